@@ -1,0 +1,26 @@
+"""occsurf.algorithms: spline-surface algorithms of the SIGGRAPH '91 course C25, in NumPy/SciPy.
+
+Pure NumPy/SciPy: this package never imports OCP, cadquery or build123d.
+"""
+
+from .curve import BSplineCurve
+from .surface import BSplineSurface
+from .errors import (
+    ExchangeError,
+    InvalidGeometryError,
+    KernelError,
+    OccsurfError,
+    ParameterError,
+    ToleranceError,
+)
+
+__all__ = [
+    "BSplineCurve",
+    "BSplineSurface",
+    "OccsurfError",
+    "InvalidGeometryError",
+    "ParameterError",
+    "ToleranceError",
+    "KernelError",
+    "ExchangeError",
+]

@@ -1,0 +1,105 @@
+"""Validation of user input, once, at public entry points. Messages name the argument."""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from . import tolerances
+from .errors import InvalidGeometryError, ParameterError
+
+
+def as_degree(value: object, name: str = "degree") -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise InvalidGeometryError(f"{name}: expected an integer from 1 to {tolerances.MAX_DEGREE}, got {value!r}")
+    d = int(value)
+    if not 1 <= d <= tolerances.MAX_DEGREE:
+        raise InvalidGeometryError(
+            f"{name}: expected 1 <= degree <= {tolerances.MAX_DEGREE} (OpenCascade's limit), got {d}"
+        )
+    return d
+
+
+def as_finite_array(value: ArrayLike, name: str, ndim: int | None = None) -> NDArray[np.float64]:
+    try:
+        a = np.array(value, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise InvalidGeometryError(f"{name}: expected an array of real numbers, got {type(value).__name__}") from err
+    if ndim is not None and a.ndim != ndim:
+        raise InvalidGeometryError(f"{name}: expected a {ndim}-D array, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        bad = np.argwhere(~np.isfinite(a))[0]
+        raise InvalidGeometryError(f"{name}: expected finite values, got {a[tuple(bad)]} at index {tuple(int(i) for i in bad)}")
+    return a
+
+
+def check_knots(knots: ArrayLike, degree: int, n_poles: int, name: str = "knots") -> NDArray[np.float64]:
+    """A full knot vector: finite, non-decreasing, length n+p+1, multiplicities <= p+1, non-empty domain."""
+    t = as_finite_array(knots, name, ndim=1)
+    expected = n_poles + degree + 1
+    if t.shape[0] != expected:
+        raise InvalidGeometryError(
+            f"{name}: expected {expected} values (poles {n_poles} + degree {degree} + 1), got {t.shape[0]}"
+        )
+    d = np.diff(t)
+    if np.any(d < 0):
+        i = int(np.argmax(d < 0))
+        raise InvalidGeometryError(f"{name}: must be non-decreasing, but knot {i + 1} = {t[i + 1]!r} < knot {i} = {t[i]!r}")
+    vals, counts = np.unique(t, return_counts=True)
+    if np.any(counts > degree + 1):
+        i = int(np.argmax(counts))
+        raise InvalidGeometryError(
+            f"{name}: multiplicity of knot {vals[i]!r} is {counts[i]}, more than degree + 1 = {degree + 1}"
+        )
+    if not t[degree] < t[n_poles]:
+        raise InvalidGeometryError(
+            f"{name}: the domain [knot[{degree}], knot[{n_poles}]] = [{t[degree]!r}, {t[n_poles]!r}] is empty"
+        )
+    return t
+
+
+def check_weights(weights: ArrayLike, shape: tuple[int, ...], name: str = "weights") -> NDArray[np.float64]:
+    w = as_finite_array(weights, name)
+    if w.shape != shape:
+        raise InvalidGeometryError(f"{name}: expected shape {shape} (one weight per control point), got {w.shape}")
+    if np.any(w <= 0):
+        bad = np.argwhere(w <= 0)[0]
+        raise InvalidGeometryError(
+            f"{name}: weights must be > 0, got {w[tuple(bad)]!r} at index {tuple(int(i) for i in bad)}"
+        )
+    return w
+
+
+def readonly(a: NDArray) -> NDArray:
+    a = np.ascontiguousarray(a)
+    a.flags.writeable = False
+    return a
+
+
+def check_parameters(u: ArrayLike, lo: float, hi: float, name: str = "u") -> NDArray[np.float64]:
+    """Finite parameters inside ``[lo, hi]``; values a hair outside (round-off) are snapped in."""
+    try:
+        a = np.asarray(u, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise ParameterError(f"{name}: expected real parameters, got {type(u).__name__}") from err
+    if not np.all(np.isfinite(a)):
+        raise ParameterError(f"{name}: parameters must be finite, got {a[~np.isfinite(a)].ravel()[0]!r}")
+    slack = tolerances.PARAMETER * max(hi - lo, 1.0)
+    if a.size and (a.min() < lo - slack or a.max() > hi + slack):
+        bad = a.min() if a.min() < lo - slack else a.max()
+        raise ParameterError(f"{name}: parameter {bad!r} is outside the domain [{lo!r}, {hi!r}]")
+    return np.clip(a, lo, hi)
+
+
+def check_times(times: object, name: str = "times") -> int:
+    if isinstance(times, bool) or not isinstance(times, numbers.Integral) or int(times) < 1:
+        raise InvalidGeometryError(f"{name}: expected a positive integer, got {times!r}")
+    return int(times)
+
+
+def check_order(order: object) -> int:
+    if isinstance(order, bool) or not isinstance(order, numbers.Integral) or int(order) < 0:
+        raise InvalidGeometryError(f"order: expected a non-negative integer, got {order!r}")
+    return int(order)

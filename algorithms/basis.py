@@ -1,0 +1,170 @@
+"""B-spline basis functions, vectorised over many parameters (course §2-9, basis splines).
+
+The kernels here loop over the degree only (a few iterations), never over parameters: every
+statement acts on arrays of ``m`` parameter values at once. They trust their input; validation
+happens once in the public classes.
+
+References
+----------
+L. Piegl, W. Tiller, *The NURBS Book*, 2nd ed., Springer 1997: A2.1 (span), A2.2 (basis
+functions), A2.3 (derivatives). C. de Boor, *A Practical Guide to Splines*, 1978.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "find_span",
+    "basis_functions",
+    "basis_derivatives",
+    "basis_matrix",
+    "greville",
+]
+
+
+def find_span(knots: NDArray[np.float64], degree: int, n_poles: int, u: NDArray[np.float64]) -> NDArray[np.intp]:
+    """Index ``s`` of the non-empty knot span ``[t_s, t_{s+1})`` holding each parameter (A2.1).
+
+    Parameters
+    ----------
+    knots : ndarray, shape (n_poles + degree + 1,)
+        Full knot vector.
+    degree : int
+    n_poles : int
+    u : ndarray, shape (m,)
+        Parameters inside the domain ``[t_p, t_n]``.
+
+    Returns
+    -------
+    ndarray of intp, shape (m,)
+        ``degree <= s <= n_poles - 1``. The domain's right end belongs to the last non-empty span,
+        so evaluation there is a limit from the left, as in OCC.
+    """
+    s = np.searchsorted(knots, u, side="right") - 1
+    # The last non-empty span of the domain: largest s <= n-1 with t_s < t_n.
+    t_end = knots[n_poles]
+    last = int(np.searchsorted(knots, t_end, side="left")) - 1
+    first = int(np.searchsorted(knots, knots[degree], side="right")) - 1
+    return np.clip(s, first, last)
+
+
+def basis_functions(
+    knots: NDArray[np.float64], degree: int, span: NDArray[np.intp], u: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The ``degree + 1`` non-zero basis functions at each parameter (A2.2, Cox–de Boor).
+
+    Returns
+    -------
+    ndarray, shape (m, degree + 1)
+        ``N[i, k] = N_{span_i - degree + k, degree}(u_i)``.
+    """
+    m = u.shape[0]
+    p = degree
+    N = np.zeros((p + 1, m))
+    N[0] = 1.0
+    left = np.empty((p + 1, m))
+    right = np.empty((p + 1, m))
+    for j in range(1, p + 1):
+        left[j] = u - knots[span + 1 - j]
+        right[j] = knots[span + j] - u
+        saved = np.zeros(m)
+        for r in range(j):
+            temp = N[r] / (right[r + 1] + left[j - r])
+            N[r] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        N[j] = saved
+    return N.T.copy()
+
+
+def basis_derivatives(
+    knots: NDArray[np.float64], degree: int, span: NDArray[np.intp], u: NDArray[np.float64], order: int
+) -> NDArray[np.float64]:
+    """Basis functions and their derivatives up to ``order`` (A2.3).
+
+    Returns
+    -------
+    ndarray, shape (m, order + 1, degree + 1)
+        ``D[i, k, j] = d^k/du^k N_{span_i - degree + j, degree}(u_i)``; rows ``k > degree`` are zero.
+    """
+    p = degree
+    m = u.shape[0]
+    n = min(order, p)
+    ndu = np.empty((p + 1, p + 1, m))
+    ndu[0, 0] = 1.0
+    left = np.empty((p + 1, m))
+    right = np.empty((p + 1, m))
+    for j in range(1, p + 1):
+        left[j] = u - knots[span + 1 - j]
+        right[j] = knots[span + j] - u
+        saved = np.zeros(m)
+        for r in range(j):
+            ndu[j, r] = right[r + 1] + left[j - r]
+            temp = ndu[r, j - 1] / ndu[j, r]
+            ndu[r, j] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        ndu[j, j] = saved
+    ders = np.zeros((order + 1, p + 1, m))
+    ders[0] = ndu[:, p]
+    a = np.empty((2, p + 1, m))
+    for r in range(p + 1):
+        s1, s2 = 0, 1
+        a[0, 0] = 1.0
+        for k in range(1, n + 1):
+            d = np.zeros(m)
+            rk, pk = r - k, p - k
+            if r >= k:
+                a[s2, 0] = a[s1, 0] / ndu[pk + 1, rk]
+                d = a[s2, 0] * ndu[rk, pk]
+            j1 = 1 if rk >= -1 else -rk
+            j2 = k - 1 if r - 1 <= pk else p - r
+            for j in range(j1, j2 + 1):
+                a[s2, j] = (a[s1, j] - a[s1, j - 1]) / ndu[pk + 1, rk + j]
+                d = d + a[s2, j] * ndu[rk + j, pk]
+            if r <= pk:
+                a[s2, k] = -a[s1, k - 1] / ndu[pk + 1, r]
+                d = d + a[s2, k] * ndu[r, pk]
+            ders[k, r] = d
+            s1, s2 = s2, s1
+    factor = float(p)
+    for k in range(1, n + 1):
+        ders[k] *= factor
+        factor *= p - k
+    return np.moveaxis(ders, 2, 0).copy()
+
+
+def basis_matrix(
+    knots: NDArray[np.float64], degree: int, n_poles: int, u: NDArray[np.float64], order: int = 0
+) -> NDArray[np.float64]:
+    """Dense collocation matrices ``B[k, i, j] = d^k/du^k N_j(u_i)`` for ``k = 0..order``.
+
+    Used for grid evaluation (two dense matrix products beat any gather) and for the linear
+    systems of fitting and knot removal.
+
+    Returns
+    -------
+    ndarray, shape (order + 1, m, n_poles)
+    """
+    m = u.shape[0]
+    span = find_span(knots, degree, n_poles, u)
+    D = basis_derivatives(knots, degree, span, u, order)  # (m, order+1, p+1)
+    B = np.zeros((order + 1, m, n_poles))
+    cols = span[:, None] - degree + np.arange(degree + 1)  # (m, p+1)
+    rows = np.broadcast_to(np.arange(m)[:, None], cols.shape)
+    for k in range(order + 1):
+        B[k, rows, cols] = D[:, k, :]
+    return B
+
+
+def greville(knots: ArrayLike, degree: int) -> NDArray[np.float64]:
+    """Greville abscissae ``(t_{i+1} + ... + t_{i+p}) / p``, one per control point.
+
+    Returns
+    -------
+    ndarray, shape (len(knots) - degree - 1,)
+    """
+    t = np.asarray(knots, dtype=float)
+    n = t.shape[0] - degree - 1
+    c = np.concatenate(([0.0], np.cumsum(t)))
+    return (c[degree + 1 : degree + 1 + n] - c[1 : 1 + n]) / degree

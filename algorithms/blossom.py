@@ -1,0 +1,88 @@
+"""Polar forms (blossoms) of B-spline segments (course §2-2..2-3, §2-7..2-10).
+
+The blossom ``f(x_1, ..., x_p)`` of a degree-``p`` polynomial piece is the unique symmetric,
+multi-affine map whose diagonal is the piece: ``f(u, ..., u) = C(u)``. For a B-spline with knots
+``t`` the control points are blossom values at consecutive knots (course §2-9),
+
+.. math::
+
+    P_i = f_\\mu(t_{i+1}, \\ldots, t_{i+p}) \\quad \\text{for every non-empty span } \\mu \\in [i, i+p],
+
+which is the whole theory behind knot insertion (Oslo / Boehm), degree raising and conversion to
+Bézier form. Here the blossom is computed as weights on the control points: the de Boor recurrence
+run on the basis functions with a different argument at every level.
+
+References
+----------
+L. Ramshaw, "Blossoms are polar forms", CAGD 6 (1989). H.-P. Seidel, "A new multiaffine approach
+to B-splines", CAGD 6 (1989). Course notes C25, Bartels, §2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["blossom_basis", "blossom_poles"]
+
+
+def blossom_basis(
+    knots: NDArray[np.float64], degree: int, span: NDArray[np.intp], args: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Weights of the ``degree + 1`` control points in the blossom of the piece on ``span``.
+
+    Parameters
+    ----------
+    knots : ndarray, shape (n + degree + 1,)
+    degree : int
+    span : ndarray of int, shape (m,)
+        Index ``mu`` of a non-empty knot span ``[t_mu, t_{mu+1})``; ``degree <= mu <= n - 1``.
+    args : ndarray, shape (m, degree)
+        Blossom arguments (any real values; the blossom is a polynomial in each).
+
+    Returns
+    -------
+    ndarray, shape (m, degree + 1)
+        ``A`` with ``f_mu(args_i) = sum_k A[i, k] P[mu_i - degree + k]``. With all arguments equal
+        to ``u`` this is the basis-function vector at ``u`` (A2.2); with the arguments of a refined
+        knot vector it is a row of the Oslo refinement matrix (discrete B-splines).
+    """
+    m = span.shape[0]
+    p = degree
+    N = np.zeros((p + 1, m))
+    N[0] = 1.0
+    for j in range(1, p + 1):
+        x = args[:, j - 1]
+        saved = np.zeros(m)
+        for r in range(j):
+            lo = knots[span + 1 - j + r]
+            hi = knots[span + 1 + r]
+            temp = N[r] / (hi - lo)
+            N[r] = saved + (hi - x) * temp
+            saved = (x - lo) * temp
+        N[j] = saved
+    return N.T.copy()
+
+
+def blossom_poles(
+    knots: NDArray[np.float64],
+    degree: int,
+    poles: NDArray[np.float64],
+    span: NDArray[np.intp],
+    args: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Blossom values ``f_mu(args)`` of a spline with the given poles (any trailing shape).
+
+    Parameters
+    ----------
+    poles : ndarray, shape (n, ...)
+        Control points; homogeneous ones give the homogeneous blossom.
+    span, args : see :func:`blossom_basis`.
+
+    Returns
+    -------
+    ndarray, shape (m, ...)
+    """
+    A = blossom_basis(knots, degree, span, args)
+    idx = span[:, None] - degree + np.arange(degree + 1)
+    return np.einsum("mk,mk...->m...", A, poles[idx])
