@@ -3,6 +3,7 @@
 Pure NumPy/SciPy: this package never imports OCP, cadquery or build123d.
 """
 
+from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_point, conic_type, ellipse
 from .curve import BSplineCurve
 from .surface import BSplineSurface
 from .errors import (
@@ -15,6 +16,13 @@ from .errors import (
 )
 
 __all__ = [
+    "arc",
+    "circle",
+    "ellipse",
+    "conic_arc",
+    "conic_from_shoulder",
+    "conic_through_point",
+    "conic_type",
     "BSplineCurve",
     "BSplineSurface",
     "OccsurfError",
