@@ -28,6 +28,7 @@ from .knots import (
     refine_poles,
     remove_knot_lsq,
     snap_knot,
+    snap_knots,
     split_poles,
 )
 from .rational import curve_quotient_rule, from_homogeneous, to_homogeneous
@@ -278,7 +279,7 @@ class BSplineCurve:
         if x.min() <= lo or x.max() >= hi:
             bad = x.min() if x.min() <= lo else x.max()
             raise ParameterError(f"knots: {bad!r} must lie strictly inside the domain ({lo!r}, {hi!r})")
-        x = np.array([snap_knot(self.knots, v) for v in x]) if x.size < 64 else x
+        x = snap_knots(self.knots, x)
         tau = merge_knots(self.knots, x)
         vals, counts = np.unique(tau, return_counts=True)
         if np.any(counts > self.degree + 1):

@@ -25,6 +25,7 @@ __all__ = [
     "multiplicity",
     "distinct_knots",
     "snap_knot",
+    "snap_knots",
     "insert_knot_boehm",
     "refinement_matrix",
     "refine_poles",
@@ -58,6 +59,15 @@ def snap_knot(knots: Array, u: float) -> float:
     """Return the existing knot equal to ``u`` within tolerance, else ``u`` itself."""
     i = int(np.argmin(np.abs(knots - u)))
     return float(knots[i]) if abs(knots[i] - u) <= knot_tol(knots) else float(u)
+
+
+def snap_knots(knots: Array, values: Array) -> Array:
+    """Vectorised :func:`snap_knot`: each value replaced by an existing knot within tolerance."""
+    tol = knot_tol(knots)
+    i = np.clip(np.searchsorted(knots, values), 1, knots.shape[0] - 1)
+    left, right = knots[i - 1], knots[i]
+    nearest = np.where(np.abs(values - left) <= np.abs(right - values), left, right)
+    return np.where(np.abs(nearest - values) <= tol, nearest, values)
 
 
 def insert_knot_boehm(knots: Array, degree: int, poles: Array, u: float, times: int) -> tuple[Array, Array]:

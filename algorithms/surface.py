@@ -29,6 +29,7 @@ from .knots import (
     refine_poles,
     remove_knot_lsq,
     snap_knot,
+    snap_knots,
     split_poles,
 )
 from .rational import from_homogeneous, surface_quotient_rule, to_homogeneous
@@ -355,6 +356,7 @@ class BSplineSurface:
         if x.min() <= lo or x.max() >= hi:
             bad = x.min() if x.min() <= lo else x.max()
             raise ParameterError(f"knots: {bad!r} must lie strictly inside the {direction} domain ({lo!r}, {hi!r})")
+        x = snap_knots(self.knots[ax], x)
         tau = merge_knots(self.knots[ax], x)
         vals, counts = np.unique(tau, return_counts=True)
         if np.any(counts > self.degree[ax] + 1):
