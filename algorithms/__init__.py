@@ -6,6 +6,18 @@ Pure NumPy/SciPy: this package never imports OCP, cadquery or build123d.
 from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_point, conic_type, ellipse
 from .curve import BSplineCurve
 from .surface import BSplineSurface
+from .manipulation import (
+    Curvature,
+    Derivative,
+    Dragger,
+    Position,
+    PreparedConstraints,
+    Tangent,
+    constrain,
+    drag_point,
+    drag_surface_point,
+)
+from .linalg import ConstraintError, ConvergenceError
 from .errors import (
     ExchangeError,
     InvalidGeometryError,
@@ -31,4 +43,15 @@ __all__ = [
     "ToleranceError",
     "KernelError",
     "ExchangeError",
+    "constrain",
+    "drag_point",
+    "drag_surface_point",
+    "Dragger",
+    "PreparedConstraints",
+    "Position",
+    "Tangent",
+    "Derivative",
+    "Curvature",
+    "ConstraintError",
+    "ConvergenceError",
 ]
