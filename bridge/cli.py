@@ -557,6 +557,12 @@ def _cmd_inspect(ns: argparse.Namespace) -> int:
     return EXIT_ERROR if any(r.error is not None for r in done) else EXIT_OK
 
 
+def _cmd_demo(ns: argparse.Namespace) -> int:
+    from .demo import run_demos
+
+    return run_demos(Path(ns.out), ns.only)
+
+
 # ---------------------------------------------------------------------------------------- parser
 def _samples_arg(text: str) -> int:
     try:
@@ -592,6 +598,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--in-process", action="store_true",
                    help="read the files in this process, not in a worker (a crash inside OCC then ends it)")
     p.set_defaults(func=_cmd_inspect)
+
+    d = sub.add_parser(
+        "demo",
+        help="write a gallery of pictures (PNG) and STEP files of what occsurf does",
+        description="Renders each chapter's showcase into OUT/<name>/ as PNG pictures plus STEP files.",
+    )
+    d.add_argument("--out", default="occsurf-demo", metavar="DIR", help="output folder (default: occsurf-demo)")
+    d.add_argument("--only", nargs="+", metavar="NAME", help="run only these demos")
+    d.set_defaults(func=_cmd_demo)
 
     w = sub.add_parser(WORKER_COMMAND)  # internal, no help= so it stays out of the listing
     w.set_defaults(func=lambda ns: _worker_main())
