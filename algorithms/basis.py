@@ -1,8 +1,9 @@
 """B-spline basis functions, vectorised over many parameters (course §2-9, basis splines).
 
 The kernels here loop over the degree only (a few iterations), never over parameters: every
-statement acts on arrays of ``m`` parameter values at once. They trust their input; validation
-happens once in the public classes.
+statement acts on arrays of ``m`` parameter values at once (:func:`band_product` loops over the
+groups of parameters that share a knot span, one matrix product each). They trust their input;
+validation happens once in the public classes.
 
 References
 ----------
@@ -20,6 +21,8 @@ __all__ = [
     "basis_functions",
     "basis_derivatives",
     "basis_matrix",
+    "span_groups",
+    "band_product",
     "greville",
 ]
 
@@ -139,8 +142,8 @@ def basis_matrix(
 ) -> NDArray[np.float64]:
     """Dense collocation matrices ``B[k, i, j] = d^k/du^k N_j(u_i)`` for ``k = 0..order``.
 
-    Used for grid evaluation (two dense matrix products beat any gather) and for the linear
-    systems of fitting and knot removal.
+    Used for the linear systems of fitting and knot removal. Grid evaluation multiplies by these
+    matrices without forming them (:func:`band_product`).
 
     Returns
     -------
@@ -155,6 +158,61 @@ def basis_matrix(
     for k in range(order + 1):
         B[k, rows, cols] = D[:, k, :]
     return B
+
+
+def span_groups(span: NDArray[np.intp]) -> list[tuple[slice | NDArray[np.intp], int]]:
+    """Parameters sharing a knot span, as ``(selection, span)`` pairs covering ``0..m-1`` once.
+
+    Runs of equal consecutive spans come back as slices (sorted parameters, the usual case);
+    if the spans change more than twice as often as there are distinct spans, the parameters
+    are grouped by span instead (index arrays, one per distinct span).
+    """
+    m = span.shape[0]
+    if m == 0:
+        return []
+    change = np.flatnonzero(span[1:] != span[:-1]) + 1
+    distinct = np.unique(span).shape[0]
+    if change.shape[0] + 1 <= 2 * distinct:
+        bounds = [0, *change.tolist(), m]
+        return [(slice(a, b), int(span[a])) for a, b in zip(bounds[:-1], bounds[1:])]
+    order = np.argsort(span, kind="stable")
+    ss = span[order]
+    cuts = [0, *(np.flatnonzero(ss[1:] != ss[:-1]) + 1).tolist(), m]
+    return [(order[a:b], int(ss[a])) for a, b in zip(cuts[:-1], cuts[1:])]
+
+
+def band_product(
+    D: NDArray[np.float64], span: NDArray[np.intp], degree: int, M: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Product of a banded collocation matrix with a matrix of poles, without forming it.
+
+    ``R[a, i, :] = sum_t D[a, i, t] M[span[a] - degree + t, :]``: the ``degree + 1`` non-zeros
+    of each row of :func:`basis_matrix` times ``M``, as one small matrix product per group of
+    parameters sharing a span (:func:`span_groups`). It equals ``basis_matrix(...)[i] @ M`` at
+    ``(degree + 1) / n`` of the dense cost.
+
+    Parameters
+    ----------
+    D : ndarray, shape (m, r, degree + 1)
+        Basis functions (or derivatives) from :func:`basis_derivatives`, C-contiguous.
+    span : ndarray of intp, shape (m,)
+    M : ndarray, shape (n, Y), C-contiguous
+
+    Returns
+    -------
+    ndarray, shape (m, r, Y)
+    """
+    m, r, p1 = D.shape
+    Y = M.shape[1]
+    R = np.empty((m, r, Y))
+    for sel, s in span_groups(span):
+        rows = M[s - degree : s + 1]
+        if isinstance(sel, slice):
+            g = sel.stop - sel.start
+            np.matmul(D[sel].reshape(g * r, p1), rows, out=R[sel].reshape(g * r, Y))
+        else:
+            R[sel] = (D[sel].reshape(-1, p1) @ rows).reshape(-1, r, Y)
+    return R
 
 
 def greville(knots: ArrayLike, degree: int) -> NDArray[np.float64]:

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import _numba_kernels as _nk
 from . import _validate as V
 from . import tolerances
 from .basis import basis_derivatives, basis_functions, find_span, greville
@@ -166,9 +167,19 @@ class BSplineCurve:
         ------
         ParameterError
             If a parameter is not finite or lies outside the domain.
+
+        Notes
+        -----
+        From ``_numba_kernels.MIN_POINTS`` points on, an optional numba kernel computes the same
+        values (to round-off) when numba is installed; ``OCCSURF_NO_NUMBA=1`` turns it off.
         """
         flat, shape = self._params(u)
         p, n = self.degree, self.n_poles
+        if _nk.applies(flat.shape[0]):
+            out = np.empty((flat.shape[0], self.dim))
+            args = (self.knots, p, *_nk.span_table(self.knots, p, n), self._hpoles, flat, self.is_rational, out)
+            if _nk.run("curve_points", *args):
+                return out.reshape(shape + (self.dim,))
         span = find_span(self.knots, p, n, flat)
         N = basis_functions(self.knots, p, span, flat)
         idx = span[:, None] - p + np.arange(p + 1)
@@ -187,10 +198,20 @@ class BSplineCurve:
         ndarray, shape (..., order + 1, d)
             ``[..., k, :]`` is ``d^k C / du^k``. At knots the derivative is the one from the
             right (left at the domain end), as in OCC.
+
+        Notes
+        -----
+        From ``_numba_kernels.MIN_POINTS`` points on, an optional numba kernel computes the same
+        values (to round-off) when numba is installed; ``OCCSURF_NO_NUMBA=1`` turns it off.
         """
         order = V.check_order(order)
         flat, shape = self._params(u)
         p, n = self.degree, self.n_poles
+        if _nk.applies(flat.shape[0]):
+            out = np.empty((flat.shape[0], order + 1, self.dim))
+            args = (self.knots, p, *_nk.span_table(self.knots, p, n), self._hpoles, flat, order, self.is_rational, out)
+            if _nk.run("curve_derivatives", *args):
+                return out.reshape(shape + (order + 1, self.dim))
         span = find_span(self.knots, p, n, flat)
         D = basis_derivatives(self.knots, p, span, flat, order)
         idx = span[:, None] - p + np.arange(p + 1)

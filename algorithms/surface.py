@@ -16,7 +16,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _validate as V
 from . import tolerances
-from .basis import basis_derivatives, basis_functions, basis_matrix, find_span, greville
+from . import _numba_kernels as _nk
+from .basis import band_product, basis_derivatives, basis_functions, find_span, greville, span_groups
 from .blossom import blossom_basis
 from .degree import elevate_poles
 from .errors import InvalidGeometryError, ParameterError, ToleranceError
@@ -161,8 +162,17 @@ class BSplineSurface:
             raise ParameterError(f"u, v: shapes {np.shape(a)} and {np.shape(b)} do not broadcast") from err
         return a.reshape(-1), b.reshape(-1), a.shape
 
+    def _kernel_args(self) -> tuple[Any, ...]:
+        """Knots, degrees, span bounds and homogeneous net, as the numba kernels take them."""
+        (p, q), (U, Vk), (nu, nv) = self.degree, self.knots, self.n_poles
+        return (U, p, *_nk.span_table(U, p, nu), Vk, q, *_nk.span_table(Vk, q, nv), self._hpoles)
+
     def _scattered(self, u: Array, v: Array, order: int) -> Array:
-        """Homogeneous partials ``(m, r+1, r+1, k)`` at scattered points, in bounded-memory chunks."""
+        """Homogeneous partials ``(m, r+1, r+1, k)`` at scattered points, in bounded-memory chunks.
+
+        The NumPy path (span-and-gather); :meth:`evaluate` and :meth:`derivatives` use the numba
+        kernels instead when they apply (see :mod:`._numba_kernels`).
+        """
         (p, q), (U, Vk), (nu, nv) = self.degree, self.knots, self.n_poles
         H = self._hpoles
         k = H.shape[2]
@@ -198,8 +208,17 @@ class BSplineSurface:
         ------
         ParameterError
             A parameter outside the domain, not finite, or shapes that do not broadcast.
+
+        Notes
+        -----
+        From ``_numba_kernels.MIN_POINTS`` points on, an optional numba kernel computes the same
+        values (to round-off) when numba is installed; ``OCCSURF_NO_NUMBA=1`` turns it off.
         """
         a, b, shape = self._uv(u, v)
+        if _nk.applies(a.shape[0]):
+            out = np.empty((a.shape[0], self.dim))
+            if _nk.run("surface_points", *self._kernel_args(), a, b, self.is_rational, out):
+                return out.reshape(shape + (self.dim,))
         H = self._scattered(a, b, 0)[:, 0, 0]
         if self.is_rational:
             H = H[:, :-1] / H[:, -1:]
@@ -214,39 +233,94 @@ class BSplineSurface:
         -------
         ndarray, shape (..., order + 1, order + 1, d)
             ``[..., k, l, :]``; rational surfaces by the quotient rule (A4.4).
+
+        Notes
+        -----
+        From ``_numba_kernels.MIN_POINTS`` points on, an optional numba kernel computes the same
+        values (to round-off) when numba is installed; ``OCCSURF_NO_NUMBA=1`` turns it off.
         """
         order = V.check_order(order)
         a, b, shape = self._uv(u, v)
+        if _nk.applies(a.shape[0]):
+            out = np.empty((a.shape[0], order + 1, order + 1, self.dim))
+            if _nk.run("surface_derivatives", *self._kernel_args(), a, b, order, self.is_rational, out):
+                return out.reshape(shape + (order + 1, order + 1, self.dim))
         H = self._scattered(a, b, order)
         if self.is_rational:
             H = surface_quotient_rule(H)
         return H.reshape(shape + (order + 1, order + 1, self.dim))
 
-    def _grid_h(self, us: ArrayLike, vs: ArrayLike, order: int) -> Array:
+    def _grid_params(self, us: ArrayLike, vs: ArrayLike) -> tuple[Array, Array]:
         (u0, u1), (v0, v1) = self.domain
         a = V.check_parameters(us, u0, u1, "us").reshape(-1)
         b = V.check_parameters(vs, v0, v1, "vs").reshape(-1)
-        (p, q), (U, Vk), (nu, nv) = self.degree, self.knots, self.n_poles
-        Bu = basis_matrix(U, p, nu, a, order)  # (r+1, mu, nu)
-        Bv = basis_matrix(Vk, q, nv, b, order)  # (r+1, mv, nv)
-        H = self._hpoles
-        k = H.shape[2]
-        out = np.empty((a.shape[0], b.shape[0], order + 1, order + 1, k))
-        for i in range(order + 1):
-            T = (Bu[i] @ H.reshape(nu, nv * k)).reshape(a.shape[0], nv, k)
-            Tt = np.ascontiguousarray(T.transpose(0, 2, 1))  # (mu, k, nv)
-            for j in range(order + 1):
-                out[:, :, i, j, :] = (Tt @ Bv[j].T).transpose(0, 2, 1)
-        return out
+        return a, b
 
-    def evaluate_grid(self, us: ArrayLike, vs: ArrayLike) -> Array:
-        """Points on the grid ``us x vs`` by two dense basis-matrix products.
+    def _grid_basis(self, ax: int, x: Array, order: int) -> tuple[NDArray[np.intp], Array]:
+        """Spans ``(m,)`` and basis derivatives ``(m, order+1, degree+1)`` along one direction."""
+        p, t, n = self.degree[ax], self.knots[ax], self.n_poles[ax]
+        span = find_span(t, p, n, x)
+        if order == 0:
+            return span, basis_functions(t, p, span, x)[:, None, :]
+        return span, basis_derivatives(t, p, span, x, order)
+
+    def _grid_v(self, b: Array, order: int) -> Array:
+        """The net contracted along v: ``G[I, b, j, c] = sum_J N_J^(j)(v_b) H[I, J, c]``.
 
         Returns
         -------
-        ndarray, shape (len(us), len(vs), d)
+        ndarray, shape (n_u, m_v, order + 1, k), C-contiguous
         """
-        H = self._grid_h(us, vs, 0)[:, :, 0, 0]
+        nu, nv = self.n_poles
+        H = self._hpoles
+        k = H.shape[2]
+        sv, Dv = self._grid_basis(1, b, order)
+        Ht = np.ascontiguousarray(H.transpose(1, 0, 2)).reshape(nv, nu * k)
+        R = band_product(Dv, sv, self.degree[1], Ht)  # (m_v, r+1, n_u * k): [b, j, I, c]
+        return np.ascontiguousarray(R.reshape(b.shape[0], order + 1, nu, k).transpose(2, 0, 1, 3))
+
+    def _grid_u(self, su: NDArray[np.intp], Du: Array, G: Array, sel: slice | NDArray[np.intp]) -> Array:
+        """Homogeneous partials ``(g, m_v, r+1, r+1, k)`` of the grid rows ``sel`` sharing one u-span.
+
+        ``G`` is :meth:`_grid_v`; rows of ``sel`` must all lie in the u-span ``su``.
+        """
+        p = self.degree[0]
+        nu, mv, r1, k = G.shape
+        D = Du[sel]
+        g = D.shape[0]
+        T = D.reshape(g * r1, p + 1) @ G.reshape(nu, mv * r1 * k)[su - p : su + 1]  # [a, i, b, j, c]
+        return T.reshape(g, r1, mv, r1, k).transpose(0, 2, 1, 3, 4)
+
+    def _grid_h(self, us: ArrayLike, vs: ArrayLike, order: int) -> Array:
+        """Homogeneous partials ``(m_u, m_v, r+1, r+1, k)`` on the grid (NumPy path).
+
+        Two banded products (:func:`band_product`): the net with the v-basis once, then each
+        group of u-parameters sharing a span with its ``p + 1`` rows of the result.
+        """
+        a, b = self._grid_params(us, vs)
+        G = self._grid_v(b, order)
+        su, Du = self._grid_basis(0, a, order)
+        out = np.empty((a.shape[0], b.shape[0], order + 1, order + 1, G.shape[3]))
+        for sel, s in span_groups(su):
+            out[sel] = self._grid_u(s, Du, G, sel)
+        return out
+
+    def evaluate_grid(self, us: ArrayLike, vs: ArrayLike) -> Array:
+        """Points on the grid ``us x vs`` by two banded basis-matrix products.
+
+        Each product uses only the ``degree + 1`` non-zeros of a basis-matrix row (one small
+        matrix product per group of parameters sharing a knot span, :func:`.basis.band_product`).
+
+        Returns
+        -------
+        ndarray, shape (len(us), len(vs), d), C-contiguous
+        """
+        a, b = self._grid_params(us, vs)
+        mu, mv = a.shape[0], b.shape[0]
+        G = self._grid_v(b, 0)  # (n_u, m_v, 1, k)
+        su, Nu = self._grid_basis(0, a, 0)
+        k = G.shape[3]
+        H = band_product(Nu, su, self.degree[0], G.reshape(G.shape[0], mv * k)).reshape(mu, mv, k)
         if self.is_rational:
             H = H[..., :-1] / H[..., -1:]
         return H
@@ -254,15 +328,40 @@ class BSplineSurface:
     def derivatives_grid(self, us: ArrayLike, vs: ArrayLike, order: int = 1) -> Array:
         """All partials up to ``order`` on the grid ``us x vs``.
 
+        The net is contracted with the v-basis once (:meth:`_grid_v`), then with the u-basis
+        row by row, only over the ``p + 1`` non-zero basis functions of each row.
+
         Returns
         -------
-        ndarray, shape (len(us), len(vs), order + 1, order + 1, d)
+        ndarray, shape (len(us), len(vs), order + 1, order + 1, d), C-contiguous
+
+        Notes
+        -----
+        From ``_numba_kernels.MIN_POINTS`` points on, an optional numba kernel computes the same
+        values (to round-off) when numba is installed; ``OCCSURF_NO_NUMBA=1`` turns it off.
         """
         order = V.check_order(order)
-        H = self._grid_h(us, vs, order)
-        if self.is_rational:
-            H = surface_quotient_rule(H)
-        return H
+        if order == 0:
+            return self.evaluate_grid(us, vs)[:, :, None, None, :]
+        a, b = self._grid_params(us, vs)
+        mu, mv, r1, d = a.shape[0], b.shape[0], order + 1, self.dim
+        G = self._grid_v(b, order)  # (n_u, m_v, r+1, k)
+        k = G.shape[3]
+        su, Du = self._grid_basis(0, a, order)
+        p = self.degree[0]
+        out = np.empty((mu, mv, r1, r1, d))
+        G3 = G.reshape(G.shape[0], mv, r1 * k)
+        if _nk.applies(mu * mv):
+            if self.is_rational:
+                done = _nk.run("grid_partials_rational", Du, su, p, G3, k, out.reshape(mu * mv, r1, r1, d))
+            else:
+                done = _nk.run("grid_partials", Du, su, p, G3, out.reshape(mu, mv, r1, r1 * k))
+            if done:
+                return out
+        for sel, s in span_groups(su):
+            h = self._grid_u(s, Du, G, sel)
+            out[sel] = surface_quotient_rule(h) if self.is_rational else h
+        return out
 
     def normal(self, u: ArrayLike, v: ArrayLike) -> Array:
         """Unit normal ``S_u x S_v / |S_u x S_v|`` (3-D surfaces); NaN where it is degenerate."""

@@ -1,0 +1,680 @@
+"""Optional numba kernels for the hot evaluation loops (scattered points, grid partials).
+
+The NumPy paths in :mod:`.basis`, :mod:`.curve` and :mod:`.surface` are the reference; the kernels
+here compute the same quantities point by point (span by table look-up, basis functions by A2.2 and
+their derivatives by differentiating lower-degree rows as de Boor's BSPLVD does, tensor contraction,
+quotient rule A4.2/A4.4 fused), which avoids the ``(m, p+1, q+1, d)`` gathers and temporaries of
+the vectorised form. ``tests/algorithms/test_fast_paths.py`` checks that both agree to 1e-14
+(relative to each partial's magnitude). Benchmarks: ``benchmarks/bench_evaluation.py``.
+
+Numba is optional and imported lazily, on the first evaluation of at least :data:`MIN_POINTS`
+points, so ``import algorithms`` never pays for it and small evaluations never compile anything.
+The kernels are compiled with ``cache=True`` (once per machine, in ``__pycache__``); where no cache
+directory is writable they are compiled once per process instead. Set the environment variable
+``OCCSURF_NO_NUMBA=1`` to force the NumPy paths.
+
+Every kernel trusts its input: parameters inside the domain, contiguous float64 arrays, and the
+span tables of :func:`span_table`. The kernels are serial (deterministic results; the benchmarks
+compare single-threaded peers).
+
+References
+----------
+L. Piegl, W. Tiller, *The NURBS Book*, 2nd ed., A2.2, A4.2, A4.4. C. de Boor, *A Practical Guide
+to Splines*, 1978, BSPLVD (derivatives of all basis functions by differentiating lower degrees).
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from typing import Any
+
+import numpy as np
+
+__all__ = ["MIN_POINTS", "ENV_DISABLE", "span_bounds", "span_table", "enabled", "applies", "run"]
+
+#: Smallest number of evaluated points for which the numba kernels are used. The first use in a
+#: process costs about 0.5 s (importing numba, loading the cached kernels); from 2**15 points on
+#: a kernel saves ~15 ms per scattered evaluation, so that cost is repaid after a few dozen
+#: calls, and below it the NumPy path takes a few milliseconds anyway.
+MIN_POINTS: int = 1 << 15
+
+#: Environment variable that, set to anything but ``""``/``"0"``, forces the NumPy paths.
+ENV_DISABLE = "OCCSURF_NO_NUMBA"
+
+_lock = threading.Lock()
+_state: dict[str, Any] = {"loaded": False, "kernels": None}
+
+
+def span_bounds(knots: np.ndarray, degree: int, n_poles: int) -> tuple[int, int]:
+    """First and last non-empty knot spans of the domain (as clipped by ``basis.find_span``)."""
+    first = int(np.searchsorted(knots, knots[degree], side="right")) - 1
+    last = int(np.searchsorted(knots, knots[n_poles], side="left")) - 1
+    return first, last
+
+
+# ---------------------------------------------------------------------------------------------
+# Kernel sources. Plain Python functions; :func:`_load` compiles them with numba. They call each
+# other through module globals, which :func:`_load` rebinds to the compiled dispatchers.
+
+
+def span_table(knots: np.ndarray, degree: int, n_poles: int) -> tuple[int, int, np.ndarray, float, float]:
+    """Span lookup table for :func:`_span`: ``(first, last, table, x0, scale)``.
+
+    ``table[b]`` is the span (:func:`.basis.find_span`) of ``x0 + b / scale``, for ``nb + 1``
+    equally spaced points over the domain, ``nb`` about sixteen per span. A parameter's span
+    lies between those of the two table points around it, so the search is one table read and,
+    in the few cells that straddle a knot, a short bisection (branch predictors defeat a plain
+    bisection on random parameters: 30 ns against 6 ns per search).
+    """
+    from .basis import find_span
+
+    first, last = span_bounds(knots, degree, n_poles)
+    x0, x1 = float(knots[degree]), float(knots[n_poles])
+    nb = int(min(max(64, 16 * (last - first + 1)), 1 << 16))
+    scale = nb / (x1 - x0)
+    edges = np.clip(x0 + np.arange(nb + 1) / scale, x0, x1)
+    table = find_span(knots, degree, n_poles, edges).astype(np.int64)
+    return first, last, table, x0, scale
+
+
+def _span(knots, first, last, table, x0, scale, x):  # pragma: no cover - compiled
+    """Largest ``s`` in ``[first, last]`` with ``knots[s] <= x`` (A2.1 via :func:`span_table`)."""
+    nb = table.shape[0] - 1
+    f = (x - x0) * scale
+    b = 0
+    if f > 0.0:
+        b = min(int(f), nb - 1)
+    lo = table[b]
+    hi = table[b + 1]
+    # Guards against round-off in the cell index; they almost never iterate.
+    while lo > first and knots[lo] > x:
+        lo -= 1
+    while hi < last and knots[hi + 1] <= x:
+        hi += 1
+    while lo < hi:
+        mid = (lo + hi + 1) >> 1
+        if knots[mid] <= x:
+            lo = mid
+        else:
+            hi = mid - 1
+    return lo
+
+
+def _basis(knots, p, s, x, N, left, right):  # pragma: no cover - compiled
+    """The ``p + 1`` non-zero basis functions at ``x`` in span ``s`` (A2.2) into ``N``."""
+    N[0] = 1.0
+    for j in range(1, p + 1):
+        left[j] = x - knots[s + 1 - j]
+        right[j] = knots[s + j] - x
+        saved = 0.0
+        for r in range(j):
+            temp = N[r] / (right[r + 1] + left[j - r])
+            N[r] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        N[j] = saved
+
+
+def _basis_ders(knots, p, s, x, order, ders, Nt, inv, left, right):  # pragma: no cover - compiled
+    """Basis functions and derivatives up to ``order`` into ``ders`` (order+1, p+1).
+
+    The triangle of A2.2 keeps every degree (``Nt[j, :j+1]``, degree ``j``); the k-th derivative
+    is the degree ``p - k`` row raised k times by differentiation (de Boor's BSPLVD),
+
+    .. math::  N'_{i,d} = d \\Big(\\frac{N_{i,d-1}}{t_{i+d} - t_i} - \\frac{N_{i+1,d-1}}{t_{i+d+1} - t_{i+1}}\\Big),
+
+    which needs ``p`` reciprocals per derivative degree instead of A2.3's divisions per term.
+    Row 0 is bit-for-bit :func:`_basis`. ``Nt``, ``inv`` (p+1, p+1) and ``left``, ``right``
+    (p+1,) are scratch.
+    """
+    Nt[0, 0] = 1.0
+    for j in range(1, p + 1):
+        left[j] = x - knots[s + 1 - j]
+        right[j] = knots[s + j] - x
+        saved = 0.0
+        for r in range(j):
+            temp = Nt[j - 1, r] / (right[r + 1] + left[j - r])
+            Nt[j, r] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        Nt[j, j] = saved
+    n = min(order, p)
+    for d in range(p - n + 1, p + 1):  # inv[d, r] = 1 / (t[s+r+1] - t[s+r+1-d])
+        for r in range(d):
+            inv[d, r] = 1.0 / (knots[s + r + 1] - knots[s + r + 1 - d])
+    for r in range(p + 1):
+        ders[0, r] = Nt[p, r]
+    for k in range(1, order + 1):
+        if k > p:
+            for r in range(p + 1):
+                ders[k, r] = 0.0
+            continue
+        # Start from degree p - k (right-aligned in ders[k]) and raise k times.
+        d0 = p - k
+        for r in range(d0 + 1):
+            ders[k, r] = Nt[d0, r]
+        for d in range(d0 + 1, p + 1):
+            fd = float(d)
+            prev = 0.0  # f_{r-1} * inv[d, r-1]
+            for r in range(d):
+                cur = ders[k, r] * inv[d, r]
+                ders[k, r] = fd * (prev - cur)
+                prev = cur
+            ders[k, d] = fd * prev
+
+
+def _binomials(n):  # pragma: no cover - compiled
+    """Pascal's triangle ``B[k, i] = C(k, i)`` for ``0 <= i <= k < n`` as floats."""
+    B = np.zeros((n, n))
+    for k in range(n):
+        B[k, 0] = 1.0
+        for i in range(1, k + 1):
+            B[k, i] = B[k - 1, i - 1] + B[k - 1, i]
+    return B
+
+
+def _curve_quotient(h, binom, out, m):  # pragma: no cover - compiled
+    """A4.2 on one point: homogeneous ``h`` (r+1, d+1) to Cartesian ``out[m]`` (r+1, d)."""
+    r1 = h.shape[0]
+    dw = h.shape[1] - 1
+    inv_w = 1.0 / h[0, dw]
+    for k in range(r1):
+        for c in range(dw):
+            out[m, k, c] = h[k, c]
+        for i in range(1, k + 1):
+            coef = binom[k, i] * h[i, dw]
+            for c in range(dw):
+                out[m, k, c] -= coef * out[m, k - i, c]
+        for c in range(dw):
+            out[m, k, c] *= inv_w
+
+
+def _quotient_plan(r1):  # pragma: no cover - compiled
+    """The terms of A4.4 for partials up to ``r1 - 1``, flattened for :func:`_surface_quotient`.
+
+    Partial ``e = k * r1 + l`` takes terms ``start[e] .. start[e+1]``; term ``t`` subtracts
+    ``coef[t] * w[wi[t]] * S[src[t]]`` with ``coef = C(k, i) C(l, j)``, ``wi = i * r1 + j`` and
+    ``src = (k - i) * r1 + (l - j)``, for ``(i, j) != (0, 0)`` in the order of the NumPy rule.
+    """
+    binom = _binomials(r1)
+    n_terms = (r1 * (r1 + 1) // 2) ** 2 - r1 * r1
+    start = np.zeros(r1 * r1 + 1, np.int64)
+    src = np.empty(n_terms, np.int64)
+    wi = np.empty(n_terms, np.int64)
+    coef = np.empty(n_terms)
+    t = 0
+    for k in range(r1):
+        for l in range(r1):
+            start[k * r1 + l] = t
+            for i in range(k + 1):
+                for j in range(l + 1):
+                    if i + j == 0:
+                        continue
+                    src[t] = (k - i) * r1 + (l - j)
+                    wi[t] = i * r1 + j
+                    coef[t] = binom[k, i] * binom[l, j]
+                    t += 1
+    start[r1 * r1] = t
+    return start, src, wi, coef
+
+
+def _surface_quotient(h, start, src, wi, coef, o, out, m):  # pragma: no cover - compiled
+    """A4.4 on one point: homogeneous ``h`` (E, d+1) to Cartesian ``out[m]`` (E, d), E = (r+1)^2.
+
+    ``o`` (E, d) is scratch; the terms come from :func:`_quotient_plan`. The same operations in
+    the same order as :func:`.rational.surface_quotient_rule`; scalar accumulators for d = 3.
+    """
+    E = h.shape[0]
+    dw = h.shape[1] - 1
+    inv_w = 1.0 / h[0, dw]
+    for e in range(E):
+        if dw == 3:
+            v0 = h[e, 0]
+            v1 = h[e, 1]
+            v2 = h[e, 2]
+            for t in range(start[e], start[e + 1]):
+                c = coef[t] * h[wi[t], 3]
+                sr = src[t]
+                v0 -= c * o[sr, 0]
+                v1 -= c * o[sr, 1]
+                v2 -= c * o[sr, 2]
+            o[e, 0] = v0 * inv_w
+            o[e, 1] = v1 * inv_w
+            o[e, 2] = v2 * inv_w
+            out[m, e, 0] = o[e, 0]
+            out[m, e, 1] = o[e, 1]
+            out[m, e, 2] = o[e, 2]
+        else:
+            for c in range(dw):
+                o[e, c] = h[e, c]
+            for t in range(start[e], start[e + 1]):
+                cw = coef[t] * h[wi[t], dw]
+                sr = src[t]
+                for c in range(dw):
+                    o[e, c] -= cw * o[sr, c]
+            for c in range(dw):
+                o[e, c] *= inv_w
+                out[m, e, c] = o[e, c]
+
+
+def curve_points(t, p, first, last, table, x0, scale, H, u, rational, out):  # pragma: no cover
+    """Curve points: ``H`` (n, k) homogeneous poles, ``u`` (m,), ``out`` (m, d)."""
+    k = H.shape[1]
+    d = out.shape[1]
+    N = np.empty(p + 1)
+    left = np.empty(p + 1)
+    right = np.empty(p + 1)
+    acc = np.empty(k)
+    for m in range(u.shape[0]):
+        x = u[m]
+        s = _span(t, first, last, table, x0, scale, x)
+        _basis(t, p, s, x, N, left, right)
+        for c in range(k):
+            acc[c] = 0.0
+        for a in range(p + 1):
+            w = N[a]
+            for c in range(k):
+                acc[c] += w * H[s - p + a, c]
+        if rational:
+            for c in range(d):
+                out[m, c] = acc[c] / acc[d]
+        else:
+            for c in range(d):
+                out[m, c] = acc[c]
+
+
+def curve_derivatives(t, p, first, last, table, x0, scale, H, u, order, rational, out):  # pragma: no cover
+    """Curve derivatives up to ``order``: ``out`` (m, order+1, d)."""
+    k = H.shape[1]
+    r1 = order + 1
+    ders = np.empty((r1, p + 1))
+    Nt = np.empty((p + 1, p + 1))
+    inv = np.empty((p + 1, p + 1))
+    left = np.empty(p + 1)
+    right = np.empty(p + 1)
+    h = np.empty((r1, k))
+    binom = _binomials(r1)
+    for m in range(u.shape[0]):
+        x = u[m]
+        s = _span(t, first, last, table, x0, scale, x)
+        _basis_ders(t, p, s, x, order, ders, Nt, inv, left, right)
+        for i in range(r1):
+            for c in range(k):
+                h[i, c] = 0.0
+            for a in range(p + 1):
+                w = ders[i, a]
+                for c in range(k):
+                    h[i, c] += w * H[s - p + a, c]
+        if rational:
+            _curve_quotient(h, binom, out, m)
+        else:
+            for i in range(r1):
+                for c in range(k):
+                    out[m, i, c] = h[i, c]
+
+
+def surface_points(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, u, v, rational, out):  # pragma: no cover
+    """Surface points: ``H`` (n_u, n_v, k) homogeneous net, ``u, v`` (m,), ``out`` (m, d).
+
+    ``fu, lu, tu, u0, cu`` (and the same for v) are :func:`span_table`. The contraction keeps
+    the coordinates in scalar accumulators for ``k`` = 3 and 4 (3-D points, rational or not),
+    which runs about twice as fast as the loop over ``k`` kept for other dimensions.
+    """
+    k = H.shape[2]
+    d = out.shape[1]
+    Nu = np.empty(p + 1)
+    Nv = np.empty(q + 1)
+    left = np.empty(max(p, q) + 1)
+    right = np.empty(max(p, q) + 1)
+    acc = np.empty(k)
+    row = np.empty(k)
+    Hf = H.reshape(H.size)
+    rowstride = np.uint64(H.shape[1] * k)
+    uk = np.uint64(k)
+    one = np.uint64(1)
+    two = np.uint64(2)
+    three = np.uint64(3)
+    for m in range(u.shape[0]):
+        x = u[m]
+        y = v[m]
+        su = _span(U, fu, lu, tu, u0, cu, x)
+        sv = _span(V, fv, lv, tv, v0, cv, y)
+        _basis(U, p, su, x, Nu, left, right)
+        _basis(V, q, sv, y, Nv, left, right)
+        r0 = su - p
+        c0 = sv - q
+        # Flat, unsigned offsets: numba emits no negative-index fix-up for unsigned indices.
+        base = np.uint64(r0) * rowstride + np.uint64(c0) * uk
+        if k == 3:
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            for a in range(p + 1):
+                b0 = 0.0
+                b1 = 0.0
+                b2 = 0.0
+                o = base
+                for b in range(q + 1):
+                    w = Nv[b]
+                    b0 += w * Hf[o]
+                    b1 += w * Hf[o + one]
+                    b2 += w * Hf[o + two]
+                    o += uk
+                w = Nu[a]
+                a0 += w * b0
+                a1 += w * b1
+                a2 += w * b2
+                base += rowstride
+            acc[0] = a0
+            acc[1] = a1
+            acc[2] = a2
+        elif k == 4:
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            a3 = 0.0
+            for a in range(p + 1):
+                b0 = 0.0
+                b1 = 0.0
+                b2 = 0.0
+                b3 = 0.0
+                o = base
+                for b in range(q + 1):
+                    w = Nv[b]
+                    b0 += w * Hf[o]
+                    b1 += w * Hf[o + one]
+                    b2 += w * Hf[o + two]
+                    b3 += w * Hf[o + three]
+                    o += uk
+                w = Nu[a]
+                a0 += w * b0
+                a1 += w * b1
+                a2 += w * b2
+                a3 += w * b3
+                base += rowstride
+            acc[0] = a0
+            acc[1] = a1
+            acc[2] = a2
+            acc[3] = a3
+        else:
+            for c in range(k):
+                acc[c] = 0.0
+            for a in range(p + 1):
+                for c in range(k):
+                    row[c] = 0.0
+                for b in range(q + 1):
+                    w = Nv[b]
+                    for c in range(k):
+                        row[c] += w * H[r0 + a, c0 + b, c]
+                w = Nu[a]
+                for c in range(k):
+                    acc[c] += w * row[c]
+        if rational:
+            for c in range(d):
+                out[m, c] = acc[c] / acc[d]
+        else:
+            for c in range(d):
+                out[m, c] = acc[c]
+
+
+def _tensor_partials(H, r0, c0, Du, Dv, T, O, m):  # pragma: no cover - compiled
+    """``O[m, i, j, :] = sum_{a,b} Du[i, a] Dv[j, b] H[r0 + a, c0 + b, :]`` (v first, via ``T``).
+
+    Scalar accumulators over the coordinates (three at a time for k = 3, else four at a time,
+    the spare lanes re-reading the last coordinate): independent chains run about twice as
+    fast as a loop over k, which LLVM cannot unroll for a run-time k.
+    """
+    r1 = Du.shape[0]
+    p1 = Du.shape[1]
+    q1 = Dv.shape[1]
+    k = H.shape[2]
+    if k == 3:
+        for a in range(p1):
+            for j in range(r1):
+                t0 = 0.0
+                t1 = 0.0
+                t2 = 0.0
+                for b in range(q1):
+                    w = Dv[j, b]
+                    t0 += w * H[r0 + a, c0 + b, 0]
+                    t1 += w * H[r0 + a, c0 + b, 1]
+                    t2 += w * H[r0 + a, c0 + b, 2]
+                T[a, j, 0] = t0
+                T[a, j, 1] = t1
+                T[a, j, 2] = t2
+        for i in range(r1):
+            for j in range(r1):
+                t0 = 0.0
+                t1 = 0.0
+                t2 = 0.0
+                for a in range(p1):
+                    w = Du[i, a]
+                    t0 += w * T[a, j, 0]
+                    t1 += w * T[a, j, 1]
+                    t2 += w * T[a, j, 2]
+                O[m, i, j, 0] = t0
+                O[m, i, j, 1] = t1
+                O[m, i, j, 2] = t2
+        return
+    for cc in range(0, k, 4):
+        e1 = min(cc + 1, k - 1)
+        e2 = min(cc + 2, k - 1)
+        e3 = min(cc + 3, k - 1)
+        for a in range(p1):
+            for j in range(r1):
+                t0 = 0.0
+                t1 = 0.0
+                t2 = 0.0
+                t3 = 0.0
+                for b in range(q1):
+                    w = Dv[j, b]
+                    t0 += w * H[r0 + a, c0 + b, cc]
+                    t1 += w * H[r0 + a, c0 + b, e1]
+                    t2 += w * H[r0 + a, c0 + b, e2]
+                    t3 += w * H[r0 + a, c0 + b, e3]
+                T[a, j, cc] = t0
+                T[a, j, e1] = t1
+                T[a, j, e2] = t2
+                T[a, j, e3] = t3
+        for i in range(r1):
+            for j in range(r1):
+                t0 = 0.0
+                t1 = 0.0
+                t2 = 0.0
+                t3 = 0.0
+                for a in range(p1):
+                    w = Du[i, a]
+                    t0 += w * T[a, j, cc]
+                    t1 += w * T[a, j, e1]
+                    t2 += w * T[a, j, e2]
+                    t3 += w * T[a, j, e3]
+                O[m, i, j, cc] = t0
+                O[m, i, j, e1] = t1
+                O[m, i, j, e2] = t2
+                O[m, i, j, e3] = t3
+
+
+def surface_derivatives(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, u, v, order, rational, out):  # pragma: no cover
+    """All partials ``d^{i+j}/du^i dv^j`` with ``i, j <= order``: ``out`` (m, order+1, order+1, d)."""
+    k = H.shape[2]
+    r1 = order + 1
+    pq = max(p, q) + 1
+    Du = np.empty((r1, p + 1))
+    Dv = np.empty((r1, q + 1))
+    Nt = np.empty((pq, pq))
+    inv = np.empty((pq, pq))
+    left = np.empty(pq)
+    right = np.empty(pq)
+    T = np.empty((p + 1, r1, k))
+    h4 = np.empty((1, r1, r1, k))
+    hf = h4.reshape(r1 * r1, k)
+    o = np.empty((r1 * r1, k))
+    start, src, wi, coef = _quotient_plan(r1)
+    out3 = out.reshape(out.shape[0], r1 * r1, out.shape[3])
+    for m in range(u.shape[0]):
+        x = u[m]
+        y = v[m]
+        su = _span(U, fu, lu, tu, u0, cu, x)
+        sv = _span(V, fv, lv, tv, v0, cv, y)
+        _basis_ders(U, p, su, x, order, Du, Nt, inv, left, right)
+        _basis_ders(V, q, sv, y, order, Dv, Nt, inv, left, right)
+        if rational:
+            _tensor_partials(H, su - p, sv - q, Du, Dv, T, h4, 0)
+            _surface_quotient(hf, start, src, wi, coef, o, out3, m)
+        else:
+            _tensor_partials(H, su - p, sv - q, Du, Dv, T, out, m)
+
+
+def _band_point(Du, a, s0, p, G, b, O, oa, ob):  # pragma: no cover - compiled
+    """``O[oa, ob, i, x] = sum_t Du[a, i, t] G[s0 + t, b, x]`` for all i, x (unrolled by four)."""
+    r1 = Du.shape[1]
+    X = G.shape[2]
+    for t0 in range(0, p + 1, 4):
+        if p + 1 - t0 >= 4:
+            for i in range(r1):
+                d0 = Du[a, i, t0]
+                d1 = Du[a, i, t0 + 1]
+                d2 = Du[a, i, t0 + 2]
+                d3 = Du[a, i, t0 + 3]
+                if t0 == 0:
+                    for x in range(X):
+                        O[oa, ob, i, x] = (d0 * G[s0 + t0, b, x] + d1 * G[s0 + t0 + 1, b, x]
+                                           + d2 * G[s0 + t0 + 2, b, x] + d3 * G[s0 + t0 + 3, b, x])
+                else:
+                    for x in range(X):
+                        O[oa, ob, i, x] += (d0 * G[s0 + t0, b, x] + d1 * G[s0 + t0 + 1, b, x]
+                                            + d2 * G[s0 + t0 + 2, b, x] + d3 * G[s0 + t0 + 3, b, x])
+        else:
+            for i in range(r1):
+                for t in range(t0, p + 1):
+                    d = Du[a, i, t]
+                    if t == 0:
+                        for x in range(X):
+                            O[oa, ob, i, x] = d * G[s0 + t, b, x]
+                    else:
+                        for x in range(X):
+                            O[oa, ob, i, x] += d * G[s0 + t, b, x]
+
+
+def grid_partials(Du, su, p, G, out):  # pragma: no cover - compiled
+    """Second (u) stage of grid partials, polynomial case.
+
+    ``Du`` (m_u, r+1, p+1) basis derivatives, ``su`` their spans, ``G`` (n_u, m_v, X) the net
+    already contracted along v (``X = (r+1) k``, index ``[I, b, j*k + c]``); writes
+    ``out[a, b, i, x] = sum_t Du[a, i, t] G[su[a]-p+t, b, x]``, shape (m_u, m_v, r+1, X).
+    """
+    for a in range(Du.shape[0]):
+        s0 = su[a] - p
+        for b in range(G.shape[1]):
+            _band_point(Du, a, s0, p, G, b, out, a, b)
+
+
+def grid_partials_rational(Du, su, p, G, k, out):  # pragma: no cover - compiled
+    """:func:`grid_partials` fused with the quotient rule (A4.4).
+
+    ``out`` (m_u * m_v, r+1, r+1, k-1): the grid partials with the two grid axes flattened.
+    """
+    r1 = Du.shape[1]
+    mv = G.shape[1]
+    h4 = np.empty((1, 1, r1, r1 * k))
+    hf = h4.reshape(r1 * r1, k)
+    o = np.empty((r1 * r1, k))
+    start, src, wi, coef = _quotient_plan(r1)
+    out3 = out.reshape(out.shape[0], r1 * r1, out.shape[3])
+    for a in range(Du.shape[0]):
+        s0 = su[a] - p
+        for b in range(mv):
+            _band_point(Du, a, s0, p, G, b, h4, 0, 0)
+            _surface_quotient(hf, start, src, wi, coef, o, out3, a * mv + b)
+
+
+_HELPERS = (
+    "_span", "_basis", "_basis_ders", "_binomials", "_quotient_plan", "_curve_quotient", "_surface_quotient",
+    "_tensor_partials", "_band_point",
+)
+_KERNELS = (
+    "curve_points",
+    "curve_derivatives",
+    "surface_points",
+    "surface_derivatives",
+    "grid_partials",
+    "grid_partials_rational",
+)
+
+
+# ---------------------------------------------------------------------------------------------
+# Loading and dispatch.
+
+
+def _jit(numba: Any, fn: Any, **options: Any) -> Any:
+    try:
+        return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(fn)
+    except RuntimeError:  # no writable cache location: compile per process instead
+        return numba.njit(nogil=True, error_model="numpy", **options)(fn)
+
+
+def _load() -> dict[str, Any] | None:
+    with _lock:
+        if _state["loaded"]:
+            return _state["kernels"]
+        kernels = None
+        try:
+            import numba
+        except Exception:  # noqa: BLE001 - numba missing or broken: NumPy paths
+            numba = None
+        if numba is not None:
+            g = globals()
+            # Helpers first: kernels resolve them as globals when they compile.
+            for name in _HELPERS:  # inlined into the kernels: a call per point costs ~20 ns
+                g[name] = _jit(numba, g[name], inline="always")
+            kernels = {name: _jit(numba, g[name]) for name in _KERNELS}
+        _state["kernels"] = kernels
+        _state["loaded"] = True
+        return kernels
+
+
+def _readonly(a: Any) -> Any:
+    """A C-contiguous read-only view (a copy only if ``a`` is not contiguous)."""
+    if isinstance(a, np.ndarray):
+        a = np.ascontiguousarray(a).view()
+        a.flags.writeable = False
+    return a
+
+
+def enabled() -> bool:
+    """True unless ``OCCSURF_NO_NUMBA`` is set (numba itself is only imported on first use)."""
+    return os.environ.get(ENV_DISABLE, "") in ("", "0")
+
+
+def applies(n_points: int) -> bool:
+    """Whether the numba kernels should evaluate ``n_points`` points.
+
+    True when numba is installed, ``OCCSURF_NO_NUMBA`` is not set and ``n_points`` is at least
+    :data:`MIN_POINTS`. The first True answer in a process imports numba.
+    """
+    if n_points < MIN_POINTS or not enabled():
+        return False
+    kernels = _state["kernels"] if _state["loaded"] else _load()
+    return kernels is not None
+
+
+def run(name: str, *args: Any) -> bool:
+    """Run kernel ``name`` on ``args``; False means "use the NumPy path" (call :func:`applies` first).
+
+    A kernel that fails (typing or lowering errors under an untested numba version) is dropped
+    for the rest of the process with a warning; the caller then computes the result with NumPy.
+    """
+    kernels = _state["kernels"]
+    if kernels is None or name not in kernels:
+        return False
+    # Inputs as read-only views (the output, last, stays writable): one compiled signature per
+    # kernel whatever the flags of the caller's arrays, so nothing is compiled twice.
+    args = tuple(_readonly(a) for a in args[:-1]) + args[-1:]
+    try:
+        kernels[name](*args)
+    except Exception as err:  # noqa: BLE001
+        import warnings
+
+        warnings.warn(f"occsurf: numba kernel {name!r} failed ({err!r}); using NumPy", RuntimeWarning, stacklevel=3)
+        kernels.pop(name, None)
+        return False
+    return True

@@ -1,0 +1,314 @@
+"""The fast evaluation paths agree with the pure-NumPy reference paths.
+
+Two kinds of fast path are checked:
+
+- the banded grid products (:func:`algorithms.basis.band_product`, NumPy) against the dense
+  collocation matrices of :func:`algorithms.basis.basis_matrix` and against scattered evaluation;
+- the optional numba kernels (:mod:`algorithms._numba_kernels`) against the NumPy paths, to 1e-14
+  relative to each partial's magnitude, on clamped, unclamped and rational curves and surfaces of
+  degrees 1 to 7, at random parameters, at every knot, at the domain ends, up to order 3.
+
+Paths are forced with the documented switches: ``OCCSURF_NO_NUMBA=1`` for NumPy, and
+``MIN_POINTS = 0`` so that the kernels run on small inputs. Without numba the kernel comparisons
+skip and the rest still runs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+
+from algorithms import BSplineCurve, BSplineSurface
+from algorithms import _numba_kernels as nk
+from algorithms.basis import band_product, basis_derivatives, basis_matrix, find_span, span_groups
+
+from .strategies import surfaces, test_settings
+
+RTOL = 1e-14  # both paths: a few ulps of each partial's magnitude
+DEGREES = range(1, 8)
+KINDS = ("clamped", "unclamped", "rational")
+
+try:
+    import numba  # noqa: F401
+
+    HAVE_NUMBA = True
+except ImportError:
+    HAVE_NUMBA = False
+
+needs_numba = pytest.mark.skipif(not HAVE_NUMBA, reason="numba is not installed (optional)")
+
+
+# ----------------------------------------------------------------------------------- helpers
+
+
+def knot_vector(rng: np.random.Generator, degree: int, n: int, clamped: bool) -> np.ndarray:
+    """Full knot vector with a double interior knot (a triple one for degree >= 3)."""
+    m = n - degree - 1  # interior knots of a clamped vector
+    interior = np.sort(rng.uniform(0.05, 0.95, m))
+    if m >= 3:
+        interior[1] = interior[0]  # repeated knot
+        if degree >= 3 and m >= 4:
+            interior[2] = interior[0]
+    if clamped:
+        return np.r_[np.zeros(degree + 1), interior, np.ones(degree + 1)]
+    lo = -np.sort(rng.uniform(0.05, 0.5, degree))[::-1] * 0.5
+    hi = 1 + np.sort(rng.uniform(0.05, 0.5, degree)) * 0.5
+    return np.r_[lo, 0.0, interior, 1.0, hi]
+
+
+def make_curve(degree: int, kind: str, seed: int) -> BSplineCurve:
+    rng = np.random.default_rng(seed)
+    n = degree + 6
+    t = knot_vector(rng, degree, n, clamped=kind != "unclamped")
+    w = rng.uniform(0.3, 3.0, n) if kind == "rational" else None
+    return BSplineCurve(degree, t, rng.uniform(-5, 5, (n, 3)), w)
+
+
+def make_surface(degree: int, kind: str, seed: int) -> BSplineSurface:
+    rng = np.random.default_rng(seed)
+    p, q = degree, 8 - degree  # (1, 7), (2, 6), ..., (7, 1)
+    nu, nv = p + 5, q + 4
+    U = knot_vector(rng, p, nu, clamped=kind != "unclamped")
+    V = knot_vector(rng, q, nv, clamped=kind != "unclamped")
+    w = rng.uniform(0.3, 3.0, (nu, nv)) if kind == "rational" else None
+    return BSplineSurface((p, q), (U, V), rng.uniform(-5, 5, (nu, nv, 3)), w)
+
+
+def params_with_knots(t: np.ndarray, lo: float, hi: float, rng: np.random.Generator, n: int = 40) -> np.ndarray:
+    """Random parameters, every knot of the domain, and both domain ends, exactly."""
+    inside = t[(t >= lo) & (t <= hi)]
+    return np.r_[rng.uniform(lo, hi, n), inside, lo, hi]
+
+
+def assert_partials_close(actual: np.ndarray, desired: np.ndarray, partial_axes: int, floor=0.0) -> None:
+    """Each partial (the last ``partial_axes`` axes before the coordinates) to ``RTOL`` of its
+    largest magnitude: derivatives of different orders differ by orders of magnitude.
+
+    ``floor`` (broadcastable to one point's partials, without the coordinate axis) bounds the
+    scale from below, for partials that vanish up to round-off (a constant surface, say).
+    """
+    assert actual.shape == desired.shape
+    lead = desired.ndim - 1 - partial_axes
+    flat_a = actual.reshape((-1,) + desired.shape[lead:])
+    flat_d = desired.reshape((-1,) + desired.shape[lead:])
+    scale = np.maximum(np.max(np.abs(flat_d), axis=(0, -1), keepdims=True), np.asarray(floor)[..., None])
+    err = np.abs(flat_a - flat_d) / np.where(scale > 0, scale, 1.0)
+    assert np.all(np.isfinite(actual))
+    assert err.max() <= RTOL, f"max relative deviation {err.max():.2e}"
+
+
+@pytest.fixture
+def numpy_only(monkeypatch):
+    monkeypatch.setenv(nk.ENV_DISABLE, "1")
+
+
+@pytest.fixture
+def with_numba(monkeypatch):
+    monkeypatch.delenv(nk.ENV_DISABLE, raising=False)
+    monkeypatch.setattr(nk, "MIN_POINTS", 0)
+    assert nk.applies(1)
+
+
+def both_paths(monkeypatch, fn):
+    """``fn()`` on the NumPy path, then on the numba kernels."""
+    monkeypatch.setenv(nk.ENV_DISABLE, "1")
+    ref = fn()
+    monkeypatch.delenv(nk.ENV_DISABLE)
+    monkeypatch.setattr(nk, "MIN_POINTS", 0)
+    assert nk.applies(1)
+    return ref, fn()
+
+
+# ------------------------------------------------------------- numba kernels vs NumPy paths
+
+
+@needs_numba
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("degree", DEGREES)
+def test_curve_kernels_match_numpy(monkeypatch, degree, kind):
+    c = make_curve(degree, kind, seed=100 * degree + len(kind))
+    u = params_with_knots(c.knots, *c.domain, np.random.default_rng(degree))
+    ref, fast = both_paths(monkeypatch, lambda: (c.evaluate(u), c.derivatives(u, 3)))
+    assert_partials_close(fast[0], ref[0], 0)
+    assert_partials_close(fast[1], ref[1], 1)
+
+
+@needs_numba
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("degree", DEGREES)
+def test_surface_kernels_match_numpy(monkeypatch, degree, kind):
+    s = make_surface(degree, kind, seed=100 * degree + len(kind))
+    rng = np.random.default_rng(degree)
+    (u0, u1), (v0, v1) = s.domain
+    us = params_with_knots(s.knots[0], u0, u1, rng, 12)
+    vs = params_with_knots(s.knots[1], v0, v1, rng, 10)
+    uu, vv = (a.ravel() for a in np.meshgrid(us, vs, indexing="ij"))  # every knot pair, ends too
+
+    def run():
+        return s.evaluate(uu, vv), s.derivatives(uu, vv, 3), s.evaluate_grid(us, vs), s.derivatives_grid(us, vs, 3)
+
+    ref, fast = both_paths(monkeypatch, run)
+    assert_partials_close(fast[0], ref[0], 0)
+    assert_partials_close(fast[1], ref[1], 2)
+    assert_partials_close(fast[2], ref[2], 0)
+    assert_partials_close(fast[3], ref[3], 2)
+    # The grid (banded products) and the scattered kernel agree too.
+    assert_partials_close(fast[3].reshape(fast[1].shape), fast[1], 2)
+
+
+@needs_numba
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_surface_kernels_orders_and_shapes(monkeypatch, order):
+    s = make_surface(3, "rational", seed=7)
+    rng = np.random.default_rng(1)
+    u = rng.uniform(0, 1, (4, 5))
+    v = rng.uniform(0, 1, (1, 5))  # broadcasts
+    ref, fast = both_paths(monkeypatch, lambda: s.derivatives(u, v, order))
+    assert fast.shape == (4, 5, order + 1, order + 1, 3)
+    assert_partials_close(fast, ref, 2)
+
+
+@needs_numba
+def test_two_dimensional_and_high_dimensional_poles(monkeypatch):
+    # Dimensions 2 and 5 (k = 2, 3, 5, 6) take the generic, not the 3/4-coordinate, contraction.
+    rng = np.random.default_rng(5)
+    U = np.r_[0, 0, 0, 0.3, 0.6, 0.8, 1, 1, 1]
+    V = np.r_[0, 0, 0, 0, 0.4, 0.5, 1, 1, 1, 1]
+    for dim in (2, 5):
+        for w in (None, rng.uniform(0.5, 2, (6, 6))):
+            s = BSplineSurface((2, 3), (U, V), rng.uniform(-1, 1, (6, 6, dim)), w)
+            u, v = rng.uniform(0, 1, 50), rng.uniform(0, 1, 50)
+            g = np.r_[0.0, 0.3, 0.35, 1.0]
+            ref, fast = both_paths(monkeypatch, lambda: (s.evaluate(u, v), s.derivatives(u, v, 2), s.derivatives_grid(g, g, 2)))
+            for a, b, axes in zip(fast, ref, (0, 2, 2)):
+                assert_partials_close(a, b, axes)
+
+
+@needs_numba
+def test_environment_variable_forces_numpy(monkeypatch):
+    monkeypatch.setattr(nk, "MIN_POINTS", 0)
+    monkeypatch.setenv(nk.ENV_DISABLE, "1")
+    assert not nk.applies(10**6)
+    monkeypatch.setenv(nk.ENV_DISABLE, "0")
+    assert nk.applies(10**6)
+    monkeypatch.setattr(nk, "MIN_POINTS", 100)
+    assert not nk.applies(99)
+
+
+@needs_numba
+def test_failing_kernel_falls_back_to_numpy_with_a_warning(monkeypatch, with_numba):
+    s = make_surface(3, "clamped", seed=3)
+    u = np.linspace(0, 1, 30)
+    monkeypatch.setenv(nk.ENV_DISABLE, "1")
+    ref = s.evaluate(u, u)
+    monkeypatch.delenv(nk.ENV_DISABLE)
+
+    def broken(*args):
+        raise TypeError("simulated typing error")
+
+    kernels = dict(nk._state["kernels"])
+    kernels["surface_points"] = broken
+    monkeypatch.setitem(nk._state, "kernels", kernels)
+    with pytest.warns(RuntimeWarning, match="surface_points"):
+        out = s.evaluate(u, u)
+    assert_allclose(out, ref, rtol=0, atol=0)
+    assert "surface_points" not in kernels  # dropped for the rest of the process
+
+
+@needs_numba
+def test_uncachable_kernel_source_still_compiles():
+    # numba raises RuntimeError at decoration when no cache directory is usable (here: a
+    # function without a source file); _jit must then compile without the cache.
+    import numba
+
+    ns: dict = {}
+    exec("def twice(x):\n    return 2 * x\n", ns)  # noqa: S102 - no file, so no cache locator
+    f = nk._jit(numba, ns["twice"])
+    assert f(21) == 42
+
+
+def test_span_table_matches_find_span():
+    rng = np.random.default_rng(11)
+    for degree in DEGREES:
+        for clamped in (True, False):
+            t = knot_vector(rng, degree, degree + 8, clamped)
+            n = t.shape[0] - degree - 1
+            first, last, table, x0, scale = nk.span_table(t, degree, n)
+            edges = np.clip(x0 + np.arange(table.shape[0]) / scale, t[degree], t[n])
+            assert np.array_equal(table, find_span(t, degree, n, edges))
+            assert (first, last) == (int(find_span(t, degree, n, t[degree : degree + 1])[0]),
+                                     int(find_span(t, degree, n, t[n : n + 1])[0]))
+
+
+# ------------------------------------------------------------- banded grid products (NumPy)
+
+
+@pytest.mark.parametrize("order", [0, 1, 3])
+def test_band_product_equals_dense_collocation_product(order):
+    rng = np.random.default_rng(order)
+    p, n = 4, 13
+    t = knot_vector(rng, p, n, clamped=False)
+    x = np.r_[rng.uniform(t[p], t[n], 60), t[p : n + 1]]
+    for u in (np.sort(x), x):  # runs of equal spans, and grouping of unsorted parameters
+        span = find_span(t, p, n, u)
+        D = basis_derivatives(t, p, span, u, order)
+        M = rng.standard_normal((n, 7))
+        R = band_product(D, span, p, M)
+        B = basis_matrix(t, p, n, u, order)
+        for i in range(order + 1):
+            assert_allclose(R[:, i], B[i] @ M, rtol=0, atol=1e-12 * np.abs(B[i]).sum(1).max() * np.abs(M).max())
+
+
+def test_span_groups_cover_every_parameter_once():
+    rng = np.random.default_rng(2)
+    for span in (np.repeat([3, 4, 4, 7], 5), rng.integers(3, 9, 200), np.array([5]), np.array([], np.intp)):
+        groups = span_groups(span)
+        seen = np.concatenate([np.arange(span.shape[0])[sel] for sel, _ in groups]) if groups else np.array([], int)
+        assert np.array_equal(np.sort(seen), np.arange(span.shape[0]))
+        for sel, s in groups:
+            assert np.all(span[sel] == s)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_grid_numpy_path_matches_scattered_for_unsorted_parameters(numpy_only, kind):
+    s = make_surface(3, kind, seed=21)
+    rng = np.random.default_rng(4)
+    (u0, u1), (v0, v1) = s.domain
+    us = rng.permutation(params_with_knots(s.knots[0], u0, u1, rng, 30))
+    vs = rng.permutation(params_with_knots(s.knots[1], v0, v1, rng, 20))
+    grid = s.derivatives_grid(us, vs, 2)
+    scattered = s.derivatives(us[:, None], vs[None, :], 2)
+    assert_partials_close(grid, scattered, 2)
+    assert_partials_close(s.evaluate_grid(us, vs), s.evaluate(us[:, None], vs[None, :]), 0)
+    assert grid.flags.c_contiguous and s.evaluate_grid(us, vs).flags.c_contiguous
+
+
+def test_grid_order_zero_and_empty_grids(numpy_only):
+    s = make_surface(2, "rational", seed=8)
+    g = np.linspace(0, 1, 9)
+    assert_allclose(s.derivatives_grid(g, g, 0)[:, :, 0, 0], s.evaluate_grid(g, g), rtol=0, atol=0)
+    assert s.evaluate_grid([], g).shape == (0, 9, 3)
+    assert s.derivatives_grid(g, [], 2).shape == (9, 0, 3, 3, 3)
+
+
+@given(surfaces(degrees=st.integers(1, 7), max_extra_poles=3))
+@test_settings(25)
+def test_grid_equals_scattered_on_random_surfaces(s):
+    (u0, u1), (v0, v1) = s.domain
+    us = np.r_[np.linspace(u0, u1, 7), s.knots[0][(s.knots[0] >= u0) & (s.knots[0] <= u1)]]
+    vs = np.r_[np.linspace(v0, v1, 5), s.knots[1][(s.knots[1] >= v0) & (s.knots[1] <= v1)]]
+    # Round-off scale of partial (i, j): |P| (2p / h_u)^i (2q / h_v)^j, times the weight ratio
+    # to the power i + j + 1 and (i + j)! for the quotient rule; h = the shortest non-empty span.
+    scale = np.max(np.abs(s.control_points))
+    fac = []
+    for ax in (0, 1):
+        t, p = s.knots[ax], s.degree[ax]
+        h = np.diff(np.unique(t[p : s.n_poles[ax] + 1])).min()
+        fac.append((2 * p / h) ** np.arange(3))
+    ij = np.add.outer(np.arange(3), np.arange(3))
+    rho = 1.0 if s.weights is None else s.weights.max() / s.weights.min()
+    floor = scale * np.outer(*fac) * rho ** (ij + 1) * np.array([1, 1, 2, 6, 24])[ij]
+    assert_partials_close(s.derivatives_grid(us, vs, 2), s.derivatives(us[:, None], vs[None, :], 2), 2, floor)
