@@ -419,7 +419,9 @@ class BSplineCurve:
         """The same point set traversed backwards: ``r(u) = c(a + b - u)`` on the same domain."""
         t = self.knots
         lo, hi = self.domain
-        return self._rebuild(self.degree, (lo + hi) - t[::-1], self._hpoles[::-1].copy())
+        w = None if self.weights is None else self.weights[::-1]
+        # Cartesian poles and weights are copied, not rebuilt from homogeneous form: bit-exact.
+        return BSplineCurve._trusted(self.degree, (lo + hi) - t[::-1], self.control_points[::-1], w)
 
     def reparametrize(self, start: float, end: float) -> BSplineCurve:
         """The same curve on the domain ``[start, end]`` (affine change of parameter)."""
@@ -430,7 +432,7 @@ class BSplineCurve:
         t = a + (self.knots - lo) * ((b - a) / (hi - lo))
         t[self.degree] = a
         t[self.n_poles] = b
-        return self._rebuild(self.degree, t, self._hpoles.copy())
+        return BSplineCurve._trusted(self.degree, t, self.control_points, self.weights)
 
     def transform(self, matrix: ArrayLike, translation: ArrayLike | None = None) -> BSplineCurve:
         """Apply the affine map ``x -> M x + b`` to the control points (affine invariance)."""

@@ -545,10 +545,15 @@ class BSplineSurface:
         return left, right
 
     def reverse(self, direction: str = "u") -> BSplineSurface:
-        """Reverse the parametrisation in u or v (flips the normal)."""
+        """Reverse the parametrisation in u or v (flips the normal). Poles and weights are copied
+        exactly (not rebuilt from homogeneous form)."""
         ax = _axis(direction)
         lo, hi = self.domain[ax]
-        return self._apply(direction, lambda t, p, H: ((lo + hi) - t[::-1], H[::-1].copy()))
+        kn = list(self.knots)
+        kn[ax] = (lo + hi) - kn[ax][::-1]
+        P = np.flip(self.control_points, axis=ax)
+        w = None if self.weights is None else np.flip(self.weights, axis=ax)
+        return BSplineSurface._trusted(self.degree, tuple(kn), P, w)
 
     def swap_uv(self) -> BSplineSurface:
         """Exchange the roles of u and v (transpose the net)."""
@@ -556,23 +561,19 @@ class BSplineSurface:
         return self._rebuild(self.degree[::-1], self.knots[::-1], H)
 
     def reparametrize(self, u_range: tuple[float, float], v_range: tuple[float, float]) -> BSplineSurface:
-        """The same surface on the domain ``u_range x v_range`` (affine changes of parameter)."""
-        s = self
+        """The same surface on the domain ``u_range x v_range`` (affine changes of parameter).
+
+        Only the knots change; poles and weights are shared unchanged."""
+        kn = []
         for ax, (a, b) in enumerate((u_range, v_range)):
             a, b = float(a), float(b)
             if not (np.isfinite(a) and np.isfinite(b) and a < b):
                 raise ParameterError(f"reparametrize: expected finite start < end in {'uv'[ax]}, got {a!r}, {b!r}")
-            lo, hi = s.domain[ax]
-            p = s.degree[ax]
-            n = s.n_poles[ax]
-
-            def fn(t, deg, H, a=a, b=b, lo=lo, hi=hi, p=p, n=n):
-                t2 = a + (t - lo) * ((b - a) / (hi - lo))
-                t2[p], t2[n] = a, b
-                return t2, H
-
-            s = s._apply("uv"[ax], fn)
-        return s
+            lo, hi = self.domain[ax]
+            t = a + (self.knots[ax] - lo) * ((b - a) / (hi - lo))
+            t[self.degree[ax]], t[self.n_poles[ax]] = a, b
+            kn.append(t)
+        return BSplineSurface._trusted(self.degree, tuple(kn), self.control_points, self.weights)
 
     def transform(self, matrix: ArrayLike, translation: ArrayLike | None = None) -> BSplineSurface:
         """Apply ``x -> M x + b`` to the control net (B-splines are affinely invariant)."""

@@ -19,12 +19,17 @@ _EXPORTS = {
     "to_edge": "convert",
     "to_cq_face": "convert",
     "to_cq_edge": "convert",
+    "is_reversed": "convert",
+    "surface_deviation": "validate",
+    "curve_deviation": "validate",
+    "roundtrip_deviation": "validate",
     "read_step": "exchange",
     "write_step": "exchange",
     "read_iges": "exchange",
     "write_iges": "exchange",
     "ImportedModel": "exchange",
     "ImportedFace": "exchange",
+    "ImportedEdge": "exchange",
 }
 
 __all__ = sorted(_EXPORTS)
