@@ -46,16 +46,16 @@ def check_knots(knots: ArrayLike, degree: int, n_poles: int, name: str = "knots"
     d = np.diff(t)
     if np.any(d < 0):
         i = int(np.argmax(d < 0))
-        raise InvalidGeometryError(f"{name}: must be non-decreasing, but knot {i + 1} = {t[i + 1]!r} < knot {i} = {t[i]!r}")
+        raise InvalidGeometryError(f"{name}: must be non-decreasing, but knot {i + 1} = {float(t[i + 1])!r} < knot {i} = {float(t[i])!r}")
     vals, counts = np.unique(t, return_counts=True)
     if np.any(counts > degree + 1):
         i = int(np.argmax(counts))
         raise InvalidGeometryError(
-            f"{name}: multiplicity of knot {vals[i]!r} is {counts[i]}, more than degree + 1 = {degree + 1}"
+            f"{name}: multiplicity of knot {float(vals[i])!r} is {counts[i]}, more than degree + 1 = {degree + 1}"
         )
     if not t[degree] < t[n_poles]:
         raise InvalidGeometryError(
-            f"{name}: the domain [knot[{degree}], knot[{n_poles}]] = [{t[degree]!r}, {t[n_poles]!r}] is empty"
+            f"{name}: the domain [knot[{degree}], knot[{n_poles}]] = [{float(t[degree])!r}, {float(t[n_poles])!r}] is empty"
         )
     return t
 
@@ -67,7 +67,7 @@ def check_weights(weights: ArrayLike, shape: tuple[int, ...], name: str = "weigh
     if np.any(w <= 0):
         bad = np.argwhere(w <= 0)[0]
         raise InvalidGeometryError(
-            f"{name}: weights must be > 0, got {w[tuple(bad)]!r} at index {tuple(int(i) for i in bad)}"
+            f"{name}: weights must be > 0, got {float(w[tuple(bad)])!r} at index {tuple(int(i) for i in bad)}"
         )
     return w
 
@@ -85,10 +85,10 @@ def check_parameters(u: ArrayLike, lo: float, hi: float, name: str = "u") -> NDA
     except (TypeError, ValueError) as err:
         raise ParameterError(f"{name}: expected real parameters, got {type(u).__name__}") from err
     if not np.all(np.isfinite(a)):
-        raise ParameterError(f"{name}: parameters must be finite, got {a[~np.isfinite(a)].ravel()[0]!r}")
+        raise ParameterError(f"{name}: parameters must be finite, got {float(a[~np.isfinite(a)].ravel()[0])!r}")
     slack = tolerances.PARAMETER * max(hi - lo, 1.0)
     if a.size and (a.min() < lo - slack or a.max() > hi + slack):
-        bad = a.min() if a.min() < lo - slack else a.max()
+        bad = float(a.min() if a.min() < lo - slack else a.max())
         raise ParameterError(f"{name}: parameter {bad!r} is outside the domain [{lo!r}, {hi!r}]")
     return np.clip(a, lo, hi)
 

@@ -43,13 +43,12 @@ def elevate_poles(knots: Array, degree: int, poles: Array, times: int = 1) -> tu
     knots, poles = clamp_poles(knots, degree, poles)
     p = degree
     for _ in range(times):
-        n = poles.shape[0]
         vals, mult = distinct_knots(knots)
         tau = np.repeat(vals, mult + 1)
         n2 = tau.shape[0] - (p + 1) - 1
         j = np.arange(n2)
         args = tau[j[:, None] + 1 + np.arange(p + 1)[None, :]]  # (n2, p+1)
-        mu = _support_span(knots, p, n, tau, j)
+        mu = _support_span(knots, tau, j)  # clamped: a domain span, p <= mu < len(poles)
         idx = mu[:, None] - p + np.arange(p + 1)
         gathered = poles[idx]  # (n2, p+1, ...)
         acc = np.zeros((n2,) + poles.shape[1:])

@@ -113,35 +113,47 @@ def refinement_matrix(knots: Array, degree: int, new_knots: Array) -> Array:
     knots : ndarray, shape (n + degree + 1,)
     new_knots : ndarray, shape (n2 + degree + 1,)
         A refinement of ``knots`` (every old knot present at least as often), with the same
-        domain ends.
+        first and last knots.
 
     Returns
     -------
     ndarray, shape (n2, n)
-        Row ``i`` holds the blossom weights ``f(tau_{i+1}, ..., tau_{i+p})`` (course §2-10).
+        Row ``i`` holds the blossom weights ``f(tau_{i+1}, ..., tau_{i+p})`` (course §2-10): the
+        discrete B-splines ``alpha_j(i)``, exact on the whole knot range ``[t_0, t_last]``, so the
+        outer poles of an unclamped spline (those whose basis functions miss the domain) are
+        refined correctly too.
     """
     p = degree
     n = knots.shape[0] - p - 1
     n2 = new_knots.shape[0] - p - 1
     i = np.arange(n2)
     args = new_knots[i[:, None] + 1 + np.arange(p)[None, :]]  # (n2, p)
-    mu = _support_span(knots, p, n, new_knots, i)
-    A = blossom_basis(knots, p, mu, args)
-    T = np.zeros((n2, n))
+    mu = _support_span(knots, new_knots, i)  # 0 <= mu <= n + p - 1, maybe outside [p, n - 1]
+    # Outside the domain a span has fewer than p + 1 basis functions: pad the knot vector with p
+    # copies of each end knot so that every span has p + 1 columns, and drop the padding's
+    # columns. Each column is one basis function's blossom, unaffected by the padding; every
+    # denominator of the recurrence contains the non-empty span mu, so none vanishes.
+    padded = np.concatenate((np.full(p, knots[0]), knots, np.full(p, knots[-1])))
+    A = blossom_basis(padded, p, mu + p, args)
     cols = mu[:, None] - p + np.arange(p + 1)
-    T[np.broadcast_to(i[:, None], cols.shape), cols] = A
+    real = (cols >= 0) & (cols < n)
+    T = np.zeros((n2, n))
+    T[np.broadcast_to(i[:, None], cols.shape)[real], cols[real]] = A[real]
     return T
 
 
-def _support_span(knots: Array, p: int, n: int, new_knots: Array, i: NDArray[np.intp]) -> NDArray[np.intp]:
-    """An old non-empty span inside the support of each new basis function ``i`` (degree p)."""
+def _support_span(knots: Array, new_knots: Array, i: NDArray[np.intp]) -> NDArray[np.intp]:
+    """A non-empty old span ``[t_mu, t_{mu+1})`` inside the support of each new basis function ``i``.
+
+    ``new_knots`` refines ``knots`` (or, for degree raising, has the same distinct values), so
+    every non-empty new span lies in one old span. The result may lie outside the domain
+    ``[p, n - 1]`` when the new basis function misses the domain (unclamped knot vectors).
+    """
     # First non-empty new span at or after tau_i: last index k with tau_k <= tau_i.
     k = np.searchsorted(new_knots, new_knots[i], side="right") - 1
     k = np.minimum(k, new_knots.shape[0] - 2)
     mid = 0.5 * (new_knots[k] + new_knots[k + 1])
-    lo, hi = knots[p], knots[n]
-    mid = np.clip(mid, lo, hi)
-    return find_span(knots, p, n, mid)
+    return np.searchsorted(knots, mid, side="right") - 1
 
 
 def refine_poles(knots: Array, degree: int, poles: Array, new_knots: Array) -> Array:
