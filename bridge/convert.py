@@ -36,8 +36,9 @@ of the seam (those at ``FirstParameter``); the unclamped form takes them from th
 end of any domain. They differ where the seam is not smooth enough (e.g. degree 1). OCC's own
 ``SetNotPeriodic`` gives the same structure, but it goes through homogeneous coordinates and rounds
 the poles of rational splines, so it is not used. ``to_occ`` of the result is a non-periodic OCC
-spline with the same geometry. A periodic spline with fewer than ``degree + 1`` poles is refused
-(:class:`InvalidGeometryError`): OCC's own flat knots for it are not even sorted.
+spline with the same geometry. A periodic spline with fewer than ``degree + 1`` poles (OCC's
+periodic circle in build123d sweeps) has an invalid ``KnotSequence``; its flat knots are then built
+from the distinct knots with OCC's convention (see ``_periodic_flat``).
 
 Faces and edges
 ---------------
@@ -344,21 +345,60 @@ def _curve_from_bspline(occ_curve: Geom_BSplineCurve) -> BSplineCurve:
     occ_w = occ_curve.Weights()  # None if polynomial (IsRational is reliable for curves, this is too)
     w = None if occ_w is None else _occ.from_real_array(occ_w)
     flat = _occ.from_real_array(occ_curve.KnotSequence())
+    rebuilt = False
     if occ_curve.IsPeriodic():
-        _check_periodic_flat(flat, p, P.shape[0], "curve")
+        occ_flat = flat
+        flat = _periodic_flat(flat, _occ.from_real_array(occ_curve.Knots()),
+                              _occ.from_int_array(occ_curve.Multiplicities()), p, P.shape[0])
+        rebuilt = flat is not occ_flat
         idx = np.arange(flat.shape[0] - p - 1) % P.shape[0]
         P = P[idx]
         w = None if w is None else w[idx]
-    return BSplineCurve(p, flat, P, w)
+    c = BSplineCurve(p, flat, P, w)
+    if rebuilt:
+        u = np.linspace(*c.domain, 17)
+        ref = np.array([occ_curve.Value(float(x)).Coord() for x in u])
+        _check_rebuilt_periodic(c.evaluate(u), ref, c.control_points, P.shape[0], p)
+    return c
 
 
-def _check_periodic_flat(flat: np.ndarray, degree: int, n_poles: int, what: str) -> None:
-    """OCC builds a valid flat knot vector for a periodic spline only if it has >= degree + 1 poles."""
-    if n_poles < degree + 1 or np.any(np.diff(flat) < 0):
+def _check_rebuilt_periodic(ours: np.ndarray, ref: np.ndarray, poles: np.ndarray, n: int, p: int) -> None:
+    """A rebuilt periodic flat knot vector must reproduce OCC's own evaluation (it does for
+    ``n_poles == degree``, OCC's periodic circles; OCC's evaluation is not the periodic extension
+    for fewer poles)."""
+    scale = max(1.0, float(np.max(np.abs(poles))))
+    dev = float(np.max(np.abs(ours - ref)))
+    if dev > 1e-9 * scale:
         raise InvalidGeometryError(
-            f"from_occ: periodic {what} with {n_poles} poles and degree {degree} is not supported: fewer than "
-            "degree + 1 poles, for which OCC's own flat knot vector (KnotSequence) is not even non-decreasing"
+            f"from_occ: periodic spline with {n} poles and degree {p} is not supported: with fewer than "
+            f"degree + 1 poles OCC's own evaluation is not the periodic extension (differs by {dev:.2g})"
         )
+
+
+def _periodic_flat(occ_flat: np.ndarray, knots: np.ndarray, mults: np.ndarray, degree: int, n_poles: int) -> np.ndarray:
+    """The flat knot vector of the unclamped equivalent of a periodic spline.
+
+    OCC's ``KnotSequence()`` is used as it is when valid (bit-exact). It is invalid (not
+    non-decreasing) when the spline has fewer than ``degree + 1`` poles, e.g. OCC's periodic circle
+    of degree 6 with 6 poles that every build123d sweep of a circular profile contains. Then the
+    sequence is built here with OCC's own convention, checked against ``KnotSequence`` on valid
+    splines: the periodic knot sequence ``s_j = b_(j mod n) + T floor(j / n)`` (``b`` the distinct
+    knots but the last, repeated by their multiplicities; ``T`` the period) read from
+    ``j = M_0 - 1 - degree``, so that pole ``j`` belongs to flat index ``j`` in both.
+    """
+    if n_poles >= degree + 1 and not np.any(np.diff(occ_flat) < 0):
+        return occ_flat
+    n, p = n_poles, degree
+    base = np.repeat(knots[:-1], mults[:-1])
+    if base.shape[0] != n:
+        raise InvalidGeometryError(
+            f"from_occ: periodic spline with {n} poles but multiplicities summing to {base.shape[0]}"
+        )
+    period = knots[-1] - knots[0]
+    j = np.arange(n + 2 * p + 1) + (int(mults[0]) - 1 - p)
+    flat = base[np.mod(j, n)] + period * np.floor_divide(j, n)
+    flat[p], flat[n + p] = knots[0], knots[-1]  # the domain ends exactly
+    return flat
 
 
 # --------------------------------------------------------------------------------- surfaces
@@ -417,17 +457,26 @@ def _surface_from_bspline(occ_surface: Geom_BSplineSurface) -> BSplineSurface:
     w = None if occ_w is None else _occ.from_real_array2(occ_w)
     U = _occ.from_real_array(occ_surface.UKnotSequence())
     V = _occ.from_real_array(occ_surface.VKnotSequence())
+    occ_U, occ_V = U, V
     if occ_surface.IsUPeriodic():
-        _check_periodic_flat(U, p, P.shape[0], "surface (u)")
+        U = _periodic_flat(U, _occ.from_real_array(occ_surface.UKnots()),
+                           _occ.from_int_array(occ_surface.UMultiplicities()), p, P.shape[0])
         idx = np.arange(U.shape[0] - p - 1) % P.shape[0]
         P = P[idx]
         w = None if w is None else w[idx]
     if occ_surface.IsVPeriodic():
-        _check_periodic_flat(V, q, P.shape[1], "surface (v)")
+        V = _periodic_flat(V, _occ.from_real_array(occ_surface.VKnots()),
+                           _occ.from_int_array(occ_surface.VMultiplicities()), q, P.shape[1])
         idx = np.arange(V.shape[0] - q - 1) % P.shape[1]
         P = P[:, idx]
         w = None if w is None else w[:, idx]
-    return BSplineSurface((p, q), (U, V), P, w)
+    s = BSplineSurface((p, q), (U, V), P, w)
+    if U is not occ_U or V is not occ_V:
+        (u0, u1), (v0, v1) = s.domain
+        uu, vv = (x.ravel() for x in np.meshgrid(np.linspace(u0, u1, 7), np.linspace(v0, v1, 7), indexing="ij"))
+        ref = np.array([occ_surface.Value(float(a), float(b)).Coord() for a, b in zip(uu, vv)])
+        _check_rebuilt_periodic(s.evaluate(uu, vv), ref, s.control_points, max(P.shape[:2]), max(p, q))
+    return s
 
 
 # ================================================================================= topology

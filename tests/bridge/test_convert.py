@@ -208,12 +208,31 @@ def test_periodic_surface_becomes_the_equivalent_unclamped_surface(data, uper, v
 
 
 def test_periodic_spline_with_too_few_poles_is_refused():
-    # 3 poles, degree 5: OCC accepts it but its KnotSequence is not sorted (and its evaluation
-    # disagrees with the periodic extension), so there is no faithful conversion.
+    # 3 poles, degree 5: OCC accepts it but its KnotSequence is not sorted and its evaluation
+    # disagrees with the periodic extension (by ~2e-2), so there is no faithful conversion.
     P = np.random.default_rng(0).uniform(-1, 1, (3, 3))
     occ = Geom_BSplineCurve(_occ.pnt_array(P), _occ.real_array([0, 1, 2, 3]), _occ.int_array([1, 1, 1, 1]), 5, True)
     with pytest.raises(InvalidGeometryError, match="fewer than degree \\+ 1 poles"):
         from_occ(occ)
+
+
+@pytest.mark.parametrize("radius", [0.7, 3.0])
+def test_build123d_circle_sweep_with_degree_many_poles_converts(radius):
+    # build123d sweeps a circle into a u-periodic surface with 6 poles of degree 6 (n == p), for
+    # which OCC's KnotSequence is invalid; we rebuild the flat knots with OCC's convention.
+    path = bd.Spline((0, 0, 0), (0, 2, 5), (3, 1, 10))
+    profile = bd.Plane(origin=(0, 0, 0), z_dir=path.tangent_at(0)) * bd.Circle(radius)
+    swept = bd.sweep(profile, path=path)
+    faces = [f for f in swept.faces() if type(BRep_Tool.Surface_s(f.wrapped)).__name__ == "Geom_BSplineSurface"]
+    assert faces
+    for f in faces:
+        occ = BRep_Tool.Surface_s(f.wrapped)
+        s = from_occ(f)
+        (u0, u1), (v0, v1) = s.domain
+        uu, vv = (x.ravel() for x in np.meshgrid(np.linspace(u0, u1, 13), np.linspace(v0, v1, 13), indexing="ij"))
+        ref = np.array([occ.Value(float(a), float(b)).Coord() for a, b in zip(uu, vv)])
+        # Exact representation: round-off of the evaluation only, relative to the poles' size.
+        assert np.abs(s.evaluate(uu, vv) - ref).max() <= 1e-13 * np.abs(s.control_points).max()
 
 
 def test_circle_converts_through_its_periodic_bspline():
