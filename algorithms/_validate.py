@@ -103,3 +103,14 @@ def check_order(order: object) -> int:
     if isinstance(order, bool) or not isinstance(order, numbers.Integral) or int(order) < 0:
         raise InvalidGeometryError(f"order: expected a non-negative integer, got {order!r}")
     return int(order)
+
+
+def affine_map(matrix: ArrayLike, translation: ArrayLike | None, dim: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Validated ``(M, b)`` of an affine map ``x -> M x + b`` acting on ``dim``-D points."""
+    M = as_finite_array(matrix, "matrix", ndim=2)
+    if M.shape != (dim, dim):
+        raise InvalidGeometryError(f"matrix: expected shape {(dim, dim)}, got {M.shape}")
+    b = np.zeros(dim) if translation is None else as_finite_array(translation, "translation", ndim=1)
+    if b.shape != (dim,):
+        raise InvalidGeometryError(f"translation: expected shape {(dim,)}, got {b.shape}")
+    return M, b

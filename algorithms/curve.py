@@ -8,6 +8,7 @@ OCC does; kernels work in homogeneous coordinates.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -32,7 +33,7 @@ from .knots import (
     snap_knots,
     split_poles,
 )
-from .rational import curve_quotient_rule, from_homogeneous, to_homogeneous
+from .rational import pole_deviation, curve_quotient_rule, from_homogeneous, to_homogeneous
 
 __all__ = ["BSplineCurve"]
 
@@ -339,23 +340,13 @@ class BSplineCurve:
         s = multiplicity(self.knots, x)
         if s < times:
             raise InvalidGeometryError(f"u: {x!r} is a knot of multiplicity {s}, cannot remove it {times} times")
-        t, H, dev = remove_knot_lsq(self.knots, self.degree, self._hpoles, x, times, self._pole_deviation)
+        t, H, dev = remove_knot_lsq(self.knots, self.degree, self._hpoles, x, times, partial(pole_deviation, rational=self.is_rational))
         if dev > tol:
             raise ToleranceError(
                 f"remove_knot: knot {x!r} (x{times}) cannot be removed within tol={tol:g}; "
                 f"the curve would move by up to {dev:.3g}"
             )
         return self._rebuild(self.degree, t, H)
-
-    def _pole_deviation(self, a: Array, b: Array) -> float:
-        if not self.is_rational:
-            return float(np.max(np.linalg.norm(a - b, axis=-1)))
-        pa, wa = from_homogeneous(a)
-        pb, wb = from_homogeneous(b)
-        dp = float(np.max(np.linalg.norm(pa - pb, axis=-1)))
-        dw = float(np.max(np.abs(wa - wb) / wb))
-        scale = max(float(np.max(np.abs(pb))), 1.0)
-        return max(dp, dw * scale)
 
     def elevate_degree(self, times: int = 1) -> BSplineCurve:
         """Raise the degree by ``times`` keeping the curve (course §2-6; blossom form).
@@ -436,10 +427,7 @@ class BSplineCurve:
 
     def transform(self, matrix: ArrayLike, translation: ArrayLike | None = None) -> BSplineCurve:
         """Apply the affine map ``x -> M x + b`` to the control points (affine invariance)."""
-        M = V.as_finite_array(matrix, "matrix", ndim=2)
-        if M.shape != (self.dim, self.dim):
-            raise InvalidGeometryError(f"matrix: expected shape {(self.dim, self.dim)}, got {M.shape}")
-        b = np.zeros(self.dim) if translation is None else V.as_finite_array(translation, "translation", ndim=1)
+        M, b = V.affine_map(matrix, translation, self.dim)
         return BSplineCurve._trusted(self.degree, self.knots, self.control_points @ M.T + b,
                                      None if self.weights is None else self.weights.copy())
 

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import comb
 
-__all__ = ["to_homogeneous", "from_homogeneous", "curve_quotient_rule", "surface_quotient_rule"]
+__all__ = ["to_homogeneous", "from_homogeneous", "pole_deviation", "curve_quotient_rule", "surface_quotient_rule"]
 
 Array = NDArray[np.float64]
 
@@ -31,6 +31,22 @@ def from_homogeneous(hpoints: Array) -> tuple[Array, Array]:
     """Inverse of :func:`to_homogeneous`: ``(points, weights)``."""
     w = hpoints[..., -1]
     return hpoints[..., :-1] / w[..., None], w
+
+
+def pole_deviation(a: Array, b: Array, rational: bool) -> float:
+    """Largest Cartesian distance between corresponding poles ``a`` and ``b`` (any leading shape).
+
+    For homogeneous poles (``rational``) the weights must agree too: their relative difference,
+    scaled by the poles' size, also counts, so that a small result bounds the movement of the
+    rational spline as well.
+    """
+    if not rational:
+        return float(np.max(np.linalg.norm(a - b, axis=-1)))
+    pa, wa = from_homogeneous(a)
+    pb, wb = from_homogeneous(b)
+    dp = float(np.max(np.linalg.norm(pa - pb, axis=-1)))
+    dw = float(np.max(np.abs(wa - wb) / wb))
+    return max(dp, dw * max(float(np.max(np.abs(pb))), 1.0))
 
 
 def curve_quotient_rule(hders: Array) -> Array:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -33,7 +34,7 @@ from .knots import (
     snap_knots,
     split_poles,
 )
-from .rational import from_homogeneous, surface_quotient_rule, to_homogeneous
+from .rational import pole_deviation, from_homogeneous, surface_quotient_rule, to_homogeneous
 
 __all__ = ["BSplineSurface"]
 
@@ -495,7 +496,7 @@ class BSplineSurface:
         dev_box: list[float] = []
 
         def kernel(t: Array, p: int, H: Array) -> tuple[Array, Array]:
-            t2, H2, dev = remove_knot_lsq(t, p, H, x, times, self._pole_deviation)
+            t2, H2, dev = remove_knot_lsq(t, p, H, x, times, partial(pole_deviation, rational=self.is_rational))
             dev_box.append(dev)
             return t2, H2
 
@@ -506,15 +507,6 @@ class BSplineSurface:
                 f"the surface would move by up to {dev_box[0]:.3g}"
             )
         return result
-
-    def _pole_deviation(self, a: Array, b: Array) -> float:
-        if not self.is_rational:
-            return float(np.max(np.linalg.norm(a - b, axis=-1)))
-        pa, wa = from_homogeneous(a)
-        pb, wb = from_homogeneous(b)
-        dp = float(np.max(np.linalg.norm(pa - pb, axis=-1)))
-        dw = float(np.max(np.abs(wa - wb) / wb))
-        return max(dp, dw * max(float(np.max(np.abs(pb))), 1.0))
 
     def clamp(self) -> BSplineSurface:
         """The same surface with clamped knot vectors in both directions."""
@@ -577,10 +569,7 @@ class BSplineSurface:
 
     def transform(self, matrix: ArrayLike, translation: ArrayLike | None = None) -> BSplineSurface:
         """Apply ``x -> M x + b`` to the control net (B-splines are affinely invariant)."""
-        M = V.as_finite_array(matrix, "matrix", ndim=2)
-        if M.shape != (self.dim, self.dim):
-            raise InvalidGeometryError(f"matrix: expected shape {(self.dim, self.dim)}, got {M.shape}")
-        b = np.zeros(self.dim) if translation is None else V.as_finite_array(translation, "translation", ndim=1)
+        M, b = V.affine_map(matrix, translation, self.dim)
         return BSplineSurface._trusted(self.degree, self.knots, self.control_points @ M.T + b,
                                        None if self.weights is None else self.weights.copy())
 
