@@ -28,6 +28,7 @@ from .knots import (
     merge_knots,
     multiplicity,
     refine_poles,
+    rescale_knots,
     remove_knot_lsq,
     snap_knot,
     snap_knots,
@@ -419,10 +420,7 @@ class BSplineCurve:
         a, b = float(start), float(end)
         if not (np.isfinite(a) and np.isfinite(b) and a < b):
             raise ParameterError(f"reparametrize: expected finite start < end, got {start!r}, {end!r}")
-        lo, hi = self.domain
-        t = a + (self.knots - lo) * ((b - a) / (hi - lo))
-        t[self.degree] = a
-        t[self.n_poles] = b
+        t = rescale_knots(self.knots, self.domain, (a, b))
         return BSplineCurve._trusted(self.degree, t, self.control_points, self.weights)
 
     def transform(self, matrix: ArrayLike, translation: ArrayLike | None = None) -> BSplineCurve:

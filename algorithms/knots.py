@@ -33,6 +33,7 @@ __all__ = [
     "clamp_poles",
     "bezier_poles",
     "split_poles",
+    "rescale_knots",
 ]
 
 Array = NDArray[np.float64]
@@ -273,3 +274,19 @@ def split_poles(knots: Array, degree: int, poles: Array, u: float) -> tuple[tupl
         t = tau
     a = int(np.searchsorted(t, u, side="left"))
     return (t[: a + p + 1], H[:a]), (t[a:], H[a:])
+
+
+def rescale_knots(knots: Array, old: tuple[float, float], new: tuple[float, float]) -> Array:
+    """Map knots affinely from the domain ``old`` to ``new``, keeping the vector non-decreasing.
+
+    Every copy of an old domain end becomes the new end exactly; the rest go through
+    ``a + (t - lo) (b - a) / (hi - lo)``, which rounding keeps monotone, and interior knots are
+    clipped into ``[a, b]`` (a product can round one ulp past an end).
+    """
+    (lo, hi), (a, b) = old, new
+    t = a + (knots - lo) * ((b - a) / (hi - lo))
+    inside = (knots > lo) & (knots < hi)
+    t[inside] = np.clip(t[inside], a, b)
+    t[knots == lo] = a
+    t[knots == hi] = b
+    return t

@@ -29,6 +29,7 @@ from .knots import (
     merge_knots,
     multiplicity,
     refine_poles,
+    rescale_knots,
     remove_knot_lsq,
     snap_knot,
     snap_knots,
@@ -561,10 +562,7 @@ class BSplineSurface:
             a, b = float(a), float(b)
             if not (np.isfinite(a) and np.isfinite(b) and a < b):
                 raise ParameterError(f"reparametrize: expected finite start < end in {'uv'[ax]}, got {a!r}, {b!r}")
-            lo, hi = self.domain[ax]
-            t = a + (self.knots[ax] - lo) * ((b - a) / (hi - lo))
-            t[self.degree[ax]], t[self.n_poles[ax]] = a, b
-            kn.append(t)
+            kn.append(rescale_knots(self.knots[ax], self.domain[ax], (a, b)))
         return BSplineSurface._trusted(self.degree, tuple(kn), self.control_points, self.weights)
 
     def transform(self, matrix: ArrayLike, translation: ArrayLike | None = None) -> BSplineSurface:

@@ -627,9 +627,7 @@ def test_reparametrize_maps_derivatives_by_the_chain_rule(data, start, length):
     end = start + length
     r = c.reparametrize(start, end)
     assert r.domain == (start, end)
-    # Known bug, pinned by test_reparametrize_keeps_the_knot_vector_non_decreasing (strict
-    # xfail): remove this line with the marker once reparametrize is fixed.
-    assume(np.all(np.diff(r.knots) >= 0))
+    assert np.all(np.diff(r.knots) >= 0)
     f = np.array(data.draw(st.lists(fractions, min_size=1, max_size=8)))
     u = lo + f * (hi - lo)
     s = np.clip(start + f * length, start, end)
@@ -643,20 +641,6 @@ def test_reparametrize_maps_derivatives_by_the_chain_rule(data, start, length):
         assert_allclose(Dr[:, k], factor**k * D[:, k], rtol=0, atol=atol, err_msg=f"order {k}")
 
 
-#: A known defect of curve.py / surface.py (files owned elsewhere), kept as a strict xfail so that
-#: the fix turns it into a failure that asks for this marker to go.
-KNOWN_REPARAMETRIZE_BUG = pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "reparametrize overwrites knots[p] and knots[n] with start/end exactly while the other copies "
-        "of those values are mapped with rounding, so the knot vector can decrease (54.5 followed by "
-        "54.49999999999999) and evaluating at the end raises IndexError; fix: assign start/end to every "
-        "knot equal to the old domain ends"
-    ),
-)
-
-
-@KNOWN_REPARAMETRIZE_BUG
 def test_reparametrize_keeps_the_knot_vector_non_decreasing():
     c = BSplineCurve(3, [2, 3, 4, 4, 5, 6, 7, 8, 15, 15, 15, 15], np.arange(16.0).reshape(8, 2))
     r = c.reparametrize(0.0, 54.5)

@@ -429,9 +429,7 @@ def test_reparametrize_maps_partials_by_the_chain_rule(data, a, la, b, lb):
     s = data.draw(surfaces(**SMALL))
     r = s.reparametrize((a, a + la), (b, b + lb))
     assert r.domain == ((a, a + la), (b, b + lb))
-    # Known bug, pinned by test_reparametrize_keeps_the_knot_vectors_non_decreasing (strict
-    # xfail): remove this line with the marker once reparametrize is fixed.
-    assume(all(np.all(np.diff(t) >= 0) for t in r.knots))
+    assert all(np.all(np.diff(t) >= 0) for t in r.knots)
     (u0, u1), (v0, v1) = s.domain
     fu = np.array(data.draw(st.lists(fractions, min_size=1, max_size=6)))
     fv = np.array(data.draw(st.lists(fractions, min_size=fu.size, max_size=fu.size)))
@@ -449,8 +447,6 @@ def test_reparametrize_maps_partials_by_the_chain_rule(data, a, la, b, lb):
             assert_allclose(Dr[:, k, l], cu**k * cv**l * D[:, k, l], rtol=0, atol=atol, err_msg=f"({k}, {l})")
 
 
-@pytest.mark.xfail(strict=True, reason="reparametrize can return a decreasing knot vector at the domain "
-                   "ends (see test_curve.KNOWN_REPARAMETRIZE_BUG); evaluation at the end then raises IndexError")
 def test_reparametrize_keeps_the_knot_vectors_non_decreasing():
     t = [2, 3, 4, 4, 5, 6, 7, 8, 15, 15, 15, 15]
     s = BSplineSurface((3, 1), (t, [0, 0, 1, 1]), np.arange(48.0).reshape(8, 2, 3))
