@@ -300,7 +300,7 @@ class BSplineCurve:
             return self
         lo, hi = self.domain
         if x.min() <= lo or x.max() >= hi:
-            bad = x.min() if x.min() <= lo else x.max()
+            bad = float(x.min() if x.min() <= lo else x.max())
             raise ParameterError(f"knots: {bad!r} must lie strictly inside the domain ({lo!r}, {hi!r})")
         x = snap_knots(self.knots, x)
         tau = merge_knots(self.knots, x)
@@ -308,7 +308,7 @@ class BSplineCurve:
         if np.any(counts > self.degree + 1):
             i = int(np.argmax(counts))
             raise InvalidGeometryError(
-                f"knots: knot {vals[i]!r} would get multiplicity {counts[i]}, above degree + 1 = {self.degree + 1}"
+                f"knots: knot {float(vals[i])!r} would get multiplicity {counts[i]}, above degree + 1 = {self.degree + 1}"
             )
         H = refine_poles(self.knots, self.degree, self._hpoles, tau)
         return self._rebuild(self.degree, tau, H)

@@ -455,7 +455,7 @@ class BSplineSurface:
             return self
         lo, hi = self.domain[ax]
         if x.min() <= lo or x.max() >= hi:
-            bad = x.min() if x.min() <= lo else x.max()
+            bad = float(x.min() if x.min() <= lo else x.max())
             raise ParameterError(f"knots: {bad!r} must lie strictly inside the {direction} domain ({lo!r}, {hi!r})")
         x = snap_knots(self.knots[ax], x)
         tau = merge_knots(self.knots[ax], x)
@@ -463,7 +463,7 @@ class BSplineSurface:
         if np.any(counts > self.degree[ax] + 1):
             i = int(np.argmax(counts))
             raise InvalidGeometryError(
-                f"knots: {direction}-knot {vals[i]!r} would get multiplicity {counts[i]} > degree + 1"
+                f"knots: {direction}-knot {float(vals[i])!r} would get multiplicity {counts[i]} > degree + 1"
             )
         return self._apply(direction, lambda t, p, H: (tau, refine_poles(t, p, H, tau)))
 
