@@ -293,6 +293,32 @@ def _from_shape(shape: TopoDS_Shape, bounds, tol: float):
 
 
 # --------------------------------------------------------------------------------- curves
+#: A trimming bound within ``PERIOD_SNAP * period`` of a multiple of the period (or a range within
+#: that of one whole period) is snapped onto it before OCC converts a periodic curve or surface:
+#: ``GeomConvert`` crashes the process (segfault) or returns a spline with no poles for ranges
+#: that overshoot a period by round-off, e.g. a cylinder face trimmed to [-8.9e-16, 6.28318530718].
+PERIOD_SNAP: float = 1e-9
+
+
+def snap_periodic_range(a: float, b: float, period: float) -> tuple[float, float]:
+    """Snap ``[a, b]`` onto multiples of ``period`` and onto one whole period within
+    :data:`PERIOD_SNAP`; a range longer than one period is refused."""
+    tol = PERIOD_SNAP * period
+    for k in (round(a / period),):
+        if abs(a - k * period) <= tol:
+            a = k * period
+    k = round(b / period)
+    if abs(b - k * period) <= tol:
+        b = k * period
+    if abs((b - a) - period) <= tol:
+        b = a + period
+    if b - a > period:
+        raise InvalidGeometryError(
+            f"from_occ: bounds [{a!r}, {b!r}] span more than one period ({period!r}) of a periodic geometry"
+        )
+    return float(a), float(b)
+
+
 def _from_geom_curve(occ_curve: Geom_Curve, bounds: tuple[float, float] | None, tol: float) -> BSplineCurve:
     if bounds is None and isinstance(occ_curve, Geom_BSplineCurve):
         return _curve_from_bspline(occ_curve)
@@ -304,6 +330,8 @@ def _from_geom_curve(occ_curve: Geom_Curve, bounds: tuple[float, float] | None, 
             raise InvalidGeometryError(
                 f"from_occ: {type(occ_curve).__name__} is unbounded; pass bounds=(t0, t1)"
             )
+    if bounds is not None and occ_curve.IsPeriodic():
+        bounds = snap_periodic_range(float(bounds[0]), float(bounds[1]), occ_curve.Period())
     with _occ.kernel_errors(f"from_occ: converting {type(occ_curve).__name__}"):
         c = occ_curve if bounds is None else Geom_TrimmedCurve(occ_curve, bounds[0], bounds[1])
         if _is_offset_curve(c):
@@ -412,6 +440,13 @@ def _from_geom_surface(occ_surface: Geom_Surface, bounds: tuple[float, ...] | No
             raise InvalidGeometryError(
                 f"from_occ: {type(occ_surface).__name__} is unbounded; pass bounds=(u0, u1, v0, v1)"
             )
+    if bounds is not None:
+        u0, u1, v0, v1 = (float(x) for x in bounds)
+        if occ_surface.IsUPeriodic():
+            u0, u1 = snap_periodic_range(u0, u1, occ_surface.UPeriod())
+        if occ_surface.IsVPeriodic():
+            v0, v1 = snap_periodic_range(v0, v1, occ_surface.VPeriod())
+        bounds = (u0, u1, v0, v1)
     with _occ.kernel_errors(f"from_occ: converting {type(occ_surface).__name__}"):
         s = occ_surface if bounds is None else Geom_RectangularTrimmedSurface(occ_surface, *bounds)
         if _needs_surface_approx(s):

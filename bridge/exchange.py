@@ -95,7 +95,6 @@ __all__ = [
     "STEP_DEFAULT_RELATIVE_ERROR",
     "IGES_RELATIVE_ERROR",
     "FACE_TOLERANCE",
-    "PERIOD_SNAP",
 ]
 
 #: Significant digits :func:`write_step` prints by default: 17 identify every IEEE double, so a
@@ -111,13 +110,6 @@ STEP_DEFAULT_RELATIVE_ERROR: float = 5e-12
 #: 0.1 <= |x| < 1000 (absolute error <= 5e-10, relative <= 5e-9 at |x| = 0.1) and ``%11.9E``
 #: elsewhere (10 significant digits, relative <= 5e-10); parsing adds at most half an ulp.
 IGES_RELATIVE_ERROR: float = 5e-9
-
-#: Before an analytic face is converted, an end of its UV box within ``PERIOD_SNAP * period`` of a
-#: multiple of the period, or a width within that of one period, is snapped onto it. Guards an OCC
-#: defect: ``GeomConvert.SurfaceToBSplineSurface`` on a cylinder trimmed to u in
-#: [-8.9e-16, 6.28318530718] (a face of linkrods.step) segfaults, and to [-1e-12, 2 pi - 1e-12]
-#: returns a surface with 0 poles. The snap moves the box by at most 1e-9 of a period.
-PERIOD_SNAP: float = 1e-9
 
 _NO_NAMES = frozenset({"", "NONE"})
 
@@ -501,33 +493,15 @@ def _import_face(index: int, shape: Any, name: str | None) -> ImportedFace:
     )
 
 
-def _snap_range(a: float, b: float, period: float) -> tuple[float, float]:
-    tol = PERIOD_SNAP * period
-    k = round(a / period)
-    if abs(a - k * period) <= tol:
-        a = k * period
-    k = round(b / period)
-    if abs(b - k * period) <= tol:
-        b = k * period
-    if abs((b - a) - period) <= tol:
-        b = a + period
-    return a, b
-
-
 def _conversion_bounds(face: Any, occ_surface: Any) -> tuple[float, float, float, float] | None:
     """``None`` for B-spline and Bézier faces (converted whole: bit-exact); else the face's UV
-    box, periodic sides snapped as :data:`PERIOD_SNAP` says."""
+    box (``from_occ`` snaps periodic sides, see ``convert.PERIOD_SNAP``)."""
     from OCP.BRepTools import BRepTools
     from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
 
     if isinstance(occ_surface, (Geom_BSplineSurface, Geom_BezierSurface)):
         return None
-    u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
-    if occ_surface.IsUPeriodic():
-        u0, u1 = _snap_range(u0, u1, occ_surface.UPeriod())
-    if occ_surface.IsVPeriodic():
-        v0, v1 = _snap_range(v0, v1, occ_surface.VPeriod())
-    return u0, u1, v0, v1
+    return BRepTools.UVBounds_s(face)
 
 
 def _import_edge(index: int, shape: Any, name: str | None) -> ImportedEdge:

@@ -531,3 +531,29 @@ def test_knot_vector_helpers_round_trip():
     assert_array_equal(_occ.from_real_array(K), [-1.0, 0.25, 0.5, 2.0])
     assert_array_equal(_occ.from_int_array(M), [2, 2, 1, 3])
     assert_array_equal(_occ.knots_from_occ(K, M), t)
+
+
+@pytest.mark.parametrize(
+    "bounds",
+    [(-8.9e-16, 6.28318530718, 0.0, 1.0), (-1e-12, 2 * np.pi - 1e-12, 0.0, 1.0), (0.0, 2 * np.pi, -1.0, 2.0)],
+)
+def test_periodic_bounds_overshooting_by_round_off_are_snapped(bounds):
+    # GeomConvert segfaults on the first range (a face of linkrods.step) and returns a surface
+    # with no poles on the second; from_occ snaps such bounds onto the period first.
+    from OCP.Geom import Geom_CylindricalSurface
+
+    s = from_occ(Geom_CylindricalSurface(gp_Ax3(), 2.0), bounds)
+    (u0, u1), (v0, v1) = s.domain
+    u, v = np.linspace(u0, u1, 41), np.linspace(v0, v1, 5)
+    X = s.evaluate_grid(u, v)
+    # exact image of the cylinder (rational quadratic): radius error is round-off only
+    assert_allclose(np.hypot(X[..., 0], X[..., 1]), 2.0, rtol=1e-14, atol=0)
+
+
+def test_bounds_longer_than_a_period_are_refused():
+    from OCP.Geom import Geom_CylindricalSurface
+
+    with pytest.raises(InvalidGeometryError, match="more than one period"):
+        from_occ(Geom_CylindricalSurface(gp_Ax3(), 2.0), (0.0, 7.0, 0.0, 1.0))
+    with pytest.raises(InvalidGeometryError, match="more than one period"):
+        from_occ(Geom_Circle(gp_Ax2(), 1.0), (0.0, 7.0))
