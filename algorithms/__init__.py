@@ -3,6 +3,7 @@
 Pure NumPy/SciPy: this package never imports OCP, cadquery or build123d.
 """
 
+from .affine import AffineMap, Frame, Normal, Point, ProjectiveMap, Vector, affine_combination
 from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_point, conic_type, ellipse
 from .curve import BSplineCurve
 from .surface import BSplineSurface
@@ -28,6 +29,13 @@ from .errors import (
 )
 
 __all__ = [
+    "Point",
+    "Vector",
+    "Normal",
+    "Frame",
+    "AffineMap",
+    "ProjectiveMap",
+    "affine_combination",
     "arc",
     "circle",
     "ellipse",
