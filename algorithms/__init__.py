@@ -6,6 +6,14 @@ Pure NumPy/SciPy: this package never imports OCP, cadquery or build123d.
 from .affine import AffineMap, Frame, Normal, Point, ProjectiveMap, Vector, affine_combination
 from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_point, conic_type, ellipse
 from .curve import BSplineCurve
+from .differential import (
+    arc_length,
+    curvature,
+    curve_frenet,
+    rotation_minimizing_frames,
+    surface_curvatures,
+    torsion,
+)
 from .surface import BSplineSurface
 from .manipulation import (
     Curvature,
@@ -29,6 +37,12 @@ from .errors import (
 )
 
 __all__ = [
+    "curve_frenet",
+    "curvature",
+    "torsion",
+    "arc_length",
+    "rotation_minimizing_frames",
+    "surface_curvatures",
     "Point",
     "Vector",
     "Normal",
