@@ -278,6 +278,36 @@ def _kind_of(x: object) -> str:
 
 
 @dataclass(frozen=True, eq=False, repr=False)
+class _Linear(_Element):
+    """Scaling, division by a scalar and negation, shared by the two vector spaces (vectors and
+    normals); each result keeps the operand's type."""
+
+    def __mul__(self, other: object) -> Any:
+        s = _scalar(other)
+        if s is None:
+            return self._forbid("*", other)
+        return type(self)._trusted(_scale(self.coords, s, "scalar"))
+
+    def __rmul__(self, other: object) -> Any:
+        s = _scalar(other)
+        if s is None:
+            return self._forbid("*", other, True)
+        return type(self)._trusted(_scale(self.coords, s, "scalar"))
+
+    def __truediv__(self, other: object) -> Any:
+        s = _scalar(other)
+        if s is None:
+            return self._forbid("/", other)
+        return type(self)._trusted(_scale(self.coords, 1.0 / s, "scalar"))
+
+    def __neg__(self) -> Any:
+        return type(self)._trusted(-self.coords)
+
+    def __pos__(self) -> Any:
+        return self
+
+
+@dataclass(frozen=True, eq=False, repr=False)
 class Point(_Element):
     """Points of an affine space, shape ``(..., d)`` (course §1-5..1-30).
 
@@ -328,7 +358,7 @@ class Point(_Element):
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class Vector(_Element):
+class Vector(_Linear):
     """Free vectors (displacements), shape ``(..., d)`` (course §1-5..1-30).
 
     Parameters
@@ -358,30 +388,6 @@ class Vector(_Element):
             _broadcast(self.coords, other.coords, "other")
             return Vector._trusted(self.coords - other.coords)
         return self._forbid("-", other)
-
-    def __mul__(self, other: object) -> Vector:
-        s = _scalar(other)
-        if s is None:
-            return self._forbid("*", other)
-        return Vector._trusted(_scale(self.coords, s, "scalar"))
-
-    def __rmul__(self, other: object) -> Vector:
-        s = _scalar(other)
-        if s is None:
-            return self._forbid("*", other, True)
-        return Vector._trusted(_scale(self.coords, s, "scalar"))
-
-    def __truediv__(self, other: object) -> Vector:
-        s = _scalar(other)
-        if s is None:
-            return self._forbid("/", other)
-        return Vector._trusted(_scale(self.coords, 1.0 / s, "scalar"))
-
-    def __neg__(self) -> Vector:
-        return Vector._trusted(-self.coords)
-
-    def __pos__(self) -> Vector:
-        return self
 
     def dot(self, other: Vector | Normal) -> Array:
         """Euclidean inner product (or the pairing with a :class:`Normal`), shape ``(...)``."""
@@ -420,7 +426,7 @@ def _unit(c: Array, name: str) -> Array:
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class Normal(_Element):
+class Normal(_Linear):
     """Normal vectors: dual vectors (covectors), shape ``(..., d)`` (course §1-20..1-30).
 
     A normal ``n`` is the linear functional ``v -> n · v``; it transforms by the inverse
@@ -461,30 +467,6 @@ class Normal(_Element):
             _broadcast(self.coords, other.coords, "other")
             return Normal._trusted(self.coords - other.coords)
         return self._forbid("-", other)
-
-    def __mul__(self, other: object) -> Normal:
-        s = _scalar(other)
-        if s is None:
-            return self._forbid("*", other)
-        return Normal._trusted(_scale(self.coords, s, "scalar"))
-
-    def __rmul__(self, other: object) -> Normal:
-        s = _scalar(other)
-        if s is None:
-            return self._forbid("*", other, True)
-        return Normal._trusted(_scale(self.coords, s, "scalar"))
-
-    def __truediv__(self, other: object) -> Normal:
-        s = _scalar(other)
-        if s is None:
-            return self._forbid("/", other)
-        return Normal._trusted(_scale(self.coords, 1.0 / s, "scalar"))
-
-    def __neg__(self) -> Normal:
-        return Normal._trusted(-self.coords)
-
-    def __pos__(self) -> Normal:
-        return self
 
     def dot(self, other: Vector) -> Array:
         """The pairing ``n · v`` with vectors, shape ``(...)``."""
