@@ -304,12 +304,11 @@ def snap_periodic_range(a: float, b: float, period: float) -> tuple[float, float
     """Snap ``[a, b]`` onto multiples of ``period`` and onto one whole period within
     :data:`PERIOD_SNAP`; a range longer than one period is refused."""
     tol = PERIOD_SNAP * period
-    for k in (round(a / period),):
-        if abs(a - k * period) <= tol:
-            a = k * period
-    k = round(b / period)
-    if abs(b - k * period) <= tol:
-        b = k * period
+    ka, kb = round(a / period), round(b / period)
+    if abs(a - ka * period) <= tol:
+        a = ka * period
+    if abs(b - kb * period) <= tol:
+        b = kb * period
     if abs((b - a) - period) <= tol:
         b = a + period
     if b - a > period:
