@@ -1,0 +1,150 @@
+"""Making B-spline curves compatible: one degree, one knot vector, one domain.
+
+Ruled surfaces, Coons patches, lofts and Gordon surfaces combine the control points of several
+curves row by row, which is only meaningful when the curves share a degree and a knot vector.
+Compatibility is reached without changing any curve's geometry: a common parameter domain by an
+affine reparametrisation, a common degree by degree elevation (course §2-12), and a common knot
+vector by knot refinement (course §2-10, Oslo algorithm). See also The NURBS Book, 2nd ed., §10.3.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from . import tolerances
+from .curve import BSplineCurve
+from .errors import InvalidGeometryError, ParameterError
+
+__all__ = ["make_compatible", "common_knots"]
+
+
+def _check_curves(curves: Sequence[BSplineCurve], name: str = "curves") -> list[BSplineCurve]:
+    try:
+        items = list(curves)
+    except TypeError as err:
+        raise InvalidGeometryError(f"{name}: expected a sequence of BSplineCurve, got {type(curves).__name__}") from err
+    if not items:
+        raise InvalidGeometryError(f"{name}: expected at least one curve, got none")
+    for i, c in enumerate(items):
+        if not isinstance(c, BSplineCurve):
+            raise InvalidGeometryError(f"{name}[{i}]: expected a BSplineCurve, got {type(c).__name__}")
+    dims = {c.dim for c in items}
+    if len(dims) != 1:
+        raise InvalidGeometryError(f"{name}: all curves must have the same dimension, got {sorted(dims)}")
+    return items
+
+
+def common_knots(knot_vectors: Sequence[np.ndarray], tol: float | None = None) -> np.ndarray:
+    """The smallest knot vector that contains every given one (same domain assumed).
+
+    Distinct values closer than ``tol`` (relative to the knot range; default
+    ``tolerances.KNOT_EQUALITY``) are one knot; its multiplicity is the largest among the inputs.
+
+    Parameters
+    ----------
+    knot_vectors : sequence of ndarray, each shape (n_k + p + 1,)
+        Full knot vectors of curves of one degree on one domain.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The merged full knot vector; values are taken from the first vector that has them.
+    """
+    eps = tolerances.KNOT_EQUALITY if tol is None else float(tol)
+    allk = np.concatenate([np.asarray(k, float) for k in knot_vectors])
+    span = float(allk.max() - allk.min()) or 1.0
+    reps: list[float] = []
+    mult: list[int] = []
+    for k in knot_vectors:
+        vals, counts = np.unique(np.asarray(k, float), return_counts=True)
+        for v, c in zip(vals, counts):
+            if reps:
+                j = int(np.argmin(np.abs(np.asarray(reps) - v)))
+                if abs(reps[j] - v) <= eps * span:
+                    mult[j] = max(mult[j], int(c))
+                    continue
+            reps.append(float(v))
+            mult.append(int(c))
+    order = np.argsort(reps, kind="stable")
+    return np.repeat(np.asarray(reps)[order], np.asarray(mult)[order])
+
+
+def make_compatible(
+    curves: Sequence[BSplineCurve], *, domain: tuple[float, float] | None = None
+) -> list[BSplineCurve]:
+    """Give curves one degree, one knot vector and one domain without changing their shapes.
+
+    Parameters
+    ----------
+    curves : sequence of BSplineCurve
+        Curves of one dimension; clamped or not, rational or not.
+    domain : (float, float), optional
+        The common parameter domain. ``None`` keeps the curves' domain when they all share one
+        (to ``tolerances.KNOT_EQUALITY``) and uses ``(0, 1)`` otherwise.
+
+    Returns
+    -------
+    list of BSplineCurve
+        In the input order. All clamped, with the highest input degree, the same knot vector
+        (bit-identical arrays) and, if any input is rational, all rational (polynomial curves get
+        unit weights). Each equals its input curve up to round-off (affine reparametrisation,
+        degree elevation and knot insertion are exact operations).
+
+    Raises
+    ------
+    InvalidGeometryError
+        An empty sequence, a non-curve, or mixed dimensions.
+    ParameterError
+        ``domain`` not a finite increasing pair.
+
+    Notes
+    -----
+    Course §2-10 (knot refinement) and §2-12 (degree raising); The NURBS Book, 2nd ed., §10.3
+    ("making curves compatible" for skinning).
+    """
+    items = _check_curves(curves)
+    if domain is None:
+        doms = np.array([c.domain for c in items])
+        span = float(np.ptp(doms)) or 1.0
+        same = np.all(np.abs(doms - doms[0]) <= tolerances.KNOT_EQUALITY * max(span, float(np.abs(doms).max())))
+        lo, hi = (float(doms[0, 0]), float(doms[0, 1])) if same else (0.0, 1.0)
+    else:
+        try:
+            lo, hi = (float(x) for x in domain)
+        except (TypeError, ValueError) as err:
+            raise ParameterError(f"domain: expected a pair (start, end), got {domain!r}") from err
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            raise ParameterError(f"domain: expected finite start < end, got {domain!r}")
+    p = max(c.degree for c in items)
+    rational = any(c.is_rational for c in items)
+    work = []
+    for c in items:
+        c = c.clamp()
+        if c.domain != (lo, hi):
+            c = c.reparametrize(lo, hi)
+        if c.degree < p:
+            c = c.elevate_degree(p - c.degree)
+        work.append(c)
+    T = common_knots([c.knots for c in work])
+    T[: p + 1] = lo
+    T[-(p + 1):] = hi
+    out = []
+    span = hi - lo
+    for c in work:
+        # knots of T missing from c (with multiplicity), matched to c's own values to the tolerance
+        have = list(c.knots)
+        missing = []
+        for v in T:
+            j = int(np.argmin(np.abs(np.asarray(have) - v))) if have else -1
+            if j >= 0 and abs(have[j] - v) <= tolerances.KNOT_EQUALITY * span:
+                have.pop(j)
+            else:
+                missing.append(v)
+        if missing:
+            c = c.refine(np.asarray(missing))
+        w = c.weights if c.weights is not None else (np.ones(c.n_poles) if rational else None)
+        # c.knots equals T up to the knot-equality tolerance; use T itself so the vectors are identical
+        out.append(BSplineCurve._trusted(p, T.copy(), c.control_points, w))
+    return out

@@ -1,0 +1,243 @@
+"""Interpolation, least-squares fitting, lofting and curve compatibility (course ch. 7, §6-17).
+
+Oracles: scipy's ``make_interp_spline`` (same collocation problem, independent solver), a dense
+KKT solve of the end-constrained least-squares problem, and splines that lie in the fitted space
+(which any least-squares fit must reproduce exactly). Invariants: the geometry of curves made
+compatible is unchanged; lofts pass through their sections.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.interpolate
+from hypothesis import given
+from hypothesis import strategies as st
+
+from algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, ParameterError, circle
+from algorithms.compat import make_compatible
+from algorithms.fitting import (
+    approximation_knots,
+    averaged_knots,
+    fit_curve,
+    fit_surface,
+    interpolate_curve,
+    interpolate_surface,
+    interpolate_values,
+    loft,
+    parametrize,
+)
+from tests.algorithms.strategies import curves as bspline_curves
+from tests.algorithms.strategies import test_settings
+
+# Round-off model: the collocation matrices are totally positive and banded, condition numbers
+# stay below ~1e3 for the averaged-knot systems used here, and data are O(1); 1e-12 absolute
+# leaves two orders of magnitude above the errors measured (2e-16 .. 4e-15).
+TOL = 1e-12
+
+
+def _points(seed: int, m: int, d: int = 3) -> np.ndarray:
+    return np.random.default_rng(seed).random((m, d))
+
+
+# ----------------------------------------------------------------------------- parameters and knots
+def test_parametrize_methods_closed_form():
+    Q = np.array([[0.0, 0], [1, 0], [1, 4], [1, 13]])
+    np.testing.assert_allclose(parametrize(Q, "chord"), [0, 1 / 14, 5 / 14, 1])
+    np.testing.assert_allclose(parametrize(Q, "centripetal"), [0, 1 / 6, 3 / 6, 1])
+    np.testing.assert_allclose(parametrize(Q, "uniform"), [0, 1 / 3, 2 / 3, 1])
+
+
+def test_parametrize_rows_average_columns():
+    a = np.array([[0.0, 0], [1, 0], [3, 0]])
+    b = np.array([[0.0, 1], [2, 1], [3, 1]])
+    rows = np.stack([a, b], axis=1)  # 3 rows of 2 points
+    np.testing.assert_allclose(parametrize(rows, "chord"), (parametrize(a, "chord") + parametrize(b, "chord")) / 2)
+
+
+def test_averaged_knots_closed_form():
+    t = np.array([0, 0.1, 0.4, 0.6, 1.0])
+    np.testing.assert_allclose(averaged_knots(t, 2), [0, 0, 0, 0.25, 0.5, 1, 1, 1])
+    np.testing.assert_allclose(averaged_knots(t, 3), [0, 0, 0, 0, (0.1 + 0.4 + 0.6) / 3, 1, 1, 1, 1])
+
+
+def test_approximation_knots_every_span_has_data():
+    t = np.sort(np.random.default_rng(3).random(50))
+    t[0], t[-1] = 0, 1
+    k = approximation_knots(t, 12, 3)
+    assert k.shape == (16,)
+    inner = np.unique(k)
+    counts = np.histogram(t, bins=inner)[0]
+    assert np.all(counts >= 1)
+
+
+@pytest.mark.parametrize("bad, err", [
+    (np.zeros((3, 2)), InvalidGeometryError),  # coincident points
+    (np.zeros((1, 2)), InvalidGeometryError),
+    (np.array([[0.0, np.nan], [1, 1]]), InvalidGeometryError),
+])
+def test_parametrize_rejects(bad, err):
+    with pytest.raises(err):
+        parametrize(bad)
+
+
+def test_parametrize_unknown_method():
+    with pytest.raises(ParameterError, match="method"):
+        parametrize(np.eye(3), "foo")
+
+
+# ----------------------------------------------------------------------------- curves
+@test_settings(40)
+@given(seed=st.integers(0, 10_000), m=st.integers(2, 30), p=st.integers(1, 7),
+       method=st.sampled_from(["centripetal", "chord", "uniform"]))
+def test_interpolate_curve_matches_scipy(seed, m, p, method):
+    p = min(p, m - 1)
+    Q = _points(seed, m)
+    c = interpolate_curve(Q, p, method=method)
+    u = parametrize(Q, method)
+    np.testing.assert_allclose(c.evaluate(u), Q, atol=TOL)
+    ref = scipy.interpolate.make_interp_spline(u, Q, k=p, t=c.knots)
+    np.testing.assert_allclose(c.control_points, ref.c, atol=1e-10)  # two solvers, condition <= ~1e4
+
+
+def test_interpolate_curve_reproduces_spline_in_its_space():
+    # data sampled from a spline, interpolated with that spline's knots at its Greville points
+    c0 = BSplineCurve(3, [0, 0, 0, 0, 0.2, 0.5, 0.55, 1, 1, 1, 1], _points(1, 7))
+    g = c0.greville()
+    c = interpolate_curve(c0.evaluate(g), 3, params=g, knots=c0.knots)
+    np.testing.assert_allclose(c.control_points, c0.control_points, atol=TOL)
+
+
+def test_interpolate_values_schoenberg_whitney():
+    with pytest.raises(InvalidGeometryError, match="Schoenberg"):
+        # degree 1, hats at 0.2 and 0.4: no data site in the support (0, 0.4) of basis function 1
+        interpolate_values([0.0, 0.5, 0.6, 1.0], np.eye(4), 1, [0, 0, 0.2, 0.4, 1, 1])
+
+
+@test_settings(30)
+@given(seed=st.integers(0, 10_000), m=st.integers(8, 60), p=st.integers(1, 5), data=st.data())
+def test_fit_curve_is_the_end_constrained_least_squares_solution(seed, m, p, data):
+    n = data.draw(st.integers(p + 1, m))
+    Q = _points(seed, m)
+    c = fit_curve(Q, n, p)
+    u = parametrize(Q)
+    # Oracle: the optimality condition of min |N P - Q|^2 with P0, P_{n-1} fixed — the residual is
+    # orthogonal to every interior basis column. Round-off in the poles is ~eps * cond(N) * |Q|,
+    # so the condition is checked to 1e-13 * cond(N) (|Q| <= 1, |N| <= sqrt(m)).
+    from algorithms.basis import basis_matrix
+
+    N = basis_matrix(c.knots, p, n, u)[0]
+    r = c.evaluate(u) - Q
+    if n > 2:  # with two poles both are fixed: nothing to optimise
+        assert np.abs(N[:, 1:-1].T @ r).max() <= 1e-13 * np.linalg.cond(N) * np.sqrt(m)
+    np.testing.assert_allclose(c.evaluate(u[[0, -1]]), Q[[0, -1]], atol=TOL)
+
+
+def test_fit_curve_reproduces_a_curve_of_its_space():
+    c0 = BSplineCurve(3, [0, 0, 0, 0, 0.3, 0.6, 1, 1, 1, 1], _points(5, 6))
+    u = np.linspace(0, 1, 40)
+    c = fit_curve(c0.evaluate(u), 6, 3, params=u, knots=c0.knots)
+    np.testing.assert_allclose(c.control_points, c0.control_points, atol=TOL)
+
+
+def test_fit_curve_helix_error_decreases_with_poles():
+    t = np.linspace(0, 4 * np.pi, 400)
+    Q = np.c_[np.cos(t), np.sin(t), t / 6]
+    errs = [np.abs(fit_curve(Q, n).evaluate(parametrize(Q)) - Q).max() for n in (10, 20, 40)]
+    assert errs[0] > errs[1] > errs[2]
+    assert errs[2] < 1e-4  # cubic approximation of a helix: error ~ h^4, h = 4 pi / 37
+
+
+@pytest.mark.parametrize("n", [0, 3, 41, 2.5])
+def test_fit_curve_rejects_pole_counts(n):
+    with pytest.raises(InvalidGeometryError, match="n_poles"):
+        fit_curve(_points(0, 40), n, 3)
+
+
+# ----------------------------------------------------------------------------- surfaces
+@test_settings(25)
+@given(seed=st.integers(0, 10_000), m=st.integers(2, 12), k=st.integers(2, 12),
+       pu=st.integers(1, 5), pv=st.integers(1, 5))
+def test_interpolate_surface_through_grid(seed, m, k, pu, pv):
+    G = np.random.default_rng(seed).random((m, k, 3))
+    s = interpolate_surface(G, (min(pu, m - 1), min(pv, k - 1)))
+    uu, vv = parametrize(G), parametrize(G.transpose(1, 0, 2))
+    np.testing.assert_allclose(s.evaluate_grid(uu, vv), G, atol=1e-11)  # two banded solves in series
+
+
+def test_fit_surface_reproduces_a_surface_of_its_space():
+    rng = np.random.default_rng(2)
+    ku = [0, 0, 0, 0, 0.4, 1, 1, 1, 1]
+    kv = [0, 0, 0, 0.3, 0.7, 1, 1, 1]
+    s0 = BSplineSurface((3, 2), (ku, kv), rng.random((5, 5, 3)))
+    u, v = np.linspace(0, 1, 23), np.linspace(0, 1, 17)
+    s = fit_surface(s0.evaluate_grid(u, v), (5, 5), (3, 2), u_params=u, v_params=v, knots=(ku, kv))
+    np.testing.assert_allclose(s.control_points, s0.control_points, atol=TOL)
+
+
+def test_fit_surface_corners_interpolated_and_error_small():
+    x = np.linspace(0, 1, 50)
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    G = np.dstack([X, Y, np.sin(3 * X) * np.cos(2 * Y)])
+    s = fit_surface(G, (14, 14))
+    uu, vv = parametrize(G), parametrize(G.transpose(1, 0, 2))
+    F = s.evaluate_grid(uu, vv)
+    np.testing.assert_allclose(F[[0, 0, -1, -1], [0, -1, 0, -1]], G[[0, 0, -1, -1], [0, -1, 0, -1]], atol=TOL)
+    assert np.abs(F - G).max() < 1e-3
+
+
+# ----------------------------------------------------------------------------- compatibility, lofting
+@test_settings(30)
+@given(curves=st.lists(bspline_curves(dims=st.just(3)), min_size=2, max_size=4))
+def test_make_compatible_keeps_geometry(curves):
+    cc = make_compatible(curves)
+    assert len({c.degree for c in cc}) == 1
+    assert all(np.array_equal(cc[0].knots, c.knots) for c in cc)
+    assert len({c.is_rational for c in cc}) == 1
+    s = np.linspace(0, 1, 37)
+    for a, b in zip(curves, cc):
+        lo, hi = a.domain
+        ua = lo + (hi - lo) * s
+        blo, bhi = b.domain
+        ub = blo + (bhi - blo) * s
+        scale = max(1.0, np.abs(a.control_points).max())
+        np.testing.assert_allclose(b.evaluate(ub), a.evaluate(ua), atol=1e-11 * scale)
+
+
+def test_make_compatible_errors():
+    with pytest.raises(InvalidGeometryError, match="at least one"):
+        make_compatible([])
+    c2 = BSplineCurve(1, [0, 0, 1, 1], [[0, 0], [1, 1]])
+    c3 = BSplineCurve(1, [0, 0, 1, 1], [[0, 0, 0], [1, 1, 1]])
+    with pytest.raises(InvalidGeometryError, match="dimension"):
+        make_compatible([c2, c3])
+    with pytest.raises(InvalidGeometryError, match=r"curves\[1\]"):
+        make_compatible([c2, "x"])
+
+
+def test_loft_through_rational_sections():
+    zs = np.linspace(0, 2, 5)
+    cs = [circle([0, 0, z], 1 + z * z, [0, 0, 1]) for z in zs]
+    s = loft(cs)
+    assert s.is_rational and s.degree == (2, 3)
+    v = parametrize(np.stack([c.control_points for c in cs]))
+    u = np.linspace(*cs[0].domain, 101)
+    for c, vk in zip(cs, v):
+        np.testing.assert_allclose(s.evaluate(u, np.full_like(u, vk)), c.evaluate(u), atol=1e-13 * 5)
+    # sections are circles: every point at height z of a section has radius 1 + z^2
+    P = s.evaluate(u, np.full_like(u, v[2]))
+    np.testing.assert_allclose(np.hypot(P[:, 0], P[:, 1]), 1 + zs[2] ** 2, rtol=1e-14 * 10)
+
+
+def test_loft_two_sections_is_ruled_and_given_params_respected():
+    a = BSplineCurve(2, [0, 0, 0, 1, 1, 1], [[0, 0, 0], [1, 1, 0], [2, 0, 0]])
+    b = BSplineCurve(1, [0, 0, 1, 1], [[0, 0, 1], [2, 0, 1]])
+    s = loft([a, b], params=[0.0, 2.0])
+    assert s.degree == (2, 1) and s.domain[1] == (0.0, 2.0)
+    u = np.linspace(0, 1, 11)
+    np.testing.assert_allclose(s.evaluate(u, 1.0 + 0 * u), (a.evaluate(u) + b.evaluate(u)) / 2, atol=TOL)
+
+
+def test_loft_rejects_one_section():
+    with pytest.raises(InvalidGeometryError, match="at least 2"):
+        loft([circle([0, 0, 0], 1.0, [0, 0, 1])])
