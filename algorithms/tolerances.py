@@ -15,7 +15,7 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Iterator
 
-__all__ = ["MAX_DEGREE", "KNOT_EQUALITY", "PARAMETER", "KNOT_REMOVAL", "WEIGHT_SUM", "override"]
+__all__ = ["MAX_DEGREE", "KNOT_EQUALITY", "PARAMETER", "KNOT_REMOVAL", "WEIGHT_SUM", "MAX_CONDITION", "override"]
 
 #: Highest degree accepted, the same as OpenCascade's ``Geom_BSplineCurve::MaxDegree()`` so that
 #: every spline we build can be handed to OCC.
@@ -37,7 +37,12 @@ KNOT_REMOVAL: float = 1e-9
 #: Tolerance on weights that must sum to one (affine combinations).
 WEIGHT_SUM: float = 1e-12
 
-_NAMES = ("KNOT_EQUALITY", "PARAMETER", "KNOT_REMOVAL", "WEIGHT_SUM")
+#: A frame basis (or any matrix that must be inverted, e.g. of an affine or projective map) whose
+#: 2-norm condition number exceeds this is treated as singular: its inverse would lose more than
+#: ~12 of 16 significant digits.
+MAX_CONDITION: float = 1e12
+
+_NAMES = ("KNOT_EQUALITY", "PARAMETER", "KNOT_REMOVAL", "WEIGHT_SUM", "MAX_CONDITION")
 
 
 @contextlib.contextmanager

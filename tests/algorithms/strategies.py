@@ -207,9 +207,14 @@ def parameters(draw, domain: tuple[float, float], *, min_size: int = 1, max_size
 
 @st.composite
 def affine_maps(draw, dim: int) -> tuple[np.ndarray, np.ndarray]:
-    """A well-conditioned affine map ``x -> M x + b`` (``cond(M) <= 100``)."""
-    M = draw(arrays(np.float64, (dim, dim), elements=st.floats(-3, 3, **_float)))
+    """A well-conditioned affine map ``x -> M x + b`` of moderate scale.
 
+    ``cond(M) <= 100`` and every singular value in [0.05, 3 d]: without the lower bound a tiny
+    (e.g. 1e-200-scaled) but well-conditioned matrix would pass, and absolute tolerances of the
+    tests that use it would be meaningless.
+    """
+    M = draw(arrays(np.float64, (dim, dim), elements=st.floats(-3, 3, **_float)))
     assume(np.linalg.cond(M) <= 100)
+    assume(np.linalg.svd(M, compute_uv=False).min() >= 0.05)
     b = draw(arrays(np.float64, (dim,), elements=coords))
     return M, b
