@@ -5,7 +5,22 @@ Pure NumPy/SciPy: this package never imports OCP, cadquery or build123d.
 
 from .affine import AffineMap, Frame, Normal, Point, ProjectiveMap, Vector, affine_combination
 from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_point, conic_type, ellipse
+from .compat import make_compatible
 from .curve import BSplineCurve
+from .fitting import (
+    approximation_knots,
+    averaged_knots,
+    fit_curve,
+    fit_surface,
+    interpolate_curve,
+    interpolate_surface,
+    loft,
+    parametrize,
+)
+from .hierarchical import HierarchicalSurface
+from .hierarchical_core import Overlay
+from .hierarchical_curve import HierarchicalCurve
+from .hierarchical_offsets import ADDITIVE_OFFSETS, FRAME_OFFSETS, OffsetMapping, register_offset_mapping
 from .differential import (
     arc_length,
     curvature,
@@ -37,6 +52,22 @@ from .errors import (
 )
 
 __all__ = [
+    "make_compatible",
+    "parametrize",
+    "averaged_knots",
+    "approximation_knots",
+    "interpolate_curve",
+    "fit_curve",
+    "interpolate_surface",
+    "fit_surface",
+    "loft",
+    "HierarchicalSurface",
+    "HierarchicalCurve",
+    "Overlay",
+    "OffsetMapping",
+    "FRAME_OFFSETS",
+    "ADDITIVE_OFFSETS",
+    "register_offset_mapping",
     "curve_frenet",
     "curvature",
     "torsion",

@@ -1,0 +1,184 @@
+"""STEP exchange of hierarchical splines (course §5-17): flat geometry + an editable sidecar.
+
+STEP has no entity for a Forsey–Bartels hierarchy, so :func:`write_hierarchical_step` writes
+
+* the STEP file: the exact flat form (:meth:`HierarchicalSurface.flatten`, one B-spline face; a
+  hierarchical curve becomes one edge) that every CAD system reads, through
+  :func:`bridge.exchange.write_step` (17 significant digits: bit-exact poles);
+* a JSON *sidecar* beside it (``model.step`` -> ``model.hierarchy.json``): the hierarchy's
+  :meth:`~HierarchicalSurface.to_dict` plus a fingerprint of the STEP file it belongs to.
+
+Both are written atomically (temporary file + ``os.replace``), the STEP file first.
+:func:`read_hierarchical_step` restores the editable hierarchy from the sidecar and checks that
+the STEP geometry still equals its flat form (a STEP file edited elsewhere, or a stale sidecar,
+raises :class:`ExchangeError` instead of silently loading details onto the wrong surface).
+:func:`import_step_base` turns a B-spline face of any STEP file into the base of a new hierarchy.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from algorithms import BSplineSurface
+from algorithms.errors import ExchangeError, InvalidGeometryError
+from algorithms.hierarchical import HierarchicalSurface
+from algorithms.hierarchical_curve import HierarchicalCurve
+from algorithms.hierarchical_offsets import OffsetMapping
+
+from . import _exchange_files as _files
+from .exchange import read_step, write_step
+
+__all__ = ["SIDECAR_SUFFIX", "SIDECAR_MATCH_RTOL", "sidecar_path", "write_hierarchical_step",
+           "read_hierarchical_step", "import_step_base"]
+
+#: The sidecar of ``name.step`` is ``name`` + this suffix.
+SIDECAR_SUFFIX: str = ".hierarchy.json"
+
+#: The STEP geometry must equal the sidecar's flat form to this relative tolerance (of the
+#: model's size) at the check samples. The STEP write is bit-exact, so a real match is ~1e-16;
+#: anything above 1e-9 means the two files do not belong together.
+SIDECAR_MATCH_RTOL: float = 1e-9
+
+_SIDECAR_FORMAT = "occsurf-hierarchy-sidecar"
+_SIDECAR_VERSION = 1
+_CLASSES = {"HierarchicalSurface": HierarchicalSurface, "HierarchicalCurve": HierarchicalCurve}
+
+
+def sidecar_path(step_path: str | os.PathLike[str]) -> Path:
+    """``model.step`` -> ``model.hierarchy.json`` (same folder)."""
+    p = Path(os.fspath(step_path))
+    return p.with_name(p.stem + SIDECAR_SUFFIX)
+
+
+def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: HierarchicalSurface | HierarchicalCurve,
+                            name: str | None = None) -> tuple[Path, Path]:
+    """Write the flat form to STEP and the hierarchy to a JSON sidecar, both atomically.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The STEP file.
+    hierarchy : HierarchicalSurface or HierarchicalCurve
+        3-D.
+    name : str, optional
+        Product/face name in the STEP file.
+
+    Returns
+    -------
+    (Path, Path)
+        The STEP file and the sidecar.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Not a hierarchy, or not 3-D.
+    ExchangeError, KernelError
+        As :func:`bridge.exchange.write_step`; the sidecar is then not written.
+    """
+    if not isinstance(hierarchy, (HierarchicalSurface, HierarchicalCurve)):
+        raise InvalidGeometryError(f"hierarchy: expected a HierarchicalSurface or HierarchicalCurve, got "
+                                   f"{type(hierarchy).__name__}")
+    side = sidecar_path(_files.target(path))
+    flat = hierarchy.flatten()
+    step = write_step(path, flat, names=name)
+    data = {
+        "format": _SIDECAR_FORMAT,
+        "version": _SIDECAR_VERSION,
+        "step_file": step.name,
+        "step_sha256": hashlib.sha256(step.read_bytes()).hexdigest(),
+        "pole_counts": hierarchy.pole_counts(),
+        "hierarchy": hierarchy.to_dict(),
+    }
+    _files.atomic_write(side, (json.dumps(data, indent=1) + "\n").encode())
+    return step, side
+
+
+def _samples(obj: Any) -> np.ndarray:
+    if isinstance(obj, (HierarchicalSurface, BSplineSurface)):
+        (u0, u1), (v0, v1) = obj.domain
+        return obj.evaluate_grid(np.linspace(u0, u1, 17), np.linspace(v0, v1, 17))
+    lo, hi = obj.domain
+    return obj.evaluate(np.linspace(lo, hi, 101))
+
+
+def read_hierarchical_step(path: str | os.PathLike[str]) -> HierarchicalSurface | HierarchicalCurve:
+    """Restore the editable hierarchy written by :func:`write_hierarchical_step`.
+
+    The STEP file's first face (or free edge, for a curve) must equal the sidecar hierarchy's flat
+    form within :data:`SIDECAR_MATCH_RTOL`.
+
+    Raises
+    ------
+    ExchangeError
+        No sidecar, an unreadable or foreign sidecar, or a STEP file whose geometry no longer
+        matches it (edited after writing). Messages name the path.
+    """
+    p = Path(os.fspath(path))
+    side = sidecar_path(p)
+    if not side.is_file():
+        raise ExchangeError(f"{side}: no hierarchy sidecar beside {p.name}; use import_step_base() to start a new "
+                            "hierarchy from the STEP geometry")
+    try:
+        data = json.loads(side.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise ExchangeError(f"{side}: unreadable hierarchy sidecar: {err}") from err
+    if not isinstance(data, dict) or data.get("format") != _SIDECAR_FORMAT:
+        raise ExchangeError(f"{side}: not an occsurf hierarchy sidecar")
+    if not isinstance(data.get("version"), int) or data["version"] > _SIDECAR_VERSION:
+        raise ExchangeError(f"{side}: sidecar version {data.get('version')!r} is newer than {_SIDECAR_VERSION}")
+    d = data.get("hierarchy")
+    cls = _CLASSES.get(d.get("type") if isinstance(d, dict) else None)
+    if cls is None:
+        raise ExchangeError(f"{side}: the sidecar holds no hierarchical surface or curve")
+    try:
+        h = cls.from_dict(d)
+    except InvalidGeometryError as err:
+        raise ExchangeError(f"{side}: invalid hierarchy: {err}") from err
+    model = read_step(p)
+    items = model.faces if cls is HierarchicalSurface else model.edges
+    geo = items[0].surface if cls is HierarchicalSurface and items else (items[0].curve if items else None)
+    if geo is None:
+        raise ExchangeError(f"{p}: no {'face' if cls is HierarchicalSurface else 'edge'} to match the sidecar")
+    ours = _samples(h)
+    try:
+        theirs = _samples(geo)
+    except InvalidGeometryError as err:
+        raise ExchangeError(f"{p}: its geometry does not match the sidecar ({err})") from err
+    scale = max(1.0, float(np.abs(ours).max()))
+    dev = float(np.abs(ours - theirs).max()) if ours.shape == theirs.shape else np.inf
+    if not dev <= SIDECAR_MATCH_RTOL * scale:
+        raise ExchangeError(f"{p}: the STEP geometry differs from the hierarchy in {side.name} by {dev:.3g} "
+                            "(edited after writing, or a stale sidecar)")
+    return h
+
+
+def import_step_base(path: str | os.PathLike[str], face: int = 0,
+                     offsets: str | OffsetMapping = "frame") -> HierarchicalSurface:
+    """A new hierarchy whose base is a B-spline face of a STEP file (exact conversion).
+
+    Parameters
+    ----------
+    path : str or path-like
+    face : int
+        Index into :attr:`bridge.exchange.ImportedModel.faces`.
+    offsets : {"frame", "additive"} or OffsetMapping
+
+    Raises
+    ------
+    ExchangeError
+        Unreadable file, no such face, or a face that is not a B-spline surface (its type named).
+    """
+    model = read_step(path)
+    if isinstance(face, bool) or not isinstance(face, int) or not 0 <= face < len(model.faces):
+        raise ExchangeError(f"{model.path}: face index {face!r} is not in 0..{len(model.faces) - 1}")
+    f = model.faces[face]
+    if f.surface_type not in ("BSplineSurface", "BezierSurface") or f.surface is None:
+        raise ExchangeError(f"{model.path}: face {face} is a {f.surface_type}, not a B-spline surface"
+                            + (f" ({f.error})" if f.error else ""))
+    return HierarchicalSurface(f.surface, offsets)
