@@ -17,6 +17,7 @@ from .fitting import (
     loft,
     parametrize,
 )
+from .generalized import GeneralizedSurface, biquadratic_patch, generalized_biquadratic, spatch_curvatures
 from .hierarchical import HierarchicalSurface
 from .hierarchical_core import Overlay
 from .hierarchical_curve import HierarchicalCurve
@@ -29,6 +30,9 @@ from .differential import (
     surface_curvatures,
     torsion,
 )
+from .mesh import Mesh, catmull_clark, read_obj, write_obj
+from .spatch import SPatch, domain_vertices, spatch_indices, wachspress, wachspress_derivatives, wachspress_gradient
+from .spatch_convert import SPatchConversion, convert_spatch, spatch_to_surfaces
 from .surface import BSplineSurface
 from .manipulation import (
     Curvature,
@@ -52,6 +56,23 @@ from .errors import (
 )
 
 __all__ = [
+    "SPatch",
+    "spatch_indices",
+    "domain_vertices",
+    "wachspress",
+    "wachspress_gradient",
+    "wachspress_derivatives",
+    "spatch_to_surfaces",
+    "convert_spatch",
+    "SPatchConversion",
+    "Mesh",
+    "read_obj",
+    "write_obj",
+    "catmull_clark",
+    "GeneralizedSurface",
+    "generalized_biquadratic",
+    "biquadratic_patch",
+    "spatch_curvatures",
     "make_compatible",
     "parametrize",
     "averaged_knots",

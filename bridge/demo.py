@@ -18,6 +18,7 @@ __all__ = ["DEMOS", "run_demos"]
 DEMOS: dict[str, str] = {
     "manipulation": "bridge.demo_manipulation:render_manipulation_demo",  # course ch. 3-4
     "hierarchical": "bridge.demo_hierarchical:render_hierarchical_demo",  # course ch. 5
+    "generalized": "bridge.demo_generalized:render_generalized_demo",  # course §8-6, 8-7
 }
 
 
