@@ -7,6 +7,7 @@ from .affine import AffineMap, Frame, Normal, Point, ProjectiveMap, Vector, affi
 from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_point, conic_type, ellipse
 from .compat import make_compatible
 from .curve import BSplineCurve
+from .curvenet import coons, coons_bicubic, gordon, network_parameters, polynomial_approximation
 from .fitting import (
     approximation_knots,
     averaged_knots,
@@ -56,6 +57,11 @@ from .errors import (
 )
 
 __all__ = [
+    "coons",
+    "coons_bicubic",
+    "gordon",
+    "network_parameters",
+    "polynomial_approximation",
     "SPatch",
     "spatch_indices",
     "domain_vertices",

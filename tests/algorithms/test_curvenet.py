@@ -1,0 +1,447 @@
+"""Coons patches and Gordon surfaces (algorithms/curvenet.py, course §6-17..6-25).
+
+Oracles: the defining formulas evaluated directly (bilinear Coons), closed forms (four lines give
+the bilinear patch; networks of iso-curves of a known surface reproduce it under the stated
+condition), exactness on the input curves; invariants under hypothesis (affine invariance, random
+networks interpolated); every error path.
+
+Tolerances. Exact identities are checked relative to the size of the data (``scale`` = largest
+coordinate). Boundaries of a Coons net ARE the compatible boundary poles (written, not computed),
+so a boundary evaluates like the input curve after degree elevation / knot refinement: the only
+error is the round-off of those exact operations and of evaluation, measured below ~4e-16 x scale;
+asserted at 1e-14 x scale. The bilinear-Coons formula is a sum of 7 terms evaluated separately:
+measured ~3e-15 x scale, asserted 1e-13 x scale. Gordon surfaces add banded interpolation solves
+whose round-off grows with the conditioning of the collocation matrices: measured <= 2e-15 x scale
+on the networks here, asserted 1e-12 x scale.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+
+from algorithms.basis import basis_matrix
+from algorithms.curve import BSplineCurve
+from algorithms.curvenet import (
+    APPROXIMATION_TOLERANCE,
+    coons,
+    coons_bicubic,
+    gordon,
+    network_parameters,
+    polynomial_approximation,
+)
+from algorithms.errors import InvalidGeometryError, ToleranceError
+from algorithms.surface import BSplineSurface
+from tests.algorithms.strategies import affine_maps, test_settings
+
+S = np.linspace(0.0, 1.0, 57)
+UU, VV = np.meshgrid(S, S, indexing="ij")
+
+
+# ------------------------------------------------------------------------------------ helpers
+def iso_u(F: BSplineSurface, v: float) -> BSplineCurve:
+    """The iso-curve ``F(., v)`` as an exact B-spline (rows of the net contracted with N_j(v))."""
+    (p, q), (U, V) = F.degree, F.knots
+    N = basis_matrix(V, q, F.n_poles[1], np.atleast_1d(float(v)))[0][0]
+    H = np.einsum("j,ijk->ik", N, F.homogeneous_points)
+    if F.is_rational:
+        return BSplineCurve(p, U, H[:, :-1] / H[:, -1:], H[:, -1])
+    return BSplineCurve(p, U, H)
+
+
+def iso_v(F: BSplineSurface, u: float) -> BSplineCurve:
+    return iso_u(F.swap_uv(), u)
+
+
+def d_iso_u(F: BSplineSurface, v: float) -> BSplineCurve:
+    """``dF/dv (., v)`` as a B-spline curve (polynomial F)."""
+    (p, q), (U, V) = F.degree, F.knots
+    N = basis_matrix(V, q, F.n_poles[1], np.atleast_1d(float(v)), 1)[1][0]
+    return BSplineCurve(p, U, np.einsum("j,ijk->ik", N, F.control_points))
+
+
+def boundary_net(F: BSplineSurface):
+    b, t, l, r = iso_u(F, 0), iso_u(F, 1), iso_v(F, 0), iso_v(F, 1)
+    G = F.swap_uv()
+    return (b, r, t, l), (d_iso_u(F, 0), d_iso_u(G, 1), d_iso_u(F, 1), d_iso_u(G, 0))
+
+
+def clamped(n: int, p: int, rng: np.random.Generator) -> np.ndarray:
+    inner = np.sort(rng.uniform(0.1, 0.9, n - p - 1))
+    return np.r_[np.zeros(p + 1), inner, np.ones(p + 1)]
+
+
+def random_surface(rng, p=3, q=3, nu=7, nv=6, rational=False) -> BSplineSurface:
+    x, y = np.meshgrid(np.linspace(0, 3, nu), np.linspace(0, 2, nv), indexing="ij")
+    P = np.stack([x, y, 0.5 * rng.standard_normal((nu, nv))], axis=-1)
+    w = rng.uniform(0.5, 2.0, (nu, nv)) if rational else None
+    return BSplineSurface((p, q), (clamped(nu, p, rng), clamped(nv, q, rng)), P, w)
+
+
+def wiggly(a, b, n, p, rng, amp=0.3) -> BSplineCurve:
+    t = np.linspace(0, 1, n)[:, None]
+    P = a + t * (b - a)
+    P[1:-1] += amp * rng.standard_normal((n - 2, a.shape[0]))
+    return BSplineCurve(p, clamped(n, p, rng), P)
+
+
+CORNERS = np.array([[0, 0, 0.0], [3, 0, 0.5], [3, 2, 0.0], [0, 2, 1.0]])  # 00, 10, 11, 01
+
+
+def random_loop(rng, degrees=(3, 2, 3, 1), counts=(6, 5, 7, 2)):
+    P00, P10, P11, P01 = CORNERS
+    b = wiggly(P00, P10, counts[0], degrees[0], rng)
+    r = wiggly(P10, P11, counts[1], degrees[1], rng)
+    t = wiggly(P01, P11, counts[2], degrees[2], rng)
+    l = wiggly(P00, P01, counts[3], degrees[3], rng)
+    return b, r, t, l
+
+
+def scale_of(*objs) -> float:
+    return max(float(np.abs(o.control_points).max()) for o in objs)
+
+
+def check_boundaries(Sf: BSplineSurface, b, r, t, l, rtol=1e-14):
+    (u0, u1), (v0, v1) = Sf.domain
+    us, vs = u0 + S * (u1 - u0), v0 + S * (v1 - v0)
+    sc = scale_of(b, r, t, l)
+    for got, c, x in ((Sf.evaluate(us, v0), b, b.domain), (Sf.evaluate(us, v1), t, t.domain),
+                      (Sf.evaluate(u0, vs), l, l.domain), (Sf.evaluate(u1, vs), r, r.domain)):
+        assert_allclose(got, c.evaluate(x[0] + S * (x[1] - x[0])), rtol=0, atol=rtol * sc)
+
+
+# ------------------------------------------------------------------------------------ Coons
+def test_coons_boundaries_are_the_input_curves():
+    b, r, t, l = random_loop(np.random.default_rng(0))
+    C = coons(b, r, t, l)
+    assert C.degree == (3, 2) and not C.is_rational
+    check_boundaries(C, b, r, t, l)
+
+
+def test_coons_equals_the_bilinear_coons_formula():
+    b, r, t, l = random_loop(np.random.default_rng(1))
+    C = coons(b, r, t, l)
+    u, v = UU[..., None], VV[..., None]
+    P00, P10, P11, P01 = CORNERS
+    ref = ((1 - v) * b(UU) + v * t(UU) + (1 - u) * l(VV) + u * r(VV)
+           - (1 - u) * (1 - v) * P00 - u * (1 - v) * P10 - u * v * P11 - (1 - u) * v * P01)
+    assert_allclose(C.evaluate(UU, VV), ref, rtol=0, atol=1e-13 * scale_of(b, r, t, l))
+
+
+def test_coons_of_four_lines_is_the_bilinear_patch():
+    P00, P10, P11, P01 = CORNERS
+    line = lambda a, c: BSplineCurve(1, [0, 0, 1, 1], [a, c])  # noqa: E731
+    C = coons(line(P00, P10), line(P10, P11), line(P01, P11), line(P00, P01))
+    assert C.degree == (1, 1) and C.n_poles == (2, 2)
+    assert_allclose(C.control_points, [[P00, P01], [P10, P11]], rtol=0, atol=1e-15)
+    u, v = UU[..., None], VV[..., None]
+    bil = (1 - u) * (1 - v) * P00 + u * (1 - v) * P10 + u * v * P11 + (1 - u) * v * P01
+    assert_allclose(C.evaluate(UU, VV), bil, rtol=0, atol=1e-14)
+
+
+def test_coons_reproduces_a_surface_linear_in_one_direction():
+    # P1 (ruled in v) reproduces F when F is linear in v, so (I - P1)(I - P2) F = 0.
+    rng = np.random.default_rng(2)
+    F = random_surface(rng, p=3, q=1, nu=6, nv=2)
+    (b, r, t, l), _ = boundary_net(F)
+    assert_allclose(coons(b, r, t, l).evaluate(UU, VV), F.evaluate(UU, VV), rtol=0, atol=1e-14 * scale_of(F))
+
+
+def test_coons_domains_kept_or_normalised():
+    b, r, t, l = random_loop(np.random.default_rng(3))
+    C = coons(b.reparametrize(2, 5), r.reparametrize(-1, 1), t.reparametrize(2, 5), l.reparametrize(-1, 1))
+    assert C.domain == ((2.0, 5.0), (-1.0, 1.0))
+    check_boundaries(C, b.reparametrize(2, 5), r.reparametrize(-1, 1), t.reparametrize(2, 5), l.reparametrize(-1, 1))
+    C2 = coons(b.reparametrize(2, 5), r, t, l)  # bottom and top disagree: both mapped to [0, 1]
+    assert C2.domain == ((0.0, 1.0), (0.0, 1.0))
+    check_boundaries(C2, b, r, t, l)
+
+
+def test_coons_closes_small_gaps_and_moves_curves_by_at_most_the_gap():
+    b, r, t, l = random_loop(np.random.default_rng(4))
+    gap = 4e-8  # below NETWORK_TOLERANCE = 1e-7
+    t2 = t.transform(np.eye(3), [0, 0, gap])
+    C = coons(b, r, t2, l)
+    assert_allclose(C.evaluate(S, 1.0), t2(S), rtol=0, atol=gap / 2 + 1e-14 * scale_of(t))
+    assert_allclose(C.evaluate(0.0, S), l(S), rtol=0, atol=gap / 2 + 1e-14 * scale_of(l))
+    assert np.abs(C.evaluate(S, 1.0) - t2(S)).max() > gap / 4  # the ends really moved
+
+
+@pytest.mark.parametrize("which", ["bottom", "right", "top", "left"])
+def test_coons_names_a_reversed_curve(which):
+    curves = dict(zip(("bottom", "right", "top", "left"), random_loop(np.random.default_rng(5))))
+    curves[which] = curves[which].reverse()
+    with pytest.raises(InvalidGeometryError, match=rf"^{which}: the curve runs the wrong way.*{which}\.reverse\(\)"):
+        coons(**curves)
+
+
+def test_coons_names_the_open_corner_and_the_gap():
+    b, r, t, l = random_loop(np.random.default_rng(6))
+    P = np.array(r.control_points)
+    P[-1] += [0, 0, 0.25]  # the end of right misses the end of top
+    r2 = BSplineCurve(r.degree, r.knots, P)
+    with pytest.raises(InvalidGeometryError, match=r"open at corner \(u1, v1\).*top and the end of right are 0\.25 apart"):
+        coons(b, r2, t, l)
+    with pytest.raises(InvalidGeometryError, match="open at corner"):
+        coons(b, r, t.transform(np.eye(3), [0, 0, 1e-6]), l)  # 1e-6 > tol = 1e-7
+    coons(b, r, t.transform(np.eye(3), [0, 0, 1e-6]), l, tol=1e-5)  # accepted with a larger tol
+
+
+def test_coons_rejects_bad_input():
+    b, r, t, l = random_loop(np.random.default_rng(7))
+    with pytest.raises(InvalidGeometryError, match="^left: expected a BSplineCurve, got list"):
+        coons(b, r, t, [[0, 0, 0]])
+    flat = BSplineCurve(1, [0, 0, 1, 1], [[0, 0], [0, 2]])
+    with pytest.raises(InvalidGeometryError, match="same dimension"):
+        coons(b, r, t, flat)
+    with pytest.raises(InvalidGeometryError, match="tol: expected a finite value >= 0"):
+        coons(b, r, t, l, tol=-1)
+
+
+def test_coons_rational_boundaries_of_a_nurbs_surface_are_exact():
+    F = random_surface(np.random.default_rng(8), p=2, q=2, nu=4, nv=5, rational=True)
+    (b, r, t, l), _ = boundary_net(F)
+    C = coons(b, r, t, l)
+    assert C.is_rational
+    check_boundaries(C, b, r, t, l, rtol=1e-14)
+    # Scaling one boundary's weights changes nothing geometrically: still exact.
+    r3 = BSplineCurve(r.degree, r.knots, r.control_points, r.weights * 3.0)
+    check_boundaries(coons(b, r3, t, l), b, r3, t, l, rtol=1e-14)
+
+
+def test_coons_rational_with_unmatchable_corner_weights_is_approximated():
+    F = random_surface(np.random.default_rng(9), p=2, q=2, nu=4, nv=4, rational=True)
+    (b, r, t, l), _ = boundary_net(F)
+    w = np.array(t.weights)
+    w[-1] *= 2.0  # changes the curve and the loop's weight-ratio product; corners still meet
+    t2 = BSplineCurve(t.degree, t.knots, t.control_points, w)
+    C = coons(b, r, t2, l, approx_tol=1e-8)
+    assert not C.is_rational
+    # each boundary within its approximation's measured error (<= approx_tol)
+    check_boundaries(C, b, r, t2, l, rtol=1e-8 / scale_of(b, r, t2, l))
+    assert np.abs(C.evaluate(S, 1.0) - t2(S)).max() > 1e-14  # really an approximation
+    with pytest.raises(ToleranceError, match="could not approximate"):
+        coons(b, r, t2, l, approx_tol=1e-30)
+
+
+@given(data=st.data())
+@test_settings(15)
+def test_coons_affine_invariance(data):
+    seed = data.draw(st.integers(0, 2**31 - 1))
+    M, v = data.draw(affine_maps(3))
+    rng = np.random.default_rng(seed)
+    degrees = tuple(data.draw(st.integers(1, 4)) for _ in range(4))
+    counts = tuple(d + 1 + data.draw(st.integers(0, 3)) for d in degrees)
+    b, r, t, l = random_loop(rng, degrees, counts)
+    C = coons(b, r, t, l)
+    CT = coons(*(c.transform(M, v) for c in (b, r, t, l)))
+    sc = np.abs(CT.control_points).max() + np.abs(M).max() * scale_of(b, r, t, l)
+    # both are the same linear combinations of (transformed) poles; M and v add round-off only
+    assert_allclose(CT.control_points, C.control_points @ M.T + v, rtol=0, atol=1e-13 * sc)
+    check_boundaries(C, b, r, t, l)
+
+
+# ------------------------------------------------------------------------------------ bicubic Coons
+def test_bicubic_coons_interpolates_boundaries_and_cross_derivatives():
+    F = random_surface(np.random.default_rng(10), nu=7, nv=6)
+    curves, xd = boundary_net(F)
+    C = coons_bicubic(*curves, cross_derivatives=xd)
+    assert C.degree == (3, 3)
+    sc = scale_of(F)
+    D, DF = C.derivatives_grid(S, [0, 1], 1), F.derivatives_grid(S, [0, 1], 1)
+    assert_allclose(D[:, :, 0, 0], DF[:, :, 0, 0], rtol=0, atol=1e-14 * sc)
+    # derivatives scale with the degree over the shortest span (~3 / 0.1): 1e-12 x scale
+    assert_allclose(D[:, :, 0, 1], DF[:, :, 0, 1], rtol=0, atol=1e-12 * sc)
+    D, DF = C.derivatives_grid([0, 1], S, 1), F.derivatives_grid([0, 1], S, 1)
+    assert_allclose(D[:, :, 0, 0], DF[:, :, 0, 0], rtol=0, atol=1e-14 * sc)
+    assert_allclose(D[:, :, 1, 0], DF[:, :, 1, 0], rtol=0, atol=1e-12 * sc)
+
+
+def test_bicubic_coons_reproduces_a_bicubic_bezier_patch():
+    rng = np.random.default_rng(11)
+    F = BSplineSurface((3, 3), ([0] * 4 + [1] * 4,) * 2, rng.standard_normal((4, 4, 3)))
+    curves, xd = boundary_net(F)
+    assert_allclose(coons_bicubic(*curves, cross_derivatives=xd).evaluate(UU, VV), F.evaluate(UU, VV),
+                    rtol=0, atol=1e-13 * scale_of(F))
+    # zero twists: no longer the patch (F has non-zero twists), cross derivatives off
+    Z = coons_bicubic(*curves, cross_derivatives=xd, twists="zero")
+    assert np.abs(Z.evaluate(UU, VV) - F.evaluate(UU, VV)).max() > 1e-3
+    # explicit twists equal to F's reproduce it again
+    W = F.derivatives(np.array([0, 1, 1, 0.0]), np.array([0, 0, 1, 1.0]), 1)[:, 1, 1]
+    assert_allclose(coons_bicubic(*curves, cross_derivatives=xd, twists=W).evaluate(UU, VV), F.evaluate(UU, VV),
+                    rtol=0, atol=1e-13 * scale_of(F))
+
+
+def test_bicubic_coons_error_paths():
+    F = random_surface(np.random.default_rng(12))
+    (b, r, t, l), (xb, xr, xt, xl) = boundary_net(F)
+    with pytest.raises(InvalidGeometryError, match=r"cross_derivatives\[0\]: at corner \(u0, v0\).*tangent of left"):
+        coons_bicubic(b, r, t, l, cross_derivatives=(xb.transform(np.eye(3), [0, 0, 1]), xr, xt, xl))
+    with pytest.raises(InvalidGeometryError, match=r"cross_derivatives: expected at least 4 curves, got 3"):
+        coons_bicubic(b, r, t, l, cross_derivatives=(xb, xr, xt))
+    with pytest.raises(InvalidGeometryError, match=r"cross_derivatives\[1\]: expected the domain"):
+        coons_bicubic(b, r, t, l, cross_derivatives=(xb, xr.reparametrize(0, 2), xt, xl))
+    with pytest.raises(InvalidGeometryError, match="twists: expected 'average', 'zero'"):
+        coons_bicubic(b, r, t, l, cross_derivatives=(xb, xr, xt, xl), twists="adini")
+    with pytest.raises(InvalidGeometryError, match=r"twists: expected shape \(4, 3\)"):
+        coons_bicubic(b, r, t, l, cross_derivatives=(xb, xr, xt, xl), twists=np.zeros((3, 3)))
+    with pytest.raises(InvalidGeometryError, match="wrong way"):
+        coons_bicubic(b.reverse(), r, t, l, cross_derivatives=(xb, xr, xt, xl))
+
+
+# ------------------------------------------------------------------------------------ Gordon
+def network(F, us, vs):
+    return [iso_u(F, v) for v in vs], [iso_v(F, u) for u in us]
+
+
+def check_network(G, A, B, us, vs, rtol=1e-12):
+    sc = scale_of(*A, *B)
+    for a, v in zip(A, vs):
+        assert_allclose(G.evaluate(S, v), a(S), rtol=0, atol=rtol * sc)
+    for b, u in zip(B, us):
+        assert_allclose(G.evaluate(u, S), b(S), rtol=0, atol=rtol * sc)
+
+
+def test_gordon_interpolates_every_network_curve():
+    F = random_surface(np.random.default_rng(20))
+    us, vs = np.array([0, 0.15, 0.4, 0.6, 0.85, 1.0]), np.array([0, 0.2, 0.45, 0.7, 1.0])
+    A, B = network(F, us, vs)
+    G = gordon(A, B)
+    check_network(G, A, B, us, vs)
+    assert G.degree == (3, 3)
+    # a 5 x 6 network of a surface with interior knots in both directions does not determine it
+    assert np.abs(G.evaluate(UU, VV) - F.evaluate(UU, VV)).max() > 1e-3
+
+
+def test_gordon_parameters_found_by_closest_points():
+    F = random_surface(np.random.default_rng(21))
+    us, vs = np.array([0, 0.3, 0.7, 1.0]), np.array([0, 0.25, 0.5, 0.9, 1.0])
+    A, B = network(F, us, vs)
+    s, t, d = network_parameters(A, B)
+    assert_allclose(s, np.broadcast_to(us, s.shape), rtol=0, atol=1e-12)
+    assert_allclose(t, np.broadcast_to(vs[:, None], t.shape), rtol=0, atol=1e-12)
+    assert d.max() < 1e-13 * scale_of(F)
+    G1, G2 = gordon(A, B), gordon(A, B, u_params=us, v_params=vs)
+    assert_allclose(G1.control_points, G2.control_points, rtol=0, atol=1e-12 * scale_of(F))
+
+
+def test_gordon_reproduces_the_surface_when_the_cross_space_contains_it():
+    F = random_surface(np.random.default_rng(22))
+    # v: the u-curves at F's v Greville abscissae with F's v knots across v => P1 F = F.
+    vs = F.greville()[1]
+    us = np.array([0, 0.5, 1.0])
+    A, B = network(F, us, vs)
+    G = gordon(A, B, cross_knots=(None, F.knots[1]))
+    assert_allclose(G.evaluate(UU, VV), F.evaluate(UU, VV), rtol=0, atol=1e-13 * scale_of(F))
+    # u likewise (swap the roles)
+    us2 = F.greville()[0]
+    A2, B2 = network(F, us2, np.array([0, 0.4, 1.0]))
+    G2 = gordon(A2, B2, cross_knots=(F.knots[0], None))
+    assert_allclose(G2.evaluate(UU, VV), F.evaluate(UU, VV), rtol=0, atol=1e-13 * scale_of(F))
+    # a polynomial-in-v surface of degree 3 is reproduced by any >= 4 u-curves (default knots)
+    Fb = random_surface(np.random.default_rng(23), q=3, nv=4)
+    A3, B3 = network(Fb, np.array([0, 0.5, 1.0]), np.array([0, 0.2, 0.7, 1.0]))
+    assert_allclose(gordon(A3, B3).evaluate(UU, VV), Fb.evaluate(UU, VV), rtol=0, atol=1e-13 * scale_of(Fb))
+
+
+def test_gordon_network_inside_the_domain_extrapolates_consistently():
+    F = random_surface(np.random.default_rng(24))
+    us, vs = np.array([0.1, 0.4, 0.6, 0.9]), np.array([0.05, 0.5, 0.8, 0.95])
+    A, B = network(F, us, vs)
+    G = gordon(A, B)
+    assert G.domain == ((0.0, 1.0), (0.0, 1.0))
+    check_network(G, A, B, us, vs)
+
+
+@given(data=st.data())
+@test_settings(15)
+def test_gordon_random_networks_are_interpolated(data):
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**31 - 1)))
+    p, q = data.draw(st.integers(1, 4)), data.draw(st.integers(1, 4))
+    F = random_surface(rng, p=p, q=q, nu=p + 1 + data.draw(st.integers(0, 3)), nv=q + 1 + data.draw(st.integers(0, 3)),
+                       rational=data.draw(st.booleans()))
+    m, n = data.draw(st.integers(2, 6)), data.draw(st.integers(2, 6))
+    gaps = lambda k: np.cumsum(rng.uniform(0.3, 1.0, k))  # noqa: E731  well-separated parameters
+    us, vs = gaps(n), gaps(m)
+    us, vs = (us - us[0]) / (us[-1] - us[0]), (vs - vs[0]) / (vs[-1] - vs[0])
+    A, B = network(F, us, vs)
+    deg = (data.draw(st.integers(1, 4)), data.draw(st.integers(1, 4)))
+    G = gordon(A, B, u_params=us, v_params=vs, degree=deg)
+    # Rational networks of iso-curves meet in homogeneous space too: built exactly, unless the
+    # homogeneous Boolean sum has a non-positive weight (then approximated within 1e-6).
+    exact = G.is_rational == F.is_rational
+    check_network(G, A, B, us, vs, rtol=1e-12 if exact else 1e-5 / scale_of(F))
+    if not exact:
+        return  # the approximation's refinement depends on distances, which an affine map scales
+    M, v = data.draw(affine_maps(3))
+    GT = gordon([a.transform(M, v) for a in A], [b.transform(M, v) for b in B], u_params=us, v_params=vs, degree=deg)
+    sc = np.abs(GT.control_points).max() + np.abs(M).max() * scale_of(F)
+    assert_allclose(GT.evaluate(UU, VV), G.evaluate(UU, VV) @ M.T + v, rtol=0, atol=1e-11 * sc)
+
+
+def test_gordon_rational_network_not_meeting_homogeneously_is_approximated():
+    F = random_surface(np.random.default_rng(25), p=2, q=2, nu=4, nv=4, rational=True)
+    us, vs = np.array([0, 0.25, 0.5, 0.8, 1]), np.array([0, 0.3, 0.6, 1])
+    A, B = network(F, us, vs)
+    A[1] = BSplineCurve(A[1].degree, A[1].knots, A[1].control_points, A[1].weights * 3)  # same curve
+    G = gordon(A, B, approx_tol=1e-7)
+    assert not G.is_rational
+    # within the approximation error of each curve (<= 1e-7), plus the interpolants of the
+    # differences of the approximations at the crossings (same order)
+    check_network(G, A, B, us, vs, rtol=1e-6 / scale_of(*A, *B))
+
+
+def test_gordon_error_paths():
+    F = random_surface(np.random.default_rng(26))
+    us, vs = np.array([0, 0.3, 0.7, 1.0]), np.array([0, 0.5, 1.0])
+    A, B = network(F, us, vs)
+    with pytest.raises(InvalidGeometryError, match="u_curves: expected at least 2 curves, got 1"):
+        gordon(A[:1], B)
+    with pytest.raises(InvalidGeometryError, match=r"u_params: expected 4 values \(one per v-curve"):
+        gordon(A, B, u_params=[0, 1], v_params=vs)
+    with pytest.raises(InvalidGeometryError, match="u_params: expected strictly increasing"):
+        gordon(A, B, u_params=[0, 0.7, 0.3, 1.0], v_params=vs)
+    with pytest.raises(InvalidGeometryError, match="v_curves: expected strictly increasing.*order the v-curves by increasing u"):
+        gordon(A, B[::-1])
+    far = B[1].transform(np.eye(3), [0, 0, 0.5])
+    with pytest.raises(InvalidGeometryError, match=r"u_curves\[\d\], v_curves\[1\]: the curves do not meet: closest distance 0\.\d+ at u="):
+        gordon(A, [B[0], far, B[2], B[3]])
+    with pytest.raises(InvalidGeometryError, match=r"the network is not consistent"):
+        gordon(A, B, u_params=[0, 0.35, 0.7, 1.0], v_params=vs)
+    with pytest.raises(InvalidGeometryError, match=r"degree: expected a pair"):
+        gordon(A, B, degree=3)
+    with pytest.raises(InvalidGeometryError, match=r"cross_knots\[1\]: expected 6 values"):
+        gordon(A, B, cross_knots=(None, [0, 0, 0, 1, 1]))
+
+
+def test_gordon_inconsistent_parametrisation_is_explained():
+    # Lines y = v_i (u = x) and x = u_j (v = y); the middle u-line is parametrised by x = u^2,
+    # so it crosses x = u_j at u = sqrt(u_j): the curves meet, the parameters do not agree.
+    us, vs = np.array([0, 0.25, 0.5, 1.0]), np.array([0, 0.5, 1.0])
+    A = [BSplineCurve(1, [0, 0, 1, 1], [[0, y, 0], [1, y, 0]]) for y in vs]
+    A[1] = BSplineCurve(2, [0, 0, 0, 1, 1, 1], [[0, 0.5, 0], [0, 0.5, 0], [1, 0.5, 0]])
+    B = [BSplineCurve(1, [0, 0, 1, 1], [[x, 0, 0], [x, 1, 0]]) for x in us]
+    with pytest.raises(InvalidGeometryError, match=r"u_curves\[1\], v_curves\[\d\]: the network is not consistent"):
+        gordon(A, B)
+
+
+# ------------------------------------------------------------------------------------ approximation
+def test_polynomial_approximation_measured_error_holds_on_dense_samples():
+    F = random_surface(np.random.default_rng(30), p=2, q=2, nu=5, nv=4, rational=True)
+    c = iso_u(F, 0.37)
+    for tol in (1e-4, 1e-8):
+        a, err = polynomial_approximation(c, tol)
+        assert not a.is_rational and err <= tol
+        x = np.linspace(0, 1, 4001)
+        dense = float(np.max(np.linalg.norm(a(x) - c(x), axis=-1)))
+        # the measured error is a sampled maximum: a denser sampling may exceed it only slightly
+        assert dense <= 1.1 * err + 1e-15
+        assert_allclose(a(np.array([0.0, 1.0])), c(np.array([0.0, 1.0])), rtol=0, atol=1e-14 * scale_of(c))
+    poly = iso_u(random_surface(np.random.default_rng(31)), 0.5)
+    assert polynomial_approximation(poly) == (poly, 0.0)
+    assert APPROXIMATION_TOLERANCE == 1e-6
+    with pytest.raises(ToleranceError, match="could not approximate"):
+        polynomial_approximation(c, 1e-30, max_subdivisions=4)
