@@ -17,7 +17,7 @@ from . import tolerances
 from .curve import BSplineCurve
 from .errors import InvalidGeometryError, ParameterError
 
-__all__ = ["make_compatible", "common_knots"]
+__all__ = ["make_compatible", "common_knots", "missing_knots"]
 
 
 def _check_curves(curves: Sequence[BSplineCurve], name: str = "curves") -> list[BSplineCurve]:
@@ -36,6 +36,17 @@ def _check_curves(curves: Sequence[BSplineCurve], name: str = "curves") -> list[
     return items
 
 
+def _clusters(values: np.ndarray, eps: float) -> tuple[np.ndarray, np.ndarray]:
+    """Sorted representatives of ``values`` merged within ``eps``, and each value's cluster index."""
+    order = np.argsort(values, kind="stable")
+    v = values[order]
+    new = np.concatenate(([True], np.diff(v) > eps))
+    label_sorted = np.cumsum(new) - 1
+    labels = np.empty_like(label_sorted)
+    labels[order] = label_sorted
+    return v[new], labels
+
+
 def common_knots(knot_vectors: Sequence[np.ndarray], tol: float | None = None) -> np.ndarray:
     """The smallest knot vector that contains every given one (same domain assumed).
 
@@ -50,25 +61,39 @@ def common_knots(knot_vectors: Sequence[np.ndarray], tol: float | None = None) -
     Returns
     -------
     ndarray, shape (N,)
-        The merged full knot vector; values are taken from the first vector that has them.
+        The merged full knot vector; each knot takes the smallest value of its cluster.
     """
     eps = tolerances.KNOT_EQUALITY if tol is None else float(tol)
-    allk = np.concatenate([np.asarray(k, float) for k in knot_vectors])
+    vecs = [np.asarray(k, float) for k in knot_vectors]
+    allk = np.concatenate(vecs)
     span = float(allk.max() - allk.min()) or 1.0
-    reps: list[float] = []
-    mult: list[int] = []
-    for k in knot_vectors:
-        vals, counts = np.unique(np.asarray(k, float), return_counts=True)
-        for v, c in zip(vals, counts):
-            if reps:
-                j = int(np.argmin(np.abs(np.asarray(reps) - v)))
-                if abs(reps[j] - v) <= eps * span:
-                    mult[j] = max(mult[j], int(c))
-                    continue
-            reps.append(float(v))
-            mult.append(int(c))
-    order = np.argsort(reps, kind="stable")
-    return np.repeat(np.asarray(reps)[order], np.asarray(mult)[order])
+    reps, labels = _clusters(allk, eps * span)
+    owner = np.repeat(np.arange(len(vecs)), [k.size for k in vecs])
+    counts = np.zeros((len(vecs), reps.size), dtype=np.intp)
+    np.add.at(counts, (owner, labels), 1)
+    return np.repeat(reps, counts.max(axis=0))
+
+
+def missing_knots(knots: np.ndarray, target: np.ndarray, tol: float | None = None) -> np.ndarray:
+    """The values to insert into ``knots`` so that it becomes ``target`` (a superset of it).
+
+    Values of ``knots`` match values of ``target`` within ``tol`` (relative to the target's
+    range; default ``tolerances.KNOT_EQUALITY``), multiplicities counted.
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        Sorted, with repeats; empty when ``knots`` already holds all of ``target``.
+    """
+    eps = tolerances.KNOT_EQUALITY if tol is None else float(tol)
+    T = np.asarray(target, float)
+    K = np.asarray(knots, float)
+    reps, labels = _clusters(T, eps * (float(T[-1] - T[0]) or 1.0))
+    want = np.bincount(labels, minlength=reps.size)
+    idx = np.clip(np.searchsorted(reps, K), 0, reps.size - 1)
+    near = np.where((idx > 0) & (np.abs(reps[idx - 1] - K) < np.abs(reps[idx] - K)), idx - 1, idx)
+    have = np.bincount(near, minlength=reps.size)
+    return np.repeat(reps, np.maximum(want - have, 0))
 
 
 def make_compatible(
@@ -131,19 +156,10 @@ def make_compatible(
     T[: p + 1] = lo
     T[-(p + 1):] = hi
     out = []
-    span = hi - lo
     for c in work:
-        # knots of T missing from c (with multiplicity), matched to c's own values to the tolerance
-        have = list(c.knots)
-        missing = []
-        for v in T:
-            j = int(np.argmin(np.abs(np.asarray(have) - v))) if have else -1
-            if j >= 0 and abs(have[j] - v) <= tolerances.KNOT_EQUALITY * span:
-                have.pop(j)
-            else:
-                missing.append(v)
-        if missing:
-            c = c.refine(np.asarray(missing))
+        missing = missing_knots(c.knots, T)
+        if missing.size:
+            c = c.refine(missing)
         w = c.weights if c.weights is not None else (np.ones(c.n_poles) if rational else None)
         # c.knots equals T up to the knot-equality tolerance; use T itself so the vectors are identical
         out.append(BSplineCurve._trusted(p, T.copy(), c.control_points, w))

@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import _validate as V
-from .compat import common_knots, make_compatible
+from .compat import common_knots, make_compatible, missing_knots
 from .degree import elevate_poles
 from .knots import merge_knots, refine_poles, snap_knots
 from .curve import BSplineCurve
@@ -177,19 +177,11 @@ def _unify(nets: list[tuple[tuple[int, int], tuple[Array, Array], Array]]) -> tu
         T = common_knots([kn[ax] for _, kn, _ in items])
         lo, hi = float(T[0]), float(T[-1])
         T[: top + 1], T[-(top + 1):] = lo, hi
-        span = hi - lo
         out = []
         for d, kn, H in items:
-            have = list(kn[ax])
-            missing = []
-            for x in T:
-                j = int(np.argmin(np.abs(np.asarray(have) - x))) if have else -1
-                if j >= 0 and abs(have[j] - x) <= 1e-12 * span:
-                    have.pop(j)
-                else:
-                    missing.append(x)
-            if missing:
-                tau = merge_knots(kn[ax], snap_knots(kn[ax], np.asarray(missing)))
+            missing = missing_knots(kn[ax], T)
+            if missing.size:
+                tau = merge_knots(kn[ax], snap_knots(kn[ax], missing))
                 H = np.moveaxis(refine_poles(kn[ax], top, np.moveaxis(H, ax, 0), tau), 0, ax)
             kn = list(kn)
             kn[ax] = T
