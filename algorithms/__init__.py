@@ -8,6 +8,8 @@ from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_p
 from .compat import make_compatible
 from .curve import BSplineCurve
 from .curvenet import coons, coons_bicubic, gordon, network_parameters, polynomial_approximation
+from .generation import extrude, revolve, rotational_sweep, ruled, translational_sweep
+from .sweep import SweepResult, exact_sweep, sweep
 from .fitting import (
     approximation_knots,
     averaged_knots,
@@ -57,6 +59,14 @@ from .errors import (
 )
 
 __all__ = [
+    "extrude",
+    "ruled",
+    "revolve",
+    "translational_sweep",
+    "rotational_sweep",
+    "sweep",
+    "SweepResult",
+    "exact_sweep",
     "coons",
     "coons_bicubic",
     "gordon",

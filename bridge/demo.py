@@ -17,6 +17,7 @@ __all__ = ["DEMOS", "run_demos"]
 #: name -> "module:function"; every function takes the output folder and returns the files it wrote.
 DEMOS: dict[str, str] = {
     "manipulation": "bridge.demo_manipulation:render_manipulation_demo",  # course ch. 3-4
+    "generation": "bridge.demo_generation:render_generation_demo",  # course §6-26..6-33
     "curvenet": "bridge.demo_curvenet:render_curvenet_demo",  # course §6-20..6-25
     "hierarchical": "bridge.demo_hierarchical:render_hierarchical_demo",  # course ch. 5
     "generalized": "bridge.demo_generalized:render_generalized_demo",  # course §8-6, 8-7
