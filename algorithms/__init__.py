@@ -9,7 +9,7 @@ from .compat import make_compatible
 from .curve import BSplineCurve
 from .curvenet import coons, coons_bicubic, gordon, network_parameters, polynomial_approximation
 from .generation import extrude, revolve, rotational_sweep, ruled, translational_sweep
-from .sweep import SweepResult, exact_sweep, sweep
+from .sweeping import SweepResult, exact_sweep, sweep
 from .fitting import (
     approximation_knots,
     averaged_knots,

@@ -30,7 +30,7 @@ from common import Row, best_of, machine_note, print_table  # noqa: E402
 from algorithms import BSplineCurve, ellipse  # noqa: E402
 from algorithms.fitting import interpolate_curve  # noqa: E402
 from algorithms.generation import extrude, revolve, ruled, translational_sweep  # noqa: E402
-from algorithms.sweep import sweep  # noqa: E402
+from algorithms.sweeping import sweep  # noqa: E402
 
 
 def inputs():

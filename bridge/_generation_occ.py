@@ -1,5 +1,5 @@
 """OpenCascade's own constructions of the surfaces of :mod:`algorithms.generation` and
-:mod:`algorithms.sweep`, and the distance between two surfaces by point projection.
+:mod:`algorithms.sweeping`, and the distance between two surfaces by point projection.
 
 Used by ``tests/bridge/test_generation_vs_occ.py``, ``benchmarks/bench_generation.py`` and the
 demo. Each builder checks ``IsDone()`` and re-raises OCC failures as :class:`KernelError`.

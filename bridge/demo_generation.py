@@ -1,7 +1,7 @@
 """Pictures and STEP files for surface generation (course §6-26 .. §6-33, "Sweeping").
 
 :func:`render_generation_demo` builds one surface per construction of
-:mod:`algorithms.generation` and :mod:`algorithms.sweep` — extrusion, ruled surface, full and
+:mod:`algorithms.generation` and :mod:`algorithms.sweeping` — extrusion, ruled surface, full and
 partial revolution, translational sweep, rotational (swung) sweep and a generalised sweep with
 twist and scaling laws — and writes, for each, a STEP file (through
 :func:`bridge.exchange.write_step`) and a PNG (shaded, coloured by mean curvature, with the input
@@ -17,7 +17,7 @@ import numpy as np
 from algorithms import BSplineCurve, circle, ellipse
 from algorithms.fitting import interpolate_curve
 from algorithms.generation import extrude, revolve, rotational_sweep, ruled, translational_sweep
-from algorithms.sweep import sweep
+from algorithms.sweeping import sweep
 
 __all__ = ["render_generation_demo", "demo_surfaces"]
 

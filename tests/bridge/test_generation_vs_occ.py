@@ -39,7 +39,7 @@ pytest.importorskip("OCP")
 from algorithms import BSplineCurve, arc, circle, ellipse  # noqa: E402
 from algorithms.fitting import interpolate_curve  # noqa: E402
 from algorithms.generation import extrude, revolve, rotational_sweep, ruled, translational_sweep  # noqa: E402
-from algorithms.sweep import sweep  # noqa: E402
+from algorithms.sweeping import sweep  # noqa: E402
 
 EXACT = 1e-11
 SWEEP = 2e-7

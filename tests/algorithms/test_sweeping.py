@@ -17,12 +17,12 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.integrate import solve_ivp
 
-import algorithms.sweep as sw
+import algorithms.sweeping as sw
 from algorithms import BSplineCurve, arc, circle
 from algorithms.errors import InvalidGeometryError, ToleranceError
 from algorithms.fitting import interpolate_curve
 from algorithms.generation import translational_sweep
-from algorithms.sweep import SweepResult, exact_sweep, sweep
+from algorithms.sweeping import SweepResult, exact_sweep, sweep
 
 ROUND = 1e-12
 
