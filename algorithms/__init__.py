@@ -33,6 +33,7 @@ from .differential import (
     surface_curvatures,
     torsion,
 )
+from .nsided import FillQuality, HoleFill, HoleSide, fill_hole, measure_fill, side_from_surface
 from .mesh import Mesh, catmull_clark, read_obj, write_obj
 from .spatch import SPatch, domain_vertices, spatch_indices, wachspress, wachspress_derivatives, wachspress_gradient
 from .spatch_convert import SPatchConversion, convert_spatch, spatch_to_surfaces
@@ -59,6 +60,12 @@ from .errors import (
 )
 
 __all__ = [
+    "HoleSide",
+    "HoleFill",
+    "FillQuality",
+    "side_from_surface",
+    "fill_hole",
+    "measure_fill",
     "extrude",
     "ruled",
     "revolve",

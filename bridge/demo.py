@@ -20,6 +20,7 @@ DEMOS: dict[str, str] = {
     "generation": "bridge.demo_generation:render_generation_demo",  # course §6-26..6-33
     "curvenet": "bridge.demo_curvenet:render_curvenet_demo",  # course §6-20..6-25
     "hierarchical": "bridge.demo_hierarchical:render_hierarchical_demo",  # course ch. 5
+    "fill": "bridge.demo_fill:render_fill_demo",  # course §8-3
     "generalized": "bridge.demo_generalized:render_generalized_demo",  # course §8-6, 8-7
 }
 

@@ -1,0 +1,61 @@
+"""Benchmark: our n-sided hole fill (algorithms/nsided.py) vs OCC's BRepOffsetAPI_MakeFilling.
+
+Same holes for both (ring models of algorithms/hole_models.py: multi-span neighbours,
+polynomial and rational, n = 3..8), both assessed by OCC's LocalAnalysis_SurfaceContinuity
+(order G1) at 41 points per boundary edge: G0 gap (model units, model size ~14) and G1 angle
+(degrees), max over the hole's boundary. OCC runs with cadquery's makeNSidedSurface defaults.
+Times are wall-clock for the fill alone (ours: fill_hole; OCC: Add + Build), best of 3.
+
+Run:  python benchmarks/bench_fill.py  (about a minute on the 2-core machine)
+"""
+
+from __future__ import annotations
+
+import common  # noqa: F401 - pins BLAS threads before NumPy
+
+import time
+
+from bridge.convert import _make_face
+from bridge.fill import _sew, fill_model
+from algorithms.hole_models import ring_model
+
+CASES = [(n, False) for n in range(3, 9)] + [(3, True), (5, True), (8, True)]
+
+
+def table() -> list[dict]:
+    rows = []
+    for n, rational in CASES:
+        m = ring_model(n, rational=rational)
+        shell = _sew([_make_face(f, 1e-7) for f in m.faces])
+        best = None
+        for _ in range(3):
+            res = fill_model(shell)
+            h = next(h for h in res.holes if h.status != "outer")
+            if best is None or h.seconds < best.seconds:
+                best = h
+        rows.append(dict(n=n, rational=rational, ours_s=best.seconds, ours_g0=best.g0, ours_g1=best.g1,
+                         internal_g1=best.internal_g1, occ=best.occ_status, occ_s=best.occ_seconds,
+                         occ_g0=best.occ_g0, occ_g1=best.occ_g1, occ_reason=best.occ_reason))
+    return rows
+
+
+def markdown(rows: list[dict]) -> str:
+    out = ["| n | rational | ours time | ours G0 gap | ours G1 angle | OCC time | OCC G0 gap | OCC G1 angle "
+           "| G1 ratio OCC/ours | time ratio ours/OCC |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if r["occ"] == "ok":
+            occ = f"{r['occ_s']:.3f} s | {r['occ_g0']:.1e} | {r['occ_g1']:.2f} deg"
+            ratio = f"{r['occ_g1'] / max(r['ours_g1'], 1e-300):.1e}"
+            tr = f"{r['ours_s'] / r['occ_s']:.1f}"
+        else:
+            occ, ratio, tr = f"{r['occ_s']:.3f} s | failed: {r['occ_reason']} | -", "-", "-"
+        out.append(f"| {r['n']} | {'yes' if r['rational'] else 'no'} | {r['ours_s']:.3f} s | {r['ours_g0']:.1e} | "
+                   f"{r['ours_g1']:.1e} deg | {occ} | {ratio} | {tr} |")
+    return "\n".join(out)
+
+
+if __name__ == "__main__":
+    t0 = time.perf_counter()
+    print(markdown(table()))
+    print(f"\n(total {time.perf_counter() - t0:.1f} s)")

@@ -1,0 +1,94 @@
+"""Tests of ``occsurf fill`` (bridge/cli.py) on step_samples/holes/ and on failing inputs."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bridge import cli
+from bridge.convert import _make_face
+from bridge.exchange import read_step, write_step
+from bridge.fill import _sew
+from algorithms.hole_models import ring_model
+
+REPO = Path(__file__).resolve().parents[2]
+HOLES = REPO / "step_samples" / "holes"
+
+
+def run_main(capsys, *args: str) -> tuple[int, str, str]:
+    code = cli.main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_fill_sample_prints_table_and_writes_step(capsys, tmp_path: Path) -> None:
+    out_file = tmp_path / "filled.step"
+    code, out, err = run_main(capsys, "fill", str(HOLES / "dome_holes.step"), "--out", str(out_file))
+    assert code == 0, err
+    assert err == ""
+    rows = [ln.split() for ln in out.splitlines() if ln.strip() and ln.split()[0].isdigit()]
+    assert sorted(int(r[1]) for r in rows) == [3, 4, 5, 6]
+    for r in rows:
+        assert r[2] == "filled"
+        assert float(r[3]) <= 1e-9 * 14  # G0 gap (OCC LocalAnalysis), model size ~14
+        assert float(r[4]) <= 1e-6  # G1 angle, degrees
+    model = read_step(out_file)
+    assert len(model.faces) == 18 + 18  # 3+4+5+6 ring faces and as many fill patches
+
+
+def test_fill_json_and_rational_sample(capsys, tmp_path: Path) -> None:
+    code, out, err = run_main(capsys, "fill", str(HOLES / "rational_holes.step"), "--out",
+                              str(tmp_path / "r.step"), "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    holes = [h for h in doc["holes"] if h["status"] != "outer"]
+    assert sorted(h["sides"] for h in holes) == [5, 8]
+    for h in holes:
+        assert h["g1"] <= 1e-6 and h["internal_g1"] <= 1e-6
+        assert h["occ_status"] in ("ok", "failed")
+        if h["occ_status"] == "ok":
+            assert h["g1"] < h["occ_g1"]
+
+
+def test_unfillable_hole_reported_others_filled(capsys, tmp_path: Path) -> None:
+    good = ring_model(4, center=(0.3, 0.5), radius=0.1, width=0.08)
+    sq = np.array([[0.6, 0.4], [0.8, 0.4], [0.8, 0.5], [0.8, 0.6], [0.6, 0.6]])
+    flat = ring_model(5, polygon=sq, bump=0.0, radius=0.1, width=0.08)
+    src = write_step(tmp_path / "two.step", _sew([_make_face(f, 1e-7) for m in (good, flat) for f in m.faces]))
+    out_file = tmp_path / "out.step"
+    code, out, err = run_main(capsys, "fill", str(src), "--out", str(out_file), "--no-occ")
+    assert code == 2
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"occsurf: {src}: hole ") and "flat" in lines[0]
+    assert out_file.exists() and len(read_step(out_file).faces) == 4 + 5 + 4
+
+
+@pytest.mark.parametrize("content", [b"", b"ISO-10303-21;\ngarbage"])
+def test_bad_input_one_line_exit_2(capsys, tmp_path: Path, content: bytes) -> None:
+    bad = tmp_path / "bad.step"
+    bad.write_bytes(content)
+    code, out, err = run_main(capsys, "fill", str(bad), "--out", str(tmp_path / "o.step"))
+    assert code == 2 and out == ""
+    assert len(err.splitlines()) == 1 and err.startswith(f"occsurf: {bad}: ")
+    assert not (tmp_path / "o.step").exists()
+
+
+def test_missing_out_is_a_usage_error(capsys) -> None:
+    code, _, err = run_main(capsys, "fill", str(HOLES / "dome_holes.step"))
+    assert code == 2 and "--out" in err
+
+
+def test_make_holes_is_reproducible(tmp_path: Path) -> None:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(x for x in (str(REPO), env.get("PYTHONPATH")) if x)
+    proc = subprocess.run([sys.executable, str(REPO / "step_samples" / "make_holes.py"), str(tmp_path)],
+                          capture_output=True, text=True, env=env, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    for name in ("dome_holes.step", "rational_holes.step"):
+        assert (tmp_path / name).read_bytes() == (HOLES / name).read_bytes(), name

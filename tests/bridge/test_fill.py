@@ -1,0 +1,90 @@
+"""Tests of bridge/fill.py: holes found in OCC shells, filled, assessed by OCC, compared with
+BRepOffsetAPI_MakeFilling.
+
+Tolerances: OCC's LocalAnalysis G0 gap between our fill and the neighbour is round-off (measured
+<= 4e-14 on models of size ~14), asserted <= 1e-9 of the model size (the issue's target); its G1
+angle is round-off too (<= 1.2e-10 deg measured), asserted <= 1e-6 deg. OCC's filler on the same
+holes measured 0.8-5.5 deg and 2e-4-4e-3 gaps: the comparison asserts ours is at least 1000x better
+in angle, not a fixed OCC value (OCC may improve).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from algorithms.errors import InvalidGeometryError
+from bridge.convert import _make_face
+from bridge.exchange import read_step, write_step
+from bridge.fill import _edge_faces, _neighbour, _sew, fill_model, find_loops, hole_sides
+from algorithms.hole_models import ring_model
+
+SIZE = 14.0  # bounding-box diagonal of the base dome ([0, 10]^2, height ~5)
+
+
+def _shell(*models):
+    return _sew([_make_face(f, 1e-7) for m in models for f in m.faces])
+
+
+@pytest.fixture(scope="module")
+def two_holes():
+    a = ring_model(5, rational=True, center=(0.3, 0.5), radius=0.12, width=0.08)
+    b = ring_model(7, center=(0.72, 0.5), radius=0.12, width=0.08)
+    return fill_model(_shell(a, b))
+
+
+def test_every_hole_filled_g1_by_occ_measure(two_holes) -> None:
+    holes = [h for h in two_holes.holes if h.status != "outer"]
+    assert sorted(h.sides for h in holes) == [5, 7]
+    assert all(h.status == "filled" for h in holes)
+    for h in holes:
+        assert len(h.side_g0) == h.sides
+        assert h.g0 <= 1e-9 * SIZE and h.own_g0 <= 1e-9 * SIZE
+        assert h.g1 <= 1e-6 and h.own_g1 <= 1e-6 and h.internal_g1 <= 1e-6
+
+
+def test_outer_boundaries_are_left_open_and_holes_closed(two_holes) -> None:
+    outer = [h for h in two_holes.holes if h.status == "outer"]
+    assert len(outer) == 2 and all(h.reason for h in outer)
+    assert two_holes.free_loops_after == 2  # only the two rings' outer loops remain free
+
+
+def test_occ_filler_compared_on_the_same_holes(two_holes) -> None:
+    for h in two_holes.holes:
+        if h.status == "outer":
+            continue
+        assert h.occ_status in ("ok", "failed")
+        assert h.occ_seconds is not None and h.occ_seconds >= 0
+        if h.occ_status == "ok":
+            assert h.g1 * 1000 < h.occ_g1
+        else:
+            assert h.occ_reason
+
+
+def test_filled_model_round_trips_through_step(two_holes, tmp_path) -> None:
+    p = write_step(tmp_path / "filled.step", two_holes.shape)
+    model = read_step(p)
+    assert len(model.faces) == 5 + 7 + 5 + 7  # the rings plus one patch per corner
+    sewn = _sew([f.face for f in model.faces])
+    assert len(find_loops(sewn, all_loops=True)) == 2  # the two rings' outer loops, nothing else
+
+
+def test_missing_neighbour_face_is_a_clear_error() -> None:
+    m = ring_model(4)
+    shell = _shell(m)
+    loops = [edges for edges, outer in find_loops(shell) if not outer]
+    e2f = _edge_faces(shell)
+    faces = [_neighbour(e2f, e) for e in loops[0]]
+    faces[2] = None
+    with pytest.raises(InvalidGeometryError, match="no neighbour face"):
+        hole_sides(loops[0], faces)
+
+
+def test_unfillable_hole_is_reported_and_others_still_filled() -> None:
+    good = ring_model(3, center=(0.3, 0.5), radius=0.1, width=0.08)
+    sq = np.array([[0.6, 0.4], [0.8, 0.4], [0.8, 0.5], [0.8, 0.6], [0.6, 0.6]])
+    flat = ring_model(5, polygon=sq, bump=0.0, radius=0.1, width=0.08)
+    res = fill_model(_shell(good, flat), compare_occ=False)
+    holes = {h.sides: h for h in res.holes if h.status != "outer"}
+    assert holes[3].status == "filled"
+    assert holes[5].status == "failed" and "flat" in holes[5].reason
