@@ -32,6 +32,7 @@ edit of the base rebuilds everything below it.
 from __future__ import annotations
 
 import copy as _copy
+import reprlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -542,20 +543,31 @@ class _Hierarchy:
         items = data.get("overlays", [])
         if not isinstance(items, list):
             raise InvalidGeometryError("from_dict: 'overlays' must be a list")
+        def whole(x: Any) -> bool:
+            return isinstance(x, int) and not isinstance(x, bool)
+
         for k, item in enumerate(items):
             try:
-                ident, parent = int(item["id"]), int(item["parent"])
+                ident, parent = item["id"], item["parent"]
                 region, ins, offs = item["region"], item["inserted_knots"], item["offsets"]
-            except (KeyError, TypeError, ValueError) as err:
-                raise InvalidGeometryError(f"from_dict: overlay {k}: missing or bad entry ({err})") from err
+            except (KeyError, TypeError, IndexError) as err:
+                raise InvalidGeometryError(f"from_dict: overlay {k}: missing or bad entry ({err!r})") from err
+            if not whole(ident) or not whole(parent):
+                raise InvalidGeometryError(f"from_dict: overlay {k}: 'id' and 'parent' must be integers, got "
+                                           f"{ident!r} and {parent!r}")
             if ident in self._nodes or ident < 1:
                 raise InvalidGeometryError(f"from_dict: overlay {k}: duplicate or invalid id {ident}")
             if parent != 0 and parent not in self._nodes:
                 raise InvalidGeometryError(f"from_dict: overlay {ident}: parent {parent} must come before it")
-            if len(region) != self._npar or len(ins) != self._npar:
-                raise InvalidGeometryError(f"from_dict: overlay {ident}: expected {self._npar} region(s) and knot list(s)")
+            if not all(isinstance(x, (list, tuple)) and len(x) == self._npar for x in (region, ins)):
+                raise InvalidGeometryError(f"from_dict: overlay {ident}: 'region' and 'inserted_knots' must be lists "
+                                           f"of {self._npar} entries (one per parametric direction), got "
+                                           f"{reprlib.repr(region)} and {reprlib.repr(ins)}")
             kn = ins[0] if self._npar == 1 else tuple(ins)
-            h = self._add(tuple(region), parent, kn, ident=ident)
+            try:
+                h = self._add(tuple(region), parent, kn, ident=ident)
+            except InvalidGeometryError as err:  # same class, with the overlay named
+                raise type(err)(f"from_dict: overlay {ident}: {err}") from err
             node = self._nodes[ident]
             o = V.as_finite_array(offs, f"overlays[{k}].offsets")
             if o.shape != node.offsets.shape:

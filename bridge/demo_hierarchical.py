@@ -24,6 +24,9 @@ __all__ = ["render_hierarchical_demo", "demo_hierarchy"]
 
 _LIGHT = np.array([-0.4, -0.5, 0.77]) / np.linalg.norm([-0.4, -0.5, 0.77])
 RESOLUTION = 101
+#: Parameter window ``[lo, hi]^2`` of the level-by-level pictures: the overlays' region, so the
+#: level-3 knobs are large enough to see.
+LEVELS_WINDOW = (0.22, 0.78)
 
 
 def demo_base() -> BSplineSurface:
@@ -154,8 +157,8 @@ def render_hierarchical_demo(out_dir: Path) -> list[Path]:
     list of Path
         ``hierarchical_levels.png`` (the surface level by level: base, + level 1, + level 2, all
         three), ``hierarchical_coarse_edit.png`` (before the coarse edit; after it with offset
-        referencing; after it with additive offsets), ``hierarchical_closeup.png`` (the same
-        from above the bent flank), ``hierarchical.step`` (the edited surface, flattened) and
+        referencing; after it with additive offsets), ``hierarchical_profiles.png`` (sections
+        across the details before and after the edit, equal axes), ``hierarchical.step`` (the edited surface, flattened) and
         ``hierarchical.hierarchy.json`` (its editable hierarchy).
     """
     from .hierarchical_io import write_hierarchical_step
@@ -171,10 +174,11 @@ def render_hierarchical_demo(out_dir: Path) -> list[Path]:
         h = hs.copy()
         for o in hs.overlays[keep:]:
             h.set_offsets(o, np.zeros(o.shape + (3,)))
-        stages.append((_sample(h), title))
+        stages.append((_sample(h, *LEVELS_WINDOW), title))
     levels_png = out / "hierarchical_levels.png"
     _render(levels_png, stages, "Hierarchical B-spline surface: details at three levels of overlays "
-            "(course §5-10, Forsey & Bartels 1988)", ncols=2)
+            "(course §5-10, Forsey & Bartels 1988)\nclose-up of the detail region, "
+            f"u, v in [{LEVELS_WINDOW[0]:g}, {LEVELS_WINDOW[1]:g}]", view=(38, -62), ncols=2)
     # 2. A coarse edit: the base is bent; offset referencing vs additive offsets.
     before = _sample(hs)
     add = demo_hierarchy("additive")

@@ -8,7 +8,9 @@ STEP has no entity for a Forsey–Bartels hierarchy, so :func:`write_hierarchica
 * a JSON *sidecar* beside it (``model.step`` -> ``model.hierarchy.json``): the hierarchy's
   :meth:`~HierarchicalSurface.to_dict` plus a fingerprint of the STEP file it belongs to.
 
-Both are written atomically (temporary file + ``os.replace``), the STEP file first.
+Both are written together: each to a synced temporary file beside its target, and only when both
+are complete are they renamed over the targets (STEP first). A failed write leaves no file behind
+and the old pair untouched.
 :func:`read_hierarchical_step` restores the editable hierarchy from the sidecar and checks that
 the STEP geometry still equals its flat form (a STEP file edited elsewhere, or a stale sidecar,
 raises :class:`ExchangeError` instead of silently loading details onto the wrong surface).
@@ -17,9 +19,11 @@ raises :class:`ExchangeError` instead of silently loading details onto the wrong
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +36,8 @@ from algorithms.hierarchical_curve import HierarchicalCurve
 from algorithms.hierarchical_offsets import OffsetMapping
 
 from . import _exchange_files as _files
-from .exchange import read_step, write_step
+from . import _exchange_occ as _xocc
+from .exchange import STEP_DIGITS, read_step
 
 __all__ = ["SIDECAR_SUFFIX", "SIDECAR_MATCH_RTOL", "sidecar_path", "write_hierarchical_step",
            "read_hierarchical_step", "import_step_base"]
@@ -79,24 +84,67 @@ def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: Hierarchica
     InvalidGeometryError
         Not a hierarchy, or not 3-D.
     ExchangeError, KernelError
-        As :func:`bridge.exchange.write_step`; the sidecar is then not written.
+        As :func:`bridge.exchange.write_step` (an unwritable path or sidecar path); no file is
+        created or modified then.
     """
     if not isinstance(hierarchy, (HierarchicalSurface, HierarchicalCurve)):
         raise InvalidGeometryError(f"hierarchy: expected a HierarchicalSurface or HierarchicalCurve, got "
                                    f"{type(hierarchy).__name__}")
-    side = sidecar_path(_files.target(path))
+    step = _files.target(path)
+    side = sidecar_path(step)
+    if side.is_dir():
+        raise ExchangeError(f"{side}: is a directory; cannot write the hierarchy sidecar there")
     flat = hierarchy.flatten()
-    step = write_step(path, flat, names=name)
+    # The STEP bytes exactly as bridge.exchange.write_step makes them, kept in memory so that the
+    # pair is committed together: nothing on disk changes until both files are complete.
+    _xocc.silence_occ()
+    step_data = _xocc.step_bytes(step, _xocc.normalise(flat, name), STEP_DIGITS)
     data = {
         "format": _SIDECAR_FORMAT,
         "version": _SIDECAR_VERSION,
         "step_file": step.name,
-        "step_sha256": hashlib.sha256(step.read_bytes()).hexdigest(),
+        "step_sha256": hashlib.sha256(step_data).hexdigest(),
         "pole_counts": hierarchy.pole_counts(),
         "hierarchy": hierarchy.to_dict(),
     }
-    _files.atomic_write(side, (json.dumps(data, indent=1) + "\n").encode())
+    _write_pair([(step, step_data), (side, (json.dumps(data, indent=1) + "\n").encode())])
     return step, side
+
+
+def _write_pair(items: list[tuple[Path, bytes]]) -> None:
+    """Write every file to a synced temporary file beside it, then ``os.replace`` them all.
+
+    A failure while writing removes the temporary files and leaves every target untouched; only
+    the renames themselves (one system call each) are not one transaction."""
+    tmps: list[str] = []
+    try:
+        for p, blob in items:
+            try:
+                fd, tmp = tempfile.mkstemp(prefix=f".{p.name[:80]}.", suffix=".tmp", dir=p.parent)
+            except OSError as err:
+                raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
+            tmps.append(tmp)
+            try:
+                mode = p.stat().st_mode & 0o7777
+            except OSError:
+                mode = _files.default_mode()
+            try:
+                with os.fdopen(fd, "wb") as fh:
+                    fh.write(blob)
+                    fh.flush()
+                    os.fsync(fh.fileno())
+                    os.fchmod(fh.fileno(), mode)
+            except OSError as err:
+                raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
+        for (p, _), tmp in zip(items, tmps):
+            try:
+                os.replace(tmp, p)
+            except OSError as err:
+                raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
+    finally:
+        for tmp in tmps:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
 
 
 def _samples(obj: Any) -> np.ndarray:
@@ -130,15 +178,17 @@ def read_hierarchical_step(path: str | os.PathLike[str]) -> HierarchicalSurface 
         raise ExchangeError(f"{side}: unreadable hierarchy sidecar: {err}") from err
     if not isinstance(data, dict) or data.get("format") != _SIDECAR_FORMAT:
         raise ExchangeError(f"{side}: not an occsurf hierarchy sidecar")
-    if not isinstance(data.get("version"), int) or data["version"] > _SIDECAR_VERSION:
-        raise ExchangeError(f"{side}: sidecar version {data.get('version')!r} is newer than {_SIDECAR_VERSION}")
+    version = data.get("version")
+    if isinstance(version, bool) or not isinstance(version, int) or not 1 <= version <= _SIDECAR_VERSION:
+        raise ExchangeError(f"{side}: sidecar version {version!r} is not supported (this is version "
+                            f"{_SIDECAR_VERSION}; older versions load)")
     d = data.get("hierarchy")
     cls = _CLASSES.get(d.get("type") if isinstance(d, dict) else None)
     if cls is None:
         raise ExchangeError(f"{side}: the sidecar holds no hierarchical surface or curve")
     try:
         h = cls.from_dict(d)
-    except InvalidGeometryError as err:
+    except (InvalidGeometryError, TypeError, KeyError, IndexError) as err:  # any malformed content
         raise ExchangeError(f"{side}: invalid hierarchy: {err}") from err
     model = read_step(p)
     items = model.faces if cls is HierarchicalSurface else model.edges

@@ -4,6 +4,7 @@ trips, and STEP faces as the base of a new hierarchy (course §5-17)."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,7 +16,7 @@ from algorithms.errors import ExchangeError
 from algorithms.hierarchical import HierarchicalSurface
 from algorithms.hierarchical_curve import HierarchicalCurve
 from bridge import to_occ
-from bridge.exchange import write_step
+from bridge.exchange import read_step, write_step
 from bridge.hierarchical_io import (
     import_step_base,
     read_hierarchical_step,
@@ -113,6 +114,88 @@ def test_failed_write_leaves_no_files(tmp_path):
     with pytest.raises(ExchangeError):
         write_hierarchical_step(tmp_path / "missing" / "m.step", make_hierarchy())
     assert not any(tmp_path.iterdir())
+
+
+def test_failed_write_keeps_the_old_pair_intact(tmp_path, monkeypatch):
+    # Found in review: the STEP file was replaced before the sidecar was written, so a sidecar
+    # that could not be written left a new STEP file beside the old, now stale, sidecar.
+    hs = make_hierarchy()
+    step, side = write_hierarchical_step(tmp_path / "m.step", hs)
+    old = {p: p.read_bytes() for p in (step, side)}
+    edited = hs.copy()
+    edited.move_vertex(None, (0, 0), (0.0, 0.0, 0.5))
+    side.unlink()
+    side.mkdir()  # the sidecar path is unwritable
+    with pytest.raises(ExchangeError, match="hierarchy.json"):
+        write_hierarchical_step(step, edited)
+    assert step.read_bytes() == old[step]
+    side.rmdir()
+    side.write_bytes(old[side])
+    # A failure while writing the second file (disk full, ...): no temporary file is left and
+    # neither target changes.
+    import bridge.hierarchical_io as hio
+
+    calls = []
+
+    def failing_fsync(fd):
+        calls.append(fd)
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(hio.os, "fsync", failing_fsync)
+    with pytest.raises(ExchangeError, match="No space left"):
+        write_hierarchical_step(step, edited)
+    monkeypatch.undo()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.hierarchy.json", "m.step"]
+    assert all(p.read_bytes() == b for p, b in old.items())
+    assert read_hierarchical_step(step).to_dict() == hs.to_dict()
+
+
+@pytest.mark.parametrize("change, match", [
+    (lambda d: d.__setitem__("version", 0), "version 0"),
+    (lambda d: d.__setitem__("version", True), "version True"),
+    (lambda d: d["hierarchy"]["overlays"][0].__setitem__("region", 3), "overlay 1"),
+    (lambda d: d["hierarchy"].__setitem__("overlays", [{"id": 1}]), "overlay 0"),
+])
+def test_malformed_sidecar_raises_exchange_error(tmp_path, change, match):
+    step, side = write_hierarchical_step(tmp_path / "m.step", make_hierarchy())
+    data = json.loads(side.read_text())
+    change(data)
+    side.write_text(json.dumps(data))
+    with pytest.raises(ExchangeError, match=match):
+        read_hierarchical_step(step)
+
+
+REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
+
+
+@pytest.mark.skipif(not (REALDATA / "occt__linkrods.step").is_file(), reason="../shared/realdata not available")
+def test_real_step_free_form_faces_become_editable_bases():
+    # occt__linkrods.step (OCCT sample data): rational B-spline faces of bidegree (6, 3..10),
+    # non-uniform, domains like [-pi/2, pi/2] x [-0.75, -0.003].
+    model = read_step(REALDATA / "occt__linkrods.step")
+    picked = [k for k, f in enumerate(model.faces) if f.surface_type == "BSplineSurface"][::6]
+    assert picked
+    for k in picked:
+        hs = import_step_base(REALDATA / "occt__linkrods.step", face=k)
+        s = model.faces[k].surface
+        assert hs.base == s
+        (u0, u1), (v0, v1) = s.domain
+        o1 = hs.add_overlay((u0 + 0.25 * (u1 - u0), u0 + 0.75 * (u1 - u0)), (v0 + 0.25 * (v1 - v0), v0 + 0.75 * (v1 - v0)))
+        o2 = hs.add_overlay(*o1.region, parent=o1)
+        us, vs = np.linspace(u0, u1, 31), np.linspace(v0, v1, 29)
+        ref = s.evaluate_grid(us, vs)
+        size = float(np.ptp(ref.reshape(-1, 3), axis=0).max())
+        assert np.array_equal(hs.evaluate_grid(us, vs), ref)  # zero deltas: bit-identical
+        c = (o2.shape[0] // 2, o2.shape[1] // 2)
+        hs.set_offset(o2, c, (0.0, 0.0, 0.05 * size))
+        g = [o2.reference_parameters[a][c[a]] for a in range(2)]
+        n = s.normal(*g)
+        lift = (hs.evaluate(*g) - s.evaluate(*g)) @ n
+        assert 0 < lift <= 0.05 * size and np.isfinite(lift)
+        # Flat form: Oslo refinement of rational nets, round-off only (measured <= 1.1e-15 of the
+        # model size over all 18 faces).
+        assert_allclose(hs.flatten().evaluate_grid(us, vs), hs.evaluate_grid(us, vs), rtol=0, atol=1e-12 * size)
 
 
 def test_step_bspline_face_becomes_a_new_base(tmp_path):
