@@ -2,7 +2,7 @@
 
 ::
 
-    occsurf inspect [FILE|DIR ...] [--json] [--samples N] [--in-process]
+    occsurf inspect [FILE|DIR ...] [--json] [--samples N] [--timeout SECONDS] [--in-process]
     occsurf fill IN --out OUT.step [--all-loops] [--no-occ] [--json]
 
 ``inspect`` reads STEP and IGES files through :mod:`bridge.exchange` and prints, per face, the
@@ -73,6 +73,9 @@ SUFFIXES = STEP_SUFFIXES + IGES_SUFFIXES
 FREE_FORM = ("BSplineSurface", "BezierSurface")
 SAMPLES_DIR = "step_samples"
 DEFAULT_SAMPLES = 25
+#: Seconds one file may take in the reader process before it is killed and reported as timed out
+#: (a hang inside OCC must not hang the command); ``--timeout`` overrides it.
+DEFAULT_TIMEOUT = 300.0
 WORKER_COMMAND = "_inspect-worker"
 #: Prefix of the worker's protocol lines on its stdout (anything else there is ignored).
 _MARK = "\x1eoccsurf-worker "
@@ -400,13 +403,31 @@ def _last_line(fh: Any) -> str:
 
 
 def _inspect_isolated(files: list[tuple[str, Path]], samples: int,
-                      on_report: Callable[[int, FileReport], None]) -> None:
-    """Inspect ``files`` in worker processes; calls ``on_report(k, report)`` for each, in order."""
+                      on_report: Callable[[int, FileReport], None], timeout: float = DEFAULT_TIMEOUT) -> None:
+    """Inspect ``files`` in worker processes; calls ``on_report(k, report)`` for each, in order.
+
+    A file that crashes the worker or takes longer than ``timeout`` seconds is reported as failed
+    (the worker is killed) and a new worker continues with the files after it.
+    """
+    import threading
+
     todo = list(range(len(files)))
     while todo:
         job = {"samples": samples, "files": [[files[k][0], str(files[k][1])] for k in todo]}
         current: int | None = None
         done: set[int] = set()
+        timed_out = threading.Event()
+        watchdog: threading.Timer | None = None
+
+        def arm(p: subprocess.Popen) -> threading.Timer:
+            def fire() -> None:
+                timed_out.set()
+                with contextlib.suppress(OSError):
+                    p.kill()
+            t = threading.Timer(timeout, fire)
+            t.daemon = True
+            t.start()
+            return t
         with tempfile.TemporaryFile() as err_log:
             try:
                 proc = subprocess.Popen(
@@ -429,12 +450,17 @@ def _inspect_isolated(files: list[tuple[str, Path]], samples: int,
                     msg = json.loads(line[len(_MARK) :])
                     if "start" in msg:
                         current = todo[msg["start"]]
+                        watchdog = arm(proc)
                     elif "report" in msg:
+                        if watchdog is not None:
+                            watchdog.cancel()
                         k = todo[msg["report"]]
                         done.add(k)
                         current = None
                         on_report(k, FileReport.from_json(msg["data"]))
             finally:
+                if watchdog is not None:
+                    watchdog.cancel()
                 if proc.stdout is not None:
                     proc.stdout.close()
                 code = proc.wait()
@@ -449,8 +475,11 @@ def _inspect_isolated(files: list[tuple[str, Path]], samples: int,
             for k in remaining:
                 on_report(k, FileReport(path=files[k][0], error=reason))
             return
-        on_report(current, FileReport(path=files[current][0], error=(
-            f"the reader process crashed while reading this file ({why}; a fault inside OpenCascade)")))
+        if timed_out.is_set():
+            error = f"reading this file took longer than {timeout:g} s; the reader process was stopped (--timeout)"
+        else:
+            error = f"the reader process crashed while reading this file ({why}; a fault inside OpenCascade)"
+        on_report(current, FileReport(path=files[current][0], error=error))
         todo = [k for k in remaining if k != current]
 
 
@@ -543,8 +572,8 @@ def _cmd_inspect(ns: argparse.Namespace) -> int:
         for k, shown, path in todo:
             emit(k, _inspect_file(shown, path, ns.samples))
     elif todo:
-        _inspect_isolated([(shown, path) for _, shown, path in todo], ns.samples,
-                          lambda j, rep: emit(todo[j][0], rep))
+        _inspect_isolated([(shown, path) for _, shown, path in todo], ns.samples, timeout=ns.timeout,
+                          on_report=lambda j, rep: emit(todo[j][0], rep))
     done = [r for r in reports if r is not None]
     total = time.perf_counter() - t0
     if ns.json:
@@ -631,6 +660,16 @@ def _samples_arg(text: str) -> int:
     return n
 
 
+def _timeout_arg(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="occsurf",
@@ -652,6 +691,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON document instead of tables")
     p.add_argument("--samples", type=_samples_arg, default=DEFAULT_SAMPLES, metavar="N",
                    help=f"grid size N of the deviation check (default {DEFAULT_SAMPLES})")
+    p.add_argument("--timeout", type=_timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
+                   help=f"stop reading a file after this long and report it (default {DEFAULT_TIMEOUT:g})")
     p.add_argument("--in-process", action="store_true",
                    help="read the files in this process, not in a worker (a crash inside OCC then ends it)")
     p.set_defaults(func=_cmd_inspect)

@@ -12,6 +12,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import pytest
@@ -278,6 +279,38 @@ def test_crash_inside_the_reader_is_isolated(tmp_path: Path) -> None:
     files = json.loads(proc.stdout)["files"]
     assert [f["error"] is None for f in files] == [True, False, True]
     assert [len(f["faces"]) for f in files] == [1, 0, 1]
+
+
+def test_a_hanging_file_times_out_and_the_others_are_read(tmp_path: Path) -> None:
+    """A reader that never returns on one file: that file is reported after --timeout, the others are read."""
+    hook_dir = tmp_path / "hook"
+    hook_dir.mkdir()
+    (hook_dir / "sitecustomize.py").write_text(textwrap.dedent("""
+        import sys, time
+        def _hang(event, args):
+            if event == "open" and str(args[0]).endswith("hang-me.step"):
+                time.sleep(3600)
+        sys.addaudithook(_hang)
+    """))
+    hang = tmp_path / "hang-me.step"
+    hang.write_bytes((SAMPLES / "nurbs_torus.step").read_bytes())
+    good = [SAMPLES / "periodic_vase.step", SAMPLES / "nurbs_torus.step"]
+    t0 = time.perf_counter()
+    proc = run_cli("inspect", str(good[0]), str(hang), str(good[1]), "--json", "--samples", "5", "--timeout", "4",
+                   env={"PYTHONPATH": os.pathsep.join([str(hook_dir), str(REPO)])})
+    assert time.perf_counter() - t0 < 120  # the hour-long sleep was cut short
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.splitlines() == [
+        f"occsurf: {hang}: reading this file took longer than 4 s; the reader process was stopped (--timeout)"
+    ]
+    files = json.loads(proc.stdout)["files"]
+    assert [f["error"] is None for f in files] == [True, False, True]
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "soon"])
+def test_bad_timeout_is_rejected(capsys: pytest.CaptureFixture[str], value: str) -> None:
+    code, out, err = run_main(capsys, "inspect", "--timeout", value)
+    assert code == 2 and "--timeout" in err and "Traceback" not in err
 
 
 def test_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
