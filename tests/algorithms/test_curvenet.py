@@ -178,6 +178,16 @@ def test_coons_names_a_reversed_curve(which):
         coons(**curves)
 
 
+def test_coons_recognises_a_head_to_tail_loop_and_names_the_fix():
+    # OCC and most CAD systems take the four boundaries as a loop: top and left then run backwards.
+    b, r, t, l = random_loop(np.random.default_rng(5))
+    with pytest.raises(InvalidGeometryError, match=r"^top, left: the curves form a head-to-tail loop .*"
+                                                   r"pass top\.reverse\(\), pass left\.reverse\(\)$"):
+        coons(b, r, t.reverse(), l.reverse())
+    with pytest.raises(InvalidGeometryError, match=r"^bottom, right, top, left: the curves run the wrong way"):
+        coons(b.reverse(), r.reverse(), t.reverse(), l.reverse())
+
+
 def test_coons_names_the_open_corner_and_the_gap():
     b, r, t, l = random_loop(np.random.default_rng(6))
     P = np.array(r.control_points)
