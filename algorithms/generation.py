@@ -61,8 +61,9 @@ Array = NDArray[np.float64]
 #: turn (round-off in a caller's ``2 * np.pi`` arithmetic); larger ``|angle|`` is rejected.
 ANGLE_SLACK: float = 1e-12
 
-#: A direction or offset vector is zero when its length is at most ``AXIS_ZERO`` times the size of
-#: the geometry it acts on (the largest pole coordinate, at least 1): scale-free.
+#: An extrusion vector is zero when its length is at most ``AXIS_ZERO`` times the size of the
+#: geometry it moves (the largest pole coordinate, at least 1): scale-free. (An axis *direction*
+#: only needs a length that normalises to a finite unit vector: its size is irrelevant.)
 AXIS_ZERO: float = 1e-12
 
 
@@ -94,10 +95,15 @@ def _nonzero3(value: ArrayLike, name: str, size: float) -> Array:
     return a
 
 
-def _axis(origin: ArrayLike, direction: ArrayLike, size: float) -> tuple[Array, Array]:
+def _axis(origin: ArrayLike, direction: ArrayLike) -> tuple[Array, Array]:
     o = _vector3(origin, "axis_origin")
-    a = _nonzero3(direction, "axis_direction", size)
-    return o, a / np.linalg.norm(a)
+    a = _vector3(direction, "axis_direction")
+    big = float(np.abs(a).max())
+    unit = a / big if big > 0 else a            # scaled first: no overflow or underflow in the norm
+    n = float(np.linalg.norm(unit))
+    if not (big > 0 and np.isfinite(unit / n).all()):
+        raise InvalidGeometryError(f"axis_direction: expected a non-zero vector, got {a.tolist()}")
+    return o, unit / n
 
 
 def _tensor(profile: BSplineCurve, degree_v: int, knots_v: Array, poles: Array, w_v: Array | None) -> BSplineSurface:
@@ -195,6 +201,8 @@ def _arc_structure(angle: float) -> tuple[Array, Array, Array, float]:
 
 
 def _check_angle(angle: float) -> float:
+    if isinstance(angle, (bool, np.bool_)):
+        raise InvalidGeometryError(f"angle: expected a real number of radians, got {angle!r}")
     try:
         a = float(angle)
     except (TypeError, ValueError) as err:
@@ -253,7 +261,7 @@ def revolve(
         ``angle`` zero, non-finite or ``|angle| > 2 pi``.
     """
     c = _check_curve(profile, "profile")
-    o, a = _axis(axis_origin, axis_direction, _size(c))
+    o, a = _axis(axis_origin, axis_direction)
     ang = _check_angle(angle)
     theta, w_arc, knots_v, mid_scale = _arc_structure(ang)
     P = c.control_points
@@ -352,7 +360,7 @@ def rotational_sweep(
     """
     c = _check_curve(profile, "profile")
     t = _check_curve(trajectory, "trajectory")
-    o, a = _axis(axis_origin, axis_direction, _size(c, t))
+    o, a = _axis(axis_origin, axis_direction)
     t0 = t.evaluate(t.domain[0]) - o
     r0 = t0 - (t0 @ a) * a
     rho0 = float(np.linalg.norm(r0))

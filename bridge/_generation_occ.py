@@ -248,11 +248,14 @@ def _as_bounded(occ: Any) -> tuple[Geom_Surface, tuple[float, float, float, floa
     raise TypeError(f"expected a TopoDS_Face, Geom_Surface or BSplineSurface, got {type(occ).__name__}")
 
 
-def _project_all(points: Array, surf: Geom_Surface, bounds: tuple[float, float, float, float]) -> Array:
+def _project_all(points: Array, surf: Geom_Surface, bounds: tuple[float, float, float, float],
+                 accept: float = 0.0) -> Array:
     """Distance of each point to the bounded surface.
 
     A local projection (``ShapeAnalysis_Surface::NextValueOfUV``) seeded at the nearest point of a
-    dense parameter grid, accepted if it lands on the point (:data:`_NEGLIGIBLE`); else a global
+    dense parameter grid, accepted if it lands on the point (:data:`_NEGLIGIBLE`) or within
+    ``accept`` of it (a distance to an actual surface point, so an upper bound of the true one:
+    accepting it never hides a larger deviation than ``accept``); else a global
     ``GeomAPI_ProjectPointOnSurf`` (one sampling of the surface reused for all points), and where
     that finds no orthogonal projection (a point on a degenerate edge such as a sphere's pole)
     ``BRepExtrema_DistShapeShape`` (vertex to face). The smallest of these distances to actual
@@ -263,7 +266,7 @@ def _project_all(points: Array, surf: Geom_Surface, bounds: tuple[float, float, 
     n = _SEED_GRID
     u0, u1, v0, v1 = bounds
     us, vs = np.linspace(u0, u1, n), np.linspace(v0, v1, n)
-    ref = _grid(surf, bounds, n)
+    ref = _seed_grid(surf, bounds, n)
     dist0, idx = cKDTree(ref).query(points)
     sas = ShapeAnalysis_Surface(surf)
     out = np.empty(points.shape[0])
@@ -276,7 +279,7 @@ def _project_all(points: Array, surf: Geom_Surface, bounds: tuple[float, float, 
         uu = min(max(uv.X(), u0), u1)
         vv = min(max(uv.Y(), v0), v1)
         d = P.Distance(surf.Value(uu, vv))
-        if d <= _NEGLIGIBLE * max(1.0, float(np.abs(p).max())):
+        if d <= max(accept, _NEGLIGIBLE * max(1.0, float(np.abs(p).max()))):
             out[k] = d
             continue
         if proj is None:
@@ -293,18 +296,41 @@ def _project_all(points: Array, surf: Geom_Surface, bounds: tuple[float, float, 
     return out
 
 
+def _params(lo: float, hi: float, n: int, knots: Array | None = None) -> Array:
+    """``n`` uniform parameters on ``[lo, hi]``, plus points close to both ends (boundaries and
+    seams: relative offsets 1e-6, 1e-4, 1e-2) and the distinct knots (segment joints) if given."""
+    w = hi - lo
+    near = np.array([1e-6, 1e-4, 1e-2]) * w
+    extra = [near + lo, hi - near]
+    if knots is not None:
+        k = np.unique(knots[(knots >= lo) & (knots <= hi)])
+        if k.shape[0] <= 2 * n:  # finely refined directions (sweeps) are covered by the uniform grid
+            extra.append(k)
+    return np.unique(np.concatenate([np.linspace(lo, hi, n)] + extra))
+
+
 def _grid(surf: Geom_Surface, bounds, n: int) -> Array:
+    u0, u1, v0, v1 = bounds
+    return np.array([surf.Value(float(u), float(v)).Coord()
+                     for u in _params(u0, u1, n) for v in _params(v0, v1, n)])
+
+
+def _seed_grid(surf: Geom_Surface, bounds, n: int) -> Array:
     u0, u1, v0, v1 = bounds
     return np.array([surf.Value(float(u), float(v)).Coord()
                      for u in np.linspace(u0, u1, n) for v in np.linspace(v0, v1, n)])
 
 
-def max_distance(ours: BSplineSurface, occ: Any, samples: int = 21) -> tuple[float, float]:
+def max_distance(ours: BSplineSurface, occ: Any, samples: int = 31, accept: float = 0.0) -> tuple[float, float]:
     """Largest distance between the surfaces, both ways, by point projection.
 
-    Our surface is sampled on a ``samples x samples`` grid over its domain and each point projected
-    onto OCC's face / surface (inside its UV bounds); then OCC's surface is sampled the same way
-    and projected onto ours. Points whose projection fails (none found, e.g. exactly on a
+    Our surface is sampled on a grid over its domain (``samples`` uniform values per direction,
+    plus values 1e-6, 1e-4 and 1e-2 of the range from each boundary, and every distinct knot:
+    boundaries, seams and segment joints) and each point projected onto OCC's face / surface
+    (inside its UV bounds); then OCC's surface is sampled the same way (without knots) and
+    projected onto ours. ``accept``: local projections landing within this distance are kept
+    without a global search (see :func:`_project_all`); pass a fraction of the tolerance that
+    will be asserted, for surfaces that agree only approximately (sweeps). Points whose projection fails (none found, e.g. exactly on a
     degenerate edge) fall back on ``BRepExtrema_DistShapeShape``; if that fails too for more than
     2 % of the points a KernelError is raised (the rest are left out).
 
@@ -315,10 +341,10 @@ def max_distance(ours: BSplineSurface, occ: Any, samples: int = 21) -> tuple[flo
     """
     surf, bounds = _as_bounded(occ)
     (a, b), (c, d) = ours.domain
-    P = ours.evaluate_grid(np.linspace(a, b, samples), np.linspace(c, d, samples)).reshape(-1, 3)
-    fwd = _project_all(P, surf, bounds)
+    P = ours.evaluate_grid(_params(a, b, samples, ours.knots[0]), _params(c, d, samples, ours.knots[1])).reshape(-1, 3)
+    fwd = _project_all(P, surf, bounds, accept)
     Q = _grid(surf, bounds, samples)
-    bwd = _project_all(Q, to_occ(ours), (a, b, c, d))
+    bwd = _project_all(Q, to_occ(ours), (a, b, c, d), accept)
     for name, arr in (("ours -> OCC", fwd), ("OCC -> ours", bwd)):
         if np.isnan(arr).mean() > 0.02:
             raise KernelError(f"max_distance: {np.isnan(arr).sum()} of {arr.size} projections failed ({name})")

@@ -92,8 +92,10 @@ def render_generation_demo(out_dir: Path) -> list[Path]:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     files: list[Path] = []
-    views = {"revolve_full": ((25.0, -60.0), (70.0, -60.0)), "revolve_partial": ((30.0, -40.0), (88.0, -90.0)),
-             "rotational_sweep": ((30.0, -60.0), (88.0, -90.0)), "sweep_twist_scale": ((20.0, -60.0), (60.0, 30.0))}
+    # Second panels look down steeply enough to show the plan shape, but not from straight above:
+    # near elevation 90 matplotlib piles the z tick labels on top of each other.
+    views = {"revolve_full": ((25.0, -60.0), (58.0, 30.0)), "revolve_partial": ((30.0, -40.0), (58.0, 60.0)),
+             "rotational_sweep": ((30.0, -60.0), (58.0, 30.0)), "sweep_twist_scale": ((20.0, -60.0), (58.0, 30.0))}
     for name, (surface, curves, caption) in demo_surfaces().items():
         png = out / f"generation_{name}.png"
         render_surfaces(png, [surface], color="mean", title=f"{name.replace('_', ' ')}", subtitle=caption,

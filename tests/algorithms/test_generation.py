@@ -304,3 +304,24 @@ def test_errors():
         rotational_sweep(c, line([0, 0, 1], [1, 0, 1]))
     # 2 pi within ANGLE_SLACK is a full turn
     assert revolve(c, [0, 0, 0], [0, 0, 1], 2 * np.pi + 1e-13).domain[1] == (0.0, 2 * np.pi)
+
+
+def test_axis_direction_length_is_irrelevant():
+    # A direction only has to normalise to a finite unit vector: its length is not compared with
+    # the size of the profile (a unit axis used to be refused for a profile of size 1e13, and a
+    # direction of length 1e-13 for a profile of size 1), nor may it overflow (a direction of
+    # length 1.4e308 used to normalise to the zero vector and give a silently wrong surface).
+    prof = BSplineCurve(2, [0, 0, 0, 1, 1, 1], [[1, 0, 0], [2, 0.5, 1], [1, 0, 2]])
+    ref = revolve(prof, [0, 0, 0], [1, 1, 0], 2.0)
+    for d in ([1e-13, 1e-13, 0], [1e308, 1e308, 0], [3e-320, 3e-320, 0]):
+        s = revolve(prof, [0, 0, 0], d, 2.0)
+        assert_allclose(s.control_points, ref.control_points, rtol=0, atol=1e-15)
+    big = prof.transform(np.eye(3) * 1e13)
+    s = revolve(big, [0, 0, 0], [0, 0, 1])
+    assert_allclose(s.control_points[:, 0], big.control_points, rtol=1e-15)
+    s = rotational_sweep(prof, circle([0, 0, 0], 2.0), axis_direction=[0, 0, 1e-13])
+    assert_allclose(s.control_points, rotational_sweep(prof, circle([0, 0, 0], 2.0)).control_points, atol=1e-14)
+    with pytest.raises(InvalidGeometryError, match=r"^axis_direction: expected a non-zero vector, got \[0.0, 0.0, 0.0\]"):
+        revolve(prof, [0, 0, 0], [0.0, 0.0, 0.0])
+    with pytest.raises(InvalidGeometryError, match=r"^angle: expected a real number of radians, got True"):
+        revolve(prof, [0, 0, 0], [0, 0, 1], True)
