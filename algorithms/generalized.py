@@ -73,6 +73,19 @@ from both sides; their agreement is measured (:attr:`GeneralizedSurface.consiste
 touch the boundary data. They are set by discrete harmonic averaging over the index lattice (each
 the mean of its neighbours ``I - e_i + e_j``), a sparse linear solve; none exist for ``n = 3``.
 
+Comparison with the published construction
+------------------------------------------
+The text of Loop & DeRose 1990 was not available to us. Salvi 2020 ("G1 hole filling with S-patches
+made easy", arXiv:2002.11109, §2-3) summarises it: from a Sabin net of boundary degree ``d`` the
+S-patch is raised to depth ``d + 3`` (here ``2 + 3 = 5``, as derived above) and each side carries
+``d`` "panels" of control points that are affine images of the regular ``n``-gon (the maps
+``L_α`` above), with closed-form panel points involving ``cos(2π/n)``. So the structure (depth,
+affine panels, twist compatibility) agrees with ours; not verified: that our ``ρ(t), λ(t)`` give
+the same panel points as the paper's formula (both satisfy the same G1 and corner conditions, and
+the lowest-degree choice need not be unique). Known difference: Loop & DeRose place the interior
+control points only for depths up to 3 (Salvi), we use the discrete harmonic fill for all
+(it changes the shape inside the patch, never the G1 joins).
+
 The generalized bicubic scheme (§8-7, one patch per face after a Doo–Sabin step) is not
 implemented.
 """
@@ -84,7 +97,10 @@ from math import comb
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy import sparse
+from scipy.sparse.linalg import spsolve
 
+from . import _validate as V
 from .errors import InvalidGeometryError
 from .mesh import Mesh, catmull_clark
 from .spatch import SPatch, domain_vertices, spatch_indices
@@ -97,6 +113,7 @@ __all__ = [
     "spatch_curvatures",
     "BIQUADRATIC_DEPTH",
     "CONSISTENCY_TOL",
+    "MAX_VALENCE",
 ]
 
 Array = NDArray[np.float64]
@@ -104,6 +121,11 @@ Array = NDArray[np.float64]
 #: Depth of the S-patch of an irregular vertex (valence != 4): the G1 cross-boundary condition
 #: ``ρ D + λ T`` has degree 4 in the side parameter, so ``d - 1 = 4``. Regular vertices use depth 2.
 BIQUADRATIC_DEPTH: int = 5
+
+#: Largest vertex valence accepted. The S-patch of a valence-n vertex has C(n + 4, 5) control
+#: points (15 504 at n = 16, 42 504 at n = 20), all evaluated at every point; beyond 16 the patches
+#: are too heavy to be useful, and a mesh with such a vertex should be refined or re-meshed.
+MAX_VALENCE: int = 16
 
 #: Relative disagreement (to the size of the vertex's Bézier net) allowed between the two
 #: computations of a control point fixed by two sides (corner maps, twist points). The construction
@@ -161,11 +183,13 @@ def biquadratic_patch(centre: ArrayLike, mids: ArrayLike, corners: ArrayLike) ->
     consistency : float
         Largest disagreement between two computations of one control point (0 for ``n = 4``).
     """
-    v = np.asarray(centre, float)
-    m = np.asarray(mids, float)
-    c = np.asarray(corners, float)
-    n = m.shape[0]
-    if n < 3 or c.shape != m.shape or v.shape != m.shape[1:]:
+    v = V.as_finite_array(centre, "centre")
+    m = V.as_finite_array(mids, "mids")
+    c = V.as_finite_array(corners, "corners")
+    n = m.shape[0] if m.ndim == 2 else 0
+    if n > MAX_VALENCE:
+        raise InvalidGeometryError(f"mids: valence {n} exceeds MAX_VALENCE = {MAX_VALENCE}")
+    if m.ndim != 2 or n < 3 or c.shape != m.shape or v.shape != m.shape[1:]:
         raise InvalidGeometryError(f"mids, corners: expected (n, dim) arrays with n >= 3 and a centre (dim,); "
                                    f"got {m.shape}, {c.shape}, {v.shape}")
     E = np.eye(n, dtype=int)
@@ -229,8 +253,8 @@ def _harmonic_fill(idx: NDArray[np.intp], pos: dict[tuple[int, ...], int], P: Ar
     """Free control points as the discrete harmonic extension of the fixed ones: each free point is
     the mean of its lattice neighbours ``I - e_i + e_j`` (``i != j``)."""
     m, n = idx.shape
-    A = np.zeros((m, m))
-    for r in range(m):
+    rows, cols = [], []
+    for r in range(m):  # sparse: at most d (n - 1) neighbours per index (dense was O(m^2) memory)
         I = idx[r]
         for i in np.flatnonzero(I > 0):
             for j in range(n):
@@ -238,12 +262,14 @@ def _harmonic_fill(idx: NDArray[np.intp], pos: dict[tuple[int, ...], int], P: Ar
                     J = I.copy()
                     J[i] -= 1
                     J[j] += 1
-                    A[r, pos[tuple(int(x) for x in J)]] += 1.0
-    A /= A.sum(axis=1, keepdims=True)
+                    rows.append(r)
+                    cols.append(pos[tuple(int(x) for x in J)])
+    A = sparse.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(m, m))
+    A = sparse.diags(1.0 / np.asarray(A.sum(axis=1)).ravel()) @ A
     fixed = np.setdiff1d(np.arange(m), free)
-    lhs = np.eye(free.size) - A[np.ix_(free, free)]
-    rhs = A[np.ix_(free, fixed)] @ P[fixed]
-    return np.linalg.solve(lhs, rhs)
+    lhs = sparse.identity(free.size, format="csc") - A[free][:, free].tocsc()
+    rhs = A[free][:, fixed] @ P[fixed]
+    return np.asarray(spsolve(lhs, rhs)).reshape(free.size, -1)
 
 
 # ---------------------------------------------------------------------------- the surface
@@ -375,6 +401,11 @@ def generalized_biquadratic(mesh: Mesh, *, refine: str = "auto") -> GeneralizedS
     for v in range(mesh.n_vertices):
         if mesh.is_boundary_vertex(v) or not mesh.vertex_faces(v):
             continue
+        if mesh.valence(v) > MAX_VALENCE:
+            raise InvalidGeometryError(
+                f"mesh: vertex {v} has valence {mesh.valence(v)}, more than MAX_VALENCE = {MAX_VALENCE} "
+                f"(its S-patch would have C({mesh.valence(v) + 4}, 5) control points)"
+            )
         centre, mids, corners = _vertex_net(mesh, v)
         patch, cons = biquadratic_patch(centre, mids, corners)
         patches.append(patch)

@@ -91,6 +91,10 @@ MAX_SIDES: int = 64
 #: work arrays to a few tens of MB).
 _BLOCK_ELEMENTS = 4_000_000
 
+#: At most this many points per block: the Bernstein tables of a block then stay in the CPU cache
+#: (measured: 2048-point blocks are up to 2x faster than 10k-point ones on the 2-core machine).
+_BLOCK_POINTS = 2048
+
 
 # ---------------------------------------------------------------------------- index sets
 @functools.lru_cache(maxsize=256)
@@ -250,13 +254,10 @@ def _wachspress_jets(x: Array, n: int, r: int) -> Array:
     if r >= 1:
         L[..., 1] = -nrm[:, 0]  # slot (1, 0)
         L[..., 2] = -nrm[:, 1]  # slot (0, 1)
-    w = np.empty((N, n, K))
-    for k in range(n):
-        others = [j for j in range(n) if j not in ((k - 1) % n, k)]
-        acc = L[:, others[0]]
-        for j in others[1:]:
-            acc = _jet_mul(acc, L[:, j], r)
-        w[:, k] = acc
+    # w_k = L_{k+1} L_{k+2} ... L_{k+n-2} (indices mod n): all k at once, n - 3 jet products
+    w = np.roll(L, -1, axis=1)
+    for s in range(2, n - 1):
+        w = _jet_mul(w, np.roll(L, -s, axis=1), r)
     W = w.sum(axis=1, keepdims=True)
     return _jet_div(w, W, r)
 
@@ -326,31 +327,76 @@ def _unit_jet(r: int) -> Array:
     return e
 
 
-def _bernstein_values(lam: Array, n: int, depth: int) -> Array:
-    """All ``B^depth_J(λ)``, shape (N, m), in :func:`spatch_indices` order.
+@functools.lru_cache(maxsize=128)
+def _multinomial_column(n: int, depth: int) -> Array:
+    """``d! / I!`` for the indices of :func:`spatch_indices` order, shape (m, 1)."""
+    idx = np.array(_indices_cached(n, depth), dtype=np.intp).reshape(-1, n)
+    return _multinomials(idx, depth)[:, None]
 
-    ``exp(J · log λ)`` as one matrix product; a zero (or round-off negative) coordinate gets the
-    finite logarithm -1e300, so that ``λ^0 = 1`` and ``λ^j = 0`` for ``j >= 1``. The relative error
-    of a value is ``|J · log λ| ε``, i.e. an absolute error below ``ε max(-B log B) < 0.4 ε``.
+
+def _bernstein_levels(lam: Array, n: int, depth: int, lowest: int = 0, monomials: bool = False) -> dict[int, Array]:
+    """Bernstein polynomials ``B^l_I(λ) = (l!/I!) λ^I`` of the depths ``lowest .. depth``, point axis last.
+
+    Entry ``l`` has shape (C(n + l - 1, l), N) in :func:`spatch_indices` order. The monomials are
+    built from the last coordinate forwards, using the recursive structure of the order: the
+    indices of sum ``e`` over coordinates ``s .. n-1`` are ``(i, J)`` for ``i = e .. 0`` and ``J``
+    those of sum ``e - i`` over ``s + 1 .. n-1``, so each block is one power of ``λ_s`` times a
+    contiguous block built before (no gathers; ``~m`` products per depth and point). Products of
+    non-negative factors: the relative error of a value is at most ``~(l + 1) ε`` for ``λ >= 0``,
+    and a coordinate that is exactly zero on a side gives exactly zero to every polynomial with a
+    positive power of it. (``exp(J · log λ)``, used before, is as accurate but costs one ``exp`` per
+    value.)
+
+    Parameters
+    ----------
+    lam : ndarray, shape (n, N)
+        Barycentric (Wachspress) coordinates, one column per point.
+    monomials : bool
+        Return the monomials ``λ^I`` without the factors ``l!/I!`` (callers that fold them into
+        the control points save a pass over the values).
     """
-    if depth == 0:
-        return np.ones((lam.shape[0], 1))
-    idx = np.array(_indices_cached(n, depth), dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        logl = np.where(lam > 0, np.log(np.where(lam > 0, lam, 1.0)), -1e300)
-    return np.exp(logl @ idx.T + np.log(_multinomials(idx.astype(np.intp), depth)))
+    N = lam.shape[1]
+    powers = np.empty((n, depth + 1, N))
+    powers[:, 0] = 1.0
+    for e in range(1, depth + 1):
+        powers[:, e] = powers[:, e - 1] * lam
+    M = [powers[n - 1, e][None] for e in range(depth + 1)]  # coordinate n-1 alone
+    for s in range(n - 2, -1, -1):
+        M_new = []
+        for e in range(depth + 1):
+            if s == 0 and e < lowest:
+                M_new.append(None)
+                continue
+            blocks = [M[e - i] for i in range(e, -1, -1)]
+            out = np.empty((sum(b.shape[0] for b in blocks), N))
+            r = 0
+            for i, b in zip(range(e, -1, -1), blocks):
+                np.multiply(b, powers[s, i], out=out[r : r + b.shape[0]])
+                r += b.shape[0]
+            M_new.append(out)
+        M = M_new
+    if monomials:
+        return {e: M[e] for e in range(lowest, depth + 1)}
+    return {e: M[e] * _multinomial_column(n, e) for e in range(lowest, depth + 1)}
+
+
+def _bernstein_values(lam: Array, n: int, depth: int) -> Array:
+    """All ``B^depth_J(λ)`` at points ``lam`` (N, n): shape (N, m), :func:`spatch_indices` order."""
+    return _bernstein_levels(np.ascontiguousarray(lam.T), n, depth, depth)[depth].T
 
 
 @functools.lru_cache(maxsize=128)
 def _taylor_table(n: int, d: int, j: int) -> tuple[NDArray[np.intp], NDArray[np.intp], Array]:
-    """For |K| = j: rows[J, K] of J + K among depth d, the K's, and d!/((d-j)! K!)."""
+    """For |K| = j: rows[J, K] of J + K among depth d; each K as the list of its j sides with
+    repetition (``(2, 0, 1) -> [0, 0, 2]``), shape (m_j, j); and ``d!/((d-j)! K!)``."""
     upper = {ix: i for i, ix in enumerate(_indices_cached(n, d))}
     Js = _indices_cached(n, d - j)
     Ks = np.array(_indices_cached(n, j), dtype=np.intp).reshape(-1, n) if j else np.zeros((1, n), dtype=np.intp)
     rows = np.array([[upper[tuple(a + b for a, b in zip(J, K))] for K in Ks] for J in Js], dtype=np.intp)
+    factors = np.array([np.repeat(np.arange(n), K) for K in Ks], dtype=np.intp).reshape(len(Ks), j)
     fac = np.array([factorial(v) for v in range(j + 1)], dtype=float)
     coef = factorial(d) / factorial(d - j) / np.prod(fac[Ks], axis=1)
-    return rows, Ks, coef
+    return rows, factors, coef
 
 
 @dataclass(frozen=True, eq=False)
@@ -485,11 +531,16 @@ class SPatch:
 
     def index_of(self, index: tuple[int, ...]) -> int:
         """Row of ``control_points`` holding the control point with multi-index ``index``."""
-        key = tuple(int(v) for v in index)
+        msg = f"index: expected {self.sides} non-negative integers summing to {self.depth}, got {index!r}"
+        try:
+            values = list(index)
+        except TypeError as err:
+            raise InvalidGeometryError(msg) from err
+        if not all(isinstance(v, numbers.Integral) and not isinstance(v, bool) for v in values):
+            raise InvalidGeometryError(msg)  # 1.5 or True must not be truncated to an index
+        key = tuple(int(v) for v in values)
         if len(key) != self.sides or sum(key) != self.depth or min(key) < 0:
-            raise InvalidGeometryError(
-                f"index: expected {self.sides} non-negative integers summing to {self.depth}, got {index!r}"
-            )
+            raise InvalidGeometryError(msg)
         return int(np.flatnonzero(np.all(self.indices == np.array(key), axis=1))[0])
 
     def control_point(self, index: tuple[int, ...]) -> Array:
@@ -519,35 +570,33 @@ class SPatch:
         """
         n, d = self.sides, self.depth
         H = self._hpoles
+        c = H.shape[1]
         K_len = (r + 1) * (r + 2) // 2
         out = np.empty((x.shape[0], K_len, self.dim))
         top = min(r, d)
-        m_max = max(len(_indices_cached(n, d - j)) * len(_indices_cached(n, j)) for j in range(top + 1))
-        block = max(1, _BLOCK_ELEMENTS // max(1, m_max * H.shape[1]))
+        tables = [_taylor_table(n, d, j) for j in range(1, top + 1)]
+        # P_{J+K} scaled by the multinomial of J, so that the monomials λ^J stand for B^{d-j}_J
+        HK = [H[rows] * _multinomial_column(n, d - j)[:, :, None] for j, (rows, _, _) in enumerate(tables, 1)]
+        H0 = H * _multinomial_column(n, d)
+        # work per point: every Bernstein level, the Q_j and the δ^K jets
+        per_point = 2 * sum(len(_indices_cached(n, l)) for l in range(d + 1)) + sum(
+            h.shape[1] * (c + 2 * K_len) for h in HK) + n * K_len * (n + 2)
+        block = max(256, min(_BLOCK_POINTS, _BLOCK_ELEMENTS // per_point))
         for s in range(0, x.shape[0], block):
             xb = x[s : s + block]
             lam = _wachspress_jets(xb, n, r)  # (B, n, K)
-            lam0 = lam[..., 0]
-            acc = np.zeros((xb.shape[0], K_len, H.shape[1]))
-            if r > 0:
+            Bs = _bernstein_levels(np.ascontiguousarray(lam[..., 0].T), n, d, d - top, monomials=True)
+            acc = np.zeros((xb.shape[0], K_len, c))
+            acc[:, 0, :] = Bs[d].T @ H0
+            if top:
                 delta = lam.copy()
                 delta[..., 0] = 0.0
-                dpow = [np.broadcast_to(_unit_jet(r), delta.shape)]
-                for _ in range(top):
-                    dpow.append(_jet_mul(dpow[-1], delta, r))
-            for j in range(top + 1):
-                rows, Ks, coef = _taylor_table(n, d, j)
-                Bj = _bernstein_values(lam0, n, d - j)  # (B, m_{d-j})
-                Q = (Bj @ H[rows].reshape(rows.shape[0], -1)).reshape(xb.shape[0], len(Ks), H.shape[1])
-                if j == 0:
-                    acc[:, 0, :] += Q[:, 0, :]
-                    continue
-                for q, Kt in enumerate(Ks):
-                    dK = None
-                    for k in np.flatnonzero(Kt):
-                        f = dpow[Kt[k]][:, k]
-                        dK = f if dK is None else _jet_mul(dK, f, r)
-                    acc += (coef[q] * dK)[:, :, None] * Q[:, q, None, :]
+            for j, ((_, factors, coef), Hj) in enumerate(zip(tables, HK), start=1):
+                Q = np.tensordot(Bs[d - j], Hj, axes=(0, 0))  # (B, m_j, c)
+                dK = delta[:, factors[:, 0], :]  # (B, m_j, K): jets of δ^K, all K at once
+                for f in range(1, j):
+                    dK = _jet_mul(dK, delta[:, factors[:, f], :], r)
+                acc += np.einsum("bqs,bqc->bsc", dK * coef[:, None], Q, optimize=True)
             if self.is_rational:
                 A = _jet_div(np.moveaxis(acc[..., :-1], 1, -1), acc[:, None, :, -1], r)  # (B, dim, K)
                 acc = np.moveaxis(A, -1, 1)
@@ -635,6 +684,8 @@ class SPatch:
         ``i_{k+1}``; they are ordered by ``i_{k+1}`` ascending, then by the index order.
         """
         k = self._side(k)
+        if isinstance(row, bool) or not isinstance(row, numbers.Integral) or not 0 <= int(row) <= self.depth:
+            raise InvalidGeometryError(f"row: expected an integer from 0 to {self.depth}, got {row!r}")
         k1 = (k + 1) % self.sides
         s = self.indices[:, k] + self.indices[:, k1]
         rows = np.flatnonzero(s == self.depth - int(row))

@@ -245,3 +245,26 @@ def test_errors():
         g.evaluate(8, [0.0, 0.0])
     with pytest.raises(InvalidGeometryError, match="mids, corners"):
         biquadratic_patch(np.zeros(3), np.zeros((2, 3)), np.zeros((2, 3)))
+
+
+def test_non_finite_net_and_too_high_valence():
+    """Review: a NaN in the vertex net used to pass the consistency check (NaN > tol is False) and
+    return a NaN patch; a valence beyond MAX_VALENCE used to build a dense C(n+4, 5)^2 matrix
+    (8 GB at n = 16) before failing."""
+    from algorithms.generalized import MAX_VALENCE
+
+    n = 5
+    rng = np.random.default_rng(0)
+    v, m, c = np.zeros(3), rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
+    for arr in (m, c):
+        bad = arr.copy()
+        bad[2, 1] = np.nan
+        args = (v, bad, c) if arr is m else (v, m, bad)
+        with pytest.raises(InvalidGeometryError, match="finite"):
+            biquadratic_patch(*args)
+    k = MAX_VALENCE + 1
+    a = 2 * np.pi * np.arange(k) / k
+    fan = Mesh(np.vstack(([0.0, 0.0, 0.0], np.column_stack((np.cos(a), np.sin(a), np.zeros(k))))),
+               [[0, 1 + i, 1 + (i + 1) % k] for i in range(k)])
+    with pytest.raises(InvalidGeometryError, match=f"vertex 0 has valence {k}"):
+        generalized_biquadratic(fan, refine="never" if fan.is_quad else "auto")

@@ -152,11 +152,15 @@ def test_wachspress_derivatives_vs_sympy(n):
     """Exact symbolic gradients and Hessians of the Wachspress coordinates (sympy) as the oracle."""
     sp = pytest.importorskip("sympy")
     X, Y = sp.symbols("x y")
-    h = sp.cos(sp.pi / n)
-    L = [h - X * sp.cos(2 * sp.pi * (j + sp.Rational(1, 2)) / n) - Y * sp.sin(2 * sp.pi * (j + sp.Rational(1, 2)) / n)
-         for j in range(n)]
-    w = [sp.Mul(*[L[j] for j in range(n) if j not in ((k - 1) % n, k)]) for k in range(n)]
-    lam = [wk / sp.Add(*w) for wk in w]
+    # Float coefficients (cos, sin of the side normals) instead of symbolic trigonometric constants:
+    # the differentiation stays exact and symbolic, but sympy no longer carries nested radicals
+    # through the quotient rule (14 s -> < 1 s); the coefficients are the doubles the code uses.
+    h = sp.Float(float(np.cos(np.pi / n)), 17)
+    L = [h - X * sp.Float(float(np.cos(2 * np.pi * (j + 0.5) / n)), 17)
+         - Y * sp.Float(float(np.sin(2 * np.pi * (j + 0.5) / n)), 17) for j in range(n)]
+    w = [sp.expand(sp.Mul(*[L[j] for j in range(n) if j not in ((k - 1) % n, k)])) for k in range(n)]
+    W = sp.expand(sp.Add(*w))
+    lam = [wk / W for wk in w]  # expanded polynomials over one expanded denominator: small trees
     pts = interior_points(np.random.default_rng(3), n, 4)
     ours = wachspress_derivatives(pts, n, order=2)
     for k in (0, 2):
@@ -518,3 +522,24 @@ def test_invalid_points_and_sides():
     v = domain_vertices(5)
     edge = 0.5 * (v[0] + v[1]) * (1 + 1e-12)
     assert np.all(np.isfinite(p.evaluate(edge)))
+
+
+def test_too_many_sides_and_bad_index_tuples():
+    """Review (issue 4 error paths): sides beyond MAX_SIDES, and index tuples that are not n
+    non-negative integers summing to d, are refused with a message naming them."""
+    from algorithms.spatch import MAX_SIDES
+
+    with pytest.raises(InvalidGeometryError, match=f"sides: expected an integer from 3 to {MAX_SIDES}, got {MAX_SIDES + 1}"):
+        SPatch(MAX_SIDES + 1, 1, np.zeros((MAX_SIDES + 1, 3)))
+    with pytest.raises(InvalidGeometryError, match="sides"):
+        domain_vertices(MAX_SIDES + 1)
+    p = random_patch(np.random.default_rng(11), 3, 2)
+    for bad in [(1.5, 1, 0), (2, 0), (3, -1, 0), (1, 1, 1), (True, 1, 0)]:
+        with pytest.raises(InvalidGeometryError, match="index: expected 3 non-negative integers summing to 2"):
+            p.index_of(bad)
+    with pytest.raises(InvalidGeometryError, match="row: expected an integer from 0 to 2"):
+        p.boundary_indices(0, 3)
+    with pytest.raises(InvalidGeometryError, match="row"):
+        p.boundary_indices(0, -1)
+    with pytest.raises(InvalidGeometryError, match="unexpected"):
+        SPatch(3, 1, {(2, -1, 0): [0, 0], (0, 1, 0): [1, 0], (0, 0, 1): [0, 1]})
