@@ -61,11 +61,14 @@ L. Piegl, W. Tiller, The NURBS Book, 2nd ed., 1997, A2.3 (derivatives), §10 (G1
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.linalg import lu_factor, lu_solve
 
 from .basis import basis_matrix, greville
 from .curve import BSplineCurve
@@ -77,6 +80,7 @@ __all__ = [
     "HoleFill",
     "FillQuality",
     "side_from_surface",
+    "closest_parameters",
     "fill_hole",
     "measure_fill",
     "CLOSURE_TOL",
@@ -92,6 +96,8 @@ Array = NDArray[np.float64]
 #: space in homogeneous coordinates); anything out of it (a corner incompatibility) must be dropped,
 #: not amplified.
 _RCOND = 1e-9
+#: Singular values below this fraction of the largest count as zero in the kite domain relation.
+_NULL_RTOL = 1e-10
 
 #: Largest gap (relative to the size of the loop's bounding box) between the end of one side and
 #: the start of the next for the loop to count as closed.
@@ -164,6 +170,31 @@ class HoleFill:
     twist_mismatch: Array
     size: float = field(default=1.0)
 
+    method: str = field(default="quads")
+
+    def locate(self, side: int, points: Array) -> tuple[NDArray[np.intp], Array, Array, Array]:
+        """Which patch, at which ``(u, v)``, carries the points ``(m, 3)`` of side ``side``.
+
+        The side parameter of each point comes from :func:`closest_parameters` (vectorised); patch
+        ``side`` covers ``[0, split]`` of the side on its ``v = 0`` edge, patch ``side + 1`` the rest
+        on its ``u = 0`` edge (reversed).
+
+        Returns
+        -------
+        patch : ndarray of intp, shape (m,)
+        u, v : ndarray, shape (m,)
+        distance : ndarray, shape (m,)
+            Distance of each point from the side curve (the caller judges it).
+        """
+        n = len(self.patches)
+        s, dist = closest_parameters(self.sides[side].curve, points)
+        sp = float(self.split[side])
+        first = s <= sp
+        patch = np.where(first, side, (side + 1) % n)
+        u = np.where(first, s / sp, 0.0)
+        v = np.where(first, 0.0, (1.0 - s) / (1.0 - sp))
+        return patch.astype(np.intp), u, v, dist
+
 
 @dataclass(frozen=True)
 class FillQuality:
@@ -196,19 +227,28 @@ def _mult_map(knots: Array, degree: int) -> dict[float, int]:
     return {float(v): int(c) for v, c in zip(vals, counts)}
 
 
+@functools.lru_cache(maxsize=256)
+def _collocation(degree: int, knots_key: bytes) -> tuple[Array, Any, Array, Array]:
+    """Greville points, LU factors of the collocation matrix, check points and their basis matrix
+    of the spline space ``(degree, knots)``; cached (a fill asks for the same few spaces many times)."""
+    knots = np.frombuffer(knots_key)
+    n = len(knots) - degree - 1
+    x = greville(knots, degree)
+    lu = lu_factor(basis_matrix(knots, degree, n, x)[0])
+    xm = np.r_[0.5 * (x[:-1] + x[1:]), knots[degree] + 0.37 * (x[1] - x[0])]
+    Nm = basis_matrix(knots, degree, n, xm)[0]
+    return x, lu, xm, Nm
+
+
 def _represent(fn: Callable[[Array], Array], degree: int, knots: Array) -> Array:
     """Poles of the spline of ``(degree, knots)`` equal to ``fn`` (which must lie in that space).
 
     Collocation at the Greville abscissae; verified at the points between them.
     """
-    n = len(knots) - degree - 1
-    x = greville(knots, degree)
-    N = basis_matrix(knots, degree, n, x)[0]
-    Y = fn(x)
-    Q = np.linalg.solve(N, Y)
-    xm = np.r_[0.5 * (x[:-1] + x[1:]), knots[degree] + 0.37 * (x[1] - x[0])]
-    Nm = basis_matrix(knots, degree, n, xm)[0]
-    Ym = fn(xm)
+    x, lu, xm, Nm = _collocation(int(degree), np.ascontiguousarray(knots, float).tobytes())
+    Y = fn(np.r_[x, xm])
+    Y, Ym = Y[:len(x)], Y[len(x):]
+    Q = lu_solve(lu, Y)
     scale = max(float(np.abs(Y).max()), float(np.abs(Ym).max()), 1e-300)
     err = float(np.abs(Nm @ Q - Ym).max()) / scale
     if err > REPRESENT_TOL:
@@ -327,6 +367,38 @@ def _angle_deg(a: Array, b: Array) -> Array:
 
 
 # ======================================================================================= inputs
+def closest_parameters(curve: BSplineCurve, points: Array, samples: int = 401,
+                       iterations: int = 8) -> tuple[Array, Array]:
+    """Parameters of the points of ``curve`` closest to ``points`` (m, dim), vectorised.
+
+    The nearest of ``samples`` uniform parameters starts Newton's iteration on
+    ``(C(t) - p) . C'(t) = 0`` (clamped to the domain), all points at once.
+
+    Returns
+    -------
+    t : ndarray, shape (m,)
+    distance : ndarray, shape (m,)
+        ``|C(t) - p|``, for the caller to check.
+    """
+    P = np.atleast_2d(np.asarray(points, float))
+    lo, hi = curve.domain
+    grid = np.linspace(lo, hi, samples)
+    dense = curve.evaluate(grid)
+    d2 = np.einsum("mkd,mkd->mk", P[:, None] - dense[None], P[:, None] - dense[None])
+    t = grid[np.argmin(d2, axis=1)]
+    for _ in range(iterations):
+        D = curve.derivatives(t, 2)
+        r = D[:, 0] - P
+        g = np.einsum("md,md->m", r, D[:, 1])
+        h = np.einsum("md,md->m", D[:, 1], D[:, 1]) + np.einsum("md,md->m", r, D[:, 2])
+        t_new = np.clip(t - np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0), lo, hi)
+        done = np.abs(t_new - t).max() <= 1e-15 * (hi - lo)
+        t = t_new
+        if done:
+            break
+    return t, np.linalg.norm(curve.evaluate(t) - P, axis=1)
+
+
 def side_from_surface(surface: BSplineSurface, edge: str, reverse: bool = False) -> HoleSide:
     """The hole side along one iso-boundary of a neighbour surface, with its exact cross derivative.
 
@@ -473,9 +545,24 @@ def _kite_relation(v: Array, p: Array, i: int, n: int) -> tuple[_Poly, _Poly, _P
     M = np.array([[perp @ A0, 0.0, perp @ B0, 0.0],
                   [perp @ A1, perp @ A0, perp @ B1, perp @ B0],
                   [0.0, perp @ A1, 0.0, perp @ B1]])
-    x = np.linalg.svd(M)[2][-1]  # (a0, a1, b0, b1)
+    # The null space of M is 1-D in general but 2-D when the split is symmetric (every side split
+    # at its middle: then A and B mirror each other about T and every a = b solves it), where a
+    # bare "last singular vector" is an arbitrary member, LAPACK-dependent, that can have a0 = 0.
+    # Take the member nearest to a = b = 1 (constant coefficients, the lowest degree): unique,
+    # continuous in the data, and the same on every machine.
+    _, sv, Vt = np.linalg.svd(M)
+    null = Vt[np.r_[sv, np.zeros(4 - sv.shape[0])] <= _NULL_RTOL * sv[0]]
+    if null.shape[0] == 0:
+        null = Vt[-1:]
+    x = null.T @ (null @ np.ones(4))  # (a0, a1, b0, b1)
+    if not np.any(x):
+        x = Vt[-1]
     if x[0] < 0:
         x = -x
+    if not np.all(x > _NULL_RTOL * np.abs(x).max()):
+        raise InvalidGeometryError(
+            f"sides: the domain relation of internal edge {i} has a coefficient that vanishes on the edge "
+            f"({np.array2string(x, precision=3)}): the side split parameters are too uneven")
     a, b = _scalar_poly([x[0], x[1] - x[0]]), _scalar_poly([x[2], x[3] - x[2]])
     # r(t) = (a A + b B) . T / |T|^2, quadratic
     A = _Poly(np.array([A0, A1 - A0])); Bp = _Poly(np.array([B0, B1 - B0]))
@@ -690,16 +777,29 @@ def _corner_knot(K: Array, degree: int) -> Array:
     return np.r_[K[:degree + 1], [kappa] * (degree - 1), K[degree + 1:]]
 
 
-def _gram(knots: Array, degree: int, order: int) -> Array:
-    """``G[i, j] = int N_i^(order) N_j^(order)`` by Gauss-Legendre per span."""
+@functools.lru_cache(maxsize=16)
+def _leggauss(m: int) -> tuple[Array, Array]:
+    return np.polynomial.legendre.leggauss(m)
+
+
+@functools.lru_cache(maxsize=64)
+def _gram_cached(knots_key: bytes, degree: int, order: int) -> Array:
+    knots = np.frombuffer(knots_key)
     n = len(knots) - degree - 1
-    xg, wg = np.polynomial.legendre.leggauss(degree + 1)
+    xg, wg = _leggauss(degree + 1)
     br = np.unique(knots)
     a, b = br[:-1], br[1:]
     x = (0.5 * (b - a)[:, None] * (xg + 1) + a[:, None]).ravel()
     wt = (0.5 * (b - a)[:, None] * wg).ravel()
     D = basis_matrix(knots, degree, n, x, order)[order]
-    return D.T @ (wt[:, None] * D)
+    G = D.T @ (wt[:, None] * D)
+    G.flags.writeable = False
+    return G
+
+
+def _gram(knots: Array, degree: int, order: int) -> Array:
+    """``G[i, j] = int N_i^(order) N_j^(order)`` by Gauss-Legendre per span (cached per space)."""
+    return _gram_cached(np.ascontiguousarray(knots, float).tobytes(), int(degree), int(order))
 
 
 def _fair_interior(H: Array, free: NDArray[np.bool_], degree: tuple[int, int], knots: tuple[Array, Array]) -> Array:
@@ -715,6 +815,15 @@ def _fair_interior(H: Array, free: NDArray[np.bool_], degree: tuple[int, int], k
 
 
 # ================================================================================== measurement
+def _point_normal(surface: BSplineSurface, u: Array, v: Array) -> tuple[Array, Array]:
+    """Points and (unnormalised) normals ``S_u x S_v`` from one derivative evaluation; a degenerate
+    normal is NaN (as :meth:`BSplineSurface.normal`), so that it fails every angle check."""
+    D = surface.derivatives(u, v, 1)
+    nrm = np.cross(D[:, 1, 0], D[:, 0, 1])
+    nrm[np.linalg.norm(nrm, axis=1) == 0] = np.nan
+    return D[:, 0, 0], nrm
+
+
 def _neighbour_normal(side: HoleSide, s: Array) -> Array:
     c = side.curve
     D = c.derivatives(s, 1)
@@ -749,14 +858,13 @@ def measure_fill(fill: HoleFill, samples: int = 201) -> FillQuality:
         tv = np.unique(np.r_[t, P[k].knots[1]])
         s1, s2 = fill.split[i] * tu, 1.0 - (1.0 - fill.split[i]) * tv
         c1, c2 = sd[i].curve.evaluate(s1), sd[i].curve.evaluate(s2)
-        f1, f2 = P[i].evaluate(tu, 0.0 * tu), P[k].evaluate(0.0 * tv, tv)
+        (f1, n1), (f2, n2) = _point_normal(P[i], tu, 0.0 * tu), _point_normal(P[k], 0.0 * tv, tv)
         bg[i] = max(np.linalg.norm(f1 - c1, axis=1).max(), np.linalg.norm(f2 - c2, axis=1).max())
-        ba[i] = max(_angle_deg(P[i].normal(tu, 0.0 * tu), _neighbour_normal(sd[i], s1)).max(),
-                    _angle_deg(P[k].normal(0.0 * tv, tv), _neighbour_normal(sd[i], s2)).max())
+        ba[i] = max(_angle_deg(n1, _neighbour_normal(sd[i], s1)).max(), _angle_deg(n2, _neighbour_normal(sd[i], s2)).max())
         te = np.unique(np.r_[t, P[i].knots[1], P[k].knots[0]])
-        e1, e2 = P[i].evaluate(1.0 + 0 * te, te), P[k].evaluate(te, 1.0 + 0 * te)
+        (e1, m1), (e2, m2) = _point_normal(P[i], 1.0 + 0 * te, te), _point_normal(P[k], te, 1.0 + 0 * te)
         ig[i] = np.linalg.norm(e1 - e2, axis=1).max()
-        ia[i] = _angle_deg(P[i].normal(1.0 + 0 * te, te), P[k].normal(te, 1.0 + 0 * te)).max()
+        ia[i] = _angle_deg(m1, m2).max()
     nc = np.array([p.normal(1.0, 1.0) for p in P])
     ca = float(max(_angle_deg(nc[0], nc[i]) for i in range(n)))
     return FillQuality(bg, ba, ig, ia, ca)

@@ -51,7 +51,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from algorithms.curve import BSplineCurve
 from algorithms.errors import InvalidGeometryError, KernelError, OccsurfError
-from algorithms.nsided import HoleFill, HoleSide, fill_hole, measure_fill, side_from_surface
+from algorithms.nsided import HoleFill, HoleSide, closest_parameters, fill_hole, measure_fill, side_from_surface
 from algorithms.surface import BSplineSurface
 
 from . import _occ
@@ -165,24 +165,15 @@ def find_loops(shape: TopoDS_Shape, all_loops: bool = False) -> list[tuple[list[
 # ---------------------------------------------------------------------------------------- sides
 def _iso_side(surf: BSplineSurface, pts: np.ndarray) -> HoleSide:
     """The iso-boundary of ``surf`` on which the edge points ``pts`` lie, as a HoleSide."""
-    from scipy.optimize import minimize_scalar
-
     length = max(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()), 1e-300)
     cands = []
-    for e in ("u0", "u1", "v0", "v1"):
+    for e in ("u0", "u1", "v0", "v1"):  # the nearest iso-boundary on a coarse sampling ...
         side = side_from_surface(surf, e)
-        t = np.linspace(*side.curve.domain, 401)
-        dense = side.curve.evaluate(t)
-        idx = [int(np.argmin(np.linalg.norm(dense - p, axis=1))) for p in pts]
-        coarse = max(float(np.linalg.norm(dense[j] - p)) for j, p in zip(idx, pts))
-        cands.append((coarse, side, t, idx))
-    coarse, side, t, idx = min(cands, key=lambda c: c[0])
-    worst = 0.0
-    for j, p in zip(idx, pts):  # exact distance: minimise around the nearest sample
-        lo, hi = t[max(j - 1, 0)], t[min(j + 1, len(t) - 1)]
-        r = minimize_scalar(lambda x: float(np.sum((side.curve.evaluate(x) - p) ** 2)), bounds=(lo, hi),
-                            method="bounded", options={"xatol": 1e-13 * (t[-1] - t[0])})
-        worst = max(worst, math.sqrt(max(r.fun, 0.0)))
+        dense = side.curve.evaluate(np.linspace(*side.curve.domain, 201))
+        coarse = float(np.sqrt(((pts[:, None] - dense[None]) ** 2).sum(-1).min(axis=1)).max())
+        cands.append((coarse, side))
+    side = min(cands, key=lambda c: c[0])[1]
+    worst = float(closest_parameters(side.curve, pts)[1].max())  # ... then its exact distances
     if worst > max(ISO_TOLERANCE * length, 1e-7):
         raise InvalidGeometryError(
             f"a hole edge is not an iso-parametric boundary of its face (off by {worst:.3g}): trimmed "
@@ -222,21 +213,48 @@ def hole_sides(edges: list[Any], faces: list[Any | None]) -> list[HoleSide]:
 
 
 # ---------------------------------------------------------------------------------------- assessment
-def assess_joint(edge: Any, face: Any, fill_surfaces: list[Any], samples: int = ASSESS_SAMPLES) -> tuple[float, float]:
-    """Max ``C0Value`` gap and ``G1Angle`` (degrees) of OCC's LocalAnalysis (order G1) along ``edge``
-    between its neighbour ``face`` and the nearest of ``fill_surfaces`` (Geom surfaces)."""
+def _edge_samples(edge: Any, face: Any, samples: int) -> tuple[Any, list[Any], np.ndarray]:
+    """The neighbour's surface, its (u, v) at ``samples`` points of ``edge`` (from the p-curve) and
+    the points themselves, shape (samples, 3)."""
     s_n = BRep_Tool.Surface_s(face)
     pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
     a, b = BRep_Tool.Range_s(edge, face)
-    projs = [GeomAPI_ProjectPointOnSurf() for _ in fill_surfaces]
+    uvs = [pc.Value(a + t * (b - a)) for t in np.linspace(0.0, 1.0, samples)]
+    pts = np.array([s_n.Value(uv.X(), uv.Y()).Coord() for uv in uvs])
+    return s_n, uvs, pts
+
+
+def _local_analysis(s_n: Any, uv: Any, s_f: Any, u: float, v: float) -> tuple[float, float]:
+    la = LocalAnalysis_SurfaceContinuity(s_n, uv.X(), uv.Y(), s_f, u, v, GeomAbs_Shape.GeomAbs_G1)
+    if not la.IsDone():
+        raise KernelError(f"LocalAnalysis_SurfaceContinuity failed ({la.StatusError()})")
+    ang = la.G1Angle()
+    return la.C0Value(), math.degrees(min(ang, math.pi - ang))
+
+
+def assess_joint(edge: Any, face: Any, fill_surfaces: list[Any], samples: int = ASSESS_SAMPLES,
+                 locate: Any = None) -> tuple[float, float]:
+    """Max ``C0Value`` gap and ``G1Angle`` (degrees) of OCC's LocalAnalysis (order G1) along ``edge``
+    between its neighbour ``face`` and the fill (Geom surfaces ``fill_surfaces``).
+
+    ``locate(points) -> (surface index, u, v)`` gives the fill's parameters of the boundary points
+    when the fill knows them (ours: from its construction, :meth:`HoleFill.locate`); OCC then
+    evaluates the fill there, so a wrong parameter shows up as a gap. Without it (OCC's filler)
+    each point is projected onto every surface (``GeomAPI_ProjectPointOnSurf``), the nearest kept.
+    """
+    s_n, uvs, pts = _edge_samples(edge, face, samples)
     g0 = g1 = 0.0
-    for t in np.linspace(0.0, 1.0, samples):
-        tp = a + t * (b - a)
-        uv = pc.Value(tp)
-        p = s_n.Value(uv.X(), uv.Y())
+    if locate is not None:
+        idx, us, vs = locate(pts)
+        for uv, k, u, v in zip(uvs, idx, us, vs):
+            gap, ang = _local_analysis(s_n, uv, fill_surfaces[int(k)], float(u), float(v))
+            g0, g1 = max(g0, gap), max(g1, ang)
+        return g0, g1
+    projs = [GeomAPI_ProjectPointOnSurf() for _ in fill_surfaces]
+    for uv, p in zip(uvs, pts):
         best = None
         for s_f, pr in zip(fill_surfaces, projs):
-            pr.Init(p, s_f)
+            pr.Init(gp_Pnt(*p), s_f)
             if pr.NbPoints() == 0:
                 continue
             d = pr.LowerDistance()
@@ -244,12 +262,8 @@ def assess_joint(edge: Any, face: Any, fill_surfaces: list[Any], samples: int = 
                 best = (d, s_f, *pr.LowerDistanceParameters())
         if best is None:
             raise KernelError("cannot project a boundary point onto the fill")
-        la = LocalAnalysis_SurfaceContinuity(s_n, uv.X(), uv.Y(), best[1], best[2], best[3], GeomAbs_Shape.GeomAbs_G1)
-        if not la.IsDone():
-            raise KernelError(f"LocalAnalysis_SurfaceContinuity failed ({la.StatusError()})")
-        ang = la.G1Angle()
-        ang = min(ang, math.pi - ang)
-        g0, g1 = max(g0, la.C0Value()), max(g1, math.degrees(ang))
+        gap, ang = _local_analysis(s_n, uv, best[1], best[2], best[3])
+        g0, g1 = max(g0, gap), max(g1, ang)
     return g0, g1
 
 
@@ -279,6 +293,13 @@ def _neighbour(m: TopTools_IndexedDataMapOfShapeListOfShape, edge: Any) -> Any |
         return None
     lst = m.FindFromIndex(idx)
     return TopoDS.Face_s(lst.First()) if lst.Size() >= 1 else None
+
+
+def _locator(fill: HoleFill, side: int) -> Any:
+    def locate(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        idx, u, v, _ = fill.locate(side, points)  # the distance is judged by OCC's C0Value
+        return idx, u, v
+    return locate
 
 
 def _one_line(err: BaseException) -> str:
@@ -326,7 +347,7 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
             q = measure_fill(fill)
             rep.own_g0, rep.own_g1 = float(q.boundary_gap.max()), float(q.boundary_angle.max())
             rep.internal_g1 = float(max(q.internal_angle.max(), q.center_angle))
-            per = [assess_joint(e, f, occ_surfs, samples) for e, f in zip(edges, nb)]
+            per = [assess_joint(e, f, occ_surfs, samples, locate=_locator(fill, i)) for i, (e, f) in enumerate(zip(edges, nb))]
             rep.side_g0, rep.side_g1 = [p[0] for p in per], [p[1] for p in per]
             rep.g0, rep.g1 = max(rep.side_g0), max(rep.side_g1)
             rep.status = "filled"

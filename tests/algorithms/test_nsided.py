@@ -181,3 +181,28 @@ def test_flat_corner_is_refused() -> None:
     m = ring_model(5, polygon=sq, bump=0.0)
     with pytest.raises(InvalidGeometryError, match="flat"):
         fill_hole(m.sides)
+
+
+@pytest.mark.parametrize("n", range(3, 9))
+@pytest.mark.parametrize("split", [0.5, 0.4])
+def test_kite_relation_is_well_posed(n: int, split: float) -> None:
+    # The relation a A + b B = r T of each internal edge has a 2-D solution space when every side is
+    # split at its middle (A and B mirror each other about T); the chosen member must not depend on
+    # LAPACK's choice of null vector (one with a(0) = 0 broke the fill on some builds) and must be
+    # positive along the edge. Checked here on the polynomials themselves, at many t.
+    from algorithms.nsided import _kite_relation
+
+    th = 2 * np.pi * np.arange(n) / n
+    v = np.c_[np.cos(th), np.sin(th)]
+    p = np.array([(1 - split) * v[i] + split * v[(i + 1) % n] for i in range(n)])
+    t = np.linspace(0.0, 1.0, 11)
+    for i in range(n):
+        a, b, r, dom = _kite_relation(v, p, i, n)
+        A = dom["A0"] + np.outer(t, dom["A1"] - dom["A0"])
+        B = dom["B0"] + np.outer(t, dom["B1"] - dom["B0"])
+        lhs = a(t)[:, :1] * A + b(t)[:, :1] * B
+        np.testing.assert_allclose(lhs, r(t)[:, :1] * dom["T"], atol=1e-13)
+        assert np.all(a(t) > 0) and np.all(b(t) > 0)
+        if split == 0.5:  # symmetric: the constant member a = b is the one chosen
+            np.testing.assert_allclose(a(t), np.broadcast_to(a(t)[:1], a(t).shape), atol=1e-15)
+            np.testing.assert_allclose(a(t), b(t), atol=1e-15)
