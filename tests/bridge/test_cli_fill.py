@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -91,4 +92,22 @@ def test_make_holes_is_reproducible(tmp_path: Path) -> None:
                           capture_output=True, text=True, env=env, timeout=600)
     assert proc.returncode == 0, proc.stderr
     for name in ("dome_holes.step", "rational_holes.step"):
-        assert (tmp_path / name).read_bytes() == (HOLES / name).read_bytes(), name
+        _assert_same_step_text((tmp_path / name).read_bytes(), (HOLES / name).read_bytes(), name)
+
+
+#: A real number in STEP text (``%.16E`` as our writer prints them, or a plain decimal).
+_STEP_REAL = re.compile(rb"[-+]?\d+\.\d*(?:E[-+]?\d+)?")
+#: The sample models go through fits and linear solves whose last bits depend on the NumPy/BLAS
+#: build: numpy 2.4.6 here reproduces the committed files to 3.9e-13 of the model size (dome),
+#: 1.6e-14 (rational), not bit for bit. Everything else (entities, ids, names, counts) must match.
+_SAMPLE_RTOL = 1e-11
+
+
+def _assert_same_step_text(new: bytes, old: bytes, name: str) -> None:
+    """The same STEP file but for the last bits of its real numbers (relative to the model size)."""
+    assert _STEP_REAL.split(new) == _STEP_REAL.split(old), f"{name}: the entities differ, not only numbers"
+    a = np.array([float(x) for x in _STEP_REAL.findall(new)])
+    b = np.array([float(x) for x in _STEP_REAL.findall(old)])
+    size = max(float(np.abs(b).max()), 1.0)
+    worst = float(np.abs(a - b).max()) / size
+    assert worst <= _SAMPLE_RTOL, f"{name}: numbers differ by {worst:.3g} of the model size"
