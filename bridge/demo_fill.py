@@ -31,6 +31,7 @@ def _table_png(path: Path, rows: list[tuple[str, ...]], title: str) -> Path:
     tab = ax.table(cellText=[list(r) for r in rows[1:]], colLabels=list(rows[0]), loc="center", cellLoc="center")
     tab.auto_set_font_size(False)
     tab.set_fontsize(10)
+    tab.auto_set_column_width(list(range(len(rows[0]))))  # headers such as "ours G1 angle" fit their cells
     tab.scale(1.0, 1.6)
     for (r, _), cell in tab.get_celld().items():
         if r == 0:
