@@ -2,7 +2,7 @@
 
 Run from the repository root::
 
-    /work/venv/bin/python benchmarks/bench_curvenet.py
+    python benchmarks/bench_curvenet.py
 
 Cases (times best of N, wall clock, one BLAS thread; see benchmarks/common.py):
 

@@ -2,7 +2,7 @@
 
 Run from the repository root::
 
-    /work/venv/bin/python benchmarks/bench_generation.py
+    python benchmarks/bench_generation.py
 
 Timed (best of N, wall clock, one BLAS thread), each from our curves to a B-spline surface:
 

@@ -2,7 +2,7 @@
 
 Run from the repository root::
 
-    /work/venv/bin/python benchmarks/bench_hierarchical.py
+    python benchmarks/bench_hierarchical.py
 
 The surface: a bicubic 20 x 20 base (non-uniform knots, seeded) with three nested overlays
 (midpoint refinement of [0.2, 0.8]^2, then [0.35, 0.65]^2, then [0.45, 0.55]^2), frame offsets,

@@ -2,8 +2,8 @@
 
 Run from the repository root::
 
-    /work/venv/bin/python benchmarks/bench_manipulation.py            # print the tables
-    /work/venv/bin/python benchmarks/bench_manipulation.py --write    # also rewrite MANIPULATION.md
+    python benchmarks/bench_manipulation.py            # print the tables
+    python benchmarks/bench_manipulation.py --write    # also rewrite MANIPULATION.md
 
 The curve is a clamped uniform cubic with 200 poles in 3-D. Timed (best of 7 repeats of many calls,
 per call, wall clock):
