@@ -20,7 +20,8 @@ from .fitting import (
     loft,
     parametrize,
 )
-from .generalized import GeneralizedSurface, biquadratic_patch, generalized_biquadratic, spatch_curvatures
+from .generalized import GeneralizedSurface, biquadratic_patch, generalized_biquadratic, ribbon_patch, spatch_curvatures
+from .generalized_bicubic import generalized_bicubic
 from .hierarchical import HierarchicalSurface
 from .hierarchical_core import Overlay
 from .hierarchical_curve import HierarchicalCurve
@@ -34,7 +35,7 @@ from .differential import (
     torsion,
 )
 from .nsided import FillQuality, HoleFill, HoleSide, fill_hole, measure_fill, side_from_surface
-from .mesh import Mesh, catmull_clark, read_obj, write_obj
+from .mesh import Mesh, catmull_clark, doo_sabin, read_obj, write_obj
 from .spatch import SPatch, domain_vertices, spatch_indices, wachspress, wachspress_derivatives, wachspress_gradient
 from .spatch_convert import SPatchConversion, convert_spatch, spatch_to_surfaces
 from .surface import BSplineSurface
@@ -92,8 +93,11 @@ __all__ = [
     "read_obj",
     "write_obj",
     "catmull_clark",
+    "doo_sabin",
     "GeneralizedSurface",
     "generalized_biquadratic",
+    "generalized_bicubic",
+    "ribbon_patch",
     "biquadratic_patch",
     "spatch_curvatures",
     "make_compatible",

@@ -86,8 +86,9 @@ the lowest-degree choice need not be unique). Known difference: Loop & DeRose pl
 control points only for depths up to 3 (Salvi), we use the discrete harmonic fill for all
 (it changes the shape inside the patch, never the G1 joins).
 
-The generalized bicubic scheme (§8-7, one patch per face after a Doo–Sabin step) is not
-implemented.
+The generalized bicubic scheme (§8-7, one patch per face after a Doo–Sabin step) is in
+:mod:`algorithms.generalized_bicubic`; it builds its irregular patches with :func:`ribbon_patch`,
+the side construction above written for boundary Bézier rows of any degree ``q`` (depth ``q + 3``).
 """
 
 from __future__ import annotations
@@ -110,6 +111,7 @@ __all__ = [
     "GeneralizedSurface",
     "generalized_biquadratic",
     "biquadratic_patch",
+    "ribbon_patch",
     "spatch_curvatures",
     "BIQUADRATIC_DEPTH",
     "CONSISTENCY_TOL",
@@ -201,23 +203,65 @@ def biquadratic_patch(centre: ArrayLike, mids: ArrayLike, corners: ArrayLike) ->
         pts[(1, 0, 1, 0)] = v
         pts[(0, 1, 0, 1)] = v
         return SPatch(4, 2, pts), 0.0
-    d = BIQUADRATIC_DEPTH
+    rows0 = np.array([[c[k], m[(k + 1) % n], c[(k + 1) % n]] for k in range(n)])
+    rows1 = np.array([[m[k], v, m[(k + 2) % n]] for k in range(n)])
+    scale = float(np.ptp(np.vstack((c, m, v[None])), axis=0).max()) or 1.0
+    return ribbon_patch(rows0, rows1, scale, name="biquadratic_patch")
+
+
+def ribbon_patch(rows0: ArrayLike, rows1: ArrayLike, scale: float = 1.0, *, name: str = "ribbon_patch") -> tuple[SPatch, float]:
+    """The ``n``-sided S-patch of depth ``q + 3`` that carries prescribed G1 ribbons (module notes).
+
+    Side ``k`` (domain vertex ``k`` to ``k + 1``) gets the boundary Bézier curve ``rows0[k]`` of degree
+    ``q`` and the tangent plane spanned by its derivative ``T`` and the cross derivative
+    ``D(t) = q Σ_j B^q_j(t) (rows1[k, j] - rows0[k, j])``: the affine-image rule with
+    ``d Σ_a B^{d-1}_a N_a = ρ D + λ T`` (degree ``q + 2``, hence ``d = q + 3``).
+
+    Parameters
+    ----------
+    rows0, rows1 : array_like, shape (n, q + 1, dim)
+        The first two Bézier rows of each side's strip, ``n >= 3``, ``n != 4`` meaningful (a 4-sided
+        tensor-product net is represented exactly by a depth-``q`` S-patch instead). The rows of
+        consecutive sides must share their corner blocks as the rows of a Bézier net do:
+        ``rows0[k, q] = rows0[k + 1, 0]``, ``rows0[k, q - 1] = rows1[k + 1, 0]``,
+        ``rows1[k, q] = rows0[k + 1, 1]`` and ``rows1[k, q - 1] = rows1[k + 1, 1]`` (corner
+        point, tangents and twist; the biquadratic and bicubic nets satisfy them by construction).
+    scale : float
+        Size of the data, for the relative :data:`CONSISTENCY_TOL` check.
+
+    Returns
+    -------
+    patch : SPatch
+        Depth ``q + 3``; free interior control points by discrete harmonic averaging.
+    consistency : float
+        Largest relative disagreement between two computations of one control point.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Control points fixed by two sides disagree by more than :data:`CONSISTENCY_TOL`.
+    """
+    R0 = np.asarray(rows0, float)
+    R1 = np.asarray(rows1, float)
+    n, q1, dim = R0.shape
+    q = q1 - 1
+    d = q + 3
+    E = np.eye(n, dtype=int)
     theta = np.pi * (n - 2) / n
     sin, cos = np.sin(theta), np.cos(theta)
     p = domain_vertices(n)
     cand: dict[tuple[int, ...], list[Array]] = {}
     tc = (np.arange(d) + 0.5) / d  # collocation parameters for the degree d-1 Bernstein fit
     Bc = _bernstein(d - 1, tc)
+    t = tc[:, None]
+    rho = (1.0 + 2.0 * cos * t * (1.0 - t)) / sin
+    lam = (cos / sin) * (2.0 * t - 1.0)
     for k in range(n):
-        k1, k2 = (k + 1) % n, (k + 2) % n
-        row0 = np.array([c[k], m[k1], c[k1]])
-        row1 = np.array([m[k], v, m[k2]])
+        k1 = (k + 1) % n
+        row0, row1 = R0[k], R1[k]
         b = _elevate(row0, d)
-        t = tc[:, None]
-        D = 2.0 * (_bernstein(2, tc) @ (row1 - row0))
-        T = 2.0 * (_bernstein(1, tc) @ (row0[1:] - row0[:-1]))
-        rho = (1.0 + 2.0 * cos * t * (1.0 - t)) / sin
-        lam = (cos / sin) * (2.0 * t - 1.0)
+        D = q * (_bernstein(q, tc) @ (row1 - row0))
+        T = q * (_bernstein(q - 1, tc) @ (row0[1:] - row0[:-1]))
         N = np.linalg.solve(Bc, rho * D + lam * T) / d  # (d, dim)
         u = p[k1] - p[k]
         nu = np.array([-u[1], u[0]])  # inward (the polygon is counter-clockwise), |nu| = |u|
@@ -229,9 +273,8 @@ def biquadratic_patch(centre: ArrayLike, mids: ArrayLike, corners: ArrayLike) ->
                 cand.setdefault(tuple(alpha + E[j]), []).append(img[j])
     idx = spatch_indices(n, d)
     pos = {tuple(int(x) for x in row): i for i, row in enumerate(idx)}
-    P = np.zeros((idx.shape[0], v.shape[0]))
+    P = np.zeros((idx.shape[0], dim))
     fixed = np.zeros(idx.shape[0], dtype=bool)
-    scale = float(np.ptp(np.vstack((c, m, v[None])), axis=0).max()) or 1.0
     worst = 0.0
     for key, vals in cand.items():
         arr = np.array(vals)
@@ -240,8 +283,8 @@ def biquadratic_patch(centre: ArrayLike, mids: ArrayLike, corners: ArrayLike) ->
         worst = max(worst, float(np.max(np.abs(arr - arr[0]))) / scale)
     if worst > CONSISTENCY_TOL:
         raise InvalidGeometryError(
-            f"biquadratic_patch: control points fixed by two sides disagree by {worst:.3g} (relative), "
-            f"more than CONSISTENCY_TOL = {CONSISTENCY_TOL}; the vertex net is degenerate"
+            f"{name}: control points fixed by two sides disagree by {worst:.3g} (relative), "
+            f"more than CONSISTENCY_TOL = {CONSISTENCY_TOL}; the net is degenerate"
         )
     free = np.flatnonzero(~fixed)
     if free.size:
@@ -275,25 +318,37 @@ def _harmonic_fill(idx: NDArray[np.intp], pos: dict[tuple[int, ...], int], P: Ar
 # ---------------------------------------------------------------------------- the surface
 @dataclass(frozen=True, eq=False)
 class GeneralizedSurface:
-    """A generalized B-spline surface: S-patches, one per interior vertex of a quad mesh.
+    """A generalized B-spline surface: S-patches joined G1 over a control mesh.
 
     Attributes
     ----------
     mesh : Mesh
-        The all-quadrilateral control mesh the patches were built from (the input, or its
-        Catmull–Clark refinement).
+        The control mesh the patches were built from (the input, or its Catmull–Clark refinement
+        for the biquadratic scheme, its Doo–Sabin refinement for the bicubic one).
     patches : tuple of SPatch
-        One per entry of ``vertices``.
+        One per mesh element of :attr:`elements`.
     vertices : tuple of int
-        The mesh vertex of each patch.
+        Biquadratic scheme: the mesh vertex of each patch (empty for the bicubic scheme).
     consistency : float
         Largest relative disagreement between two computations of one control point.
+    scheme : {"biquadratic", "bicubic"}
+        Patches per interior vertex (:func:`generalized_biquadratic`) or per interior face
+        (:func:`algorithms.generalized_bicubic.generalized_bicubic`).
+    elements : tuple of int
+        The mesh vertex (biquadratic) or face (bicubic) of each patch; side ``k`` of a face's patch
+        runs along the face's edge from corner ``k`` to corner ``k + 1``.
     """
 
     mesh: Mesh
     patches: tuple[SPatch, ...]
     vertices: tuple[int, ...]
     consistency: float
+    scheme: str = "biquadratic"
+    elements: tuple[int, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.scheme == "biquadratic" and not self.elements:
+            object.__setattr__(self, "elements", tuple(self.vertices))
 
     def __len__(self) -> int:
         return len(self.patches)
@@ -323,6 +378,16 @@ class GeneralizedSurface:
         ``l`` of patch ``j`` traversed backwards (parameter ``t`` on one is ``1 - t`` on the other);
         each pair once, ``i < j``."""
         out = []
+        if self.scheme == "bicubic":
+            patch_of = {f: i for i, f in enumerate(self.elements)}
+            for i, fi in enumerate(self.elements):
+                f = self.mesh.faces[fi]
+                for k in range(len(f)):
+                    g = self.mesh.face_of_edge(f[(k + 1) % len(f)], f[k])
+                    j = patch_of.get(g, -1)
+                    if j > i:
+                        out.append((i, k, j, self.mesh.faces[g].index(f[(k + 1) % len(f)])))
+            return out
         for i, v in enumerate(self.vertices):
             ring = self.mesh.one_ring(v)
             n = len(ring)

@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 from . import _validate as V
 from .errors import ExchangeError, InvalidGeometryError
 
-__all__ = ["Mesh", "read_obj", "write_obj", "catmull_clark"]
+__all__ = ["Mesh", "read_obj", "write_obj", "catmull_clark", "doo_sabin"]
 
 Array = NDArray[np.float64]
 
@@ -350,6 +350,46 @@ def catmull_clark(mesh: Mesh) -> Mesh:
             e_out = nv + nf + eid[(min(b, c), max(b, c))]
             faces.append((b, e_out, nv + fi, e_in))
     return Mesh(np.vstack((newP, fp, ep)), faces)
+
+
+def doo_sabin(mesh: Mesh) -> Mesh:
+    """One step of Doo–Sabin refinement (Doo & Sabin 1978, "Behaviour of recursive division surfaces
+    near extraordinary points"): afterwards every interior vertex has valence 4.
+
+    Each corner ``v`` of a face with ``k`` vertices ``v = x_0, x_1, ..., x_{k-1}`` gets a new vertex
+    ``Σ_i α_i x_i`` with ``α_0 = 1/4 + 5/(4k)`` and ``α_i = (3 + 2 cos(2π i / k)) / (4k)`` (for
+    ``k = 4`` the biquadratic B-spline rule 9/16, 3/16, 1/16, 3/16). New faces: one per old face
+    (its corners' new vertices), one quadrilateral per interior edge, and one per interior vertex
+    (the new vertices of its faces, a polygon with as many sides as the vertex's valence).
+    Boundary edges and boundary vertices make no face.
+
+    Returns
+    -------
+    Mesh
+        Vertex order: face by face, corner by corner (the order of :attr:`Mesh.faces`).
+    """
+    P = mesh.vertices
+    corner: dict[tuple[int, int], int] = {}  # (face, old vertex) -> new vertex
+    pts = []
+    for fi, f in enumerate(mesh.faces):
+        k = len(f)
+        i = np.arange(k)
+        alpha = (3.0 + 2.0 * np.cos(2.0 * np.pi * i / k)) / (4.0 * k)
+        alpha[0] = 0.25 + 5.0 / (4.0 * k)
+        X = P[list(f)]
+        for c in range(k):
+            corner[(fi, f[c])] = len(pts)
+            pts.append(alpha @ np.roll(X, -c, axis=0))
+    faces: list[tuple[int, ...]] = [tuple(corner[(fi, v)] for v in f) for fi, f in enumerate(mesh.faces)]
+    for a, b in mesh.edges:
+        f1, f2 = mesh.face_of_edge(a, b), mesh.face_of_edge(b, a)
+        if f1 >= 0 and f2 >= 0:  # f1 has a -> b, f2 has b -> a: the quad runs b, a in f1 then a, b in f2
+            faces.append((corner[(f1, b)], corner[(f1, a)], corner[(f2, a)], corner[(f2, b)]))
+    for v in range(mesh.n_vertices):
+        fan = mesh.vertex_faces(v)
+        if fan and not mesh.is_boundary_vertex(v):
+            faces.append(tuple(corner[(f, v)] for f in fan))
+    return Mesh(np.array(pts), faces)
 
 
 # ---------------------------------------------------------------------------- OBJ files

@@ -2,7 +2,8 @@
 
 :func:`render_generalized_demo` builds the generalized biquadratic surface (Loop & DeRose 1990) of a
 small irregular control mesh (a wavy pentagonal dome: one Catmull–Clark step turns it into quads
-with vertices of valence 3, 4 and 5) and of a genus-1 picture frame, pictures them coloured by mean
+with vertices of valence 3, 4 and 5) and of a genus-1 picture frame, and the generalized bicubic
+surface of both (one Doo–Sabin step: every vertex of valence 4, faces of 3 to 5 sides), pictures them coloured by mean
 and Gaussian curvature (computed from the S-patches' exact second derivatives) with the control
 mesh overlaid, and writes each surface to STEP as a sewn shell through
 :func:`bridge.spatch_export.write_spatches_step`.
@@ -18,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from algorithms.generalized import GeneralizedSurface, generalized_biquadratic, spatch_curvatures
+from algorithms.generalized_bicubic import generalized_bicubic
 from algorithms.mesh import Mesh
 from algorithms.spatch_convert import piece_domain_points
 
@@ -146,16 +148,18 @@ def render_generalized_demo(out_dir: Path) -> list[Path]:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     files: list[Path] = []
-    for name, mesh in (("dome", demo_dome()), ("frame", demo_frame())):
-        surf = generalized_biquadratic(mesh)
-        gap, ang = surf.continuity(33)
-        val = sorted({len(p.indices[0]) for p in surf.patches})
-        sub = (f"{len(surf)} S-patches (sides {', '.join(map(str, val))}); green: control mesh; "
-               f"measured G0 gap {gap:.1e}, normal angle {np.degrees(ang):.1e} deg")
-        for color in ("mean", "gaussian"):
-            files.append(render_generalized(out / f"generalized_{name}_{color}.png", surf, control=mesh,
-                                            title=f"Generalized biquadratic B-spline surface ({name}), "
-                                                  f"{'mean' if color == 'mean' else 'Gaussian'} curvature",
-                                            subtitle=sub, color=color))
-        files.append(write_spatches_step(out / f"generalized_{name}.step", list(surf.patches)))
+    schemes = (("biquadratic", "", generalized_biquadratic), ("bicubic", "bicubic_", generalized_bicubic))
+    for scheme, prefix, build in schemes:
+        for name, mesh in (("dome", demo_dome()), ("frame", demo_frame())):
+            surf = build(mesh)
+            gap, ang = surf.continuity(33)
+            val = sorted({p.sides for p in surf.patches})
+            sub = (f"{len(surf)} S-patches (sides {', '.join(map(str, val))}); green: control mesh; "
+                   f"measured G0 gap {gap:.1e}, normal angle {np.degrees(ang):.1e} deg")
+            for color in ("mean", "gaussian"):
+                files.append(render_generalized(out / f"generalized_{prefix}{name}_{color}.png", surf, control=mesh,
+                                                title=f"Generalized {scheme} B-spline surface ({name}), "
+                                                      f"{'mean' if color == 'mean' else 'Gaussian'} curvature",
+                                                subtitle=sub, color=color))
+            files.append(write_spatches_step(out / f"generalized_{prefix}{name}.step", list(surf.patches)))
     return files

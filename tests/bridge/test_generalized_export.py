@@ -14,13 +14,16 @@ import numpy as np
 import pytest
 
 from algorithms.generalized import generalized_biquadratic
+from algorithms.generalized_bicubic import generalized_bicubic
 from algorithms.mesh import read_obj
 from algorithms.spatch_convert import piece_domain_points
 from bridge.exchange import read_step
 from bridge.spatch_export import spatch_faces, write_spatches_step
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "meshes"
-CASES = {"cube": 8 * 3, "pentagonal_prism": None}  # expected face count (None: computed)
+# expected face count (None: computed); "bicubic:" = the generalized bicubic scheme (Doo-Sabin cube:
+# 8 triangles of depth 6 and 18 quads of depth 3, so 8 * 3 + 18 * 4 pieces, all exact: degree 6)
+CASES = {"cube": 8 * 3, "pentagonal_prism": None, "bicubic:cube": 8 * 3 + 18 * 4, "bicubic:pentagonal_prism": None}
 
 # OCC evaluates the exact rational pieces; measured agreement with SPatch.evaluate ~1e-15 before
 # STEP, and STEP keeps ~13 significant digits (OCP_NOTES §7): bounds 1e-12 and 1e-10 on unit-size
@@ -31,6 +34,8 @@ GRID = np.linspace(0.0, 1.0, 7)
 
 
 def _surface(name: str):
+    if name.startswith("bicubic:"):
+        return generalized_bicubic(read_obj(FIXTURES / f"{name.split(':')[1]}.obj"))
     return generalized_biquadratic(read_obj(FIXTURES / f"{name}.obj"))
 
 
@@ -119,7 +124,7 @@ def test_occ_faces_agree_with_spatch_evaluation(name):
 @pytest.mark.parametrize("name", list(CASES))
 def test_step_round_trip(tmp_path, name):
     surf = _surface(name)
-    path = write_spatches_step(tmp_path / f"{name}.step", list(surf.patches))
+    path = write_spatches_step(tmp_path / f"{name.replace(':', '_')}.step", list(surf.patches))
     model = read_step(path)
     faces = [f for f in model.faces if f.surface is not None]
     assert len(faces) == len(model.faces) == sum(p.sides for p in surf.patches)
