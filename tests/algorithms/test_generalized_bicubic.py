@@ -7,7 +7,7 @@ quadrilateral patches, twist consistency, affine invariance, Doo–Sabin valence
 
 Tolerances. The construction is exact (patch boundaries and tangent planes equal the shared Bézier
 strips identically), so what is measured is round-off of evaluating depth-6 S-patches: measured
-G0 gaps <= 6e-15 and normal angles <= 2.8e-14 rad on the unit-size fixtures, twist consistency
+G0 gaps <= 6e-15 and normal angles <= 2.9e-14 rad on the unit-size fixtures, twist consistency
 <= 2e-15. The bounds leave ~100x room for other BLAS/CPU round-off.
 """
 
