@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _validate as V
 from .errors import InvalidGeometryError, ParameterError
-from .hierarchical_core import FORMAT_VERSION, Overlay, _Hierarchy, _Node, check_format
+from .hierarchical_core import FORMAT_VERSION, Overlay, _Hierarchy, _Node, check_format, support_mask
 from .hierarchical_offsets import OffsetMapping, surface_frames
 from .linalg import ConvergenceError
 from .rational import surface_quotient_rule
@@ -58,9 +58,10 @@ EDIT_POINT_RTOL: float = 1e-11
 EDIT_POINT_MAX_ITER: int = 12
 
 
-def _select(x: Array, lo: float, hi: float) -> slice | NDArray[np.intp] | None:
-    """Indices of ``x`` inside ``[lo, hi]``: a slice if contiguous, None if empty."""
-    idx = np.flatnonzero((x >= lo) & (x <= hi))
+def _select(x: Array, lo: float, hi: float, end: float) -> slice | NDArray[np.intp] | None:
+    """Indices of ``x`` in the support ``[lo, hi)`` (``[lo, hi]`` at the domain ``end``; see
+    :func:`support_mask`): a slice if contiguous, None if empty."""
+    idx = np.flatnonzero(support_mask(x, lo, hi, end))
     if idx.size == 0:
         return None
     if idx[-1] - idx[0] + 1 == idx.size:
@@ -344,7 +345,7 @@ class HierarchicalSurface(_Hierarchy):
         H = np.array(self._base_h().derivatives(a, b, order))
         for n in self._nodes.values():
             (ua, ub), (va, vb) = n.support
-            m = (a >= ua) & (a <= ub) & (b >= va) & (b <= vb)
+            m = support_mask(a, ua, ub, self._domain[0][1]) & support_mask(b, va, vb, self._domain[1][1])
             if np.any(m):
                 H[m, ..., :d] += n.delta.derivatives(a[m], b[m], order)
         return H
@@ -361,7 +362,7 @@ class HierarchicalSurface(_Hierarchy):
         H = np.array(self._base_h().evaluate(a, b)).reshape(-1, self._base_h().dim)
         for n in self._nodes.values():
             (ua, ub), (va, vb) = n.support
-            m = (a >= ua) & (a <= ub) & (b >= va) & (b <= vb)
+            m = support_mask(a, ua, ub, self._domain[0][1]) & support_mask(b, va, vb, self._domain[1][1])
             if np.any(m):
                 H[m, :d] += n.delta.evaluate(a[m], b[m])
         P = H[:, :d] / H[:, d:] if self._rational else H
@@ -420,7 +421,7 @@ class HierarchicalSurface(_Hierarchy):
             part = parts.get(ident)
             if part is None or part[0] != n.version:
                 (ua, ub), (va, vb) = n.support
-                iu, iv = _select(a, ua, ub), _select(b, va, vb)
+                iu, iv = _select(a, ua, ub, self._domain[0][1]), _select(b, va, vb, self._domain[1][1])
                 vals = None if iu is None or iv is None else n.delta.evaluate_grid(a[iu], b[iv])
                 part = parts[ident] = (n.version, iu, iv, vals)
             if part[3] is not None:
@@ -440,7 +441,7 @@ class HierarchicalSurface(_Hierarchy):
         H = np.array(self._base_h().derivatives_grid(a, b, order))
         for n in self._nodes.values():
             (ua, ub), (va, vb) = n.support
-            iu, iv = _select(a, ua, ub), _select(b, va, vb)
+            iu, iv = _select(a, ua, ub, self._domain[0][1]), _select(b, va, vb, self._domain[1][1])
             if iu is not None and iv is not None:
                 H[_ix(iu, iv) + (Ellipsis, slice(0, d))] += n.delta.derivatives_grid(a[iu], b[iv], order)
         return surface_quotient_rule(H) if self._rational else H

@@ -132,6 +132,17 @@ class _Node:
         self.blk: tuple[slice, ...] = ()
 
 
+def support_mask(x: Array, lo: float, hi: float, end: float) -> NDArray[np.bool_]:
+    """Parameters ``x`` where an overlay on ``[lo, hi]`` contributes: ``[lo, hi)``, or ``[lo, hi]`` when
+    ``hi`` is the domain's ``end``.
+
+    The right-limit convention of B-spline evaluation at interior knots (and of :meth:`flatten`'s
+    single spline): at ``hi`` the overlay's own spline would give its *left* limit, whose
+    derivatives of order >= degree jump there, on top of the base's right limit.
+    """
+    return (x >= lo) & ((x < hi) | (hi >= end))
+
+
 def _refine_net(H: Array, Ts: tuple[Array, ...]) -> Array:
     """Apply one refinement matrix per parametric axis of the net ``H`` (last axis: coordinates)."""
     for ax, T in enumerate(Ts):

@@ -27,7 +27,7 @@ from . import _validate as V
 from .curve import BSplineCurve
 from .errors import InvalidGeometryError
 from .hierarchical import EDIT_POINT_MAX_ITER, EDIT_POINT_RTOL
-from .hierarchical_core import Overlay, _Hierarchy, check_format
+from .hierarchical_core import Overlay, _Hierarchy, check_format, support_mask
 from .hierarchical_offsets import OffsetMapping, curve_frames
 from .linalg import ConvergenceError
 from .manipulation import drag_point as _drag_curve_point
@@ -151,7 +151,7 @@ class HierarchicalCurve(_Hierarchy):
         H = np.array(hb.derivatives(a, order))
         for n in self._nodes.values():
             (ua, ub), = n.support
-            m = (a >= ua) & (a <= ub)
+            m = support_mask(a, ua, ub, self.domain[1])
             if np.any(m):
                 H[m, :, :d] += n.delta.derivatives(a[m], order)
         return H

@@ -498,3 +498,30 @@ def test_errors_name_the_argument():
         hs.evaluate(1.5, 0.5)
     with pytest.raises(InvalidGeometryError, match="base"):
         hs.set_base(hs.base.refine([0.5]))
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3])
+def test_derivatives_at_the_ends_of_an_overlay_follow_the_flat_convention(degree):
+    """Review: at the right end of an overlay's support the overlay's own spline gives its left
+    limit, whose derivatives of order >= degree jump there; added to the base's right limit that
+    gave a derivative (and normal) matching neither side. The hierarchy must agree with flatten()
+    (one spline: right limits at interior knots) at every support end, in u and in v."""
+    rng = np.random.default_rng(degree)
+    U = np.r_[[0.0] * degree, np.linspace(0, 1, 6), [1.0] * degree]
+    n = U.size - degree - 1
+    P = np.stack(np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n), indexing="ij"), -1)
+    P = np.concatenate([P, 0.2 * rng.standard_normal((n, n, 1))], -1)
+    hs = HierarchicalSurface(BSplineSurface((degree, degree), (U, U), P))
+    o = hs.add_overlay((0.2, 0.6), (0.2, 0.6))
+    hs.set_offsets(o, 0.1 * rng.normal(size=o.shape + (3,)))
+    f = hs.flatten()
+    (ua, ub), (va, vb) = hs._node(o).support
+    ends = np.array([ua, ub, va, vb, 0.0, 1.0])
+    uu, vv = (x.ravel() for x in np.meshgrid(ends, np.r_[ends, 0.5], indexing="ij"))
+    # round-off relative to the largest partial (third derivatives of a 6-span cubic reach ~1e3)
+    for a, b in ((uu, vv), (vv, uu)):
+        ref = f.derivatives(a, b, degree)
+        assert_allclose(hs.derivatives(a, b, degree), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+        assert_allclose(hs.normal(a, b), f.normal(a, b), atol=1e-11)
+    ref = f.derivatives_grid(ends, ends, degree)
+    assert_allclose(hs.derivatives_grid(ends, ends, degree), ref, rtol=0, atol=1e-12 * np.abs(ref).max())

@@ -168,3 +168,18 @@ def test_provided_mappings():
     assert get_offset_mapping("frame") is FRAME_OFFSETS
     with pytest.raises(InvalidGeometryError):
         get_offset_mapping("nope")
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3])
+def test_curve_derivatives_at_the_ends_of_an_overlay_follow_the_flat_convention(degree):
+    """Review: the same right-limit convention as flatten() at the ends of an overlay's support."""
+    rng = np.random.default_rng(degree)
+    U = np.r_[[0.0] * degree, np.linspace(0, 1, 6), [1.0] * degree]
+    c = BSplineCurve(degree, U, rng.normal(size=(U.size - degree - 1, 3)))
+    hc = HierarchicalCurve(c)
+    o = hc.add_overlay((0.2, 0.6))
+    hc.set_offsets(o, 0.1 * rng.normal(size=o.shape + (3,)))
+    (ua, ub), = hc._node(o).support
+    x = np.array([0.0, ua, ub, 1.0])
+    ref = hc.flatten().derivatives(x, degree)
+    assert_allclose(hc.derivatives(x, degree), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
