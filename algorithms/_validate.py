@@ -93,6 +93,14 @@ def check_parameters(u: ArrayLike, lo: float, hi: float, name: str = "u") -> NDA
     return np.clip(a, lo, hi)
 
 
+def check_parameter(u: object, lo: float, hi: float, name: str = "u") -> float:
+    """One finite parameter inside ``[lo, hi]`` (:func:`check_parameters` for a scalar)."""
+    a = check_parameters(u, lo, hi, name)
+    if a.ndim != 0:
+        raise ParameterError(f"{name}: expected one parameter, got an array of shape {a.shape}")
+    return float(a)
+
+
 def check_times(times: object, name: str = "times") -> int:
     if isinstance(times, bool) or not isinstance(times, numbers.Integral) or int(times) < 1:
         raise InvalidGeometryError(f"{name}: expected a positive integer, got {times!r}")

@@ -277,9 +277,15 @@ class _Hierarchy:
         vals = np.unique(t[(t >= lo) & (t <= hi)])
         a2 = float(vals[max(int(np.searchsorted(vals, a + tol, side="right")) - 1, 0)])
         b2 = float(vals[min(int(np.searchsorted(vals, b - tol, side="left")), vals.size - 1)])
+        if not a2 < b2:
+            raise ParameterError(f"{name}: ({a!r}, {b!r}) shrinks to the single knot {a2!r} of the parent "
+                                 f"(within its knot tolerance {tol:.3g}); a region must cover a knot span")
         if knots is None:
             inner = vals[(vals >= a2) & (vals <= b2)]
-            ins = 0.5 * (inner[:-1] + inner[1:])
+            mid = 0.5 * (inner[:-1] + inner[1:])
+            # spans narrower than the knot tolerance get no midpoint: it would snap onto their ends
+            # (as explicit knots are snapped, also when from_dict reads these back)
+            ins = mid[np.diff(inner) > 2.0 * tol]
         else:
             ins = V.as_finite_array(knots, f"knots[{ax}]" if self._npar > 1 else "knots", ndim=1)
             if ins.size and (ins.min() < a2 - tol or ins.max() > b2 + tol or ins.min() <= lo or ins.max() >= hi):
@@ -427,6 +433,18 @@ class _Hierarchy:
         self._root.level_spline = base
         self._root.H = np.array(base.homogeneous_points, dtype=float)
         self._refresh_subtree_of_root()
+
+    def _snapshot(self, node: _Node) -> Any:
+        """What an edit of ``node``'s own vertices changes, for :meth:`_restore`."""
+        return self._level(node) if node.handle is None else node.offsets.copy()
+
+    def _restore(self, node: _Node, saved: Any) -> None:
+        """Undo edits of ``node``'s vertices made since :meth:`_snapshot` (a failed drag leaves nothing)."""
+        if node.handle is None:
+            self._set_base(saved)
+        else:
+            node.offsets = saved
+            self._update(node, reference=False)
 
     def set_offsets(self, overlay: Overlay | int, offsets: ArrayLike) -> None:
         """Replace all stored offsets of ``overlay`` (in place; see the class notes).

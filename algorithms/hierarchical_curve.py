@@ -118,11 +118,12 @@ class HierarchicalCurve(_Hierarchy):
         turn (see :meth:`HierarchicalSurface.drag_point`).
         """
         lo, hi = self.domain
-        uu = float(V.check_parameters(u, lo, hi, "u"))
+        uu = V.check_parameter(u, lo, hi, "u")
         tgt = self._vector(target, "target")
         node = self._node(overlay)
         tol = EDIT_POINT_RTOL * max(1.0, float(np.abs(tgt).max())) if tol is None else float(tol)
         first, last = (None, None) if node.handle is None else node.handle.vertices[0]
+        saved = self._snapshot(node)
         for _ in range(EDIT_POINT_MAX_ITER):
             r = tgt - self.evaluate(uu)
             if float(np.linalg.norm(r)) <= tol:
@@ -140,8 +141,9 @@ class HierarchicalCurve(_Hierarchy):
                 self._update(node, reference=False)
         res = float(np.linalg.norm(tgt - self.evaluate(uu)))
         if res > tol:
+            self._restore(node, saved)
             raise ConvergenceError(f"drag_point: |C(u) - target| = {res:.3g} > tol = {tol:.3g} after "
-                                   f"{EDIT_POINT_MAX_ITER} solves")
+                                   f"{EDIT_POINT_MAX_ITER} solves; the curve is left as it was")
 
     # ------------------------------------------------------------------ evaluation
     def _h(self, a: Array, order: int) -> Array:

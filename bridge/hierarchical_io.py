@@ -94,6 +94,10 @@ def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: Hierarchica
     side = sidecar_path(step)
     if side.is_dir():
         raise ExchangeError(f"{side}: is a directory; cannot write the hierarchy sidecar there")
+    other = _sidecar_owner(side)
+    if other is not None and other != step.name and (step.parent / other).exists():
+        raise ExchangeError(f"{side}: is the hierarchy sidecar of {other}, which would lose it; write {step.name} "
+                            "under another name (model.step and model.stp share one sidecar name)")
     flat = hierarchy.flatten()
     # The STEP bytes exactly as bridge.exchange.write_step makes them, kept in memory so that the
     # pair is committed together: nothing on disk changes until both files are complete.
@@ -147,25 +151,44 @@ def _write_pair(items: list[tuple[Path, bytes]]) -> None:
                 os.unlink(tmp)
 
 
-def _samples(obj: Any) -> np.ndarray:
+def _sidecar_owner(side: Path) -> str | None:
+    """The ``step_file`` an existing sidecar names, or None (no file, or not one of ours)."""
+    try:
+        data = json.loads(side.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return None
+    owner = data.get("step_file") if isinstance(data, dict) and data.get("format") == _SIDECAR_FORMAT else None
+    return owner if isinstance(owner, str) else None
+
+
+def _check_params(knots: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Every distinct knot of the flat form in ``[lo, hi]`` and 1/4, 1/2, 3/4 of every span: each
+    polynomial piece is sampled, however small the finest overlay is."""
+    k = np.unique(np.clip(knots, lo, hi))
+    inner = [k[:-1] + f * np.diff(k) for f in (0.25, 0.5, 0.75)]
+    return np.unique(np.concatenate([k] + inner))
+
+
+def _samples(obj: Any, params: tuple[np.ndarray, ...]) -> np.ndarray:
     if isinstance(obj, (HierarchicalSurface, BSplineSurface)):
-        (u0, u1), (v0, v1) = obj.domain
-        return obj.evaluate_grid(np.linspace(u0, u1, 17), np.linspace(v0, v1, 17))
-    lo, hi = obj.domain
-    return obj.evaluate(np.linspace(lo, hi, 101))
+        return obj.evaluate_grid(*params)
+    return obj.evaluate(params[0])
 
 
 def read_hierarchical_step(path: str | os.PathLike[str]) -> HierarchicalSurface | HierarchicalCurve:
     """Restore the editable hierarchy written by :func:`write_hierarchical_step`.
 
-    The STEP file's first face (or free edge, for a curve) must equal the sidecar hierarchy's flat
-    form within :data:`SIDECAR_MATCH_RTOL`.
+    The sidecar must name this STEP file, and the file must be the one written with it (its SHA-256
+    is stored) or, if it was saved again, its first face (or free edge, for a curve) must equal the
+    sidecar hierarchy's flat form within :data:`SIDECAR_MATCH_RTOL` at every distinct knot and at
+    three points inside every knot span of the flat form.
 
     Raises
     ------
     ExchangeError
-        No sidecar, an unreadable or foreign sidecar, or a STEP file whose geometry no longer
-        matches it (edited after writing). Messages name the path.
+        No sidecar, an unreadable or foreign sidecar, a sidecar of another STEP file (``model.stp``
+        beside ``model.step``), or a STEP file whose geometry no longer matches it (edited after
+        writing). Messages name the path.
     """
     p = Path(os.fspath(path))
     side = sidecar_path(p)
@@ -182,6 +205,9 @@ def read_hierarchical_step(path: str | os.PathLike[str]) -> HierarchicalSurface 
     if isinstance(version, bool) or not isinstance(version, int) or not 1 <= version <= _SIDECAR_VERSION:
         raise ExchangeError(f"{side}: sidecar version {version!r} is not supported (this is version "
                             f"{_SIDECAR_VERSION}; older versions load)")
+    owner = data.get("step_file")
+    if isinstance(owner, str) and owner != p.name:
+        raise ExchangeError(f"{side}: the hierarchy sidecar of {owner}, not of {p.name}")
     d = data.get("hierarchy")
     cls = _CLASSES.get(d.get("type") if isinstance(d, dict) else None)
     if cls is None:
@@ -195,9 +221,17 @@ def read_hierarchical_step(path: str | os.PathLike[str]) -> HierarchicalSurface 
     geo = items[0].surface if cls is HierarchicalSurface and items else (items[0].curve if items else None)
     if geo is None:
         raise ExchangeError(f"{p}: no {'face' if cls is HierarchicalSurface else 'edge'} to match the sidecar")
-    ours = _samples(h)
+    if hashlib.sha256(p.read_bytes()).hexdigest() == data.get("step_sha256"):
+        return h  # the very file written with this sidecar
+    # Re-saved or edited: the geometry must still be the hierarchy's, on every polynomial piece.
+    flat = h.flatten()
+    if isinstance(flat, BSplineSurface):
+        params = tuple(_check_params(flat.knots[i], *flat.domain[i]) for i in range(2))
+    else:
+        params = (_check_params(flat.knots, *flat.domain),)
+    ours = _samples(h, params)
     try:
-        theirs = _samples(geo)
+        theirs = _samples(geo, params)
     except InvalidGeometryError as err:
         raise ExchangeError(f"{p}: its geometry does not match the sidecar ({err})") from err
     scale = max(1.0, float(np.abs(ours).max()))

@@ -525,3 +525,62 @@ def test_derivatives_at_the_ends_of_an_overlay_follow_the_flat_convention(degree
         assert_allclose(hs.normal(a, b), f.normal(a, b), atol=1e-11)
     ref = f.derivatives_grid(ends, ends, degree)
     assert_allclose(hs.derivatives_grid(ends, ends, degree), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+
+
+def test_tiny_knot_spans_and_knot_sized_regions():
+    """Review: a base knot gap of 1e-13 gave a midpoint knot that from_dict snapped away (the saved
+    hierarchy could not be loaded); a range within the tolerance of one knot gave a zero-width
+    overlay that could not be loaded either. Both round-trip or are refused now."""
+    rng = np.random.default_rng(0)
+    U = [0, 0, 0, 0, .3, .5, .5 + 1e-13, .7, 1, 1, 1, 1]
+    V = [0, 0, 0, 0, 1 / 3, 2 / 3, 1, 1, 1, 1]
+    hs = HierarchicalSurface(BSplineSurface((3, 3), (U, V), rng.normal(size=(8, 6, 3))))
+    o = hs.add_overlay((0.3, 0.7), (0.2, 0.8))
+    hs.set_offsets(o, 0.1 * rng.normal(size=o.shape + (3,)))
+    back = HierarchicalSurface.from_dict(json.loads(json.dumps(hs.to_dict())))
+    g = np.linspace(0, 1, 23)
+    assert np.array_equal(back.evaluate_grid(g, g), hs.evaluate_grid(g, g))
+    k = [0, 0, 0, 0, 1 / 3, 2 / 3, 1, 1, 1, 1]
+    hs2 = HierarchicalSurface(BSplineSurface((3, 3), (k, k), rng.normal(size=(6, 6, 3))))
+    with pytest.raises(ParameterError, match=r"^u_range: .* shrinks to the single knot 0\.333"):
+        hs2.add_overlay((1 / 3, 1 / 3 + 1e-13), (0.2, 0.8))
+
+
+def _review_drag_case() -> HierarchicalSurface:
+    k = [0, 0, 0, 0, .25, .5, .75, 1, 1, 1, 1]
+    rng = np.random.default_rng(4)
+    P = np.stack(np.meshgrid(np.linspace(0, 1, 7), np.linspace(0, 1, 7), indexing="ij"), -1)
+    P = np.concatenate([P, 0.2 * rng.standard_normal((7, 7, 1))], -1)
+    hs = HierarchicalSurface(BSplineSurface((3, 3), (k, k), P))
+    o1 = hs.add_overlay((0.2, 0.8), (0.2, 0.8))
+    o2 = hs.add_overlay((0.4, 0.6), (0.4, 0.6), parent=o1)
+    o3 = hs.add_overlay((0.45, 0.9), (0.1, 0.55))
+    rng = np.random.default_rng(5)
+    for o in (o1, o2, o3):
+        hs.set_offsets(o, 0.1 * rng.normal(size=o.shape + (3,)))
+    return hs
+
+
+def test_drag_point_converges_with_large_details_and_restores_on_failure(monkeypatch):
+    """Review: with details of 0.1 on a unit patch the residual falls only by ~0.16 per solve;
+    12 solves were not enough (ConvergenceError) and the failed drag left the surface moved."""
+    import algorithms.hierarchical as H
+
+    hs = _review_drag_case()
+    p0 = hs.evaluate(0.52, 0.47)
+    target = p0 + [0.05, -0.03, 0.2]
+    hs.drag_point(0.52, 0.47, target)
+    assert np.linalg.norm(hs.evaluate(0.52, 0.47) - target) <= H.EDIT_POINT_RTOL
+    hs = _review_drag_case()
+    g = np.linspace(0, 1, 15)
+    before = hs.evaluate_grid(g, g)
+    monkeypatch.setattr(H, "EDIT_POINT_MAX_ITER", 3)
+    with pytest.raises(H.ConvergenceError, match="left as it was"):
+        hs.drag_point(0.52, 0.47, target)
+    assert np.array_equal(hs.evaluate_grid(g, g), before)
+
+
+def test_drag_point_takes_one_parameter_pair():
+    hs, (o1, _, _) = three_levels()
+    with pytest.raises(ParameterError, match=r"^u: expected one parameter, got an array of shape \(2,\)"):
+        hs.drag_point([0.5, 0.6], 0.5, np.zeros(3))

@@ -230,3 +230,37 @@ def test_demo_writes_pngs_step_and_sidecar(tmp_path):
     step = next(f for f in files if f.suffix == ".step")
     hs = read_hierarchical_step(step)
     assert hs.depth == 3 and len(hs.overlays) == 3
+
+
+def test_resaved_step_is_checked_on_every_knot_span(tmp_path):
+    """Review: the sidecar check sampled a fixed 17 x 17 grid, so a STEP file holding only the base
+    (a detail 0.2 high at level 5 lost) loaded silently. An identical file is recognised by its
+    stored SHA-256; a re-saved one is compared inside every knot span of the flat form."""
+    k = [0, 0, 0, 0, 1 / 3, 2 / 3, 1, 1, 1, 1]
+    base = BSplineSurface((3, 3), (k, k), np.random.default_rng(1).normal(size=(6, 6, 3)))
+    hs = HierarchicalSurface(base)
+    par = None
+    for _ in range(5):
+        par = hs.add_overlay((0.57, 0.61), (0.57, 0.61), parent=par)
+    j = int(np.flatnonzero(np.isclose(par.knots[0], 55 / 96))[0]) - par.vertices[0][0]
+    hs.set_offset(par, (j, j), (0, 0, 0.5))
+    step, _ = write_hierarchical_step(tmp_path / "stale.step", hs)
+    assert read_hierarchical_step(step).flatten().control_points.shape == hs.flatten().control_points.shape
+    write_step(step, hs.flatten())  # saved again (new header): still the same geometry
+    read_hierarchical_step(step)
+    write_step(step, [base])  # the detail lost behind the sidecar's back
+    with pytest.raises(ExchangeError, match="differs from the hierarchy"):
+        read_hierarchical_step(step)
+
+
+def test_step_and_stp_do_not_share_a_sidecar_silently(tmp_path):
+    a, b = make_hierarchy(), make_hierarchy(rational=True)
+    step, side = write_hierarchical_step(tmp_path / "model.step", a)
+    before = side.read_bytes()
+    with pytest.raises(ExchangeError, match=r"model\.hierarchy\.json: is the hierarchy sidecar of model\.step"):
+        write_hierarchical_step(tmp_path / "model.stp", b)
+    assert side.read_bytes() == before and not (tmp_path / "model.stp").exists()
+    (tmp_path / "model.stp").write_bytes(step.read_bytes())  # a copy under the other name
+    with pytest.raises(ExchangeError, match=r"the hierarchy sidecar of model\.step, not of model\.stp"):
+        read_hierarchical_step(tmp_path / "model.stp")
+    assert_allclose(read_hierarchical_step(step).flatten().control_points, a.flatten().control_points, rtol=0, atol=0)
