@@ -366,6 +366,10 @@ def _worker_main() -> int:
         sys.stdout.write(_MARK + json.dumps(msg) + "\n")
         sys.stdout.flush()
 
+    # Load OCC and the reading stack before the first "start": --timeout measures reading a file,
+    # not this process's start-up (seconds on a loaded machine; a failure shows up per file).
+    with contextlib.suppress(Exception):
+        from . import exchange, validate  # noqa: F401
     for k, (shown, path) in enumerate(job["files"]):
         send({"start": k})
         try:
