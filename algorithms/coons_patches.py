@@ -411,19 +411,30 @@ def coons(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BS
     b, t = make_compatible([cs["bottom"], cs["top"]])
     l, r = make_compatible([cs["left"], cs["right"]])
     rational = any(c.is_rational for c in (b, t, l, r))
+    scaled = None
     if rational:
         b, r, t, l = [c if c.is_rational else BSplineCurve._trusted(c.degree, c.knots, c.control_points, np.ones(c.n_poles))
                       for c in (b, r, t, l)]
         scaled = _scale_loop_weights([b, r, t, l])
-        if scaled is None:
-            # No exact homogeneous form: polynomial approximations within approx_tol.
-            cs = _boundaries(bottom, right, top, left, tol, False, atol)
-            b, t = make_compatible([cs["bottom"], cs["top"]])
-            l, r = make_compatible([cs["left"], cs["right"]])
-            rational = False
-        else:
-            b, r, t, l = scaled
-    (u0, u1), (v0, v1) = b.domain, l.domain
+    if scaled is not None:
+        deg, kn, H = _coons_net(*scaled, blend, True)
+        if np.all(H[..., -1] > 0):
+            return _surface(deg, kn, H, True, "coons")
+    if rational:
+        # No exact homogeneous form (corner weights that cannot be matched, or a homogeneous net
+        # with non-positive weights, e.g. 120-degree arcs of weight 0.5): polynomial approximations
+        # of the boundaries within approx_tol.
+        cs = _boundaries(bottom, right, top, left, tol, False, atol)
+        b, t = make_compatible([cs["bottom"], cs["top"]])
+        l, r = make_compatible([cs["left"], cs["right"]])
+    deg, kn, H = _coons_net(b, r, t, l, blend, False)
+    return _surface(deg, kn, H, False, "coons")
+
+
+def _coons_net(b: BSplineCurve, r: BSplineCurve, t: BSplineCurve, l: BSplineCurve, blend: str,
+               rational: bool) -> tuple[tuple[int, int], tuple[Array, Array], Array]:
+    """Degrees, knots and (homogeneous if ``rational``) net of the Coons patch of compatible pairs
+    ``(b, t)`` and ``(l, r)``."""
     k = 1 if blend == "linear" else 3
     (U, Hb, Ht), (Vk, Hl, Hr) = (_elevated_pair(c0, c1, k, rational) for c0, c1 in ((b, t), (l, r)))
     # The three terms written directly on the final knots: each blending function's B-spline
@@ -435,13 +446,12 @@ def coons(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BS
     C = (np.multiply.outer(np.outer(f0u, f0v), Hb[0]) + np.multiply.outer(np.outer(f1u, f0v), Hb[-1])
          + np.multiply.outer(np.outer(f0u, f1v), Ht[0]) + np.multiply.outer(np.outer(f1u, f1v), Ht[-1]))
     deg = (len(U) - Hb.shape[0] - 1, len(Vk) - Hl.shape[0] - 1)
-    kn = (U, Vk)
     H = A + B - C
     # The boundary rows of A + B - C are the boundary poles up to round-off (B and C agree on
     # them); write the compatible boundary poles themselves so the boundaries are bit-faithful.
     H[:, 0], H[:, -1] = A[:, 0], A[:, -1]
     H[0, :], H[-1, :] = B[0, :], B[-1, :]
-    return _surface(deg, kn, H, rational, "coons")
+    return deg, (U, Vk), H
 
 
 def _elevated_pair(c0: BSplineCurve, c1: BSplineCurve, k: int, rational: bool) -> tuple[Array, Array, Array]:

@@ -455,3 +455,23 @@ def test_polynomial_approximation_measured_error_holds_on_dense_samples():
     assert APPROXIMATION_TOLERANCE == 1e-6
     with pytest.raises(ToleranceError, match="could not approximate"):
         polynomial_approximation(c, 1e-30, max_subdivisions=4)
+
+
+def test_coons_of_arcs_whose_homogeneous_net_has_non_positive_weights_is_approximated():
+    """Review: four single-segment 120-degree arcs (middle weight 0.5) match at their corners, but
+    their homogeneous Coons net gets weight 0 inside; coons used to raise with advice that could
+    not help. It falls back to polynomial boundaries within approx_tol, as gordon does."""
+    def arc(a, m, b, w):
+        return BSplineCurve(2, [0, 0, 0, 1, 1, 1], np.array([a, m, b], float), np.array([1.0, w, 1.0]))
+
+    A, B, C, D = [0.0, 0, 0], [1.0, 0, 0], [1.0, 1, 0], [0.0, 1, 0]
+    b, r = arc(A, [.5, -.5, 0], B, 0.5), arc(B, [1.5, .5, 0], C, 0.5)
+    t, l = arc(D, [.5, 1.5, 0], C, 0.5), arc(A, [-.5, .5, 0], D, 0.5)
+    s = coons(b, r, t, l, approx_tol=1e-7)
+    assert s.weights is None
+    x = np.linspace(0, 1, 201)
+    (u0, u1), (v0, v1) = s.domain
+    for curve, pts in ((b, s.evaluate(u0 + x * (u1 - u0), v0)), (t, s.evaluate(u0 + x * (u1 - u0), v1)),
+                       (l, s.evaluate(u0, v0 + x * (v1 - v0))), (r, s.evaluate(u1, v0 + x * (v1 - v0)))):
+        # at equal parameters: an upper bound of the distance between the curves
+        assert np.linalg.norm(pts - curve.evaluate(x), axis=1).max() <= 1e-7
