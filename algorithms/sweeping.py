@@ -75,6 +75,7 @@ __all__ = [
     "SPLIT_SAFETY",
     "MAX_SPLIT",
     "KINK_ANGLE",
+    "MIN_SPAN",
     "SweepResult",
     "sweep",
     "exact_sweep",
@@ -110,6 +111,10 @@ MAX_SPLIT: int = 16
 #: A path joint (knot of multiplicity >= degree) must be tangent-continuous within this angle
 #: (radians) unless ``frame="fixed"``: a moving frame turns abruptly at a kink, tearing the sweep.
 KINK_ANGLE: float = 1e-9
+#: Refinement gives up (:class:`ToleranceError`) rather than cut a span below this fraction of the
+#: path's domain: an error that does not fall as spans shrink comes from a jump in a law, a cusp
+#: of the path or a frame that turns abruptly, not from too few sections.
+MIN_SPAN: float = 1e-9
 
 _FRAMES = ("rmf", "frenet", "fixed")
 _CHECK_FRACTIONS = (np.arange(CHECKS_PER_SPAN) + 0.5) / CHECKS_PER_SPAN * 0.96 + 0.013
@@ -130,8 +135,9 @@ class SweepResult:
         supremum measured up to 1.7 % above it.
     pole_bound : float
         ``max_i |Q_i(v) - P_i(v)|`` at the same v values: an upper bound of the error over all u
-        at those v; it bounded the true supremum over (u, v) in every case measured
-        (``tests/algorithms/test_sweeping.py``, true / pole_bound <= 0.81).
+        at those v, and at most ``tol`` (refinement continues until it is); it bounded the true
+        supremum over (u, v) in every case measured (``tests/algorithms/test_sweeping.py``,
+        true / pole_bound <= 0.81).
     tol : float
         The absolute tolerance the refinement met (``pole_bound <= tol`` at the check points).
     n_sections : int
@@ -389,6 +395,13 @@ def _check_joints(path: BSplineCurve, frame: str, size: float) -> None:
             )
 
 
+def _span_errors(rows: BSplineCurve, exact: Array, v: Array, n_u: int, n_spans: int) -> Array:
+    """Largest pole-row distance ``max_i |Q_i(v) - P_i(v)|`` per span, from values at ``v`` (an equal
+    number of points per span, span by span) and the exact pole rows ``exact`` (m, 3 n_u)."""
+    diff = (rows.evaluate(v) - exact).reshape(v.shape[0], n_u, 3)
+    return np.sqrt((diff * diff).sum(axis=-1).max(axis=1)).reshape(n_spans, -1).max(axis=1)
+
+
 def _off_sites(a: Array, b: Array, fractions: Array) -> Array:
     return (a[:, None] + (b - a)[:, None] * fractions[None, :]).reshape(-1)
 
@@ -453,8 +466,9 @@ def sweep(
         a path that jumps at a joint, or (``frame`` "rmf"/"frenet") turns abruptly there by more
         than :data:`KINK_ANGLE`; ``tol`` not a positive number.
     ToleranceError
-        ``tol`` not reached with :data:`MAX_SECTIONS` pole rows (the message gives the error
-        reached).
+        ``tol`` not reached with :data:`MAX_SECTIONS` pole rows, or an error that does not fall
+        as spans shrink towards :data:`MIN_SPAN` (a law that jumps, a cusp of the path: the
+        message gives the error reached and where).
     """
     c = _check_curve(profile, "profile")
     q_path = _check_curve(path, "path")
@@ -484,13 +498,27 @@ def sweep(
         # the exact pole rows at the fitting sites and the check points, in one evaluation
         vals = ex.place(np.concatenate((sites, vc)), c.control_points).reshape(-1, 3 * n_u)
         rows = BSplineCurve._trusted(q, K, interpolate_values(sites, vals[: sites.shape[0]], q, K))
-        diff = (rows.evaluate(vc) - vals[sites.shape[0]:]).reshape(vc.shape[0], n_u, 3)
-        err = np.sqrt((diff * diff).sum(axis=-1).max(axis=1)).reshape(a.shape[0], -1).max(axis=1)
+        err = _span_errors(rows, vals[sites.shape[0]:], vc, n_u, a.shape[0])
         bad = err > tol_abs
         if not np.any(bad):
-            break
+            # the denser verification points of the report must meet tol too (the check points
+            # alone let pole_bound exceed tol by up to 3 %)
+            vv = _off_sites(a, b, np.asarray(_VERIFY_FRACTIONS))
+            exact_vv = ex.place(vv, c.control_points).reshape(vv.shape[0], -1)
+            err = _span_errors(rows, exact_vv, vv, n_u, a.shape[0])
+            bad = err > tol_abs
+            if not np.any(bad):
+                break
         # cut each bad span in as many pieces as the O(h^(q+1)) error model asks for
         pieces = np.clip(np.ceil(SPLIT_SAFETY * (err[bad] / tol_abs) ** (1.0 / (q + 1))), 2, MAX_SPLIT).astype(int)
+        narrow = (b[bad] - a[bad]) / pieces < MIN_SPAN * (q_path.domain[1] - q_path.domain[0])
+        if np.any(narrow):
+            k = int(np.flatnonzero(bad)[np.argmax(narrow)])
+            raise ToleranceError(
+                f"sweep: tolerance {tol_abs:.3g} not reached: the error ({float(err[k]):.3g}) does not fall as the "
+                f"sections near v = {float(a[k]):.6g} get closer; a scale or twist law that jumps there, or a "
+                "path with a cusp (C'(v) = 0) or an abrupt turn there?"
+            )
         if rows.n_poles + int((pieces - 1).sum()) > MAX_SECTIONS:
             raise ToleranceError(
                 f"sweep: tolerance {tol_abs:.3g} not reached with {MAX_SECTIONS} sections; error reached "
@@ -505,15 +533,13 @@ def sweep(
     surface = BSplineSurface._trusted((c.degree, q), (c.knots.copy(), K), np.ascontiguousarray(net), W)
     if not return_report:
         return surface
-    # Dense verification off the fitting sites.
-    vv = _off_sites(a, b, np.asarray(_VERIFY_FRACTIONS))
+    # Dense verification off the fitting sites (vv, exact_vv: the points the loop verified last).
     ua, ub = _spans(c.knots, c.degree)
     uu = np.concatenate((_off_sites(ua, ub, (np.arange(8) + 0.5) / 8), c.domain))
     S = surface.evaluate_grid(uu, vv)
     E = ex.place(vv, c.evaluate(uu)).transpose(1, 0, 2)
     max_error = float(np.linalg.norm(S - E, axis=-1).max())
-    pole = np.linalg.norm((rows.evaluate(vv) - ex.place(vv, c.control_points).reshape(vv.shape[0], -1))
-                          .reshape(vv.shape[0], -1, 3), axis=-1)
+    pole = _span_errors(rows, exact_vv, vv, n_u, a.shape[0])
     return SweepResult(surface=surface, max_error=max_error, pole_bound=float(pole.max()), tol=tol_abs,
                        n_sections=rows.n_poles, iterations=iterations, n_checked=int(S.shape[0] * S.shape[1]),
                        frame=frame)
