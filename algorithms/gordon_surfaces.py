@@ -17,6 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
 
 from . import _validate as V
 from .coons_patches import (
@@ -83,13 +84,13 @@ def network_parameters(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSpl
     K = _STARTS
     s = np.empty((m, n, K))
     t = np.empty((m, n, K))
-    for i in range(m):
-        for j in range(n):
-            d2 = np.sum((pa[i][:, None, :] - pb[j][None, :, :]) ** 2, axis=-1).ravel()
-            best = np.argsort(d2, kind="stable")[:K]
+    trees = [cKDTree(p) for p in pb]  # nearest v-curve sample of every u-curve sample: O(N log N) a pair
+    for j, tree in enumerate(trees):
+        for i in range(m):
+            dd, near = tree.query(pa[i])
+            best = np.argpartition(dd, K - 1)[:K] if dd.shape[0] > K else np.arange(dd.shape[0])
             best = np.r_[best, np.full(K - best.shape[0], best[0])]
-            k, l = np.unravel_index(best, (sa[i].shape[0], sb[j].shape[0]))
-            s[i, j], t[i, j] = sa[i][k], sb[j][l]
+            s[i, j], t[i, j] = sa[i][best], sb[j][near[best]]
     for _ in range(_NEWTON_STEPS):
         Da = np.stack([a.derivatives(s[i], 1) for i, a in enumerate(A)])  # (m, n, K, 2, d)
         Db = np.stack([b.derivatives(t[:, j], 1) for j, b in enumerate(B)], axis=1)
@@ -111,6 +112,29 @@ def network_parameters(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSpl
     k = np.argmin(dist, axis=-1)[..., None]
     take = lambda x: np.take_along_axis(x, k, axis=-1)[..., 0]  # noqa: E731
     return take(s), take(t), take(dist)
+
+
+def _closed(c: BSplineCurve, tol: float) -> bool:
+    lo, hi = c.domain
+    ends = c.evaluate(np.array([lo, hi]))
+    return bool(np.linalg.norm(ends[1] - ends[0]) <= tol)
+
+
+def _unwrap_seam(p: Array, dom: tuple[float, float], closed: bool) -> Array:
+    """On closed curves a crossing at the seam has two parameters; the closest-point search may
+    return either. The first crossing found at the domain's end belongs at its start, the last
+    found at its start belongs at its end (a network closed around a cylinder: the first and last
+    curves coincide)."""
+    if not closed or p.shape[0] < 2:
+        return p
+    p = p.copy()
+    lo, hi = dom
+    eps = 1e-9 * (hi - lo)
+    if p[-1] - lo <= eps and p[-2] > p[-1]:
+        p[-1] = hi
+    if hi - p[0] <= eps and p[1] < p[0]:
+        p[0] = lo
+    return p
 
 
 def _increasing(x: Array, name: str, what: str) -> None:
@@ -300,9 +324,9 @@ def _network_params(A: list[BSplineCurve], B: list[BSplineCurve], u_params, v_pa
                 f"at u={s[i, j]:.9g}, v={t[i, j]:.9g} (tol={tol:g})"
             )
         if up is None:
-            up = np.median(s, axis=0)
+            up = _unwrap_seam(np.median(s, axis=0), udom, all(_closed(a, tol) for a in A))
             _increasing(up, "v_curves", "the u values where the v-curves cross the u-curves; order the v-curves by increasing u")
         if vp is None:
-            vp = np.median(t, axis=1)
+            vp = _unwrap_seam(np.median(t, axis=1), vdom, all(_closed(b, tol) for b in B))
             _increasing(vp, "u_curves", "the v values where the u-curves cross the v-curves; order the u-curves by increasing v")
     return up, vp

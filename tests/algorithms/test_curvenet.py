@@ -475,3 +475,34 @@ def test_coons_of_arcs_whose_homogeneous_net_has_non_positive_weights_is_approxi
                        (l, s.evaluate(u0, v0 + x * (v1 - v0))), (r, s.evaluate(u1, v0 + x * (v1 - v0)))):
         # at equal parameters: an upper bound of the distance between the curves
         assert np.linalg.norm(pts - curve.evaluate(x), axis=1).max() <= 1e-7
+
+
+def test_gordon_of_a_network_closed_around_a_cylinder():
+    """Review: the last v-line sits on the circles' seam; its crossing was found at u = 0 instead of
+    u = 2 pi and the network was refused as unordered. The parameters are unwrapped on closed
+    curves, and the surface is the exact cylinder."""
+    from algorithms import circle
+
+    circ = [circle([0, 0, z], 1.0, normal=[0, 0, 1]) for z in (0.0, 1.0, 2.0)]
+    pts = [circ[0].evaluate(a) for a in np.linspace(0, 2 * np.pi, 5)]
+    lines = [BSplineCurve(1, [0, 0, 1, 1], np.array([p, p + [0, 0, 2]])) for p in pts]
+    g = gordon(circ, lines)
+    ref = gordon(circ, lines, u_params=np.linspace(0, 2 * np.pi, 5))
+    assert_allclose(g.control_points, ref.control_points, atol=1e-14)
+    X = g.evaluate_grid(np.linspace(0, 2 * np.pi, 61), np.linspace(0, 1, 7))
+    assert_allclose(np.linalg.norm(X[..., :2], axis=-1), 1.0, atol=1e-14)
+
+
+def test_gordon_finds_the_parameters_of_a_large_network():
+    """A 12 x 12 network of 40-span iso-curves (the parameter search used a dense all-pairs distance
+    matrix and a full sort per curve pair; now a k-d tree): the found parameters give the surface
+    built from the true ones."""
+    n = 43
+    U = np.r_[[0.0] * 4, np.linspace(0, 1, 41)[1:-1], [1.0] * 4]
+    X, Y = np.meshgrid(np.linspace(0, 10, n), np.linspace(0, 10, n), indexing="ij")
+    S = BSplineSurface((3, 3), (U, U), np.stack([X, Y, np.sin(X) * np.cos(Y)], -1))
+    us = np.linspace(0, 1, 12)
+    A, B = [iso_u(S, v) for v in us], [iso_v(S, u) for u in us]
+    found = gordon(A, B)
+    given = gordon(A, B, u_params=us, v_params=us)
+    assert_allclose(found.control_points, given.control_points, atol=1e-11)
