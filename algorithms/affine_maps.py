@@ -341,7 +341,14 @@ class ProjectiveMap:
         H = _as_matrix(self.matrix, "matrix")
         if H.shape[0] < 2:
             raise InvalidGeometryError(f"matrix: expected shape (d+1, d+1) with d >= 1, got {H.shape}")
-        _check_invertible(H, "matrix", tolerances.MAX_CONDITION)
+        # Judged in units of the translation's size: a change of length unit x -> c x turns
+        # [[A, t], [p, s]] into [[A, c t], [p / c, s]], the same map, and the condition number of
+        # the raw matrix grows like |t|^2 (a plain shift by 1e6 looked singular).
+        c = max(1.0, float(np.abs(H[:-1, -1]).max()))
+        B = H.copy()
+        B[:-1, -1] /= c
+        B[-1, :-1] *= c
+        _check_invertible(B, "matrix", tolerances.MAX_CONDITION)
         object.__setattr__(self, "matrix", _readonly(H))
 
     @property
@@ -406,8 +413,9 @@ class ProjectiveMap:
         Raises
         ------
         InvalidGeometryError
-            If any new weight is ``<= 0``: the spline's control polygon crosses (or touches) the
-            plane sent to infinity, so the image is not a valid NURBS.
+            If the new weights are not all of one sign (or one is 0): the spline's control
+            polygon crosses (or touches) the plane sent to infinity, so the image is not a valid
+            NURBS. (All negative is the same map as ``-H``: the weights are negated.)
         """
         if not isinstance(spline, (BSplineCurve, BSplineSurface)):
             raise TypeError(f"spline: expected a BSplineCurve or BSplineSurface, got {type(spline).__name__}")
@@ -417,6 +425,8 @@ class ProjectiveMap:
         w = np.ones(P.shape[:-1]) if spline.weights is None else spline.weights
         h = self._homogeneous(P)
         new_w = w * h[..., -1]
+        if np.all(new_w < 0):
+            new_w = -new_w  # H and -H are one projective map: every weight negative is a sign, not a crossing
         if np.any(new_w <= 0):
             i = tuple(int(j) for j in np.argwhere(new_w <= 0)[0])
             raise InvalidGeometryError(

@@ -541,3 +541,21 @@ class TestProjective:
         A = AffineMap(H1[:3, :3], H1[:3, 3])
         _close((A @ Q)(pts).coords, A(mid).coords, scale=scale)
         _close((Q @ A)(pts).coords, Q(A(pts)).coords, scale=scale * 10)
+
+
+def test_projective_map_conditioning_is_unit_free_and_sign_free():
+    """Review: a plain translation by 1e6 composed with the identity looked singular (the condition
+    number of the homogeneous matrix grows like |t|^2), and -H (the same map as H) was refused on
+    splines although it maps points correctly."""
+    from algorithms import circle
+    from algorithms.affine import ProjectiveMap
+
+    for t in (1e6, 1e9):
+        M = AffineMap(np.eye(3), [t, 0, 0]) @ ProjectiveMap(np.eye(4))
+        assert_allclose(M(Point([1.0, 2, 3])).coords, [1 + t, 2, 3], rtol=1e-15)
+    c = circle([0, 0, 0], 1.0)
+    d = ProjectiveMap(-np.eye(4)).apply_to(c)
+    assert_allclose(d.control_points, c.control_points, atol=0)
+    assert_allclose(d.weights, c.weights, atol=0)
+    with pytest.raises(InvalidGeometryError, match="singular|invertible"):
+        ProjectiveMap(np.diag([1.0, 1.0, 1.0, 0.0]))
