@@ -432,10 +432,12 @@ def read_obj(path: str | os.PathLike[str]) -> Mesh:
         key = tok[0]
         where = f"{p.name}:{lineno}"
         if key == "v":
-            if len(tok) not in (4, 5):
-                raise ExchangeError(f"read_obj: {where}: a 'v' record needs 3 (or 4) numbers, got {len(tok) - 1}: {raw.strip()!r}")
+            if len(tok) not in (4, 5, 7, 8):
+                raise ExchangeError(f"read_obj: {where}: a 'v' record needs 3 (or 4) numbers, optionally followed by "
+                                    f"an r g b colour, got {len(tok) - 1}: {raw.strip()!r}")
             try:
-                xs = [float(t) for t in tok[1:]]
+                # "v x y z r g b" (MeshLab, scanners) carries a colour: read and ignored
+                xs = [float(t) for t in tok[1:]][: 3 if len(tok) == 7 else 4]
             except ValueError as err:
                 raise ExchangeError(f"read_obj: {where}: non-numeric vertex coordinate in {raw.strip()!r}") from err
             if not all(np.isfinite(xs)) or (len(xs) == 4 and xs[3] == 0.0):

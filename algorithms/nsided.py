@@ -85,6 +85,7 @@ __all__ = [
     "measure_fill",
     "CLOSURE_TOL",
     "MIN_CORNER_ANGLE",
+    "CORNER_PLANE_TOL",
     "REPRESENT_TOL",
     "MAX_SIDES",
     "TWIST_TOL",
@@ -105,6 +106,11 @@ CLOSURE_TOL: float = 1e-6
 #: Smallest angle (degrees) between the two sides at a hole corner, and between a side's tangent
 #: and its neighbour's cross derivative; below it the corner/side is degenerate and refused.
 MIN_CORNER_ANGLE: float = 2.0
+#: At a hole corner the tangent planes of the two neighbours must agree (sine of the angle by which
+#: one neighbour's boundary tangent leaves the other's tangent plane); above this the neighbours
+#: meet at a sharp edge there and no surface is G1 to both, so the hole is refused. Below it the
+#: fill is built and its measured G1 angle at that corner shows the mismatch.
+CORNER_PLANE_TOL: float = 0.02
 #: Self-check of the exact representations (relative to the function's size): a spline or
 #: polynomial placed into a knot space that holds it must come back to round-off.
 REPRESENT_TOL: float = 1e-9
@@ -446,7 +452,7 @@ def side_from_surface(surface: BSplineSurface, edge: str, reverse: bool = False)
     return HoleSide(curve, X)
 
 
-def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Side], bool, float]:
+def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Side], bool, float, Array]:
     if isinstance(sides, (str, bytes)) or not isinstance(sides, Sequence):
         raise InvalidGeometryError(f"sides: expected a sequence of HoleSide, got {type(sides).__name__}")
     n = len(sides)
@@ -482,9 +488,18 @@ def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Sid
             raise InvalidGeometryError(
                 f"sides: the boundary is not closed: side {k} ends {gap:.3g} away from the start of side "
                 f"{(k + 1) % n} (tolerance {CLOSURE_TOL * size:.3g}); order and orient the sides along the loop")
+    # The construction works about the hole's own centre: boundary derivatives and the exactness
+    # checks of _represent then lose no digits to the model's distance from the origin (a hole
+    # 1e6 away failed the representation check; at 1e4 the G1 angle grew from 4e-11 to 1e-7 deg).
+    origin = ends[:, 0].mean(axis=0)
     work: list[_Side] = []
     for k, sd in enumerate(unit):
-        c, X = sd.curve, sd.cross
+        c = BSplineCurve._trusted(sd.curve.degree, sd.curve.knots, np.asarray(sd.curve.control_points, float) - origin,
+                                 sd.curve.weights)
+        X = sd.cross
+        if c.is_rational:  # the homogeneous cross field (w x, w y, w z, w)' moves by -w' origin
+            Xp = np.asarray(X.control_points, float)
+            X = BSplineCurve._trusted(X.degree, X.knots, np.c_[Xp[:, :3] - Xp[:, 3:] * origin, Xp[:, 3:]])
         if rational:
             Hc = c.homogeneous_points if c.is_rational else np.c_[c.control_points, np.ones(c.n_poles)]
             Xh = X.control_points if c.is_rational else np.c_[X.control_points, np.zeros(X.n_poles)]
@@ -498,7 +513,7 @@ def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Sid
         else:
             B, Xc = c, X
         work.append(_Side(B, Xc, rational))
-    return unit, work, rational, size
+    return unit, work, rational, size, origin
 
 
 def _times_linear(c: BSplineCurve, lam: Callable[[Array], Array]) -> BSplineCurve:
@@ -589,14 +604,15 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
     ------
     InvalidGeometryError
         Fewer than 3 sides, a loop that is not closed (:data:`CLOSURE_TOL`), a degenerate corner or
-        cross field (:data:`MIN_CORNER_ANGLE`), a kink inside a side, or a fill that would turn back
-        over the neighbour (cross field pointing into the hole).
+        cross field (:data:`MIN_CORNER_ANGLE`; a neighbour's pole at a corner), neighbours meeting
+        at a sharp edge at a corner (:data:`CORNER_PLANE_TOL`), a kink inside a side, or a fill
+        that would turn back over the neighbour (cross field pointing into the hole).
 
     Notes
     -----
     Construction in the module docstring (course §8-3; central split with G1 ribbons).
     """
-    unit, S, rational, size = _working_sides(sides)
+    unit, S, rational, size, origin = _working_sides(sides)
     n = len(S)
     w = 4 if rational else 3
     nf = S[0].nf
@@ -622,10 +638,23 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
             raise InvalidGeometryError(
                 f"sides: corner {i} (start of side {i}) is flat: the sides meet at {_angle_deg(tca, tcb):.3g} deg "
                 f"from tangent (minimum {MIN_CORNER_ANGLE}); merge the two sides or split the hole differently")
+        for k, at, F, t_side in ((i, "start", Fa, ta), (j, "end", Fb, tb)):
+            cross = _cart_tangent(S[i].B.evaluate(0.0), F[0], rational)
+            ang = _angle_deg(_cart_tangent(S[i].B.evaluate(0.0), t_side, rational), cross)
+            if not np.linalg.norm(cross) > 0 or not ang >= MIN_CORNER_ANGLE:
+                raise InvalidGeometryError(
+                    f"sides[{k}].cross: degenerate at the {at} of the side (its angle to the boundary is "
+                    f"{ang:.3g} deg): the neighbour has a pole or a collapsed edge at hole corner {i} (a sphere "
+                    "or a fillet corner), where no tangent plane across the boundary is defined")
         xa, *_ = np.linalg.lstsq(Fa.T, tb, rcond=_RCOND)
         xb, *_ = np.linalg.lstsq(Fb.T, ta, rcond=_RCOND)
         corner_res[i] = max(np.linalg.norm(Fa.T @ xa - tb) / np.linalg.norm(tb),
                             np.linalg.norm(Fb.T @ xb - ta) / np.linalg.norm(ta))
+        if not corner_res[i] <= CORNER_PLANE_TOL:
+            raise InvalidGeometryError(
+                f"sides: at hole corner {i} the neighbours of sides {j} and {i} meet at a sharp edge (their "
+                f"tangent planes differ by {np.degrees(np.arcsin(min(corner_res[i], 1.0))):.3g} deg, more than "
+                f"{np.degrees(np.arcsin(CORNER_PLANE_TOL)):.3g}): no surface is G1 to both there")
         ca0[i], cb0[i] = xa, xb
         rhs = (-tau[j] * xb @ dFb) - (sig[i] * xa @ dFa)
         M = np.c_[Fa.T, -Fb.T]
@@ -764,10 +793,10 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
             if np.any(H[..., 3] <= 0):
                 raise InvalidGeometryError(f"sides: the rational fill of corner {i} got a non-positive weight "
                                            f"({H[..., 3].min():.3g}); the neighbours' weights vary too much")
-            patches.append(BSplineSurface((Pu, Pv), (Ku, Kv), H[..., :3] / H[..., 3:], H[..., 3]))
+            patches.append(BSplineSurface((Pu, Pv), (Ku, Kv), H[..., :3] / H[..., 3:] + origin, H[..., 3]))
         else:
-            patches.append(BSplineSurface((Pu, Pv), (Ku, Kv), H))
-    return HoleFill(patches, unit, sig, C, corner_res, twist, size)
+            patches.append(BSplineSurface((Pu, Pv), (Ku, Kv), H + origin))
+    return HoleFill(patches, unit, sig, C + origin, corner_res, twist, size)
 
 
 def _corner_knot(K: Array, degree: int) -> Array:

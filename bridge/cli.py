@@ -602,6 +602,11 @@ def _fmt_s(x: float | None) -> str:
 def _cmd_fill(ns: argparse.Namespace) -> int:
     """``occsurf fill IN --out OUT``: fill every hole, print per hole ours vs OCC's filler."""
     src, out = Path(ns.input), Path(ns.out)
+    folder = out.parent if str(out.parent) else Path(".")
+    if out.is_dir() or not folder.is_dir() or not os.access(folder, os.W_OK):
+        why = "is a directory" if out.is_dir() else f"the folder {folder} does not exist or is not writable"
+        print(f"occsurf: {out}: cannot write the filled model there ({why})", file=sys.stderr)
+        return EXIT_ERROR
     try:
         with warnings.catch_warnings(), _quiet_native_stdout():
             warnings.simplefilter("ignore")
@@ -612,7 +617,8 @@ def _cmd_fill(ns: argparse.Namespace) -> int:
             model = (exchange.read_step if fmt == "step" else exchange.read_iges)(src)
             result = fill_model(model.shape, all_loops=ns.all_loops, compare_occ=not ns.no_occ)
             filled = [h for h in result.holes if h.status == "filled"]
-            if filled:
+            nothing_to_do = not any(h.status != "outer" for h in result.holes)
+            if filled or nothing_to_do:  # a model without holes is written as it is (sewn)
                 exchange.write_step(out, result.shape)
     except Exception as err:  # noqa: BLE001 - one line, never a traceback
         print(f"occsurf: {src}: {_strip_path(_one_line(err), src)}", file=sys.stderr)
@@ -624,7 +630,8 @@ def _cmd_fill(ns: argparse.Namespace) -> int:
     if ns.json:
         from dataclasses import asdict as _asdict
 
-        doc = {"input": str(src), "output": str(out) if filled else None, "holes": [_asdict(h) for h in result.holes],
+        doc = {"input": str(src), "output": str(out) if filled or nothing_to_do else None,
+               "holes": [_asdict(h) for h in result.holes],
                "free_loops_after": result.free_loops_after}
         sys.stdout.write(json.dumps(doc, indent=1) + "\n")
     else:
@@ -643,8 +650,10 @@ def _cmd_fill(ns: argparse.Namespace) -> int:
                          "OCC LocalAnalysis_SurfaceContinuity)\n")
         if filled:
             sys.stdout.write(f"wrote {out} ({len(filled)} fills sewn in; {result.free_loops_after} free loops left)\n")
+        elif nothing_to_do:
+            sys.stdout.write(f"no holes to fill; wrote {out} unchanged\n")
     sys.stdout.flush()
-    return EXIT_ERROR if failed or not filled else EXIT_OK
+    return EXIT_ERROR if failed or not (filled or nothing_to_do) else EXIT_OK
 
 
 def _cmd_demo(ns: argparse.Namespace) -> int:

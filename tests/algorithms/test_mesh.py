@@ -259,3 +259,14 @@ def test_fixtures_read(name):
     m = read_obj(FIXTURES / f"{name}.obj")
     assert m.is_closed
     _check_fans(m)
+
+
+def test_read_obj_ignores_vertex_colours(tmp_path):
+    """Review: 'v x y z r g b' (MeshLab, scanners) was refused; the colour is ignored."""
+    p = tmp_path / "col.obj"
+    p.write_text("v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\nv 0 1 0 0.5 0.5 0.5\nf 1 2 3 4\n")
+    m = read_obj(p)
+    assert_allclose(m.vertices, [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], atol=0)
+    p.write_text("v 0 0 0 1 2\nv 1 0 0\nv 1 1 0\nf 1 2 3\n")
+    with pytest.raises(ExchangeError, match="optionally followed by an r g b colour, got 5"):
+        read_obj(p)

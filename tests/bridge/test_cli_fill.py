@@ -111,3 +111,22 @@ def _assert_same_step_text(new: bytes, old: bytes, name: str) -> None:
     size = max(float(np.abs(b).max()), 1.0)
     worst = float(np.abs(a - b).max()) / size
     assert worst <= _SAMPLE_RTOL, f"{name}: numbers differ by {worst:.3g} of the model size"
+
+
+def test_model_without_holes_is_written_unchanged_exit_0(capsys, tmp_path: Path) -> None:
+    """Review: a closed model gave '0 holes', exit status 2 and no output file."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+
+    src = write_step(tmp_path / "box.step", BRepPrimAPI_MakeBox(10.0, 20.0, 30.0).Shape())
+    out = tmp_path / "out.step"
+    code, stdout, err = run_main(capsys, "fill", str(src), "--out", str(out), "--no-occ")
+    assert code == 0 and err == "", err
+    assert "0 holes" in stdout and f"no holes to fill; wrote {out} unchanged" in stdout
+    assert len(read_step(out).faces) == 6
+
+
+def test_unwritable_out_is_refused_before_any_work(capsys, tmp_path: Path) -> None:
+    code, out, err = run_main(capsys, "fill", str(HOLES / "dome_holes.step"), "--out", str(tmp_path / "nope" / "x.step"))
+    assert code == 2 and out == "" and "does not exist or is not writable" in err
+    code, out, err = run_main(capsys, "fill", str(HOLES / "dome_holes.step"), "--out", str(tmp_path))
+    assert code == 2 and "is a directory" in err

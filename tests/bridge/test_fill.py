@@ -88,3 +88,57 @@ def test_unfillable_hole_is_reported_and_others_still_filled() -> None:
     holes = {h.sides: h for h in res.holes if h.status != "outer"}
     assert holes[3].status == "filled"
     assert holes[5].status == "failed" and "flat" in holes[5].reason
+
+
+def _trimmed_ring(ext: float):
+    """A 5-sided hole whose neighbour faces use only part of their B-spline surfaces (UV bounds
+    u in [s0, s1]; the hole edges lie on the surfaces' v = 0 boundary for that range only)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+
+    from algorithms.hole_models import base_surface, represent_grid
+    from algorithms.surface import BSplineSurface
+    from bridge.convert import to_occ
+
+    G = base_surface(False)
+    m = ring_model(5, bump=0.0)
+    s0, s1 = ext / (1 + 2 * ext), (1 + ext) / (1 + 2 * ext)
+    K = np.r_[[0.0] * 7, [1.0] * 7]
+    faces = []
+    for i in range(5):
+        a, b = m.hole[i], m.hole[(i + 1) % 5]
+        A, B = m.outer[i], m.outer[(i + 1) % 5]
+        a2, b2, A2, B2 = a - ext * (b - a), b + ext * (b - a), A - ext * (B - A), B + ext * (B - A)
+
+        def fn(s, t, a2=a2, b2=b2, A2=A2, B2=B2):
+            S, T = np.meshgrid(s, t, indexing="ij")
+            xy = [(1 - T) * ((1 - S) * a2[c] + S * b2[c]) + T * ((1 - S) * A2[c] + S * B2[c]) for c in (0, 1)]
+            return G.evaluate(*xy)
+
+        srf = BSplineSurface((6, 6), (K, K), represent_grid(fn, (6, 6), (K, K)))
+        faces.append(BRepBuilderAPI_MakeFace(to_occ(srf), s0, s1, 0.0, 1.0, 1e-7).Face())
+    return _sew(faces)
+
+
+def test_neighbours_trimmed_by_uv_bounds_are_filled() -> None:
+    """Review: the whole B-spline surface of each neighbour was used, so its iso-boundary ran past
+    the hole's corners and the loop was refused as 'not closed'."""
+    res = fill_model(_trimmed_ring(0.25), compare_occ=False)
+    holes = [h for h in res.holes if h.status != "outer"]
+    assert [h.status for h in holes] == ["filled"], holes[0].reason
+    assert holes[0].g0 <= 1e-9 * SIZE and holes[0].g1 <= 1e-6
+
+
+def test_a_face_outside_any_shell_has_its_loops_found() -> None:
+    """Review: only shells were searched, so a lone face beside a shell (or alone) had no loops."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
+
+    shell = _shell(ring_model(5))
+    lone = _make_face(ring_model(3, center=(0.2, 0.2), radius=0.05, width=0.04).faces[0], 1e-7)
+    comp = TopoDS_Compound()
+    b = BRep_Builder()
+    b.MakeCompound(comp)
+    b.Add(comp, shell)
+    b.Add(comp, lone)
+    assert len(find_loops(comp)) == len(find_loops(shell)) + 1
+    assert len(find_loops(lone)) == 1
