@@ -144,6 +144,8 @@ def _scale(coords: Array, s: Array, name: str) -> Array:
         raise InvalidGeometryError(
             f"{name}: scalar shape {s.shape} does not broadcast against the leading shape {coords.shape[:-1]}"
         ) from err
+    if not np.all(np.isfinite(s)):
+        raise InvalidGeometryError(f"{name}: expected finite scalars, got {float(s[~np.isfinite(s)].ravel()[0])!r}")
     return coords * s[..., None]
 
 
@@ -297,6 +299,8 @@ class _Linear(_Element):
         s = _scalar(other)
         if s is None:
             return self._forbid("/", other)
+        if np.any(s == 0):
+            raise InvalidGeometryError("scalar: division by zero")
         return type(self)._trusted(_scale(self.coords, 1.0 / s, "scalar"))
 
     def __neg__(self) -> Any:

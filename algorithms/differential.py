@@ -30,6 +30,8 @@ Degenerate points give NaN, never a silent wrong number and never an exception
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -268,6 +270,8 @@ def arc_length(curve: BSplineCurve, u0: ArrayLike, u1: ArrayLike, tol: float | N
 
     Raises
     ------
+    InvalidGeometryError
+        ``tol`` not a positive finite number.
     ToleranceError
         If ``tol`` is not reached after 40 halvings (e.g. a cusp, tol below round-off).
     """
@@ -281,8 +285,13 @@ def arc_length(curve: BSplineCurve, u0: ArrayLike, u1: ArrayLike, tol: float | N
     if tol is None:
         poly = float(np.sum(_norm(np.diff(c.control_points, axis=0))))
         tol = ARC_LENGTH * max(poly, np.finfo(float).tiny)
-    elif not (np.isfinite(tol) and tol > 0):
-        raise ToleranceError(f"tol: expected a positive finite number, got {tol!r}")
+    else:
+        try:
+            ok = isinstance(tol, numbers.Real) and not isinstance(tol, bool) and math.isfinite(tol) and tol > 0
+        except TypeError:
+            ok = False
+        if not ok:
+            raise InvalidGeometryError(f"tol: expected a positive finite number, got {tol!r}")
     sign = np.where(b < a, -1.0, 1.0)
     left, right = np.minimum(a, b), np.maximum(a, b)
     knots = np.unique(c.knots)

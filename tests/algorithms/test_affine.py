@@ -559,3 +559,13 @@ def test_projective_map_conditioning_is_unit_free_and_sign_free():
     assert_allclose(d.weights, c.weights, atol=0)
     with pytest.raises(InvalidGeometryError, match="singular|invertible"):
         ProjectiveMap(np.diag([1.0, 1.0, 1.0, 0.0]))
+
+
+def test_vector_scaling_by_zero_division_or_nan_is_refused():
+    """Review: Vector / 0 gave inf/nan silently although constructors refuse non-finite values."""
+    v = Vector([1.0, 0.0, 0.0])
+    with pytest.raises(InvalidGeometryError, match="division by zero"):
+        v / 0
+    with pytest.raises(InvalidGeometryError, match="finite scalars"):
+        v * float("nan")
+    assert_allclose((v / 4).coords, [0.25, 0, 0])

@@ -224,7 +224,7 @@ def test_arc_length_errors():
     c = twisted_cubic()
     with pytest.raises(ParameterError):
         arc_length(c, 0.0, 2.0)
-    with pytest.raises(ToleranceError):
+    with pytest.raises(InvalidGeometryError, match="tol"):  # a bad tol is bad input, as everywhere
         arc_length(c, 0.0, 1.0, tol=-1.0)
     with pytest.raises(InvalidGeometryError):
         curvature("not a curve", 0.5)
@@ -423,3 +423,12 @@ def test_normal_curvature_errors_and_zero_direction():
     flat = BSplineSurface((1, 1), ([0, 0, 1, 1],) * 2, np.zeros((2, 2, 2)) + [[[0, 0], [0, 1]], [[1, 0], [1, 1]]])
     with pytest.raises(InvalidGeometryError):
         surface_curvatures(flat, 0.5, 0.5)
+
+
+@pytest.mark.parametrize("tol", ["1e-3", -1.0, 0.0, float("nan"), True])
+def test_arc_length_tol_must_be_a_positive_number(tol):
+    """Review: a string tol raised a bare TypeError from np.isfinite, a negative one ToleranceError."""
+    from algorithms import circle
+
+    with pytest.raises(InvalidGeometryError, match="tol: expected a positive finite number"):
+        arc_length(circle([0, 0, 0], 1.0), 0.0, 1.0, tol=tol)
