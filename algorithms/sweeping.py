@@ -22,7 +22,11 @@ Frames (``frame=``)
   fixed reference chain of :data:`RMF_STEPS` steps per path span, plus one double-reflection step
   from the nearest reference sample to each query, so every query sees the same frame field.
   The start normal does not matter: the profile is carried in start-frame coordinates.
-  OCC's closest mode is ``GeomFill_IsCorrectedFrenet``.
+  OCC's closest mode is ``GeomFill_IsCorrectedFrenet``. On a *closed*, tangent-continuous path
+  (ends within :data:`CLOSE_TOL`) the RMF returns turned about the tangent by its holonomy angle
+  ``α`` (zero only for planar paths), so the surface would not close; the sweep then adds the
+  twist ``-α t`` (``t`` the normalised path parameter), the minimal uniform correction, and the
+  surface closes (as Rhino and CATIA close sweeps along closed rails).
 * ``"frenet"`` — the Frenet frame (course §6-2); undefined where the path's curvature vanishes (an
   error), and it flips at inflections. OCC: ``GeomFill_IsFrenet``.
 * ``"fixed"`` — the start frame throughout (a translational sweep, with the laws applied).
@@ -76,6 +80,8 @@ __all__ = [
     "MAX_SPLIT",
     "KINK_ANGLE",
     "MIN_SPAN",
+    "CLOSE_TOL",
+    "CLOSE_ANGLE",
     "SweepResult",
     "sweep",
     "exact_sweep",
@@ -111,6 +117,11 @@ MAX_SPLIT: int = 16
 #: A path joint (knot of multiplicity >= degree) must be tangent-continuous within this angle
 #: (radians) unless ``frame="fixed"``: a moving frame turns abruptly at a kink, tearing the sweep.
 KINK_ANGLE: float = 1e-9
+#: A path whose ends are this close (relative to its size) is closed: with ``frame="rmf"`` the
+#: frame's holonomy is then spread along it so that the swept surface closes too.
+CLOSE_TOL: float = 1e-9
+#: ... and its end tangents within this angle (radians) of each other.
+CLOSE_ANGLE: float = 1e-6
 #: Refinement gives up (:class:`ToleranceError`) rather than cut a span below this fraction of the
 #: path's domain: an error that does not fall as spans shrink comes from a jump in a law, a cusp
 #: of the path or a frame that turns abruptly, not from too few sections.
@@ -226,11 +237,20 @@ class _FrameField:
             fr = _path_frames(path, grid)
             self.grid, self.x, self.t, self.r = grid, fr.point, fr.tangent, fr.normal
             self.start = np.stack([fr.tangent[0], fr.normal[0], fr.binormal[0]], axis=-1)
+            # On a closed, tangent-continuous path the RMF comes back turned about the tangent by
+            # its holonomy angle: the sweep spreads that angle linearly (module notes) to close.
+            closed = np.linalg.norm(fr.point[-1] - fr.point[0]) <= CLOSE_TOL * max(1.0, float(np.abs(fr.point).max()))
+            t0, t1 = fr.tangent[0], fr.tangent[-1]
+            tangent_ok = math.atan2(float(np.linalg.norm(np.cross(t0, t1))), float(t0 @ t1)) <= CLOSE_ANGLE
+            self.holonomy = (math.atan2(float(fr.normal[-1] @ fr.binormal[0]), float(fr.normal[-1] @ fr.normal[0]))
+                             if closed and tangent_ok else 0.0)
         elif kind == "frenet":
             self.start = self(np.array([v0]))[0]
+            self.holonomy = 0.0
         else:  # the start normal does not matter (module notes): Frenet's, or any perpendicular
             f0 = _path_frames(path, np.array([v0]))
             self.start = np.stack([f0.tangent[0], f0.normal[0], f0.binormal[0]], axis=-1)
+            self.holonomy = 0.0
 
     def __call__(self, v: Array, D: Array | None = None) -> Array:
         """Frames at ``v`` (m,): shape (m, 3, 3). ``D`` = ``path.derivatives(v, 1)`` if known."""
@@ -289,7 +309,7 @@ class _Sweep:
         t = (v - self.v0) / (self.v1 - self.v0)
         D = self.path.derivatives(v, 1)          # position and tangent in one evaluation
         F = self.frames(v, D)
-        phi, s = self.twist(t), self.scale(t)
+        phi, s = self.twist(t) - self.frames.holonomy * t, self.scale(t)
         c, sn = np.cos(phi), np.sin(phi)
         # F R_T(phi) without forming R: the first column stays, columns 2 and 3 rotate.
         FR = np.empty_like(F) if F.flags.writeable else np.empty(F.shape)
