@@ -426,6 +426,14 @@ class GeneralizedSurface:
         return [spatch_to_surfaces(p, tol=tol) for p in self.patches]
 
 
+def check_scheme_args(mesh: object, refine: object) -> None:
+    """The arguments every generalized scheme takes: a :class:`Mesh` and a refinement policy."""
+    if not isinstance(mesh, Mesh):
+        raise InvalidGeometryError(f"mesh: expected a Mesh, got {type(mesh).__name__}")
+    if refine not in ("auto", "always", "never"):
+        raise InvalidGeometryError(f"refine: expected 'auto', 'always' or 'never', got {refine!r}")
+
+
 def generalized_biquadratic(mesh: Mesh, *, refine: str = "auto") -> GeneralizedSurface:
     """The generalized biquadratic B-spline surface of a control mesh (course §8-7; Loop & DeRose 1990).
 
@@ -450,10 +458,7 @@ def generalized_biquadratic(mesh: Mesh, *, refine: str = "auto") -> GeneralizedS
         If ``mesh`` is not a Mesh, ``refine`` is unknown, non-quad faces remain with
         ``refine="never"``, or the mesh has no interior vertex.
     """
-    if not isinstance(mesh, Mesh):
-        raise InvalidGeometryError(f"mesh: expected a Mesh, got {type(mesh).__name__}")
-    if refine not in ("auto", "always", "never"):
-        raise InvalidGeometryError(f"refine: expected 'auto', 'always' or 'never', got {refine!r}")
+    check_scheme_args(mesh, refine)
     if refine == "always" or (refine == "auto" and not mesh.is_quad):
         mesh = catmull_clark(mesh)
     elif not mesh.is_quad:

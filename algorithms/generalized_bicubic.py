@@ -60,7 +60,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import InvalidGeometryError
-from .generalized import MAX_VALENCE, GeneralizedSurface, ribbon_patch
+from .generalized import MAX_VALENCE, GeneralizedSurface, check_scheme_args, ribbon_patch
 from .mesh import Mesh, doo_sabin
 from .spatch import SPatch, spatch_indices
 
@@ -169,10 +169,7 @@ def generalized_bicubic(mesh: Mesh, *, refine: str = "auto") -> GeneralizedSurfa
         ``refine="never"``, a face with more than :data:`~algorithms.generalized.MAX_VALENCE` sides,
         or no face with all vertices interior.
     """
-    if not isinstance(mesh, Mesh):
-        raise InvalidGeometryError(f"mesh: expected a Mesh, got {type(mesh).__name__}")
-    if refine not in ("auto", "always", "never"):
-        raise InvalidGeometryError(f"refine: expected 'auto', 'always' or 'never', got {refine!r}")
+    check_scheme_args(mesh, refine)
     bad = _needs_refinement(mesh)
     if refine == "always" or (refine == "auto" and bad >= 0):
         mesh = doo_sabin(mesh)
