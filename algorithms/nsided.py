@@ -633,14 +633,15 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
         Fb, dFb = F1[j][0][0], F1[j][1][0]  # of side i-1 at s=1
         ta = sig[i] * S[i].B.derivatives(0.0, 1)[1]  # a'(0)
         tb = -tau[j] * S[j].B.derivatives(1.0, 1)[1]  # b'(0)
-        tca, tcb = _cart_tangent(S[i].B.evaluate(0.0), ta, rational), _cart_tangent(S[i].B.evaluate(0.0), tb, rational)
+        h0 = S[i].B.evaluate(0.0)  # the corner (homogeneous, weight 1)
+        tca, tcb = _cart_tangent(h0, ta, rational), _cart_tangent(h0, tb, rational)
         if _angle_deg(tca, tcb) < MIN_CORNER_ANGLE:
             raise InvalidGeometryError(
                 f"sides: corner {i} (start of side {i}) is flat: the sides meet at {_angle_deg(tca, tcb):.3g} deg "
                 f"from tangent (minimum {MIN_CORNER_ANGLE}); merge the two sides or split the hole differently")
-        for k, at, F, t_side in ((i, "start", Fa, ta), (j, "end", Fb, tb)):
-            cross = _cart_tangent(S[i].B.evaluate(0.0), F[0], rational)
-            ang = _angle_deg(_cart_tangent(S[i].B.evaluate(0.0), t_side, rational), cross)
+        for k, at, F, t_side in ((i, "start", Fa, tca), (j, "end", Fb, tcb)):
+            cross = _cart_tangent(h0, F[0], rational)
+            ang = _angle_deg(t_side, cross)
             if not np.linalg.norm(cross) > 0 or not ang >= MIN_CORNER_ANGLE:
                 raise InvalidGeometryError(
                     f"sides[{k}].cross: degenerate at the {at} of the side (its angle to the boundary is "
