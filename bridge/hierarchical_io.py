@@ -216,13 +216,17 @@ def read_hierarchical_step(path: str | os.PathLike[str]) -> HierarchicalSurface 
         h = cls.from_dict(d)
     except (InvalidGeometryError, TypeError, KeyError, IndexError) as err:  # any malformed content
         raise ExchangeError(f"{side}: invalid hierarchy: {err}") from err
+    try:
+        same = hashlib.sha256(p.read_bytes()).hexdigest() == data.get("step_sha256")
+    except OSError:
+        same = False  # read_step names the problem
+    if same:
+        return h  # the very file written with this sidecar: no need to parse it
     model = read_step(p)
     items = model.faces if cls is HierarchicalSurface else model.edges
     geo = items[0].surface if cls is HierarchicalSurface and items else (items[0].curve if items else None)
     if geo is None:
         raise ExchangeError(f"{p}: no {'face' if cls is HierarchicalSurface else 'edge'} to match the sidecar")
-    if hashlib.sha256(p.read_bytes()).hexdigest() == data.get("step_sha256"):
-        return h  # the very file written with this sidecar
     # Re-saved or edited: the geometry must still be the hierarchy's, on every polynomial piece.
     flat = h.flatten()
     if isinstance(flat, BSplineSurface):
