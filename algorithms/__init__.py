@@ -1,15 +1,73 @@
 """occsurf.algorithms: spline-surface algorithms of the SIGGRAPH '91 course C25, in NumPy/SciPy.
 
-Pure NumPy/SciPy: this package never imports OCP, cadquery or build123d.
+Pure NumPy/SciPy: this package never imports OCP, cadquery or build123d, nor :mod:`occsurf.bridge`.
+One subpackage per family of course chapters:
+
+=================  ==========================================================================
+``kernel``         basis, knots, curves, surfaces, Bézier, blossoms, degree, rational, conics (ch. 2, 12)
+``geometry``       affine and differential geometry (ch. 1, §6-0..6-14)
+``construction``   extrusion, revolution, sweeps, Coons, Gordon (ch. 6)
+``fitting``        parameters, knots, interpolation, least squares, lofting (ch. 7)
+``manipulation``   linear algebra, constraints, dragging (ch. 3, 4)
+``hierarchical``   hierarchical B-splines (ch. 5)
+``topology``       S-patches, n-sided holes, meshes, generalized B-splines (ch. 8)
+=================  ==========================================================================
+
+Cross-cutting modules stay at this level: :mod:`.errors` (the exception hierarchy),
+:mod:`.tolerances` (every numeric tolerance, overridable), :mod:`._validate` (argument checks) and
+:mod:`._numba_kernels` (optional compiled kernels).
 """
 
-from .affine import AffineMap, Frame, Normal, Point, ProjectiveMap, Vector, affine_combination
-from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_point, conic_type, ellipse
-from .compat import make_compatible
-from .curve import BSplineCurve
-from .curvenet import coons, coons_bicubic, gordon, network_parameters, polynomial_approximation
-from .generation import extrude, revolve, rotational_sweep, ruled, translational_sweep
-from .sweeping import SweepResult, exact_sweep, sweep
+from .errors import (
+    ExchangeError,
+    InvalidGeometryError,
+    KernelError,
+    OccsurfError,
+    ParameterError,
+    ToleranceError,
+)
+from .kernel import (
+    BSplineCurve,
+    BSplineSurface,
+    arc,
+    circle,
+    conic_arc,
+    conic_from_shoulder,
+    conic_through_point,
+    conic_type,
+    ellipse,
+    make_compatible,
+)
+from .geometry import (
+    AffineMap,
+    Frame,
+    Normal,
+    Point,
+    ProjectiveMap,
+    Vector,
+    affine_combination,
+    arc_length,
+    curvature,
+    curve_frenet,
+    rotation_minimizing_frames,
+    surface_curvatures,
+    torsion,
+)
+from .construction import (
+    SweepResult,
+    coons,
+    coons_bicubic,
+    exact_sweep,
+    extrude,
+    gordon,
+    network_parameters,
+    polynomial_approximation,
+    revolve,
+    rotational_sweep,
+    ruled,
+    sweep,
+    translational_sweep,
+)
 from .fitting import (
     approximation_knots,
     averaged_knots,
@@ -20,26 +78,9 @@ from .fitting import (
     loft,
     parametrize,
 )
-from .generalized import GeneralizedSurface, biquadratic_patch, generalized_biquadratic, ribbon_patch, spatch_curvatures
-from .generalized_bicubic import generalized_bicubic
-from .hierarchical import HierarchicalSurface
-from .hierarchical_core import Overlay
-from .hierarchical_curve import HierarchicalCurve
-from .hierarchical_offsets import ADDITIVE_OFFSETS, FRAME_OFFSETS, OffsetMapping, register_offset_mapping
-from .differential import (
-    arc_length,
-    curvature,
-    curve_frenet,
-    rotation_minimizing_frames,
-    surface_curvatures,
-    torsion,
-)
-from .nsided import FillQuality, HoleFill, HoleSide, fill_hole, measure_fill, side_from_surface
-from .mesh import Mesh, catmull_clark, doo_sabin, read_obj, write_obj
-from .spatch import SPatch, domain_vertices, spatch_indices, wachspress, wachspress_derivatives, wachspress_gradient
-from .spatch_convert import SPatchConversion, convert_spatch, spatch_to_surfaces
-from .surface import BSplineSurface
 from .manipulation import (
+    ConstraintError,
+    ConvergenceError,
     Curvature,
     Derivative,
     Dragger,
@@ -50,14 +91,42 @@ from .manipulation import (
     drag_point,
     drag_surface_point,
 )
-from .linalg import ConstraintError, ConvergenceError
-from .errors import (
-    ExchangeError,
-    InvalidGeometryError,
-    KernelError,
-    OccsurfError,
-    ParameterError,
-    ToleranceError,
+from .hierarchical import (
+    ADDITIVE_OFFSETS,
+    FRAME_OFFSETS,
+    HierarchicalCurve,
+    HierarchicalSurface,
+    OffsetMapping,
+    Overlay,
+    register_offset_mapping,
+)
+from .topology import (
+    FillQuality,
+    GeneralizedSurface,
+    HoleFill,
+    HoleSide,
+    Mesh,
+    SPatch,
+    SPatchConversion,
+    biquadratic_patch,
+    catmull_clark,
+    convert_spatch,
+    domain_vertices,
+    doo_sabin,
+    fill_hole,
+    generalized_bicubic,
+    generalized_biquadratic,
+    measure_fill,
+    read_obj,
+    ribbon_patch,
+    side_from_surface,
+    spatch_curvatures,
+    spatch_indices,
+    spatch_to_surfaces,
+    wachspress,
+    wachspress_derivatives,
+    wachspress_gradient,
+    write_obj,
 )
 
 __all__ = [

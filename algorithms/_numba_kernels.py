@@ -67,7 +67,7 @@ def span_table(knots: np.ndarray, degree: int, n_poles: int) -> tuple[int, int, 
     in the few cells that straddle a knot, a short bisection (branch predictors defeat a plain
     bisection on random parameters: 30 ns against 6 ns per search).
     """
-    from .basis import find_span
+    from .kernel.basis import find_span
 
     first, last = span_bounds(knots, degree, n_poles)
     x0, x1 = float(knots[degree]), float(knots[n_poles])

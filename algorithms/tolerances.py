@@ -3,7 +3,7 @@
 Every tolerance that an algorithm uses by default lives here, so that it is written once and can
 be changed for a block of code with :func:`override`::
 
-    from algorithms import tolerances
+    from . import tolerances
     with tolerances.override(KNOT_REMOVAL=1e-6):
         c2 = c.remove_knot(0.5)
 

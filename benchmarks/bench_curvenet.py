@@ -22,10 +22,10 @@ from common import Row, best_of, machine_note, print_table
 
 import numpy as np  # noqa: E402
 
-from algorithms.basis import basis_matrix  # noqa: E402
-from algorithms.curve import BSplineCurve  # noqa: E402
-from algorithms.curvenet import coons, gordon  # noqa: E402
-from algorithms.surface import BSplineSurface  # noqa: E402
+from occsurf.algorithms.kernel.basis import basis_matrix  # noqa: E402
+from occsurf.algorithms.kernel.curve import BSplineCurve  # noqa: E402
+from occsurf.algorithms.construction import coons, gordon  # noqa: E402
+from occsurf.algorithms.kernel.surface import BSplineSurface  # noqa: E402
 
 
 def loop(n: int = 12, seed: int = 0):
@@ -58,8 +58,8 @@ def network(m: int, n: int, seed: int = 1):
 def main() -> None:
     from OCP.GeomFill import GeomFill_BSplineCurves, GeomFill_FillingStyle
 
-    from bridge._occ import silence_messages
-    from bridge.convert import to_occ
+    from occsurf.bridge._occ import silence_messages
+    from occsurf.bridge.conversion.splines import to_occ
 
     silence_messages()
     rows: list[Row] = []

@@ -15,9 +15,9 @@ import common  # noqa: F401 - pins BLAS threads before NumPy
 
 import time
 
-from bridge.convert import _make_face
-from bridge.fill import _sew, fill_model
-from algorithms.hole_models import ring_model
+from occsurf.bridge.conversion.splines import _make_face
+from occsurf.bridge.modeling.fill import _sew, fill_model
+from occsurf.examples.hole_models import ring_model
 
 CASES = [(n, False) for n in range(3, 9)] + [(3, True), (5, True), (8, True)]
 

@@ -6,7 +6,7 @@ Run from the repository root::
 
 Timed (best of N, wall clock, one BLAS thread), each from our curves to a B-spline surface:
 
-* revolve (full turn, rational cubic profile, 9 poles): ``algorithms.generation.revolve`` vs
+* revolve (full turn, rational cubic profile, 9 poles): ``occsurf.algorithms.construction.generation.revolve`` vs
   ``BRepPrimAPI_MakeRevol`` + ``BRepBuilderAPI_NurbsConvert`` and vs ``Geom_SurfaceOfRevolution`` +
   ``GeomConvert::SurfaceToBSplineSurface``;
 * extrude: ``extrude`` vs ``BRepPrimAPI_MakePrism`` + ``NurbsConvert``;
@@ -27,10 +27,10 @@ import common  # noqa: F401  (pins BLAS threads before NumPy)
 import numpy as np  # noqa: E402
 from common import Row, best_of, machine_note, print_table  # noqa: E402
 
-from algorithms import BSplineCurve, ellipse  # noqa: E402
-from algorithms.fitting import interpolate_curve  # noqa: E402
-from algorithms.generation import extrude, revolve, ruled, translational_sweep  # noqa: E402
-from algorithms.sweeping import sweep  # noqa: E402
+from occsurf.algorithms import BSplineCurve, ellipse  # noqa: E402
+from occsurf.algorithms.fitting.interpolation import interpolate_curve  # noqa: E402
+from occsurf.algorithms.construction.generation import extrude, revolve, ruled, translational_sweep  # noqa: E402
+from occsurf.algorithms.construction.sweeping import sweep  # noqa: E402
 
 
 def inputs():
@@ -51,8 +51,8 @@ def inputs():
 def main() -> None:
     from OCP.GeomConvert import GeomConvert
 
-    import bridge._generation_occ as G
-    from bridge import to_occ
+    import tests.bridge.generation_occ as G
+    from occsurf.bridge import to_occ
 
     prof, c2, path, sec = inputs()
     o, a = (0.2, -0.1, 0.3), (0.1, 0.2, 1.0)

@@ -32,7 +32,7 @@ import common  # noqa: E402  (pins BLAS threads before NumPy)
 
 import numpy as np  # noqa: E402
 
-from algorithms.hierarchical import HierarchicalSurface  # noqa: E402
+from occsurf.algorithms.hierarchical.surface import HierarchicalSurface  # noqa: E402
 
 TARGET_MS = 5.0
 GRID = 100

@@ -18,7 +18,7 @@ import common  # first: pins BLAS to one thread  # noqa: I001
 import numpy as np
 from common import Row, best_of, check_targets, max_dev, print_table
 
-from algorithms.knots import merge_knots, refine_poles
+from occsurf.algorithms.kernel.knots import merge_knots, refine_poles
 
 
 def occ_insert_time(occ, knots: np.ndarray, direction: str, repeat: int) -> tuple[float, object]:
@@ -48,7 +48,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer repetitions")
     args = ap.parse_args()
-    from bridge import from_occ
+    from occsurf.bridge import from_occ
     from geomdl import operations
 
     rep = 20 if args.quick else 200

@@ -38,8 +38,8 @@ if str(ROOT) not in sys.path:  # run as a script from anywhere
 import numpy as np  # noqa: E402
 from OCP.gp import gp_Pnt, gp_Vec  # noqa: E402
 
-from algorithms import BSplineCurve, Derivative, Dragger, Position, Tangent, constrain, drag_point  # noqa: E402
-from bridge import to_occ  # noqa: E402
+from occsurf.algorithms import BSplineCurve, Derivative, Dragger, Position, Tangent, constrain, drag_point  # noqa: E402
+from occsurf.bridge import to_occ  # noqa: E402
 
 N_POLES = 200
 TARGET_US = 50.0

@@ -1,7 +1,7 @@
 """Benchmark: S-patch evaluation and first derivatives (algorithms/spatch.py) vs its peers.
 
 The same 10 000 domain points for everyone: a random piece ``k`` and random ``(s, t)`` in
-``[0, 1]²`` per point, mapped to the regular n-gon by :func:`algorithms.spatch_convert.piece_domain_points`.
+``[0, 1]²`` per point, mapped to the regular n-gon by :func:`occsurf.algorithms.topology.spatch_convert.piece_domain_points`.
 
 * **ours**: ``SPatch.evaluate(x)`` / ``SPatch.derivatives(x, 1)`` on the n-gon points (Wachspress
   coordinates, Bernstein form, Taylor-mode derivatives; vectorised over the points).
@@ -29,9 +29,9 @@ from math import comb
 import numpy as np
 from OCP.gp import gp_Pnt, gp_Vec
 
-from algorithms.spatch import SPatch
-from algorithms.spatch_convert import convert_spatch, piece_domain_points
-from bridge.convert import to_occ
+from occsurf.algorithms.topology.spatch import SPatch
+from occsurf.algorithms.topology.spatch_convert import convert_spatch, piece_domain_points
+from occsurf.bridge.conversion.splines import to_occ
 
 CASES = [(5, 3, False), (5, 3, True), (6, 5, False), (9, 3, False), (9, 4, False)]
 N_POINTS = 10_000

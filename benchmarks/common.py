@@ -23,8 +23,8 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
 
-from algorithms import BSplineSurface  # noqa: E402
-from algorithms import _numba_kernels  # noqa: E402
+from occsurf.algorithms import BSplineSurface  # noqa: E402
+from occsurf.algorithms import _numba_kernels  # noqa: E402
 
 SEED = 20240611
 
@@ -114,7 +114,7 @@ def geomdl_surface(s: BSplineSurface):
 
 
 def occ_surface(s: BSplineSurface):
-    from bridge import to_occ
+    from occsurf.bridge import to_occ
 
     return to_occ(s)
 

@@ -1,10 +1,21 @@
 """occsurf.bridge: the only place OpenCascade (OCP), cadquery and build123d are touched.
 
-Exact conversion between :mod:`algorithms` splines and ``Geom_BSplineCurve``/``Geom_BSplineSurface``
-(and any OCC curve, surface, face, edge, build123d or cadquery object), STEP/IGES exchange, validation
-of our evaluation against OCC's, and the ``occsurf`` command line.
+Rooms:
 
-Names are imported lazily: ``import bridge`` does not load OCC until a function is used.
+==============  ===========================================================================
+``conversion``  exact conversion of :mod:`occsurf.algorithms` splines to and from OCC geometry,
+                faces and edges (and build123d/cadquery objects); S-patch export
+``exchange``    STEP/IGES reading and lossless writing, hierarchical STEP + sidecar
+``validation``  our evaluation and curvature against OCC's on the same input
+``modeling``    operations on OCC models: hole filling of shells (course §8-3)
+``rendering``   PNG pictures of surfaces
+``cli``         the ``occsurf`` command line, one module per command
+==============  ===========================================================================
+
+:mod:`._occ` holds the few helpers every room shares (OCC arrays, knots + multiplicities, kernel
+limits, OCC exceptions as :class:`~occsurf.algorithms.errors.KernelError`).
+
+Names are imported lazily: ``import occsurf.bridge`` does not load OCC until a function is used.
 """
 
 from __future__ import annotations
@@ -13,23 +24,23 @@ import importlib
 from typing import Any
 
 _EXPORTS = {
-    "to_occ": "convert",
-    "from_occ": "convert",
-    "to_face": "convert",
-    "to_edge": "convert",
-    "to_cq_face": "convert",
-    "to_cq_edge": "convert",
-    "is_reversed": "convert",
-    "surface_deviation": "validate",
-    "curve_deviation": "validate",
-    "roundtrip_deviation": "validate",
-    "read_step": "exchange",
-    "write_step": "exchange",
-    "read_iges": "exchange",
-    "write_iges": "exchange",
-    "ImportedModel": "exchange",
-    "ImportedFace": "exchange",
-    "ImportedEdge": "exchange",
+    "to_occ": "conversion.splines",
+    "from_occ": "conversion.splines",
+    "to_face": "conversion.splines",
+    "to_edge": "conversion.splines",
+    "to_cq_face": "conversion.splines",
+    "to_cq_edge": "conversion.splines",
+    "is_reversed": "conversion.splines",
+    "surface_deviation": "validation.deviation",
+    "curve_deviation": "validation.deviation",
+    "roundtrip_deviation": "validation.deviation",
+    "read_step": "exchange.step_iges",
+    "write_step": "exchange.step_iges",
+    "read_iges": "exchange.step_iges",
+    "write_iges": "exchange.step_iges",
+    "ImportedModel": "exchange.step_iges",
+    "ImportedFace": "exchange.step_iges",
+    "ImportedEdge": "exchange.step_iges",
 }
 
 __all__ = sorted(_EXPORTS)
@@ -38,7 +49,7 @@ __all__ = sorted(_EXPORTS)
 def __getattr__(name: str) -> Any:
     module = _EXPORTS.get(name)
     if module is None:
-        raise AttributeError(f"module 'bridge' has no attribute {name!r}")
+        raise AttributeError(f"module 'occsurf.bridge' has no attribute {name!r}")
     value = getattr(importlib.import_module(f".{module}", __name__), name)
     globals()[name] = value
     return value

@@ -29,7 +29,7 @@ from OCP.Message import Message, Message_Gravity
 from OCP.TColgp import TColgp_Array1OfPnt, TColgp_Array2OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_Array2OfReal
 
-from algorithms.errors import InvalidGeometryError, KernelError
+from occsurf.algorithms.errors import InvalidGeometryError, KernelError
 
 __all__ = [
     "MAX_DEGREE",

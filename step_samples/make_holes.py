@@ -15,7 +15,7 @@ Every ring is a shell whose outer loop is its boundary (``occsurf fill`` leaves 
 | ``holes/dome_holes.step`` | bicubic dome, four rings around a 3-, 4-, 5- and 6-sided hole (degree 6, 4 spans) |
 | ``holes/rational_holes.step`` | rational biquadratic dome, rings around a 5- and an 8-sided hole (rational degree 4) |
 
-The files are written with :func:`bridge.exchange.write_step` (17 digits); the STEP time stamp is
+The files are written with :func:`occsurf.bridge.exchange.step_iges.write_step` (17 digits); the STEP time stamp is
 fixed so rebuilding gives the same bytes.
 """
 
@@ -28,10 +28,10 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-from bridge.convert import _make_face  # noqa: E402
-from bridge.exchange import write_step  # noqa: E402
-from bridge.fill import _sew  # noqa: E402
-from algorithms.hole_models import ring_model  # noqa: E402
+from occsurf.bridge.conversion.splines import _make_face  # noqa: E402
+from occsurf.bridge.exchange.step_iges import write_step  # noqa: E402
+from occsurf.bridge.modeling.fill import _sew  # noqa: E402
+from occsurf.examples.hole_models import ring_model  # noqa: E402
 
 FIXED_STEP_TIME = "2000-01-01T00:00:00"
 LAYOUT = {

@@ -6,8 +6,8 @@ Run from anywhere::
     python step_samples/make_samples.py OUTDIR     # writes into OUTDIR
 
 Every model is built from fixed numbers with build123d, cadquery, OCC's own constructors or our
-:mod:`algorithms` kernel, and written with :func:`bridge.exchange.write_step` (17 significant
-digits: our surfaces come back bit-exact) or :func:`bridge.exchange.write_iges`. The output is
+:mod:`algorithms` kernel, and written with :func:`occsurf.bridge.exchange.step_iges.write_step` (17 significant
+digits: our surfaces come back bit-exact) or :func:`occsurf.bridge.exchange.step_iges.write_iges`. The output is
 byte-for-byte reproducible with the pinned OCC (7.9.3): the only varying bytes OCC writes, the time
 stamps of the STEP ``FILE_NAME`` and of the IGES global section, are set to 2000-01-01 00:00:00.
 
@@ -33,7 +33,7 @@ sys.path.insert(0, str(HERE.parent))  # run from a source checkout without insta
 
 import numpy as np  # noqa: E402
 
-from algorithms import BSplineSurface, circle  # noqa: E402
+from occsurf.algorithms import BSplineSurface, circle  # noqa: E402
 
 #: Written into every file instead of the wall-clock time, so rebuilding changes nothing.
 FIXED_STEP_TIME = "2000-01-01T00:00:00"
@@ -57,7 +57,7 @@ def swept_tube():
 
     The section is a periodic cubic spline through 9 points of a three-lobed curve. (A circular
     section would give OCC's rational periodic circle, 6 poles of degree 6, which
-    ``bridge.convert.from_occ`` refuses: fewer than degree + 1 poles.)
+    ``occsurf.bridge.conversion.splines.from_occ`` refuses: fewer than degree + 1 poles.)
     """
     import build123d as bd
 
@@ -162,7 +162,7 @@ def _fix_iges_dates(path: Path) -> None:
 
 def write_samples(outdir: Path) -> list[Path]:
     """Build every model and write the sample files into ``outdir``; returns the paths."""
-    from bridge.exchange import write_iges, write_step
+    from occsurf.bridge.exchange.step_iges import write_iges, write_step
 
     jobs: list[tuple[str, Callable[[], tuple[list, list[str]]]]] = [
         ("loft.step", lambda: ([loft_body()], ["loft circle-rounded rect-ellipse"])),

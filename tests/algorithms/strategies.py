@@ -26,7 +26,7 @@ from hypothesis import HealthCheck, assume, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms import BSplineCurve, BSplineSurface
 
 __all__ = [
     "COORD",

@@ -1,4 +1,4 @@
-"""Tests of algorithms.affine: DeRose's coordinate-free types (course ch. 1, §1-5..1-30).
+"""Tests of occsurf.algorithms.geometry.affine: DeRose's coordinate-free types (course ch. 1, §1-5..1-30).
 
 Kinds of test: type rules (allowed operations and TypeErrors), closed forms (frames, normals under
 shear), invariants driven by hypothesis (frame round trips, composition/inverse, affine invariance
@@ -14,8 +14,8 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from numpy.testing import assert_allclose
 
-from algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, tolerances
-from algorithms.affine import (
+from occsurf.algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, tolerances
+from occsurf.algorithms.geometry.affine import (
     AffineMap,
     Frame,
     Normal,
@@ -547,8 +547,8 @@ def test_projective_map_conditioning_is_unit_free_and_sign_free():
     """Review: a plain translation by 1e6 composed with the identity looked singular (the condition
     number of the homogeneous matrix grows like |t|^2), and -H (the same map as H) was refused on
     splines although it maps points correctly."""
-    from algorithms import circle
-    from algorithms.affine import ProjectiveMap
+    from occsurf.algorithms import circle
+    from occsurf.algorithms.geometry.affine import ProjectiveMap
 
     for t in (1e6, 1e9):
         M = AffineMap(np.eye(3), [t, 0, 0]) @ ProjectiveMap(np.eye(4))

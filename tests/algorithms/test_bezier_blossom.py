@@ -1,4 +1,4 @@
-"""algorithms.bezier: Bernstein basis, de Casteljau, blossom, subdivision, degree raising (course §2-1..2-6).
+"""occsurf.algorithms.kernel.bezier: Bernstein basis, de Casteljau, blossom, subdivision, degree raising (course §2-1..2-6).
 
 Oracles: scipy's ``BPoly`` (its own Bernstein-form evaluation), the explicit Bernstein sum, and
 the B-spline classes (a Bézier segment is a clamped B-spline with a single span).
@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 from scipy.interpolate import BPoly
 
-from algorithms import BSplineCurve
-from algorithms.bezier import bernstein, bezier_blossom, de_casteljau, elevate_bezier, subdivide
+from occsurf.algorithms import BSplineCurve
+from occsurf.algorithms.kernel.bezier import bernstein, bezier_blossom, de_casteljau, elevate_bezier, subdivide
 
 from .strategies import COORD, fractions, poles, test_settings
 

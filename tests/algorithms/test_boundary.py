@@ -14,7 +14,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-import algorithms
+import occsurf.algorithms as algorithms
 
 PACKAGE_DIR = Path(algorithms.__file__).resolve().parent
 REPO = PACKAGE_DIR.parent
@@ -46,7 +46,7 @@ for name in FORBIDDEN:
         raise SystemExit(f"the blocker failed: {{name}} imported")
 del attempts[:]
 
-import algorithms
+import occsurf.algorithms as algorithms
 modules = ["algorithms"]
 for info in pkgutil.walk_packages(algorithms.__path__, "algorithms."):
     importlib.import_module(info.name)

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms import (
+from occsurf.algorithms import (
     InvalidGeometryError,
     arc,
     circle,

@@ -21,8 +21,8 @@ from numpy.testing import assert_allclose, assert_array_equal
 from scipy.interpolate import BSpline
 from scipy.special import comb
 
-from algorithms import BSplineCurve
-from algorithms.basis import basis_derivatives, basis_functions, basis_matrix, find_span
+from occsurf.algorithms import BSplineCurve
+from occsurf.algorithms.kernel.basis import basis_derivatives, basis_functions, basis_matrix, find_span
 
 from .strategies import affine_maps, curves, fractions, knot_vectors, parameters, test_settings
 

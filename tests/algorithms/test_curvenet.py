@@ -23,18 +23,18 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms.basis import basis_matrix
-from algorithms.curve import BSplineCurve
-from algorithms.curvenet import (
-    APPROXIMATION_TOLERANCE,
+from occsurf.algorithms.kernel.basis import basis_matrix
+from occsurf.algorithms.kernel.curve import BSplineCurve
+from occsurf.algorithms.construction.coons_patches import APPROXIMATION_TOLERANCE
+from occsurf.algorithms.construction import (
     coons,
     coons_bicubic,
     gordon,
     network_parameters,
     polynomial_approximation,
 )
-from algorithms.errors import InvalidGeometryError, ToleranceError
-from algorithms.surface import BSplineSurface
+from occsurf.algorithms.errors import InvalidGeometryError, ToleranceError
+from occsurf.algorithms.kernel.surface import BSplineSurface
 from tests.algorithms.strategies import affine_maps, test_settings
 
 S = np.linspace(0.0, 1.0, 57)
@@ -481,7 +481,7 @@ def test_gordon_of_a_network_closed_around_a_cylinder():
     """Review: the last v-line sits on the circles' seam; its crossing was found at u = 0 instead of
     u = 2 pi and the network was refused as unordered. The parameters are unwrapped on closed
     curves, and the surface is the exact cylinder."""
-    from algorithms import circle
+    from occsurf.algorithms import circle
 
     circ = [circle([0, 0, z], 1.0, normal=[0, 0, 1]) for z in (0.0, 1.0, 2.0)]
     pts = [circ[0].evaluate(a) for a in np.linspace(0, 2 * np.pi, 5)]

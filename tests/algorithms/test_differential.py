@@ -1,4 +1,4 @@
-"""Differential geometry (algorithms.differential): closed forms, invariants, degenerate points.
+"""Differential geometry (occsurf.algorithms.geometry.differential): closed forms, invariants, degenerate points.
 
 Oracles: circle (kappa = 1/r, tau = 0, length r theta), the twisted cubic (t, t^2, t^3) written as a
 cubic Bézier (closed-form kappa, tau), sphere / cylinder / torus as exact rational B-splines built
@@ -14,8 +14,8 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms import BSplineCurve, BSplineSurface, arc, circle
-from algorithms.differential import (
+from occsurf.algorithms import BSplineCurve, BSplineSurface, arc, circle
+from occsurf.algorithms.geometry.differential import (
     FrenetFrame,
     SurfaceCurvatures,
     arc_length,
@@ -29,7 +29,7 @@ from algorithms.differential import (
     surface_curvatures,
     torsion,
 )
-from algorithms.errors import InvalidGeometryError, ParameterError, ToleranceError
+from occsurf.algorithms.errors import InvalidGeometryError, ParameterError, ToleranceError
 
 from .strategies import curves, surfaces, test_settings
 
@@ -428,7 +428,7 @@ def test_normal_curvature_errors_and_zero_direction():
 @pytest.mark.parametrize("tol", ["1e-3", -1.0, 0.0, float("nan"), True])
 def test_arc_length_tol_must_be_a_positive_number(tol):
     """Review: a string tol raised a bare TypeError from np.isfinite, a negative one ToleranceError."""
-    from algorithms import circle
+    from occsurf.algorithms import circle
 
     with pytest.raises(InvalidGeometryError, match="tol: expected a positive finite number"):
         arc_length(circle([0, 0, 0], 1.0), 0.0, 1.0, tol=tol)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from algorithms import (
+from occsurf.algorithms import (
     BSplineCurve,
     BSplineSurface,
     InvalidGeometryError,

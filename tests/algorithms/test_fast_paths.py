@@ -2,9 +2,9 @@
 
 Two kinds of fast path are checked:
 
-- the banded grid products (:func:`algorithms.basis.band_product`, NumPy) against the dense
-  collocation matrices of :func:`algorithms.basis.basis_matrix` and against scattered evaluation;
-- the optional numba kernels (:mod:`algorithms._numba_kernels`) against the NumPy paths, to 1e-14
+- the banded grid products (:func:`occsurf.algorithms.kernel.basis.band_product`, NumPy) against the dense
+  collocation matrices of :func:`occsurf.algorithms.kernel.basis.basis_matrix` and against scattered evaluation;
+- the optional numba kernels (:mod:`occsurf.algorithms._numba_kernels`) against the NumPy paths, to 1e-14
   relative to each partial's magnitude, on clamped, unclamped and rational curves and surfaces of
   degrees 1 to 7, at random parameters, at every knot, at the domain ends, up to order 3.
 
@@ -21,9 +21,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms import BSplineCurve, BSplineSurface
-from algorithms import _numba_kernels as nk
-from algorithms.basis import band_product, basis_derivatives, basis_matrix, find_span, span_groups
+from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms import _numba_kernels as nk
+from occsurf.algorithms.kernel.basis import band_product, basis_derivatives, basis_matrix, find_span, span_groups
 
 from .strategies import surfaces, test_settings
 

@@ -14,9 +14,9 @@ import scipy.interpolate
 from hypothesis import given
 from hypothesis import strategies as st
 
-from algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, ParameterError, circle
-from algorithms.compat import make_compatible
-from algorithms.fitting import (
+from occsurf.algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, ParameterError, circle
+from occsurf.algorithms.kernel.compat import make_compatible
+from occsurf.algorithms.fitting.interpolation import (
     approximation_knots,
     averaged_knots,
     fit_curve,
@@ -124,7 +124,7 @@ def test_fit_curve_is_the_end_constrained_least_squares_solution(seed, m, p, dat
     # Oracle: the optimality condition of min |N P - Q|^2 with P0, P_{n-1} fixed — the residual is
     # orthogonal to every interior basis column. Round-off in the poles is ~eps * cond(N) * |Q|,
     # so the condition is checked to 1e-13 * cond(N) (|Q| <= 1, |N| <= sqrt(m)).
-    from algorithms.basis import basis_matrix
+    from occsurf.algorithms.kernel.basis import basis_matrix
 
     N = basis_matrix(c.knots, p, n, u)[0]
     r = c.evaluate(u) - Q

@@ -1,7 +1,7 @@
-"""Generalized biquadratic B-spline surfaces from S-patches (algorithms.generalized; course §8-6, 8-7).
+"""Generalized biquadratic B-spline surfaces from S-patches (occsurf.algorithms.topology.generalized; course §8-6, 8-7).
 
 Oracles: the tensor-product biquadratic B-spline on regular grids (BSplineSurface, independent
-code), curvature of that B-spline (algorithms.differential), the Bézier net's closed forms
+code), curvature of that B-spline (occsurf.algorithms.geometry.differential), the Bézier net's closed forms
 (corners at face centroids, quadratic boundaries, Varignon corner planes). Invariants: G1 between
 all neighbouring patches measured densely, C1 between regular ones, affine invariance.
 """
@@ -16,18 +16,18 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms.differential import surface_curvatures
-from algorithms.errors import InvalidGeometryError
-from algorithms.generalized import (
+from occsurf.algorithms.geometry.differential import surface_curvatures
+from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.algorithms.topology.generalized import (
     BIQUADRATIC_DEPTH,
     GeneralizedSurface,
     biquadratic_patch,
     generalized_biquadratic,
     spatch_curvatures,
 )
-from algorithms.mesh import Mesh, catmull_clark, read_obj
-from algorithms.spatch import domain_vertices
-from algorithms.surface import BSplineSurface
+from occsurf.algorithms.topology.mesh import Mesh, catmull_clark, read_obj
+from occsurf.algorithms.topology.spatch import domain_vertices
+from occsurf.algorithms.kernel.surface import BSplineSurface
 from tests.algorithms.strategies import test_settings
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "meshes"
@@ -90,7 +90,7 @@ def test_regular_grid_equals_tensor_product_biquadratic(nu, nv, seed):
 
 
 def test_regular_grid_curvature_matches_bspline():
-    """spatch_curvatures (from SPatch second derivatives) against algorithms.differential on the
+    """spatch_curvatures (from SPatch second derivatives) against occsurf.algorithms.geometry.differential on the
     same surface in the B-spline's parametrisation: curvature does not depend on it."""
     rng = np.random.default_rng(7)
     m, P = grid(5, 5, rng)
@@ -251,7 +251,7 @@ def test_non_finite_net_and_too_high_valence():
     """Review: a NaN in the vertex net used to pass the consistency check (NaN > tol is False) and
     return a NaN patch; a valence beyond MAX_VALENCE used to build a dense C(n+4, 5)^2 matrix
     (8 GB at n = 16) before failing."""
-    from algorithms.generalized import MAX_VALENCE
+    from occsurf.algorithms.topology.generalized import MAX_VALENCE
 
     n = 5
     rng = np.random.default_rng(0)

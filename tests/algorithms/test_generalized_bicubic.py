@@ -1,5 +1,5 @@
-"""Generalized bicubic B-spline surfaces (algorithms.generalized_bicubic; course §8-7) and the
-Doo–Sabin step that prepares their meshes (algorithms.mesh.doo_sabin).
+"""Generalized bicubic B-spline surfaces (occsurf.algorithms.topology.generalized_bicubic; course §8-7) and the
+Doo–Sabin step that prepares their meshes (occsurf.algorithms.topology.mesh.doo_sabin).
 
 Oracles: the uniform bicubic B-spline (BSplineSurface, independent code) on regular grids, and its
 Bézier corner rules. Invariants: G1 between all neighbouring patches measured densely, C1 between
@@ -21,11 +21,11 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms.errors import InvalidGeometryError
-from algorithms.generalized_bicubic import BICUBIC_DEPTH, generalized_bicubic
-from algorithms.mesh import Mesh, doo_sabin, read_obj
-from algorithms.spatch import domain_vertices
-from algorithms.surface import BSplineSurface
+from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.algorithms.topology.generalized_bicubic import BICUBIC_DEPTH, generalized_bicubic
+from occsurf.algorithms.topology.mesh import Mesh, doo_sabin, read_obj
+from occsurf.algorithms.topology.spatch import domain_vertices
+from occsurf.algorithms.kernel.surface import BSplineSurface
 from tests.algorithms.strategies import test_settings
 from tests.algorithms.test_generalized import grid, ngon_with_skirt
 

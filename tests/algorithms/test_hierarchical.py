@@ -15,12 +15,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms import BSplineSurface
-from algorithms.errors import InvalidGeometryError, ParameterError
-from algorithms.hierarchical import HierarchicalSurface, Overlay
-from algorithms.hierarchical_offsets import ADDITIVE_OFFSETS, FRAME_OFFSETS, OffsetMapping, register_offset_mapping
-from algorithms.linalg import ConstraintError
-from algorithms.surface_manipulation import drag_surface_point
+from occsurf.algorithms import BSplineSurface
+from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
+from occsurf.algorithms.hierarchical.surface import HierarchicalSurface, Overlay
+from occsurf.algorithms.hierarchical.offsets import ADDITIVE_OFFSETS, FRAME_OFFSETS, OffsetMapping, register_offset_mapping
+from occsurf.algorithms.manipulation.linalg import ConstraintError
+from occsurf.algorithms.manipulation.surfaces import drag_surface_point
 from tests.algorithms.strategies import surfaces, test_settings
 
 _float = dict(allow_nan=False, allow_infinity=False, allow_subnormal=False)
@@ -564,7 +564,7 @@ def _review_drag_case() -> HierarchicalSurface:
 def test_drag_point_converges_with_large_details_and_restores_on_failure(monkeypatch):
     """Review: with details of 0.1 on a unit patch the residual falls only by ~0.16 per solve;
     12 solves were not enough (ConvergenceError) and the failed drag left the surface moved."""
-    import algorithms.hierarchical as H
+    import occsurf.algorithms.hierarchical.surface as H
 
     hs = _review_drag_case()
     p0 = hs.evaluate(0.52, 0.47)

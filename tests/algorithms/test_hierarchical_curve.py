@@ -10,11 +10,11 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms import BSplineCurve, BSplineSurface
-from algorithms.errors import InvalidGeometryError, ParameterError
-from algorithms.hierarchical import HierarchicalSurface
-from algorithms.hierarchical_curve import HierarchicalCurve
-from algorithms.hierarchical_offsets import (
+from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
+from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
+from occsurf.algorithms.hierarchical.curve import HierarchicalCurve
+from occsurf.algorithms.hierarchical.offsets import (
     ADDITIVE_OFFSETS,
     FRAME_NUDGE,
     FRAME_OFFSETS,

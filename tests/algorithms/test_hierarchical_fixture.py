@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 from numpy.testing import assert_allclose
 
-from algorithms import BSplineSurface
-from algorithms.hierarchical import HierarchicalSurface
+from occsurf.algorithms import BSplineSurface
+from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 
 FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "hierarchical_v1.json"
 

@@ -17,9 +17,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms import InvalidGeometryError
-from algorithms.basis import basis_matrix
-from algorithms.linalg import (
+from occsurf.algorithms import InvalidGeometryError
+from occsurf.algorithms.kernel.basis import basis_matrix
+from occsurf.algorithms.manipulation.linalg import (
     ConstraintError,
     ConstraintFactor,
     ConvergenceError,

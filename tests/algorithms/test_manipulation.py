@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 from scipy.optimize import NonlinearConstraint, minimize
 
-from algorithms import (
+from occsurf.algorithms import (
     BSplineCurve,
     BSplineSurface,
     ConstraintError,
@@ -592,7 +592,7 @@ def test_algorithms_modules_do_not_import_occ_or_matplotlib():
     code = (
         "import sys\n"
         "for m in ('OCP', 'cadquery', 'build123d', 'matplotlib'): sys.modules[m] = None\n"
-        "import algorithms.linalg, algorithms.manipulation\n"
+        "import occsurf.algorithms.manipulation.linalg, occsurf.algorithms.manipulation.curves\n"
         "assert not any(k.startswith('matplotlib.') for k in sys.modules)\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True, cwd=str(__import__("pathlib").Path(__file__).parents[2]))

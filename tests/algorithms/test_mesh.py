@@ -1,4 +1,4 @@
-"""Polygon meshes: adjacency, manifold validation, Catmull–Clark, OBJ read/write (algorithms.mesh)."""
+"""Polygon meshes: adjacency, manifold validation, Catmull–Clark, OBJ read/write (occsurf.algorithms.topology.mesh)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
-from algorithms.errors import ExchangeError, InvalidGeometryError
-from algorithms.mesh import Mesh, catmull_clark, read_obj, write_obj
+from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
+from occsurf.algorithms.topology.mesh import Mesh, catmull_clark, read_obj, write_obj
 from tests.algorithms.strategies import test_settings
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "meshes"

@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from algorithms.curve import BSplineCurve
-from algorithms.errors import InvalidGeometryError
-from algorithms.nsided import HoleSide, fill_hole, measure_fill, side_from_surface
-from algorithms.hole_models import ring_model
+from occsurf.algorithms.kernel.curve import BSplineCurve
+from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.algorithms.topology.nsided import HoleSide, fill_hole, measure_fill, side_from_surface
+from occsurf.examples.hole_models import ring_model
 
 SCALE = float(os.environ.get("OCCSURF_HYPOTHESIS_SCALE", "1"))
 GAP_REL = 1e-11
@@ -131,7 +131,7 @@ def test_rational_side_cross_is_homogeneous_derivative() -> None:
     face = m.faces[0]
     side = side_from_surface(face, "v0")
     assert side.cross.dim == 4 and side.curve.is_rational
-    from algorithms.surface import BSplineSurface
+    from occsurf.algorithms.kernel.surface import BSplineSurface
 
     Hs = BSplineSurface._trusted(face.degree, face.knots, face.homogeneous_points)
     t = np.linspace(0, 1, 9)
@@ -190,7 +190,7 @@ def test_kite_relation_is_well_posed(n: int, split: float) -> None:
     # split at its middle (A and B mirror each other about T); the chosen member must not depend on
     # LAPACK's choice of null vector (one with a(0) = 0 broke the fill on some builds) and must be
     # positive along the edge. Checked here on the polynomials themselves, at many t.
-    from algorithms.nsided import _kite_relation
+    from occsurf.algorithms.topology.nsided import _kite_relation
 
     th = 2 * np.pi * np.arange(n) / n
     v = np.c_[np.cos(th), np.sin(th)]
@@ -236,7 +236,7 @@ def test_fill_does_not_depend_on_where_the_hole_is(rational: bool) -> None:
 def test_pole_of_a_neighbour_at_a_corner_is_named() -> None:
     """Review: a neighbour whose cross derivative vanishes at a hole corner (a sphere's pole, as at
     every filleted box corner) was refused as 'a reflex corner', or filled nearly degenerate."""
-    from algorithms.nsided import _times_linear
+    from occsurf.algorithms.topology.nsided import _times_linear
 
     m = ring_model(5)
     sides = list(m.sides)

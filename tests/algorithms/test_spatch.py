@@ -18,9 +18,9 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms.bezier import de_casteljau
-from algorithms.errors import InvalidGeometryError, ParameterError
-from algorithms.spatch import (
+from occsurf.algorithms.kernel.bezier import de_casteljau
+from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
+from occsurf.algorithms.topology.spatch import (
     SPatch,
     domain_vertices,
     spatch_indices,
@@ -28,7 +28,7 @@ from algorithms.spatch import (
     wachspress_derivatives,
     wachspress_gradient,
 )
-from algorithms.surface import BSplineSurface
+from occsurf.algorithms.kernel.surface import BSplineSurface
 from tests.algorithms.strategies import test_settings
 
 # Tolerances. The identities below are exact in real arithmetic; the computations are short sums
@@ -527,7 +527,7 @@ def test_invalid_points_and_sides():
 def test_too_many_sides_and_bad_index_tuples():
     """Review (issue 4 error paths): sides beyond MAX_SIDES, and index tuples that are not n
     non-negative integers summing to d, are refused with a message naming them."""
-    from algorithms.spatch import MAX_SIDES
+    from occsurf.algorithms.topology.spatch import MAX_SIDES
 
     with pytest.raises(InvalidGeometryError, match=f"sides: expected an integer from 3 to {MAX_SIDES}, got {MAX_SIDES + 1}"):
         SPatch(MAX_SIDES + 1, 1, np.zeros((MAX_SIDES + 1, 3)))

@@ -12,10 +12,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from algorithms import spatch_convert as conv
-from algorithms.errors import InvalidGeometryError, ToleranceError
-from algorithms.spatch import SPatch
-from algorithms.spatch_convert import (
+from occsurf.algorithms.topology import spatch_convert as conv
+from occsurf.algorithms.errors import InvalidGeometryError, ToleranceError
+from occsurf.algorithms.topology.spatch import SPatch
+from occsurf.algorithms.topology.spatch_convert import (
     convert_spatch,
     exact_bidegree,
     piece_corners,

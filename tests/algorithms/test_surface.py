@@ -17,7 +17,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 from scipy.interpolate import NdBSpline
 from scipy.special import comb
 
-from algorithms import BSplineSurface
+from occsurf.algorithms import BSplineSurface
 
 from .strategies import affine_maps, fractions, surfaces, test_settings
 

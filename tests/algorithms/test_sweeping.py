@@ -17,12 +17,12 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.integrate import solve_ivp
 
-import algorithms.sweeping as sw
-from algorithms import BSplineCurve, arc, circle
-from algorithms.errors import InvalidGeometryError, ToleranceError
-from algorithms.fitting import interpolate_curve
-from algorithms.generation import translational_sweep
-from algorithms.sweeping import SweepResult, exact_sweep, sweep
+import occsurf.algorithms.construction.sweeping as sw
+from occsurf.algorithms import BSplineCurve, arc, circle
+from occsurf.algorithms.errors import InvalidGeometryError, ToleranceError
+from occsurf.algorithms.fitting.interpolation import interpolate_curve
+from occsurf.algorithms.construction.generation import translational_sweep
+from occsurf.algorithms.construction.sweeping import SweepResult, exact_sweep, sweep
 
 ROUND = 1e-12
 

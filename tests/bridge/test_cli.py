@@ -1,7 +1,7 @@
 """Tests of the ``occsurf`` command line (``bridge/cli.py``) and of the files in ``step_samples/``.
 
-Most tests call :func:`bridge.cli.main` with ``--in-process`` (OCC is loaded once, in pytest); the
-ones that need a real process boundary (``python -m bridge.cli``, crash isolation, ``--help``
+Most tests call :func:`occsurf.bridge.cli.main` with ``--in-process`` (OCC is loaded once, in pytest); the
+ones that need a real process boundary (``python -m occsurf.bridge.cli``, crash isolation, ``--help``
 without OCC, the public files of ``../shared/realdata``) run it with :mod:`subprocess`.
 """
 
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from bridge import cli
+from occsurf.bridge import cli
 
 REPO = Path(__file__).resolve().parents[2]
 SAMPLES = REPO / "step_samples"
@@ -53,12 +53,12 @@ SAMPLE_FILES = ["loft.step", "mixed.igs", "nurbs_torus.step", "periodic_vase.ste
 
 def run_cli(*args: str, cwd: Path | None = None, env: dict[str, str] | None = None,
             timeout: float = 600) -> subprocess.CompletedProcess[str]:
-    """``python -m bridge.cli ARGS`` in a fresh process."""
+    """``python -m occsurf.bridge.cli ARGS`` in a fresh process."""
     full_env = dict(os.environ)
     full_env["PYTHONPATH"] = os.pathsep.join(x for x in (str(REPO), full_env.get("PYTHONPATH")) if x)
     if env:
         full_env.update(env)
-    return subprocess.run([sys.executable, "-m", "bridge.cli", *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "occsurf.bridge.cli", *args], capture_output=True, text=True,
                           cwd=cwd or REPO, env=full_env, timeout=timeout)
 
 
@@ -170,7 +170,7 @@ def test_table_output(capsys: pytest.CaptureFixture[str]) -> None:
 
 # ------------------------------------------------------------------------------------ errors
 def test_bad_and_missing_files_beside_a_good_one(tmp_path: Path) -> None:
-    """Run as ``python -m bridge.cli``: exit 2, the good file still reported, one line per bad file."""
+    """Run as ``python -m occsurf.bridge.cli``: exit 2, the good file still reported, one line per bad file."""
     garbage = tmp_path / "garbage.step"
     garbage.write_bytes(bytes(range(256)) * 8)  # binary junk, fixed
     empty = tmp_path / "empty.igs"
@@ -223,7 +223,7 @@ def test_empty_folder_and_unknown_suffix(tmp_path: Path, capsys: pytest.CaptureF
 
 def test_unexpected_exception_is_reported_not_raised(monkeypatch: pytest.MonkeyPatch,
                                                      capsys: pytest.CaptureFixture[str]) -> None:
-    from bridge import exchange
+    from occsurf.bridge.exchange import step_iges as exchange
 
     def broken(path):
         raise RuntimeError("boom\nsecond line")
@@ -240,7 +240,7 @@ def test_unexpected_exception_is_reported_not_raised(monkeypatch: pytest.MonkeyP
 
 def test_face_failure_stays_with_the_face(monkeypatch: pytest.MonkeyPatch,
                                           capsys: pytest.CaptureFixture[str]) -> None:
-    from bridge import validate
+    from occsurf.bridge.validation import deviation as validate
 
     def broken(*args, **kwargs):
         raise ValueError("no grid today")
@@ -348,7 +348,7 @@ def test_no_samples_folder(monkeypatch: pytest.MonkeyPatch, capsys: pytest.Captu
 
 def test_help_is_fast_and_does_not_load_occ() -> None:
     code = ("import sys, contextlib, io\n"
-            "from bridge.cli import main\n"
+            "from occsurf.bridge.cli import main\n"
             "with contextlib.redirect_stdout(io.StringIO()) as buf:\n"
             "    assert main(['--help']) == 0 and main(['inspect', '--help']) == 0\n"
             "assert 'inspect' in buf.getvalue() and '--samples' in buf.getvalue()\n"

@@ -12,11 +12,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bridge import cli
-from bridge.convert import _make_face
-from bridge.exchange import read_step, write_step
-from bridge.fill import _sew
-from algorithms.hole_models import ring_model
+from occsurf.bridge import cli
+from occsurf.bridge.conversion.splines import _make_face
+from occsurf.bridge.exchange.step_iges import read_step, write_step
+from occsurf.bridge.modeling.fill import _sew
+from occsurf.examples.hole_models import ring_model
 
 REPO = Path(__file__).resolve().parents[2]
 HOLES = REPO / "step_samples" / "holes"

@@ -1,4 +1,4 @@
-"""``bridge.convert``: bit-exact round trips, periodic and Bézier inputs, topology, error paths."""
+"""``occsurf.bridge.conversion.splines``: bit-exact round trips, periodic and Bézier inputs, topology, error paths."""
 
 from __future__ import annotations
 
@@ -30,10 +30,10 @@ from OCP.TopAbs import TopAbs_EDGE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
 
-from algorithms import BSplineCurve, BSplineSurface
-from algorithms.errors import InvalidGeometryError, KernelError, ToleranceError
-from bridge import _occ
-from bridge.convert import from_occ, is_reversed, to_cq_edge, to_cq_face, to_edge, to_face, to_occ
+from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms.errors import InvalidGeometryError, KernelError, ToleranceError
+from occsurf.bridge import _occ
+from occsurf.bridge.conversion.splines import from_occ, is_reversed, to_cq_edge, to_cq_face, to_edge, to_face, to_occ
 
 from .test_kernel_vs_occ import (
     D2_ORDER,

@@ -1,6 +1,6 @@
 """Coons and Gordon surfaces against OpenCascade, and through STEP (algorithms/curvenet.py).
 
-The distance between two surfaces is measured both ways with ``bridge._generation_occ.max_distance``:
+The distance between two surfaces is measured both ways with ``tests.bridge.generation_occ.max_distance``:
 dense samples of one surface (41 uniform values per direction plus values 1e-6, 1e-4, 1e-2 of the
 range from each boundary, and the knots) projected onto the other (a seeded local projection, a
 global ``GeomAPI_ProjectPointOnSurf`` wherever that does not land on the surface), the maximum
@@ -35,10 +35,10 @@ pytest.importorskip("OCP")
 
 from OCP.GeomFill import GeomFill_BSplineCurves, GeomFill_FillingStyle  # noqa: E402
 
-from algorithms.curve import BSplineCurve  # noqa: E402
-from algorithms.curvenet import coons, coons_bicubic, gordon  # noqa: E402
-from bridge.convert import from_occ, to_occ  # noqa: E402
-from bridge.exchange import read_step, write_step  # noqa: E402
+from occsurf.algorithms.kernel.curve import BSplineCurve  # noqa: E402
+from occsurf.algorithms.construction import coons, coons_bicubic, gordon  # noqa: E402
+from occsurf.bridge.conversion.splines import from_occ, to_occ  # noqa: E402
+from occsurf.bridge.exchange.step_iges import read_step, write_step  # noqa: E402
 from tests.algorithms.test_curvenet import boundary_net, network, random_loop, random_surface  # noqa: E402
 
 K = 41
@@ -46,7 +46,7 @@ S = np.linspace(0.0, 1.0, K)
 
 
 def _gen():
-    import bridge._generation_occ as mod
+    import tests.bridge.generation_occ as mod
 
     return mod
 
@@ -144,7 +144,7 @@ def test_gordon_matches_ocp_gordon_when_both_reproduce_the_surface():
     ocp_gordon = pytest.importorskip("ocp_gordon")
     rng = np.random.default_rng(41)
     x, y = np.meshgrid(np.linspace(0, 3, 4), np.linspace(0, 2, 4), indexing="ij")
-    from algorithms.surface import BSplineSurface
+    from occsurf.algorithms.kernel.surface import BSplineSurface
     F = BSplineSurface((3, 3), ([0] * 4 + [1] * 4,) * 2, np.stack([x, y, 0.5 * rng.standard_normal((4, 4))], -1))
     A, B = network(F, np.array([0, 0.3, 0.6, 0.8, 1.0]), np.array([0, 0.3, 0.7, 1.0]))
     ours = gordon(A, B)

@@ -6,8 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from bridge import cli, demo
-from bridge.exchange import read_step
+from occsurf.bridge import cli
+from occsurf.examples import gallery as demo
+from occsurf.bridge.exchange.step_iges import read_step
 
 
 def test_demo_writes_pngs_and_readable_step(tmp_path, capsys):
@@ -25,7 +26,7 @@ def test_demo_writes_pngs_and_readable_step(tmp_path, capsys):
 
 
 def test_demo_failure_is_one_line_and_others_still_run(tmp_path, capsys, monkeypatch):
-    monkeypatch.setitem(demo.DEMOS, "broken", "bridge.demo:no_such_function")
+    monkeypatch.setitem(demo.DEMOS, "broken", "occsurf.examples.gallery:no_such_function")
     status = cli.main(["demo", "--out", str(tmp_path), "--only", "broken", "manipulation"])
     assert status == 2
     captured = capsys.readouterr()

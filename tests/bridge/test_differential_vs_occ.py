@@ -1,4 +1,4 @@
-"""algorithms.differential against OpenCascade's GeomLProp on the bit-identical ``to_occ`` copies.
+"""occsurf.algorithms.geometry.differential against OpenCascade's GeomLProp on the bit-identical ``to_occ`` copies.
 
 Oracles
 -------
@@ -36,9 +36,9 @@ from OCP.Geom import Geom_SphericalSurface, Geom_ToroidalSurface
 from OCP.GeomLProp import GeomLProp_CLProps, GeomLProp_SLProps
 from OCP.gp import gp_Ax3, gp_Dir
 
-from algorithms import BSplineCurve
-from algorithms.differential import curve_frenet, surface_curvatures
-from bridge.convert import from_occ, to_occ
+from occsurf.algorithms import BSplineCurve
+from occsurf.algorithms.geometry.differential import curve_frenet, surface_curvatures
+from occsurf.bridge.conversion.splines import from_occ, to_occ
 from tests.algorithms.strategies import curves, surfaces, test_settings
 
 SETTINGS = test_settings(40)

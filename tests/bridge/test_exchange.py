@@ -1,4 +1,4 @@
-"""STEP/IGES exchange (bridge.exchange): lossless STEP round trips, the IGES error bound, names,
+"""STEP/IGES exchange (occsurf.bridge.exchange.step_iges): lossless STEP round trips, the IGES error bound, names,
 millimetres, atomic writes, corrupt files, and the public CAD files of ../shared/realdata.
 
 Every file is generated in ``tmp_path``; nothing is kept under tests/.
@@ -15,9 +15,9 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from algorithms import BSplineCurve, BSplineSurface
-from algorithms.errors import ExchangeError, InvalidGeometryError
-from bridge.exchange import (
+from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
+from occsurf.bridge.exchange.step_iges import (
     IGES_RELATIVE_ERROR,
     STEP_DEFAULT_RELATIVE_ERROR,
     ImportedEdge,
@@ -250,7 +250,7 @@ class TestStepRoundTrip:
         write_step prints the model itself. The measured error stays within the documented bound."""
         from OCP.STEPControl import STEPControl_StepModelType, STEPControl_Writer
 
-        from bridge.convert import to_face
+        from occsurf.bridge.conversion.splines import to_face
 
         s = _surface()
         writer = STEPControl_Writer()
@@ -357,7 +357,7 @@ class TestUnits:
         from OCP.Interface import Interface_Static
         from OCP.STEPControl import STEPControl_StepModelType, STEPControl_Writer
 
-        from bridge.convert import to_face
+        from occsurf.bridge.conversion.splines import to_face
 
         s = _surface(rational=False)
         writer = STEPControl_Writer()
@@ -458,10 +458,10 @@ class TestReading:
     def test_conversion_failure_is_per_face(self, tmp_path, monkeypatch):
         import build123d as bd
 
-        import bridge.convert
+        import occsurf.bridge.conversion.splines
 
         path = write_step(tmp_path / "a.step", [bd.Solid.make_box(1, 1, 1), _surface()])
-        real = bridge.convert.from_occ
+        real = occsurf.bridge.conversion.splines.from_occ
 
         def flaky(obj, *args, **kwargs):
             from OCP.BRep import BRep_Tool
@@ -471,7 +471,7 @@ class TestReading:
                 raise RuntimeError("synthetic\nfailure")
             return real(obj, *args, **kwargs)
 
-        monkeypatch.setattr(bridge.convert, "from_occ", flaky)
+        monkeypatch.setattr(occsurf.bridge.conversion.splines, "from_occ", flaky)
         model = read_step(path)
         assert len(model.faces) == 7
         planes = [f for f in model.faces if f.surface_type == "Plane"]

@@ -13,11 +13,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from algorithms.errors import InvalidGeometryError
-from bridge.convert import _make_face
-from bridge.exchange import read_step, write_step
-from bridge.fill import _edge_faces, _neighbour, _sew, fill_model, find_loops, hole_sides
-from algorithms.hole_models import ring_model
+from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.bridge.conversion.splines import _make_face
+from occsurf.bridge.exchange.step_iges import read_step, write_step
+from occsurf.bridge.modeling.fill import _edge_faces, _neighbour, _sew, fill_model, find_loops, hole_sides
+from occsurf.examples.hole_models import ring_model
 
 SIZE = 14.0  # bounding-box diagonal of the base dome ([0, 10]^2, height ~5)
 
@@ -95,9 +95,9 @@ def _trimmed_ring(ext: float):
     u in [s0, s1]; the hole edges lie on the surfaces' v = 0 boundary for that range only)."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 
-    from algorithms.hole_models import base_surface, represent_grid
-    from algorithms.surface import BSplineSurface
-    from bridge.convert import to_occ
+    from occsurf.examples.hole_models import base_surface, represent_grid
+    from occsurf.algorithms.kernel.surface import BSplineSurface
+    from occsurf.bridge.conversion.splines import to_occ
 
     G = base_surface(False)
     m = ring_model(5, bump=0.0)

@@ -1,8 +1,8 @@
 """Generalized biquadratic surfaces to OCC and STEP: sewn, valid shells whose faces are the S-patches.
 
 Each S-patch goes to OCC as its ``sides`` rational tensor-product pieces
-(:func:`algorithms.spatch_convert.spatch_to_surfaces`; exact here: bidegree ``d (n - 2) <= 25``),
-the pieces are sewn into one shell (:func:`bridge.spatch_export.spatch_faces`), checked by
+(:func:`occsurf.algorithms.topology.spatch_convert.spatch_to_surfaces`; exact here: bidegree ``d (n - 2) <= 25``),
+the pieces are sewn into one shell (:func:`occsurf.bridge.conversion.spatch_export.spatch_faces`), checked by
 ``BRepCheck_Analyzer``, written to STEP and read back.
 """
 
@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from algorithms.generalized import generalized_biquadratic
-from algorithms.generalized_bicubic import generalized_bicubic
-from algorithms.mesh import read_obj
-from algorithms.spatch_convert import piece_domain_points
-from bridge.exchange import read_step
-from bridge.spatch_export import spatch_faces, write_spatches_step
+from occsurf.algorithms.topology.generalized import generalized_biquadratic
+from occsurf.algorithms.topology.generalized_bicubic import generalized_bicubic
+from occsurf.algorithms.topology.mesh import read_obj
+from occsurf.algorithms.topology.spatch_convert import piece_domain_points
+from occsurf.bridge.exchange.step_iges import read_step
+from occsurf.bridge.conversion.spatch_export import spatch_faces, write_spatches_step
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "meshes"
 # expected face count (None: computed); "bicubic:" = the generalized bicubic scheme (Doo-Sabin cube:

@@ -1,6 +1,6 @@
 """Surface generation cross-validated with OpenCascade on the same inputs, and STEP round trips.
 
-Each case builds our surface and OCC's (``bridge._generation_occ``) from the same curves and
+Each case builds our surface and OCC's (``tests.bridge.generation_occ``) from the same curves and
 reports the largest distance both ways: our points (dense grid) projected onto OCC's face, and
 OCC's face points projected onto ours (``GeomAPI_ProjectPointOnSurf``, BRepExtrema fallback).
 
@@ -36,10 +36,10 @@ import pytest
 
 pytest.importorskip("OCP")
 
-from algorithms import BSplineCurve, arc, circle, ellipse  # noqa: E402
-from algorithms.fitting import interpolate_curve  # noqa: E402
-from algorithms.generation import extrude, revolve, rotational_sweep, ruled, translational_sweep  # noqa: E402
-from algorithms.sweeping import sweep  # noqa: E402
+from occsurf.algorithms import BSplineCurve, arc, circle, ellipse  # noqa: E402
+from occsurf.algorithms.fitting.interpolation import interpolate_curve  # noqa: E402
+from occsurf.algorithms.construction.generation import extrude, revolve, rotational_sweep, ruled, translational_sweep  # noqa: E402
+from occsurf.algorithms.construction.sweeping import sweep  # noqa: E402
 
 EXACT = 1e-11
 SWEEP = 2e-7
@@ -49,7 +49,7 @@ TABLE: list[tuple[str, str, float, float, float]] = []
 
 
 def G():
-    import bridge._generation_occ as mod
+    import tests.bridge.generation_occ as mod
 
     return mod
 
@@ -224,7 +224,7 @@ def generated():
 
 
 def test_step_round_trip_is_bit_exact(tmp_path):
-    from bridge.exchange import read_step, write_step
+    from occsurf.bridge.exchange.step_iges import read_step, write_step
 
     items = generated()
     path = write_step(tmp_path / "generation.step", list(items.values()), names=list(items), precision_digits=17)

@@ -11,13 +11,13 @@ import pytest
 from numpy.testing import assert_allclose
 from OCP.gp import gp_Pnt, gp_Vec
 
-from algorithms import BSplineSurface
-from algorithms.errors import ExchangeError
-from algorithms.hierarchical import HierarchicalSurface
-from algorithms.hierarchical_curve import HierarchicalCurve
-from bridge import to_occ
-from bridge.exchange import read_step, write_step
-from bridge.hierarchical_io import (
+from occsurf.algorithms import BSplineSurface
+from occsurf.algorithms.errors import ExchangeError
+from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
+from occsurf.algorithms.hierarchical.curve import HierarchicalCurve
+from occsurf.bridge import to_occ
+from occsurf.bridge.exchange.step_iges import read_step, write_step
+from occsurf.bridge.exchange.hierarchical_io import (
     import_step_base,
     read_hierarchical_step,
     sidecar_path,
@@ -83,7 +83,7 @@ def test_step_round_trip_restores_the_editable_hierarchy(tmp_path):
 
 
 def test_curve_hierarchy_round_trip(tmp_path):
-    from algorithms import BSplineCurve
+    from occsurf.algorithms import BSplineCurve
 
     t = np.r_[[0.0] * 4, 0.25, 0.5, 0.75, [1.0] * 4]
     hc = HierarchicalCurve(BSplineCurve(3, t, np.c_[np.linspace(0, 6, 7), np.zeros(7), np.zeros(7)]))
@@ -133,7 +133,7 @@ def test_failed_write_keeps_the_old_pair_intact(tmp_path, monkeypatch):
     side.write_bytes(old[side])
     # A failure while writing the second file (disk full, ...): no temporary file is left and
     # neither target changes.
-    import bridge.hierarchical_io as hio
+    import occsurf.bridge.exchange.hierarchical_io as hio
 
     calls = []
 
@@ -220,7 +220,7 @@ def test_non_bspline_face_is_refused(tmp_path):
 
 
 def test_demo_writes_pngs_step_and_sidecar(tmp_path):
-    from bridge.demo_hierarchical import render_hierarchical_demo
+    from occsurf.examples.hierarchical import render_hierarchical_demo
 
     files = render_hierarchical_demo(tmp_path / "hierarchical")
     pngs = [f for f in files if f.suffix == ".png"]

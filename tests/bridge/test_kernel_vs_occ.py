@@ -20,7 +20,7 @@ knot span in the domain (per direction for surfaces). The sups make the ratio in
 derivative that vanishes at one sample; the last term is the size of the k-th derivative's control
 polygon, the quantity the round-off of any evaluation algorithm scales with, so that derivatives
 vanishing identically (all poles equal, ``S_uu`` of a bilinear patch) are not compared with noise.
-For points (k = 0) it is simply the coordinate magnitude. ``bridge.validate`` uses the same scale
+For points (k = 0) it is simply the coordinate magnitude. ``occsurf.bridge.validation.deviation`` uses the same scale
 for derivatives.
 
 How close OCC itself is: measured against exact arithmetic (``test_exact_oracle_*``), OCC's B-spline
@@ -61,10 +61,10 @@ from OCP.Geom import (
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GeomConvert import GeomConvert
 
-from algorithms import BSplineCurve, BSplineSurface
-from algorithms.errors import ToleranceError
-from bridge import _occ
-from bridge.convert import from_occ, to_occ
+from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms.errors import ToleranceError
+from occsurf.bridge import _occ
+from occsurf.bridge.conversion.splines import from_occ, to_occ
 
 # ============================================================================ strategies
 #: Control-point coordinates in [-COORD, COORD]; weights in [W_MIN, W_MAX] (ratio 4: realistic).
@@ -219,7 +219,7 @@ def snap_to_knots(params: np.ndarray, knots: np.ndarray) -> np.ndarray:
     OCC's span search counts a parameter one ulp below a knot as the knot (derivatives from the
     right); we evaluate it literally (from the left). Where the spline is not smooth at the knot the
     two then differ by O(1), a convention, not an error ("round" fractions land there easily).
-    ``bridge.validate`` does the same.
+    ``occsurf.bridge.validation.deviation`` does the same.
     """
     params = np.asarray(params, dtype=float)
     k = np.unique(knots)

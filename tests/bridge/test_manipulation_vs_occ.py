@@ -34,7 +34,7 @@ pytest.importorskip("OCP")
 from OCP.GeomLProp import GeomLProp_CLProps  # noqa: E402
 from OCP.gp import gp_Pnt, gp_Vec  # noqa: E402
 
-from algorithms import (  # noqa: E402
+from occsurf.algorithms import (  # noqa: E402
     BSplineCurve,
     BSplineSurface,
     ConstraintError,
@@ -56,7 +56,7 @@ TABLE: list[dict] = []
 # ---------------------------------------------------------------------------------------- helpers
 def to_occ(spline):
     """``bridge.to_occ`` (imported lazily, so a broken bridge fails these tests, not collection)."""
-    from bridge import to_occ as convert
+    from occsurf.bridge import to_occ as convert
 
     return convert(spline)
 
@@ -315,8 +315,8 @@ def test_mixed_constraints_checked_by_occ_evaluators(rational):
 # ---------------------------------------------------------------------------------------- demo
 def test_render_manipulation_demo(tmp_path):
     pytest.importorskip("matplotlib")
-    from bridge import read_step
-    from bridge.demo_manipulation import render_manipulation_demo
+    from occsurf.bridge import read_step
+    from occsurf.examples.manipulation import render_manipulation_demo
 
     paths = render_manipulation_demo(tmp_path / "demo")
     assert [p.name for p in paths] == ["manipulation_curve.png", "manipulation_surface.png", "manipulation.step"]

@@ -1,13 +1,13 @@
-"""bridge.render writes curvature-coloured PNGs of any sampled surface."""
+"""occsurf.bridge.rendering.surfaces writes curvature-coloured PNGs of any sampled surface."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from algorithms import BSplineSurface, circle
-from algorithms.fitting import loft
-from bridge.render import render_surfaces, surface_grid
+from occsurf.algorithms import BSplineSurface, circle
+from occsurf.algorithms.fitting.interpolation import loft
+from occsurf.bridge.rendering.surfaces import render_surfaces, surface_grid
 
 
 def _vase() -> BSplineSurface:

@@ -1,4 +1,4 @@
-"""``bridge.validate``: deviation reports against OCC and between two of our splines."""
+"""``occsurf.bridge.validation.deviation``: deviation reports against OCC and between two of our splines."""
 
 from __future__ import annotations
 
@@ -12,10 +12,10 @@ from numpy.testing import assert_allclose
 from OCP.Geom import Geom_SphericalSurface
 from OCP.gp import gp_Ax3
 
-from algorithms import BSplineCurve, BSplineSurface
-from algorithms.errors import InvalidGeometryError
-from bridge.convert import from_occ, to_occ
-from bridge.validate import (
+from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.bridge.conversion.splines import from_occ, to_occ
+from occsurf.bridge.validation.deviation import (
     CurveDeviation,
     RoundTripDeviation,
     SurfaceDeviation,

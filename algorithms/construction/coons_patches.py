@@ -1,0 +1,636 @@
+r"""Coons patches (course §6-20, §6-21) and the machinery shared with Gordon surfaces
+(:mod:`occsurf.algorithms.construction.gordon_surfaces`): network tolerances, compatible tensor-product nets,
+polynomial approximation of rational curves. :mod:`occsurf.algorithms.construction` re-exports both modules.
+
+Three transfinite interpolants, each returned as ONE tensor-product :class:`BSplineSurface` that is
+*exactly* the classical formula (not a fit):
+
+* :func:`coons` — the bilinearly blended Coons patch of four boundary curves (course §6-20),
+
+  .. math::
+
+      S = \underbrace{(1-\bar v)\,c_0(u) + \bar v\,c_1(u)}_{\text{ruled in } v}
+        + \underbrace{(1-\bar u)\,d_0(v) + \bar u\,d_1(v)}_{\text{ruled in } u}
+        - \underbrace{\textstyle\sum (1-\bar u\,|\,\bar u)(1-\bar v\,|\,\bar v) P_{ij}}_{\text{bilinear}}
+
+  with :math:`\bar u, \bar v` the normalised parameters. Each term is a B-spline surface (the
+  linear blends are degree-1 B-splines), so after degree elevation and knot refinement to one
+  degree ``(max(p, 1), max(q, 1))`` and one pair of knot vectors the three nets simply add.
+* :func:`coons_bicubic` — the bicubically blended Coons patch (course §6-21): cubic Hermite
+  blending of the boundary curves *and* the cross-boundary derivative curves, minus the bicubic
+  Hermite interpolant of the corner data (positions, tangents, twists).
+* :func:`gordon` — the Gordon surface of a network of ``m`` u-curves and ``n`` v-curves (course
+  §6-22..6-25; W. J. Gordon, "Spline-blended surface interpolation through curve networks",
+  J. Math. Mech. 18 (1969)): the Boolean sum :math:`P_1 \oplus P_2 = P_1 + P_2 - P_1 P_2` of the
+  spline interpolation projector across v (the loft of the u-curves) and across u (the loft of the
+  v-curves); :math:`P_1 P_2` is the tensor-product interpolant of the intersection points.
+
+Exactness
+---------
+Every step (affine reparametrisation, degree elevation, knot refinement, adding nets) is an exact
+operation on B-splines, so the results equal the formulas up to floating-point round-off, and the
+boundary rows of a Coons net *are* the boundary curves' poles (the blending terms cancel there
+pole for pole). Gordon surfaces interpolate the network to the round-off of the banded
+interpolation solves (~1e-13 relative), provided the network is consistent (below).
+
+Rational input
+--------------
+Coons patches of rational boundaries are built in homogeneous coordinates, which is exact when the
+homogeneous corners agree; the weights of each boundary are first scaled by a constant (which
+does not change the curve) to make them agree. That is possible unless the product of the
+corner-weight ratios around the loop differs from 1; then the boundaries are approximated as
+below. Gordon surfaces of rational networks are built in homogeneous coordinates when the
+curves meet in homogeneous space too (for instance a network of iso-curves of one NURBS
+surface); otherwise, and for :func:`coons_bicubic` (whose derivative data are Cartesian), rational
+curves are replaced by polynomial B-spline approximations within ``approx_tol`` (measured on dense
+samples, see :func:`polynomial_approximation`), so the result is within that distance of the
+rational network.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .. import _validate as V
+from ..kernel.basis import greville
+from ..kernel.compat import common_knots, make_compatible, missing_knots
+from ..kernel.curve import BSplineCurve
+from ..kernel.degree import elevate_poles
+from ..errors import InvalidGeometryError, ToleranceError
+from ..fitting.interpolation import interpolate_values
+from ..kernel.knots import merge_knots, refine_poles, snap_knots
+from ..kernel.rational import from_homogeneous, to_homogeneous
+from ..kernel.surface import BSplineSurface
+
+__all__ = [
+    "NETWORK_TOLERANCE",
+    "DERIVATIVE_TOLERANCE",
+    "APPROXIMATION_TOLERANCE",
+    "coons",
+    "coons_bicubic",
+    "polynomial_approximation",
+]
+
+Array = NDArray[np.float64]
+
+#: Largest gap allowed between curves that should meet (Coons corners, Gordon intersections),
+#: absolute, in model units (OCC's ``Precision::Confusion()``). Gaps up to it are closed (Coons:
+#: the curves' end poles move to the corner's mean; Gordon: the intersection point is the mean);
+#: larger ones raise :class:`InvalidGeometryError`.
+NETWORK_TOLERANCE: float = 1e-7
+
+#: Bicubic Coons corner compatibility: a cross-boundary derivative at a corner must equal the
+#: tangent of the adjacent boundary there to this tolerance, relative to the larger of the two
+#: vectors' lengths (and 1).
+DERIVATIVE_TOLERANCE: float = 1e-7
+
+#: Default largest distance between a rational curve and the polynomial B-spline that replaces it
+#: where an exact homogeneous construction is impossible (absolute, model units).
+APPROXIMATION_TOLERANCE: float = 1e-6
+
+#: Relative agreement demanded of homogeneous corner / intersection weights.
+_WEIGHT_RTOL = 1e-12
+
+_CORNERS = ("(u0, v0)", "(u1, v0)", "(u1, v1)", "(u0, v1)")
+
+
+# ------------------------------------------------------------------------------------ helpers
+def _tol(tol: float | None, default: float, name: str = "tol") -> float:
+    if tol is None:
+        return default
+    t = float(tol)
+    if not np.isfinite(t) or t < 0:
+        raise InvalidGeometryError(f"{name}: expected a finite value >= 0, got {tol!r}")
+    return t
+
+
+def _curve(c: object, name: str) -> BSplineCurve:
+    if not isinstance(c, BSplineCurve):
+        raise InvalidGeometryError(f"{name}: expected a BSplineCurve, got {type(c).__name__}")
+    return c
+
+
+def _curves(items: object, name: str, minimum: int = 2) -> list[BSplineCurve]:
+    try:
+        out = list(items)  # type: ignore[call-overload]
+    except TypeError as err:
+        raise InvalidGeometryError(f"{name}: expected a sequence of BSplineCurve, got {type(items).__name__}") from err
+    if len(out) < minimum:
+        raise InvalidGeometryError(f"{name}: expected at least {minimum} curves, got {len(out)}")
+    return [_curve(c, f"{name}[{i}]") for i, c in enumerate(out)]
+
+
+def _same_dim(named: dict[str, BSplineCurve]) -> int:
+    dims = {k: c.dim for k, c in named.items()}
+    if len(set(dims.values())) != 1:
+        raise InvalidGeometryError(f"curves: all must have the same dimension, got {dims}")
+    return next(iter(dims.values()))
+
+
+def _hnet(c: BSplineCurve, rational: bool) -> Array:
+    """Poles of a (compatible) curve, homogeneous ``(n, d+1)`` if ``rational``."""
+    if not rational:
+        return np.asarray(c.control_points, float)
+    w = np.ones(c.n_poles) if c.weights is None else c.weights
+    return to_homogeneous(np.asarray(c.control_points, float), w)
+
+
+def _with_end_points(c: BSplineCurve, start: Array, end: Array) -> BSplineCurve:
+    """A clamped curve with its first and last pole (= its end points) replaced."""
+    P = np.array(c.control_points, float)
+    P[0], P[-1] = start, end
+    return BSplineCurve._trusted(c.degree, c.knots, P, c.weights)
+
+
+def _unify(nets: list[tuple[tuple[int, int], tuple[Array, Array], Array]]) -> tuple[tuple[int, int], tuple[Array, Array], list[Array]]:
+    """Bring tensor-product nets to one pair of degrees and knot vectors (exact operations).
+
+    Each item is ``((p, q), (U, V), H)`` with ``H`` of shape ``(n_u, n_v, k)`` (homogeneous
+    coordinates for rational nets: the kernels are linear, so no weight is ever divided by);
+    all are clamped on one domain. Per direction: degree elevation, then knot refinement to the
+    union of the knot vectors, as :func:`make_compatible` does for curves.
+    """
+    items = [(list(d), list(kn), np.asarray(H, float)) for d, kn, H in nets]
+    for ax in (0, 1):
+        top = max(d[ax] for d, _, _ in items)
+        elevated = []
+        for d, kn, H in items:
+            if d[ax] < top:
+                kn = list(kn)
+                kn[ax], Hx = elevate_poles(kn[ax], d[ax], np.moveaxis(H, ax, 0), top - d[ax])
+                H = np.moveaxis(Hx, 0, ax)
+                d = list(d)
+                d[ax] = top
+            elevated.append((d, kn, H))
+        items = elevated
+        T = common_knots([kn[ax] for _, kn, _ in items])
+        lo, hi = float(T[0]), float(T[-1])
+        T[: top + 1], T[-(top + 1):] = lo, hi
+        out = []
+        for d, kn, H in items:
+            missing = missing_knots(kn[ax], T)
+            if missing.size:
+                tau = merge_knots(kn[ax], snap_knots(kn[ax], missing))
+                H = np.moveaxis(refine_poles(kn[ax], top, np.moveaxis(H, ax, 0), tau), 0, ax)
+            kn = list(kn)
+            kn[ax] = T
+            out.append((d, kn, H))
+        items = out
+    d, kn, _ = items[0]
+    return (d[0], d[1]), (kn[0], kn[1]), [np.ascontiguousarray(H) for _, _, H in items]
+
+
+def _surface(deg: tuple[int, int], kn: tuple[Array, Array], H: Array, rational: bool, what: str) -> BSplineSurface:
+    if not rational:
+        return BSplineSurface._trusted(deg, kn, np.ascontiguousarray(H))
+    if np.any(H[..., -1] <= 0):
+        raise InvalidGeometryError(
+            f"{what}: the homogeneous construction gives non-positive weights "
+            f"(min {float(H[..., -1].min()):.3g}); rescale the curves' weights"
+        )
+    P, w = from_homogeneous(np.ascontiguousarray(H))
+    return BSplineSurface._trusted(deg, kn, P, w)
+
+
+def _bezier(a: float, b: float, p: int) -> Array:
+    return np.r_[np.full(p + 1, a), np.full(p + 1, b)]
+
+
+# ------------------------------------------------------------------------------------ rational
+def polynomial_approximation(curve: BSplineCurve, tol: float | None = None, *,
+                             max_subdivisions: int = 256) -> tuple[BSplineCurve, float]:
+    """A polynomial B-spline within ``tol`` of a rational curve, with the measured error.
+
+    Degree ``max(p, 3)``; knots: the curve's own (multiplicities raised with the degree, so the
+    continuity at each knot is kept) with every span cut into ``k`` equal pieces, ``k = 2, 4, 8,
+    ...``; the spline interpolating the curve at the Greville abscissae of those knots (which
+    satisfy the Schoenberg–Whitney condition). Stops once the largest distance over 16 samples
+    per span is at most ``tol``. The end points are interpolated exactly (they are Greville
+    abscissae of clamped knots), so Coons corners and network ends stay put.
+
+    Parameters
+    ----------
+    curve : BSplineCurve
+        Returned unchanged (error 0.0) if it is not rational.
+    tol : float, optional
+        Default :data:`APPROXIMATION_TOLERANCE`.
+    max_subdivisions : int
+        Largest ``k`` tried.
+
+    Returns
+    -------
+    (BSplineCurve, float)
+        The approximation (same domain, degree ``max(curve.degree, 3)``) and its measured error.
+
+    Raises
+    ------
+    ToleranceError
+        ``tol`` is not reached with ``max_subdivisions``.
+    """
+    c = _curve(curve, "curve")
+    tol = _tol(tol, APPROXIMATION_TOLERANCE)
+    if not c.is_rational:
+        return c, 0.0
+    c = c.clamp()
+    p = max(c.degree, 3)
+    vals, mult = np.unique(c.knots, return_counts=True)
+    mult = np.minimum(mult + (p - c.degree), p + 1)  # keeps the curve's continuity at its knots
+    k = 2
+    err = np.inf
+    while k <= max_subdivisions:
+        f = np.linspace(0.0, 1.0, k + 1)[1:-1]
+        extra = (vals[:-1, None] + f * np.diff(vals)[:, None]).ravel()
+        kn = np.sort(np.r_[np.repeat(vals, mult), extra])
+        x = greville(kn, p)  # Schoenberg-Whitney holds at the Greville abscissae
+        approx = BSplineCurve._trusted(p, kn, interpolate_values(x, c.evaluate(x), p, kn))
+        s = np.linspace(0.0, 1.0, 17)[:-1]
+        br = np.unique(kn)
+        y = np.r_[(br[:-1, None] + s * np.diff(br)[:, None]).ravel(), br[-1]]
+        err = float(np.max(np.linalg.norm(approx.evaluate(y) - c.evaluate(y), axis=-1)))
+        if err <= tol:
+            return approx, err
+        k *= 2
+    raise ToleranceError(
+        f"polynomial_approximation: could not approximate the rational curve within tol={tol:g} "
+        f"(error {err:.3g} with {max_subdivisions} pieces per span)"
+    )
+
+
+def _scale_loop_weights(cc: list[BSplineCurve]) -> list[BSplineCurve] | None:
+    """Scale the weights of compatible rational Coons boundaries so that homogeneous corners agree.
+
+    ``cc`` = bottom, right, top, left (clamped, rational). Returns ``None`` if impossible.
+    """
+    b, r, t, l = (c.weights for c in cc)
+    s_b = 1.0
+    s_l = b[0] / l[0]
+    s_r = b[-1] / r[0]
+    s_t = s_l * l[-1] / t[0]
+    if abs(s_t * t[-1] - s_r * r[-1]) > _WEIGHT_RTOL * max(s_t * t[-1], s_r * r[-1]):
+        return None
+    scales = (s_b, s_r, s_t, s_l)
+    return [BSplineCurve._trusted(c.degree, c.knots, c.control_points, c.weights * s) for c, s in zip(cc, scales)]
+
+
+# ------------------------------------------------------------------------------------ Coons
+def _check_loop(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BSplineCurve,
+                tol: float) -> Array:
+    """Corner points ``(4, d)`` (means of the two curve ends) in order 00, 10, 11, 01, or raise.
+    The curves must be clamped."""
+    # clamped curves: the end points are the end poles (exact, no evaluation)
+    ends = {k: (np.asarray(c.control_points[0], float), np.asarray(c.control_points[-1], float))
+            for k, c in (("bottom", bottom), ("right", right), ("top", top), ("left", left))}
+    pairs = [(("bottom", 0), ("left", 0)), (("bottom", 1), ("right", 0)),
+             (("top", 1), ("right", 1)), (("top", 0), ("left", 1))]
+    gaps = [float(np.linalg.norm(ends[a][i] - ends[b][j])) for (a, i), (b, j) in pairs]
+    if max(gaps) > tol:
+        # Are curves merely reversed or swapped? Try every reversal subset with and without
+        # swapping left/right or bottom/top (48 cases of 4 point distances): name the fix.
+        order = ("bottom", "right", "top", "left")
+        expect = ("expected bottom = S(u, v0) and top = S(u, v1) both running from u0 to u1, "
+                  "left = S(u0, v) and right = S(u1, v) both from v0 to v1")
+        for swap in (None, ("left", "right"), ("bottom", "top")):
+            for mask in range(16):
+                if swap is None and mask == 0:
+                    continue
+                flipped = dict(ends)
+                if swap is not None:
+                    flipped[swap[0]], flipped[swap[1]] = ends[swap[1]], ends[swap[0]]
+                rev = [n for bit, n in enumerate(order) if mask >> bit & 1]
+                for n in rev:
+                    flipped[n] = flipped[n][::-1]
+                g = [float(np.linalg.norm(flipped[a][i] - flipped[b][j])) for (a, i), (b, j) in pairs]
+                if max(g) > tol:
+                    continue
+                fix = ([f"swap {swap[0]} and {swap[1]}"] if swap else []) + [f"pass {n}.reverse()" for n in rev]
+                if swap is None and len(rev) == 1:
+                    what = f"{rev[0]}: the curve runs the wrong way (reversing it closes the loop)"
+                elif swap is None and rev == ["top", "left"]:
+                    what = ("top, left: the curves form a head-to-tail loop (OCC's GeomFill_BSplineCurves "
+                            "convention), but coons takes the grid orientation")
+                elif swap is None:
+                    what = f"{', '.join(rev)}: the curves run the wrong way (reversing them closes the loop)"
+                else:
+                    what = f"{swap[0]}, {swap[1]}: the curves are swapped (exchanging them closes the loop)"
+                raise InvalidGeometryError(f"{what}; {expect}: {', '.join(fix)}")
+        k = int(np.argmax(gaps))
+        (a, i), (b, j) = pairs[k]
+        raise InvalidGeometryError(
+            f"{a}, {b}: the boundary loop is open at corner {_CORNERS[k]}: the {('start', 'end')[i]} of "
+            f"{a} and the {('start', 'end')[j]} of {b} are {gaps[k]:.3g} apart (tol={tol:g})"
+        )
+    return np.stack([(ends[a][i] + ends[b][j]) / 2 for (a, i), (b, j) in pairs])
+
+
+def _boundaries(bottom, right, top, left, tol, rational_ok: bool, approx_tol: float):
+    """Validated, corner-snapped, compatible boundary pairs ``(bottom, top)``, ``(left, right)``."""
+    cs = {"bottom": _curve(bottom, "bottom"), "right": _curve(right, "right"),
+          "top": _curve(top, "top"), "left": _curve(left, "left")}
+    _same_dim(cs)
+    if not rational_ok:
+        cs = {k: polynomial_approximation(c, approx_tol)[0] for k, c in cs.items()}
+    cs = {k: c.clamp() for k, c in cs.items()}
+    P = _check_loop(cs["bottom"], cs["right"], cs["top"], cs["left"], tol)
+    cs["bottom"] = _with_end_points(cs["bottom"], P[0], P[1])
+    cs["right"] = _with_end_points(cs["right"], P[1], P[2])
+    cs["top"] = _with_end_points(cs["top"], P[3], P[2])
+    cs["left"] = _with_end_points(cs["left"], P[0], P[3])
+    return cs
+
+
+def coons(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BSplineCurve, *,
+          blend: str = "linear", tol: float | None = None, approx_tol: float | None = None) -> BSplineSurface:
+    r"""Bilinearly blended Coons patch of four boundary curves (course §6-20), exactly.
+
+    Orientation (the grid order, not a loop)::
+
+        left = S(u0, v)  ^   top = S(u, v1)  ->   ^  right = S(u1, v)
+                         |   bottom = S(u, v0) -> |
+
+    ``bottom`` and ``top`` both run from ``u0`` to ``u1``; ``left`` and ``right`` both from ``v0``
+    to ``v1``. (OCC's ``GeomFill_BSplineCurves`` takes a loop instead: its third and fourth curves
+    are ``top`` and ``left`` reversed.)
+
+    Parameters
+    ----------
+    bottom, right, top, left : BSplineCurve
+        Same dimension; any degrees, knots, clamping; rational allowed (see the module notes).
+        The u domain is the common domain of ``bottom`` and ``top`` if they share one, else
+        ``[0, 1]`` (both mapped affinely); likewise v from ``left`` and ``right``.
+    blend : {"linear", "cubic"}
+        Blending functions: ``(1 - t, t)``, the bilinearly blended patch of course §6-20
+        (default), or the cubic Hermite pair ``(1 - 3t² + 2t³, 3t² - 2t³)``, which gives the
+        bicubically blended patch with zero cross-boundary derivatives and twists (degree at
+        least 3): the patch OCC's ``GeomFill_Coons`` builds from Bézier boundaries.
+    tol : float, optional
+        Largest corner gap accepted (default :data:`NETWORK_TOLERANCE`). Gaps up to ``tol`` are
+        closed by moving the two end poles to their mean (each boundary moves by at most half
+        the gap).
+    approx_tol : float, optional
+        Only for rational boundaries whose corner weights cannot be matched (module notes): the
+        distance within which they are replaced by polynomial curves
+        (:func:`polynomial_approximation`; default :data:`APPROXIMATION_TOLERANCE`).
+
+    Returns
+    -------
+    BSplineSurface
+        Degree ``(max(p_b, p_t, 1), max(q_l, q_r, 1))``, knots the union of the boundaries' knots.
+        ``S(u, v0) == bottom(u)`` etc. to round-off: the net's boundary rows are the (compatible)
+        boundary poles. Rational iff a boundary is.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Not curves, mixed dimensions, a curve running the wrong way (the message names it), a
+        corner gap above ``tol`` (the message names the corner, both curves and the gap).
+    ToleranceError
+        Rational boundaries that need approximating and cannot be approximated within
+        ``approx_tol``.
+
+    Notes
+    -----
+    The three terms are B-spline surfaces: the ruled surface in v (net rows ``c_0``, ``c_1``,
+    degree 1 in v), the ruled surface in u, and the bilinear patch of the corners. Degree
+    elevation of a linear function to degree ``q`` with knots ``V`` gives poles at the Greville
+    abscissae, so the result is the *discrete* Coons formula applied to the boundary polygons
+    with Greville-abscissa blending weights: ``P_ij = (1-η_j) c0_i + η_j c1_i + (1-ξ_i) d0_j +
+    ξ_i d1_j - bilinear(ξ_i, η_j)``. OCC's ``GeomFill_Coons`` blends the pole arrays with its own
+    weights: the cubic Hermite functions ``F = 1 - 3t² + 2t³``, ``G = 1 - F``, degree-elevated
+    to the number of poles minus 1 and indexed by pole number. For Bézier boundaries of degree
+    >= 3 that is exactly ``blend="cubic"``; for multi-span boundaries it is not a Coons formula
+    (the blending follows pole indices, not parameters), and the surfaces differ inside.
+    """
+    tol = _tol(tol, NETWORK_TOLERANCE)
+    atol = _tol(approx_tol, APPROXIMATION_TOLERANCE, "approx_tol")
+    if blend not in ("linear", "cubic"):
+        raise InvalidGeometryError(f"blend: expected 'linear' or 'cubic', got {blend!r}")
+    cs = _boundaries(bottom, right, top, left, tol, True, atol)
+    b, t = make_compatible([cs["bottom"], cs["top"]])
+    l, r = make_compatible([cs["left"], cs["right"]])
+    rational = any(c.is_rational for c in (b, t, l, r))
+    scaled = None
+    if rational:
+        b, r, t, l = [c if c.is_rational else BSplineCurve._trusted(c.degree, c.knots, c.control_points, np.ones(c.n_poles))
+                      for c in (b, r, t, l)]
+        scaled = _scale_loop_weights([b, r, t, l])
+    if scaled is not None:
+        deg, kn, H = _coons_net(*scaled, blend, True)
+        if np.all(H[..., -1] > 0):
+            return _surface(deg, kn, H, True, "coons")
+    if rational:
+        # No exact homogeneous form (corner weights that cannot be matched, or a homogeneous net
+        # with non-positive weights, e.g. 120-degree arcs of weight 0.5): polynomial approximations
+        # of the boundaries within approx_tol.
+        cs = _boundaries(bottom, right, top, left, tol, False, atol)
+        b, t = make_compatible([cs["bottom"], cs["top"]])
+        l, r = make_compatible([cs["left"], cs["right"]])
+    deg, kn, H = _coons_net(b, r, t, l, blend, False)
+    return _surface(deg, kn, H, False, "coons")
+
+
+def _coons_net(b: BSplineCurve, r: BSplineCurve, t: BSplineCurve, l: BSplineCurve, blend: str,
+               rational: bool) -> tuple[tuple[int, int], tuple[Array, Array], Array]:
+    """Degrees, knots and (homogeneous if ``rational``) net of the Coons patch of compatible pairs
+    ``(b, t)`` and ``(l, r)``."""
+    k = 1 if blend == "linear" else 3
+    (U, Hb, Ht), (Vk, Hl, Hr) = (_elevated_pair(c0, c1, k, rational) for c0, c1 in ((b, t), (l, r)))
+    # The three terms written directly on the final knots: each blending function's B-spline
+    # coefficients are its blossom at the knots (no Bézier nets to elevate and refine).
+    f0u, f1u = _blend_coefficients(U, len(U) - Hb.shape[0] - 1, blend)
+    f0v, f1v = _blend_coefficients(Vk, len(Vk) - Hl.shape[0] - 1, blend)
+    A = f0v[None, :, None] * Hb[:, None, :] + f1v[None, :, None] * Ht[:, None, :]   # ruled in v
+    B = f0u[:, None, None] * Hl[None, :, :] + f1u[:, None, None] * Hr[None, :, :]   # ruled in u
+    C = (np.multiply.outer(np.outer(f0u, f0v), Hb[0]) + np.multiply.outer(np.outer(f1u, f0v), Hb[-1])
+         + np.multiply.outer(np.outer(f0u, f1v), Ht[0]) + np.multiply.outer(np.outer(f1u, f1v), Ht[-1]))
+    deg = (len(U) - Hb.shape[0] - 1, len(Vk) - Hl.shape[0] - 1)
+    H = A + B - C
+    # The boundary rows of A + B - C are the boundary poles up to round-off (B and C agree on
+    # them); write the compatible boundary poles themselves so the boundaries are bit-faithful.
+    H[:, 0], H[:, -1] = A[:, 0], A[:, -1]
+    H[0, :], H[-1, :] = B[0, :], B[-1, :]
+    return deg, (U, Vk), H
+
+
+def _elevated_pair(c0: BSplineCurve, c1: BSplineCurve, k: int, rational: bool) -> tuple[Array, Array, Array]:
+    """Knots and (homogeneous if ``rational``) poles of two compatible curves, degree raised to at
+    least ``k`` (one elevation of the stacked poles: they share the knots)."""
+    H0, H1 = _hnet(c0, rational), _hnet(c1, rational)
+    U = np.asarray(c0.knots, float)
+    if c0.degree < k:
+        U, H = elevate_poles(U, c0.degree, np.concatenate((H0, H1), axis=-1), k - c0.degree)
+        H0, H1 = H[:, : H0.shape[1]], H[:, H0.shape[1]:]
+    return U, H0, H1
+
+
+def _blend_coefficients(knots: Array, degree: int, blend: str) -> tuple[Array, Array]:
+    r"""B-spline coefficients ``(f0, f1)``, shape (n,) each, of the Coons blending functions of the
+    normalised parameter ``s`` on a clamped knot vector.
+
+    A polynomial's coefficient ``j`` is its degree-``degree`` blossom at the knots ``t_{j+1} ..
+    t_{j+degree}`` (course §2-6, §2-10); the blossom of ``s^k`` is ``e_k / C(degree, k)``, ``e_k``
+    the elementary symmetric polynomial of the (normalised) arguments. Linear: ``f1 = s`` (the
+    Greville abscissae); cubic: ``f1 = 3 s^2 - 2 s^3``; ``f0 = 1 - f1``. Needs ``degree >= 1``,
+    resp. ``>= 3``.
+    """
+    n = knots.shape[0] - degree - 1
+    lo, hi = knots[0], knots[-1]
+    x = (knots[1 + np.arange(n)[:, None] + np.arange(degree)[None, :]] - lo) / (hi - lo)  # (n, degree)
+    if blend == "linear":
+        f1 = x.mean(axis=1)
+    else:
+        e = np.zeros((4, n))
+        e[0] = 1.0
+        for r in range(degree):            # e_k of the first r+1 arguments (k <= 3): degree steps
+            e[1:] = e[1:] + x[:, r] * e[:-1]
+        d = degree
+        f1 = 3 * e[2] / (d * (d - 1) / 2) - 2 * e[3] / (d * (d - 1) * (d - 2) / 6)
+    return 1.0 - f1, f1
+
+
+def _hermite_rows(c0: Array, c1: Array, d0: Array, d1: Array, h: float) -> Array:
+    """Cubic Bézier rows of ``c0 H0 + c1 H1 + d0 H2 + d1 H3`` (Hermite data at both ends)."""
+    return np.stack([c0, c0 + d0 * (h / 3), c1 - d1 * (h / 3), c1])
+
+
+def coons_bicubic(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BSplineCurve, *,
+                  cross_derivatives: Sequence[BSplineCurve],
+                  twists: str | ArrayLike = "average",
+                  tol: float | None = None,
+                  approx_tol: float | None = None) -> BSplineSurface:
+    r"""Bicubically blended Coons patch (course §6-21): boundaries plus cross-boundary derivatives.
+
+    .. math::
+
+        S = \sum_k c_k(u) H_k(v) + \sum_k d_k(v) H_k(u) - \sum_{k,l} T_{kl} H_k(u) H_l(v)
+
+    with the cubic Hermite functions ``H_0..H_3`` (value at each end, derivative at each end) on
+    the domain, ``c = (bottom, top, ∂S/∂v along bottom, ∂S/∂v along top)``, ``d = (left, right,
+    ∂S/∂u along left, ∂S/∂u along right)`` and ``T`` the corner data: points, first partials
+    (taken from the cross-derivative curves) and twists ``∂²S/∂u∂v``.
+
+    Parameters
+    ----------
+    bottom, right, top, left : BSplineCurve
+        As in :func:`coons` (grid orientation), except that bottom and top must share one u domain
+        and left and right one v domain (derivatives depend on the parametrisation, so nothing is
+        reparametrised).
+    cross_derivatives : sequence of 4 BSplineCurve
+        ``(∂S/∂v (u, v0), ∂S/∂u (u1, v), ∂S/∂v (u, v1), ∂S/∂u (u0, v))``, in the order of the
+        boundaries: the first and third are functions of u on the u domain, the others of v.
+        At each corner the cross derivative of one boundary must equal the tangent of the other
+        (e.g. ``cross_derivatives[0](u0) == left'(v0)``), to :data:`DERIVATIVE_TOLERANCE`.
+    twists : "average", "zero" or array_like, shape (4, d)
+        Twist vectors ``∂²S/∂u∂v`` at the corners ``(u0,v0), (u1,v0), (u1,v1), (u0,v1)``.
+        ``"average"`` (default) uses the mean of the two twists the data imply at each corner
+        (the u-derivative of the v-cross-derivative curve and the v-derivative of the u one):
+        when they agree (compatible data, e.g. taken from one surface) the patch reproduces every
+        boundary and every cross derivative exactly; when they do not, no bicubic Coons patch can,
+        and each cross derivative is then off by at most half the twist mismatch times
+        ``max |H_2| = 4/27`` of the domain length. ``"zero"`` gives zero twists (the classical
+        choice, which makes the cross derivatives inexact unless the data twists vanish).
+    tol : float, optional
+        Corner gap tolerance, as in :func:`coons`.
+    approx_tol : float, optional
+        Rational curves are replaced by polynomial approximations within this distance
+        (:func:`polynomial_approximation`; default :data:`APPROXIMATION_TOLERANCE`).
+
+    Returns
+    -------
+    BSplineSurface
+        Polynomial, degree ``(max(p, 3), max(q, 3))``.
+
+    Raises
+    ------
+    InvalidGeometryError
+        As :func:`coons`; domains that differ; a cross-derivative curve inconsistent with the
+        adjacent boundary's tangent at a corner; bad ``twists``.
+    """
+    tol = _tol(tol, NETWORK_TOLERANCE)
+    atol = _tol(approx_tol, APPROXIMATION_TOLERANCE, "approx_tol")
+    cs = _boundaries(bottom, right, top, left, tol, False, atol)
+    xd = _curves(cross_derivatives, "cross_derivatives", 4)
+    if len(xd) != 4:
+        raise InvalidGeometryError(f"cross_derivatives: expected 4 curves (bottom, right, top, left), got {len(xd)}")
+    names = ("bottom", "right", "top", "left")
+    xd = [polynomial_approximation(c, atol)[0].clamp() for c in xd]
+    dim = cs["bottom"].dim
+    for k, c in enumerate(xd):
+        if c.dim != dim:
+            raise InvalidGeometryError(f"cross_derivatives[{k}]: expected dimension {dim}, got {c.dim}")
+    for group in (("bottom", "top", 0, 2), ("left", "right", 3, 1)):
+        a, b2, i, j = group
+        doms = {a: cs[a].domain, b2: cs[b2].domain, f"cross_derivatives[{i}]": xd[i].domain,
+                f"cross_derivatives[{j}]": xd[j].domain}
+        ref = doms[a]
+        for k, dmn in doms.items():
+            if not np.allclose(dmn, ref, rtol=0, atol=1e-12 * max(1.0, abs(ref[1] - ref[0]))):
+                raise InvalidGeometryError(
+                    f"{k}: expected the domain {ref} of {a} (derivatives depend on the parametrisation, so "
+                    f"bottom/top and their cross derivatives must share one u domain, left/right one v domain), got {dmn}"
+                )
+    b, t, xb, xt = make_compatible([cs["bottom"], cs["top"], xd[0], xd[2]])
+    l, r, xl, xr = make_compatible([cs["left"], cs["right"], xd[3], xd[1]])
+    (u0, u1), (v0, v1) = b.domain, l.domain
+    hu, hv = u1 - u0, v1 - v0
+
+    # Corner data, order 00, 10, 11, 01: position, S_u, S_v, and the two twist estimates.
+    def d1(c: BSplineCurve, x: float) -> Array:
+        return c.derivatives(x, 1)
+
+    B0, B1 = d1(b, u0), d1(b, u1)
+    T0, T1 = d1(t, u0), d1(t, u1)
+    L0, L1 = d1(l, v0), d1(l, v1)
+    R0, R1 = d1(r, v0), d1(r, v1)
+    XB0, XB1, XT0, XT1 = d1(xb, u0), d1(xb, u1), d1(xt, u0), d1(xt, u1)
+    XL0, XL1, XR0, XR1 = d1(xl, v0), d1(xl, v1), d1(xr, v0), d1(xr, v1)
+    P = np.stack([B0[0], B1[0], T1[0], T0[0]])
+    Su = np.stack([XL0[0], XR0[0], XR1[0], XL1[0]])  # from the u-cross-derivative curves
+    Sv = np.stack([XB0[0], XB1[0], XT1[0], XT0[0]])  # from the v-cross-derivative curves
+    # Compatibility: Su must be the bottom/top tangent, Sv the left/right tangent.
+    checks = [(Su, np.stack([B0[1], B1[1], T1[1], T0[1]]), ("left", "right", "right", "left"), ("bottom", "bottom", "top", "top")),
+              (Sv, np.stack([L0[1], R0[1], R1[1], L1[1]]), ("bottom", "bottom", "top", "top"), ("left", "right", "right", "left"))]
+    for got, want, xnames, bnames in checks:
+        for k in range(4):
+            scale = max(1.0, float(np.linalg.norm(got[k])), float(np.linalg.norm(want[k])))
+            gap = float(np.linalg.norm(got[k] - want[k]))
+            if gap > DERIVATIVE_TOLERANCE * scale:
+                raise InvalidGeometryError(
+                    f"cross_derivatives[{names.index(xnames[k])}]: at corner {_CORNERS[k]} the cross derivative "
+                    f"along {xnames[k]} must equal the tangent of {bnames[k]} there; they differ by {gap:.3g}"
+                )
+    tw_v = np.stack([XB0[1], XB1[1], XT1[1], XT0[1]])  # d/du of dS/dv curves
+    tw_u = np.stack([XL0[1], XR0[1], XR1[1], XL1[1]])  # d/dv of dS/du curves
+    if isinstance(twists, str):
+        if twists == "average":
+            W = (tw_u + tw_v) / 2
+        elif twists == "zero":
+            W = np.zeros_like(tw_u)
+        else:
+            raise InvalidGeometryError(f"twists: expected 'average', 'zero' or an array of shape (4, {dim}), got {twists!r}")
+    else:
+        W = V.as_finite_array(twists, "twists")
+        if W.shape != (4, dim):
+            raise InvalidGeometryError(f"twists: expected shape (4, {dim}), got {W.shape}")
+
+    Pb, Pt, Pxb, Pxt = (np.asarray(c.control_points, float) for c in (b, t, xb, xt))
+    Pl, Pr, Pxl, Pxr = (np.asarray(c.control_points, float) for c in (l, r, xl, xr))
+    L1net = _hermite_rows(Pb, Pt, Pxb, Pxt, hv).transpose(1, 0, 2)  # (nu, 4, d)
+    L2net = _hermite_rows(Pl, Pr, Pxl, Pxr, hu)  # (4, nv, d)
+    # Bicubic Hermite corner patch: Hermite in u of the Hermite-in-v rows.
+    # along v at u0: positions P00, P01, derivatives Sv00, Sv01; at u1: P10, P11, Sv10, Sv11
+    col_u0 = _hermite_rows(P[0], P[3], Sv[0], Sv[3], hv)  # (4, d) Bézier in v
+    col_u1 = _hermite_rows(P[1], P[2], Sv[1], Sv[2], hv)
+    dcol_u0 = _hermite_rows(Su[0], Su[3], W[0], W[3], hv)  # S_u along u0 (Bézier in v)
+    dcol_u1 = _hermite_rows(Su[1], Su[2], W[1], W[2], hv)
+    Tnet = _hermite_rows(col_u0, col_u1, dcol_u0, dcol_u1, hu)  # (4, 4, d)
+    k3u, k3v = _bezier(u0, u1, 3), _bezier(v0, v1, 3)
+    deg, kn, (A, B, C) = _unify([((b.degree, 3), (b.knots, k3v), L1net),
+                                 ((3, l.degree), (k3u, l.knots), L2net),
+                                 ((3, 3), (k3u, k3v), Tnet)])
+    H = A + B - C
+    H[:, 0], H[:, -1] = A[:, 0], A[:, -1]
+    H[0, :], H[-1, :] = B[0, :], B[-1, :]
+    return _surface(deg, kn, H, False, "coons_bicubic")

@@ -1,0 +1,26 @@
+"""Affine and differential geometry (course ch. 1 and §6-0..6-14).
+
+Public names: the typed affine objects :class:`Point`, :class:`Vector`, :class:`Normal`,
+:class:`Frame`, :class:`AffineMap`, :class:`ProjectiveMap`, :func:`affine_combination`, and the
+differential geometry of curves and surfaces: :func:`curve_frenet`, :func:`curvature`,
+:func:`torsion`, :func:`arc_length`, :func:`rotation_minimizing_frames`, :func:`surface_curvatures`.
+"""
+
+from .affine import AffineMap, Frame, Normal, Point, ProjectiveMap, Vector, affine_combination
+from .differential import arc_length, curvature, curve_frenet, rotation_minimizing_frames, surface_curvatures, torsion
+
+__all__ = [
+    "AffineMap",
+    "Frame",
+    "Normal",
+    "Point",
+    "ProjectiveMap",
+    "Vector",
+    "affine_combination",
+    "arc_length",
+    "curvature",
+    "curve_frenet",
+    "rotation_minimizing_frames",
+    "surface_curvatures",
+    "torsion",
+]

@@ -1,0 +1,26 @@
+"""The spline kernel (course ch. 2 and 12): B-spline basis, knots, curves, surfaces, Bézier
+form, blossoms, degree raising, rational (homogeneous) forms and exact conics.
+
+Public names: :class:`BSplineCurve`, :class:`BSplineSurface`, :func:`make_compatible`, the conics
+(:func:`circle`, :func:`arc`, :func:`ellipse`, :func:`conic_arc`, :func:`conic_from_shoulder`,
+:func:`conic_through_point`, :func:`conic_type`); the array-level kernels live in :mod:`.basis`,
+:mod:`.knots`, :mod:`.bezier`, :mod:`.blossom`, :mod:`.degree` and :mod:`.rational`.
+"""
+
+from .curve import BSplineCurve
+from .surface import BSplineSurface
+from .compat import make_compatible
+from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_point, conic_type, ellipse
+
+__all__ = [
+    "BSplineCurve",
+    "BSplineSurface",
+    "make_compatible",
+    "arc",
+    "circle",
+    "conic_arc",
+    "conic_from_shoulder",
+    "conic_through_point",
+    "conic_type",
+    "ellipse",
+]

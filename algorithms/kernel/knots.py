@@ -1,0 +1,292 @@
+"""Knot insertion, refinement, removal, clamping and Bézier extraction (course §2-10, §2-11).
+
+All functions act on *poles* of any trailing shape ``(n, ...)``: Cartesian points, homogeneous
+points (rational splines, weight last) or whole rows of a surface net, so surfaces reuse them
+along either direction without copying code. They trust their input (validated by the classes).
+
+References
+----------
+W. Boehm, "Inserting new knots into B-spline curves", CAD 12 (1980) — single knot.
+E. Cohen, T. Lyche, R. Riesenfeld, "Discrete B-splines and subdivision techniques", CGIP 14
+(1980) — the Oslo algorithm for knot refinement. Piegl & Tiller, *The NURBS Book*, 2nd ed.,
+A5.1 (insertion), A5.8 (removal), A5.6 (decomposition into Bézier segments).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .. import tolerances
+from .basis import find_span
+from .blossom import blossom_basis
+
+__all__ = [
+    "multiplicity",
+    "distinct_knots",
+    "snap_knot",
+    "snap_knots",
+    "insert_knot_boehm",
+    "refinement_matrix",
+    "refine_poles",
+    "remove_knot_lsq",
+    "clamp_poles",
+    "bezier_poles",
+    "split_poles",
+    "rescale_knots",
+]
+
+Array = NDArray[np.float64]
+
+
+def knot_tol(knots: Array) -> float:
+    """Absolute knot-equality tolerance for this knot vector."""
+    span = float(knots[-1] - knots[0])
+    return tolerances.KNOT_EQUALITY * max(span, 1.0)
+
+
+def distinct_knots(knots: Array) -> tuple[Array, NDArray[np.intp]]:
+    """Distinct knot values and multiplicities (exact equality, as OCC's ``BSplCLib::Knots``)."""
+    vals, counts = np.unique(knots, return_counts=True)
+    return vals, counts
+
+
+def multiplicity(knots: Array, u: float) -> int:
+    """How many times ``u`` occurs in ``knots`` (within the knot-equality tolerance)."""
+    return int(np.count_nonzero(np.abs(knots - u) <= knot_tol(knots)))
+
+
+def snap_knot(knots: Array, u: float) -> float:
+    """Return the existing knot equal to ``u`` within tolerance, else ``u`` itself."""
+    i = int(np.argmin(np.abs(knots - u)))
+    return float(knots[i]) if abs(knots[i] - u) <= knot_tol(knots) else float(u)
+
+
+def snap_knots(knots: Array, values: Array) -> Array:
+    """Vectorised :func:`snap_knot`: each value replaced by an existing knot within tolerance."""
+    tol = knot_tol(knots)
+    i = np.clip(np.searchsorted(knots, values), 1, knots.shape[0] - 1)
+    left, right = knots[i - 1], knots[i]
+    nearest = np.where(np.abs(values - left) <= np.abs(right - values), left, right)
+    return np.where(np.abs(nearest - values) <= tol, nearest, values)
+
+
+def insert_knot_boehm(knots: Array, degree: int, poles: Array, u: float, times: int) -> tuple[Array, Array]:
+    """Insert ``u`` ``times`` times by Boehm's algorithm (NURBS Book A5.1).
+
+    Requires ``multiplicity(u) + times <= degree + 1`` and ``u`` inside the domain.
+
+    Returns
+    -------
+    knots : ndarray, shape (n + degree + 1 + times,)
+    poles : ndarray, shape (n + times, ...)
+    """
+    p = degree
+    n = poles.shape[0]
+    k = int(find_span(knots, p, n, np.array([u]))[0])
+    s = int(np.count_nonzero(knots == u))
+    r = times
+    # If u equals the right end of the span found (domain end), A5.1's span is the one ending there.
+    new_knots = np.concatenate((knots[: k + 1], np.full(r, u), knots[k + 1 :]))
+    Q = np.empty((n + r,) + poles.shape[1:])
+    Q[: k - p + 1] = poles[: k - p + 1]
+    Q[k - s + r :] = poles[k - s :]
+    R = poles[k - p : k - s + 1].copy()
+    L = k - p
+    for j in range(1, r + 1):
+        L = k - p + j
+        i = np.arange(p - j - s + 1)
+        alpha = (u - knots[L + i]) / (knots[i + k + 1] - knots[L + i])
+        alpha = alpha.reshape((-1,) + (1,) * (poles.ndim - 1))
+        R[: p - j - s + 1] = alpha * R[1 : p - j - s + 2] + (1.0 - alpha) * R[: p - j - s + 1]
+        Q[L] = R[0]
+        Q[k + r - j - s] = R[p - j - s]
+    for i in range(L + 1, k - s):
+        Q[i] = R[i - L]
+    return new_knots, Q
+
+
+def refinement_matrix(knots: Array, degree: int, new_knots: Array) -> Array:
+    """Oslo knot-refinement matrix ``T`` with ``new_poles = T @ poles`` (discrete B-splines).
+
+    Parameters
+    ----------
+    knots : ndarray, shape (n + degree + 1,)
+    new_knots : ndarray, shape (n2 + degree + 1,)
+        A refinement of ``knots`` (every old knot present at least as often), with the same
+        first and last knots.
+
+    Returns
+    -------
+    ndarray, shape (n2, n)
+        Row ``i`` holds the blossom weights ``f(tau_{i+1}, ..., tau_{i+p})`` (course §2-10): the
+        discrete B-splines ``alpha_j(i)``, exact on the whole knot range ``[t_0, t_last]``, so the
+        outer poles of an unclamped spline (those whose basis functions miss the domain) are
+        refined correctly too.
+    """
+    p = degree
+    n = knots.shape[0] - p - 1
+    n2 = new_knots.shape[0] - p - 1
+    i = np.arange(n2)
+    args = new_knots[i[:, None] + 1 + np.arange(p)[None, :]]  # (n2, p)
+    mu = _support_span(knots, new_knots, i)  # 0 <= mu <= n + p - 1, maybe outside [p, n - 1]
+    # Outside the domain a span has fewer than p + 1 basis functions: pad the knot vector with p
+    # copies of each end knot so that every span has p + 1 columns, and drop the padding's
+    # columns. Each column is one basis function's blossom, unaffected by the padding; every
+    # denominator of the recurrence contains the non-empty span mu, so none vanishes.
+    padded = np.concatenate((np.full(p, knots[0]), knots, np.full(p, knots[-1])))
+    A = blossom_basis(padded, p, mu + p, args)
+    cols = mu[:, None] - p + np.arange(p + 1)
+    real = (cols >= 0) & (cols < n)
+    T = np.zeros((n2, n))
+    T[np.broadcast_to(i[:, None], cols.shape)[real], cols[real]] = A[real]
+    return T
+
+
+def _support_span(knots: Array, new_knots: Array, i: NDArray[np.intp]) -> NDArray[np.intp]:
+    """A non-empty old span ``[t_mu, t_{mu+1})`` inside the support of each new basis function ``i``.
+
+    ``new_knots`` refines ``knots`` (or, for degree raising, has the same distinct values), so
+    every non-empty new span lies in one old span. The result may lie outside the domain
+    ``[p, n - 1]`` when the new basis function misses the domain (unclamped knot vectors).
+    """
+    # First non-empty new span at or after tau_i: last index k with tau_k <= tau_i.
+    k = np.searchsorted(new_knots, new_knots[i], side="right") - 1
+    k = np.minimum(k, new_knots.shape[0] - 2)
+    mid = 0.5 * (new_knots[k] + new_knots[k + 1])
+    return np.searchsorted(knots, mid, side="right") - 1
+
+
+def refine_poles(knots: Array, degree: int, poles: Array, new_knots: Array) -> Array:
+    """Poles on ``new_knots`` (a refinement of ``knots``) describing the same spline."""
+    T = refinement_matrix(knots, degree, new_knots)
+    flat = poles.reshape(poles.shape[0], -1)
+    return (T @ flat).reshape((T.shape[0],) + poles.shape[1:])
+
+
+def merge_knots(knots: Array, extra: Array) -> Array:
+    """The knot vector with ``extra`` values added (sorted merge)."""
+    return np.sort(np.concatenate((knots, extra)), kind="stable")
+
+
+def remove_knot_lsq(
+    knots: Array, degree: int, poles: Array, u: float, times: int, deviation
+) -> tuple[Array, Array, float]:
+    """Remove ``times`` copies of the knot ``u``; the new poles are the least-squares solution.
+
+    The spline after removal, re-expressed on the original knots, is ``T @ Q`` with ``T`` the Oslo
+    matrix; ``Q`` minimises ``||T Q - P||`` over the few poles that removal can change. The
+    returned deviation is ``deviation(T @ Q, P)``, the largest movement of any pole of the
+    original representation, which bounds the movement of the curve (convex-hull property).
+    Exactly removable knots come back exactly (to round-off); the caller compares the deviation
+    with its tolerance.
+
+    Returns
+    -------
+    new_knots, new_poles, deviation
+    """
+    p = degree
+    n = poles.shape[0]
+    idx = np.flatnonzero(knots == u)
+    keep = np.ones(knots.shape[0], bool)
+    keep[idx[:times]] = False
+    reduced = knots[keep]
+    n2 = n - times
+    T = refinement_matrix(reduced, p, knots)  # (n, n2)
+    flat = poles.reshape(n, -1)
+    # Columns whose basis function changes when u is re-inserted: a window around u.
+    k = int(find_span(reduced, p, n2, np.array([u]))[0])
+    s = int(np.count_nonzero(reduced == u))
+    c0 = max(k - p, 0)
+    c1 = min(k - s, n2 - 1)
+    r0 = c0
+    r1 = min(k - s + times, n - 1)
+    Q = np.empty((n2, flat.shape[1]))
+    Q[:c0] = flat[:c0]
+    Q[c1 + 1 :] = flat[c1 + 1 + times :]
+    rows = slice(r0, r1 + 1)
+    cols = slice(c0, c1 + 1)
+    rhs = flat[rows] - T[rows, : c0] @ Q[:c0] - T[rows, c1 + 1 :] @ Q[c1 + 1 :]
+    sol, *_ = np.linalg.lstsq(T[rows, cols], rhs, rcond=None)
+    Q[cols] = sol
+    refined = T @ Q
+    dev = float(deviation(refined.reshape(poles.shape), poles))
+    return reduced, Q.reshape((n2,) + poles.shape[1:]), dev
+
+
+def clamp_poles(knots: Array, degree: int, poles: Array) -> tuple[Array, Array]:
+    """Equivalent clamped representation on the domain ``[t_p, t_n]`` (ends of multiplicity p+1)."""
+    p = degree
+    n = poles.shape[0]
+    a, b = knots[p], knots[n]
+    ma = int(np.count_nonzero(knots[: p + 1] == a))
+    mb = int(np.count_nonzero(knots[n:] == b))
+    if ma == p + 1 and mb == p + 1 and knots[0] == a and knots[-1] == b:
+        return knots, poles
+    extra = np.concatenate((np.full(max(p + 1 - int(np.count_nonzero(knots == a)), 0), a),
+                            np.full(max(p + 1 - int(np.count_nonzero(knots == b)), 0), b)))
+    tau = merge_knots(knots, extra)
+    Q = refine_poles(knots, p, poles, tau)
+    # Keep the part between the (p+1)-fold end knots.
+    first = int(np.searchsorted(tau, a, side="left"))
+    last = int(np.searchsorted(tau, b, side="right"))  # one past the last b
+    new_knots = tau[first:last]
+    return new_knots, Q[first : first + new_knots.shape[0] - p - 1]
+
+
+def bezier_poles(knots: Array, degree: int, poles: Array) -> tuple[Array, Array]:
+    """Bézier control points of every non-empty span (course §2-11; NURBS Book A5.6).
+
+    Returns
+    -------
+    breaks : ndarray, shape (n_seg + 1,)
+        Distinct knots of the domain.
+    segments : ndarray, shape (n_seg, degree + 1, ...)
+    """
+    p = degree
+    knots, poles = clamp_poles(knots, p, poles)
+    vals, mult = distinct_knots(knots)
+    add = np.repeat(vals[1:-1], np.maximum(p - mult[1:-1], 0))
+    if add.size:
+        tau = merge_knots(knots, add)
+        poles = refine_poles(knots, p, poles, tau)
+        knots = tau
+    # Segment j is the span ending at the last copy of vals[j]; its poles are k-p .. k.
+    k = np.searchsorted(knots, vals[:-1], side="right") - 1
+    idx = k[:, None] - p + np.arange(p + 1)[None, :]
+    return vals, poles[idx]
+
+
+def split_poles(knots: Array, degree: int, poles: Array, u: float) -> tuple[tuple[Array, Array], tuple[Array, Array]]:
+    """Split at the interior parameter ``u``: insert it up to multiplicity ``degree + 1``.
+
+    Returns
+    -------
+    (left_knots, left_poles), (right_knots, right_poles)
+        Clamped representations of the pieces on ``[a, u]`` and ``[u, b]``.
+    """
+    p = degree
+    t, H = clamp_poles(knots, p, poles)
+    s = int(np.count_nonzero(t == u))
+    if s < p + 1:
+        tau = merge_knots(t, np.full(p + 1 - s, u))
+        H = refine_poles(t, p, H, tau)
+        t = tau
+    a = int(np.searchsorted(t, u, side="left"))
+    return (t[: a + p + 1], H[:a]), (t[a:], H[a:])
+
+
+def rescale_knots(knots: Array, old: tuple[float, float], new: tuple[float, float]) -> Array:
+    """Map knots affinely from the domain ``old`` to ``new``, keeping the vector non-decreasing.
+
+    Every copy of an old domain end becomes the new end exactly; the rest go through
+    ``a + (t - lo) (b - a) / (hi - lo)``, which rounding keeps monotone, and interior knots are
+    clipped into ``[a, b]`` (a product can round one ulp past an end).
+    """
+    (lo, hi), (a, b) = old, new
+    t = a + (knots - lo) * ((b - a) / (hi - lo))
+    inside = (knots > lo) & (knots < hi)
+    t[inside] = np.clip(t[inside], a, b)
+    t[knots == lo] = a
+    t[knots == hi] = b
+    return t

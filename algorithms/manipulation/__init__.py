@@ -1,0 +1,27 @@
+"""Linear algebra for splines and constraint-based direct manipulation (course ch. 3 and 4).
+
+Public names: the constraints :class:`Position`, :class:`Tangent`, :class:`Derivative`,
+:class:`Curvature`; :func:`constrain`, :func:`drag_point`, :class:`Dragger`,
+:class:`PreparedConstraints` for curves and :func:`drag_surface_point` for surfaces; the solvers of
+:mod:`.linalg` (least squares, minimum norm, equality-constrained, dense and sparse) and their
+errors :class:`ConstraintError`, :class:`ConvergenceError`.
+"""
+
+from .constraints import Curvature, Derivative, Position, Tangent
+from .curves import Dragger, PreparedConstraints, constrain, drag_point
+from .surfaces import drag_surface_point
+from .linalg import ConstraintError, ConvergenceError
+
+__all__ = [
+    "Curvature",
+    "Derivative",
+    "Position",
+    "Tangent",
+    "Dragger",
+    "PreparedConstraints",
+    "constrain",
+    "drag_point",
+    "drag_surface_point",
+    "ConstraintError",
+    "ConvergenceError",
+]

@@ -1,0 +1,900 @@
+"""Filling an n-sided hole with G1 continuity (course §8-3, the n-sided hole problem).
+
+Given ``n >= 3`` boundary curves forming a closed loop (the free edges of the faces around a hole)
+and, along each, the neighbour face's cross-boundary derivative, :func:`fill_hole` builds ``n``
+tensor-product (rational) B-spline patches that
+
+* interpolate every boundary curve exactly (the boundary row of poles *is* the curve, refined and
+  degree-raised: round-off only), multi-span and rational curves included;
+* are G1 to the neighbour along the whole boundary, by a polynomial identity (below), not at samples;
+* are G1 to each other along the internal edges, again by a polynomial identity, and share one
+  tangent plane at the centre.
+
+The choice: a central split into four-sided patches
+---------------------------------------------------
+A single S-patch (Loop & DeRose 1989) has Bézier sides of one degree, while CAD boundaries are
+multi-span, often rational B-splines. Splitting the sides at their knots into extra (straight)
+sides makes the S-patch singular at every straight corner (its tangent plane there is spanned by
+two collinear edge tangents) and the number of control points explodes (``C(d+N-1, N-1)`` for ``N``
+spans). We therefore decompose the hole, as the course suggests for n-sided regions (§8-3, the
+Sabin/Gregory "central split" into n quadrilaterals; also the NURBS Book §10 on G1 joins): the
+centre ``C`` is joined to a point ``m_i`` on every side, giving ``n`` four-sided patches; patch
+``i`` covers hole corner ``V_i`` and is bounded by the first part of side ``i``, the last part of
+side ``i-1`` and the internal edges ``E_i`` (``m_i -> C``) and ``E_{i-1}``. A four-sided patch is
+a four-sided S-patch (a tensor product; for one span a Bézier patch of bidegree ``(d, d)``), and a
+tensor product carries a multi-span rational boundary exactly: its u-knots are the side's knots.
+
+Boundary G1 by construction. Work in homogeneous coordinates (``R^4`` for rational data, ``R^3``
+otherwise). Along side ``i`` with boundary ``B(s)`` and neighbour cross-derivative ``X(s)`` the
+patch's cross-boundary derivative is set to::
+
+    F_v(u, 0) = sum_f c_f(u) f(s(u)),   f in {X, B', B (rational only)}
+
+with cubic polynomials ``c_f``. Its poles are computed exactly in the patch's knot space (the
+product of a spline and a polynomial is a spline on the same knots, multiplicity raised). Then
+``span(F, F_u, F_v) = span(B, B', X)`` identically in ``u``: the projected tangent planes coincide
+at every point of the boundary (provided ``c_X != 0``; it is checked to stay negative, pointing into
+the hole). This is the classical ribbon (G1 "transversal vector field") construction.
+
+Internal G1 by construction. Along ``E_i`` the two cross derivatives ``L`` (patch ``i``) and
+``R`` (patch ``i+1``) satisfy ``a(t) L + b(t) R = r(t) E'(t)`` with ``a, b`` linear, ``r``
+quadratic, taken from a *domain picture*: a regular n-gon split into kites, whose bilinear
+parametrisations satisfy the same relation exactly. ``L = b Z + l E'``, ``R = -a Z + m E'`` with
+``a l + b m = r`` make it a polynomial identity. Corner compatibility (the twists at ``V_i``,
+``m_i`` and ``C``) fixes the end derivatives of the ``c_f``; the centre data come from one affine
+map of the domain, so the ``n`` twists there agree. The remaining interior poles minimise the
+thin-plate energy ``int |F_uu|^2 + 2|F_uv|^2 + |F_vv|^2``.
+
+Known limits (reported, never hidden): at a hole corner the twist is over-determined when the two
+neighbours are only G1 (not G2) to each other there (Gregory's twist incompatibility): its normal
+component is then averaged and G1 holds up to :attr:`HoleFill.twist_mismatch` near that corner.
+A side with a C0 knot (a kink, no tangent) is refused; split the side there. Hole corners must be
+convex (interior angle between :data:`MIN_CORNER_ANGLE` and 180 degrees): a reflex corner would fold
+the corner patch and is refused, as is a flat one (two tangent sides: merge them).
+
+References
+----------
+Course C25 §8-3 (n-sided holes), §8-5 (Sabin nets). C. Loop, T. DeRose, "A multisided
+generalization of Bézier surfaces", ACM ToG 8 (1989). J. Gregory, "N-sided surface patches" (1986).
+L. Piegl, W. Tiller, The NURBS Book, 2nd ed., 1997, A2.3 (derivatives), §10 (G1 joins).
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.linalg import lu_factor, lu_solve
+
+from ..kernel.basis import basis_matrix, greville
+from ..kernel.curve import BSplineCurve
+from ..errors import InvalidGeometryError, ToleranceError
+from ..kernel.surface import BSplineSurface
+
+__all__ = [
+    "HoleSide",
+    "HoleFill",
+    "FillQuality",
+    "side_from_surface",
+    "closest_parameters",
+    "fill_hole",
+    "measure_fill",
+    "CLOSURE_TOL",
+    "MIN_CORNER_ANGLE",
+    "CORNER_PLANE_TOL",
+    "REPRESENT_TOL",
+    "MAX_SIDES",
+    "TWIST_TOL",
+    "CORNER_SPAN",
+]
+
+Array = NDArray[np.float64]
+#: Relative singular-value cut-off of the small least-squares solves: the fields span a plane (3-D
+#: space in homogeneous coordinates); anything out of it (a corner incompatibility) must be dropped,
+#: not amplified.
+_RCOND = 1e-9
+#: Singular values below this fraction of the largest count as zero in the kite domain relation.
+_NULL_RTOL = 1e-10
+
+#: Largest gap (relative to the size of the loop's bounding box) between the end of one side and
+#: the start of the next for the loop to count as closed.
+CLOSURE_TOL: float = 1e-6
+#: Smallest angle (degrees) between the two sides at a hole corner, and between a side's tangent
+#: and its neighbour's cross derivative; below it the corner/side is degenerate and refused.
+MIN_CORNER_ANGLE: float = 2.0
+#: At a hole corner the tangent planes of the two neighbours must agree (sine of the angle by which
+#: one neighbour's boundary tangent leaves the other's tangent plane); above this the neighbours
+#: meet at a sharp edge there and no surface is G1 to both, so the hole is refused. Below it the
+#: fill is built and its measured G1 angle at that corner shows the mismatch.
+CORNER_PLANE_TOL: float = 0.02
+#: Self-check of the exact representations (relative to the function's size): a spline or
+#: polynomial placed into a knot space that holds it must come back to round-off.
+REPRESENT_TOL: float = 1e-9
+#: Twist mismatch (relative, see :attr:`HoleFill.twist_mismatch`) above which a corner is treated as
+#: incompatible: its twist pole is averaged and confined to a corner span of length CORNER_SPAN.
+TWIST_TOL: float = 1e-8
+#: Parameter length of that corner span; the G1 error it leaves near the corner is proportional to it.
+CORNER_SPAN: float = 0.02
+#: Most sides accepted (the construction works for any n; this bounds the output size).
+MAX_SIDES: int = 24
+
+
+# ============================================================================================ data
+@dataclass(frozen=True)
+class HoleSide:
+    """One side of a hole: the boundary curve and the neighbour's cross-boundary derivative.
+
+    Parameters
+    ----------
+    curve : BSplineCurve
+        The boundary, 3-D, oriented along the loop (side ``i`` ends where side ``i+1`` starts).
+    cross : BSplineCurve
+        Non-rational, on the same domain as ``curve``: the derivative of the neighbour surface
+        across the boundary, pointing *into the neighbour* (away from the hole). For a polynomial
+        ``curve`` it is 3-D; for a rational one it is the 4-D derivative of the neighbour's
+        homogeneous surface ``(w x, w y, w z, w)`` (what :func:`side_from_surface` returns).
+    """
+
+    curve: BSplineCurve
+    cross: BSplineCurve
+
+
+@dataclass(frozen=True)
+class HoleFill:
+    """The result of :func:`fill_hole`.
+
+    Attributes
+    ----------
+    patches : list of BSplineSurface
+        ``n`` four-sided patches; patch ``i`` has corner ``(0, 0)`` at the start of side ``i``, its
+        ``v = 0`` edge on side ``i`` (parameters ``[0, split[i]]``), its ``u = 0`` edge on side
+        ``i-1`` (``[split[i-1], 1]`` reversed), its ``u = 1`` edge on internal edge ``i`` and its
+        ``(1, 1)`` corner at the centre.
+    sides : list of HoleSide
+        The input sides reparametrised to ``[0, 1]``.
+    split : ndarray, shape (n,)
+        Parameter on each side where the internal edge starts (1/2 unless a knot of low continuity
+        sits there).
+    center : ndarray, shape (3,)
+    corner_residual : ndarray, shape (n,)
+        At each hole corner: how far (relative) the adjacent side's tangent lies out of the
+        neighbour's tangent plane. Zero when the neighbours are G1 to each other at the corner.
+    twist_mismatch : ndarray, shape (n,)
+        At each hole corner: relative size of the twist incompatibility (0 when the neighbours are
+        G2-compatible there; see the module notes).
+    """
+
+    patches: list[BSplineSurface]
+    sides: list[HoleSide]
+    split: Array
+    center: Array
+    corner_residual: Array
+    twist_mismatch: Array
+    size: float = field(default=1.0)
+
+    method: str = field(default="quads")
+
+    def locate(self, side: int, points: Array) -> tuple[NDArray[np.intp], Array, Array, Array]:
+        """Which patch, at which ``(u, v)``, carries the points ``(m, 3)`` of side ``side``.
+
+        The side parameter of each point comes from :func:`closest_parameters` (vectorised); patch
+        ``side`` covers ``[0, split]`` of the side on its ``v = 0`` edge, patch ``side + 1`` the rest
+        on its ``u = 0`` edge (reversed).
+
+        Returns
+        -------
+        patch : ndarray of intp, shape (m,)
+        u, v : ndarray, shape (m,)
+        distance : ndarray, shape (m,)
+            Distance of each point from the side curve (the caller judges it).
+        """
+        n = len(self.patches)
+        s, dist = closest_parameters(self.sides[side].curve, points)
+        sp = float(self.split[side])
+        first = s <= sp
+        patch = np.where(first, side, (side + 1) % n)
+        u = np.where(first, s / sp, 0.0)
+        v = np.where(first, 0.0, (1.0 - s) / (1.0 - sp))
+        return patch.astype(np.intp), u, v, dist
+
+
+@dataclass(frozen=True)
+class FillQuality:
+    """Dense measurements of a fill (:func:`measure_fill`).
+
+    Attributes
+    ----------
+    boundary_gap : ndarray, shape (n,)
+        Largest distance between the fill and side ``i`` (model units).
+    boundary_angle : ndarray, shape (n,)
+        Largest angle (degrees) between the fill's and the neighbour's tangent planes along side ``i``.
+    internal_gap, internal_angle : ndarray, shape (n,)
+        The same between patches ``i`` and ``i+1`` along internal edge ``i``.
+    center_angle : float
+        Largest angle (degrees) between the patches' normals at the centre.
+    """
+
+    boundary_gap: Array
+    boundary_angle: Array
+    internal_gap: Array
+    internal_angle: Array
+    center_angle: float
+
+
+# ====================================================================================== helpers
+def _mult_map(knots: Array, degree: int) -> dict[float, int]:
+    """Interior knots (strictly inside the domain) -> multiplicity."""
+    lo, hi = knots[degree], knots[-degree - 1]
+    vals, counts = np.unique(knots[(knots > lo) & (knots < hi)], return_counts=True)
+    return {float(v): int(c) for v, c in zip(vals, counts)}
+
+
+@functools.lru_cache(maxsize=256)
+def _collocation(degree: int, knots_key: bytes) -> tuple[Array, Any, Array, Array]:
+    """Greville points, LU factors of the collocation matrix, check points and their basis matrix
+    of the spline space ``(degree, knots)``; cached (a fill asks for the same few spaces many times)."""
+    knots = np.frombuffer(knots_key)
+    n = len(knots) - degree - 1
+    x = greville(knots, degree)
+    lu = lu_factor(basis_matrix(knots, degree, n, x)[0])
+    xm = np.r_[0.5 * (x[:-1] + x[1:]), knots[degree] + 0.37 * (x[1] - x[0])]
+    Nm = basis_matrix(knots, degree, n, xm)[0]
+    return x, lu, xm, Nm
+
+
+def _represent(fn: Callable[[Array], Array], degree: int, knots: Array) -> Array:
+    """Poles of the spline of ``(degree, knots)`` equal to ``fn`` (which must lie in that space).
+
+    Collocation at the Greville abscissae; verified at the points between them.
+    """
+    x, lu, xm, Nm = _collocation(int(degree), np.ascontiguousarray(knots, float).tobytes())
+    Y = fn(np.r_[x, xm])
+    Y, Ym = Y[:len(x)], Y[len(x):]
+    Q = lu_solve(lu, Y)
+    scale = max(float(np.abs(Y).max()), float(np.abs(Ym).max()), 1e-300)
+    err = float(np.abs(Nm @ Q - Ym).max()) / scale
+    if err > REPRESENT_TOL:
+        raise ToleranceError(f"internal: a ribbon is not exactly representable (relative error {err:.2e}); "
+                             "the side's knots or continuity are inconsistent")
+    return Q
+
+
+class _Poly:
+    """A vector polynomial in monomial form, ``coef`` shape (deg+1, w)."""
+
+    def __init__(self, coef: Array) -> None:
+        self.coef = np.asarray(coef, float)
+
+    @classmethod
+    def hermite(cls, conds: Sequence[tuple[float, int, Array]]) -> _Poly:
+        """The polynomial of degree ``len(conds) - 1`` with ``d^k p(t) = value`` for each condition."""
+        m = len(conds)
+        A = np.zeros((m, m))
+        Y = np.array([np.asarray(c[2], float) for c in conds])
+        for row, (t, k, _) in enumerate(conds):
+            for c in range(k, m):
+                A[row, c] = np.prod(np.arange(c - k + 1, c + 1)) * t ** (c - k)
+        return cls(np.linalg.solve(A, Y.reshape(m, -1)))
+
+    def __call__(self, t: Array, k: int = 0) -> Array:
+        t = np.asarray(t, float)
+        out = np.zeros(t.shape + self.coef.shape[1:])
+        for c in range(k, self.coef.shape[0]):
+            out += np.multiply.outer(np.prod(np.arange(c - k + 1, c + 1)) * t ** (c - k), self.coef[c])
+        return out
+
+    def __mul__(self, other: _Poly) -> _Poly:
+        """Scalar polynomial (w = 1) times vector polynomial."""
+        a, b = self.coef, other.coef
+        out = np.zeros((a.shape[0] + b.shape[0] - 1, max(a.shape[1], b.shape[1])))
+        for i in range(a.shape[0]):
+            out[i:i + b.shape[0]] += a[i] * b
+        return _Poly(out)
+
+    def __add__(self, other: _Poly) -> _Poly:
+        a, b = self.coef, other.coef
+        out = np.zeros((max(a.shape[0], b.shape[0]), a.shape[1]))
+        out[:a.shape[0]] += a
+        out[:b.shape[0]] += b
+        return _Poly(out)
+
+    def __neg__(self) -> _Poly:
+        return _Poly(-self.coef)
+
+    def deriv(self) -> _Poly:
+        c = self.coef
+        if c.shape[0] == 1:
+            return _Poly(np.zeros_like(c))
+        return _Poly(c[1:] * np.arange(1, c.shape[0])[:, None])
+
+
+def _scalar_poly(coefs: Sequence[float]) -> _Poly:
+    return _Poly(np.asarray(coefs, float)[:, None])
+
+
+class _Side:
+    """A side in working coordinates: boundary ``B`` and cross field ``X`` on ``[0, 1]``."""
+
+    def __init__(self, B: BSplineCurve, X: BSplineCurve, rational: bool) -> None:
+        self.B, self.X, self.rational = B, X, rational
+        self.nf = 3 if rational else 2
+
+    def fields(self, s: Array) -> tuple[Array, Array]:
+        """Fields ``[X, B', (B)]`` and their s-derivatives at ``s``: each (m, nf, w)."""
+        s = np.atleast_1d(np.asarray(s, float))
+        DB = self.B.derivatives(s, 2)
+        DX = self.X.derivatives(s, 1)
+        if self.rational:
+            F = np.stack([DX[:, 0], DB[:, 1], DB[:, 0]], 1)
+            dF = np.stack([DX[:, 1], DB[:, 2], DB[:, 1]], 1)
+        else:
+            F = np.stack([DX[:, 0], DB[:, 1]], 1)
+            dF = np.stack([DX[:, 1], DB[:, 2]], 1)
+        return F, dF
+
+    def continuity(self) -> dict[float, int]:
+        """Interior knot -> continuity order of the fields (B' and X) there."""
+        out: dict[float, int] = {}
+        for k, m in _mult_map(self.B.knots, self.B.degree).items():
+            out[k] = min(out.get(k, 99), self.B.degree - 1 - m)
+        for k, m in _mult_map(self.X.knots, self.X.degree).items():
+            out[k] = min(out.get(k, 99), self.X.degree - m)
+        return out
+
+    @property
+    def degree(self) -> int:
+        return max(self.B.degree, self.X.degree)
+
+
+def _cart(h: Array, rational: bool) -> Array:
+    return h[..., :3] / h[..., 3:4] if rational else h
+
+
+def _cart_tangent(h: Array, dh: Array, rational: bool) -> Array:
+    """Cartesian derivative of the projected curve from homogeneous point and derivative."""
+    if not rational:
+        return dh
+    return (dh[..., :3] - dh[..., 3:4] * (h[..., :3] / h[..., 3:4])) / h[..., 3:4]
+
+
+def _unit(v: Array) -> Array:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-300)
+
+
+def _angle_deg(a: Array, b: Array) -> Array:
+    """Angle between lines (or planes, given normals), in degrees, sign-free."""
+    a, b = _unit(a), _unit(b)
+    c = np.abs(np.einsum("...i,...i->...", a, b))
+    return np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), c))
+
+
+# ======================================================================================= inputs
+def closest_parameters(curve: BSplineCurve, points: Array, samples: int = 401,
+                       iterations: int = 8) -> tuple[Array, Array]:
+    """Parameters of the points of ``curve`` closest to ``points`` (m, dim), vectorised.
+
+    The nearest of ``samples`` uniform parameters starts Newton's iteration on
+    ``(C(t) - p) . C'(t) = 0`` (clamped to the domain), all points at once.
+
+    Returns
+    -------
+    t : ndarray, shape (m,)
+    distance : ndarray, shape (m,)
+        ``|C(t) - p|``, for the caller to check.
+    """
+    P = np.atleast_2d(np.asarray(points, float))
+    lo, hi = curve.domain
+    grid = np.linspace(lo, hi, samples)
+    dense = curve.evaluate(grid)
+    d2 = np.einsum("mkd,mkd->mk", P[:, None] - dense[None], P[:, None] - dense[None])
+    t = grid[np.argmin(d2, axis=1)]
+    for _ in range(iterations):
+        D = curve.derivatives(t, 2)
+        r = D[:, 0] - P
+        g = np.einsum("md,md->m", r, D[:, 1])
+        h = np.einsum("md,md->m", D[:, 1], D[:, 1]) + np.einsum("md,md->m", r, D[:, 2])
+        t_new = np.clip(t - np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0), lo, hi)
+        done = np.abs(t_new - t).max() <= 1e-15 * (hi - lo)
+        t = t_new
+        if done:
+            break
+    return t, np.linalg.norm(curve.evaluate(t) - P, axis=1)
+
+
+def side_from_surface(surface: BSplineSurface, edge: str, reverse: bool = False) -> HoleSide:
+    """The hole side along one iso-boundary of a neighbour surface, with its exact cross derivative.
+
+    Parameters
+    ----------
+    surface : BSplineSurface
+        The neighbour (3-D, polynomial or rational; unclamped knots are clamped first).
+    edge : {'u0', 'u1', 'v0', 'v1'}
+        Which boundary lies on the hole: ``'v0'`` is the curve ``S(u, v_min)``, etc.
+    reverse : bool
+        Reverse the curve (and field) so that the side runs the right way around the loop.
+
+    Returns
+    -------
+    HoleSide
+        The boundary curve (the row of poles, bit-exact) and the derivative across it pointing into
+        the surface (homogeneous for a rational surface), The NURBS Book eq. (3.17) applied to the
+        first two rows of homogeneous poles.
+    """
+    if not isinstance(surface, BSplineSurface):
+        raise InvalidGeometryError(f"surface: expected a BSplineSurface, got {type(surface).__name__}")
+    if edge not in ("u0", "u1", "v0", "v1"):
+        raise InvalidGeometryError(f"edge: expected one of 'u0', 'u1', 'v0', 'v1', got {edge!r}")
+    if surface.dim != 3:
+        raise InvalidGeometryError(f"surface: expected 3-D control points, got dimension {surface.dim}")
+    s = surface.clamp()
+    H = s.homogeneous_points
+    if edge[0] == "u":  # make the boundary direction the first index
+        H = np.swapaxes(H, 0, 1)
+        (q, p), (Kc, Kb) = s.degree, s.knots
+    else:
+        (p, q), (Kb, Kc) = s.degree, s.knots
+    nc = H.shape[1]
+    if edge[1] == "0":
+        row, cross = H[:, 0], q / (Kc[q + 1] - Kc[1]) * (H[:, 1] - H[:, 0])
+    else:
+        row, cross = H[:, -1], q / (Kc[nc + q - 1] - Kc[nc - 1]) * (H[:, -2] - H[:, -1])
+    if s.is_rational:
+        curve = BSplineCurve(p, Kb, row[:, :3] / row[:, 3:], row[:, 3])
+    else:
+        curve = BSplineCurve(p, Kb, row)
+    X = BSplineCurve(p, Kb, cross)
+    if reverse:
+        curve, X = curve.reverse(), X.reverse()
+    return HoleSide(curve, X)
+
+
+def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Side], bool, float, Array]:
+    if isinstance(sides, (str, bytes)) or not isinstance(sides, Sequence):
+        raise InvalidGeometryError(f"sides: expected a sequence of HoleSide, got {type(sides).__name__}")
+    n = len(sides)
+    if not 3 <= n <= MAX_SIDES:
+        raise InvalidGeometryError(f"sides: expected 3 to {MAX_SIDES} sides, got {n}")
+    rational = False
+    for k, sd in enumerate(sides):
+        if not isinstance(sd, HoleSide):
+            raise InvalidGeometryError(f"sides[{k}]: expected a HoleSide, got {type(sd).__name__}")
+        if not isinstance(sd.curve, BSplineCurve) or not isinstance(sd.cross, BSplineCurve):
+            raise InvalidGeometryError(f"sides[{k}]: curve and cross must be BSplineCurve")
+        if sd.curve.dim != 3:
+            raise InvalidGeometryError(f"sides[{k}].curve: expected a 3-D curve, got dimension {sd.curve.dim}")
+        want = 4 if sd.curve.is_rational else 3
+        if sd.cross.is_rational or sd.cross.dim != want:
+            raise InvalidGeometryError(
+                f"sides[{k}].cross: expected a non-rational {want}-D field "
+                f"({'homogeneous, for a rational curve' if want == 4 else 'Cartesian'}), got "
+                f"{'rational ' if sd.cross.is_rational else ''}{sd.cross.dim}-D")
+        if not np.allclose(sd.curve.domain, sd.cross.domain, rtol=1e-12, atol=1e-12):
+            raise InvalidGeometryError(f"sides[{k}].cross: domain {sd.cross.domain} differs from the curve's "
+                                       f"{sd.curve.domain}")
+        rational |= sd.curve.is_rational
+    unit = [HoleSide(sd.curve.clamp().reparametrize(0.0, 1.0), sd.cross.clamp().reparametrize(0.0, 1.0))
+            for sd in sides]
+    ends = np.array([[sd.curve.evaluate(0.0), sd.curve.evaluate(1.0)] for sd in unit])
+    size = float(np.linalg.norm(np.ptp(np.concatenate([sd.curve.evaluate(np.linspace(0, 1, 33)) for sd in unit]),
+                                       axis=0)))
+    size = max(size, 1e-300)
+    for k in range(n):
+        gap = float(np.linalg.norm(ends[k, 1] - ends[(k + 1) % n, 0]))
+        if gap > CLOSURE_TOL * size:
+            raise InvalidGeometryError(
+                f"sides: the boundary is not closed: side {k} ends {gap:.3g} away from the start of side "
+                f"{(k + 1) % n} (tolerance {CLOSURE_TOL * size:.3g}); order and orient the sides along the loop")
+    # The construction works about the hole's own centre: boundary derivatives and the exactness
+    # checks of _represent then lose no digits to the model's distance from the origin (a hole
+    # 1e6 away failed the representation check; at 1e4 the G1 angle grew from 4e-11 to 1e-7 deg).
+    origin = ends[:, 0].mean(axis=0)
+    work: list[_Side] = []
+    for k, sd in enumerate(unit):
+        c = BSplineCurve._trusted(sd.curve.degree, sd.curve.knots, np.asarray(sd.curve.control_points, float) - origin,
+                                 sd.curve.weights)
+        X = sd.cross
+        if c.is_rational:  # the homogeneous cross field (w x, w y, w z, w)' moves by -w' origin
+            Xp = np.asarray(X.control_points, float)
+            X = BSplineCurve._trusted(X.degree, X.knots, np.c_[Xp[:, :3] - Xp[:, 3:] * origin, Xp[:, 3:]])
+        if rational:
+            Hc = c.homogeneous_points if c.is_rational else np.c_[c.control_points, np.ones(c.n_poles)]
+            Xh = X.control_points if c.is_rational else np.c_[X.control_points, np.zeros(X.n_poles)]
+            B = BSplineCurve._trusted(c.degree, c.knots, Hc)
+            Xc = BSplineCurve._trusted(X.degree, X.knots, Xh)
+            w0, w1 = float(Hc[0, 3]), float(Hc[-1, 3])
+            if abs(w0 - 1.0) > 1e-15 or abs(w1 - 1.0) > 1e-15:
+                # lambda(s) B(s) with lambda linear: end weights 1, same projected curve and same span.
+                lam = lambda s, w0=w0, w1=w1: (1 - s) / w0 + s / w1  # noqa: E731
+                B, Xc = _times_linear(B, lam), _times_linear(Xc, lam)
+        else:
+            B, Xc = c, X
+        work.append(_Side(B, Xc, rational))
+    return unit, work, rational, size, origin
+
+
+def _times_linear(c: BSplineCurve, lam: Callable[[Array], Array]) -> BSplineCurve:
+    """``lam(s) c(s)`` for a linear ``lam``: degree + 1, every knot one more time."""
+    p = c.degree
+    inner = [k for k, m in _mult_map(c.knots, p).items() for _ in range(m + 1)]
+    K = np.r_[np.zeros(p + 2), sorted(inner), np.ones(p + 2)]
+    Q = _represent(lambda s: lam(s)[:, None] * c.evaluate(s), p + 1, K)
+    return BSplineCurve._trusted(p + 1, K, Q)
+
+
+# ================================================================================= construction
+def _choose_split(side: _Side) -> float:
+    """1/2, unless a knot there breaks the continuity of the fields' first derivative."""
+    cont = side.continuity()
+    bad = sorted(k for k, c in cont.items() if c < 1)
+    if not any(abs(k - 0.5) < 1e-9 for k in bad):
+        return 0.5
+    knots = np.unique(np.r_[0.0, list(cont), 1.0])
+    j = int(np.searchsorted(knots, 0.5 - 1e-9))  # knots[j] ~ 0.5
+    left, right = 0.5 * (knots[j - 1] + knots[j]), 0.5 * (knots[j] + knots[j + 1])
+    return float(left if 0.5 - left <= right - 0.5 else right)
+
+
+def _half_space(side: _Side, lo: float, hi: float, reverse: bool, degree: int) -> Array:
+    """Knot vector (degree ``degree``, on [0, 1]) of the part ``[lo, hi]`` of a side."""
+    inner: list[float] = []
+    for k, c in side.continuity().items():
+        if lo + 1e-12 < k < hi - 1e-12:
+            if c < 0:
+                raise InvalidGeometryError(
+                    f"sides: a side has a C0 knot (no tangent) at parameter {k:.6g}; split the side there")
+            x = (hi - k) / (hi - lo) if reverse else (k - lo) / (hi - lo)
+            inner += [x] * min(degree, degree - c)
+    return np.r_[np.zeros(degree + 1), sorted(inner), np.ones(degree + 1)]
+
+
+def _kite_relation(v: Array, p: Array, i: int, n: int) -> tuple[_Poly, _Poly, _Poly, dict[str, Array]]:
+    """Domain relation ``a A + b B = r T`` along internal edge ``i`` of the kite split (see module)."""
+    A0, A1 = p[i] - v[i], -p[i - 1]
+    B0, B1 = p[i] - v[(i + 1) % n], -p[(i + 1) % n]
+    T = -p[i]
+    perp = np.array([-T[1], T[0]])
+    M = np.array([[perp @ A0, 0.0, perp @ B0, 0.0],
+                  [perp @ A1, perp @ A0, perp @ B1, perp @ B0],
+                  [0.0, perp @ A1, 0.0, perp @ B1]])
+    # The null space of M is 1-D in general but 2-D when the split is symmetric (every side split
+    # at its middle: then A and B mirror each other about T and every a = b solves it), where a
+    # bare "last singular vector" is an arbitrary member, LAPACK-dependent, that can have a0 = 0.
+    # Take the member nearest to a = b = 1 (constant coefficients, the lowest degree): unique,
+    # continuous in the data, and the same on every machine.
+    _, sv, Vt = np.linalg.svd(M)
+    null = Vt[np.r_[sv, np.zeros(4 - sv.shape[0])] <= _NULL_RTOL * sv[0]]
+    if null.shape[0] == 0:
+        null = Vt[-1:]
+    x = null.T @ (null @ np.ones(4))  # (a0, a1, b0, b1)
+    if not np.any(x):
+        x = Vt[-1]
+    if x[0] < 0:
+        x = -x
+    if not np.all(x > _NULL_RTOL * np.abs(x).max()):
+        raise InvalidGeometryError(
+            f"sides: the domain relation of internal edge {i} has a coefficient that vanishes on the edge "
+            f"({np.array2string(x, precision=3)}): the side split parameters are too uneven")
+    a, b = _scalar_poly([x[0], x[1] - x[0]]), _scalar_poly([x[2], x[3] - x[2]])
+    # r(t) = (a A + b B) . T / |T|^2, quadratic
+    A = _Poly(np.array([A0, A1 - A0])); Bp = _Poly(np.array([B0, B1 - B0]))
+    V = a * A + b * Bp
+    r = _Poly((V.coef @ T / (T @ T))[:, None])
+    return a, b, r, {"A0": A0, "A1": A1, "B0": B0, "B1": B1, "T": T}
+
+
+def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
+    """Fill an n-sided hole with n four-sided patches, G1 to the neighbours and to each other.
+
+    Parameters
+    ----------
+    sides : sequence of HoleSide, length n (3 to :data:`MAX_SIDES`)
+        The hole's boundary in loop order, each with the neighbour's cross derivative
+        (:func:`side_from_surface` builds them from neighbour surfaces).
+
+    Returns
+    -------
+    HoleFill
+        The patches (rational if any side is) and the corner diagnostics.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Fewer than 3 sides, a loop that is not closed (:data:`CLOSURE_TOL`), a degenerate corner or
+        cross field (:data:`MIN_CORNER_ANGLE`; a neighbour's pole at a corner), neighbours meeting
+        at a sharp edge at a corner (:data:`CORNER_PLANE_TOL`), a kink inside a side, or a fill
+        that would turn back over the neighbour (cross field pointing into the hole).
+
+    Notes
+    -----
+    Construction in the module docstring (course §8-3; central split with G1 ribbons).
+    """
+    unit, S, rational, size, origin = _working_sides(sides)
+    n = len(S)
+    w = 4 if rational else 3
+    nf = S[0].nf
+    sig = np.array([_choose_split(sd) for sd in S])
+    tau = 1.0 - sig
+    th = 2 * np.pi * np.arange(n) / n
+    vdom = np.c_[np.cos(th), np.sin(th)]
+    pdom = np.array([(1 - sig[i]) * vdom[i] + sig[i] * vdom[(i + 1) % n] for i in range(n)])
+
+    # ---- geometry at the corners V_i: coefficient values and derivatives at the patch corner
+    F0 = [sd.fields(0.0) for sd in S]
+    F1 = [sd.fields(1.0) for sd in S]
+    ca0 = np.zeros((n, nf)); ca0d = np.zeros((n, nf)); cb0 = np.zeros((n, nf)); cb0d = np.zeros((n, nf))
+    corner_res = np.zeros(n); twist = np.zeros(n)
+    for i in range(n):
+        j = (i - 1) % n
+        Fa, dFa = F0[i][0][0], F0[i][1][0]  # (nf, w) fields of side i at s=0
+        Fb, dFb = F1[j][0][0], F1[j][1][0]  # of side i-1 at s=1
+        ta = sig[i] * S[i].B.derivatives(0.0, 1)[1]  # a'(0)
+        tb = -tau[j] * S[j].B.derivatives(1.0, 1)[1]  # b'(0)
+        h0 = S[i].B.evaluate(0.0)  # the corner (homogeneous, weight 1)
+        tca, tcb = _cart_tangent(h0, ta, rational), _cart_tangent(h0, tb, rational)
+        if _angle_deg(tca, tcb) < MIN_CORNER_ANGLE:
+            raise InvalidGeometryError(
+                f"sides: corner {i} (start of side {i}) is flat: the sides meet at {_angle_deg(tca, tcb):.3g} deg "
+                f"from tangent (minimum {MIN_CORNER_ANGLE}); merge the two sides or split the hole differently")
+        for k, at, F, t_side in ((i, "start", Fa, tca), (j, "end", Fb, tcb)):
+            cross = _cart_tangent(h0, F[0], rational)
+            ang = _angle_deg(t_side, cross)
+            if not np.linalg.norm(cross) > 0 or not ang >= MIN_CORNER_ANGLE:
+                raise InvalidGeometryError(
+                    f"sides[{k}].cross: degenerate at the {at} of the side (its angle to the boundary is "
+                    f"{ang:.3g} deg): the neighbour has a pole or a collapsed edge at hole corner {i} (a sphere "
+                    "or a fillet corner), where no tangent plane across the boundary is defined")
+        xa, *_ = np.linalg.lstsq(Fa.T, tb, rcond=_RCOND)
+        xb, *_ = np.linalg.lstsq(Fb.T, ta, rcond=_RCOND)
+        corner_res[i] = max(np.linalg.norm(Fa.T @ xa - tb) / np.linalg.norm(tb),
+                            np.linalg.norm(Fb.T @ xb - ta) / np.linalg.norm(ta))
+        if not corner_res[i] <= CORNER_PLANE_TOL:
+            raise InvalidGeometryError(
+                f"sides: at hole corner {i} the neighbours of sides {j} and {i} meet at a sharp edge (their "
+                f"tangent planes differ by {np.degrees(np.arcsin(min(corner_res[i], 1.0))):.3g} deg, more than "
+                f"{np.degrees(np.arcsin(CORNER_PLANE_TOL)):.3g}): no surface is G1 to both there")
+        ca0[i], cb0[i] = xa, xb
+        rhs = (-tau[j] * xb @ dFb) - (sig[i] * xa @ dFa)
+        M = np.c_[Fa.T, -Fb.T]
+        y, *_ = np.linalg.lstsq(M, rhs, rcond=_RCOND)
+        twist[i] = np.linalg.norm(M @ y - rhs) / max(np.linalg.norm(ta), np.linalg.norm(tb), 1e-300)
+        ca0d[i], cb0d[i] = y[:nf], y[nf:]
+
+    # ---- centre, midpoints and the coefficients there
+    Fm = [sd.fields(sig[i]) for i, sd in enumerate(S)]
+    mh = np.array([S[i].B.evaluate(sig[i]) for i in range(n)])
+    mder = np.array([S[i].B.derivatives(sig[i], 1)[1] for i in range(n)])
+    mc = _cart(mh, rational)
+    normals = np.zeros((n, 3))
+    for i in range(n):
+        tc = _cart_tangent(mh[i], mder[i], rational)
+        dc = _cart_tangent(mh[i], Fm[i][0][0, 0], rational)
+        if _angle_deg(tc, dc) < MIN_CORNER_ANGLE:
+            raise InvalidGeometryError(f"sides[{i}].cross: nearly tangent to the boundary "
+                                       f"({_angle_deg(tc, dc):.3g} deg); the neighbour is degenerate there")
+        normals[i] = _unit(np.cross(tc, dc))
+
+    def proj(i: int, d: Array) -> Array:
+        return d - normals[i] * (normals[i] @ d)
+
+    C0 = mc.mean(0)
+    C = np.mean([mc[i] + 0.5 * proj(i, C0 - mc[i]) for i in range(n)], axis=0)
+    Ch = np.r_[C, 1.0] if rational else C
+    c1 = np.zeros((n, nf))
+    for i in range(n):
+        t = proj(i, C - mc[i])
+        target = np.r_[mh[i, 3] * t, 0.0] if rational else t
+        c1[i], *_ = np.linalg.lstsq(Fm[i][0][0].T, target, rcond=_RCOND)
+    for arr, where in ((ca0, "corner"), (cb0, "corner"), (c1, "midpoint")):
+        if np.any(arr[:, 0] >= 0):
+            k = int(np.argmax(arr[:, 0]))
+            raise InvalidGeometryError(
+                f"sides: at the {where} of side {k} the fill would leave over the neighbour: a reflex corner "
+                "(interior angle above 180 deg, not supported by the central split), or a cross field pointing "
+                "into the hole (it must point into its neighbour)")
+
+    # ---- centre tangent plane: an affine map of the domain, DPhi (w, 2)
+    tg = np.array([np.r_[C - mc[i], 0.0] if rational else C - mc[i] for i in range(n)])
+    DPhi = np.linalg.lstsq(-pdom, tg, rcond=_RCOND)[0].T  # g_i = DPhi (-p_i)
+
+    # ---- internal edges: E_i, L_i (patch i), R_i (patch i+1); coefficient end derivatives
+    E: list[_Poly] = []; L: list[_Poly] = []; R: list[_Poly] = []
+    ca1d = np.zeros((n, nf)); cb1d = np.zeros((n, nf))
+    for i in range(n):
+        a, b, r, dom = _kite_relation(vdom, pdom, i, n)
+        a0, b0 = a(0.0)[0], b(0.0)[0]
+        a0d, b0d = a(0.0, 1)[0], b(0.0, 1)[0]
+        r0d = r(0.0, 1)[0]
+        F, dF = Fm[i][0][0], Fm[i][1][0]
+        rhs = r0d * c1[i].copy()
+        rhs[1] -= a0d * sig[i] - b0d * tau[i]
+        ca1d[i], cb1d[i] = 0.5 * rhs / a0, 0.5 * rhs / b0
+        T0 = c1[i] @ F
+        Ei = _Poly.hermite([(0.0, 0, mh[i]), (0.0, 1, T0), (1.0, 0, Ch), (1.0, 1, DPhi @ dom["T"]),
+                            (1.0, 2, np.zeros(w))])
+        L0, R0 = sig[i] * mder[i], -tau[i] * mder[i]
+        L0d = ca1d[i] @ F + sig[i] * c1[i] @ dF
+        R0d = cb1d[i] @ F - tau[i] * c1[i] @ dF
+        L1, L1d = DPhi @ dom["A1"], DPhi @ (dom["A1"] - dom["A0"])
+        R1, R1d = DPhi @ dom["B1"], DPhi @ (dom["B1"] - dom["B0"])
+        # l, m linear with a l + b m = r (coefficients of the quadratic identity)
+        Amat = np.array([[a.coef[0, 0], 0, b.coef[0, 0], 0],
+                         [a.coef[1, 0], a.coef[0, 0], b.coef[1, 0], b.coef[0, 0]],
+                         [0, a.coef[1, 0], 0, b.coef[1, 0]]])
+        rc = np.zeros(3); rc[:r.coef.shape[0]] = r.coef[:3, 0]
+        lm = np.linalg.lstsq(Amat, rc, rcond=_RCOND)[0]
+        ell, emm = _scalar_poly(lm[:2]), _scalar_poly(lm[2:])
+        T = Ei.deriv()
+        b1, b1d, ell0, ell1, ell0d = b(1.0)[0], b(1.0, 1)[0], ell(0.0)[0], ell(1.0)[0], ell(0.0, 1)[0]
+        Z0 = (L0 - ell0 * T(0.0)) / b0
+        Z1 = (L1 - ell1 * T(1.0)) / b1
+        Z0d = (L0d - b0d * Z0 - ell0d * T(0.0) - ell0 * T(0.0, 1)) / b0
+        Z1d = (L1d - b1d * Z1 - ell(1.0, 1)[0] * T(1.0) - ell1 * T(1.0, 1)) / b1
+        Z = _Poly.hermite([(0.0, 0, Z0), (0.0, 1, Z0d), (1.0, 0, Z1), (1.0, 1, Z1d)])
+        Li, Ri = b * Z + ell * T, -(a * Z) + emm * T
+        # self-check: R must meet its end data too (it does when the corner conditions hold)
+        scale = max(np.abs(L0).max(), np.abs(L1).max(), 1e-300)
+        err = max(np.abs(Ri(0.0) - R0).max(), np.abs(Ri(1.0) - R1).max(), np.abs(Ri(0.0, 1) - R0d).max(),
+                  np.abs(Ri(1.0, 1) - R1d).max()) / scale
+        if err > 1e-7:
+            raise ToleranceError(f"internal: the G1 data of internal edge {i} are inconsistent ({err:.2e})")
+        E.append(Ei); L.append(Li); R.append(Ri)
+
+    # ---- coefficient functions on every half side
+    def coeff_poly(v0: Array, d0: Array, v1: Array, d1: Array) -> _Poly:
+        return _Poly.hermite([(0.0, 0, v0), (0.0, 1, d0), (1.0, 0, v1), (1.0, 1, d1)])
+
+    patches: list[BSplineSurface] = []
+    for i in range(n):
+        j = (i - 1) % n
+        sa, sb = S[i], S[j]
+        pa = coeff_poly(ca0[i], ca0d[i], c1[i], ca1d[i])  # on u in [0,1], s = sig_i u
+        pb = coeff_poly(cb0[i], cb0d[i], c1[j], cb1d[j])  # on v in [0,1], s = 1 - tau_j v
+        Pu, Pv = max(sa.degree + 3, 4), max(sb.degree + 3, 4)
+        Ku = _half_space(sa, 0.0, sig[i], False, Pu)
+        Kv = _half_space(sb, sig[j], 1.0, True, Pv)
+        if twist[i] > TWIST_TOL:  # confine the incompatible twist to a small corner span
+            Ku, Kv = _corner_knot(Ku, Pu), _corner_knot(Kv, Pv)
+        nu, nv = len(Ku) - Pu - 1, len(Kv) - Pv - 1
+        H = np.full((nu, nv, w), np.nan)
+        cnt = np.zeros((nu, nv))
+        acc = np.zeros((nu, nv, w))
+
+        def put(idx, vals):  # poles set twice (corner blocks) are averaged; they agree but for the twist
+            acc[idx] += vals
+            cnt[idx] += 1
+
+        s_a = lambda u: sig[i] * u  # noqa: E731
+        s_b = lambda v: 1.0 - tau[j] * v  # noqa: E731
+        row0 = _represent(lambda u: sa.B.evaluate(s_a(u)), Pu, Ku)
+        da = _represent(lambda u: np.einsum("mf,mfw->mw", pa(u), sa.fields(s_a(u))[0]), Pu, Ku)
+        col0 = _represent(lambda v: sb.B.evaluate(s_b(v)), Pv, Kv)
+        db = _represent(lambda v: np.einsum("mf,mfw->mw", pb(v), sb.fields(s_b(v))[0]), Pv, Kv)
+        hu0, hv0 = Ku[Pu + 1] / Pu, Kv[Pv + 1] / Pv
+        hu1, hv1 = (1.0 - Ku[nu - 1]) / Pu, (1.0 - Kv[nv - 1]) / Pv
+        put((slice(None), 0), row0)
+        put((slice(None), 1), row0 + hv0 * da)
+        put((0, slice(None)), col0)
+        put((1, slice(None)), col0 + hu0 * db)
+        Ei, Li = E[i], L[i]
+        colE = _represent(lambda v: Ei(v), Pv, Kv)
+        put((nu - 1, slice(None)), colE)
+        put((nu - 2, slice(None)), colE - hu1 * _represent(lambda v: Li(v), Pv, Kv))
+        Ej, Rj = E[j], R[j]
+        rowE = _represent(lambda u: Ej(u), Pu, Ku)
+        put((slice(None), nv - 1), rowE)
+        put((slice(None), nv - 2), rowE - hv1 * _represent(lambda u: Rj(u), Pu, Ku))
+        fixed = cnt > 0
+        H[fixed] = acc[fixed] / cnt[fixed][:, None]
+        H = _fair_interior(H, ~fixed, (Pu, Pv), (Ku, Kv))
+        if rational:
+            if np.any(H[..., 3] <= 0):
+                raise InvalidGeometryError(f"sides: the rational fill of corner {i} got a non-positive weight "
+                                           f"({H[..., 3].min():.3g}); the neighbours' weights vary too much")
+            patches.append(BSplineSurface((Pu, Pv), (Ku, Kv), H[..., :3] / H[..., 3:] + origin, H[..., 3]))
+        else:
+            patches.append(BSplineSurface((Pu, Pv), (Ku, Kv), H + origin))
+    return HoleFill(patches, unit, sig, C + origin, corner_res, twist, size)
+
+
+def _corner_knot(K: Array, degree: int) -> Array:
+    """Insert a knot of multiplicity ``degree - 1`` at :data:`CORNER_SPAN` (or half the first span)."""
+    first = float(K[degree + 1])
+    kappa = min(CORNER_SPAN, 0.5 * first)
+    return np.r_[K[:degree + 1], [kappa] * (degree - 1), K[degree + 1:]]
+
+
+@functools.lru_cache(maxsize=16)
+def _leggauss(m: int) -> tuple[Array, Array]:
+    return np.polynomial.legendre.leggauss(m)
+
+
+@functools.lru_cache(maxsize=64)
+def _gram_cached(knots_key: bytes, degree: int, order: int) -> Array:
+    knots = np.frombuffer(knots_key)
+    n = len(knots) - degree - 1
+    xg, wg = _leggauss(degree + 1)
+    br = np.unique(knots)
+    a, b = br[:-1], br[1:]
+    x = (0.5 * (b - a)[:, None] * (xg + 1) + a[:, None]).ravel()
+    wt = (0.5 * (b - a)[:, None] * wg).ravel()
+    D = basis_matrix(knots, degree, n, x, order)[order]
+    G = D.T @ (wt[:, None] * D)
+    G.flags.writeable = False
+    return G
+
+
+def _gram(knots: Array, degree: int, order: int) -> Array:
+    """``G[i, j] = int N_i^(order) N_j^(order)`` by Gauss-Legendre per span (cached per space)."""
+    return _gram_cached(np.ascontiguousarray(knots, float).tobytes(), int(degree), int(order))
+
+
+def _fair_interior(H: Array, free: NDArray[np.bool_], degree: tuple[int, int], knots: tuple[Array, Array]) -> Array:
+    """Fill the free poles by minimising the thin-plate energy with the others fixed."""
+    if not free.any():
+        return H
+    G = [[_gram(knots[d], degree[d], k) for k in range(3)] for d in range(2)]
+    K = np.kron(G[0][2], G[1][0]) + 2 * np.kron(G[0][1], G[1][1]) + np.kron(G[0][0], G[1][2])
+    f = free.ravel()
+    flat = H.reshape(-1, H.shape[2]).copy()
+    flat[f] = np.linalg.solve(K[np.ix_(f, f)], -K[np.ix_(f, ~f)] @ flat[~f])
+    return flat.reshape(H.shape)
+
+
+# ================================================================================== measurement
+def _point_normal(surface: BSplineSurface, u: Array, v: Array) -> tuple[Array, Array]:
+    """Points and (unnormalised) normals ``S_u x S_v`` from one derivative evaluation; a degenerate
+    normal is NaN (as :meth:`BSplineSurface.normal`), so that it fails every angle check."""
+    D = surface.derivatives(u, v, 1)
+    nrm = np.cross(D[:, 1, 0], D[:, 0, 1])
+    nrm[np.linalg.norm(nrm, axis=1) == 0] = np.nan
+    return D[:, 0, 0], nrm
+
+
+def _neighbour_normal(side: HoleSide, s: Array) -> Array:
+    c = side.curve
+    D = c.derivatives(s, 1)
+    X = side.cross.evaluate(s)
+    if c.is_rational:
+        Hs = BSplineCurve._trusted(c.degree, c.knots, c.homogeneous_points).evaluate(s)
+        X = (X[:, :3] - X[:, 3:] * (Hs[:, :3] / Hs[:, 3:])) / Hs[:, 3:]
+    return np.cross(D[:, 1], X)
+
+
+def measure_fill(fill: HoleFill, samples: int = 201) -> FillQuality:
+    """Measure a fill densely: positional gap and tangent-plane angle along every joint.
+
+    Parameters
+    ----------
+    fill : HoleFill
+    samples : int
+        Points per half side / internal edge (plus every knot of the patches' edges).
+
+    Returns
+    -------
+    FillQuality
+    """
+    if not isinstance(fill, HoleFill):
+        raise InvalidGeometryError(f"fill: expected a HoleFill, got {type(fill).__name__}")
+    P, sd, n = fill.patches, fill.sides, len(fill.patches)
+    t = np.linspace(0.0, 1.0, max(int(samples), 3))
+    bg, ba, ig, ia = (np.zeros(n) for _ in range(4))
+    for i in range(n):
+        k = (i + 1) % n
+        tu = np.unique(np.r_[t, P[i].knots[0]])
+        tv = np.unique(np.r_[t, P[k].knots[1]])
+        s1, s2 = fill.split[i] * tu, 1.0 - (1.0 - fill.split[i]) * tv
+        c1, c2 = sd[i].curve.evaluate(s1), sd[i].curve.evaluate(s2)
+        (f1, n1), (f2, n2) = _point_normal(P[i], tu, 0.0 * tu), _point_normal(P[k], 0.0 * tv, tv)
+        bg[i] = max(np.linalg.norm(f1 - c1, axis=1).max(), np.linalg.norm(f2 - c2, axis=1).max())
+        ba[i] = max(_angle_deg(n1, _neighbour_normal(sd[i], s1)).max(), _angle_deg(n2, _neighbour_normal(sd[i], s2)).max())
+        te = np.unique(np.r_[t, P[i].knots[1], P[k].knots[0]])
+        (e1, m1), (e2, m2) = _point_normal(P[i], 1.0 + 0 * te, te), _point_normal(P[k], te, 1.0 + 0 * te)
+        ig[i] = np.linalg.norm(e1 - e2, axis=1).max()
+        ia[i] = _angle_deg(m1, m2).max()
+    nc = np.array([p.normal(1.0, 1.0) for p in P])
+    ca = float(max(_angle_deg(nc[0], nc[i]) for i in range(n)))
+    return FillQuality(bg, ba, ig, ia, ca)

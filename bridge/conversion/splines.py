@@ -1,0 +1,580 @@
+"""Exact conversion between our splines and OpenCascade geometry and topology.
+
+``to_occ`` and ``from_occ`` are inverse and **bit-exact** for B-splines: poles, weights and knots
+are copied as IEEE doubles, never recomputed. The knot vector is split into OCC's distinct knots +
+multiplicities in one place (:func:`occsurf.bridge._occ.knots_to_occ`).
+
+What ``from_occ`` accepts, and how exact the result is
+------------------------------------------------------
+* ``Geom_BSplineCurve`` / ``Geom_BSplineSurface``: bit-exact (periodic ones: see below).
+* ``Geom_BezierCurve`` / ``Geom_BezierSurface``: exact, the same poles on knots ``[0]*(p+1) + [1]*(p+1)``.
+* Lines, conics, planes, cylinders, cones, spheres, tori, surfaces of revolution and extrusion,
+  trimmed curves and surfaces, offsets with an analytic equivalent (``Geom_OffsetSurface.Surface()``):
+  through ``GeomConvert``. The *image* is exact (rational degree 2 in the circular directions, up
+  to round-off), the *parametrisation* in circular directions is not OCC's (they differ by up to
+  ~1e-2 in parameter; see OCP_NOTES §2).
+* Other offset curves and surfaces: approximated by ``GeomConvert_ApproxCurve`` /
+  ``GeomConvert_ApproxSurface`` within ``tol`` (:class:`ToleranceError` if that is not reached).
+* ``TopoDS_Face`` / ``TopoDS_Edge`` and build123d / cadquery ``Face`` / ``Edge`` (their
+  ``.wrapped``): the underlying surface / curve, see "Faces and edges".
+
+Infinite geometry (lines, planes, cylinders, cones, extrusions) has no B-spline form: pass
+``bounds`` (``(t0, t1)`` for curves, ``(u0, u1, v0, v1)`` for surfaces). ``bounds`` on a finite
+surface or curve trims it too (``Geom_RectangularTrimmedSurface`` / ``Geom_TrimmedCurve``, then
+``GeomConvert``, which segments a B-spline without changing its parametrisation).
+
+Periodic B-splines
+------------------
+We have no periodic flag: a periodic OCC spline with ``n`` poles, degree ``p`` and flat knots
+``KnotSequence()`` (length ``m``) is returned as the *equivalent unclamped non-periodic spline* with
+the same flat knots and the ``m - p - 1`` poles ``P[j mod n]`` (poles wrapped around, copied
+bit-exactly; weights likewise). Its domain ``[flat[p], flat[m - p - 1]]`` is the period
+``[FirstParameter, LastParameter]``, and it evaluates to the same points as the periodic curve (the
+B-spline basis on the period is the same; verified against OCC in ``tests/bridge``). One
+difference at the seam: at ``LastParameter`` OCC wraps round and takes derivatives from the right
+of the seam (those at ``FirstParameter``); the unclamped form takes them from the left, as at the
+end of any domain. They differ where the seam is not smooth enough (e.g. degree 1). OCC's own
+``SetNotPeriodic`` gives the same structure, but it goes through homogeneous coordinates and rounds
+the poles of rational splines, so it is not used. ``to_occ`` of the result is a non-periodic OCC
+spline with the same geometry. A periodic spline with fewer than ``degree + 1`` poles (OCC's
+periodic circle in build123d sweeps) has an invalid ``KnotSequence``; its flat knots are then built
+from the distinct knots with OCC's convention (see ``_periodic_flat``).
+
+Faces and edges
+---------------
+``BRep_Tool.Surface_s(face)`` / ``BRep_Tool.Curve_s(edge)`` give the geometry with the shape's
+``Location`` applied. A B-spline or Bézier surface (curve) is returned whole and exact; any other
+surface is trimmed to the face's UV bounds (``BRepTools.UVBounds_s``) — an edge's curve to the edge's
+parameter range — before conversion. **Orientation is not applied**: a ``REVERSED`` face keeps the
+normal of its surface (``S_u x S_v``), which then points *into* the solid; a ``REVERSED`` edge runs
+against its curve. Ask :func:`is_reversed` and apply it yourself (``surface.reverse("u")`` flips
+the normal, ``curve.reverse()`` the direction) when you need the topological sense.
+
+Dimension
+---------
+Geom2d is out of scope: ``to_occ`` raises :class:`InvalidGeometryError` for a spline whose points
+are not 3-D (pad planar curves with a zero z column yourself: ``np.c_[P, np.zeros(len(P))]``), and
+``from_occ`` refuses ``Geom2d_*`` objects. Silently padding would break the round trip
+``from_occ(to_occ(c)) == c``.
+
+Weights
+-------
+OCC stores a spline whose weights are all equal as polynomial (``Weights()`` is ``None``), so
+``from_occ(to_occ(c))`` of such a rational ``c`` has ``weights=None``: the same geometry, but not
+the same arrays. Any other rational spline round-trips bit-exactly.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from OCP.BRep import BRep_Tool
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace
+from OCP.BRepTools import BRepTools
+from OCP.Geom import (
+    Geom_BezierCurve,
+    Geom_BezierSurface,
+    Geom_BSplineCurve,
+    Geom_BSplineSurface,
+    Geom_Curve,
+    Geom_Geometry,
+    Geom_OffsetCurve,
+    Geom_OffsetSurface,
+    Geom_RectangularTrimmedSurface,
+    Geom_Surface,
+    Geom_TrimmedCurve,
+)
+from OCP.GeomAbs import GeomAbs_Shape
+from OCP.GeomConvert import GeomConvert, GeomConvert_ApproxCurve, GeomConvert_ApproxSurface
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED
+from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape
+
+from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms.errors import InvalidGeometryError, KernelError, ToleranceError
+
+from .. import _occ
+
+__all__ = [
+    "FACE_TOLERANCE",
+    "APPROX_TOLERANCE",
+    "to_occ",
+    "from_occ",
+    "is_reversed",
+    "to_face",
+    "to_edge",
+    "to_cq_face",
+    "to_cq_edge",
+]
+
+#: Tolerance given to ``BRepBuilderAPI_MakeFace`` / stored on the edges of faces we build: OCC's
+#: ``Precision::Confusion()``. Absolute, model units.
+FACE_TOLERANCE: float = 1e-7
+
+#: Default 3-D tolerance for offset curves and surfaces that have no exact B-spline form and are
+#: approximated by ``GeomConvert_ApproxCurve`` / ``GeomConvert_ApproxSurface`` (``GeomConvert``
+#: itself would use 1e-4). Absolute, model units; ``from_occ(..., tol=)`` overrides it.
+APPROX_TOLERANCE: float = 1e-7
+
+#: Limits handed to the approximators: highest degree and number of spans.
+_APPROX_MAX_DEGREE = 14
+_APPROX_MAX_SEGMENTS = 100
+
+#: ``Precision::IsInfinite``: parameters of magnitude >= 1e100 mean "unbounded".
+_INFINITE = 1e100
+
+
+# ================================================================================= ours -> OCC
+def to_occ(obj: BSplineCurve | BSplineSurface) -> Geom_BSplineCurve | Geom_BSplineSurface:
+    """Our spline as a non-periodic ``Geom_BSplineCurve`` / ``Geom_BSplineSurface``, bit-exact.
+
+    Parameters
+    ----------
+    obj : BSplineCurve or BSplineSurface
+        3-D (``dim == 3``). Clamped or unclamped knots; rational or not.
+
+    Returns
+    -------
+    Geom_BSplineCurve or Geom_BSplineSurface
+        Same degree(s), poles, weights and flat knot vector(s) (``KnotSequence()``) as ``obj``.
+
+    Raises
+    ------
+    InvalidGeometryError
+        ``obj`` is not one of our splines (the message names its type); not 3-D; a degree above
+        OCC's 25 (possible through ``_trusted``); an interior knot of multiplicity ``degree + 1``
+        (OCC allows it at the ends only); two knots closer than one ulp.
+    KernelError
+        OCC refused the data anyway (e.g. weights <= 0 smuggled in through ``_trusted``).
+    """
+    if isinstance(obj, BSplineCurve):
+        return _curve_to_occ(obj)
+    if isinstance(obj, BSplineSurface):
+        return _surface_to_occ(obj)
+    raise InvalidGeometryError(f"to_occ: expected a BSplineCurve or BSplineSurface, got {type(obj).__name__}")
+
+
+def _check_dim(dim: int, what: str) -> None:
+    if dim != 3:
+        raise InvalidGeometryError(
+            f"{what}: OpenCascade geometry is 3-D, got dim {dim} (Geom2d is out of scope; "
+            "pad 2-D control points with a zero z column to place the spline in the plane z = 0)"
+        )
+
+
+def _curve_to_occ(c: BSplineCurve) -> Geom_BSplineCurve:
+    _check_dim(c.dim, "to_occ(curve)")
+    p = _occ.check_degree(c.degree, "degree")
+    occ_knots, occ_mults = _occ.knots_to_occ(c.knots, p, "knots")
+    occ_poles = _occ.pnt_array(c.control_points)
+    with _occ.kernel_errors("to_occ: building Geom_BSplineCurve"):
+        if c.weights is None:
+            return Geom_BSplineCurve(occ_poles, occ_knots, occ_mults, p, False)
+        return Geom_BSplineCurve(occ_poles, _occ.real_array(c.weights), occ_knots, occ_mults, p, False)
+
+
+def _surface_to_occ(s: BSplineSurface) -> Geom_BSplineSurface:
+    _check_dim(s.dim, "to_occ(surface)")
+    p = _occ.check_degree(s.degree[0], "degree[0] (u)")
+    q = _occ.check_degree(s.degree[1], "degree[1] (v)")
+    occ_uk, occ_um = _occ.knots_to_occ(s.knots[0], p, "knots[0] (U)")
+    occ_vk, occ_vm = _occ.knots_to_occ(s.knots[1], q, "knots[1] (V)")
+    occ_poles = _occ.pnt_array2(s.control_points)
+    with _occ.kernel_errors("to_occ: building Geom_BSplineSurface"):
+        if s.weights is None:
+            return Geom_BSplineSurface(occ_poles, occ_uk, occ_vk, occ_um, occ_vm, p, q, False, False)
+        return Geom_BSplineSurface(occ_poles, _occ.real_array2(s.weights), occ_uk, occ_vk, occ_um, occ_vm,
+                                   p, q, False, False)
+
+
+# ================================================================================= OCC -> ours
+def from_occ(obj: Any, bounds: tuple[float, ...] | None = None, *, tol: float | None = None) -> BSplineCurve | BSplineSurface:
+    """Our B-spline equivalent of an OCC curve, surface, edge or face.
+
+    Parameters
+    ----------
+    obj : Geom_Curve, Geom_Surface, TopoDS_Edge, TopoDS_Face, or a build123d / cadquery Edge / Face
+        See the module docstring for what is exact.
+    bounds : tuple of float, optional
+        ``(t0, t1)`` for a curve or edge, ``(u0, u1, v0, v1)`` for a surface or face: trim to this
+        parameter box first. Required for unbounded geometry (plane, cylinder, line, ...).
+    tol : float, optional
+        3-D tolerance for offsets that must be approximated; default :data:`APPROX_TOLERANCE`.
+
+    Returns
+    -------
+    BSplineCurve or BSplineSurface
+        3-D. Bit-exact for OCC B-splines (periodic ones as their unclamped equivalent).
+
+    Raises
+    ------
+    InvalidGeometryError
+        Unsupported type (named), 2-D geometry, missing or malformed ``bounds``, degenerated edge.
+    ToleranceError
+        An offset could not be approximated within ``tol``.
+    KernelError
+        OCC failed (e.g. ``bounds`` outside a non-periodic spline's range).
+    """
+    tol = APPROX_TOLERANCE if tol is None else float(tol)
+    wrapped = getattr(obj, "wrapped", None)
+    if isinstance(wrapped, TopoDS_Shape):  # build123d / cadquery Shape
+        obj = wrapped
+    if isinstance(obj, TopoDS_Shape):
+        return _from_shape(obj, bounds, tol)
+    if isinstance(obj, Geom_Curve):
+        return _from_geom_curve(obj, _check_bounds(bounds, 2, "curve"), tol)
+    if isinstance(obj, Geom_Surface):
+        return _from_geom_surface(obj, _check_bounds(bounds, 4, "surface"), tol)
+    name = type(obj).__name__
+    if name.startswith("Geom2d"):
+        raise InvalidGeometryError(f"from_occ: 2-D geometry ({name}) is out of scope; expected 3-D Geom_* objects")
+    raise InvalidGeometryError(
+        f"from_occ: expected a Geom_Curve, Geom_Surface, TopoDS_Edge, TopoDS_Face or a build123d/cadquery "
+        f"Edge/Face, got {name}"
+    )
+
+
+def is_reversed(shape: Any) -> bool:
+    """True if a face or edge (OCC, build123d or cadquery) has ``TopAbs_REVERSED`` orientation.
+
+    ``from_occ`` ignores orientation; for a reversed face the outward normal is ``-S_u x S_v``.
+    """
+    wrapped = getattr(shape, "wrapped", None)
+    if isinstance(wrapped, TopoDS_Shape):
+        shape = wrapped
+    if not isinstance(shape, TopoDS_Shape):
+        raise InvalidGeometryError(f"is_reversed: expected a TopoDS_Shape or a build123d/cadquery shape, got {type(shape).__name__}")
+    return shape.Orientation() == TopAbs_REVERSED
+
+
+def _check_bounds(bounds: tuple[float, ...] | None, n: int, what: str) -> tuple[float, ...] | None:
+    if bounds is None:
+        return None
+    try:
+        b = tuple(float(x) for x in bounds)
+    except (TypeError, ValueError) as err:
+        raise InvalidGeometryError(f"bounds: expected {n} real numbers for a {what}, got {bounds!r}") from err
+    if len(b) != n or not all(np.isfinite(b)) or any(b[i] >= b[i + 1] for i in range(0, n, 2)):
+        form = "(t0, t1)" if n == 2 else "(u0, u1, v0, v1)"
+        raise InvalidGeometryError(f"bounds: expected finite {form} with t0 < t1 for a {what}, got {bounds!r}")
+    return b
+
+
+def _from_shape(shape: TopoDS_Shape, bounds, tol: float):
+    kind = shape.ShapeType()
+    if kind == TopAbs_FACE:
+        face = shape if isinstance(shape, TopoDS_Face) else TopoDS.Face_s(shape)
+        b = _check_bounds(bounds, 4, "face")
+        with _occ.kernel_errors("from_occ: reading the surface of a face"):
+            occ_surface = BRep_Tool.Surface_s(face)  # Location applied (OCP_NOTES §2)
+            if b is None and not isinstance(occ_surface, (Geom_BSplineSurface, Geom_BezierSurface)):
+                b = BRepTools.UVBounds_s(face)
+        if occ_surface is None:
+            raise InvalidGeometryError("from_occ: the face has no surface")
+        return _from_geom_surface(occ_surface, b, tol)
+    if kind == TopAbs_EDGE:
+        edge = shape if isinstance(shape, TopoDS_Edge) else TopoDS.Edge_s(shape)
+        b = _check_bounds(bounds, 2, "edge")
+        with _occ.kernel_errors("from_occ: reading the curve of an edge"):
+            occ_curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)  # Location applied; range from Range_s
+            first, last = BRep_Tool.Range_s(edge)
+        if occ_curve is None:
+            raise InvalidGeometryError("from_occ: the edge has no 3-D curve (degenerated edge, e.g. at a sphere's pole)")
+        if b is None and not (
+            isinstance(occ_curve, (Geom_BSplineCurve, Geom_BezierCurve))
+            and (first, last) == (occ_curve.FirstParameter(), occ_curve.LastParameter())
+        ):
+            b = _check_bounds((first, last), 2, "edge")
+        return _from_geom_curve(occ_curve, b, tol)
+    raise InvalidGeometryError(
+        f"from_occ: expected a face or an edge, got a {str(kind).rsplit('_', 1)[-1].lower()} "
+        "(iterate over its faces or edges)"
+    )
+
+
+# --------------------------------------------------------------------------------- curves
+#: A trimming bound within ``PERIOD_SNAP * period`` of a multiple of the period (or a range within
+#: that of one whole period) is snapped onto it before OCC converts a periodic curve or surface:
+#: ``GeomConvert`` crashes the process (segfault) or returns a spline with no poles for ranges
+#: that overshoot a period by round-off, e.g. a cylinder face trimmed to [-8.9e-16, 6.28318530718].
+PERIOD_SNAP: float = 1e-9
+
+
+def snap_periodic_range(a: float, b: float, period: float) -> tuple[float, float]:
+    """Snap ``[a, b]`` onto multiples of ``period`` and onto one whole period within
+    :data:`PERIOD_SNAP`; a range longer than one period is refused."""
+    tol = PERIOD_SNAP * period
+    ka, kb = round(a / period), round(b / period)
+    if abs(a - ka * period) <= tol:
+        a = ka * period
+    if abs(b - kb * period) <= tol:
+        b = kb * period
+    if abs((b - a) - period) <= tol:
+        b = a + period
+    if b - a > period:
+        raise InvalidGeometryError(
+            f"from_occ: bounds [{a!r}, {b!r}] span more than one period ({period!r}) of a periodic geometry"
+        )
+    return float(a), float(b)
+
+
+def _from_geom_curve(occ_curve: Geom_Curve, bounds: tuple[float, float] | None, tol: float) -> BSplineCurve:
+    if bounds is None and isinstance(occ_curve, Geom_BSplineCurve):
+        return _curve_from_bspline(occ_curve)
+    if bounds is None and isinstance(occ_curve, Geom_BezierCurve):
+        return _curve_from_bezier(occ_curve)
+    if bounds is None:
+        t0, t1 = occ_curve.FirstParameter(), occ_curve.LastParameter()
+        if abs(t0) >= _INFINITE or abs(t1) >= _INFINITE:
+            raise InvalidGeometryError(
+                f"from_occ: {type(occ_curve).__name__} is unbounded; pass bounds=(t0, t1)"
+            )
+    if bounds is not None and occ_curve.IsPeriodic():
+        bounds = snap_periodic_range(float(bounds[0]), float(bounds[1]), occ_curve.Period())
+    with _occ.kernel_errors(f"from_occ: converting {type(occ_curve).__name__}"):
+        c = occ_curve if bounds is None else Geom_TrimmedCurve(occ_curve, bounds[0], bounds[1])
+        if _is_offset_curve(c):
+            occ_b = _approx_curve(c, tol)
+        else:
+            occ_b = GeomConvert.CurveToBSplineCurve_s(c)
+    return _curve_from_bspline(occ_b)
+
+
+def _is_offset_curve(c: Geom_Curve) -> bool:
+    while isinstance(c, Geom_TrimmedCurve):
+        c = c.BasisCurve()
+    return isinstance(c, Geom_OffsetCurve)
+
+
+def _approx_curve(c: Geom_Curve, tol: float) -> Geom_BSplineCurve:
+    ap = GeomConvert_ApproxCurve(c, tol, GeomAbs_Shape.GeomAbs_C2, _APPROX_MAX_SEGMENTS, _APPROX_MAX_DEGREE)
+    if not ap.HasResult():
+        raise KernelError(f"from_occ: GeomConvert_ApproxCurve gave no result for {type(c).__name__}")
+    if not ap.IsDone() or ap.MaxError() > tol:
+        raise ToleranceError(
+            f"from_occ: the offset curve could not be approximated within tol={tol:g} "
+            f"(best {ap.MaxError():.3g})"
+        )
+    return ap.Curve()
+
+
+def _curve_from_bezier(occ_curve: Geom_BezierCurve) -> BSplineCurve:
+    p = occ_curve.Degree()
+    P = _occ.from_pnt_array(occ_curve.Poles())
+    w = occ_curve.Weights()
+    knots = np.r_[np.zeros(p + 1), np.ones(p + 1)]
+    return BSplineCurve(p, knots, P, None if w is None else _occ.from_real_array(w))
+
+
+def _curve_from_bspline(occ_curve: Geom_BSplineCurve) -> BSplineCurve:
+    p = occ_curve.Degree()
+    P = _occ.from_pnt_array(occ_curve.Poles())
+    occ_w = occ_curve.Weights()  # None if polynomial (IsRational is reliable for curves, this is too)
+    w = None if occ_w is None else _occ.from_real_array(occ_w)
+    flat = _occ.from_real_array(occ_curve.KnotSequence())
+    rebuilt = False
+    if occ_curve.IsPeriodic():
+        occ_flat = flat
+        flat = _periodic_flat(flat, _occ.from_real_array(occ_curve.Knots()),
+                              _occ.from_int_array(occ_curve.Multiplicities()), p, P.shape[0])
+        rebuilt = flat is not occ_flat
+        idx = np.arange(flat.shape[0] - p - 1) % P.shape[0]
+        P = P[idx]
+        w = None if w is None else w[idx]
+    c = BSplineCurve(p, flat, P, w)
+    if rebuilt:
+        u = np.linspace(*c.domain, 17)
+        ref = np.array([occ_curve.Value(float(x)).Coord() for x in u])
+        _check_rebuilt_periodic(c.evaluate(u), ref, c.control_points, P.shape[0], p)
+    return c
+
+
+def _check_rebuilt_periodic(ours: np.ndarray, ref: np.ndarray, poles: np.ndarray, n: int, p: int) -> None:
+    """A rebuilt periodic flat knot vector must reproduce OCC's own evaluation (it does for
+    ``n_poles == degree``, OCC's periodic circles; OCC's evaluation is not the periodic extension
+    for fewer poles)."""
+    scale = max(1.0, float(np.max(np.abs(poles))))
+    dev = float(np.max(np.abs(ours - ref)))
+    if dev > 1e-9 * scale:
+        raise InvalidGeometryError(
+            f"from_occ: periodic spline with {n} poles and degree {p} is not supported: with fewer than "
+            f"degree + 1 poles OCC's own evaluation is not the periodic extension (differs by {dev:.2g})"
+        )
+
+
+def _periodic_flat(occ_flat: np.ndarray, knots: np.ndarray, mults: np.ndarray, degree: int, n_poles: int) -> np.ndarray:
+    """The flat knot vector of the unclamped equivalent of a periodic spline.
+
+    OCC's ``KnotSequence()`` is used as it is when valid (bit-exact). It is invalid (not
+    non-decreasing) when the spline has fewer than ``degree + 1`` poles, e.g. OCC's periodic circle
+    of degree 6 with 6 poles that every build123d sweep of a circular profile contains. Then the
+    sequence is built here with OCC's own convention, checked against ``KnotSequence`` on valid
+    splines: the periodic knot sequence ``s_j = b_(j mod n) + T floor(j / n)`` (``b`` the distinct
+    knots but the last, repeated by their multiplicities; ``T`` the period) read from
+    ``j = M_0 - 1 - degree``, so that pole ``j`` belongs to flat index ``j`` in both.
+    """
+    if n_poles >= degree + 1 and not np.any(np.diff(occ_flat) < 0):
+        return occ_flat
+    n, p = n_poles, degree
+    base = np.repeat(knots[:-1], mults[:-1])
+    if base.shape[0] != n:
+        raise InvalidGeometryError(
+            f"from_occ: periodic spline with {n} poles but multiplicities summing to {base.shape[0]}"
+        )
+    period = knots[-1] - knots[0]
+    j = np.arange(n + 2 * p + 1) + (int(mults[0]) - 1 - p)
+    flat = base[np.mod(j, n)] + period * np.floor_divide(j, n)
+    flat[p], flat[n + p] = knots[0], knots[-1]  # the domain ends exactly
+    return flat
+
+
+# --------------------------------------------------------------------------------- surfaces
+def _from_geom_surface(occ_surface: Geom_Surface, bounds: tuple[float, ...] | None, tol: float) -> BSplineSurface:
+    if bounds is None and isinstance(occ_surface, Geom_BSplineSurface):
+        return _surface_from_bspline(occ_surface)
+    if bounds is None and isinstance(occ_surface, Geom_BezierSurface):
+        return _surface_from_bezier(occ_surface)
+    if bounds is None:
+        if any(abs(x) >= _INFINITE for x in occ_surface.Bounds()):
+            raise InvalidGeometryError(
+                f"from_occ: {type(occ_surface).__name__} is unbounded; pass bounds=(u0, u1, v0, v1)"
+            )
+    if bounds is not None:
+        u0, u1, v0, v1 = (float(x) for x in bounds)
+        if occ_surface.IsUPeriodic():
+            u0, u1 = snap_periodic_range(u0, u1, occ_surface.UPeriod())
+        if occ_surface.IsVPeriodic():
+            v0, v1 = snap_periodic_range(v0, v1, occ_surface.VPeriod())
+        bounds = (u0, u1, v0, v1)
+    with _occ.kernel_errors(f"from_occ: converting {type(occ_surface).__name__}"):
+        s = occ_surface if bounds is None else Geom_RectangularTrimmedSurface(occ_surface, *bounds)
+        if _needs_surface_approx(s):
+            occ_b = _approx_surface(s, tol)
+        else:
+            occ_b = GeomConvert.SurfaceToBSplineSurface_s(s)
+    return _surface_from_bspline(occ_b)
+
+
+def _needs_surface_approx(s: Geom_Surface) -> bool:
+    """An offset surface (possibly trimmed) without an analytic equivalent (``Surface()`` is null)."""
+    while isinstance(s, Geom_RectangularTrimmedSurface):
+        s = s.BasisSurface()
+    return isinstance(s, Geom_OffsetSurface) and s.Surface() is None
+
+
+def _approx_surface(s: Geom_Surface, tol: float) -> Geom_BSplineSurface:
+    C2 = GeomAbs_Shape.GeomAbs_C2
+    ap = GeomConvert_ApproxSurface(s, tol, C2, C2, _APPROX_MAX_DEGREE, _APPROX_MAX_DEGREE, _APPROX_MAX_SEGMENTS, 1)
+    if not ap.HasResult():
+        raise KernelError(f"from_occ: GeomConvert_ApproxSurface gave no result for {type(s).__name__}")
+    if not ap.IsDone() or ap.MaxError() > tol:
+        raise ToleranceError(
+            f"from_occ: the offset surface could not be approximated within tol={tol:g} (best {ap.MaxError():.3g})"
+        )
+    return ap.Surface()
+
+
+def _surface_from_bezier(occ_surface: Geom_BezierSurface) -> BSplineSurface:
+    p, q = occ_surface.UDegree(), occ_surface.VDegree()
+    P = _occ.from_pnt_array2(occ_surface.Poles())
+    occ_w = occ_surface.Weights()
+    w = None if occ_w is None else _occ.from_real_array2(occ_w)
+    U = np.r_[np.zeros(p + 1), np.ones(p + 1)]
+    V = np.r_[np.zeros(q + 1), np.ones(q + 1)]
+    return BSplineSurface((p, q), (U, V), P, w)
+
+
+def _surface_from_bspline(occ_surface: Geom_BSplineSurface) -> BSplineSurface:
+    p, q = occ_surface.UDegree(), occ_surface.VDegree()
+    P = _occ.from_pnt_array2(occ_surface.Poles())
+    occ_w = occ_surface.Weights()  # not IsURational(): it is False when weights vary only along u
+    w = None if occ_w is None else _occ.from_real_array2(occ_w)
+    U = _occ.from_real_array(occ_surface.UKnotSequence())
+    V = _occ.from_real_array(occ_surface.VKnotSequence())
+    occ_U, occ_V = U, V
+    if occ_surface.IsUPeriodic():
+        U = _periodic_flat(U, _occ.from_real_array(occ_surface.UKnots()),
+                           _occ.from_int_array(occ_surface.UMultiplicities()), p, P.shape[0])
+        idx = np.arange(U.shape[0] - p - 1) % P.shape[0]
+        P = P[idx]
+        w = None if w is None else w[idx]
+    if occ_surface.IsVPeriodic():
+        V = _periodic_flat(V, _occ.from_real_array(occ_surface.VKnots()),
+                           _occ.from_int_array(occ_surface.VMultiplicities()), q, P.shape[1])
+        idx = np.arange(V.shape[0] - q - 1) % P.shape[1]
+        P = P[:, idx]
+        w = None if w is None else w[:, idx]
+    s = BSplineSurface((p, q), (U, V), P, w)
+    if U is not occ_U or V is not occ_V:
+        (u0, u1), (v0, v1) = s.domain
+        uu, vv = (x.ravel() for x in np.meshgrid(np.linspace(u0, u1, 7), np.linspace(v0, v1, 7), indexing="ij"))
+        ref = np.array([occ_surface.Value(float(a), float(b)).Coord() for a, b in zip(uu, vv)])
+        _check_rebuilt_periodic(s.evaluate(uu, vv), ref, s.control_points, max(P.shape[:2]), max(p, q))
+    return s
+
+
+# ================================================================================= topology
+def _make_face(surface: BSplineSurface | Geom_Surface, tol: float) -> TopoDS_Face:
+    occ_surface = surface if isinstance(surface, Geom_Surface) else _as_occ(surface, BSplineSurface, "surface")
+    with _occ.kernel_errors("building a face (BRepBuilderAPI_MakeFace)"):
+        mf = BRepBuilderAPI_MakeFace(occ_surface, tol)
+        if not mf.IsDone():
+            raise KernelError(f"BRepBuilderAPI_MakeFace failed with status {mf.Error()}")
+        return mf.Face()
+
+
+def _make_edge(curve: BSplineCurve | Geom_Curve) -> TopoDS_Edge:
+    occ_curve = curve if isinstance(curve, Geom_Curve) else _as_occ(curve, BSplineCurve, "curve")
+    with _occ.kernel_errors("building an edge (BRepBuilderAPI_MakeEdge)"):
+        me = BRepBuilderAPI_MakeEdge(occ_curve)
+        if not me.IsDone():
+            raise KernelError(f"BRepBuilderAPI_MakeEdge failed with status {me.Error()}")
+        return me.Edge()
+
+
+def _as_occ(obj: Any, cls: type, name: str) -> Geom_Geometry:
+    if not isinstance(obj, cls):
+        raise InvalidGeometryError(f"{name}: expected a {cls.__name__} (or an OCC Geom object), got {type(obj).__name__}")
+    return to_occ(obj)
+
+
+def to_face(surface: BSplineSurface | Geom_Surface, *, tol: float = FACE_TOLERANCE):
+    """A build123d ``Face`` bounded by the whole parameter domain of ``surface``.
+
+    Parameters
+    ----------
+    surface : BSplineSurface or Geom_Surface
+    tol : float
+        Edge tolerance for ``BRepBuilderAPI_MakeFace``; default :data:`FACE_TOLERANCE`.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Wrong type, or see :func:`to_occ`.
+    KernelError
+        ``BRepBuilderAPI_MakeFace`` failed.
+    """
+    import build123d as bd
+
+    return bd.Face(_make_face(surface, tol))
+
+
+def to_edge(curve: BSplineCurve | Geom_Curve):
+    """A build123d ``Edge`` over the whole domain of ``curve`` (see :func:`to_face` for errors)."""
+    import build123d as bd
+
+    return bd.Edge(_make_edge(curve))
+
+
+def to_cq_face(surface: BSplineSurface | Geom_Surface, *, tol: float = FACE_TOLERANCE):
+    """A cadquery ``Face`` bounded by the whole parameter domain of ``surface`` (as :func:`to_face`)."""
+    import cadquery as cq
+
+    return cq.Face(_make_face(surface, tol))
+
+
+def to_cq_edge(curve: BSplineCurve | Geom_Curve):
+    """A cadquery ``Edge`` over the whole domain of ``curve`` (as :func:`to_edge`)."""
+    import cadquery as cq
+
+    return cq.Edge(_make_edge(curve))

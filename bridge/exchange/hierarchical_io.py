@@ -1,0 +1,272 @@
+"""STEP exchange of hierarchical splines (course §5-17): flat geometry + an editable sidecar.
+
+STEP has no entity for a Forsey–Bartels hierarchy, so :func:`write_hierarchical_step` writes
+
+* the STEP file: the exact flat form (:meth:`HierarchicalSurface.flatten`, one B-spline face; a
+  hierarchical curve becomes one edge) that every CAD system reads, through
+  :func:`occsurf.bridge.exchange.step_iges.write_step` (17 significant digits: bit-exact poles);
+* a JSON *sidecar* beside it (``model.step`` -> ``model.hierarchy.json``): the hierarchy's
+  :meth:`~HierarchicalSurface.to_dict` plus a fingerprint of the STEP file it belongs to.
+
+Both are written together: each to a synced temporary file beside its target, and only when both
+are complete are they renamed over the targets (STEP first). A failed write leaves no file behind
+and the old pair untouched.
+:func:`read_hierarchical_step` restores the editable hierarchy from the sidecar and checks that
+the STEP geometry still equals its flat form (a STEP file edited elsewhere, or a stale sidecar,
+raises :class:`ExchangeError` instead of silently loading details onto the wrong surface).
+:func:`import_step_base` turns a B-spline face of any STEP file into the base of a new hierarchy.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from occsurf.algorithms import BSplineSurface
+from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
+from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
+from occsurf.algorithms.hierarchical.curve import HierarchicalCurve
+from occsurf.algorithms.hierarchical.offsets import OffsetMapping
+
+from . import files as _files
+from . import occ_io as _xocc
+from .step_iges import STEP_DIGITS, read_step
+
+__all__ = ["SIDECAR_SUFFIX", "SIDECAR_MATCH_RTOL", "sidecar_path", "write_hierarchical_step",
+           "read_hierarchical_step", "import_step_base"]
+
+#: The sidecar of ``name.step`` is ``name`` + this suffix.
+SIDECAR_SUFFIX: str = ".hierarchy.json"
+
+#: The STEP geometry must equal the sidecar's flat form to this relative tolerance (of the
+#: model's size) at the check samples. The STEP write is bit-exact, so a real match is ~1e-16;
+#: anything above 1e-9 means the two files do not belong together.
+SIDECAR_MATCH_RTOL: float = 1e-9
+
+_SIDECAR_FORMAT = "occsurf-hierarchy-sidecar"
+_SIDECAR_VERSION = 1
+_CLASSES = {"HierarchicalSurface": HierarchicalSurface, "HierarchicalCurve": HierarchicalCurve}
+
+
+def sidecar_path(step_path: str | os.PathLike[str]) -> Path:
+    """``model.step`` -> ``model.hierarchy.json`` (same folder)."""
+    p = Path(os.fspath(step_path))
+    return p.with_name(p.stem + SIDECAR_SUFFIX)
+
+
+def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: HierarchicalSurface | HierarchicalCurve,
+                            name: str | None = None) -> tuple[Path, Path]:
+    """Write the flat form to STEP and the hierarchy to a JSON sidecar, both atomically.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The STEP file.
+    hierarchy : HierarchicalSurface or HierarchicalCurve
+        3-D.
+    name : str, optional
+        Product/face name in the STEP file.
+
+    Returns
+    -------
+    (Path, Path)
+        The STEP file and the sidecar.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Not a hierarchy, or not 3-D.
+    ExchangeError, KernelError
+        As :func:`occsurf.bridge.exchange.step_iges.write_step` (an unwritable path or sidecar path); no file is
+        created or modified then.
+    """
+    if not isinstance(hierarchy, (HierarchicalSurface, HierarchicalCurve)):
+        raise InvalidGeometryError(f"hierarchy: expected a HierarchicalSurface or HierarchicalCurve, got "
+                                   f"{type(hierarchy).__name__}")
+    step = _files.target(path)
+    side = sidecar_path(step)
+    if side.is_dir():
+        raise ExchangeError(f"{side}: is a directory; cannot write the hierarchy sidecar there")
+    other = _sidecar_owner(side)
+    if other is not None and other != step.name and (step.parent / other).exists():
+        raise ExchangeError(f"{side}: is the hierarchy sidecar of {other}, which would lose it; write {step.name} "
+                            "under another name (model.step and model.stp share one sidecar name)")
+    flat = hierarchy.flatten()
+    # The STEP bytes exactly as occsurf.bridge.exchange.step_iges.write_step makes them, kept in memory so that the
+    # pair is committed together: nothing on disk changes until both files are complete.
+    _xocc.silence_occ()
+    step_data = _xocc.step_bytes(step, _xocc.normalise(flat, name), STEP_DIGITS)
+    data = {
+        "format": _SIDECAR_FORMAT,
+        "version": _SIDECAR_VERSION,
+        "step_file": step.name,
+        "step_sha256": hashlib.sha256(step_data).hexdigest(),
+        "pole_counts": hierarchy.pole_counts(),
+        "hierarchy": hierarchy.to_dict(),
+    }
+    _write_pair([(step, step_data), (side, (json.dumps(data, indent=1) + "\n").encode())])
+    return step, side
+
+
+def _write_pair(items: list[tuple[Path, bytes]]) -> None:
+    """Write every file to a synced temporary file beside it, then ``os.replace`` them all.
+
+    A failure while writing removes the temporary files and leaves every target untouched; only
+    the renames themselves (one system call each) are not one transaction."""
+    tmps: list[str] = []
+    try:
+        for p, blob in items:
+            try:
+                fd, tmp = tempfile.mkstemp(prefix=f".{p.name[:80]}.", suffix=".tmp", dir=p.parent)
+            except OSError as err:
+                raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
+            tmps.append(tmp)
+            try:
+                mode = p.stat().st_mode & 0o7777
+            except OSError:
+                mode = _files.default_mode()
+            try:
+                with os.fdopen(fd, "wb") as fh:
+                    fh.write(blob)
+                    fh.flush()
+                    os.fsync(fh.fileno())
+                    os.fchmod(fh.fileno(), mode)
+            except OSError as err:
+                raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
+        for (p, _), tmp in zip(items, tmps):
+            try:
+                os.replace(tmp, p)
+            except OSError as err:
+                raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
+    finally:
+        for tmp in tmps:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
+def _sidecar_owner(side: Path) -> str | None:
+    """The ``step_file`` an existing sidecar names, or None (no file, or not one of ours)."""
+    try:
+        data = json.loads(side.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return None
+    owner = data.get("step_file") if isinstance(data, dict) and data.get("format") == _SIDECAR_FORMAT else None
+    return owner if isinstance(owner, str) else None
+
+
+def _check_params(knots: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Every distinct knot of the flat form in ``[lo, hi]`` and 1/4, 1/2, 3/4 of every span: each
+    polynomial piece is sampled, however small the finest overlay is."""
+    k = np.unique(np.clip(knots, lo, hi))
+    inner = [k[:-1] + f * np.diff(k) for f in (0.25, 0.5, 0.75)]
+    return np.unique(np.concatenate([k] + inner))
+
+
+def _samples(obj: Any, params: tuple[np.ndarray, ...]) -> np.ndarray:
+    if isinstance(obj, (HierarchicalSurface, BSplineSurface)):
+        return obj.evaluate_grid(*params)
+    return obj.evaluate(params[0])
+
+
+def read_hierarchical_step(path: str | os.PathLike[str]) -> HierarchicalSurface | HierarchicalCurve:
+    """Restore the editable hierarchy written by :func:`write_hierarchical_step`.
+
+    The sidecar must name this STEP file, and the file must be the one written with it (its SHA-256
+    is stored) or, if it was saved again, its first face (or free edge, for a curve) must equal the
+    sidecar hierarchy's flat form within :data:`SIDECAR_MATCH_RTOL` at every distinct knot and at
+    three points inside every knot span of the flat form.
+
+    Raises
+    ------
+    ExchangeError
+        No sidecar, an unreadable or foreign sidecar, a sidecar of another STEP file (``model.stp``
+        beside ``model.step``), or a STEP file whose geometry no longer matches it (edited after
+        writing). Messages name the path.
+    """
+    p = Path(os.fspath(path))
+    side = sidecar_path(p)
+    if not side.is_file():
+        raise ExchangeError(f"{side}: no hierarchy sidecar beside {p.name}; use import_step_base() to start a new "
+                            "hierarchy from the STEP geometry")
+    try:
+        data = json.loads(side.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise ExchangeError(f"{side}: unreadable hierarchy sidecar: {err}") from err
+    if not isinstance(data, dict) or data.get("format") != _SIDECAR_FORMAT:
+        raise ExchangeError(f"{side}: not an occsurf hierarchy sidecar")
+    version = data.get("version")
+    if isinstance(version, bool) or not isinstance(version, int) or not 1 <= version <= _SIDECAR_VERSION:
+        raise ExchangeError(f"{side}: sidecar version {version!r} is not supported (this is version "
+                            f"{_SIDECAR_VERSION}; older versions load)")
+    owner = data.get("step_file")
+    if isinstance(owner, str) and owner != p.name:
+        raise ExchangeError(f"{side}: the hierarchy sidecar of {owner}, not of {p.name}")
+    d = data.get("hierarchy")
+    cls = _CLASSES.get(d.get("type") if isinstance(d, dict) else None)
+    if cls is None:
+        raise ExchangeError(f"{side}: the sidecar holds no hierarchical surface or curve")
+    try:
+        h = cls.from_dict(d)
+    except (InvalidGeometryError, TypeError, KeyError, IndexError) as err:  # any malformed content
+        raise ExchangeError(f"{side}: invalid hierarchy: {err}") from err
+    try:
+        same = hashlib.sha256(p.read_bytes()).hexdigest() == data.get("step_sha256")
+    except OSError:
+        same = False  # read_step names the problem
+    if same:
+        return h  # the very file written with this sidecar: no need to parse it
+    model = read_step(p)
+    items = model.faces if cls is HierarchicalSurface else model.edges
+    geo = items[0].surface if cls is HierarchicalSurface and items else (items[0].curve if items else None)
+    if geo is None:
+        raise ExchangeError(f"{p}: no {'face' if cls is HierarchicalSurface else 'edge'} to match the sidecar")
+    # Re-saved or edited: the geometry must still be the hierarchy's, on every polynomial piece.
+    flat = h.flatten()
+    if isinstance(flat, BSplineSurface):
+        params = tuple(_check_params(flat.knots[i], *flat.domain[i]) for i in range(2))
+    else:
+        params = (_check_params(flat.knots, *flat.domain),)
+    ours = _samples(h, params)
+    try:
+        theirs = _samples(geo, params)
+    except InvalidGeometryError as err:
+        raise ExchangeError(f"{p}: its geometry does not match the sidecar ({err})") from err
+    scale = max(1.0, float(np.abs(ours).max()))
+    dev = float(np.abs(ours - theirs).max()) if ours.shape == theirs.shape else np.inf
+    if not dev <= SIDECAR_MATCH_RTOL * scale:
+        raise ExchangeError(f"{p}: the STEP geometry differs from the hierarchy in {side.name} by {dev:.3g} "
+                            "(edited after writing, or a stale sidecar)")
+    return h
+
+
+def import_step_base(path: str | os.PathLike[str], face: int = 0,
+                     offsets: str | OffsetMapping = "frame") -> HierarchicalSurface:
+    """A new hierarchy whose base is a B-spline face of a STEP file (exact conversion).
+
+    Parameters
+    ----------
+    path : str or path-like
+    face : int
+        Index into :attr:`occsurf.bridge.exchange.step_iges.ImportedModel.faces`.
+    offsets : {"frame", "additive"} or OffsetMapping
+
+    Raises
+    ------
+    ExchangeError
+        Unreadable file, no such face, or a face that is not a B-spline surface (its type named).
+    """
+    model = read_step(path)
+    if isinstance(face, bool) or not isinstance(face, int) or not 0 <= face < len(model.faces):
+        raise ExchangeError(f"{model.path}: face index {face!r} is not in 0..{len(model.faces) - 1}")
+    f = model.faces[face]
+    if f.surface_type not in ("BSplineSurface", "BezierSurface") or f.surface is None:
+        raise ExchangeError(f"{model.path}: face {face} is a {f.surface_type}, not a B-spline surface"
+                            + (f" ({f.error})" if f.error else ""))
+    return HierarchicalSurface(f.surface, offsets)
