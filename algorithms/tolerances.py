@@ -1,71 +1,296 @@
-"""Tolerances and kernel limits, as documented module constants.
+"""Every numeric tolerance and limit of :mod:`occsurf.algorithms`, in one place, overridable.
 
-Every tolerance that an algorithm uses by default lives here, so that it is written once and can
-be changed for a block of code with :func:`override`::
+Each value is read where it is used, at call time, as ``tolerances.NAME``; so a block of code can
+change any of them with :func:`override`::
 
-    from . import tolerances
-    with tolerances.override(KNOT_REMOVAL=1e-6):
+    from occsurf.algorithms import tolerances
+    with tolerances.override(KNOT_REMOVAL=1e-6, SWEEP_TOLERANCE=1e-8):
         c2 = c.remove_knot(0.5)
 
-Functions also take an explicit ``tol=`` keyword, which wins over the module value.
+Overrides live in a :class:`contextvars.ContextVar`: they apply to the thread (or asyncio task) that
+set them and to nothing else, so two threads can work with different tolerances at once. Functions
+also take an explicit ``tol=`` keyword where a caller typically wants its own value; it wins over the
+value here. :data:`MAX_DEGREE` is a kernel limit (OpenCascade's), not a tolerance: it cannot be
+overridden. :func:`defaults` lists every name with its default value.
+
+The names are grouped by the subpackage that reads them; names used by one family only carry its
+prefix (``SWEEP_``, ``GORDON_``, ``SPATCH_``, ``FILL_``, ``DRAG_``).
 """
 
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator
+import contextvars
+from collections.abc import Iterator, Mapping
+from types import MappingProxyType
 
-__all__ = ["MAX_DEGREE", "KNOT_EQUALITY", "PARAMETER", "KNOT_REMOVAL", "WEIGHT_SUM", "MAX_CONDITION", "override"]
+__all__ = ["MAX_DEGREE", "override", "defaults", "get"]
 
 #: Highest degree accepted, the same as OpenCascade's ``Geom_BSplineCurve::MaxDegree()`` so that
-#: every spline we build can be handed to OCC.
+#: every spline we build can be handed to OCC (a test asks OCC). A kernel limit: not overridable.
 MAX_DEGREE: int = 25
 
-#: Two knots closer than this (relative to the knot range) are treated as one knot when counting
-#: multiplicities, inserting, or converting to OCC's distinct knots + multiplicities.
-KNOT_EQUALITY: float = 1e-12
+_DEFAULTS: dict[str, float] = {
+    # ---- kernel (course ch. 2, 12) -------------------------------------------------------------
+    # Two knots closer than this (relative to the knot range) are treated as one knot when counting
+    # multiplicities, inserting, or converting to OCC's distinct knots + multiplicities.
+    "KNOT_EQUALITY": 1e-12,
+    # How far (relative to the domain length) a parameter may lie outside the domain and still be
+    # snapped onto it rather than rejected. Covers round-off in callers' arithmetic.
+    "PARAMETER": 1e-10,
+    # Default geometric tolerance for knot removal: the largest allowed movement of any control
+    # point of the refined representation (which bounds the movement of the curve by the
+    # convex-hull property). Absolute, in model units.
+    "KNOT_REMOVAL": 1e-9,
+    # Smallest number of evaluated points for which the numba kernels are used. The first use in a
+    # process costs about 0.5 s (importing numba, loading the cached kernels); from 2**15 points on
+    # a kernel saves ~15 ms per scattered evaluation, so that cost is repaid after a few dozen
+    # calls, and below it the NumPy path takes a few milliseconds anyway.
+    "NUMBA_MIN_POINTS": 1 << 15,
+    # ---- geometry (course ch. 1, §6-0..6-14) ---------------------------------------------------
+    # Tolerance on weights that must sum to one (affine combinations).
+    "WEIGHT_SUM": 1e-12,
+    # A frame basis (or any matrix that must be inverted, e.g. of an affine or projective map)
+    # whose 2-norm condition number exceeds this is treated as singular: its inverse would lose
+    # more than ~12 of 16 significant digits.
+    "MAX_CONDITION": 1e12,
+    # A curve point has no Frenet normal when |C' x C''| <= CURVATURE_ZERO * |C'| * |C''| (the sine
+    # of the angle between the first two derivatives; scale-free).
+    "CURVATURE_ZERO": 1e-12,
+    # A surface point has no normal when |S_u x S_v| <= NORMAL_ZERO * max(|S_u|, |S_v|)^2
+    # (scale-free; at a sphere pole S_u is round-off, so |S_u| |S_v| would not do).
+    "NORMAL_ZERO": 1e-12,
+    # Default arc-length tolerance, relative to the length of the control polygon ...
+    "ARC_LENGTH": 1e-13,
+    # ... reached by adaptive 16-point Gauss-Legendre with at most this many halvings.
+    "ARC_LENGTH_MAX_LEVELS": 40,
+    # Default tolerance of is_umbilic, relative to max(|k1|, |k2|, 1/R), R the size of the net.
+    "UMBILIC": 1e-8,
+    # ---- construction (course ch. 6) -----------------------------------------------------------
+    # A revolution angle may exceed 2 pi by this much (absolute, radians) and still count as a
+    # full turn (round-off in a caller's 2 * np.pi arithmetic); larger |angle| is rejected.
+    "ANGLE_SLACK": 1e-12,
+    # An extrusion vector is zero when its length is at most AXIS_ZERO times the size of the
+    # geometry it moves (the largest pole coordinate, at least 1): scale-free.
+    "AXIS_ZERO": 1e-12,
+    # Largest gap allowed between curves that should meet (Coons corners, Gordon intersections),
+    # absolute, in model units (OCC's Precision::Confusion()). Gaps up to it are closed (Coons: the
+    # curves' end poles move to the corner's mean; Gordon: the intersection point is the mean);
+    # larger ones raise InvalidGeometryError.
+    "NETWORK_TOLERANCE": 1e-7,
+    # Bicubic Coons corner compatibility: a cross-boundary derivative at a corner must equal the
+    # tangent of the adjacent boundary there to this tolerance, relative to the larger of the two
+    # vectors' lengths (and 1).
+    "DERIVATIVE_TOLERANCE": 1e-7,
+    # Default largest distance between a rational curve and the polynomial B-spline that replaces
+    # it where an exact homogeneous construction is impossible (absolute, model units).
+    "APPROXIMATION_TOLERANCE": 1e-6,
+    # Relative agreement demanded of homogeneous corner / intersection weights (Coons, Gordon).
+    "HOMOGENEOUS_WEIGHT_RTOL": 1e-12,
+    # Gordon closest-point search between two curves: samples per non-empty knot span (at least 16
+    # per curve) for the starting guess, then at most GORDON_NEWTON_STEPS Gauss-Newton iterations
+    # from each of the GORDON_STARTS closest sample pairs (so that a nearby local minimum of the
+    # distance does not hide the intersection).
+    "GORDON_SAMPLES_PER_SPAN": 8,
+    "GORDON_NEWTON_STEPS": 40,
+    "GORDON_STARTS": 8,
+    # Default tolerance of sweep, relative to the size of the swept geometry (max(1, largest
+    # |coordinate| of the profile and path poles)): the pole bound is driven below
+    # SWEEP_TOLERANCE * size.
+    "SWEEP_TOLERANCE": 1e-6,
+    # Steps of the reference rotation-minimising frame chain per non-empty path span (double
+    # reflection has a global error of O(h^4): on a 1.5-turn helix with 9 spans, 128 steps agree
+    # with an ODE solution of the RMF transport (DOP853, rtol 1e-13) to 7.8e-12 in the frame
+    # vectors, 64 steps to 1.4e-10, 32 to 2.3e-9).
+    "SWEEP_RMF_STEPS": 128,
+    # Each non-empty path span is first cut in this many v spans.
+    "SWEEP_INITIAL_PIECES": 2,
+    # Points per v span where the pole bound is checked during refinement.
+    "SWEEP_CHECKS_PER_SPAN": 5,
+    # v values per v span of the final dense verification (every profile span sampled 8 times).
+    "SWEEP_VERIFY_PER_SPAN": 9,
+    # Refinement stops with a ToleranceError beyond this many pole rows in v.
+    "SWEEP_MAX_SECTIONS": 4000,
+    # A span whose error e exceeds tol is cut in ceil(SWEEP_SPLIT_SAFETY (e / tol)^(1/(q+1)))
+    # pieces (at least 2, at most SWEEP_MAX_SPLIT): the interpolation error of a smooth function
+    # falls like h^(q+1), so one pass usually suffices where plain halving needs several.
+    "SWEEP_SPLIT_SAFETY": 1.2,
+    "SWEEP_MAX_SPLIT": 16,
+    # A path joint (knot of multiplicity >= degree) must be tangent-continuous within this angle
+    # (radians) unless frame="fixed": a moving frame turns abruptly at a kink, tearing the sweep.
+    "SWEEP_KINK_ANGLE": 1e-9,
+    # A path whose ends are this close (relative to its size) and whose end tangents agree within
+    # SWEEP_CLOSE_ANGLE (radians) is closed: with frame="rmf" the frame's holonomy is then spread
+    # along it so that the swept surface closes too.
+    "SWEEP_CLOSE_TOL": 1e-9,
+    "SWEEP_CLOSE_ANGLE": 1e-6,
+    # Refinement gives up (ToleranceError) rather than cut a span below this fraction of the
+    # path's domain: an error that does not fall as spans shrink comes from a jump in a law, a cusp
+    # of the path or a frame that turns abruptly, not from too few sections.
+    "SWEEP_MIN_SPAN": 1e-9,
+    # ---- fitting (course ch. 7) ----------------------------------------------------------------
+    # Schoenberg-Whitney margin: a collocation system is refused when some basis function is
+    # smaller than this at its own data site (the matrix is then singular or nearly so). Relative
+    # to the basis' maximum of 1.
+    "SCHOENBERG_WHITNEY": 1e-12,
+    # ---- manipulation (course ch. 3, 4) --------------------------------------------------------
+    # A pivot |R[k, k]| of the equilibrated constraint matrix below RANK_RTOL * |R[0, 0]| counts as
+    # zero: rows beyond it are taken as combinations of the earlier ones.
+    "RANK_RTOL": 1e-10,
+    # Dependent constraint rows are consistent when their targets match the combination of the
+    # independent rows' targets to CONSISTENCY_RTOL times the size of the (equilibrated) targets.
+    "CONSISTENCY_RTOL": 1e-9,
+    # Stopping tolerance (atol and btol) of the iterative sparse solvers.
+    "SPARSE_TOL": 1e-14,
+    # Nonlinear constraints (curvature, tangent magnitude) are met when each residual is at most
+    # NEWTON_TOL * max(1, |target|) (in the constraint's own units).
+    "NEWTON_TOL": 1e-12,
+    # Newton-KKT steps allowed in all continuation stages before the SLSQP fallback (and SLSQP's
+    # iteration limit, at least 100).
+    "DRAG_MAX_ITERATIONS": 60,
+    # Newton steps tried per continuation stage before the stage is halved.
+    "DRAG_NEWTON_STEPS": 10,
+    # Smallest continuation step in t before giving up.
+    "MIN_CONTINUATION_STEP": 2.0**-14,
+    # A Newton-KKT stage has converged (once feasible) when the reduced gradient of the Lagrangian
+    # is below KKT_RTOL * max(|y|, 1) (first-order optimality of the minimum-norm change).
+    "KKT_RTOL": 1e-10,
+    # Linear constraints (curve and surface edits) must hold after the solve to this relative
+    # accuracy, else the system was too ill-conditioned and ConstraintError is raised instead of
+    # returning a wrong result.
+    "LINEAR_CHECK_RTOL": 1e-9,
+    # ---- hierarchical (course ch. 5) -----------------------------------------------------------
+    # A normal is degenerate where |S_u x S_v| <= FRAME_DEGENERACY (|S_u|^2 + |S_v|^2): ~6 digits
+    # above round-off in the cross product, far below any real surface's tangent angle.
+    "FRAME_DEGENERACY": 1e-10,
+    # Relative step (of the domain size) towards the domain centre at which a degenerate frame is
+    # re-evaluated. The frame found there approximates the limit frame to O(FRAME_NUDGE).
+    "FRAME_NUDGE": 1e-6,
+    # HierarchicalSurface.drag_point stops once the point is this close to the target, relative to
+    # max(1, |target|): the linear solve is exact to ~1e-14, and with frame offsets each further
+    # iteration only corrects the turn of finer details ...
+    "EDIT_POINT_RTOL": 1e-11,
+    # ... after at most this many linearised solves (14 measured for details of 0.1 on a unit
+    # patch, residual factor 0.16 per step; 40 leave room for a factor of ~0.5).
+    "EDIT_POINT_MAX_ITER": 40,
+    # ---- topology (course ch. 8) ---------------------------------------------------------------
+    # How far (relative to the circumradius 1) a domain point may lie outside the regular n-gon
+    # and still be accepted (round-off in callers' arithmetic); the Wachspress coordinates are
+    # smooth across the sides, so such points evaluate to the analytic continuation.
+    "SPATCH_DOMAIN_SLACK": 1e-10,
+    # Largest number of sides of an S-patch. Beyond it the Wachspress denominator (degree n - 3)
+    # and the number of control points grow without practical use; the course stops at 8.
+    "SPATCH_MAX_SIDES": 64,
+    # S-patch conversion: default maximum deviation of an approximated piece, relative to the
+    # diagonal of the patch's control-point bounding box (tol= overrides it with an absolute value),
+    # with B-spline pieces of degree SPATCH_APPROX_DEGREE of at most SPATCH_APPROX_MAX_POLES poles
+    # per direction (else ToleranceError) where the exact bidegree exceeds MAX_DEGREE.
+    "SPATCH_APPROX_TOL": 1e-7,
+    "SPATCH_APPROX_DEGREE": 5,
+    "SPATCH_APPROX_MAX_POLES": 80,
+    # Relative tolerance (to the largest homogeneous coefficient) within which the degree
+    # reduction of the 4-sided pieces (exact in theory) must reproduce the coefficients on
+    # re-elevation (round-off measured: ~1e-15); otherwise the pieces are kept at bidegree 2d.
+    "SPATCH_REDUCTION_TOL": 1e-13,
+    # Parameter samples per direction and piece at which a conversion's deviation is measured.
+    "SPATCH_CHECK_SAMPLES": 41,
+    # Largest vertex valence of a generalized B-spline mesh: the S-patch of a valence-n vertex has
+    # C(n + 4, 5) control points (15 504 at n = 16), all evaluated at every point.
+    "MAX_VALENCE": 16,
+    # Relative disagreement (to the size of the vertex's Bézier net) allowed between the two
+    # computations of a generalized-surface control point fixed by two sides; round-off gives
+    # ~1e-15, larger means a bug, and raises.
+    "GENERALIZED_CONSISTENCY_TOL": 1e-9,
+    # n-sided fill: relative singular-value cut-off of the small least-squares solves (anything out
+    # of the fields' plane, a corner incompatibility, is dropped, not amplified) ...
+    "FILL_RCOND": 1e-9,
+    # ... and the fraction of the largest singular value below which one counts as zero in the kite
+    # domain relation.
+    "FILL_NULL_RTOL": 1e-10,
+    # Largest gap (relative to the size of the loop's bounding box) between the end of one side and
+    # the start of the next for a hole's loop to count as closed.
+    "FILL_CLOSURE_TOL": 1e-6,
+    # Smallest angle (degrees) between the two sides at a hole corner, and between a side's tangent
+    # and its neighbour's cross derivative; below it the corner/side is degenerate and refused.
+    "FILL_MIN_CORNER_ANGLE": 2.0,
+    # At a hole corner the tangent planes of the two neighbours must agree (sine of the angle by
+    # which one neighbour's boundary tangent leaves the other's tangent plane); above this the
+    # neighbours meet at a sharp edge and no surface is G1 to both, so the hole is refused.
+    "FILL_CORNER_PLANE_TOL": 0.02,
+    # Self-check of the exact representations (relative to the function's size): a spline or
+    # polynomial placed into a knot space that holds it must come back to round-off.
+    "FILL_REPRESENT_TOL": 1e-9,
+    # Twist mismatch (relative, see HoleFill.twist_mismatch) above which a corner is treated as
+    # incompatible: its twist pole is averaged and confined to a corner span of parameter length
+    # FILL_CORNER_SPAN (the G1 error left near the corner is proportional to it).
+    "FILL_TWIST_TOL": 1e-8,
+    "FILL_CORNER_SPAN": 0.02,
+    # Most sides of a hole (the construction works for any n; this bounds the output size).
+    "FILL_MAX_SIDES": 24,
+}
 
-#: How far (relative to the domain length) a parameter may lie outside the domain and still be
-#: snapped onto it rather than rejected. Covers round-off in callers' arithmetic.
-PARAMETER: float = 1e-10
+_OVERRIDES: contextvars.ContextVar[Mapping[str, float]] = contextvars.ContextVar(
+    "occsurf_tolerances", default=MappingProxyType({}))
 
-#: Default geometric tolerance for knot removal: the largest allowed movement of any control point
-#: of the refined representation (which bounds the movement of the curve by the convex-hull
-#: property). Absolute, in model units.
-KNOT_REMOVAL: float = 1e-9
 
-#: Tolerance on weights that must sum to one (affine combinations).
-WEIGHT_SUM: float = 1e-12
+def get(name: str) -> float:
+    """The value of tolerance ``name`` in the current context (an override, else the default).
 
-#: A frame basis (or any matrix that must be inverted, e.g. of an affine or projective map) whose
-#: 2-norm condition number exceeds this is treated as singular: its inverse would lose more than
-#: ~12 of 16 significant digits.
-MAX_CONDITION: float = 1e12
+    Raises
+    ------
+    KeyError
+        If ``name`` is not a tolerance of this module.
+    """
+    try:
+        default = _DEFAULTS[name]
+    except KeyError:
+        raise KeyError(f"tolerances: {name!r} is not a tolerance; known: {', '.join(sorted(_DEFAULTS))}") from None
+    return _OVERRIDES.get().get(name, default)
 
-_NAMES = ("KNOT_EQUALITY", "PARAMETER", "KNOT_REMOVAL", "WEIGHT_SUM", "MAX_CONDITION")
+
+def __getattr__(name: str) -> float:
+    # Module attribute access (``tolerances.KNOT_EQUALITY``) reads the current context's value.
+    if name in _DEFAULTS:
+        return _OVERRIDES.get().get(name, _DEFAULTS[name])
+    raise AttributeError(f"module 'occsurf.algorithms.tolerances' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_DEFAULTS])
+
+
+def defaults() -> dict[str, float]:
+    """Every overridable tolerance with its default value (a copy)."""
+    return dict(_DEFAULTS)
 
 
 @contextlib.contextmanager
 def override(**values: float) -> Iterator[None]:
-    """Temporarily replace module tolerances, e.g. ``override(KNOT_REMOVAL=1e-6)``.
+    """Replace tolerances for the ``with`` block, in this thread or task only.
 
     Parameters
     ----------
     **values : float
-        New values keyed by constant name. ``MAX_DEGREE`` is a kernel limit and cannot be changed.
+        New values keyed by name, e.g. ``override(KNOT_REMOVAL=1e-6)``. Integer limits (iteration
+        counts, sizes) keep integer values. ``MAX_DEGREE`` is a kernel limit and cannot be changed.
 
     Raises
     ------
     KeyError
         If a name is not an overridable tolerance of this module.
+    TypeError
+        If a value is not a real number (or an integer limit gets a non-integer).
     """
-    g = globals()
-    for name in values:
-        if name not in _NAMES:
-            raise KeyError(f"override: {name!r} is not a tolerance; known: {', '.join(_NAMES)}")
-    old = {name: g[name] for name in values}
-    g.update({k: float(v) for k, v in values.items()})
+    for name, value in values.items():
+        if name not in _DEFAULTS:
+            raise KeyError(f"override: {name!r} is not a tolerance; known: {', '.join(sorted(_DEFAULTS))}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise TypeError(f"override: {name} must be a real number, got {value!r}")
+        if isinstance(_DEFAULTS[name], int) and not float(value).is_integer():
+            raise TypeError(f"override: {name} is an integer limit, got {value!r}")
+    typed = {k: type(_DEFAULTS[k])(v) for k, v in values.items()}
+    token = _OVERRIDES.set(MappingProxyType({**_OVERRIDES.get(), **typed}))
     try:
         yield
     finally:
-        g.update(old)
+        _OVERRIDES.reset(token)
