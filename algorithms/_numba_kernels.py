@@ -7,9 +7,10 @@ quotient rule A4.2/A4.4 fused), which avoids the ``(m, p+1, q+1, d)`` gathers an
 the vectorised form. ``tests/algorithms/test_fast_paths.py`` checks that both agree to 1e-14
 (relative to each partial's magnitude). Benchmarks: ``benchmarks/bench_evaluation.py``.
 
-Numba is optional and imported lazily, on the first evaluation of at least :data:`MIN_POINTS`
-points, so ``import algorithms`` never pays for it and small evaluations never compile anything.
-The kernels are compiled with ``cache=True`` (once per machine, in ``__pycache__``); where no cache
+Numba is optional and imported lazily, on the first evaluation of at least
+:data:`~occsurf.algorithms.tolerances.NUMBA_MIN_POINTS` points (read at call time, overridable),
+so ``import occsurf.algorithms`` never pays for it and small evaluations never compile anything. The
+kernels are compiled with ``cache=True`` (once per machine, in ``__pycache__``); where no cache
 directory is writable they are compiled once per process instead. Set the environment variable
 ``OCCSURF_NO_NUMBA=1`` to force the NumPy paths.
 
@@ -31,13 +32,9 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MIN_POINTS", "ENV_DISABLE", "span_bounds", "span_table", "enabled", "applies", "run"]
+from . import tolerances
 
-#: Smallest number of evaluated points for which the numba kernels are used. The first use in a
-#: process costs about 0.5 s (importing numba, loading the cached kernels); from 2**15 points on
-#: a kernel saves ~15 ms per scattered evaluation, so that cost is repaid after a few dozen
-#: calls, and below it the NumPy path takes a few milliseconds anyway.
-MIN_POINTS: int = 1 << 15
+__all__ = ["ENV_DISABLE", "span_bounds", "span_table", "enabled", "applies", "run"]
 
 #: Environment variable that, set to anything but ``""``/``"0"``, forces the NumPy paths.
 ENV_DISABLE = "OCCSURF_NO_NUMBA"
@@ -259,7 +256,6 @@ def _surface_quotient(h, start, src, wi, coef, o, out, m):  # pragma: no cover -
 def curve_points(t, p, first, last, table, x0, scale, H, u, rational, out):  # pragma: no cover
     """Curve points: ``H`` (n, k) homogeneous poles, ``u`` (m,), ``out`` (m, d)."""
     k = H.shape[1]
-    d = out.shape[1]
     N = np.empty(p + 1)
     left = np.empty(p + 1)
     right = np.empty(p + 1)
@@ -274,12 +270,7 @@ def curve_points(t, p, first, last, table, x0, scale, H, u, rational, out):  # p
             w = N[a]
             for c in range(k):
                 acc[c] += w * H[s - p + a, c]
-        if rational:
-            for c in range(d):
-                out[m, c] = acc[c] / acc[d]
-        else:
-            for c in range(d):
-                out[m, c] = acc[c]
+        _store_point(acc, rational, out, m)
 
 
 def curve_derivatives(t, p, first, last, table, x0, scale, H, u, order, rational, out):  # pragma: no cover
@@ -312,15 +303,113 @@ def curve_derivatives(t, p, first, last, table, x0, scale, H, u, order, rational
                     out[m, i, c] = h[i, c]
 
 
+def _store_point(acc, rational, out, m):  # pragma: no cover - compiled
+    """Homogeneous point ``acc`` (d+1,) (or Cartesian (d,)) to Cartesian ``out[m]`` (d,)."""
+    d = out.shape[1]
+    if rational:
+        for c in range(d):
+            out[m, c] = acc[c] / acc[d]
+    else:
+        for c in range(d):
+            out[m, c] = acc[c]
+
+
+def _net_point3(Hf, base, rowstride, Nu, Nv, acc):  # pragma: no cover - compiled
+    """``acc[:3] = sum_a Nu[a] sum_b Nv[b] H[r0 + a, c0 + b, :]`` for k = 3 (scalar accumulators).
+
+    ``Hf`` is the flat net, ``base`` the flat offset of ``H[r0, c0, 0]`` and ``rowstride`` that
+    of one u-row (``n_v * k``), both ``uint64``: numba emits no negative-index fix-up for them.
+    """
+    uk = np.uint64(3)
+    one = np.uint64(1)
+    two = np.uint64(2)
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    for a in range(Nu.shape[0]):
+        b0 = 0.0
+        b1 = 0.0
+        b2 = 0.0
+        o = base
+        for b in range(Nv.shape[0]):
+            w = Nv[b]
+            b0 += w * Hf[o]
+            b1 += w * Hf[o + one]
+            b2 += w * Hf[o + two]
+            o += uk
+        w = Nu[a]
+        a0 += w * b0
+        a1 += w * b1
+        a2 += w * b2
+        base += rowstride
+    acc[0] = a0
+    acc[1] = a1
+    acc[2] = a2
+
+
+def _net_point4(Hf, base, rowstride, Nu, Nv, acc):  # pragma: no cover - compiled
+    """:func:`_net_point3` for k = 4 (3-D rational points)."""
+    uk = np.uint64(4)
+    one = np.uint64(1)
+    two = np.uint64(2)
+    three = np.uint64(3)
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    a3 = 0.0
+    for a in range(Nu.shape[0]):
+        b0 = 0.0
+        b1 = 0.0
+        b2 = 0.0
+        b3 = 0.0
+        o = base
+        for b in range(Nv.shape[0]):
+            w = Nv[b]
+            b0 += w * Hf[o]
+            b1 += w * Hf[o + one]
+            b2 += w * Hf[o + two]
+            b3 += w * Hf[o + three]
+            o += uk
+        w = Nu[a]
+        a0 += w * b0
+        a1 += w * b1
+        a2 += w * b2
+        a3 += w * b3
+        base += rowstride
+    acc[0] = a0
+    acc[1] = a1
+    acc[2] = a2
+    acc[3] = a3
+
+
+def _net_point(H, r0, c0, Nu, Nv, row, acc):  # pragma: no cover - compiled
+    """:func:`_net_point3` for any k, looping over the coordinates; ``row`` (k,) is scratch."""
+    k = H.shape[2]
+    for c in range(k):
+        acc[c] = 0.0
+    for a in range(Nu.shape[0]):
+        for c in range(k):
+            row[c] = 0.0
+        for b in range(Nv.shape[0]):
+            w = Nv[b]
+            for c in range(k):
+                row[c] += w * H[r0 + a, c0 + b, c]
+        w = Nu[a]
+        for c in range(k):
+            acc[c] += w * row[c]
+
+
 def surface_points(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, u, v, rational, out):  # pragma: no cover
     """Surface points: ``H`` (n_u, n_v, k) homogeneous net, ``u, v`` (m,), ``out`` (m, d).
 
-    ``fu, lu, tu, u0, cu`` (and the same for v) are :func:`span_table`. The contraction keeps
-    the coordinates in scalar accumulators for ``k`` = 3 and 4 (3-D points, rational or not),
-    which runs about twice as fast as the loop over ``k`` kept for other dimensions.
+    ``fu, lu, tu, u0, cu`` (and the same for v) are :func:`span_table`. Per point: the spans and
+    basis functions (:func:`_span`, :func:`_basis`), the contraction with the net, the quotient
+    (:func:`_store_point`). The contraction keeps the coordinates in scalar accumulators for
+    ``k`` = 3 and 4 (3-D points, rational or not: :func:`_net_point3`, :func:`_net_point4`),
+    which runs about twice as fast as the loop over ``k`` (:func:`_net_point`) kept for other
+    dimensions.
     """
     k = H.shape[2]
-    d = out.shape[1]
     Nu = np.empty(p + 1)
     Nv = np.empty(q + 1)
     left = np.empty(max(p, q) + 1)
@@ -330,9 +419,6 @@ def surface_points(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, u, v, 
     Hf = H.reshape(H.size)
     rowstride = np.uint64(H.shape[1] * k)
     uk = np.uint64(k)
-    one = np.uint64(1)
-    two = np.uint64(2)
-    three = np.uint64(3)
     for m in range(u.shape[0]):
         x = u[m]
         y = v[m]
@@ -342,78 +428,13 @@ def surface_points(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, u, v, 
         _basis(V, q, sv, y, Nv, left, right)
         r0 = su - p
         c0 = sv - q
-        # Flat, unsigned offsets: numba emits no negative-index fix-up for unsigned indices.
-        base = np.uint64(r0) * rowstride + np.uint64(c0) * uk
         if k == 3:
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            for a in range(p + 1):
-                b0 = 0.0
-                b1 = 0.0
-                b2 = 0.0
-                o = base
-                for b in range(q + 1):
-                    w = Nv[b]
-                    b0 += w * Hf[o]
-                    b1 += w * Hf[o + one]
-                    b2 += w * Hf[o + two]
-                    o += uk
-                w = Nu[a]
-                a0 += w * b0
-                a1 += w * b1
-                a2 += w * b2
-                base += rowstride
-            acc[0] = a0
-            acc[1] = a1
-            acc[2] = a2
+            _net_point3(Hf, np.uint64(r0) * rowstride + np.uint64(c0) * uk, rowstride, Nu, Nv, acc)
         elif k == 4:
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            a3 = 0.0
-            for a in range(p + 1):
-                b0 = 0.0
-                b1 = 0.0
-                b2 = 0.0
-                b3 = 0.0
-                o = base
-                for b in range(q + 1):
-                    w = Nv[b]
-                    b0 += w * Hf[o]
-                    b1 += w * Hf[o + one]
-                    b2 += w * Hf[o + two]
-                    b3 += w * Hf[o + three]
-                    o += uk
-                w = Nu[a]
-                a0 += w * b0
-                a1 += w * b1
-                a2 += w * b2
-                a3 += w * b3
-                base += rowstride
-            acc[0] = a0
-            acc[1] = a1
-            acc[2] = a2
-            acc[3] = a3
+            _net_point4(Hf, np.uint64(r0) * rowstride + np.uint64(c0) * uk, rowstride, Nu, Nv, acc)
         else:
-            for c in range(k):
-                acc[c] = 0.0
-            for a in range(p + 1):
-                for c in range(k):
-                    row[c] = 0.0
-                for b in range(q + 1):
-                    w = Nv[b]
-                    for c in range(k):
-                        row[c] += w * H[r0 + a, c0 + b, c]
-                w = Nu[a]
-                for c in range(k):
-                    acc[c] += w * row[c]
-        if rational:
-            for c in range(d):
-                out[m, c] = acc[c] / acc[d]
-        else:
-            for c in range(d):
-                out[m, c] = acc[c]
+            _net_point(H, r0, c0, Nu, Nv, row, acc)
+        _store_point(acc, rational, out, m)
 
 
 def _tensor_partials(H, r0, c0, Du, Dv, T, O, m):  # pragma: no cover - compiled
@@ -589,7 +610,7 @@ def grid_partials_rational(Du, su, p, G, k, out):  # pragma: no cover - compiled
 
 _HELPERS = (
     "_span", "_basis", "_basis_ders", "_binomials", "_quotient_plan", "_curve_quotient", "_surface_quotient",
-    "_tensor_partials", "_band_point",
+    "_tensor_partials", "_band_point", "_store_point", "_net_point3", "_net_point4", "_net_point",
 )
 _KERNELS = (
     "curve_points",
@@ -649,9 +670,10 @@ def applies(n_points: int) -> bool:
     """Whether the numba kernels should evaluate ``n_points`` points.
 
     True when numba is installed, ``OCCSURF_NO_NUMBA`` is not set and ``n_points`` is at least
-    :data:`MIN_POINTS`. The first True answer in a process imports numba.
+    :data:`~occsurf.algorithms.tolerances.NUMBA_MIN_POINTS`. The first True answer in a process
+    imports numba.
     """
-    if n_points < MIN_POINTS or not enabled():
+    if n_points < tolerances.NUMBA_MIN_POINTS or not enabled():
         return False
     kernels = _state["kernels"] if _state["loaded"] else _load()
     return kernels is not None

@@ -5,8 +5,8 @@ all of them at once, or catch the narrower class it cares about. The classes als
 built-in exception a Python user would reach for first (``ValueError`` for bad input, ``OSError``
 for files), so ``except ValueError`` keeps working in code that does not know occsurf.
 
-This module is pure Python: ``bridge`` raises the same classes, so ``algorithms`` and ``bridge``
-share one hierarchy without ``algorithms`` importing anything from OCC.
+This module is pure Python: ``occsurf.bridge`` raises the same classes, so ``occsurf.algorithms`` and ``occsurf.bridge``
+share one hierarchy without ``occsurf.algorithms`` importing anything from OCC.
 
 ::
 

@@ -1,6 +1,6 @@
-"""Benchmark: our n-sided hole fill (algorithms/nsided.py) vs OCC's BRepOffsetAPI_MakeFilling.
+"""Benchmark: our n-sided hole fill (algorithms/topology/nsided.py) vs OCC's BRepOffsetAPI_MakeFilling.
 
-Same holes for both (ring models of algorithms/hole_models.py: multi-span neighbours,
+Same holes for both (ring models of examples/hole_models.py: multi-span neighbours,
 polynomial and rational, n = 3..8), both assessed by OCC's LocalAnalysis_SurfaceContinuity
 (order G1) at 41 points per boundary edge: G0 gap (model units, model size ~14) and G1 angle
 (degrees), max over the hole's boundary. OCC runs with cadquery's makeNSidedSurface defaults.
@@ -15,8 +15,8 @@ import common  # noqa: F401 - pins BLAS threads before NumPy
 
 import time
 
-from occsurf.bridge.conversion.splines import _make_face
-from occsurf.bridge.modeling.fill import _sew, fill_model
+from occsurf.bridge.conversion.splines import make_face
+from occsurf.bridge.modeling.fill import fill_model, sew_faces
 from occsurf.examples.hole_models import ring_model
 
 CASES = [(n, False) for n in range(3, 9)] + [(3, True), (5, True), (8, True)]
@@ -26,7 +26,7 @@ def table() -> list[dict]:
     rows = []
     for n, rational in CASES:
         m = ring_model(n, rational=rational)
-        shell = _sew([_make_face(f, 1e-7) for f in m.faces])
+        shell = sew_faces([make_face(f, 1e-7) for f in m.faces])
         best = None
         for _ in range(3):
             res = fill_model(shell)

@@ -4,7 +4,7 @@
 
 Inserts 100 distinct random knots into a bicubic 50 x 50 surface along u (and along v), as one
 refinement. OCC is timed on its one-call ``InsertUKnots`` (knot arrays built beforehand, a fresh
-copy of the surface per call, made just before it and not timed); ours on ``s.refine(knots, "u")``, the public,
+copy of the surface per call, made just before it and not timed); ours on ``s.refine(knots, direction="u")``, the public,
 validated call that returns a new surface. geomdl inserts one knot per call, so it is timed on
 10 knots and scaled. The refined nets are compared with OCC's. Exit status 1 if a target fails.
 """
@@ -63,7 +63,7 @@ def main() -> int:
     results = {}
     for direction in ("u", "v"):
         ax = 0 if direction == "u" else 1
-        ours = s.refine(knots, direction)
+        ours = s.refine(knots, direction=direction)
         # The kernel alone: the Oslo matrix times the net, no validation or new object.
         H = s.homogeneous_points if ax == 0 else np.ascontiguousarray(s.homogeneous_points.transpose(1, 0, 2))
         tau = merge_knots(s.knots[ax], knots)
@@ -71,7 +71,7 @@ def main() -> int:
         # from other processes cannot fall on one of them only.
         t_ours = t_kernel = t_occ = float("inf")
         for _ in range(5):
-            t_ours = min(t_ours, best_of(lambda: s.refine(knots, direction), rep // 5, budget=1.0))
+            t_ours = min(t_ours, best_of(lambda: s.refine(knots, direction=direction), rep // 5, budget=1.0))
             t_kernel = min(t_kernel, best_of(lambda: refine_poles(s.knots[ax], s.degree[ax], H, tau), rep // 5, budget=1.0))
             t, occ_done = occ_insert_time(occ, knots, direction, rep // 5)
             t_occ = min(t_occ, t)
@@ -101,7 +101,7 @@ def main() -> int:
         results[direction] = r
 
     # Single knot (Boehm) for reference.
-    r = Row("insert one knot (u = 0.5)", best_of(lambda: s.insert_knot(0.5, "u"), rep, budget=2.0))
+    r = Row("insert one knot (u = 0.5)", best_of(lambda: s.insert_knot(0.5, direction="u"), rep, budget=2.0))
     r.peers["OCC Insert*Knots"] = occ_insert_time(occ, np.array([0.5]), "u", rep)[0]
     rows.append(r)
 
@@ -110,7 +110,7 @@ def main() -> int:
     print("\nagreement of the refined net with OCC's (max |OCC - ours| / max |ours|):")
     for d in deviations:
         print("  " + d)
-    print("\n(the target is the issue's s.refine(knots, 'u'); the v row is for information: our v-refinement")
+    print("\n(the target is the issue's s.refine(knots, direction='u'); the v row is for information: our v-refinement")
     print(" transposes the net before and after the u kernel)")
     ok = check_targets([
         ("refine 100 knots along u within 1.5x of OCC's one call (OCC time / ours)",

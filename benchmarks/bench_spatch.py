@@ -1,4 +1,4 @@
-"""Benchmark: S-patch evaluation and first derivatives (algorithms/spatch.py) vs its peers.
+"""Benchmark: S-patch evaluation and first derivatives (algorithms/topology/spatch.py) vs its peers.
 
 The same 10 000 domain points for everyone: a random piece ``k`` and random ``(s, t)`` in
 ``[0, 1]²`` per point, mapped to the regular n-gon by :func:`occsurf.algorithms.topology.spatch_convert.piece_domain_points`.

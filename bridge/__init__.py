@@ -12,6 +12,9 @@ Rooms:
 ``cli``         the ``occsurf`` command line, one module per command
 ==============  ===========================================================================
 
+:mod:`.isolation` runs a job on untrusted items in a worker process (a crash or a hang inside OCC
+costs one item, not the command); :mod:`.messages` formats any error as one line.
+
 :mod:`._occ` holds the few helpers every room shares (OCC arrays, knots + multiplicities, kernel
 limits, OCC exceptions as :class:`~occsurf.algorithms.errors.KernelError`).
 
@@ -34,6 +37,8 @@ _EXPORTS = {
     "surface_deviation": "validation.deviation",
     "curve_deviation": "validation.deviation",
     "roundtrip_deviation": "validation.deviation",
+    "inspect_model": "validation.inspect",
+    "FaceReport": "validation.inspect",
     "read_step": "exchange.step_iges",
     "write_step": "exchange.step_iges",
     "read_iges": "exchange.step_iges",

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from occsurf.bridge.conversion.splines import _make_face
+from occsurf.bridge.conversion.splines import make_face
 from occsurf.bridge.exchange.step_iges import write_step
-from occsurf.bridge.modeling.fill import _sew, fill_model
+from occsurf.bridge.modeling.fill import fill_model, sew_faces
 from occsurf.bridge.rendering.surfaces import render_surfaces
 
 __all__ = ["render_fill_demo"]
@@ -51,7 +51,7 @@ def render_fill_demo(out_dir: Path) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     files: list[Path] = []
     model = ring_model(5, bump=0.6)
-    shell = _sew([_make_face(f, 1e-7) for f in model.faces])
+    shell = sew_faces([make_face(f, 1e-7) for f in model.faces])
     res = fill_model(shell)
     hole = next(h for h in res.holes if h.status == "filled")
     fill = next(f for f in res.fills if f is not None)
@@ -67,7 +67,7 @@ def render_fill_demo(out_dir: Path) -> list[Path]:
     rows = [("n", "ours G0 gap", "ours G1 angle", "ours time", "OCC G0 gap", "OCC G1 angle", "OCC time")]
     for n in range(3, 9):
         m = ring_model(n)
-        r = fill_model(_sew([_make_face(f, 1e-7) for f in m.faces]))
+        r = fill_model(sew_faces([make_face(f, 1e-7) for f in m.faces]))
         h = next(h for h in r.holes if h.status != "outer")
         occ = ((f"{h.occ_g0:.1e}", f"{h.occ_g1:.2f} deg", f"{h.occ_seconds:.3f} s") if h.occ_status == "ok"
                else (f"failed: {h.occ_reason}", "-", f"{h.occ_seconds:.3f} s"))

@@ -6,7 +6,7 @@ with its tangent plane, draws before/after PNGs (curvature combs on the curves, 
 wireframe surfaces), and writes the edited curve and surface to STEP through
 :func:`occsurf.bridge.exchange.step_iges.write_step`.
 
-matplotlib is imported here, in ``bridge``, never in ``algorithms``; the figures use the
+matplotlib is imported here, in the examples, never in ``occsurf.algorithms``; the figures use the
 object-oriented API with the Agg canvas (no pyplot state, no display needed).
 """
 

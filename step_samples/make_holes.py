@@ -5,7 +5,7 @@ Run from anywhere::
     python step_samples/make_holes.py            # writes into step_samples/holes/
     python step_samples/make_holes.py OUTDIR
 
-Each hole is a ring model of ``algorithms/hole_models.py``: faces that are a smooth base
+Each hole is a ring model of ``examples/hole_models.py``: faces that are a smooth base
 surface composed with bilinear maps (exact Bézier/B-spline faces), with a multi-span C2 bump so
 that the hole sides are genuine multi-span B-splines; the hole's neighbours are G2 to each other.
 Every ring is a shell whose outer loop is its boundary (``occsurf fill`` leaves that loop alone).
@@ -28,9 +28,9 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-from occsurf.bridge.conversion.splines import _make_face  # noqa: E402
+from occsurf.bridge.conversion.splines import make_face  # noqa: E402
 from occsurf.bridge.exchange.step_iges import write_step  # noqa: E402
-from occsurf.bridge.modeling.fill import _sew  # noqa: E402
+from occsurf.bridge.modeling.fill import sew_faces  # noqa: E402
 from occsurf.examples.hole_models import ring_model  # noqa: E402
 
 FIXED_STEP_TIME = "2000-01-01T00:00:00"
@@ -44,8 +44,8 @@ def build(rational: bool, holes) -> object:
     faces = []
     for n, c in holes:
         m = ring_model(n, rational=rational, center=c, radius=0.1, width=0.08, bump=0.3)
-        faces += [_make_face(f, 1e-7) for f in m.faces]
-    return _sew(faces)
+        faces += [make_face(f, 1e-7) for f in m.faces]
+    return sew_faces(faces)
 
 
 def main(out: Path) -> list[Path]:

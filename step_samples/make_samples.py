@@ -6,7 +6,7 @@ Run from anywhere::
     python step_samples/make_samples.py OUTDIR     # writes into OUTDIR
 
 Every model is built from fixed numbers with build123d, cadquery, OCC's own constructors or our
-:mod:`algorithms` kernel, and written with :func:`occsurf.bridge.exchange.step_iges.write_step` (17 significant
+:mod:`occsurf.algorithms` kernel, and written with :func:`occsurf.bridge.exchange.step_iges.write_step` (17 significant
 digits: our surfaces come back bit-exact) or :func:`occsurf.bridge.exchange.step_iges.write_iges`. The output is
 byte-for-byte reproducible with the pinned OCC (7.9.3): the only varying bytes OCC writes, the time
 stamps of the STEP ``FILE_NAME`` and of the IGES global section, are set to 2000-01-01 00:00:00.

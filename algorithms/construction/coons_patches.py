@@ -1,6 +1,10 @@
-r"""Coons patches (course §6-20, §6-21) and the machinery shared with Gordon surfaces
-(:mod:`occsurf.algorithms.construction.gordon_surfaces`): network tolerances, compatible tensor-product nets,
-polynomial approximation of rational curves. :mod:`occsurf.algorithms.construction` re-exports both modules.
+r"""Coons patches (course §6-20, §6-21) and the polynomial approximation of rational curves that
+Gordon surfaces (:mod:`occsurf.algorithms.construction.gordon_surfaces`) use too; the helpers both
+share (argument checks, compatible tensor-product nets) are in
+:mod:`occsurf.algorithms.construction._common`. :mod:`occsurf.algorithms.construction` re-exports
+both modules. Tolerances: ``NETWORK_TOLERANCE``, ``DERIVATIVE_TOLERANCE``,
+``APPROXIMATION_TOLERANCE`` and ``HOMOGENEOUS_WEIGHT_RTOL`` of :mod:`occsurf.algorithms.tolerances`,
+read at call time.
 
 Three transfinite interpolants, each returned as ONE tensor-product :class:`BSplineSurface` that is
 *exactly* the classical formula (not a fit):
@@ -50,25 +54,23 @@ rational network.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
-from ..kernel.basis import greville
-from ..kernel.compat import common_knots, make_compatible, missing_knots
-from ..kernel.curve import BSplineCurve
-from ..kernel.degree import elevate_poles
+from .. import tolerances
 from ..errors import InvalidGeometryError, ToleranceError
 from ..fitting.interpolation import interpolate_values
-from ..kernel.knots import merge_knots, refine_poles, snap_knots
-from ..kernel.rational import from_homogeneous, to_homogeneous
+from ..kernel.basis import greville
+from ..kernel.compat import make_compatible
+from ..kernel.curve import BSplineCurve
+from ..kernel.degree import elevate_poles
 from ..kernel.surface import BSplineSurface
+from ._common import Net, check_curve, check_curves, homogeneous_poles, resolve_tolerance, surface_from_net, unify_nets
 
 __all__ = [
-    "NETWORK_TOLERANCE",
-    "DERIVATIVE_TOLERANCE",
-    "APPROXIMATION_TOLERANCE",
     "coons",
     "coons_bicubic",
     "polynomial_approximation",
@@ -76,66 +78,15 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-#: Largest gap allowed between curves that should meet (Coons corners, Gordon intersections),
-#: absolute, in model units (OCC's ``Precision::Confusion()``). Gaps up to it are closed (Coons:
-#: the curves' end poles move to the corner's mean; Gordon: the intersection point is the mean);
-#: larger ones raise :class:`InvalidGeometryError`.
-NETWORK_TOLERANCE: float = 1e-7
-
-#: Bicubic Coons corner compatibility: a cross-boundary derivative at a corner must equal the
-#: tangent of the adjacent boundary there to this tolerance, relative to the larger of the two
-#: vectors' lengths (and 1).
-DERIVATIVE_TOLERANCE: float = 1e-7
-
-#: Default largest distance between a rational curve and the polynomial B-spline that replaces it
-#: where an exact homogeneous construction is impossible (absolute, model units).
-APPROXIMATION_TOLERANCE: float = 1e-6
-
-#: Relative agreement demanded of homogeneous corner / intersection weights.
-_WEIGHT_RTOL = 1e-12
-
 _CORNERS = ("(u0, v0)", "(u1, v0)", "(u1, v1)", "(u0, v1)")
 
 
 # ------------------------------------------------------------------------------------ helpers
-def _tol(tol: float | None, default: float, name: str = "tol") -> float:
-    if tol is None:
-        return default
-    t = float(tol)
-    if not np.isfinite(t) or t < 0:
-        raise InvalidGeometryError(f"{name}: expected a finite value >= 0, got {tol!r}")
-    return t
-
-
-def _curve(c: object, name: str) -> BSplineCurve:
-    if not isinstance(c, BSplineCurve):
-        raise InvalidGeometryError(f"{name}: expected a BSplineCurve, got {type(c).__name__}")
-    return c
-
-
-def _curves(items: object, name: str, minimum: int = 2) -> list[BSplineCurve]:
-    try:
-        out = list(items)  # type: ignore[call-overload]
-    except TypeError as err:
-        raise InvalidGeometryError(f"{name}: expected a sequence of BSplineCurve, got {type(items).__name__}") from err
-    if len(out) < minimum:
-        raise InvalidGeometryError(f"{name}: expected at least {minimum} curves, got {len(out)}")
-    return [_curve(c, f"{name}[{i}]") for i, c in enumerate(out)]
-
-
 def _same_dim(named: dict[str, BSplineCurve]) -> int:
     dims = {k: c.dim for k, c in named.items()}
     if len(set(dims.values())) != 1:
         raise InvalidGeometryError(f"curves: all must have the same dimension, got {dims}")
     return next(iter(dims.values()))
-
-
-def _hnet(c: BSplineCurve, rational: bool) -> Array:
-    """Poles of a (compatible) curve, homogeneous ``(n, d+1)`` if ``rational``."""
-    if not rational:
-        return np.asarray(c.control_points, float)
-    w = np.ones(c.n_poles) if c.weights is None else c.weights
-    return to_homogeneous(np.asarray(c.control_points, float), w)
 
 
 def _with_end_points(c: BSplineCurve, start: Array, end: Array) -> BSplineCurve:
@@ -145,58 +96,23 @@ def _with_end_points(c: BSplineCurve, start: Array, end: Array) -> BSplineCurve:
     return BSplineCurve._trusted(c.degree, c.knots, P, c.weights)
 
 
-def _unify(nets: list[tuple[tuple[int, int], tuple[Array, Array], Array]]) -> tuple[tuple[int, int], tuple[Array, Array], list[Array]]:
-    """Bring tensor-product nets to one pair of degrees and knot vectors (exact operations).
-
-    Each item is ``((p, q), (U, V), H)`` with ``H`` of shape ``(n_u, n_v, k)`` (homogeneous
-    coordinates for rational nets: the kernels are linear, so no weight is ever divided by);
-    all are clamped on one domain. Per direction: degree elevation, then knot refinement to the
-    union of the knot vectors, as :func:`make_compatible` does for curves.
-    """
-    items = [(list(d), list(kn), np.asarray(H, float)) for d, kn, H in nets]
-    for ax in (0, 1):
-        top = max(d[ax] for d, _, _ in items)
-        elevated = []
-        for d, kn, H in items:
-            if d[ax] < top:
-                kn = list(kn)
-                kn[ax], Hx = elevate_poles(kn[ax], d[ax], np.moveaxis(H, ax, 0), top - d[ax])
-                H = np.moveaxis(Hx, 0, ax)
-                d = list(d)
-                d[ax] = top
-            elevated.append((d, kn, H))
-        items = elevated
-        T = common_knots([kn[ax] for _, kn, _ in items])
-        lo, hi = float(T[0]), float(T[-1])
-        T[: top + 1], T[-(top + 1):] = lo, hi
-        out = []
-        for d, kn, H in items:
-            missing = missing_knots(kn[ax], T)
-            if missing.size:
-                tau = merge_knots(kn[ax], snap_knots(kn[ax], missing))
-                H = np.moveaxis(refine_poles(kn[ax], top, np.moveaxis(H, ax, 0), tau), 0, ax)
-            kn = list(kn)
-            kn[ax] = T
-            out.append((d, kn, H))
-        items = out
-    d, kn, _ = items[0]
-    return (d[0], d[1]), (kn[0], kn[1]), [np.ascontiguousarray(H) for _, _, H in items]
-
-
-def _surface(deg: tuple[int, int], kn: tuple[Array, Array], H: Array, rational: bool, what: str) -> BSplineSurface:
-    if not rational:
-        return BSplineSurface._trusted(deg, kn, np.ascontiguousarray(H))
-    if np.any(H[..., -1] <= 0):
-        raise InvalidGeometryError(
-            f"{what}: the homogeneous construction gives non-positive weights "
-            f"(min {float(H[..., -1].min()):.3g}); rescale the curves' weights"
-        )
-    P, w = from_homogeneous(np.ascontiguousarray(H))
-    return BSplineSurface._trusted(deg, kn, P, w)
-
-
 def _bezier(a: float, b: float, p: int) -> Array:
     return np.r_[np.full(p + 1, a), np.full(p + 1, b)]
+
+
+def _boolean_sum(A: Array, B: Array, C: Array) -> Array:
+    """The Coons net ``A + B - C`` of three nets on the same knots, with its boundary rows written.
+
+    ``A`` is the term that interpolates the boundaries ``v = v0, v1`` (its first and last columns
+    are their poles), ``B`` the term for ``u = u0, u1`` (first and last rows), ``C`` the corner
+    term. Arithmetically the boundary rows of ``A + B - C`` are those poles up to round-off (the
+    other two terms agree on them); they are copied from ``A`` and ``B`` so that the patch's
+    boundaries are the given curves bit for bit. Shapes ``(n_u, n_v, k)``.
+    """
+    H = A + B - C
+    H[:, 0], H[:, -1] = A[:, 0], A[:, -1]
+    H[0, :], H[-1, :] = B[0, :], B[-1, :]
+    return H
 
 
 # ------------------------------------------------------------------------------------ rational
@@ -216,7 +132,7 @@ def polynomial_approximation(curve: BSplineCurve, tol: float | None = None, *,
     curve : BSplineCurve
         Returned unchanged (error 0.0) if it is not rational.
     tol : float, optional
-        Default :data:`APPROXIMATION_TOLERANCE`.
+        Default ``tolerances.APPROXIMATION_TOLERANCE``.
     max_subdivisions : int
         Largest ``k`` tried.
 
@@ -230,8 +146,8 @@ def polynomial_approximation(curve: BSplineCurve, tol: float | None = None, *,
     ToleranceError
         ``tol`` is not reached with ``max_subdivisions``.
     """
-    c = _curve(curve, "curve")
-    tol = _tol(tol, APPROXIMATION_TOLERANCE)
+    c = check_curve(curve, "curve")
+    tol = resolve_tolerance(tol, tolerances.APPROXIMATION_TOLERANCE)
     if not c.is_rational:
         return c, 0.0
     c = c.clamp()
@@ -269,7 +185,7 @@ def _scale_loop_weights(cc: list[BSplineCurve]) -> list[BSplineCurve] | None:
     s_l = b[0] / l[0]
     s_r = b[-1] / r[0]
     s_t = s_l * l[-1] / t[0]
-    if abs(s_t * t[-1] - s_r * r[-1]) > _WEIGHT_RTOL * max(s_t * t[-1], s_r * r[-1]):
+    if abs(s_t * t[-1] - s_r * r[-1]) > tolerances.HOMOGENEOUS_WEIGHT_RTOL * max(s_t * t[-1], s_r * r[-1]):
         return None
     scales = (s_b, s_r, s_t, s_l)
     return [BSplineCurve._trusted(c.degree, c.knots, c.control_points, c.weights * s) for c, s in zip(cc, scales)]
@@ -325,10 +241,16 @@ def _check_loop(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, le
     return np.stack([(ends[a][i] + ends[b][j]) / 2 for (a, i), (b, j) in pairs])
 
 
-def _boundaries(bottom, right, top, left, tol, rational_ok: bool, approx_tol: float):
-    """Validated, corner-snapped, compatible boundary pairs ``(bottom, top)``, ``(left, right)``."""
-    cs = {"bottom": _curve(bottom, "bottom"), "right": _curve(right, "right"),
-          "top": _curve(top, "top"), "left": _curve(left, "left")}
+def _boundaries(bottom: object, right: object, top: object, left: object, tol: float, rational_ok: bool,
+                approx_tol: float) -> dict[str, BSplineCurve]:
+    """The four boundaries by name, validated, clamped and corner-snapped (not yet compatible).
+
+    Polynomial approximations within ``approx_tol`` replace rational curves unless
+    ``rational_ok``; corner gaps up to ``tol`` are closed by moving the end poles to the corner's
+    mean (:func:`_check_loop`).
+    """
+    cs = {"bottom": check_curve(bottom, "bottom"), "right": check_curve(right, "right"),
+          "top": check_curve(top, "top"), "left": check_curve(left, "left")}
     _same_dim(cs)
     if not rational_ok:
         cs = {k: polynomial_approximation(c, approx_tol)[0] for k, c in cs.items()}
@@ -339,6 +261,20 @@ def _boundaries(bottom, right, top, left, tol, rational_ok: bool, approx_tol: fl
     cs["top"] = _with_end_points(cs["top"], P[3], P[2])
     cs["left"] = _with_end_points(cs["left"], P[0], P[3])
     return cs
+
+
+def _compatible_loop(bottom: object, right: object, top: object, left: object, tol: float, rational_ok: bool,
+                     approx_tol: float) -> tuple[BSplineCurve, BSplineCurve, BSplineCurve, BSplineCurve]:
+    """The boundaries ``(bottom, right, top, left)`` of :func:`_boundaries`, made compatible in pairs.
+
+    ``bottom`` and ``top`` share one degree and one knot vector (the u direction of the patch),
+    ``left`` and ``right`` another (v), by the exact operations of
+    :func:`occsurf.algorithms.kernel.compat.make_compatible`; the loop's corners coincide.
+    """
+    cs = _boundaries(bottom, right, top, left, tol, rational_ok, approx_tol)
+    b, t = make_compatible([cs["bottom"], cs["top"]])
+    l, r = make_compatible([cs["left"], cs["right"]])
+    return b, r, t, l
 
 
 def coons(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BSplineCurve, *,
@@ -366,13 +302,13 @@ def coons(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BS
         bicubically blended patch with zero cross-boundary derivatives and twists (degree at
         least 3): the patch OCC's ``GeomFill_Coons`` builds from Bézier boundaries.
     tol : float, optional
-        Largest corner gap accepted (default :data:`NETWORK_TOLERANCE`). Gaps up to ``tol`` are
+        Largest corner gap accepted (default ``tolerances.NETWORK_TOLERANCE``). Gaps up to ``tol`` are
         closed by moving the two end poles to their mean (each boundary moves by at most half
         the gap).
     approx_tol : float, optional
         Only for rational boundaries whose corner weights cannot be matched (module notes): the
         distance within which they are replaced by polynomial curves
-        (:func:`polynomial_approximation`; default :data:`APPROXIMATION_TOLERANCE`).
+        (:func:`polynomial_approximation`; default ``tolerances.APPROXIMATION_TOLERANCE``).
 
     Returns
     -------
@@ -403,32 +339,37 @@ def coons(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BS
     >= 3 that is exactly ``blend="cubic"``; for multi-span boundaries it is not a Coons formula
     (the blending follows pole indices, not parameters), and the surfaces differ inside.
     """
-    tol = _tol(tol, NETWORK_TOLERANCE)
-    atol = _tol(approx_tol, APPROXIMATION_TOLERANCE, "approx_tol")
+    tol = resolve_tolerance(tol, tolerances.NETWORK_TOLERANCE)
+    atol = resolve_tolerance(approx_tol, tolerances.APPROXIMATION_TOLERANCE, "approx_tol")
     if blend not in ("linear", "cubic"):
         raise InvalidGeometryError(f"blend: expected 'linear' or 'cubic', got {blend!r}")
-    cs = _boundaries(bottom, right, top, left, tol, True, atol)
-    b, t = make_compatible([cs["bottom"], cs["top"]])
-    l, r = make_compatible([cs["left"], cs["right"]])
-    rational = any(c.is_rational for c in (b, t, l, r))
-    scaled = None
-    if rational:
-        b, r, t, l = [c if c.is_rational else BSplineCurve._trusted(c.degree, c.knots, c.control_points, np.ones(c.n_poles))
-                      for c in (b, r, t, l)]
-        scaled = _scale_loop_weights([b, r, t, l])
-    if scaled is not None:
-        deg, kn, H = _coons_net(*scaled, blend, True)
-        if np.all(H[..., -1] > 0):
-            return _surface(deg, kn, H, True, "coons")
-    if rational:
+    b, r, t, l = _compatible_loop(bottom, right, top, left, tol, True, atol)
+    if any(c.is_rational for c in (b, r, t, l)):
+        net = _homogeneous_coons_net(b, r, t, l, blend)
+        if net is not None:
+            return surface_from_net(*net, True, "coons")
         # No exact homogeneous form (corner weights that cannot be matched, or a homogeneous net
         # with non-positive weights, e.g. 120-degree arcs of weight 0.5): polynomial approximations
         # of the boundaries within approx_tol.
-        cs = _boundaries(bottom, right, top, left, tol, False, atol)
-        b, t = make_compatible([cs["bottom"], cs["top"]])
-        l, r = make_compatible([cs["left"], cs["right"]])
-    deg, kn, H = _coons_net(b, r, t, l, blend, False)
-    return _surface(deg, kn, H, False, "coons")
+        b, r, t, l = _compatible_loop(bottom, right, top, left, tol, False, atol)
+    return surface_from_net(*_coons_net(b, r, t, l, blend, False), False, "coons")
+
+
+def _homogeneous_coons_net(b: BSplineCurve, r: BSplineCurve, t: BSplineCurve, l: BSplineCurve,
+                           blend: str) -> Net | None:
+    """The exact homogeneous Coons net of a loop with a rational boundary, or ``None`` if there is none.
+
+    Polynomial boundaries get weights 1; the weights of each boundary are then scaled by a constant
+    so that the homogeneous corners agree (:func:`_scale_loop_weights`). ``None`` when that is
+    impossible or when the homogeneous net has a weight ``<= 0`` (no NURBS form).
+    """
+    b, r, t, l = [c if c.is_rational else BSplineCurve._trusted(c.degree, c.knots, c.control_points, np.ones(c.n_poles))
+                  for c in (b, r, t, l)]
+    scaled = _scale_loop_weights([b, r, t, l])
+    if scaled is None:
+        return None
+    deg, kn, H = _coons_net(*scaled, blend, True)
+    return (deg, kn, H) if np.all(H[..., -1] > 0) else None
 
 
 def _coons_net(b: BSplineCurve, r: BSplineCurve, t: BSplineCurve, l: BSplineCurve, blend: str,
@@ -446,18 +387,13 @@ def _coons_net(b: BSplineCurve, r: BSplineCurve, t: BSplineCurve, l: BSplineCurv
     C = (np.multiply.outer(np.outer(f0u, f0v), Hb[0]) + np.multiply.outer(np.outer(f1u, f0v), Hb[-1])
          + np.multiply.outer(np.outer(f0u, f1v), Ht[0]) + np.multiply.outer(np.outer(f1u, f1v), Ht[-1]))
     deg = (len(U) - Hb.shape[0] - 1, len(Vk) - Hl.shape[0] - 1)
-    H = A + B - C
-    # The boundary rows of A + B - C are the boundary poles up to round-off (B and C agree on
-    # them); write the compatible boundary poles themselves so the boundaries are bit-faithful.
-    H[:, 0], H[:, -1] = A[:, 0], A[:, -1]
-    H[0, :], H[-1, :] = B[0, :], B[-1, :]
-    return deg, (U, Vk), H
+    return deg, (U, Vk), _boolean_sum(A, B, C)
 
 
 def _elevated_pair(c0: BSplineCurve, c1: BSplineCurve, k: int, rational: bool) -> tuple[Array, Array, Array]:
     """Knots and (homogeneous if ``rational``) poles of two compatible curves, degree raised to at
     least ``k`` (one elevation of the stacked poles: they share the knots)."""
-    H0, H1 = _hnet(c0, rational), _hnet(c1, rational)
+    H0, H1 = homogeneous_poles(c0, rational), homogeneous_poles(c1, rational)
     U = np.asarray(c0.knots, float)
     if c0.degree < k:
         U, H = elevate_poles(U, c0.degree, np.concatenate((H0, H1), axis=-1), k - c0.degree)
@@ -521,7 +457,7 @@ def coons_bicubic(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, 
         ``(∂S/∂v (u, v0), ∂S/∂u (u1, v), ∂S/∂v (u, v1), ∂S/∂u (u0, v))``, in the order of the
         boundaries: the first and third are functions of u on the u domain, the others of v.
         At each corner the cross derivative of one boundary must equal the tangent of the other
-        (e.g. ``cross_derivatives[0](u0) == left'(v0)``), to :data:`DERIVATIVE_TOLERANCE`.
+        (e.g. ``cross_derivatives[0](u0) == left'(v0)``), to ``tolerances.DERIVATIVE_TOLERANCE``.
     twists : "average", "zero" or array_like, shape (4, d)
         Twist vectors ``∂²S/∂u∂v`` at the corners ``(u0,v0), (u1,v0), (u1,v1), (u0,v1)``.
         ``"average"`` (default) uses the mean of the two twists the data imply at each corner
@@ -535,7 +471,7 @@ def coons_bicubic(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, 
         Corner gap tolerance, as in :func:`coons`.
     approx_tol : float, optional
         Rational curves are replaced by polynomial approximations within this distance
-        (:func:`polynomial_approximation`; default :data:`APPROXIMATION_TOLERANCE`).
+        (:func:`polynomial_approximation`; default ``tolerances.APPROXIMATION_TOLERANCE``).
 
     Returns
     -------
@@ -548,20 +484,39 @@ def coons_bicubic(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, 
         As :func:`coons`; domains that differ; a cross-derivative curve inconsistent with the
         adjacent boundary's tangent at a corner; bad ``twists``.
     """
-    tol = _tol(tol, NETWORK_TOLERANCE)
-    atol = _tol(approx_tol, APPROXIMATION_TOLERANCE, "approx_tol")
+    tol = resolve_tolerance(tol, tolerances.NETWORK_TOLERANCE)
+    atol = resolve_tolerance(approx_tol, tolerances.APPROXIMATION_TOLERANCE, "approx_tol")
     cs = _boundaries(bottom, right, top, left, tol, False, atol)
-    xd = _curves(cross_derivatives, "cross_derivatives", 4)
+    xd = _cross_derivative_curves(cross_derivatives, cs["bottom"].dim, atol)
+    _check_bicubic_domains(cs, xd)
+    u_side = make_compatible([cs["bottom"], cs["top"], xd[0], xd[2]])   # bottom, top, their S_v
+    v_side = make_compatible([cs["left"], cs["right"], xd[3], xd[1]])   # left, right, their S_u
+    corners = _corner_data(*u_side, *v_side)
+    _check_corner_derivatives(corners)
+    W = _corner_twists(twists, corners)
+    deg, kn, (A, B, C) = unify_nets(_bicubic_terms(u_side, v_side, corners, W))
+    return surface_from_net(deg, kn, _boolean_sum(A, B, C), False, "coons_bicubic")
+
+
+def _cross_derivative_curves(cross_derivatives: object, dim: int, approx_tol: float) -> list[BSplineCurve]:
+    """The 4 cross-derivative curves, checked, polynomial (within ``approx_tol``) and clamped."""
+    xd = check_curves(cross_derivatives, "cross_derivatives", 4)
     if len(xd) != 4:
         raise InvalidGeometryError(f"cross_derivatives: expected 4 curves (bottom, right, top, left), got {len(xd)}")
-    names = ("bottom", "right", "top", "left")
-    xd = [polynomial_approximation(c, atol)[0].clamp() for c in xd]
-    dim = cs["bottom"].dim
+    xd = [polynomial_approximation(c, approx_tol)[0].clamp() for c in xd]
     for k, c in enumerate(xd):
         if c.dim != dim:
             raise InvalidGeometryError(f"cross_derivatives[{k}]: expected dimension {dim}, got {c.dim}")
-    for group in (("bottom", "top", 0, 2), ("left", "right", 3, 1)):
-        a, b2, i, j = group
+    return xd
+
+
+def _check_bicubic_domains(cs: dict[str, BSplineCurve], xd: list[BSplineCurve]) -> None:
+    """Bottom, top and their cross derivatives share one u domain; left, right and theirs one v domain.
+
+    Derivatives depend on the parametrisation, so nothing may be reparametrised: the domains must
+    agree (to 1e-12 of their length) or :class:`InvalidGeometryError` names the one that differs.
+    """
+    for a, b2, i, j in (("bottom", "top", 0, 2), ("left", "right", 3, 1)):
         doms = {a: cs[a].domain, b2: cs[b2].domain, f"cross_derivatives[{i}]": xd[i].domain,
                 f"cross_derivatives[{j}]": xd[j].domain}
         ref = doms[a]
@@ -571,12 +526,36 @@ def coons_bicubic(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, 
                     f"{k}: expected the domain {ref} of {a} (derivatives depend on the parametrisation, so "
                     f"bottom/top and their cross derivatives must share one u domain, left/right one v domain), got {dmn}"
                 )
-    b, t, xb, xt = make_compatible([cs["bottom"], cs["top"], xd[0], xd[2]])
-    l, r, xl, xr = make_compatible([cs["left"], cs["right"], xd[3], xd[1]])
-    (u0, u1), (v0, v1) = b.domain, l.domain
-    hu, hv = u1 - u0, v1 - v0
 
-    # Corner data, order 00, 10, 11, 01: position, S_u, S_v, and the two twist estimates.
+
+class _CornerData(NamedTuple):
+    """What the bicubic Coons data say at the corners ``(u0,v0), (u1,v0), (u1,v1), (u0,v1)``.
+
+    Every field has shape ``(4, d)``, one row per corner in that order.
+    """
+
+    #: Positions (from bottom and top).
+    points: Array
+    #: ``S_u`` from the u-cross-derivative curves (along left and right) ...
+    su: Array
+    #: ... which must equal the tangents of bottom / top there.
+    tangent_u: Array
+    #: ``S_v`` from the v-cross-derivative curves (along bottom and top) ...
+    sv: Array
+    #: ... which must equal the tangents of left / right there.
+    tangent_v: Array
+    #: The twist ``S_uv`` implied by the u-cross-derivative curves (their v derivative) ...
+    twist_u: Array
+    #: ... and by the v-cross-derivative curves (their u derivative).
+    twist_v: Array
+
+
+def _corner_data(b: BSplineCurve, t: BSplineCurve, xb: BSplineCurve, xt: BSplineCurve,
+                 l: BSplineCurve, r: BSplineCurve, xl: BSplineCurve, xr: BSplineCurve) -> _CornerData:
+    """Corner data (:class:`_CornerData`) of the boundaries bottom ``b``, top ``t``, left ``l``,
+    right ``r`` and the cross-derivative curves along them (``xb = S_v`` along bottom, ...)."""
+    (u0, u1), (v0, v1) = b.domain, l.domain
+
     def d1(c: BSplineCurve, x: float) -> Array:
         return c.derivatives(x, 1)
 
@@ -586,51 +565,84 @@ def coons_bicubic(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, 
     R0, R1 = d1(r, v0), d1(r, v1)
     XB0, XB1, XT0, XT1 = d1(xb, u0), d1(xb, u1), d1(xt, u0), d1(xt, u1)
     XL0, XL1, XR0, XR1 = d1(xl, v0), d1(xl, v1), d1(xr, v0), d1(xr, v1)
-    P = np.stack([B0[0], B1[0], T1[0], T0[0]])
-    Su = np.stack([XL0[0], XR0[0], XR1[0], XL1[0]])  # from the u-cross-derivative curves
-    Sv = np.stack([XB0[0], XB1[0], XT1[0], XT0[0]])  # from the v-cross-derivative curves
-    # Compatibility: Su must be the bottom/top tangent, Sv the left/right tangent.
-    checks = [(Su, np.stack([B0[1], B1[1], T1[1], T0[1]]), ("left", "right", "right", "left"), ("bottom", "bottom", "top", "top")),
-              (Sv, np.stack([L0[1], R0[1], R1[1], L1[1]]), ("bottom", "bottom", "top", "top"), ("left", "right", "right", "left"))]
+    return _CornerData(
+        points=np.stack([B0[0], B1[0], T1[0], T0[0]]),
+        su=np.stack([XL0[0], XR0[0], XR1[0], XL1[0]]),
+        tangent_u=np.stack([B0[1], B1[1], T1[1], T0[1]]),
+        sv=np.stack([XB0[0], XB1[0], XT1[0], XT0[0]]),
+        tangent_v=np.stack([L0[1], R0[1], R1[1], L1[1]]),
+        twist_u=np.stack([XL0[1], XR0[1], XR1[1], XL1[1]]),
+        twist_v=np.stack([XB0[1], XB1[1], XT1[1], XT0[1]]),
+    )
+
+
+def _check_corner_derivatives(corners: _CornerData) -> None:
+    """At each corner ``S_u`` must be the bottom/top tangent and ``S_v`` the left/right tangent,
+    to ``tolerances.DERIVATIVE_TOLERANCE`` relative to ``max(1, |a|, |b|)``; else
+    :class:`InvalidGeometryError` names the cross-derivative curve and the corner."""
+    names = ("bottom", "right", "top", "left")
+    checks = [(corners.su, corners.tangent_u, ("left", "right", "right", "left"), ("bottom", "bottom", "top", "top")),
+              (corners.sv, corners.tangent_v, ("bottom", "bottom", "top", "top"), ("left", "right", "right", "left"))]
     for got, want, xnames, bnames in checks:
         for k in range(4):
             scale = max(1.0, float(np.linalg.norm(got[k])), float(np.linalg.norm(want[k])))
             gap = float(np.linalg.norm(got[k] - want[k]))
-            if gap > DERIVATIVE_TOLERANCE * scale:
+            if gap > tolerances.DERIVATIVE_TOLERANCE * scale:
                 raise InvalidGeometryError(
                     f"cross_derivatives[{names.index(xnames[k])}]: at corner {_CORNERS[k]} the cross derivative "
                     f"along {xnames[k]} must equal the tangent of {bnames[k]} there; they differ by {gap:.3g}"
                 )
-    tw_v = np.stack([XB0[1], XB1[1], XT1[1], XT0[1]])  # d/du of dS/dv curves
-    tw_u = np.stack([XL0[1], XR0[1], XR1[1], XL1[1]])  # d/dv of dS/du curves
+
+
+def _corner_twists(twists: str | ArrayLike, corners: _CornerData) -> Array:
+    """The twist vectors ``(4, d)`` at the corners: ``"average"`` of the two the data imply,
+    ``"zero"``, or the caller's array (checked: finite, shape ``(4, d)``)."""
+    dim = corners.points.shape[1]
     if isinstance(twists, str):
         if twists == "average":
-            W = (tw_u + tw_v) / 2
-        elif twists == "zero":
-            W = np.zeros_like(tw_u)
-        else:
-            raise InvalidGeometryError(f"twists: expected 'average', 'zero' or an array of shape (4, {dim}), got {twists!r}")
-    else:
-        W = V.as_finite_array(twists, "twists")
-        if W.shape != (4, dim):
-            raise InvalidGeometryError(f"twists: expected shape (4, {dim}), got {W.shape}")
+            return (corners.twist_u + corners.twist_v) / 2
+        if twists == "zero":
+            return np.zeros_like(corners.twist_u)
+        raise InvalidGeometryError(
+            f"twists: expected 'average', 'zero' or an array of shape (4, {dim}), got {twists!r}"
+        )
+    W = V.as_finite_array(twists, "twists")
+    if W.shape != (4, dim):
+        raise InvalidGeometryError(f"twists: expected shape (4, {dim}), got {W.shape}")
+    return W
 
-    Pb, Pt, Pxb, Pxt = (np.asarray(c.control_points, float) for c in (b, t, xb, xt))
-    Pl, Pr, Pxl, Pxr = (np.asarray(c.control_points, float) for c in (l, r, xl, xr))
-    L1net = _hermite_rows(Pb, Pt, Pxb, Pxt, hv).transpose(1, 0, 2)  # (nu, 4, d)
-    L2net = _hermite_rows(Pl, Pr, Pxl, Pxr, hu)  # (4, nv, d)
-    # Bicubic Hermite corner patch: Hermite in u of the Hermite-in-v rows.
+
+def _hermite_corner_patch(corners: _CornerData, W: Array, hu: float, hv: float) -> Array:
+    """Bézier net ``(4, 4, d)`` of the bicubic Hermite interpolant of the corner data: positions,
+    ``S_u`` (from the u-cross-derivative curves), ``S_v`` and the twists ``W``; ``hu``, ``hv`` the
+    domain lengths. Hermite in u of the Hermite-in-v columns."""
+    P, Su, Sv = corners.points, corners.su, corners.sv
     # along v at u0: positions P00, P01, derivatives Sv00, Sv01; at u1: P10, P11, Sv10, Sv11
     col_u0 = _hermite_rows(P[0], P[3], Sv[0], Sv[3], hv)  # (4, d) Bézier in v
     col_u1 = _hermite_rows(P[1], P[2], Sv[1], Sv[2], hv)
     dcol_u0 = _hermite_rows(Su[0], Su[3], W[0], W[3], hv)  # S_u along u0 (Bézier in v)
     dcol_u1 = _hermite_rows(Su[1], Su[2], W[1], W[2], hv)
-    Tnet = _hermite_rows(col_u0, col_u1, dcol_u0, dcol_u1, hu)  # (4, 4, d)
+    return _hermite_rows(col_u0, col_u1, dcol_u0, dcol_u1, hu)
+
+
+def _bicubic_terms(u_side: Sequence[BSplineCurve], v_side: Sequence[BSplineCurve], corners: _CornerData,
+                   W: Array) -> list[Net]:
+    """The three terms of the bicubically blended Coons patch, as nets on their own knots.
+
+    ``u_side = (bottom, top, S_v along bottom, S_v along top)`` and ``v_side = (left, right,
+    S_u along left, S_u along right)``, each group compatible. Returns ``[L1, L2, T]``: the cubic
+    Hermite blend in v of bottom/top and their cross derivatives (it interpolates them at ``v0``,
+    ``v1``), the blend in u of left/right, and the bicubic Hermite patch of the corner data.
+    """
+    b, t, xb, xt = u_side
+    l, r, xl, xr = v_side
+    (u0, u1), (v0, v1) = b.domain, l.domain
+    hu, hv = u1 - u0, v1 - v0
+    Pb, Pt, Pxb, Pxt = (np.asarray(c.control_points, float) for c in u_side)
+    Pl, Pr, Pxl, Pxr = (np.asarray(c.control_points, float) for c in v_side)
+    L1net = _hermite_rows(Pb, Pt, Pxb, Pxt, hv).transpose(1, 0, 2)  # (nu, 4, d)
+    L2net = _hermite_rows(Pl, Pr, Pxl, Pxr, hu)  # (4, nv, d)
     k3u, k3v = _bezier(u0, u1, 3), _bezier(v0, v1, 3)
-    deg, kn, (A, B, C) = _unify([((b.degree, 3), (b.knots, k3v), L1net),
-                                 ((3, l.degree), (k3u, l.knots), L2net),
-                                 ((3, 3), (k3u, k3v), Tnet)])
-    H = A + B - C
-    H[:, 0], H[:, -1] = A[:, 0], A[:, -1]
-    H[0, :], H[-1, :] = B[0, :], B[-1, :]
-    return _surface(deg, kn, H, False, "coons_bicubic")
+    return [((b.degree, 3), (b.knots, k3v), L1net),
+            ((3, l.degree), (k3u, l.knots), L2net),
+            ((3, 3), (k3u, k3v), _hermite_corner_patch(corners, W, hu, hv))]

@@ -30,6 +30,10 @@ rational basis functions with weights ``w_i`` and ``ω_j`` (each a partition of 
 and ``R_i(u) R_j(v)`` are exactly the rational basis functions of the tensor-product net with weights
 ``w_i ω_j``. Extrusion, translational sweep, revolution (``f`` = rotation of ``P`` by the arc point
 ``T``) and the swung surface are all of this form, which is why each is exact for rational inputs.
+
+Tolerances: ``ANGLE_SLACK`` (a revolution angle may exceed ``2 pi`` by this much) and
+``AXIS_ZERO`` (an extrusion vector or a trajectory's distance to the axis is zero at most this
+times the size of the geometry) of :mod:`occsurf.algorithms.tolerances`, read at call time.
 """
 
 from __future__ import annotations
@@ -40,14 +44,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
+from .. import tolerances
 from ..kernel.compat import make_compatible
 from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError
 from ..kernel.surface import BSplineSurface
+from ._common import check_curve
 
 __all__ = [
-    "ANGLE_SLACK",
-    "AXIS_ZERO",
     "extrude",
     "ruled",
     "revolve",
@@ -57,23 +61,10 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-#: A revolution angle may exceed ``2 pi`` by this much (absolute, radians) and still count as a full
-#: turn (round-off in a caller's ``2 * np.pi`` arithmetic); larger ``|angle|`` is rejected.
-ANGLE_SLACK: float = 1e-12
-
-#: An extrusion vector is zero when its length is at most ``AXIS_ZERO`` times the size of the
-#: geometry it moves (the largest pole coordinate, at least 1): scale-free. (An axis *direction*
-#: only needs a length that normalises to a finite unit vector: its size is irrelevant.)
-AXIS_ZERO: float = 1e-12
-
 
 # ------------------------------------------------------------------------------------- validation
 def _check_curve(curve: object, name: str) -> BSplineCurve:
-    if not isinstance(curve, BSplineCurve):
-        raise InvalidGeometryError(f"{name}: expected a BSplineCurve, got {type(curve).__name__}")
-    if curve.dim != 3:
-        raise InvalidGeometryError(f"{name}: expected a 3-D curve (poles of shape (n, 3)), got dimension {curve.dim}")
-    return curve
+    return check_curve(curve, name, dim=3)
 
 
 def _size(*curves: BSplineCurve) -> float:
@@ -90,7 +81,8 @@ def _vector3(value: ArrayLike, name: str) -> Array:
 def _nonzero3(value: ArrayLike, name: str, size: float) -> Array:
     a = _vector3(value, name)
     n = float(np.linalg.norm(a))
-    if not n > AXIS_ZERO * size:
+    # scale-free; an axis *direction* (see _axis) only needs to normalise to a finite unit vector
+    if not n > tolerances.AXIS_ZERO * size:
         raise InvalidGeometryError(f"{name}: expected a non-zero vector, got {a.tolist()} (length {n:.3g})")
     return a
 
@@ -207,7 +199,7 @@ def _check_angle(angle: float) -> float:
         a = float(angle)
     except (TypeError, ValueError) as err:
         raise InvalidGeometryError(f"angle: expected a real number of radians, got {angle!r}") from err
-    if not math.isfinite(a) or a == 0.0 or abs(a) > 2 * math.pi + ANGLE_SLACK:
+    if not math.isfinite(a) or a == 0.0 or abs(a) > 2 * math.pi + tolerances.ANGLE_SLACK:
         raise InvalidGeometryError(f"angle: expected 0 < |angle| <= 2 pi (radians), got {angle!r}")
     return max(-2 * math.pi, min(2 * math.pi, a))
 
@@ -364,7 +356,7 @@ def rotational_sweep(
     t0 = t.evaluate(t.domain[0]) - o
     r0 = t0 - (t0 @ a) * a
     rho0 = float(np.linalg.norm(r0))
-    if not rho0 > AXIS_ZERO * _size(c, t):
+    if not rho0 > tolerances.AXIS_ZERO * _size(c, t):
         raise InvalidGeometryError("trajectory: its start point lies on the axis; the rotation angle is undefined there")
     e1 = r0 / rho0
     e2 = np.cross(a, e1)

@@ -9,6 +9,8 @@ tensor-product interpolant of the intersection points. Every step is an exact B-
 round-off of the banded interpolation solves (~1e-13 relative), provided the network is
 consistent. Rational networks: see :mod:`occsurf.algorithms.construction.coons_patches` (homogeneous construction when
 the curves meet in homogeneous space, else polynomial approximations within ``approx_tol``).
+Tolerances: ``NETWORK_TOLERANCE``, ``APPROXIMATION_TOLERANCE``, ``HOMOGENEOUS_WEIGHT_RTOL`` and the
+``GORDON_`` limits of :mod:`occsurf.algorithms.tolerances`, read at call time.
 """
 
 from __future__ import annotations
@@ -20,39 +22,23 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from .. import _validate as V
-from .coons_patches import (
-    _WEIGHT_RTOL,
-    APPROXIMATION_TOLERANCE,
-    NETWORK_TOLERANCE,
-    _curves,
-    _hnet,
-    _surface,
-    _tol,
-    _unify,
-    polynomial_approximation,
-)
-from ..kernel.compat import make_compatible
-from ..kernel.curve import BSplineCurve
+from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..fitting.interpolation import averaged_knots, interpolate_values
-from ..kernel.rational import to_homogeneous
+from ..kernel.compat import make_compatible
+from ..kernel.curve import BSplineCurve
+from ..kernel.surface import BSplineSurface
+from ._common import Net, check_curves, homogeneous_poles, resolve_tolerance, surface_from_net, unify_nets
+from .coons_patches import polynomial_approximation
 
 __all__ = ["gordon", "network_parameters"]
 
 Array = NDArray[np.float64]
 
-#: Closest-point search between two curves: samples per non-empty knot span (at least 16 per
-#: curve) for the starting guess, then Gauss-Newton iterations.
-_SAMPLES_PER_SPAN = 8
-_NEWTON_STEPS = 40
-#: Starting pairs refined per curve pair (the closest sample pairs), so that a nearby local
-#: minimum of the distance does not hide the intersection.
-_STARTS = 8
-
 
 def _samples(c: BSplineCurve) -> Array:
     br = np.unique(c.knots[c.degree: c.n_poles + 1])
-    k = max(_SAMPLES_PER_SPAN, -(-16 // (br.shape[0] - 1)))
+    k = max(tolerances.GORDON_SAMPLES_PER_SPAN, -(-16 // (br.shape[0] - 1)))
     f = np.linspace(0.0, 1.0, k + 1)[:-1]
     return np.r_[(br[:-1, None] + f * np.diff(br)[:, None]).ravel(), br[-1]]
 
@@ -63,7 +49,9 @@ def network_parameters(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSpl
     For each pair ``(i, j)`` the parameters ``(s, t)`` minimising ``|u_curves[i](s) -
     v_curves[j](t)|``: a grid search over samples of both curves, then Gauss-Newton (vectorised
     over all pairs; loops run over curves, not points). With several local minima (closed
-    curves, curves crossing twice) the sampled global minimum is refined.
+    curves, curves crossing twice) the sampled global minimum is refined. The search reads
+    ``GORDON_SAMPLES_PER_SPAN``, ``GORDON_STARTS`` and ``GORDON_NEWTON_STEPS`` of
+    :mod:`occsurf.algorithms.tolerances`.
 
     Returns
     -------
@@ -74,14 +62,14 @@ def network_parameters(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSpl
     dist : ndarray, shape (m, n)
         The distances at ``(s, t)``.
     """
-    A = _curves(u_curves, "u_curves", 1)
-    B = _curves(v_curves, "v_curves", 1)
+    A = check_curves(u_curves, "u_curves", 1)
+    B = check_curves(v_curves, "v_curves", 1)
     m, n = len(A), len(B)
     sa = [_samples(a) for a in A]
     sb = [_samples(b) for b in B]
     pa = [a.evaluate(x) for a, x in zip(A, sa)]
     pb = [b.evaluate(x) for b, x in zip(B, sb)]
-    K = _STARTS
+    K = tolerances.GORDON_STARTS
     s = np.empty((m, n, K))
     t = np.empty((m, n, K))
     trees = [cKDTree(p) for p in pb]  # nearest v-curve sample of every u-curve sample: O(N log N) a pair
@@ -91,7 +79,7 @@ def network_parameters(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSpl
             best = np.argpartition(dd, K - 1)[:K] if dd.shape[0] > K else np.arange(dd.shape[0])
             best = np.r_[best, np.full(K - best.shape[0], best[0])]
             s[i, j], t[i, j] = sa[i][best], sb[j][near[best]]
-    for _ in range(_NEWTON_STEPS):
+    for _ in range(tolerances.GORDON_NEWTON_STEPS):
         Da = np.stack([a.derivatives(s[i], 1) for i, a in enumerate(A)])  # (m, n, K, 2, d)
         Db = np.stack([b.derivatives(t[:, j], 1) for j, b in enumerate(B)], axis=1)
         F = Da[..., 0, :] - Db[..., 0, :]
@@ -185,11 +173,11 @@ def gordon(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSplineCurve], *
         Book eq. 9.8) with the ends moved to the domain ends.
     tol : float, optional
         Largest distance between ``u_curves[i](u_params[j])`` and ``v_curves[j](v_params[i])``
-        (default :data:`NETWORK_TOLERANCE`). The intersection point used is their mean: the
+        (default ``tolerances.NETWORK_TOLERANCE``). The intersection point used is their mean: the
         surface then reproduces each curve up to the interpolant of half the gaps.
     approx_tol : float, optional
         For rational networks that do not meet in homogeneous coordinates: distance within which
-        rational curves are replaced by polynomial ones (default :data:`APPROXIMATION_TOLERANCE`).
+        rational curves are replaced by polynomial ones (default ``tolerances.APPROXIMATION_TOLERANCE``).
 
     Returns
     -------
@@ -215,10 +203,27 @@ def gordon(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSplineCurve], *
     = F's v Greville abscissae, or take F polynomial in v (one v span) of degree <= ``degree[1]``
     with at least ``degree[1] + 1`` u-curves.
     """
-    tol = _tol(tol, NETWORK_TOLERANCE)
-    atol = _tol(approx_tol, APPROXIMATION_TOLERANCE, "approx_tol")
-    A = _curves(u_curves, "u_curves")
-    B = _curves(v_curves, "v_curves")
+    tol = resolve_tolerance(tol, tolerances.NETWORK_TOLERANCE)
+    atol = resolve_tolerance(approx_tol, tolerances.APPROXIMATION_TOLERANCE, "approx_tol")
+    A, B, pu, qv = _check_network(u_curves, v_curves, degree)
+    A, B = make_compatible(A), make_compatible(B)
+    params = (u_params, v_params)
+    rational = A[0].is_rational or B[0].is_rational
+    net = _gordon_net(A, B, params, (pu, qv), cross_knots, tol, rational)
+    if net is None:
+        # a rational network without an exact NURBS Gordon surface: polynomial approximations
+        A, B, tol = _polynomial_network(A, B, tol, atol)
+        net = _gordon_net(A, B, params, (pu, qv), cross_knots, tol, False)
+        rational = False
+    return surface_from_net(*net, rational, "gordon")
+
+
+def _check_network(u_curves: object, v_curves: object,
+                   degree: object) -> tuple[list[BSplineCurve], list[BSplineCurve], int, int]:
+    """The curve families (at least 2 each, one dimension) and the cross degrees ``(pu, qv)``,
+    each lowered to the number of curves it interpolates minus 1."""
+    A = check_curves(u_curves, "u_curves")
+    B = check_curves(v_curves, "v_curves")
     dims = {c.dim for c in A + B}
     if len(dims) != 1:
         raise InvalidGeometryError(f"u_curves, v_curves: all curves must have one dimension, got {sorted(dims)}")
@@ -226,65 +231,102 @@ def gordon(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSplineCurve], *
         raise InvalidGeometryError(f"degree: expected a pair (across u, across v), got {degree!r}")
     pu = min(V.as_degree(degree[0], "degree[0]"), len(B) - 1)
     qv = min(V.as_degree(degree[1], "degree[1]"), len(A) - 1)
-    A = make_compatible(A)
-    B = make_compatible(B)
-    rational = A[0].is_rational or B[0].is_rational
-    for attempt in ("exact", "approximate"):
-        if attempt == "approximate":
-            fa = [polynomial_approximation(c, atol) for c in A]
-            fb = [polynomial_approximation(c, atol) for c in B]
-            A = make_compatible([c for c, _ in fa])
-            B = make_compatible([c for c, _ in fb])
-            rational = False
-            # the approximations move each curve by their measured error: allow for it at the crossings
-            tol += max(e for _, e in fa) + max(e for _, e in fb)
-        m, n = len(A), len(B)
-        udom, vdom = A[0].domain, B[0].domain
-        up, vp = _network_params(A, B, u_params, v_params, udom, vdom, tol)
-        Pa = np.stack([a.evaluate(up) for a in A])  # (m, n, d): u_curves[i](u_j)
-        Pb = np.stack([b.evaluate(vp) for b in B], axis=1)  # (m, n, d): v_curves[j](v_i)
-        gap = np.linalg.norm(Pa - Pb, axis=-1)
-        if gap.max() > tol:
-            i, j = np.unravel_index(int(np.argmax(gap)), gap.shape)
-            raise InvalidGeometryError(
-                f"u_curves[{i}], v_curves[{j}]: the network is not consistent: u_curves[{i}](u_params[{j}]="
-                f"{up[j]:.9g}) and v_curves[{j}](v_params[{i}]={vp[i]:.9g}) are {gap[i, j]:.3g} apart (tol={tol:g}); "
-                "a Gordon surface needs every u-curve to cross v-curve j at the same u (and every v-curve "
-                "to cross u-curve i at the same v): reparametrise the curves or pass consistent u_params/v_params"
-            )
-        if rational:
-            Ha = np.stack([_hnet_eval(a, up) for a in A])
-            Hb = np.stack([_hnet_eval(b, vp) for b in B], axis=1)
-            if not np.all(np.abs(Ha[..., -1] - Hb[..., -1]) <= _WEIGHT_RTOL * 1e3 * np.maximum(Ha[..., -1], Hb[..., -1])):
-                continue  # the curves do not meet in homogeneous space: approximate
-        Ku = _cross_or_default(cross_knots[0], up, pu, udom, "cross_knots[0]")
-        Kv = _cross_or_default(cross_knots[1], vp, qv, vdom, "cross_knots[1]")
-        if rational:
-            Q = (Ha + Hb) / 2
-            Ra = np.stack([_hnet(a, True) for a in A])  # (m, nu, k)
-            Rb = np.stack([_hnet(b, True) for b in B])  # (n, nv, k)
-        else:
-            Q = (Pa + Pb) / 2
-            Ra = np.stack([np.asarray(a.control_points, float) for a in A])
-            Rb = np.stack([np.asarray(b.control_points, float) for b in B])
-        X1 = interpolate_values(vp, Ra, qv, Kv).transpose(1, 0, 2)  # (nu, m, k): across v
-        X2 = interpolate_values(up, Rb, pu, Ku)  # (n, nv, k): across u
-        X12 = interpolate_values(up, interpolate_values(vp, Q, qv, Kv).transpose(1, 0, 2), pu, Ku)  # (n, m, k)
-        deg, kn, (S1, S2, S12) = _unify([((A[0].degree, qv), (A[0].knots, Kv), X1),
-                                          ((pu, B[0].degree), (Ku, B[0].knots), X2),
-                                          ((pu, qv), (Ku, Kv), X12)])
-        H = S1 + S2 - S12
-        if not rational or np.all(H[..., -1] > 0):
-            break
-        # the homogeneous Boolean sum has non-positive weights: no exact NURBS form; approximate
-    return _surface(deg, kn, H, rational, "gordon")
+    return A, B, pu, qv
+
+
+def _polynomial_network(A: list[BSplineCurve], B: list[BSplineCurve], tol: float,
+                        approx_tol: float) -> tuple[list[BSplineCurve], list[BSplineCurve], float]:
+    """Polynomial approximations (within ``approx_tol``) of the curves, made compatible again, and
+    the crossing tolerance widened by the largest measured errors of both families (each curve
+    moves by its error, so the crossings may open by up to their sum)."""
+    fa = [polynomial_approximation(c, approx_tol) for c in A]
+    fb = [polynomial_approximation(c, approx_tol) for c in B]
+    tol += max(e for _, e in fa) + max(e for _, e in fb)
+    return make_compatible([c for c, _ in fa]), make_compatible([c for c, _ in fb]), tol
+
+
+def _gordon_net(A: list[BSplineCurve], B: list[BSplineCurve], params: tuple[ArrayLike | None, ArrayLike | None],
+                degrees: tuple[int, int], cross_knots: tuple[ArrayLike | None, ArrayLike | None], tol: float,
+                rational: bool) -> Net | None:
+    """The net ``P1 + P2 - P12`` of compatible families ``A`` (u-curves) and ``B`` (v-curves),
+    homogeneous if ``rational``; ``None`` for a rational network without an exact NURBS form (the
+    curves do not meet in homogeneous space, or the homogeneous sum has a weight ``<= 0``)."""
+    pu, qv = degrees
+    udom, vdom = A[0].domain, B[0].domain
+    up, vp = _network_params(A, B, *params, udom, vdom, tol)
+    Q = _crossing_points(A, B, up, vp, tol)  # checks that the network is consistent
+    if rational:
+        Q = _homogeneous_crossing_points(A, B, up, vp)  # the same points, in homogeneous space
+        if Q is None:
+            return None  # the curves do not meet in homogeneous space
+    Ku = _cross_or_default(cross_knots[0], up, pu, udom, "cross_knots[0]")
+    Kv = _cross_or_default(cross_knots[1], vp, qv, vdom, "cross_knots[1]")
+    terms = _gordon_terms(A, B, (up, vp), Q, degrees, (Ku, Kv), rational)
+    deg, kn, (S1, S2, S12) = unify_nets(terms)
+    H = S1 + S2 - S12
+    if rational and not np.all(H[..., -1] > 0):
+        return None  # the homogeneous Boolean sum has non-positive weights: no exact NURBS form
+    return deg, kn, H
+
+
+def _crossing_points(A: list[BSplineCurve], B: list[BSplineCurve], up: Array, vp: Array, tol: float) -> Array:
+    """The intersection points ``(m, n, d)``: the mean of ``A[i](up[j])`` and ``B[j](vp[i])``.
+
+    Raises
+    ------
+    InvalidGeometryError
+        The two are more than ``tol`` apart somewhere (an inconsistent network; the message names
+        both curves, the parameters and the gap).
+    """
+    Pa = np.stack([a.evaluate(up) for a in A])  # (m, n, d): u_curves[i](u_j)
+    Pb = np.stack([b.evaluate(vp) for b in B], axis=1)  # (m, n, d): v_curves[j](v_i)
+    gap = np.linalg.norm(Pa - Pb, axis=-1)
+    if gap.max() > tol:
+        i, j = np.unravel_index(int(np.argmax(gap)), gap.shape)
+        raise InvalidGeometryError(
+            f"u_curves[{i}], v_curves[{j}]: the network is not consistent: u_curves[{i}](u_params[{j}]="
+            f"{up[j]:.9g}) and v_curves[{j}](v_params[{i}]={vp[i]:.9g}) are {gap[i, j]:.3g} apart (tol={tol:g}); "
+            "a Gordon surface needs every u-curve to cross v-curve j at the same u (and every v-curve "
+            "to cross u-curve i at the same v): reparametrise the curves or pass consistent u_params/v_params"
+        )
+    return (Pa + Pb) / 2
+
+
+def _homogeneous_crossing_points(A: list[BSplineCurve], B: list[BSplineCurve], up: Array, vp: Array) -> Array | None:
+    """The homogeneous intersection points ``(m, n, d + 1)`` (mean of both curves' values), or
+    ``None`` where the weights of the two curves differ (relative ``1e3 *
+    tolerances.HOMOGENEOUS_WEIGHT_RTOL``): the curves do not meet in homogeneous space."""
+    Ha = np.stack([_hnet_eval(a, up) for a in A])
+    Hb = np.stack([_hnet_eval(b, vp) for b in B], axis=1)
+    rtol = tolerances.HOMOGENEOUS_WEIGHT_RTOL * 1e3
+    if not np.all(np.abs(Ha[..., -1] - Hb[..., -1]) <= rtol * np.maximum(Ha[..., -1], Hb[..., -1])):
+        return None
+    return (Ha + Hb) / 2
+
+
+def _gordon_terms(A: list[BSplineCurve], B: list[BSplineCurve], params: tuple[Array, Array], Q: Array,
+                  degrees: tuple[int, int], knots: tuple[Array, Array], rational: bool) -> list[Net]:
+    """The three terms of the Boolean sum, as nets on their own knots: ``[P1, P2, P12]``.
+
+    ``P1`` interpolates the u-curves ``A`` across v (``P1(u, vp[i]) = A[i](u)``), ``P2`` the
+    v-curves ``B`` across u (``P2(up[j], v) = B[j](v)``), ``P12`` the intersection points ``Q``
+    ``(m, n, k)`` in both directions (``P12(up[j], vp[i]) = Q[i, j]``); degrees ``(pu, qv)`` and
+    knots ``(Ku, Kv)`` of the cross interpolation. Homogeneous poles if ``rational``.
+    """
+    (up, vp), (pu, qv), (Ku, Kv) = params, degrees, knots
+    Ra = np.stack([homogeneous_poles(a, rational) for a in A])  # (m, nu, k)
+    Rb = np.stack([homogeneous_poles(b, rational) for b in B])  # (n, nv, k)
+    X1 = interpolate_values(vp, Ra, qv, Kv).transpose(1, 0, 2)  # (nu, m, k): across v
+    X2 = interpolate_values(up, Rb, pu, Ku)  # (n, nv, k): across u
+    X12 = interpolate_values(up, interpolate_values(vp, Q, qv, Kv).transpose(1, 0, 2), pu, Ku)  # (n, m, k)
+    return [((A[0].degree, qv), (A[0].knots, Kv), X1),
+            ((pu, B[0].degree), (Ku, B[0].knots), X2),
+            ((pu, qv), (Ku, Kv), X12)]
 
 
 def _hnet_eval(c: BSplineCurve, x: Array) -> Array:
     """Homogeneous values ``(w C, w)`` of a rational curve at ``x``."""
-    w = np.ones(c.n_poles) if c.weights is None else c.weights
-    H = BSplineCurve._trusted(c.degree, c.knots, to_homogeneous(np.asarray(c.control_points, float), w))
-    return H.evaluate(x)
+    return BSplineCurve._trusted(c.degree, c.knots, homogeneous_poles(c, True)).evaluate(x)
 
 
 def _cross_or_default(kn: ArrayLike | None, params: Array, p: int, domain: tuple[float, float], name: str) -> Array:

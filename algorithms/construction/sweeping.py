@@ -19,11 +19,11 @@ Frames (``frame=``)
 -------------------
 * ``"rmf"`` — rotation-minimising frames (no twist about the tangent; Wang et al. 2008 double
   reflection, :func:`occsurf.algorithms.geometry.differential.rotation_minimizing_frames`). The frames come from a
-  fixed reference chain of :data:`RMF_STEPS` steps per path span, plus one double-reflection step
+  fixed reference chain of ``SWEEP_RMF_STEPS`` steps per path span, plus one double-reflection step
   from the nearest reference sample to each query, so every query sees the same frame field.
   The start normal does not matter: the profile is carried in start-frame coordinates.
   OCC's closest mode is ``GeomFill_IsCorrectedFrenet``. On a *closed*, tangent-continuous path
-  (ends within :data:`CLOSE_TOL`) the RMF returns turned about the tangent by its holonomy angle
+  (ends within ``SWEEP_CLOSE_TOL``) the RMF returns turned about the tangent by its holonomy angle
   ``α`` (zero only for planar paths), so the surface would not close; the sweep then adds the
   twist ``-α t`` (``t`` the normalised path parameter), the minimal uniform correction, and the
   surface closes (as Rhino and CATIA close sweeps along closed rails).
@@ -37,17 +37,20 @@ The sweep is approximated by a spline of degree ``degree`` in v whose pole rows 
 mapped profile poles ``P_i(v)`` at the Greville abscissae of the v knot vector (course §7-5;
 :func:`occsurf.algorithms.fitting.interpolation.interpolate_values`). The initial v knots are the path's knots (with
 multiplicities matching the continuity of the frame field there) with each span cut in
-:data:`INITIAL_PIECES`; a span whose error exceeds ``tol`` is cut into as many pieces as the
-``h^(degree+1)`` error model asks for (:data:`SPLIT_SAFETY`), until no span exceeds ``tol``. Because the
+``SWEEP_INITIAL_PIECES``; a span whose error exceeds ``tol`` is cut into as many pieces as the
+``h^(degree+1)`` error model asks for (``SWEEP_SPLIT_SAFETY``), until no span exceeds ``tol``. Because the
 sections are affine images of one profile with fixed weights, the surface error at ``(u, v)`` is a
 convex combination of the pole-row errors, so
 
 .. math:: \max_u |S(u, v) - E(u, v)| \le \max_i |Q_i(v) - P_i(v)|,
 
-the *pole bound*, which the refinement drives below ``tol`` at :data:`CHECKS_PER_SPAN` points per
+the *pole bound*, which the refinement drives below ``tol`` at ``SWEEP_CHECKS_PER_SPAN`` points per
 span. The final report then measures ``max |S - E|`` directly on a dense grid (every profile span
-and :data:`VERIFY_PER_SPAN` v values per v span, all off the interpolation sites). Both numbers
+and ``SWEEP_VERIFY_PER_SPAN`` v values per v span, all off the interpolation sites). Both numbers
 are parametric deviations, upper bounds of the distance between the surfaces.
+
+Every tolerance and limit named here (``SWEEP_...``) is in :mod:`occsurf.algorithms.tolerances`,
+read at call time, so :func:`occsurf.algorithms.tolerances.override` changes it.
 """
 
 from __future__ import annotations
@@ -61,6 +64,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
+from .. import tolerances
 from ..kernel.basis import greville
 from ..kernel.curve import BSplineCurve
 from ..geometry.differential import curve_frenet, rotation_minimizing_frames
@@ -68,20 +72,9 @@ from ..errors import InvalidGeometryError, ToleranceError
 from ..fitting.interpolation import interpolate_values
 from ..kernel.knots import distinct_knots
 from ..kernel.surface import BSplineSurface
+from ._common import check_curve
 
 __all__ = [
-    "SWEEP_TOLERANCE",
-    "RMF_STEPS",
-    "INITIAL_PIECES",
-    "CHECKS_PER_SPAN",
-    "VERIFY_PER_SPAN",
-    "MAX_SECTIONS",
-    "SPLIT_SAFETY",
-    "MAX_SPLIT",
-    "KINK_ANGLE",
-    "MIN_SPAN",
-    "CLOSE_TOL",
-    "CLOSE_ANGLE",
     "SweepResult",
     "sweep",
     "exact_sweep",
@@ -90,46 +83,21 @@ __all__ = [
 Array = NDArray[np.float64]
 Law = float | Callable[[Array], ArrayLike] | None
 
-#: Default tolerance of :func:`sweep`, in model units, relative to the size of the swept geometry
-#: (``max(1, largest |coordinate| of the profile and path poles)``): the pole bound is driven below
-#: ``SWEEP_TOLERANCE * size``.
-SWEEP_TOLERANCE: float = 1e-6
-#: Steps of the reference rotation-minimising frame chain per non-empty path span (double
-#: reflection has a global error of O(h^4): on a 1.5-turn helix with 9 spans, 128 steps agree with
-#: an ODE solution of the RMF transport (DOP853, rtol 1e-13) to 7.8e-12 in the frame vectors,
-#: 64 steps to 1.4e-10, 32 to 2.3e-9; 256 steps reach the ODE's own accuracy, 3.7e-12, at twice
-#: the cost).
-RMF_STEPS: int = 128
-#: Each non-empty path span is first cut in this many v spans.
-INITIAL_PIECES: int = 2
-#: Points per v span where the pole bound is checked during refinement.
-CHECKS_PER_SPAN: int = 5
-#: v values per v span of the final dense verification (with every profile span sampled 8 times).
-VERIFY_PER_SPAN: int = 9
-#: Refinement stops with a :class:`ToleranceError` beyond this many pole rows in v.
-MAX_SECTIONS: int = 4000
-#: A span whose error ``e`` exceeds ``tol`` is cut in ``ceil(SPLIT_SAFETY (e / tol)^(1/(q+1)))``
-#: pieces (at least 2, at most :data:`MAX_SPLIT`): the interpolation error of a smooth function
-#: falls like ``h^(q+1)``, so one pass usually suffices where plain halving needs several.
-SPLIT_SAFETY: float = 1.2
-#: Most pieces one refinement pass cuts a span into.
-MAX_SPLIT: int = 16
-#: A path joint (knot of multiplicity >= degree) must be tangent-continuous within this angle
-#: (radians) unless ``frame="fixed"``: a moving frame turns abruptly at a kink, tearing the sweep.
-KINK_ANGLE: float = 1e-9
-#: A path whose ends are this close (relative to its size) is closed: with ``frame="rmf"`` the
-#: frame's holonomy is then spread along it so that the swept surface closes too.
-CLOSE_TOL: float = 1e-9
-#: ... and its end tangents within this angle (radians) of each other.
-CLOSE_ANGLE: float = 1e-6
-#: Refinement gives up (:class:`ToleranceError`) rather than cut a span below this fraction of the
-#: path's domain: an error that does not fall as spans shrink comes from a jump in a law, a cusp
-#: of the path or a frame that turns abruptly, not from too few sections.
-MIN_SPAN: float = 1e-9
-
 _FRAMES = ("rmf", "frenet", "fixed")
-_CHECK_FRACTIONS = (np.arange(CHECKS_PER_SPAN) + 0.5) / CHECKS_PER_SPAN * 0.96 + 0.013
-_VERIFY_FRACTIONS = (np.arange(VERIFY_PER_SPAN) + 0.5) / VERIFY_PER_SPAN * 0.97 + 0.011
+
+
+def _check_fractions() -> Array:
+    """Where in each v span (fractions of its length, off the fitting sites) the pole bound is
+    checked during refinement: ``tolerances.SWEEP_CHECKS_PER_SPAN`` points."""
+    n = int(tolerances.SWEEP_CHECKS_PER_SPAN)
+    return (np.arange(n) + 0.5) / n * 0.96 + 0.013
+
+
+def _verify_fractions() -> Array:
+    """Where in each v span the final verification and the report look:
+    ``tolerances.SWEEP_VERIFY_PER_SPAN`` points, off the fitting and check sites."""
+    n = int(tolerances.SWEEP_VERIFY_PER_SPAN)
+    return (np.arange(n) + 0.5) / n * 0.97 + 0.011
 
 
 @dataclass(frozen=True)
@@ -172,11 +140,7 @@ class SweepResult:
 
 # ------------------------------------------------------------------------------------- inputs
 def _check_curve(curve: object, name: str) -> BSplineCurve:
-    if not isinstance(curve, BSplineCurve):
-        raise InvalidGeometryError(f"{name}: expected a BSplineCurve, got {type(curve).__name__}")
-    if curve.dim != 3:
-        raise InvalidGeometryError(f"{name}: expected a 3-D curve (poles of shape (n, 3)), got dimension {curve.dim}")
-    return curve
+    return check_curve(curve, name, dim=3)
 
 
 def _law(law: Law, name: str, default: float, nonnegative: bool) -> Callable[[Array], Array]:
@@ -226,22 +190,23 @@ class _FrameField:
     """Orthonormal frames ``F(v)`` (columns T, N, B) of the path at any parameters."""
 
     def __init__(self, path: BSplineCurve, kind: str) -> None:
-        # rmf: reference chain of RMF_STEPS double-reflection steps per span, computed once
+        # rmf: reference chain of SWEEP_RMF_STEPS double-reflection steps per span, computed once
         self.path, self.kind = path, kind
         v0, v1 = path.domain
         if kind == "rmf":
             brk = distinct_knots(path.knots)[0]
             brk = brk[(brk >= v0) & (brk <= v1)]
-            steps = np.linspace(0.0, 1.0, RMF_STEPS + 1)[:-1]
+            steps = np.linspace(0.0, 1.0, tolerances.SWEEP_RMF_STEPS + 1)[:-1]
             grid = np.concatenate([a + (b - a) * steps for a, b in zip(brk[:-1], brk[1:]) if b > a] + [[v1]])
             fr = _path_frames(path, grid)
             self.grid, self.x, self.t, self.r = grid, fr.point, fr.tangent, fr.normal
             self.start = np.stack([fr.tangent[0], fr.normal[0], fr.binormal[0]], axis=-1)
             # On a closed, tangent-continuous path the RMF comes back turned about the tangent by
             # its holonomy angle: the sweep spreads that angle linearly (module notes) to close.
-            closed = np.linalg.norm(fr.point[-1] - fr.point[0]) <= CLOSE_TOL * max(1.0, float(np.abs(fr.point).max()))
+            size = max(1.0, float(np.abs(fr.point).max()))
+            closed = np.linalg.norm(fr.point[-1] - fr.point[0]) <= tolerances.SWEEP_CLOSE_TOL * size
             t0, t1 = fr.tangent[0], fr.tangent[-1]
-            tangent_ok = math.atan2(float(np.linalg.norm(np.cross(t0, t1))), float(t0 @ t1)) <= CLOSE_ANGLE
+            tangent_ok = math.atan2(float(np.linalg.norm(np.cross(t0, t1))), float(t0 @ t1)) <= tolerances.SWEEP_CLOSE_ANGLE
             self.holonomy = (math.atan2(float(fr.normal[-1] @ fr.binormal[0]), float(fr.normal[-1] @ fr.normal[0]))
                              if closed and tangent_ok else 0.0)
         elif kind == "frenet":
@@ -368,7 +333,7 @@ def _check_frame(frame: object) -> str:
 
 def _initial_knots(path: BSplineCurve, frame: str, q: int) -> Array:
     """v knots: the path's breaks with multiplicities matching the frame field's continuity there,
-    every span cut in INITIAL_PIECES."""
+    every span cut in ``tolerances.SWEEP_INITIAL_PIECES``."""
     v0, v1 = path.domain
     vals, mults = distinct_knots(path.knots)
     inside = (vals > v0) & (vals < v1)
@@ -377,7 +342,7 @@ def _initial_knots(path: BSplineCurve, frame: str, q: int) -> Array:
     cont = np.maximum(path.degree - mults[inside] - loss, 0)
     mult = np.clip(q - cont, 1, q)
     parts = [np.full(q + 1, v0)]
-    f = np.linspace(0, 1, INITIAL_PIECES + 1)[1:-1]
+    f = np.linspace(0, 1, tolerances.SWEEP_INITIAL_PIECES + 1)[1:-1]
     for k, (a, b) in enumerate(zip(brk[:-1], brk[1:])):
         parts.append(a + (b - a) * f)
         if k < mult.shape[0]:
@@ -407,7 +372,7 @@ def _check_joints(path: BSplineCurve, frame: str, size: float) -> None:
         if nl == 0 or nr == 0:
             raise InvalidGeometryError(f"path: C'(v) = 0 at v = {float(u)!r}; the frame is undefined")
         angle = math.atan2(float(np.linalg.norm(np.cross(dl[1], dr[1]))), float(dl[1] @ dr[1]))
-        if angle > KINK_ANGLE:
+        if angle > tolerances.SWEEP_KINK_ANGLE:
             raise InvalidGeometryError(
                 f"path: not tangent-continuous at v = {float(u)!r} (the tangent turns by "
                 f"{math.degrees(angle):.3g} degrees); a moving frame would turn abruptly there and tear the "
@@ -466,7 +431,7 @@ def sweep(
         Default 0.
     tol : float, optional
         Absolute bound on the pole-row error (hence on ``|S - E|``); default
-        :data:`SWEEP_TOLERANCE` times ``max(1, largest |coordinate|)`` of the inputs.
+        ``tolerances.SWEEP_TOLERANCE`` times ``max(1, largest |coordinate|)`` of the inputs.
     degree : int, default 3
         Degree in v.
     return_report : bool, default False
@@ -484,82 +449,146 @@ def sweep(
         Not 3-D curves; an unknown frame; a law that is not finite (or a negative scale); a
         Frenet frame that is undefined (zero curvature) at some sample; ``C' = 0`` on the path;
         a path that jumps at a joint, or (``frame`` "rmf"/"frenet") turns abruptly there by more
-        than :data:`KINK_ANGLE`; ``tol`` not a positive number.
+        than ``tolerances.SWEEP_KINK_ANGLE``; ``tol`` not a positive number.
     ToleranceError
-        ``tol`` not reached with :data:`MAX_SECTIONS` pole rows, or an error that does not fall
-        as spans shrink towards :data:`MIN_SPAN` (a law that jumps, a cusp of the path: the
-        message gives the error reached and where).
+        ``tol`` not reached with ``tolerances.SWEEP_MAX_SECTIONS`` pole rows, or an error that
+        does not fall as spans shrink towards ``tolerances.SWEEP_MIN_SPAN`` (a law that jumps, a
+        cusp of the path: the message gives the error reached and where).
     """
     c = _check_curve(profile, "profile")
     q_path = _check_curve(path, "path")
     frame = _check_frame(frame)
     q = V.as_degree(degree, "degree")
     size = max(1.0, float(np.abs(c.control_points).max()), float(np.abs(q_path.control_points).max()))
-    if tol is None:
-        tol_abs = SWEEP_TOLERANCE * size
-    else:
-        try:
-            tol_abs = float(tol)
-        except (TypeError, ValueError) as err:
-            raise InvalidGeometryError(f"tol: expected a positive finite number, got {tol!r}") from err
-        if not (math.isfinite(tol_abs) and tol_abs > 0):
-            raise InvalidGeometryError(f"tol: expected a positive finite number, got {tol!r}")
+    tol_abs = _absolute_tolerance(tol, size)
     _check_joints(q_path, frame, size)
     ex = _Sweep(c, q_path, frame, scale, twist)
-    K = _initial_knots(q_path, frame, q)
-    fractions = np.asarray(_CHECK_FRACTIONS)
-    n_u = c.n_poles
+    fit = _refine(ex, _initial_knots(q_path, frame, q), q, tol_abs)
+    surface = _surface_from_rows(c, fit.rows)
+    if not return_report:
+        return surface
+    return _report(ex, surface, fit, tol_abs, frame)
+
+
+def _absolute_tolerance(tol: object, size: float) -> float:
+    """``tol`` as a positive finite float, or ``tolerances.SWEEP_TOLERANCE * size`` for ``None``."""
+    if tol is None:
+        return tolerances.SWEEP_TOLERANCE * size
+    try:
+        tol_abs = float(tol)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as err:
+        raise InvalidGeometryError(f"tol: expected a positive finite number, got {tol!r}") from err
+    if not (math.isfinite(tol_abs) and tol_abs > 0):
+        raise InvalidGeometryError(f"tol: expected a positive finite number, got {tol!r}")
+    return tol_abs
+
+
+@dataclass(frozen=True)
+class _Fit:
+    """The pole rows that met the tolerance, and what the last pass measured."""
+
+    #: The pole rows as one curve in v: poles ``(n_sections, 3 n_u)``, degree q, the v knots.
+    rows: BSplineCurve
+    #: Refinement passes.
+    iterations: int
+    #: The verification parameters ``(m,)`` (``_verify_fractions`` of every v span) ...
+    verify_v: Array
+    #: ... and the pole bound per v span measured at them (each ``<= tol``).
+    span_errors: Array
+
+
+def _fit_rows(ex: _Sweep, K: Array, q: int) -> tuple[BSplineCurve, Array]:
+    """Pole rows of degree ``q`` on the v knots ``K`` interpolating the exact mapped profile poles
+    at the Greville abscissae, and their pole bound per v span at the check points."""
+    a, b = _spans(K, q)
+    sites = greville(K, q)
+    vc = _off_sites(a, b, _check_fractions())
+    n_u = ex.profile.n_poles
+    # the exact pole rows at the fitting sites and the check points, in one evaluation
+    vals = ex.place(np.concatenate((sites, vc)), ex.profile.control_points).reshape(-1, 3 * n_u)
+    rows = BSplineCurve._trusted(q, K, interpolate_values(sites, vals[: sites.shape[0]], q, K))
+    return rows, _span_errors(rows, vals[sites.shape[0]:], vc, n_u, a.shape[0])
+
+
+def _verify_rows(ex: _Sweep, rows: BSplineCurve) -> tuple[Array, Array]:
+    """The verification parameters ``vv`` (``_verify_fractions`` of every v span) and the pole
+    bound per v span measured there."""
+    a, b = _spans(rows.knots, rows.degree)
+    vv = _off_sites(a, b, _verify_fractions())
+    exact_vv = ex.place(vv, ex.profile.control_points).reshape(vv.shape[0], -1)
+    return vv, _span_errors(rows, exact_vv, vv, ex.profile.n_poles, a.shape[0])
+
+
+def _refine(ex: _Sweep, K: Array, q: int, tol_abs: float) -> _Fit:
+    """Fit pole rows on ``K``, cut the spans whose pole bound exceeds ``tol_abs`` (at the check
+    points, then at the denser verification points), and repeat until none does."""
     iterations = 0
     while True:
         iterations += 1
-        a, b = _spans(K, q)
-        sites = greville(K, q)
-        vc = _off_sites(a, b, fractions)
-        # the exact pole rows at the fitting sites and the check points, in one evaluation
-        vals = ex.place(np.concatenate((sites, vc)), c.control_points).reshape(-1, 3 * n_u)
-        rows = BSplineCurve._trusted(q, K, interpolate_values(sites, vals[: sites.shape[0]], q, K))
-        err = _span_errors(rows, vals[sites.shape[0]:], vc, n_u, a.shape[0])
-        bad = err > tol_abs
-        if not np.any(bad):
+        rows, err = _fit_rows(ex, K, q)
+        if not np.any(err > tol_abs):
             # the denser verification points of the report must meet tol too (the check points
             # alone let pole_bound exceed tol by up to 3 %)
-            vv = _off_sites(a, b, np.asarray(_VERIFY_FRACTIONS))
-            exact_vv = ex.place(vv, c.control_points).reshape(vv.shape[0], -1)
-            err = _span_errors(rows, exact_vv, vv, n_u, a.shape[0])
-            bad = err > tol_abs
-            if not np.any(bad):
-                break
-        # cut each bad span in as many pieces as the O(h^(q+1)) error model asks for
-        pieces = np.clip(np.ceil(SPLIT_SAFETY * (err[bad] / tol_abs) ** (1.0 / (q + 1))), 2, MAX_SPLIT).astype(int)
-        narrow = (b[bad] - a[bad]) / pieces < MIN_SPAN * (q_path.domain[1] - q_path.domain[0])
-        if np.any(narrow):
-            k = int(np.flatnonzero(bad)[np.argmax(narrow)])
-            raise ToleranceError(
-                f"sweep: tolerance {tol_abs:.3g} not reached: the error ({float(err[k]):.3g}) does not fall as the "
-                f"sections near v = {float(a[k]):.6g} get closer; a scale or twist law that jumps there, or a "
-                "path with a cusp (C'(v) = 0) or an abrupt turn there?"
-            )
-        if rows.n_poles + int((pieces - 1).sum()) > MAX_SECTIONS:
-            raise ToleranceError(
-                f"sweep: tolerance {tol_abs:.3g} not reached with {MAX_SECTIONS} sections; error reached "
-                f"{float(err.max()):.3g} (a non-smooth law or a nearly singular frame?)"
-            )
-        n_new = pieces - 1
-        j = np.arange(int(n_new.sum())) - np.repeat(np.cumsum(n_new) - n_new, n_new) + 1   # 1 .. pieces-1
-        new = np.repeat(a[bad], n_new) + np.repeat(b[bad] - a[bad], n_new) * j / np.repeat(pieces, n_new)
-        K = np.sort(np.concatenate((K, new)))
+            vv, err = _verify_rows(ex, rows)
+            if not np.any(err > tol_abs):
+                return _Fit(rows, iterations, vv, err)
+        K = _split_spans(rows, err, tol_abs, ex.path.domain)
+
+
+def _split_spans(rows: BSplineCurve, err: Array, tol_abs: float, domain: tuple[float, float]) -> Array:
+    """The v knots of ``rows`` with every span whose error ``err`` (one per span) exceeds
+    ``tol_abs`` cut in as many equal pieces as the ``O(h^(q+1))`` error model asks for.
+
+    Raises
+    ------
+    ToleranceError
+        A piece would be shorter than ``tolerances.SWEEP_MIN_SPAN`` of the path's ``domain`` (the
+        error does not fall as spans shrink), or there would be more than
+        ``tolerances.SWEEP_MAX_SECTIONS`` pole rows.
+    """
+    K, q = rows.knots, rows.degree
+    a, b = _spans(K, q)
+    bad = err > tol_abs
+    pieces = np.clip(np.ceil(tolerances.SWEEP_SPLIT_SAFETY * (err[bad] / tol_abs) ** (1.0 / (q + 1))),
+                     2, tolerances.SWEEP_MAX_SPLIT).astype(int)
+    narrow = (b[bad] - a[bad]) / pieces < tolerances.SWEEP_MIN_SPAN * (domain[1] - domain[0])
+    if np.any(narrow):
+        k = int(np.flatnonzero(bad)[np.argmax(narrow)])
+        raise ToleranceError(
+            f"sweep: tolerance {tol_abs:.3g} not reached: the error ({float(err[k]):.3g}) does not fall as the "
+            f"sections near v = {float(a[k]):.6g} get closer; a scale or twist law that jumps there, or a "
+            "path with a cusp (C'(v) = 0) or an abrupt turn there?"
+        )
+    max_sections = tolerances.SWEEP_MAX_SECTIONS
+    if rows.n_poles + int((pieces - 1).sum()) > max_sections:
+        raise ToleranceError(
+            f"sweep: tolerance {tol_abs:.3g} not reached with {max_sections} sections; error reached "
+            f"{float(err.max()):.3g} (a non-smooth law or a nearly singular frame?)"
+        )
+    n_new = pieces - 1
+    j = np.arange(int(n_new.sum())) - np.repeat(np.cumsum(n_new) - n_new, n_new) + 1   # 1 .. pieces-1
+    new = np.repeat(a[bad], n_new) + np.repeat(b[bad] - a[bad], n_new) * j / np.repeat(pieces, n_new)
+    return np.sort(np.concatenate((K, new)))
+
+
+def _surface_from_rows(profile: BSplineCurve, rows: BSplineCurve) -> BSplineSurface:
+    """The swept surface: u the profile's knots, degree and weights; v the pole rows' knots."""
+    n_u = profile.n_poles
     net = rows.control_points.reshape(rows.n_poles, n_u, 3).transpose(1, 0, 2)
-    W = None if c.weights is None else np.repeat(c.weights[:, None], rows.n_poles, axis=1)
-    surface = BSplineSurface._trusted((c.degree, q), (c.knots.copy(), K), np.ascontiguousarray(net), W)
-    if not return_report:
-        return surface
-    # Dense verification off the fitting sites (vv, exact_vv: the points the loop verified last).
+    W = None if profile.weights is None else np.repeat(profile.weights[:, None], rows.n_poles, axis=1)
+    return BSplineSurface._trusted((profile.degree, rows.degree), (profile.knots.copy(), rows.knots),
+                                   np.ascontiguousarray(net), W)
+
+
+def _report(ex: _Sweep, surface: BSplineSurface, fit: _Fit, tol_abs: float, frame: str) -> SweepResult:
+    """Measure ``max |S - E|`` on the dense grid (every profile span sampled 8 times and the
+    domain ends, times the v values the refinement verified last) and assemble the report."""
+    c = ex.profile
     ua, ub = _spans(c.knots, c.degree)
     uu = np.concatenate((_off_sites(ua, ub, (np.arange(8) + 0.5) / 8), c.domain))
-    S = surface.evaluate_grid(uu, vv)
-    E = ex.place(vv, c.evaluate(uu)).transpose(1, 0, 2)
+    S = surface.evaluate_grid(uu, fit.verify_v)
+    E = ex.place(fit.verify_v, c.evaluate(uu)).transpose(1, 0, 2)
     max_error = float(np.linalg.norm(S - E, axis=-1).max())
-    pole = _span_errors(rows, exact_vv, vv, n_u, a.shape[0])
-    return SweepResult(surface=surface, max_error=max_error, pole_bound=float(pole.max()), tol=tol_abs,
-                       n_sections=rows.n_poles, iterations=iterations, n_checked=int(S.shape[0] * S.shape[1]),
+    return SweepResult(surface=surface, max_error=max_error, pole_bound=float(fit.span_errors.max()), tol=tol_abs,
+                       n_sections=fit.rows.n_poles, iterations=fit.iterations, n_checked=int(S.shape[0] * S.shape[1]),
                        frame=frame)

@@ -19,6 +19,7 @@ import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
+from .. import tolerances
 from ..kernel.basis import basis_matrix
 from ..kernel.compat import make_compatible
 from ..kernel.curve import BSplineCurve
@@ -39,11 +40,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-
-#: Schoenberg–Whitney margin: a collocation system is refused when some basis function is smaller
-#: than this at its own data site (the matrix is then singular or nearly so, and the "interpolant"
-#: would be meaningless). Relative to the basis' maximum of 1.
-SCHOENBERG_WHITNEY: float = 1e-12
 
 _METHODS = ("centripetal", "chord", "uniform")
 
@@ -139,14 +135,74 @@ def averaged_knots(params: ArrayLike, degree: int) -> Array:
 
 
 def approximation_knots(params: ArrayLike, n_poles: int, degree: int) -> Array:
-    """Clamped knots for a least-squares fit with ``n_poles`` poles (The NURBS Book, eq. 9.68-9.69).
+    """Clamped knots for a least-squares fit with ``n_poles`` poles (The NURBS Book, eqs. 9.68-9.69
+    and 9.8 combined).
 
-    Every knot span then contains at least one parameter, so the normal equations are positive
-    definite (de Boor's condition for least squares).
+    Work in *index space*: ``T(x)`` is the piecewise-linear interpolant of the ``m`` parameters over
+    their index (``T(k) = t_k``), as eq. 9.69 interpolates them. Eq. 9.69 spreads the ``n - p``
+    knot spans evenly over the data, ``D = (m - 1) / (n - p)`` index units each. Here the ``n``
+    Greville abscissae ``g_i`` of that even clamped knot vector serve as *virtual sites*, pushed
+    apart to at least one data step where the clamped ends crowd them,
+
+    .. math::
+
+        s_i = \\min\\big(\\max(g_i,\\, i),\\; m - n + i\\big), \\qquad i = 0, \\ldots, n - 1,
+
+    and the interior knots are the averages (eq. 9.8) of ``p`` consecutive virtual sites:
+
+    .. math::
+
+        u_{p+j} = T\\Big(\\frac{1}{p} \\sum_{k=j}^{j+p-1} s_k\\Big), \\qquad j = 1, \\ldots, n - p - 1.
+
+    With many data per span (``D >= p``) no site is moved and the knots are those of eq. 9.69 up to
+    the averaging, so the fits are as good; as ``n`` approaches ``m`` the sites become the data
+    indices themselves and the knots those of interpolation (eq. 9.8). For any increasing
+    parameters and every ``p + 1 <= n <= m``, because ``s_0 = 0``, ``s_{n-1} = m - 1`` and
+    ``s_{i+1} - s_i >= 1``:
+
+    * every knot span contains at least one parameter (interior spans are at least one index unit
+      long), the design goal of eqs. 9.68-9.69;
+    * the Schoenberg–Whitney condition holds with a margin, also with both end points
+      interpolated: the data site ``k_i = round(s_i)`` (strictly increasing, ``1 <= k_i <= m - 2``
+      for ``0 < i < n - 1``) lies at least half a data step inside the support of ``N_i``, which
+      reaches from ``<= s_{i-1}`` to ``>= s_{i+1}``. The least-squares matrix has full column rank
+      and stays well conditioned.
+
+    For ``n = m`` the averaged knots of :func:`averaged_knots` (interpolation) are returned.
+
+    Parameters
+    ----------
+    params : array_like, shape (m,)
+        Strictly increasing data parameters.
+    n_poles : int
+        ``degree + 1 <= n_poles <= m``.
+    degree : int
 
     Returns
     -------
     ndarray, shape (n_poles + degree + 1,)
+        Clamped at ``params[0]`` and ``params[-1]``; the interior knots are simple and strictly
+        inside ``(params[0], params[-1])``.
+
+    Raises
+    ------
+    InvalidGeometryError
+        ``n_poles`` out of range.
+
+    Notes
+    -----
+    Eq. 9.69 itself (``u_{p+j} = T(j d - 1)``, ``d = m / (n - p)``) also puts a parameter in every
+    span, but that does not make the system well conditioned: its basis functions next to the
+    clamped ends have Greville abscissae ``D/p, 2D/p, ...`` apart, closer than the data once
+    ``D < p``, so as ``n`` approaches ``m`` the only data site left to each basis function falls
+    near the end of its support. The matrix keeps full rank in exact arithmetic, but its condition
+    number grows exponentially with ``n``. Measured on the interior (end-constrained) matrix,
+    centripetal parameters of random points, ``8 <= m <= 60``, ``p = 3``: 7e4 at ``n = 0.8 m``,
+    6e12 at ``0.9 m``, 1e20 at ``n = m - 1`` (up to 2e22 for ``p = 5`` and uniformly random
+    parameters), so that :func:`fit_curve` had to refuse e.g. ``m = 39, n = 38, p = 4`` as rank
+    deficient. With the knots above the same scan stays below 40 (``p <= 5``; below 1e5 on
+    uniformly random parameters) for every ``n``, and a cubic fit of a sampled helix
+    (``m = 400``, ``n = 10 .. 200``) deviates as much as with eq. 9.69, within 10 %.
     """
     p = V.as_degree(degree)
     t = V.as_finite_array(params, "params", ndim=1)
@@ -156,11 +212,17 @@ def approximation_knots(params: ArrayLike, n_poles: int, degree: int) -> Array:
         raise InvalidGeometryError(f"n_poles: expected {p + 1} <= n_poles <= {m} (number of points), got {n_poles}")
     if n == m:
         return averaged_knots(t, p)
-    d = m / (n - p)
-    j = np.arange(1, n - p)
-    i = np.floor(j * d).astype(int)
-    a = j * d - i
-    inner = (1 - a) * t[i - 1] + a * t[i]
+    # Greville abscissae of the clamped knot vector with n - p even spans over [0, m - 1].
+    D = (m - 1) / (n - p)
+    even = np.concatenate((np.zeros(p), D * np.arange(n - p + 1), np.full(p, m - 1.0)))
+    g = sum(even[r + 1:r + 1 + n] for r in range(p)) / p  # (n,)
+    i = np.arange(n)
+    sites = np.minimum(np.maximum(g, i), m - n + i)  # at least one data step apart
+    # Averages of p consecutive sites, summed directly: integer sites give integer knots exactly.
+    x = sum(sites[r + 1:r + n - p] for r in range(p)) / p  # (n - p - 1,)
+    k = np.minimum(np.floor(x).astype(int), m - 2)
+    a = x - k
+    inner = (1 - a) * t[k] + a * t[k + 1]
     return np.concatenate((np.full(p + 1, t[0]), inner, np.full(p + 1, t[-1])))
 
 
@@ -170,9 +232,13 @@ def _collocation(params: Array, degree: int, knots: Array, n: int) -> Array:
 
 
 def _check_sw(B: Array, name: str) -> None:
+    # Schoenberg–Whitney margin: refused when some basis function is smaller than
+    # tolerances.SCHOENBERG_WHITNEY at its own data site (the matrix is then singular or nearly so,
+    # and the "interpolant" would be meaningless). Relative to the basis' maximum of 1.
     d = np.diagonal(B)
-    if np.any(d < SCHOENBERG_WHITNEY):
-        i = int(np.argmax(d < SCHOENBERG_WHITNEY))
+    margin = tolerances.SCHOENBERG_WHITNEY
+    if np.any(d < margin):
+        i = int(np.argmax(d < margin))
         raise InvalidGeometryError(
             f"{name}: the data parameters and knots violate the Schoenberg–Whitney condition at "
             f"basis function {i} (no data site where it is non-zero); the interpolation system is singular"
@@ -245,8 +311,8 @@ def _lsq_operator(params: Array, degree: int, knots: Array, n: int) -> Array:
     X, _, rank, _ = np.linalg.lstsq(A, S, rcond=None)
     if rank < n - 2:
         raise InvalidGeometryError(
-            f"n_poles: {n} poles are not determined by the data (rank {rank + 2}); some knot span holds no "
-            "data parameter — use fewer poles or approximation_knots"
+            f"n_poles: {n} poles are not determined by the data (rank {rank + 2}); the data parameters do not "
+            "interlace with the knots (Schoenberg–Whitney) — use fewer poles or approximation_knots"
         )
     F = np.zeros((n, m))
     F[0, 0] = 1.0

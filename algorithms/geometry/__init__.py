@@ -6,7 +6,8 @@ differential geometry of curves and surfaces: :func:`curve_frenet`, :func:`curva
 :func:`torsion`, :func:`arc_length`, :func:`rotation_minimizing_frames`, :func:`surface_curvatures`.
 """
 
-from .affine import AffineMap, Frame, Normal, Point, ProjectiveMap, Vector, affine_combination
+from .affine import Normal, Point, Vector, affine_combination
+from .affine_maps import AffineMap, Frame, ProjectiveMap
 from .differential import arc_length, curvature, curve_frenet, rotation_minimizing_frames, surface_curvatures, torsion
 
 __all__ = [

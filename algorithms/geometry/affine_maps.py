@@ -3,7 +3,8 @@
 A :class:`Frame` converts coordinates between frames; an :class:`AffineMap` moves points by
 ``M p + t``, vectors by ``M v`` and normals by the inverse transpose; a :class:`ProjectiveMap`
 acts on homogeneous points and maps rational splines exactly. The element types (Point, Vector,
-Normal) are in :mod:`occsurf.algorithms.geometry.affine`, which re-exports these classes.
+Normal) are in :mod:`occsurf.algorithms.geometry.affine`; :mod:`occsurf.algorithms.geometry`
+exports both modules' public names.
 """
 
 from __future__ import annotations
@@ -15,31 +16,20 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import tolerances
-from .affine import (
-    Normal,
-    Point,
-    Vector,
-    _as_coords,
-    _as_matrix,
-    _check_invertible,
-    _Element,
-    _readonly,
-    _broadcast,
-    _kind_of,
-    _unit,
-    Spline,
-)
-from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError
+from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
+from ._common import Element, as_coords, as_matrix, check_broadcast, check_invertible, kind_of, readonly, unit
+from .affine import Normal, Point, Vector
 
 __all__ = ["Frame", "AffineMap", "ProjectiveMap"]
 
 Array = NDArray[np.float64]
+Spline = Union[BSplineCurve, BSplineSurface]
 
 # ---------------------------------------------------------------------------------------- frames
 _Kind = Union[type[Point], type[Vector], type[Normal], Literal["point", "vector", "normal"]]
-_KINDS: dict[str, type[_Element]] = {"point": Point, "vector": Vector, "normal": Normal}
+_KINDS: dict[str, type[Element]] = {"point": Point, "vector": Vector, "normal": Normal}
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,16 +59,16 @@ class Frame:
 
     def __post_init__(self) -> None:
         o = self.origin
-        o_c = o.coords if isinstance(o, Point) else _as_coords(o, "origin")
+        o_c = o.coords if isinstance(o, Point) else as_coords(o, "origin")
         if isinstance(o, (Vector, Normal)):
             raise TypeError(f"origin: expected a Point, got a {o._kind}")
         if o_c.ndim != 1:
             raise InvalidGeometryError(f"origin: expected a single point of shape (d,), got {o_c.shape}")
-        B = _as_matrix(self.basis, "basis", o_c.shape[0])
-        _check_invertible(B, "basis", tolerances.MAX_CONDITION)
+        B = as_matrix(self.basis, "basis", o_c.shape[0])
+        check_invertible(B, "basis", tolerances.MAX_CONDITION)
         object.__setattr__(self, "origin", Point._trusted(o_c))
-        object.__setattr__(self, "basis", _readonly(B))
-        object.__setattr__(self, "_inverse", _readonly(np.linalg.inv(B)))
+        object.__setattr__(self, "basis", readonly(B))
+        object.__setattr__(self, "_inverse", readonly(np.linalg.inv(B)))
 
     @classmethod
     def standard(cls, dim: int = 3) -> Frame:
@@ -95,8 +85,8 @@ class Frame:
         InvalidGeometryError
             If the directions are not 3-D, zero, or parallel.
         """
-        z = _as_coords(z_dir.coords if isinstance(z_dir, Vector) else z_dir, "z_dir")
-        x = _as_coords(x_dir.coords if isinstance(x_dir, Vector) else x_dir, "x_dir")
+        z = as_coords(z_dir.coords if isinstance(z_dir, Vector) else z_dir, "z_dir")
+        x = as_coords(x_dir.coords if isinstance(x_dir, Vector) else x_dir, "x_dir")
         for name, a in (("z_dir", z), ("x_dir", x)):
             if a.shape != (3,):
                 raise InvalidGeometryError(f"{name}: expected a 3-D direction of shape (3,), got {a.shape}")
@@ -127,13 +117,13 @@ class Frame:
         that ``n · v`` equals the dot product of the coordinate arrays.
         """
         if isinstance(x, Point):
-            _broadcast(self.origin.coords, x.coords, "point_or_vector")
+            check_broadcast(self.origin.coords, x.coords, "point_or_vector")
             return (x.coords - self.origin.coords) @ self._inverse.T
         if isinstance(x, Vector):
-            _broadcast(self.origin.coords, x.coords, "point_or_vector")
+            check_broadcast(self.origin.coords, x.coords, "point_or_vector")
             return x.coords @ self._inverse.T
         if isinstance(x, Normal):
-            _broadcast(self.origin.coords, x.coords, "point_or_vector")
+            check_broadcast(self.origin.coords, x.coords, "point_or_vector")
             return x.coords @ self.basis
         raise TypeError(f"coordinates_of: expected a Point, Vector or Normal, got {type(x).__name__}")
 
@@ -148,7 +138,7 @@ class Frame:
         k = _KINDS.get(kind, None) if isinstance(kind, str) else kind
         if k not in (Point, Vector, Normal):
             raise TypeError(f"kind: expected Point, Vector or Normal, got {kind!r}")
-        c = _as_coords(coords, "coords")
+        c = as_coords(coords, "coords")
         if c.shape[-1] != self.dim:
             raise InvalidGeometryError(f"coords: expected dimension {self.dim}, got {c.shape[-1]}")
         if k is Point:
@@ -194,22 +184,22 @@ class AffineMap:
     translation: Array | None = None
 
     def __post_init__(self) -> None:
-        M = _as_matrix(self.matrix, "matrix")
+        M = as_matrix(self.matrix, "matrix")
         d = M.shape[0]
         if self.translation is None:
             t = np.zeros(d)
         else:
-            t = _as_coords(self.translation, "translation")
+            t = as_coords(self.translation, "translation")
             if t.shape != (d,):
                 raise InvalidGeometryError(f"translation: expected shape {(d,)}, got {t.shape}")
-        object.__setattr__(self, "matrix", _readonly(M))
-        object.__setattr__(self, "translation", _readonly(t))
+        object.__setattr__(self, "matrix", readonly(M))
+        object.__setattr__(self, "translation", readonly(t))
 
     @classmethod
     def _trusted(cls, matrix: Array, translation: Array) -> AffineMap:
         obj = object.__new__(cls)
-        object.__setattr__(obj, "matrix", _readonly(matrix))
-        object.__setattr__(obj, "translation", _readonly(translation))
+        object.__setattr__(obj, "matrix", readonly(matrix))
+        object.__setattr__(obj, "translation", readonly(translation))
         return obj
 
     @classmethod
@@ -219,7 +209,7 @@ class AffineMap:
     @classmethod
     def translate(cls, v: Vector | ArrayLike) -> AffineMap:
         """Translation by ``v``."""
-        t = v.coords if isinstance(v, Vector) else _as_coords(v, "v")
+        t = v.coords if isinstance(v, Vector) else as_coords(v, "v")
         if t.ndim != 1:
             raise InvalidGeometryError(f"v: expected a single vector of shape (d,), got {t.shape}")
         return cls._trusted(np.eye(t.shape[0]), t)
@@ -227,7 +217,7 @@ class AffineMap:
     @classmethod
     def from_homogeneous(cls, matrix: ArrayLike) -> AffineMap:
         """From a ``(d+1, d+1)`` homogeneous matrix whose last row is ``[0, ..., 0, 1]``."""
-        H = _as_matrix(matrix, "matrix")
+        H = as_matrix(matrix, "matrix")
         d = H.shape[0] - 1
         if d < 1 or not np.array_equal(H[-1], np.r_[np.zeros(d), 1.0]):
             raise InvalidGeometryError(f"matrix: expected last row [0, ..., 0, 1] of an affine map, got {H[-1].tolist()}")
@@ -246,7 +236,7 @@ class AffineMap:
         return H
 
     def _normal_matrix(self) -> Array:
-        _check_invertible(self.matrix, "matrix", tolerances.MAX_CONDITION)
+        check_invertible(self.matrix, "matrix", tolerances.MAX_CONDITION)
         return np.linalg.inv(self.matrix).T
 
     def __call__(self, x: Any, *, normalize: bool = False) -> Any:
@@ -265,7 +255,7 @@ class AffineMap:
         InvalidGeometryError
             On dimension mismatch; for normals when ``M`` is (numerically) singular.
         """
-        if isinstance(x, _Element):
+        if isinstance(x, Element):
             if x.dim != self.dim:
                 raise InvalidGeometryError(f"x: expected dimension {self.dim}, got {x.dim}")
             if isinstance(x, Point):
@@ -273,7 +263,7 @@ class AffineMap:
             if isinstance(x, Vector):
                 return Vector._trusted(x.coords @ self.matrix.T)
             n = x.coords @ self._normal_matrix().T
-            return Normal._trusted(_unit(n, "normal") if normalize else n)
+            return Normal._trusted(unit(n, "normal") if normalize else n)
         if isinstance(x, Frame):
             if x.dim != self.dim:
                 raise InvalidGeometryError(f"x: expected dimension {self.dim}, got {x.dim}")
@@ -301,13 +291,13 @@ class AffineMap:
             return AffineMap._trusted(self.matrix @ other.matrix, self.matrix @ other.translation + self.translation)
         if isinstance(other, ProjectiveMap):
             return ProjectiveMap(self.homogeneous) @ other
-        if isinstance(other, _Element):
+        if isinstance(other, Element):
             raise TypeError("AffineMap @ element: apply a map by calling it, f(x)")
         return NotImplemented
 
     def inverse(self) -> AffineMap:
         """The inverse map ``x -> M^{-1} (x - t)``; raises if ``M`` is (numerically) singular."""
-        _check_invertible(self.matrix, "matrix", tolerances.MAX_CONDITION)
+        check_invertible(self.matrix, "matrix", tolerances.MAX_CONDITION)
         Mi = np.linalg.inv(self.matrix)
         return AffineMap._trusted(Mi, -Mi @ self.translation)
 
@@ -338,7 +328,7 @@ class ProjectiveMap:
     matrix: Array
 
     def __post_init__(self) -> None:
-        H = _as_matrix(self.matrix, "matrix")
+        H = as_matrix(self.matrix, "matrix")
         if H.shape[0] < 2:
             raise InvalidGeometryError(f"matrix: expected shape (d+1, d+1) with d >= 1, got {H.shape}")
         # Judged in units of the translation's size: a change of length unit x -> c x turns
@@ -348,8 +338,8 @@ class ProjectiveMap:
         B = H.copy()
         B[:-1, -1] /= c
         B[-1, :-1] *= c
-        _check_invertible(B, "matrix", tolerances.MAX_CONDITION)
-        object.__setattr__(self, "matrix", _readonly(H))
+        check_invertible(B, "matrix", tolerances.MAX_CONDITION)
+        object.__setattr__(self, "matrix", readonly(H))
 
     @property
     def dim(self) -> int:
@@ -376,7 +366,7 @@ class ProjectiveMap:
         if isinstance(x, (BSplineCurve, BSplineSurface)):
             return self.apply_to(x)
         if not isinstance(x, Point):
-            raise TypeError(f"ProjectiveMap: acts on Points and splines, not on {_kind_of(x)}; "
+            raise TypeError(f"ProjectiveMap: acts on Points and splines, not on {kind_of(x)}; "
                             f"map the end points of a vector instead")
         if x.dim != self.dim:
             raise InvalidGeometryError(f"x: expected dimension {self.dim}, got {x.dim}")
@@ -446,7 +436,7 @@ class ProjectiveMap:
             if other.dim != self.dim:
                 raise InvalidGeometryError(f"other: expected dimension {self.dim}, got {other.dim}")
             return ProjectiveMap(self.matrix @ other.homogeneous)
-        if isinstance(other, _Element):
+        if isinstance(other, Element):
             raise TypeError("ProjectiveMap @ element: apply a map by calling it, f(x)")
         return NotImplemented
 

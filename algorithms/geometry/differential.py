@@ -21,10 +21,10 @@ Sign conventions (the same as OpenCascade's ``GeomLProp``)
 Degenerate points give NaN, never a silent wrong number and never an exception
 -------------------------------------------------------------------------------
 * Curves: where ``|C'| = 0`` everything but the point is NaN. Where the curvature vanishes
-  (``|C' x C''| <= CURVATURE_ZERO |C'| |C''|``, e.g. a straight piece or an inflection) ``curvature``
+  (``|C' x C''| <= tolerances.CURVATURE_ZERO |C'| |C''|``, e.g. a straight piece or an inflection) ``curvature``
   is 0 and the normal, binormal, torsion and dκ/ds are NaN (OCC raises ``LProp_NotDefined`` there).
-* Surfaces: where ``|S_u x S_v| <= NORMAL_ZERO max(|S_u|, |S_v|)^2`` (a sphere pole, a collapsed edge) the
-  normal and all curvature quantities are NaN. OCC still finds a normal at a pole from higher
+* Surfaces: where ``|S_u x S_v| <= tolerances.NORMAL_ZERO max(|S_u|, |S_v|)^2`` (a sphere pole, a
+  collapsed edge) the normal and all curvature quantities are NaN. OCC still finds a normal at a pole from higher
   derivatives but reports the curvature undefined.
 """
 
@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
+from .. import tolerances
 from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError, ToleranceError
 from ..kernel.surface import BSplineSurface
@@ -45,10 +46,6 @@ from ..kernel.surface import BSplineSurface
 Array = NDArray[np.float64]
 
 __all__ = [
-    "CURVATURE_ZERO",
-    "NORMAL_ZERO",
-    "ARC_LENGTH",
-    "UMBILIC",
     "FrenetFrame",
     "Frames",
     "SurfaceCurvatures",
@@ -64,22 +61,13 @@ __all__ = [
     "normal_curvature",
 ]
 
-#: A curve point has no Frenet normal when ``|C' x C''| <= CURVATURE_ZERO * |C'| * |C''|`` (the sine of
-#: the angle between the first two derivatives; scale-free).
-CURVATURE_ZERO: float = 1e-12
-#: A surface point has no normal when ``|S_u x S_v| <= NORMAL_ZERO * max(|S_u|, |S_v|)^2``
-#: (scale-free; at a sphere pole ``S_u`` is round-off, so ``|S_u| |S_v|`` would not do).
-NORMAL_ZERO: float = 1e-12
-#: Default arc-length tolerance, relative to the length of the control polygon.
-ARC_LENGTH: float = 1e-13
-#: Default tolerance of :func:`is_umbilic`, relative to ``max(|k1|, |k2|, 1/R)``, R the size of the net.
-UMBILIC: float = 1e-8
+# Tolerances (read at call time from :mod:`occsurf.algorithms.tolerances`): CURVATURE_ZERO,
+# NORMAL_ZERO, ARC_LENGTH, ARC_LENGTH_MAX_LEVELS, UMBILIC.
 
 # 16-point Gauss–Legendre rule on [0, 1].
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 _GL_X = 0.5 * (_GL_X + 1.0)
 _GL_W = 0.5 * _GL_W
-_MAX_LEVELS = 40
 
 
 # ---------------------------------------------------------------------------------------------- curves
@@ -158,7 +146,7 @@ def _frenet_parts(D: Array) -> dict[str, Array]:
     s = _norm(d1)
     na = _norm(a)
     regular = s > 0
-    bends = regular & (na > CURVATURE_ZERO * s * _norm(d2))
+    bends = regular & (na > tolerances.CURVATURE_ZERO * s * _norm(d2))
     kappa = np.where(bends, _safe_div(na, s**3, bends), np.where(regular, 0.0, np.nan))
     return dict(d1=d1, d2=d2, a=a, s=s, na=na, regular=regular, bends=bends, kappa=kappa)
 
@@ -185,9 +173,10 @@ def curve_frenet(curve: BSplineCurve, u: ArrayLike) -> FrenetFrame:
 
     Notes
     -----
-    Where the curvature vanishes (see :data:`CURVATURE_ZERO`) the normal, binormal and torsion are
-    NaN and ``curvature`` is 0; where ``C' = 0`` the tangent and curvature are NaN too. OCC instead
-    takes a tangent from higher derivatives at ``C' = 0`` and raises for the normal of a line.
+    Where the curvature vanishes (see :data:`~occsurf.algorithms.tolerances.CURVATURE_ZERO`) the
+    normal, binormal and torsion are NaN and ``curvature`` is 0; where ``C' = 0`` the tangent and
+    curvature are NaN too. OCC instead takes a tangent from higher derivatives at ``C' = 0`` and
+    raises for the normal of a line.
     """
     c = _check_curve(curve)
     D = _curve_derivs(c, u, 3)
@@ -254,8 +243,8 @@ def arc_length(curve: BSplineCurve, u0: ArrayLike, u1: ArrayLike, tol: float | N
     u0, u1 : array_like, broadcastable to shape S
         Limits in the domain; ``u1 < u0`` gives a negative length.
     tol : float, optional
-        Absolute error bound (model units) on each length; default :data:`ARC_LENGTH` times the
-        length of the control polygon.
+        Absolute error bound (model units) on each length; default
+        :data:`~occsurf.algorithms.tolerances.ARC_LENGTH` times the length of the control polygon.
 
     Returns
     -------
@@ -273,7 +262,9 @@ def arc_length(curve: BSplineCurve, u0: ArrayLike, u1: ArrayLike, tol: float | N
     InvalidGeometryError
         ``tol`` not a positive finite number.
     ToleranceError
-        If ``tol`` is not reached after 40 halvings (e.g. a cusp, tol below round-off).
+        If ``tol`` is not reached after
+        :data:`~occsurf.algorithms.tolerances.ARC_LENGTH_MAX_LEVELS` (40) halvings (e.g. a cusp,
+        tol below round-off).
     """
     c = _check_curve(curve)
     lo, hi = c.domain
@@ -284,7 +275,7 @@ def arc_length(curve: BSplineCurve, u0: ArrayLike, u1: ArrayLike, tol: float | N
     a, b = a.reshape(-1), b.reshape(-1)
     if tol is None:
         poly = float(np.sum(_norm(np.diff(c.control_points, axis=0))))
-        tol = ARC_LENGTH * max(poly, np.finfo(float).tiny)
+        tol = tolerances.ARC_LENGTH * max(poly, np.finfo(float).tiny)
     else:
         try:
             ok = isinstance(tol, numbers.Real) and not isinstance(tol, bool) and math.isfinite(tol) and tol > 0
@@ -304,7 +295,8 @@ def arc_length(curve: BSplineCurve, u0: ArrayLike, u1: ArrayLike, tol: float | N
     total_len = np.maximum(right - left, np.finfo(float).tiny)
     out = np.zeros(a.size)
     whole = _gauss(c, sa, sb)
-    for _ in range(_MAX_LEVELS):
+    max_levels = int(tolerances.ARC_LENGTH_MAX_LEVELS)
+    for _ in range(max_levels):
         if sa.size == 0:
             break
         mid = 0.5 * (sa + sb)
@@ -320,7 +312,7 @@ def arc_length(curve: BSplineCurve, u0: ArrayLike, u1: ArrayLike, tol: float | N
         owner = np.concatenate((owner, owner))
     else:
         if sa.size:
-            raise ToleranceError(f"arc_length: tolerance {tol:g} not reached after {_MAX_LEVELS} halvings")
+            raise ToleranceError(f"arc_length: tolerance {tol:g} not reached after {max_levels} halvings")
     return (sign * out).reshape(shape)
 
 
@@ -429,7 +421,7 @@ class SurfaceCurvatures:
     second_form : tuple of 3 ndarrays, shape S
         ``(L, M, N)`` against ``normal``.
 
-    All fields are NaN where the normal is undefined (:data:`NORMAL_ZERO`).
+    All fields are NaN where the normal is undefined (:data:`~occsurf.algorithms.tolerances.NORMAL_ZERO`).
     """
 
     gaussian: Array
@@ -457,7 +449,7 @@ def _forms(surface: BSplineSurface, u: ArrayLike, v: ArrayLike) -> dict[str, Arr
     cr = np.cross(su, sv)
     ncr = _norm(cr)
     lu, lv = _norm(su), _norm(sv)
-    ok = ncr > NORMAL_ZERO * np.maximum(lu, lv) ** 2
+    ok = ncr > tolerances.NORMAL_ZERO * np.maximum(lu, lv) ** 2
     n = _safe_div(cr, ncr[..., None], ok[..., None])
     dot = lambda x, y: np.einsum("...i,...i->...", x, y)  # noqa: E731
     return dict(su=su, sv=sv, n=n, ok=ok, lu=lu,
@@ -530,10 +522,10 @@ def principal_curvatures(surface: BSplineSurface, u: ArrayLike, v: ArrayLike) ->
 
 def is_umbilic(surface: BSplineSurface, u: ArrayLike, v: ArrayLike, tol: float | None = None) -> NDArray[np.bool_]:
     """Whether ``k1 - k2 <= tol * max(|k1|, |k2|, 1/R)`` (R: largest control-point distance from
-    the net's centroid, so that round-off on a plane counts as flat). Default tol :data:`UMBILIC`.
-    False where the curvature is undefined (NaN)."""
+    the net's centroid, so that round-off on a plane counts as flat). Default tol
+    :data:`~occsurf.algorithms.tolerances.UMBILIC`. False where the curvature is undefined (NaN)."""
     s = _check_surface(surface)
-    tol = UMBILIC if tol is None else float(tol)
+    tol = tolerances.UMBILIC if tol is None else float(tol)
     P = s.control_points.reshape(-1, 3)
     R = max(float(np.max(_norm(P - P.mean(axis=0)))), np.finfo(float).tiny)
     r = surface_curvatures(s, u, v)

@@ -45,7 +45,7 @@ from ..errors import InvalidGeometryError, ParameterError
 from .offsets import OffsetMapping, get_offset_mapping
 from ..kernel.knots import knot_tol, merge_knots, refinement_matrix, snap_knots
 
-__all__ = ["FORMAT_VERSION", "Overlay"]
+__all__ = ["FORMAT_VERSION", "Hierarchy", "Node", "Overlay", "check_format", "support_mask"]
 
 Array = NDArray[np.float64]
 
@@ -110,16 +110,20 @@ class Overlay:
         return f"Overlay(id={self.id}, parent={self.parent}, level={self.level}, region={reg}, vertices={self.shape})"
 
 
-class _Node:
-    """Mutable per-node state and caches (private)."""
+class Node:
+    """Mutable state and caches of one overlay (or of the base: ``handle is None``) of a
+    :class:`Hierarchy`.
+
+    Shared by the hierarchical curve and surface modules; not exported by the subpackage.
+    """
 
     __slots__ = ("handle", "parent", "children", "T", "R", "offsets", "frames", "H", "delta", "support",
                  "level_spline", "version", "blk")
 
-    def __init__(self, handle: Overlay | None, parent: _Node | None) -> None:
+    def __init__(self, handle: Overlay | None, parent: Node | None) -> None:
         self.handle = handle
         self.parent = parent
-        self.children: list[_Node] = []
+        self.children: list[Node] = []
         self.T: tuple[Array, ...] = ()
         self.R: Array | None = None
         self.offsets: Array | None = None
@@ -162,8 +166,9 @@ def _union_knots(vectors: list[Array]) -> Array:
     return np.repeat(np.array(xs, float), [mult[x] for x in xs])
 
 
-class _Hierarchy:
-    """Base class of :class:`HierarchicalSurface` and :class:`HierarchicalCurve` (private).
+class Hierarchy:
+    """Base class of :class:`HierarchicalSurface` and :class:`HierarchicalCurve` (shared by their
+    modules, not exported by the subpackage).
 
     Subclasses set ``_npar`` (parametric directions) and implement ``_base_knots``, ``_make``
     (a spline from knots, poles, weights) and ``_frames_of`` (frames of a level spline at the
@@ -179,10 +184,10 @@ class _Hierarchy:
         self._rational = base.is_rational
         self._dim = base.dim
         self._deg: tuple[int, ...] = tuple(base.degree) if self._npar == 2 else (int(base.degree),)
-        self._root = _Node(None, None)
+        self._root = Node(None, None)
         self._root.H = np.array(base.homogeneous_points, dtype=float)
         self._root.level_spline = base
-        self._nodes: dict[int, _Node] = {}
+        self._nodes: dict[int, Node] = {}
         self._next_id = 1
         self._domain: tuple[tuple[float, float], ...] = (
             tuple(base.domain) if self._npar == 2 else (base.domain,))
@@ -201,7 +206,7 @@ class _Hierarchy:
         raise NotImplementedError
 
     # ------------------------------------------------------------------ node access
-    def _node(self, overlay: Overlay | int | None, name: str = "overlay") -> _Node:
+    def _node(self, overlay: Overlay | int | None, name: str = "overlay") -> Node:
         if overlay is None or (isinstance(overlay, int) and not isinstance(overlay, bool) and overlay == 0):
             return self._root
         if isinstance(overlay, Overlay):
@@ -214,7 +219,7 @@ class _Hierarchy:
         raise InvalidGeometryError(f"{name}: expected an Overlay handle of this hierarchy, an overlay id or None "
                                    f"(the base), got {overlay!r}")
 
-    def _knots_of(self, node: _Node) -> tuple[Array, ...]:
+    def _knots_of(self, node: Node) -> tuple[Array, ...]:
         return self._base_knots(self._root.level_spline) if node.handle is None else node.handle.knots
 
     @property
@@ -249,13 +254,13 @@ class _Hierarchy:
             return self._make(knots, H[..., :-1] / H[..., -1:], H[..., -1])
         return self._make(knots, H, None)
 
-    def _level(self, node: _Node) -> Any:
+    def _level(self, node: Node) -> Any:
         if node.level_spline is None:
             node.level_spline = self._spline_from_h(self._knots_of(node), node.H)
         return node.level_spline
 
     # ------------------------------------------------------------------ adding overlays
-    def _region_axis(self, ax: int, rng: Any, parent: _Node, knots: Any, name: str) -> tuple[tuple[float, float], Array]:
+    def _region_axis(self, ax: int, rng: Any, parent: Node, knots: Any, name: str) -> tuple[tuple[float, float], Array]:
         """Validate one direction's range; return the region widened to parent knots and the
         knots to insert (midpoints of the parent's spans in the region, or ``knots``)."""
         try:
@@ -330,7 +335,7 @@ class _Hierarchy:
         level = 1 if pnode.handle is None else pnode.handle.level + 1
         h = Overlay(ident, 0 if pnode.handle is None else pnode.handle.id, level, tuple(regions), tuple(inserted),
                     tuple(new_knots), tuple(vertices), tuple(refs))
-        node = _Node(h, pnode)
+        node = Node(h, pnode)
         node.T = tuple(Ts)
         node.blk = tuple(slice(a, b + 1) for a, b in vertices)
         node.offsets = np.zeros(h.shape + (self._dim,))
@@ -341,13 +346,13 @@ class _Hierarchy:
         return h
 
     # ------------------------------------------------------------------ updates
-    def _displacements(self, node: _Node, offsets: Array, frames: Array | None) -> Array:
+    def _displacements(self, node: Node, offsets: Array, frames: Array | None) -> Array:
         d = self._dim
         shape = offsets.shape
         F = None if frames is None else frames.reshape(-1, d, d)
         return np.asarray(self._mapping(offsets.reshape(-1, d), F), float).reshape(shape)
 
-    def _update(self, node: _Node, recurse: bool = True, *, reference: bool = True) -> None:
+    def _update(self, node: Node, recurse: bool = True, *, reference: bool = True) -> None:
         """Rebuild ``node`` (reference net and frames too if ``reference``), then its subtree."""
         if reference:
             node.R = _refine_net(node.parent.H, node.T)
@@ -370,7 +375,7 @@ class _Hierarchy:
             for c in node.children:
                 self._update(c)
 
-    def _build_delta(self, node: _Node, WD: Array) -> None:
+    def _build_delta(self, node: Node, WD: Array) -> None:
         """The delta spline of ``node``: its weighted displacements padded by ``degree`` zero
         vertices on each side, on the matching stretch of its knots (domain = support)."""
         h = node.handle
@@ -393,7 +398,7 @@ class _Hierarchy:
             self._update(c)
 
     # ------------------------------------------------------------------ edits
-    def _index(self, node: _Node, index: Any) -> tuple[int, ...]:
+    def _index(self, node: Node, index: Any) -> tuple[int, ...]:
         shape = node.offsets.shape[:-1] if node.handle is not None else node.H.shape[:-1]
         idx = (index,) if self._npar == 1 and not isinstance(index, (tuple, list)) else tuple(index) if isinstance(index, (tuple, list)) else None
         if idx is None or len(idx) != self._npar or any(isinstance(i, bool) or not isinstance(i, (int, np.integer)) for i in idx):
@@ -412,7 +417,7 @@ class _Hierarchy:
             raise InvalidGeometryError(f"{name}: expected shape ({self._dim},), got {a.shape}")
         return a
 
-    def _move_world(self, node: _Node, idx: tuple[Any, ...], disp: Array) -> None:
+    def _move_world(self, node: Node, idx: tuple[Any, ...], disp: Array) -> None:
         """Add world displacements ``disp`` to vertices ``idx`` of ``node`` (stored as offsets)."""
         if node.handle is None:
             base = self._root.level_spline
@@ -434,11 +439,11 @@ class _Hierarchy:
         self._root.H = np.array(base.homogeneous_points, dtype=float)
         self._refresh_subtree_of_root()
 
-    def _snapshot(self, node: _Node) -> Any:
+    def _snapshot(self, node: Node) -> Any:
         """What an edit of ``node``'s own vertices changes, for :meth:`_restore`."""
         return self._level(node) if node.handle is None else node.offsets.copy()
 
-    def _restore(self, node: _Node, saved: Any) -> None:
+    def _restore(self, node: Node, saved: Any) -> None:
         """Undo edits of ``node``'s vertices made since :meth:`_snapshot` (a failed drag leaves nothing)."""
         if node.handle is None:
             self._set_base(saved)
@@ -533,11 +538,11 @@ class _Hierarchy:
     def copy(self):
         """An independent copy (handles stay valid for the copy: they are shared, immutable)."""
         new = _copy.copy(self)
-        memo: dict[int, _Node] = {}
+        memo: dict[int, Node] = {}
 
-        def clone(n: _Node, parent: _Node | None) -> _Node:
-            c = _Node(n.handle, parent)
-            for s in _Node.__slots__:
+        def clone(n: Node, parent: Node | None) -> Node:
+            c = Node(n.handle, parent)
+            for s in Node.__slots__:
                 if s not in ("parent", "children"):
                     v = getattr(n, s)
                     setattr(c, s, v.copy() if isinstance(v, np.ndarray) and s in ("offsets",) else v)

@@ -24,10 +24,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
+from .. import tolerances
 from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError
-from .surface import EDIT_POINT_MAX_ITER, EDIT_POINT_RTOL
-from .core import Overlay, _Hierarchy, check_format, support_mask
+from .core import Hierarchy, Overlay, check_format, support_mask
 from .offsets import OffsetMapping, curve_frames
 from ..manipulation.linalg import ConvergenceError
 from ..manipulation.curves import drag_point as _drag_curve_point
@@ -38,7 +38,7 @@ __all__ = ["HierarchicalCurve"]
 Array = NDArray[np.float64]
 
 
-class HierarchicalCurve(_Hierarchy):
+class HierarchicalCurve(Hierarchy):
     """A hierarchical B-spline curve (course §5-33).
 
     Parameters
@@ -121,10 +121,11 @@ class HierarchicalCurve(_Hierarchy):
         uu = V.check_parameter(u, lo, hi, "u")
         tgt = self._vector(target, "target")
         node = self._node(overlay)
-        tol = EDIT_POINT_RTOL * max(1.0, float(np.abs(tgt).max())) if tol is None else float(tol)
+        tol = tolerances.EDIT_POINT_RTOL * max(1.0, float(np.abs(tgt).max())) if tol is None else float(tol)
+        max_iter = int(tolerances.EDIT_POINT_MAX_ITER)
         first, last = (None, None) if node.handle is None else node.handle.vertices[0]
         saved = self._snapshot(node)
-        for _ in range(EDIT_POINT_MAX_ITER):
+        for _ in range(max_iter):
             r = tgt - self.evaluate(uu)
             if float(np.linalg.norm(r)) <= tol:
                 return
@@ -143,7 +144,7 @@ class HierarchicalCurve(_Hierarchy):
         if res > tol:
             self._restore(node, saved)
             raise ConvergenceError(f"drag_point: |C(u) - target| = {res:.3g} > tol = {tol:.3g} after "
-                                   f"{EDIT_POINT_MAX_ITER} solves; the curve is left as it was")
+                                   f"{max_iter} solves; the curve is left as it was")
 
     # ------------------------------------------------------------------ evaluation
     def _h(self, a: Array, order: int) -> Array:

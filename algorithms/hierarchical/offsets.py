@@ -53,12 +53,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..kernel.curve import BSplineCurve
+from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..kernel.surface import BSplineSurface
 
 __all__ = [
-    "FRAME_DEGENERACY",
-    "FRAME_NUDGE",
     "CURVE_UP",
     "OffsetMapping",
     "FRAME_OFFSETS",
@@ -72,14 +71,8 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-#: A normal is degenerate where ``|S_u x S_v| <= FRAME_DEGENERACY (|S_u|^2 + |S_v|^2)``, i.e. the
-#: sine of the angle between the partials (times their length ratio) is below 1e-10: ~6 digits
-#: above round-off in the cross product, far below any real surface's tangent angle.
-FRAME_DEGENERACY: float = 1e-10
-
-#: Relative step (of the domain size) towards the domain centre at which a degenerate frame is
-#: re-evaluated. The frame found there approximates the limit frame to O(FRAME_NUDGE).
-FRAME_NUDGE: float = 1e-6
+# FRAME_DEGENERACY and FRAME_NUDGE (see the module notes) are tolerances of
+# :mod:`occsurf.algorithms.tolerances`, read at call time (``tolerances.FRAME_NUDGE``).
 
 #: Reference "up" direction of 3-D curve frames (see the module notes).
 CURVE_UP: tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -176,7 +169,7 @@ def frames_from_partials(su: Array, sv: Array) -> tuple[Array, NDArray[np.bool_]
     ln = np.linalg.norm(n, axis=-1)
     lu = np.linalg.norm(su, axis=-1)
     scale = np.einsum("mi,mi->m", su, su) + np.einsum("mi,mi->m", sv, sv)
-    bad = ~(ln > FRAME_DEGENERACY * scale) | ~(lu > 0)
+    bad = ~(ln > tolerances.FRAME_DEGENERACY * scale) | ~(lu > 0)
     F = np.empty(su.shape[:1] + (3, 3))
     F[:] = np.eye(3)
     ok = ~bad
@@ -188,7 +181,7 @@ def frames_from_partials(su: Array, sv: Array) -> tuple[Array, NDArray[np.bool_]
 
 
 def _towards_centre(x: Array, lo: float, hi: float) -> Array:
-    step = FRAME_NUDGE * (hi - lo)
+    step = tolerances.FRAME_NUDGE * (hi - lo)
     return np.where(x < 0.5 * (lo + hi), x + step, x - step)
 
 

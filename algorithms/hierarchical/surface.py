@@ -35,28 +35,23 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
+from .. import tolerances
 from ..errors import InvalidGeometryError, ParameterError
-from .core import FORMAT_VERSION, Overlay, _Hierarchy, _Node, check_format, support_mask
+from .core import FORMAT_VERSION, Hierarchy, Node, Overlay, check_format, support_mask
 from .offsets import OffsetMapping, surface_frames
 from ..manipulation.linalg import ConvergenceError
 from ..kernel.rational import surface_quotient_rule
 from ..kernel.surface import BSplineSurface
 from ..manipulation.surfaces import drag_surface_point
 
-__all__ = ["HierarchicalSurface", "Overlay", "FORMAT_VERSION", "EDIT_POINT_RTOL", "EDIT_POINT_MAX_ITER"]
+__all__ = ["HierarchicalSurface", "Overlay", "FORMAT_VERSION"]
 
 Array = NDArray[np.float64]
 
-#: :meth:`HierarchicalSurface.drag_point` stops once the point is this close to the target,
-#: relative to ``max(1, |target|)``: the linear solve itself is exact to ~1e-14, and with frame
-#: offsets each further iteration only corrects the turn of finer details.
-EDIT_POINT_RTOL: float = 1e-11
-
-#: At most this many linearised solves per :meth:`HierarchicalSurface.drag_point` (frame offsets
-#: make the point a mildly non-linear function of the vertices; the residual falls by the factor
-#: (detail size x frame rotation) per step: 2-4 steps for small details, 14 measured for details
-#: of 0.1 on a unit patch (factor 0.16), so 40 leave room for a factor of ~0.5).
-EDIT_POINT_MAX_ITER: int = 40
+# drag_point reads EDIT_POINT_RTOL and EDIT_POINT_MAX_ITER from :mod:`occsurf.algorithms.tolerances`
+# at call time. Frame offsets make the point a mildly non-linear function of the vertices; the
+# residual falls by the factor (detail size x frame rotation) per linearised solve: 2-4 solves for
+# small details, 14 measured for details of 0.1 on a unit patch (factor 0.16).
 
 
 def _select(x: Array, lo: float, hi: float, end: float) -> slice | NDArray[np.intp] | None:
@@ -78,7 +73,7 @@ def _ix(a: slice | NDArray[np.intp], b: slice | NDArray[np.intp]) -> Any:
     return np.ix_(ar, br)
 
 
-class HierarchicalSurface(_Hierarchy):
+class HierarchicalSurface(Hierarchy):
     """A Forsey–Bartels hierarchical B-spline surface (course ch. 5).
 
     Parameters
@@ -246,7 +241,7 @@ class HierarchicalSurface(_Hierarchy):
     def finest_overlay(self, u: float, v: float) -> Overlay | None:
         """The deepest overlay whose region holds ``(u, v)`` (the latest one on ties); ``None``
         if no overlay does (course §5-30: the level an arbitrary surface position is edited at)."""
-        best: _Node | None = None
+        best: Node | None = None
         for n in self._nodes.values():
             (a, b), (c, d) = n.handle.region
             if a <= u <= b and c <= v <= d and (best is None or n.handle.level >= best.handle.level):
@@ -272,14 +267,16 @@ class HierarchicalSurface(_Hierarchy):
             The level edited: ``None`` the base, ``"finest"`` :meth:`finest_overlay` at ``(u, v)``
             (the base if none covers it).
         tol : float, optional
-            Absolute; default :data:`EDIT_POINT_RTOL` ``* max(1, |target|)``.
+            Absolute; default :data:`~occsurf.algorithms.tolerances.EDIT_POINT_RTOL`
+            ``* max(1, |target|)``.
 
         Raises
         ------
         ConstraintError
             No vertex of the overlay acts at ``(u, v)``.
         ConvergenceError
-            Not within ``tol`` after :data:`EDIT_POINT_MAX_ITER` solves (the surface is restored).
+            Not within ``tol`` after :data:`~occsurf.algorithms.tolerances.EDIT_POINT_MAX_ITER`
+            solves (the surface is restored).
         """
         (u0, u1), (v0, v1) = self._domain
         uu = V.check_parameter(u, u0, u1, "u")
@@ -290,11 +287,12 @@ class HierarchicalSurface(_Hierarchy):
                 raise InvalidGeometryError(f"overlay: expected an Overlay, id, None or 'finest', got {overlay!r}")
             overlay = self.finest_overlay(uu, vv)
         node = self._node(overlay)
-        tol = EDIT_POINT_RTOL * max(1.0, float(np.abs(tgt).max())) if tol is None else float(tol)
+        tol = tolerances.EDIT_POINT_RTOL * max(1.0, float(np.abs(tgt).max())) if tol is None else float(tol)
+        max_iter = int(tolerances.EDIT_POINT_MAX_ITER)
         window = None if node.handle is None else node.handle.vertices
         saved = self._snapshot(node)
         res = np.inf
-        for _ in range(EDIT_POINT_MAX_ITER):
+        for _ in range(max_iter):
             r = tgt - self.evaluate(uu, vv)
             res = float(np.linalg.norm(r))
             if res <= tol:
@@ -312,9 +310,9 @@ class HierarchicalSurface(_Hierarchy):
         if res > tol:
             self._restore(node, saved)
             raise ConvergenceError(f"drag_point: |S(u, v) - target| = {res:.3g} > tol = {tol:.3g} after "
-                                   f"{EDIT_POINT_MAX_ITER} solves; the surface is left as it was")
+                                   f"{max_iter} solves; the surface is left as it was")
 
-    def _move_block(self, node: _Node, disp: Array) -> None:
+    def _move_block(self, node: Node, disp: Array) -> None:
         d = self._dim
         F = node.frames
         cur = self._displacements(node, node.offsets, F)

@@ -4,7 +4,12 @@ form, blossoms, degree raising, rational (homogeneous) forms and exact conics.
 Public names: :class:`BSplineCurve`, :class:`BSplineSurface`, :func:`make_compatible`, the conics
 (:func:`circle`, :func:`arc`, :func:`ellipse`, :func:`conic_arc`, :func:`conic_from_shoulder`,
 :func:`conic_through_point`, :func:`conic_type`); the array-level kernels live in :mod:`.basis`,
-:mod:`.knots`, :mod:`.bezier`, :mod:`.blossom`, :mod:`.degree` and :mod:`.rational`.
+:mod:`.knots`, :mod:`.bezier`, :mod:`.blossom`, :mod:`.degree` and :mod:`.rational`. The private
+:mod:`._common` holds what the frozen spline values share (``to_dict``/``from_dict``, ``==``,
+``transform``; also used by :class:`~occsurf.algorithms.topology.spatch.SPatch`).
+
+A surface method that works along one direction takes the curve method's arguments, then
+``direction="u" | "v"`` as a required keyword (see :class:`BSplineSurface`).
 """
 
 from .curve import BSplineCurve

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -17,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import _numba_kernels as _nk
 from .. import _validate as V
 from .. import tolerances
+from ._common import ARRAY, SCALAR, ControlPointValue
 from .basis import basis_derivatives, basis_functions, find_span, greville
 from .blossom import blossom_poles
 from .degree import elevate_poles
@@ -40,11 +40,9 @@ __all__ = ["BSplineCurve"]
 
 Array = NDArray[np.float64]
 
-FORMAT_VERSION = 1
-
 
 @dataclass(frozen=True, eq=False)
-class BSplineCurve:
+class BSplineCurve(ControlPointValue):
     """A B-spline (or NURBS) curve of any dimension.
 
     Parameters
@@ -70,7 +68,15 @@ class BSplineCurve:
     >>> c = BSplineCurve(2, [0, 0, 0, 1, 1, 1], [[0, 0], [1, 1], [2, 0]])
     >>> c.evaluate(0.5)
     array([1. , 0.5])
+
+    Notes
+    -----
+    ``to_dict``, ``from_dict``, ``transform`` and ``==`` come from
+    :class:`._common.ControlPointValue` (dict type ``"BSplineCurve"``, header ``degree``, ``knots``).
     """
+
+    _DICT_TYPE = "BSplineCurve"
+    _HEADER = (("degree", SCALAR), ("knots", ARRAY))
 
     degree: int
     knots: Array
@@ -172,7 +178,7 @@ class BSplineCurve:
 
         Notes
         -----
-        From ``_numba_kernels.MIN_POINTS`` points on, an optional numba kernel computes the same
+        From ``tolerances.NUMBA_MIN_POINTS`` points on, an optional numba kernel computes the same
         values (to round-off) when numba is installed; ``OCCSURF_NO_NUMBA=1`` turns it off.
         """
         flat, shape = self._params(u)
@@ -203,7 +209,7 @@ class BSplineCurve:
 
         Notes
         -----
-        From ``_numba_kernels.MIN_POINTS`` points on, an optional numba kernel computes the same
+        From ``tolerances.NUMBA_MIN_POINTS`` points on, an optional numba kernel computes the same
         values (to round-off) when numba is installed; ``OCCSURF_NO_NUMBA=1`` turns it off.
         """
         order = V.check_order(order)
@@ -258,27 +264,35 @@ class BSplineCurve:
     def _rebuild(self, degree: int, knots: Array, hpoles: Array) -> BSplineCurve:
         return BSplineCurve._from_homogeneous(degree, knots, hpoles, self.is_rational)
 
-    def _interior_knot(self, u: float, name: str = "u") -> float:
+    def _interior_knot(self, u: float, name: str) -> float:
         lo, hi = self.domain
         x = float(V.check_parameters(u, lo, hi, name))
         if x <= lo or x >= hi:
             raise ParameterError(f"{name}: {x!r} must lie strictly inside the domain ({lo!r}, {hi!r})")
         return snap_knot(self.knots, x)
 
-    def insert_knot(self, u: float, times: int = 1) -> BSplineCurve:
-        """Insert the knot ``u`` ``times`` times by Boehm's algorithm (course §2-10; A5.1).
+    def insert_knot(self, knot: float, times: int = 1) -> BSplineCurve:
+        """Insert ``knot`` ``times`` times by Boehm's algorithm (course §2-10; A5.1).
 
         The curve is unchanged; ``times`` extra poles appear.
+
+        Parameters
+        ----------
+        knot : float
+            The parameter value to insert, strictly inside the domain (snapped to an existing knot
+            within round-off).
+        times : int, optional
+            How many copies to insert; the multiplicity may not exceed the degree.
 
         Raises
         ------
         ParameterError
-            ``u`` not strictly inside the domain.
+            ``knot`` not strictly inside the domain.
         InvalidGeometryError
             The multiplicity would exceed the degree.
         """
         times = V.check_times(times)
-        x = self._interior_knot(u)
+        x = self._interior_knot(knot, "knot")
         s = multiplicity(self.knots, x)
         if s + times > self.degree:
             raise InvalidGeometryError(
@@ -313,8 +327,8 @@ class BSplineCurve:
         H = refine_poles(self.knots, self.degree, self._hpoles, tau)
         return self._rebuild(self.degree, tau, H)
 
-    def remove_knot(self, u: float, times: int = 1, tol: float | None = None) -> BSplineCurve:
-        """Remove the knot ``u`` ``times`` times if the curve moves by at most ``tol``.
+    def remove_knot(self, knot: float, times: int = 1, tol: float | None = None) -> BSplineCurve:
+        """Remove ``knot`` ``times`` times if the curve moves by at most ``tol``.
 
         The new poles are the least-squares solution over the poles that removal changes; the
         deviation checked is the largest movement of any pole of the original representation,
@@ -324,6 +338,10 @@ class BSplineCurve:
 
         Parameters
         ----------
+        knot : float
+            An interior knot of the curve.
+        times : int, optional
+            How many of its copies to remove.
         tol : float, optional
             Absolute tolerance in model units; default ``tolerances.KNOT_REMOVAL``.
 
@@ -333,14 +351,14 @@ class BSplineCurve:
             The knot cannot be removed within ``tol``; the message gives the deviation needed.
             Nothing is changed (there is nothing to change: curves are immutable).
         InvalidGeometryError
-            ``u`` is not a knot, or has fewer than ``times`` copies.
+            ``knot`` is not a knot, or has fewer than ``times`` copies.
         """
         times = V.check_times(times)
         tol = tolerances.KNOT_REMOVAL if tol is None else float(tol)
-        x = self._interior_knot(u)
+        x = self._interior_knot(knot, "knot")
         s = multiplicity(self.knots, x)
         if s < times:
-            raise InvalidGeometryError(f"u: {x!r} is a knot of multiplicity {s}, cannot remove it {times} times")
+            raise InvalidGeometryError(f"knot: {x!r} is a knot of multiplicity {s}, cannot remove it {times} times")
         t, H, dev = remove_knot_lsq(self.knots, self.degree, self._hpoles, x, times, partial(pole_deviation, rational=self.is_rational))
         if dev > tol:
             raise ToleranceError(
@@ -385,9 +403,15 @@ class BSplineCurve:
             for j in range(segs.shape[0])
         ]
 
-    def split(self, u: float) -> tuple[BSplineCurve, BSplineCurve]:
-        """Split at an interior parameter into two clamped curves on ``[a, u]`` and ``[u, b]``."""
-        x = self._interior_knot(u)
+    def split(self, param: float) -> tuple[BSplineCurve, BSplineCurve]:
+        """Split at an interior parameter into two clamped curves on ``[a, param]`` and ``[param, b]``.
+
+        Raises
+        ------
+        ParameterError
+            ``param`` not strictly inside the domain ``(a, b)``.
+        """
+        x = self._interior_knot(param, "param")
         (tl, Hl), (tr, Hr) = split_poles(self.knots, self.degree, self._hpoles, x)
         left = self._rebuild(self.degree, tl, Hl)
         right = self._rebuild(self.degree, tr, Hr)
@@ -422,46 +446,3 @@ class BSplineCurve:
             raise ParameterError(f"reparametrize: expected finite start < end, got {start!r}, {end!r}")
         t = rescale_knots(self.knots, self.domain, (a, b))
         return BSplineCurve._trusted(self.degree, t, self.control_points, self.weights)
-
-    def transform(self, matrix: ArrayLike, translation: ArrayLike | None = None) -> BSplineCurve:
-        """Apply the affine map ``x -> M x + b`` to the control points (affine invariance)."""
-        M, b = V.affine_map(matrix, translation, self.dim)
-        return BSplineCurve._trusted(self.degree, self.knots, self.control_points @ M.T + b,
-                                     None if self.weights is None else self.weights.copy())
-
-    # ------------------------------------------------------------------ (de)serialisation
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dict (lists of floats, exact: Python floats print round-trip exactly)."""
-        return {
-            "type": "BSplineCurve",
-            "version": FORMAT_VERSION,
-            "degree": self.degree,
-            "knots": self.knots.tolist(),
-            "control_points": self.control_points.tolist(),
-            "weights": None if self.weights is None else self.weights.tolist(),
-        }
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> BSplineCurve:
-        """Inverse of :meth:`to_dict` (validated)."""
-        if not isinstance(data, dict) or data.get("type") != "BSplineCurve":
-            raise InvalidGeometryError(f"from_dict: expected a dict with type 'BSplineCurve', got {type(data).__name__}")
-        if data.get("version", 1) > FORMAT_VERSION:
-            raise InvalidGeometryError(f"from_dict: format version {data['version']} is newer than {FORMAT_VERSION}")
-        try:
-            return cls(data["degree"], data["knots"], data["control_points"], data.get("weights"))
-        except KeyError as err:
-            raise InvalidGeometryError(f"from_dict: missing key {err}") from err
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, BSplineCurve):
-            return NotImplemented
-        return (
-            self.degree == other.degree
-            and np.array_equal(self.knots, other.knots)
-            and np.array_equal(self.control_points, other.control_points)
-            and (self.weights is None) == (other.weights is None)
-            and (self.weights is None or np.array_equal(self.weights, other.weights))
-        )
-
-    __hash__ = None  # type: ignore[assignment]

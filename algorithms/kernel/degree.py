@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .blossom import blossom_basis
-from .knots import _support_span, clamp_poles, distinct_knots
+from .knots import clamp_poles, distinct_knots, support_span
 
 __all__ = ["elevate_poles"]
 
@@ -48,7 +48,7 @@ def elevate_poles(knots: Array, degree: int, poles: Array, times: int = 1) -> tu
         n2 = tau.shape[0] - (p + 1) - 1
         j = np.arange(n2)
         args = tau[j[:, None] + 1 + np.arange(p + 1)[None, :]]  # (n2, p+1)
-        mu = _support_span(knots, tau, j)  # clamped: a domain span, p <= mu < len(poles)
+        mu = support_span(knots, tau, j)  # clamped: a domain span, p <= mu < len(poles)
         idx = mu[:, None] - p + np.arange(p + 1)
         gathered = poles[idx]  # (n2, p+1, ...)
         acc = np.zeros((n2,) + poles.shape[1:])

@@ -129,7 +129,7 @@ def refinement_matrix(knots: Array, degree: int, new_knots: Array) -> Array:
     n2 = new_knots.shape[0] - p - 1
     i = np.arange(n2)
     args = new_knots[i[:, None] + 1 + np.arange(p)[None, :]]  # (n2, p)
-    mu = _support_span(knots, new_knots, i)  # 0 <= mu <= n + p - 1, maybe outside [p, n - 1]
+    mu = support_span(knots, new_knots, i)  # 0 <= mu <= n + p - 1, maybe outside [p, n - 1]
     # Outside the domain a span has fewer than p + 1 basis functions: pad the knot vector with p
     # copies of each end knot so that every span has p + 1 columns, and drop the padding's
     # columns. Each column is one basis function's blossom, unaffected by the padding; every
@@ -143,12 +143,29 @@ def refinement_matrix(knots: Array, degree: int, new_knots: Array) -> Array:
     return T
 
 
-def _support_span(knots: Array, new_knots: Array, i: NDArray[np.intp]) -> NDArray[np.intp]:
+def support_span(knots: Array, new_knots: Array, i: NDArray[np.intp]) -> NDArray[np.intp]:
     """A non-empty old span ``[t_mu, t_{mu+1})`` inside the support of each new basis function ``i``.
 
     ``new_knots`` refines ``knots`` (or, for degree raising, has the same distinct values), so
     every non-empty new span lies in one old span. The result may lie outside the domain
     ``[p, n - 1]`` when the new basis function misses the domain (unclamped knot vectors).
+    Used by knot refinement (:func:`refinement_matrix`) and degree raising
+    (:func:`occsurf.algorithms.kernel.degree.elevate_poles`) to pick the span whose blossom
+    gives a new pole.
+
+    Parameters
+    ----------
+    knots : ndarray, shape (n + p + 1,)
+        The old knot vector.
+    new_knots : ndarray, shape (n2 + p2 + 1,)
+        The new knot vector (a refinement of ``knots``, or the same distinct values).
+    i : ndarray of int, shape (m,)
+        Indices of new basis functions.
+
+    Returns
+    -------
+    ndarray of int, shape (m,)
+        ``mu`` with ``knots[mu] < knots[mu + 1]``.
     """
     # First non-empty new span at or after tau_i: last index k with tau_k <= tau_i.
     k = np.searchsorted(new_knots, new_knots[i], side="right") - 1

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import _validate as V
 from .. import tolerances
 from .. import _numba_kernels as _nk
+from ._common import ARRAY_PAIR, PAIR, ControlPointValue
 from .basis import band_product, basis_derivatives, basis_functions, find_span, greville, span_groups
 from .blossom import blossom_basis
 from .degree import elevate_poles
@@ -40,18 +41,18 @@ from .rational import pole_deviation, from_homogeneous, surface_quotient_rule, t
 __all__ = ["BSplineSurface"]
 
 Array = NDArray[np.float64]
-FORMAT_VERSION = 1
+Direction = Literal["u", "v"]
 _CHUNK = 1 << 15  # scattered evaluation works on blocks of this many points (bounded memory)
 
 
-def _axis(direction: str) -> int:
+def _axis(direction: Direction) -> int:
     if direction not in ("u", "v"):
         raise InvalidGeometryError(f"direction: expected 'u' or 'v', got {direction!r}")
     return 0 if direction == "u" else 1
 
 
 @dataclass(frozen=True, eq=False)
-class BSplineSurface:
+class BSplineSurface(ControlPointValue):
     """A tensor-product B-spline (or NURBS) surface.
 
     Parameters
@@ -69,7 +70,33 @@ class BSplineSurface:
     ------
     InvalidGeometryError
         Naming the argument at fault.
+
+    Notes
+    -----
+    **One rule for directional operations.** A method that works along one parameter direction
+    (:meth:`insert_knot`, :meth:`remove_knot`, :meth:`refine`, :meth:`elevate_degree`,
+    :meth:`split`, :meth:`reverse`) takes the same leading arguments, with the same names and
+    defaults, as the :class:`~.curve.BSplineCurve` method of the same name, then ``direction``
+    (``"u"`` or ``"v"``) as a *required keyword-only* argument::
+
+        c.insert_knot(0.5, times=2)                  # curve
+        s.insert_knot(0.5, times=2, direction="v")   # surface, along v
+        s.elevate_degree(direction="u")              # times=1, as c.elevate_degree()
+
+    ``direction`` has no default: a surface has no preferred direction, a default would turn a
+    forgotten argument into a silent operation along u, and a keyword cannot be mistaken for a
+    positional count or knot. Every call site says which direction it means. Methods acting on
+    both directions at once take no ``direction``: :meth:`clamp`, :meth:`to_bezier`,
+    :meth:`reparametrize` (one range per direction), :meth:`swap_uv`, :meth:`transform`.
+    ``tests/algorithms/test_surface.py`` checks the rule on the signatures.
+
+    ``to_dict``, ``from_dict``, ``transform`` and ``==`` come from
+    :class:`._common.ControlPointValue` (dict type ``"BSplineSurface"``, header ``degree``,
+    ``knots``).
     """
+
+    _DICT_TYPE = "BSplineSurface"
+    _HEADER = (("degree", PAIR), ("knots", ARRAY_PAIR))
 
     degree: tuple[int, int]
     knots: tuple[Array, Array]
@@ -213,7 +240,7 @@ class BSplineSurface:
 
         Notes
         -----
-        From ``_numba_kernels.MIN_POINTS`` points on, an optional numba kernel computes the same
+        From ``tolerances.NUMBA_MIN_POINTS`` points on, an optional numba kernel computes the same
         values (to round-off) when numba is installed; ``OCCSURF_NO_NUMBA=1`` turns it off.
         """
         a, b, shape = self._uv(u, v)
@@ -238,7 +265,7 @@ class BSplineSurface:
 
         Notes
         -----
-        From ``_numba_kernels.MIN_POINTS`` points on, an optional numba kernel computes the same
+        From ``tolerances.NUMBA_MIN_POINTS`` points on, an optional numba kernel computes the same
         values (to round-off) when numba is installed; ``OCCSURF_NO_NUMBA=1`` turns it off.
         """
         order = V.check_order(order)
@@ -339,7 +366,7 @@ class BSplineSurface:
 
         Notes
         -----
-        From ``_numba_kernels.MIN_POINTS`` points on, an optional numba kernel computes the same
+        From ``tolerances.NUMBA_MIN_POINTS`` points on, an optional numba kernel computes the same
         values (to round-off) when numba is installed; ``OCCSURF_NO_NUMBA=1`` turns it off.
         """
         order = V.check_order(order)
@@ -414,7 +441,7 @@ class BSplineSurface:
         return H.reshape(shape + (self.dim,))
 
     # ------------------------------------------------------------------ knot operations
-    def _apply(self, direction: str, fn: Callable[[Array, int, Array], tuple[Array, Array]], new_degree: int | None = None) -> BSplineSurface:
+    def _apply(self, direction: Direction, fn: Callable[[Array, int, Array], tuple[Array, Array]], new_degree: int | None = None) -> BSplineSurface:
         """Run a curve kernel ``fn(knots, degree, poles) -> (knots, poles)`` along ``direction``."""
         ax = _axis(direction)
         H = self._hpoles if ax == 0 else self._hpoles.transpose(1, 0, 2)
@@ -428,18 +455,21 @@ class BSplineSurface:
             deg[ax] = new_degree
         return self._rebuild(tuple(deg), tuple(kn), np.ascontiguousarray(H2))
 
-    def _interior(self, value: float, ax: int, name: str = "value") -> float:
+    def _interior(self, value: float, ax: int, name: str) -> float:
         lo, hi = self.domain[ax]
         x = float(V.check_parameters(value, lo, hi, name))
         if x <= lo or x >= hi:
             raise ParameterError(f"{name}: {x!r} must lie strictly inside the {'uv'[ax]} domain ({lo!r}, {hi!r})")
         return snap_knot(self.knots[ax], x)
 
-    def insert_knot(self, value: float, direction: str = "u", times: int = 1) -> BSplineSurface:
-        """Insert a knot in u or v, ``times`` times (Boehm, course §2-10). The surface is unchanged."""
+    def insert_knot(self, knot: float, times: int = 1, *, direction: Direction) -> BSplineSurface:
+        """Insert ``knot`` in u or v, ``times`` times (Boehm, course §2-10). The surface is unchanged.
+
+        As :meth:`BSplineCurve.insert_knot` on every row (``direction="u"``) or column of the net.
+        """
         ax = _axis(direction)
         times = V.check_times(times)
-        x = self._interior(value, ax)
+        x = self._interior(knot, ax, "knot")
         s = multiplicity(self.knots[ax], x)
         if s + times > self.degree[ax]:
             raise InvalidGeometryError(
@@ -447,8 +477,11 @@ class BSplineSurface:
             )
         return self._apply(direction, lambda t, p, H: insert_knot_boehm(t, p, H, x, times))
 
-    def refine(self, knots: ArrayLike, direction: str = "u") -> BSplineSurface:
-        """Insert many knots at once in one direction (Oslo refinement, course §2-10)."""
+    def refine(self, knots: ArrayLike, *, direction: Direction) -> BSplineSurface:
+        """Insert many knots at once in one direction (Oslo refinement, course §2-10).
+
+        As :meth:`BSplineCurve.refine`; ``knots`` (k,) strictly inside that direction's domain.
+        """
         ax = _axis(direction)
         x = V.as_finite_array(knots, "knots", ndim=1)
         if x.size == 0:
@@ -467,7 +500,7 @@ class BSplineSurface:
             )
         return self._apply(direction, lambda t, p, H: (tau, refine_poles(t, p, H, tau)))
 
-    def elevate_degree(self, direction: str = "u", times: int = 1) -> BSplineSurface:
+    def elevate_degree(self, times: int = 1, *, direction: Direction) -> BSplineSurface:
         """Raise the degree in one direction (blossom form, course §2-6). Unclamped: clamped first."""
         ax = _axis(direction)
         times = V.check_times(times)
@@ -477,7 +510,8 @@ class BSplineSurface:
             )
         return self._apply(direction, lambda t, p, H: elevate_poles(t, p, H, times), self.degree[ax] + times)
 
-    def remove_knot(self, value: float, direction: str = "u", times: int = 1, tol: float | None = None) -> BSplineSurface:
+    def remove_knot(self, knot: float, times: int = 1, tol: float | None = None, *,
+                    direction: Direction) -> BSplineSurface:
         """Remove a u- or v-knot if no pole of the refined net moves more than ``tol``.
 
         See :meth:`BSplineCurve.remove_knot`; every row (column) of the net is solved at once.
@@ -490,10 +524,10 @@ class BSplineSurface:
         ax = _axis(direction)
         times = V.check_times(times)
         tol = tolerances.KNOT_REMOVAL if tol is None else float(tol)
-        x = self._interior(value, ax)
+        x = self._interior(knot, ax, "knot")
         s = multiplicity(self.knots[ax], x)
         if s < times:
-            raise InvalidGeometryError(f"value: {x!r} is a {direction}-knot of multiplicity {s}, cannot remove it {times} times")
+            raise InvalidGeometryError(f"knot: {x!r} is a {direction}-knot of multiplicity {s}, cannot remove it {times} times")
         dev_box: list[float] = []
 
         def kernel(t: Array, p: int, H: Array) -> tuple[Array, Array]:
@@ -529,15 +563,15 @@ class BSplineSurface:
             out.append(row)
         return out
 
-    def split(self, value: float, direction: str = "u") -> tuple[BSplineSurface, BSplineSurface]:
-        """Split at an interior u or v value into two clamped surfaces."""
+    def split(self, param: float, *, direction: Direction) -> tuple[BSplineSurface, BSplineSurface]:
+        """Split at an interior u or v value ``param`` into two clamped surfaces (low side first)."""
         ax = _axis(direction)
-        x = self._interior(value, ax)
+        x = self._interior(param, ax, "param")
         left = self._apply(direction, lambda t, p, H: split_poles(t, p, H, x)[0])
         right = self._apply(direction, lambda t, p, H: split_poles(t, p, H, x)[1])
         return left, right
 
-    def reverse(self, direction: str = "u") -> BSplineSurface:
+    def reverse(self, *, direction: Direction) -> BSplineSurface:
         """Reverse the parametrisation in u or v (flips the normal). Poles and weights are copied
         exactly (not rebuilt from homogeneous form)."""
         ax = _axis(direction)
@@ -564,46 +598,3 @@ class BSplineSurface:
                 raise ParameterError(f"reparametrize: expected finite start < end in {'uv'[ax]}, got {a!r}, {b!r}")
             kn.append(rescale_knots(self.knots[ax], self.domain[ax], (a, b)))
         return BSplineSurface._trusted(self.degree, tuple(kn), self.control_points, self.weights)
-
-    def transform(self, matrix: ArrayLike, translation: ArrayLike | None = None) -> BSplineSurface:
-        """Apply ``x -> M x + b`` to the control net (B-splines are affinely invariant)."""
-        M, b = V.affine_map(matrix, translation, self.dim)
-        return BSplineSurface._trusted(self.degree, self.knots, self.control_points @ M.T + b,
-                                       None if self.weights is None else self.weights.copy())
-
-    # ------------------------------------------------------------------ (de)serialisation
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dict; floats survive ``json`` exactly."""
-        return {
-            "type": "BSplineSurface",
-            "version": FORMAT_VERSION,
-            "degree": list(self.degree),
-            "knots": [self.knots[0].tolist(), self.knots[1].tolist()],
-            "control_points": self.control_points.tolist(),
-            "weights": None if self.weights is None else self.weights.tolist(),
-        }
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> BSplineSurface:
-        """Inverse of :meth:`to_dict` (validated)."""
-        if not isinstance(data, dict) or data.get("type") != "BSplineSurface":
-            raise InvalidGeometryError(f"from_dict: expected a dict with type 'BSplineSurface', got {type(data).__name__}")
-        if data.get("version", 1) > FORMAT_VERSION:
-            raise InvalidGeometryError(f"from_dict: format version {data['version']} is newer than {FORMAT_VERSION}")
-        try:
-            return cls(tuple(data["degree"]), tuple(data["knots"]), data["control_points"], data.get("weights"))
-        except KeyError as err:
-            raise InvalidGeometryError(f"from_dict: missing key {err}") from err
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, BSplineSurface):
-            return NotImplemented
-        return (
-            self.degree == other.degree
-            and all(np.array_equal(a, b) for a, b in zip(self.knots, other.knots))
-            and np.array_equal(self.control_points, other.control_points)
-            and (self.weights is None) == (other.weights is None)
-            and (self.weights is None or np.array_equal(self.weights, other.weights))
-        )
-
-    __hash__ = None  # type: ignore[assignment]

@@ -35,7 +35,14 @@ Array = NDArray[np.float64]
 _AXES = "xyzw"
 
 
-def _param(u: object, cls: str) -> float:
+def as_parameter(u: object, cls: str) -> float:
+    """``u`` as a float, checked to be a finite real number (not a bool).
+
+    Raises
+    ------
+    ParameterError
+        Naming ``{cls}.u`` (``cls`` is the constraint class or function that received ``u``).
+    """
     if isinstance(u, bool) or not isinstance(u, numbers.Real) or not np.isfinite(float(u)):
         raise ParameterError(f"{cls}.u: expected a finite real parameter, got {u!r}")
     return float(u)
@@ -62,7 +69,7 @@ class Position:
     point: ArrayLike
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "u", _param(self.u, "Position"))
+        object.__setattr__(self, "u", as_parameter(self.u, "Position"))
         object.__setattr__(self, "point", _vector(self.point, "Position.point"))
 
     @property
@@ -98,7 +105,7 @@ class Tangent:
     magnitude_only: bool = False
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "u", _param(self.u, "Tangent"))
+        object.__setattr__(self, "u", as_parameter(self.u, "Tangent"))
         if self.direction_only and self.magnitude_only:
             raise InvalidGeometryError("Tangent: direction_only and magnitude_only exclude each other")
         if self.magnitude_only and np.ndim(self.vector) == 0:
@@ -134,7 +141,7 @@ class Derivative:
     vector: ArrayLike
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "u", _param(self.u, "Derivative"))
+        object.__setattr__(self, "u", as_parameter(self.u, "Derivative"))
         if isinstance(self.order, bool) or not isinstance(self.order, numbers.Integral) or self.order < 0:
             raise InvalidGeometryError(f"Derivative.order: expected an integer >= 0, got {self.order!r}")
         object.__setattr__(self, "order", int(self.order))
@@ -167,7 +174,7 @@ class Curvature:
     value: ArrayLike
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "u", _param(self.u, "Curvature"))
+        object.__setattr__(self, "u", as_parameter(self.u, "Curvature"))
         if np.ndim(self.value) == 0:
             try:
                 r = float(self.value)  # type: ignore[arg-type]

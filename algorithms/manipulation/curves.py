@@ -54,6 +54,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
+from .. import tolerances
 from ..kernel.basis import basis_derivatives, find_span
 from .constraints import (
     Constraint,
@@ -74,8 +75,6 @@ from ..kernel.rational import curve_quotient_rule
 from .surfaces import drag_surface_point
 
 __all__ = [
-    "NEWTON_TOL",
-    "MAX_ITERATIONS",
     "Position",
     "Tangent",
     "Derivative",
@@ -92,22 +91,8 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-#: Nonlinear constraints (curvature, tangent magnitude) are met when each residual is at most
-#: ``NEWTON_TOL * max(1, |target|)`` (in the constraint's own units).
-NEWTON_TOL: float = 1e-12
-#: Newton–KKT steps allowed in all continuation stages before the SLSQP fallback (and SLSQP's
-#: iteration limit, at least 100).
-MAX_ITERATIONS: int = 60
-#: Newton steps tried per continuation stage before the stage is halved.
-NEWTON_STEPS: int = 10
-#: Smallest continuation step in ``t`` before giving up.
-MIN_CONTINUATION_STEP: float = 2.0**-14
-#: A Newton–KKT stage has converged (once feasible) when the reduced gradient of the Lagrangian is
-#: below ``KKT_RTOL * max(|y|, 1)`` (first-order optimality of the minimum-norm change).
-KKT_RTOL: float = 1e-10
-#: Linear constraints must hold after the solve to this relative accuracy, else the system was too
-#: ill-conditioned and :class:`ConstraintError` is raised instead of returning a wrong curve.
-LINEAR_CHECK_RTOL: float = 1e-9
+# Tolerances and limits, read at call time from :mod:`occsurf.algorithms.tolerances`: NEWTON_TOL,
+# DRAG_MAX_ITERATIONS, DRAG_NEWTON_STEPS, MIN_CONTINUATION_STEP, KKT_RTOL, LINEAR_CHECK_RTOL.
 
 
 # ============================================================================ basis rows
@@ -262,7 +247,7 @@ def _solve(prob: _Problem, tol: float, max_iter: int) -> Array:
     iterations and doubled after a success: the edit follows the branch of minimal changes a user
     would trace by dragging the curvature gradually, and each stage converges quadratically.
     Convergence at ``t = 1``: every nonlinear residual ``<= tol * max(1, |target|)`` and the
-    reduced Lagrangian gradient ``<= KKT_RTOL * ||y||``.
+    reduced Lagrangian gradient ``<= tolerances.KKT_RTOL * ||y||``.
     """
     lin, nl = prob.lin, prob.nl
     D = prob.derivs(np.zeros(prob.col_scale.size))
@@ -318,7 +303,8 @@ def _slsqp(prob: _Problem, y_c: Array, Z: Array, tol: float, max_iter: int) -> t
     # Newton-KKT polish at t = 1 (quadratic from here); multipliers from least squares.
     F, J = prob.system(nl, prob.derivs(y))
     lam = -lstsq((J @ Z).T, Z.T @ y).x
-    ok, y_new, _, _ = _newton_kkt(prob, y, lam, Z, np.zeros(scales.size), scales, tol, NEWTON_STEPS)
+    ok, y_new, _, _ = _newton_kkt(prob, y, lam, Z, np.zeros(scales.size), scales, tol,
+                                  tolerances.DRAG_NEWTON_STEPS)
     if ok:
         y = y_new
     with np.errstate(all="ignore"):
@@ -337,13 +323,13 @@ def _continuation(prob: _Problem, y_c: Array, Z: Array, tol: float, max_iter: in
     while t < 1.0 and used < max_iter and Z.shape[1]:
         t_new = min(1.0, t + dt)
         ok, y_new, lam_new, steps = _newton_kkt(prob, y, lam, Z, (1.0 - t_new) * F0, scales, tol,
-                                                min(NEWTON_STEPS, max_iter - used))
+                                                min(tolerances.DRAG_NEWTON_STEPS, max_iter - used))
         used += steps
         if ok:
             t, y, lam, dt = t_new, y_new, lam_new, 2.0 * dt
         else:
             dt *= 0.5
-            if dt < MIN_CONTINUATION_STEP:
+            if dt < tolerances.MIN_CONTINUATION_STEP:
                 break
     with np.errstate(all="ignore"):
         F, _ = prob.system(nl, prob.derivs(y))
@@ -366,7 +352,7 @@ def _newton_kkt(prob: _Problem, y: Array, lam: Array, Z: Array, offset: Array, s
         A = J @ Z
         g = Z.T @ y + A.T @ lam
         merit = float(np.max(np.abs(F) / scales))
-        if merit <= tol and np.linalg.norm(g) <= KKT_RTOL * max(float(np.linalg.norm(y)), 1.0):
+        if merit <= tol and np.linalg.norm(g) <= tolerances.KKT_RTOL * max(float(np.linalg.norm(y)), 1.0):
             return True, y, lam, step
         if step == max_steps:
             break
@@ -410,7 +396,7 @@ def _verify(prob: _Problem, y: Array, tol: float) -> None:
     for k, r in enumerate(prob.rows):
         F, _ = r.residual(D[k], prob.K)
         if r.linear:
-            limit = LINEAR_CHECK_RTOL * max(r.scale, float(np.abs(prob.D0[k]).max()))
+            limit = tolerances.LINEAR_CHECK_RTOL * max(r.scale, float(np.abs(prob.D0[k]).max()))
         else:
             limit = 10 * tol * r.scale
         if np.max(np.abs(F)) > limit:
@@ -454,9 +440,10 @@ def constrain(curve: BSplineCurve, constraints: Sequence[Constraint] | Constrain
     weights : array_like, shape (n,), optional
         Positive per-pole weights of the norm (a heavy pole moves little). Not the rational weights.
     tol : float, optional
-        Nonlinear residual tolerance, relative to ``max(1, |target|)``; default :data:`NEWTON_TOL`.
+        Nonlinear residual tolerance, relative to ``max(1, |target|)``; default
+        :data:`~occsurf.algorithms.tolerances.NEWTON_TOL`.
     max_iter : int, optional
-        Default :data:`MAX_ITERATIONS`.
+        Default :data:`~occsurf.algorithms.tolerances.DRAG_MAX_ITERATIONS`.
 
     Returns
     -------
@@ -486,10 +473,10 @@ def constrain(curve: BSplineCurve, constraints: Sequence[Constraint] | Constrain
     """
     if not isinstance(curve, BSplineCurve):
         raise InvalidGeometryError(f"curve: expected a BSplineCurve, got {type(curve).__name__}")
-    tol = NEWTON_TOL if tol is None else float(tol)
+    tol = tolerances.NEWTON_TOL if tol is None else float(tol)
     if not tol > 0:
         raise InvalidGeometryError(f"tol: expected > 0, got {tol!r}")
-    max_iter = MAX_ITERATIONS if max_iter is None else V.check_times(max_iter, "max_iter")
+    max_iter = tolerances.DRAG_MAX_ITERATIONS if max_iter is None else V.check_times(max_iter, "max_iter")
     prob = _Problem(curve, constraints, movable, weights)
     y = _solve(prob, tol, max_iter)
     bad = _reversed_directions(prob, y)

@@ -21,10 +21,10 @@ The constraint rows are first *equilibrated* (each row of ``C`` and its entry of
 the row's Euclidean norm: the solution set is unchanged, and rows measured in different units, such
 as positions and second derivatives of a spline, become comparable). Then ``C^T P = Q R`` with
 column pivoting; the rank is the number of diagonal entries of ``R`` above
-``RANK_RTOL * |R[0, 0]|``. A row that is not among the first ``rank`` pivots is a combination of
-those that are; if its target disagrees with the same combination of their targets by more than
-``CONSISTENCY_RTOL`` (relative), the system is inconsistent and :class:`ConstraintError` names the
-row and the rows it depends on. Consistent redundant rows are simply dropped.
+``tolerances.RANK_RTOL * |R[0, 0]|``. A row that is not among the first ``rank`` pivots is a
+combination of those that are; if its target disagrees with the same combination of their targets
+by more than ``tolerances.CONSISTENCY_RTOL`` (relative), the system is inconsistent and
+:class:`ConstraintError` names the row and the rows it depends on. Consistent redundant rows are simply dropped.
 
 References
 ----------
@@ -47,12 +47,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
+from .. import tolerances
 from ..errors import InvalidGeometryError, ToleranceError
 
 __all__ = [
-    "RANK_RTOL",
-    "CONSISTENCY_RTOL",
-    "SPARSE_TOL",
     "ConstraintError",
     "ConvergenceError",
     "LstsqResult",
@@ -66,15 +64,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-
-#: A pivot ``|R[k, k]|`` of the equilibrated constraint matrix below ``RANK_RTOL * |R[0, 0]|``
-#: counts as zero: rows beyond it are taken as combinations of the earlier ones.
-RANK_RTOL: float = 1e-10
-#: Dependent constraint rows are consistent when their targets match the combination of the
-#: independent rows' targets to ``CONSISTENCY_RTOL`` times the size of the (equilibrated) targets.
-CONSISTENCY_RTOL: float = 1e-9
-#: Stopping tolerance (``atol`` and ``btol``) of the iterative sparse solvers.
-SPARSE_TOL: float = 1e-14
 
 
 class ConstraintError(InvalidGeometryError):
@@ -223,7 +212,7 @@ class ConstraintFactor:
     labels : sequence of str, optional
         One name per row, used in error messages (default ``"row i"``).
     rank_rtol : float, optional
-        Default :data:`RANK_RTOL`.
+        Default :data:`~occsurf.algorithms.tolerances.RANK_RTOL`.
     full : bool
         Also compute an orthonormal basis of the null space of ``C`` (:attr:`null_basis`), as the
         null-space method of :func:`constrained_lstsq` needs.
@@ -246,7 +235,7 @@ class ConstraintFactor:
         m, n = C.shape
         self.shape = (m, n)
         self.labels = _labels(labels, m)
-        rtol = RANK_RTOL if rank_rtol is None else float(rank_rtol)
+        rtol = tolerances.RANK_RTOL if rank_rtol is None else float(rank_rtol)
         norms = np.linalg.norm(C, axis=1)
         self.row_scale = np.where(norms > 0, norms, 1.0)
         Ce = C / self.row_scale[:, None]
@@ -304,8 +293,9 @@ class ConstraintFactor:
         ----------
         d : array_like, shape (m,) or (m, k)
         tol : float, optional
-            Absolute tolerance on the equilibrated residual; default ``CONSISTENCY_RTOL`` times the
-            largest equilibrated target times ``1 + max |coefficient row sum|``.
+            Absolute tolerance on the equilibrated residual; default
+            :data:`~occsurf.algorithms.tolerances.CONSISTENCY_RTOL` times the largest equilibrated
+            target times ``1 + max |coefficient row sum|``.
         """
         if not self.redundant.size:
             return
@@ -315,7 +305,7 @@ class ConstraintFactor:
         if tol is None:
             scale = float(np.abs(de).max()) if de.size else 0.0
             amp = 1.0 + np.abs(self.coefficients).sum(axis=1) if self.coefficients.size else np.ones(res.shape)
-            tol_j = CONSISTENCY_RTOL * max(scale, np.finfo(float).tiny) * amp
+            tol_j = tolerances.CONSISTENCY_RTOL * max(scale, np.finfo(float).tiny) * amp
         else:
             tol_j = np.full(res.shape, float(tol))
         bad = np.nonzero(res > tol_j)[0]
@@ -496,7 +486,7 @@ def sparse_lstsq(A: object, b: ArrayLike, weights: ArrayLike | None = None, *, t
         Each column is solved separately.
     weights : array_like, shape (m,), optional
     tol : float, optional
-        ``atol = btol`` of LSMR; default :data:`SPARSE_TOL`.
+        ``atol = btol`` of LSMR; default :data:`~occsurf.algorithms.tolerances.SPARSE_TOL`.
     maxiter : int, optional
         Default ``10 * n``.
 
@@ -516,7 +506,7 @@ def sparse_lstsq(A: object, b: ArrayLike, weights: ArrayLike | None = None, *, t
         s = np.sqrt(w)
         A = sp.diags(s) @ A
         b = b * (s if b.ndim == 1 else s[:, None])
-    t = SPARSE_TOL if tol is None else float(tol)
+    t = tolerances.SPARSE_TOL if tol is None else float(tol)
     it = 10 * A.shape[1] if maxiter is None else int(maxiter)
     B = b.reshape(b.shape[0], -1)
     X = np.empty((A.shape[1], B.shape[1]))
@@ -582,7 +572,7 @@ def sparse_min_norm_solve(C: object, d: ArrayLike, weights: ArrayLike | None = N
     labels : sequence of str, optional
     tol : float, optional
         Relative tolerance of the final check ``||C x - d|| <= tol * max(1, ||d||)``; default
-        ``CONSISTENCY_RTOL``.
+        :data:`~occsurf.algorithms.tolerances.CONSISTENCY_RTOL`.
 
     Returns
     -------
@@ -612,7 +602,8 @@ def sparse_min_norm_solve(C: object, d: ArrayLike, weights: ArrayLike | None = N
 
 def _check_residual(C: sp.csr_matrix, x: Array, d: Array, tol: float | None, labels, what: str) -> None:
     res = np.abs(C @ x - d).reshape(d.shape[0], -1).max(axis=1)
-    t = (CONSISTENCY_RTOL if tol is None else float(tol)) * max(1.0, float(np.abs(d).max()) if d.size else 0.0)
+    rtol = tolerances.CONSISTENCY_RTOL if tol is None else float(tol)
+    t = rtol * max(1.0, float(np.abs(d).max()) if d.size else 0.0)
     if np.any(res > t):
         _diagnose_sparse(C, d, labels, what)
         bad = np.nonzero(res > t)[0]

@@ -102,6 +102,7 @@ from scipy import sparse
 from scipy.sparse.linalg import spsolve
 
 from .. import _validate as V
+from .. import tolerances
 from ..errors import InvalidGeometryError
 from .mesh import Mesh, catmull_clark
 from .spatch import SPatch, domain_vertices, spatch_indices
@@ -114,8 +115,6 @@ __all__ = [
     "ribbon_patch",
     "spatch_curvatures",
     "BIQUADRATIC_DEPTH",
-    "CONSISTENCY_TOL",
-    "MAX_VALENCE",
 ]
 
 Array = NDArray[np.float64]
@@ -124,15 +123,8 @@ Array = NDArray[np.float64]
 #: ``ρ D + λ T`` has degree 4 in the side parameter, so ``d - 1 = 4``. Regular vertices use depth 2.
 BIQUADRATIC_DEPTH: int = 5
 
-#: Largest vertex valence accepted. The S-patch of a valence-n vertex has C(n + 4, 5) control
-#: points (15 504 at n = 16, 42 504 at n = 20), all evaluated at every point; beyond 16 the patches
-#: are too heavy to be useful, and a mesh with such a vertex should be refined or re-meshed.
-MAX_VALENCE: int = 16
-
-#: Relative disagreement (to the size of the vertex's Bézier net) allowed between the two
-#: computations of a control point fixed by two sides (corner maps, twist points). The construction
-#: makes them equal in exact arithmetic; round-off gives ~1e-15. Larger means a bug, and raises.
-CONSISTENCY_TOL: float = 1e-9
+# The largest vertex valence and the consistency check of the control points fixed by two sides
+# are tolerances.MAX_VALENCE and tolerances.GENERALIZED_CONSISTENCY_TOL, read at call time.
 
 
 # ---------------------------------------------------------------------------- one vertex
@@ -189,8 +181,9 @@ def biquadratic_patch(centre: ArrayLike, mids: ArrayLike, corners: ArrayLike) ->
     m = V.as_finite_array(mids, "mids")
     c = V.as_finite_array(corners, "corners")
     n = m.shape[0] if m.ndim == 2 else 0
-    if n > MAX_VALENCE:
-        raise InvalidGeometryError(f"mids: valence {n} exceeds MAX_VALENCE = {MAX_VALENCE}")
+    max_valence = tolerances.MAX_VALENCE
+    if n > max_valence:
+        raise InvalidGeometryError(f"mids: valence {n} exceeds MAX_VALENCE = {max_valence}")
     if m.ndim != 2 or n < 3 or c.shape != m.shape or v.shape != m.shape[1:]:
         raise InvalidGeometryError(f"mids, corners: expected (n, dim) arrays with n >= 3 and a centre (dim,); "
                                    f"got {m.shape}, {c.shape}, {v.shape}")
@@ -227,7 +220,7 @@ def ribbon_patch(rows0: ArrayLike, rows1: ArrayLike, scale: float = 1.0, *, name
         ``rows1[k, q] = rows0[k + 1, 1]`` and ``rows1[k, q - 1] = rows1[k + 1, 1]`` (corner
         point, tangents and twist; the biquadratic and bicubic nets satisfy them by construction).
     scale : float
-        Size of the data, for the relative :data:`CONSISTENCY_TOL` check.
+        Size of the data, for the relative ``tolerances.GENERALIZED_CONSISTENCY_TOL`` check.
 
     Returns
     -------
@@ -239,7 +232,8 @@ def ribbon_patch(rows0: ArrayLike, rows1: ArrayLike, scale: float = 1.0, *, name
     Raises
     ------
     InvalidGeometryError
-        Control points fixed by two sides disagree by more than :data:`CONSISTENCY_TOL`.
+        Control points fixed by two sides disagree by more than
+        ``tolerances.GENERALIZED_CONSISTENCY_TOL``.
     """
     R0 = np.asarray(rows0, float)
     R1 = np.asarray(rows1, float)
@@ -281,10 +275,11 @@ def ribbon_patch(rows0: ArrayLike, rows1: ArrayLike, scale: float = 1.0, *, name
         P[pos[key]] = arr.mean(axis=0)
         fixed[pos[key]] = True
         worst = max(worst, float(np.max(np.abs(arr - arr[0]))) / scale)
-    if worst > CONSISTENCY_TOL:
+    consistency_tol = tolerances.GENERALIZED_CONSISTENCY_TOL
+    if worst > consistency_tol:
         raise InvalidGeometryError(
             f"{name}: control points fixed by two sides disagree by {worst:.3g} (relative), "
-            f"more than CONSISTENCY_TOL = {CONSISTENCY_TOL}; the net is degenerate"
+            f"more than GENERALIZED_CONSISTENCY_TOL = {consistency_tol}; the net is degenerate"
         )
     free = np.flatnonzero(~fixed)
     if free.size:
@@ -471,9 +466,9 @@ def generalized_biquadratic(mesh: Mesh, *, refine: str = "auto") -> GeneralizedS
     for v in range(mesh.n_vertices):
         if mesh.is_boundary_vertex(v) or not mesh.vertex_faces(v):
             continue
-        if mesh.valence(v) > MAX_VALENCE:
+        if mesh.valence(v) > tolerances.MAX_VALENCE:
             raise InvalidGeometryError(
-                f"mesh: vertex {v} has valence {mesh.valence(v)}, more than MAX_VALENCE = {MAX_VALENCE} "
+                f"mesh: vertex {v} has valence {mesh.valence(v)}, more than MAX_VALENCE = {tolerances.MAX_VALENCE} "
                 f"(its S-patch would have C({mesh.valence(v) + 4}, 5) control points)"
             )
         centre, mids, corners = _vertex_net(mesh, v)

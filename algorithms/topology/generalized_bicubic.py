@@ -59,8 +59,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import tolerances
 from ..errors import InvalidGeometryError
-from .generalized import MAX_VALENCE, GeneralizedSurface, check_scheme_args, ribbon_patch
+from .generalized import GeneralizedSurface, check_scheme_args, ribbon_patch
 from .mesh import Mesh, doo_sabin
 from .spatch import SPatch, spatch_indices
 
@@ -166,7 +167,7 @@ def generalized_bicubic(mesh: Mesh, *, refine: str = "auto") -> GeneralizedSurfa
     ------
     InvalidGeometryError
         ``mesh`` not a Mesh, ``refine`` unknown, an interior vertex of valence != 4 with
-        ``refine="never"``, a face with more than :data:`~occsurf.algorithms.topology.generalized.MAX_VALENCE` sides,
+        ``refine="never"``, a face with more than ``tolerances.MAX_VALENCE`` sides,
         or no face with all vertices interior.
     """
     check_scheme_args(mesh, refine)
@@ -182,9 +183,9 @@ def generalized_bicubic(mesh: Mesh, *, refine: str = "auto") -> GeneralizedSurfa
     for fi, f in enumerate(mesh.faces):
         if any(mesh.is_boundary_vertex(v) for v in f):
             continue
-        if len(f) > MAX_VALENCE:
+        if len(f) > tolerances.MAX_VALENCE:
             raise InvalidGeometryError(
-                f"mesh: face {fi} has {len(f)} sides, more than MAX_VALENCE = {MAX_VALENCE}")
+                f"mesh: face {fi} has {len(f)} sides, more than MAX_VALENCE = {tolerances.MAX_VALENCE}")
         patch, cons = _face_patch(mesh, fi)
         patches.append(patch)
         faces.append(fi)

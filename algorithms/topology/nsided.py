@@ -49,8 +49,8 @@ Known limits (reported, never hidden): at a hole corner the twist is over-determ
 neighbours are only G1 (not G2) to each other there (Gregory's twist incompatibility): its normal
 component is then averaged and G1 holds up to :attr:`HoleFill.twist_mismatch` near that corner.
 A side with a C0 knot (a kink, no tangent) is refused; split the side there. Hole corners must be
-convex (interior angle between :data:`MIN_CORNER_ANGLE` and 180 degrees): a reflex corner would fold
-the corner patch and is refused, as is a flat one (two tangent sides: merge them).
+convex (interior angle between ``tolerances.FILL_MIN_CORNER_ANGLE`` and 180 degrees): a reflex
+corner would fold the corner patch and is refused, as is a flat one (two tangent sides: merge them).
 
 References
 ----------
@@ -70,6 +70,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import lu_factor, lu_solve
 
+from .. import tolerances
 from ..kernel.basis import basis_matrix, greville
 from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError, ToleranceError
@@ -83,44 +84,13 @@ __all__ = [
     "closest_parameters",
     "fill_hole",
     "measure_fill",
-    "CLOSURE_TOL",
-    "MIN_CORNER_ANGLE",
-    "CORNER_PLANE_TOL",
-    "REPRESENT_TOL",
-    "MAX_SIDES",
-    "TWIST_TOL",
-    "CORNER_SPAN",
 ]
 
 Array = NDArray[np.float64]
-#: Relative singular-value cut-off of the small least-squares solves: the fields span a plane (3-D
-#: space in homogeneous coordinates); anything out of it (a corner incompatibility) must be dropped,
-#: not amplified.
-_RCOND = 1e-9
-#: Singular values below this fraction of the largest count as zero in the kite domain relation.
-_NULL_RTOL = 1e-10
-
-#: Largest gap (relative to the size of the loop's bounding box) between the end of one side and
-#: the start of the next for the loop to count as closed.
-CLOSURE_TOL: float = 1e-6
-#: Smallest angle (degrees) between the two sides at a hole corner, and between a side's tangent
-#: and its neighbour's cross derivative; below it the corner/side is degenerate and refused.
-MIN_CORNER_ANGLE: float = 2.0
-#: At a hole corner the tangent planes of the two neighbours must agree (sine of the angle by which
-#: one neighbour's boundary tangent leaves the other's tangent plane); above this the neighbours
-#: meet at a sharp edge there and no surface is G1 to both, so the hole is refused. Below it the
-#: fill is built and its measured G1 angle at that corner shows the mismatch.
-CORNER_PLANE_TOL: float = 0.02
-#: Self-check of the exact representations (relative to the function's size): a spline or
-#: polynomial placed into a knot space that holds it must come back to round-off.
-REPRESENT_TOL: float = 1e-9
-#: Twist mismatch (relative, see :attr:`HoleFill.twist_mismatch`) above which a corner is treated as
-#: incompatible: its twist pole is averaged and confined to a corner span of length CORNER_SPAN.
-TWIST_TOL: float = 1e-8
-#: Parameter length of that corner span; the G1 error it leaves near the corner is proportional to it.
-CORNER_SPAN: float = 0.02
-#: Most sides accepted (the construction works for any n; this bounds the output size).
-MAX_SIDES: int = 24
+# Tolerances and limits (read at call time from :mod:`occsurf.algorithms.tolerances`): FILL_RCOND,
+# FILL_NULL_RTOL (the small least-squares solves), FILL_CLOSURE_TOL, FILL_MIN_CORNER_ANGLE,
+# FILL_CORNER_PLANE_TOL (the checks of the hole), FILL_REPRESENT_TOL (the exact representations),
+# FILL_TWIST_TOL, FILL_CORNER_SPAN (incompatible twists) and FILL_MAX_SIDES.
 
 
 # ============================================================================================ data
@@ -257,7 +227,7 @@ def _represent(fn: Callable[[Array], Array], degree: int, knots: Array) -> Array
     Q = lu_solve(lu, Y)
     scale = max(float(np.abs(Y).max()), float(np.abs(Ym).max()), 1e-300)
     err = float(np.abs(Nm @ Q - Ym).max()) / scale
-    if err > REPRESENT_TOL:
+    if err > tolerances.FILL_REPRESENT_TOL:
         raise ToleranceError(f"internal: a ribbon is not exactly representable (relative error {err:.2e}); "
                              "the side's knots or continuity are inconsistent")
     return Q
@@ -453,11 +423,32 @@ def side_from_surface(surface: BSplineSurface, edge: str, reverse: bool = False)
 
 
 def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Side], bool, float, Array]:
+    """Check the sides of a hole and bring them into working coordinates (step 0 of :func:`fill_hole`).
+
+    Returns
+    -------
+    unit : list of HoleSide, length n
+        The sides clamped and reparametrised to ``[0, 1]``.
+    work : list of _Side, length n
+        The same about ``origin``, homogeneous (end weights 1) if any side is rational.
+    rational : bool
+    size : float
+        Diagonal of the loop's bounding box.
+    origin : ndarray, shape (3,)
+        The mean of the hole corners.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Wrong types, dimensions or domains, fewer than 3 or more than ``tolerances.FILL_MAX_SIDES``
+        sides, or a loop that is not closed (``tolerances.FILL_CLOSURE_TOL``).
+    """
     if isinstance(sides, (str, bytes)) or not isinstance(sides, Sequence):
         raise InvalidGeometryError(f"sides: expected a sequence of HoleSide, got {type(sides).__name__}")
     n = len(sides)
-    if not 3 <= n <= MAX_SIDES:
-        raise InvalidGeometryError(f"sides: expected 3 to {MAX_SIDES} sides, got {n}")
+    max_sides = tolerances.FILL_MAX_SIDES
+    if not 3 <= n <= max_sides:
+        raise InvalidGeometryError(f"sides: expected 3 to {max_sides} sides, got {n}")
     rational = False
     for k, sd in enumerate(sides):
         if not isinstance(sd, HoleSide):
@@ -482,12 +473,13 @@ def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Sid
     size = float(np.linalg.norm(np.ptp(np.concatenate([sd.curve.evaluate(np.linspace(0, 1, 33)) for sd in unit]),
                                        axis=0)))
     size = max(size, 1e-300)
+    closure_tol = tolerances.FILL_CLOSURE_TOL
     for k in range(n):
         gap = float(np.linalg.norm(ends[k, 1] - ends[(k + 1) % n, 0]))
-        if gap > CLOSURE_TOL * size:
+        if gap > closure_tol * size:
             raise InvalidGeometryError(
                 f"sides: the boundary is not closed: side {k} ends {gap:.3g} away from the start of side "
-                f"{(k + 1) % n} (tolerance {CLOSURE_TOL * size:.3g}); order and orient the sides along the loop")
+                f"{(k + 1) % n} (tolerance {closure_tol * size:.3g}); order and orient the sides along the loop")
     # The construction works about the hole's own centre: boundary derivatives and the exactness
     # checks of _represent then lose no digits to the model's distance from the origin (a hole
     # 1e6 away failed the representation check; at 1e4 the G1 angle grew from 4e-11 to 1e-7 deg).
@@ -565,8 +557,9 @@ def _kite_relation(v: Array, p: Array, i: int, n: int) -> tuple[_Poly, _Poly, _P
     # bare "last singular vector" is an arbitrary member, LAPACK-dependent, that can have a0 = 0.
     # Take the member nearest to a = b = 1 (constant coefficients, the lowest degree): unique,
     # continuous in the data, and the same on every machine.
+    null_rtol = tolerances.FILL_NULL_RTOL
     _, sv, Vt = np.linalg.svd(M)
-    null = Vt[np.r_[sv, np.zeros(4 - sv.shape[0])] <= _NULL_RTOL * sv[0]]
+    null = Vt[np.r_[sv, np.zeros(4 - sv.shape[0])] <= null_rtol * sv[0]]
     if null.shape[0] == 0:
         null = Vt[-1:]
     x = null.T @ (null @ np.ones(4))  # (a0, a1, b0, b1)
@@ -574,7 +567,7 @@ def _kite_relation(v: Array, p: Array, i: int, n: int) -> tuple[_Poly, _Poly, _P
         x = Vt[-1]
     if x[0] < 0:
         x = -x
-    if not np.all(x > _NULL_RTOL * np.abs(x).max()):
+    if not np.all(x > null_rtol * np.abs(x).max()):
         raise InvalidGeometryError(
             f"sides: the domain relation of internal edge {i} has a coefficient that vanishes on the edge "
             f"({np.array2string(x, precision=3)}): the side split parameters are too uneven")
@@ -591,7 +584,7 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
 
     Parameters
     ----------
-    sides : sequence of HoleSide, length n (3 to :data:`MAX_SIDES`)
+    sides : sequence of HoleSide, length n (3 to ``tolerances.FILL_MAX_SIDES``)
         The hole's boundary in loop order, each with the neighbour's cross derivative
         (:func:`side_from_surface` builds them from neighbour surfaces).
 
@@ -603,67 +596,214 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
     Raises
     ------
     InvalidGeometryError
-        Fewer than 3 sides, a loop that is not closed (:data:`CLOSURE_TOL`), a degenerate corner or
-        cross field (:data:`MIN_CORNER_ANGLE`; a neighbour's pole at a corner), neighbours meeting
-        at a sharp edge at a corner (:data:`CORNER_PLANE_TOL`), a kink inside a side, or a fill
-        that would turn back over the neighbour (cross field pointing into the hole).
+        Fewer than 3 sides, a loop that is not closed (``tolerances.FILL_CLOSURE_TOL``), a
+        degenerate corner or cross field (``tolerances.FILL_MIN_CORNER_ANGLE``; a neighbour's pole
+        at a corner), neighbours meeting at a sharp edge at a corner
+        (``tolerances.FILL_CORNER_PLANE_TOL``), a kink inside a side, or a fill that would turn back
+        over the neighbour (cross field pointing into the hole).
 
     Notes
     -----
-    Construction in the module docstring (course §8-3; central split with G1 ribbons).
+    Construction in the module docstring (course §8-3; central split with G1 ribbons). The steps:
+    the sides in working coordinates (:func:`_working_sides`), where each is split
+    (:func:`_choose_split`), the kite domain picture (:func:`_domain_picture`), the ribbon
+    coefficients at the hole corners (:func:`_corner_analysis`), the side midpoints and the centre
+    (:func:`_midpoints`, :func:`_centre`), the centre's tangent map (:func:`_centre_map`), the
+    internal edges with their cross fields (:func:`_internal_edge`) and, last, one patch per hole
+    corner (:func:`_corner_patch`).
     """
     unit, S, rational, size, origin = _working_sides(sides)
     n = len(S)
-    w = 4 if rational else 3
-    nf = S[0].nf
     sig = np.array([_choose_split(sd) for sd in S])
-    tau = 1.0 - sig
+    vdom, pdom = _domain_picture(sig)
+    corners = _corner_analysis(S, sig, rational)
+    mid = _midpoints(S, sig, rational)
+    C, c1 = _centre(mid, rational)
+    _check_inward(corners, c1)
+    Ch = np.r_[C, 1.0] if rational else C
+    DPhi = _centre_map(C, mid.cart, pdom, rational)
+    edges = [_internal_edge(i, vdom, pdom, sig[i], mid, c1[i], Ch, DPhi) for i in range(n)]
+    patches = [_corner_patch(i, S, sig, corners, c1, edges, rational, origin) for i in range(n)]
+    return HoleFill(patches, unit, sig, C + origin, corners.residual, corners.twist, size)
+
+
+# ---- step 1: the domain picture
+def _domain_picture(sig: Array) -> tuple[Array, Array]:
+    """The regular n-gon of the kite split: its vertices and the images of the split points.
+
+    Parameters
+    ----------
+    sig : ndarray, shape (n,)
+        Split parameter of each side.
+
+    Returns
+    -------
+    vdom : ndarray, shape (n, 2)
+        Vertex ``i`` (hole corner ``V_i``) at angle ``2 pi i / n`` on the unit circle.
+    pdom : ndarray, shape (n, 2)
+        The point of domain side ``i`` at ``sig[i]`` (the midpoint ``m_i``).
+    """
+    n = len(sig)
     th = 2 * np.pi * np.arange(n) / n
     vdom = np.c_[np.cos(th), np.sin(th)]
     pdom = np.array([(1 - sig[i]) * vdom[i] + sig[i] * vdom[(i + 1) % n] for i in range(n)])
+    return vdom, pdom
 
-    # ---- geometry at the corners V_i: coefficient values and derivatives at the patch corner
-    F0 = [sd.fields(0.0) for sd in S]
-    F1 = [sd.fields(1.0) for sd in S]
-    ca0 = np.zeros((n, nf)); ca0d = np.zeros((n, nf)); cb0 = np.zeros((n, nf)); cb0d = np.zeros((n, nf))
-    corner_res = np.zeros(n); twist = np.zeros(n)
-    for i in range(n):
-        j = (i - 1) % n
-        Fa, dFa = F0[i][0][0], F0[i][1][0]  # (nf, w) fields of side i at s=0
-        Fb, dFb = F1[j][0][0], F1[j][1][0]  # of side i-1 at s=1
-        ta = sig[i] * S[i].B.derivatives(0.0, 1)[1]  # a'(0)
-        tb = -tau[j] * S[j].B.derivatives(1.0, 1)[1]  # b'(0)
-        h0 = S[i].B.evaluate(0.0)  # the corner (homogeneous, weight 1)
-        tca, tcb = _cart_tangent(h0, ta, rational), _cart_tangent(h0, tb, rational)
-        if _angle_deg(tca, tcb) < MIN_CORNER_ANGLE:
-            raise InvalidGeometryError(
-                f"sides: corner {i} (start of side {i}) is flat: the sides meet at {_angle_deg(tca, tcb):.3g} deg "
-                f"from tangent (minimum {MIN_CORNER_ANGLE}); merge the two sides or split the hole differently")
-        for k, at, F, t_side in ((i, "start", Fa, tca), (j, "end", Fb, tcb)):
-            cross = _cart_tangent(h0, F[0], rational)
-            ang = _angle_deg(t_side, cross)
-            if not np.linalg.norm(cross) > 0 or not ang >= MIN_CORNER_ANGLE:
-                raise InvalidGeometryError(
-                    f"sides[{k}].cross: degenerate at the {at} of the side (its angle to the boundary is "
-                    f"{ang:.3g} deg): the neighbour has a pole or a collapsed edge at hole corner {i} (a sphere "
-                    "or a fillet corner), where no tangent plane across the boundary is defined")
-        xa, *_ = np.linalg.lstsq(Fa.T, tb, rcond=_RCOND)
-        xb, *_ = np.linalg.lstsq(Fb.T, ta, rcond=_RCOND)
-        corner_res[i] = max(np.linalg.norm(Fa.T @ xa - tb) / np.linalg.norm(tb),
-                            np.linalg.norm(Fb.T @ xb - ta) / np.linalg.norm(ta))
-        if not corner_res[i] <= CORNER_PLANE_TOL:
-            raise InvalidGeometryError(
-                f"sides: at hole corner {i} the neighbours of sides {j} and {i} meet at a sharp edge (their "
-                f"tangent planes differ by {np.degrees(np.arcsin(min(corner_res[i], 1.0))):.3g} deg, more than "
-                f"{np.degrees(np.arcsin(CORNER_PLANE_TOL)):.3g}): no surface is G1 to both there")
-        ca0[i], cb0[i] = xa, xb
-        rhs = (-tau[j] * xb @ dFb) - (sig[i] * xa @ dFa)
-        M = np.c_[Fa.T, -Fb.T]
-        y, *_ = np.linalg.lstsq(M, rhs, rcond=_RCOND)
-        twist[i] = np.linalg.norm(M @ y - rhs) / max(np.linalg.norm(ta), np.linalg.norm(tb), 1e-300)
-        ca0d[i], cb0d[i] = y[:nf], y[nf:]
 
-    # ---- centre, midpoints and the coefficients there
+# ---- step 2: geometry at the corners V_i: coefficient values and derivatives at the patch corner
+@dataclass(frozen=True)
+class _CornerFit:
+    """The ribbon coefficients ``c_f`` at the hole corners (:func:`_corner_analysis`).
+
+    Corner ``i`` is the start of side ``i`` and the end of side ``i - 1``, the ``(0, 0)`` corner of
+    patch ``i``. ``nf`` is the number of fields: 2 (``X, B'``), 3 for rational data (``X, B', B``).
+
+    Attributes
+    ----------
+    start, start_d : ndarray, shape (n, nf)
+        Value and u-derivative at ``u = 0`` of the coefficients of side ``i``'s ribbon on patch
+        ``i`` (``s = sig_i u``): the ribbon there is the tangent of side ``i - 1``.
+    end, end_d : ndarray, shape (n, nf)
+        The same at ``v = 0`` for side ``i - 1`` on patch ``i`` (``s = 1 - (1 - sig_{i-1}) v``).
+    residual : ndarray, shape (n,)
+        :attr:`HoleFill.corner_residual`.
+    twist : ndarray, shape (n,)
+        :attr:`HoleFill.twist_mismatch`.
+    """
+
+    start: Array
+    start_d: Array
+    end: Array
+    end_d: Array
+    residual: Array
+    twist: Array
+
+
+def _corner_analysis(S: list[_Side], sig: Array, rational: bool) -> _CornerFit:
+    """Fit the ribbons of the two sides at every hole corner to each other (step 2).
+
+    At corner ``i`` each side's ribbon must be the other side's tangent (so that the patch's
+    corner is consistent), and the twists seen from both sides must agree: a least-squares fit in
+    the fields' span, whose residuals are the corner diagnostics.
+
+    Parameters
+    ----------
+    S : list of _Side, length n
+        The sides in working coordinates.
+    sig : ndarray, shape (n,)
+        Split parameters.
+    rational : bool
+
+    Returns
+    -------
+    _CornerFit
+
+    Raises
+    ------
+    InvalidGeometryError
+        A flat corner, a degenerate cross field at a corner, or neighbours meeting at a sharp edge.
+    """
+    n, nf = len(S), S[0].nf
+    out = [_corner(i, S, sig, rational) for i in range(n)]
+    start, end, start_d, end_d = (np.array([c[k] for c in out]).reshape(n, nf) for k in range(4))
+    residual, twist = np.array([c[4] for c in out]), np.array([c[5] for c in out])
+    return _CornerFit(start, start_d, end, end_d, residual, twist)
+
+
+def _corner(i: int, S: list[_Side], sig: Array, rational: bool) -> tuple[Array, Array, Array, Array, float, float]:
+    """Hole corner ``i`` for :func:`_corner_analysis`.
+
+    Returns
+    -------
+    start, end, start_d, end_d : ndarray, shape (nf,)
+        Row ``i`` of the :class:`_CornerFit` arrays of the same names.
+    residual, twist : float
+        Corner residual and twist mismatch at corner ``i``.
+    """
+    nf = S[0].nf
+    j = (i - 1) % len(S)
+    tau_j = 1.0 - sig[j]
+    (Fa,), (dFa,) = S[i].fields(0.0)  # (nf, w) fields of side i at s=0
+    (Fb,), (dFb,) = S[j].fields(1.0)  # of side i-1 at s=1
+    ta = sig[i] * S[i].B.derivatives(0.0, 1)[1]  # a'(0)
+    tb = -tau_j * S[j].B.derivatives(1.0, 1)[1]  # b'(0)
+    h0 = S[i].B.evaluate(0.0)  # the corner (homogeneous, weight 1)
+    _check_corner_angles(i, j, h0, _cart_tangent(h0, ta, rational), _cart_tangent(h0, tb, rational), Fa, Fb,
+                         rational)
+    rcond = tolerances.FILL_RCOND
+    xa, *_ = np.linalg.lstsq(Fa.T, tb, rcond=rcond)
+    xb, *_ = np.linalg.lstsq(Fb.T, ta, rcond=rcond)
+    residual = max(np.linalg.norm(Fa.T @ xa - tb) / np.linalg.norm(tb),
+                   np.linalg.norm(Fb.T @ xb - ta) / np.linalg.norm(ta))
+    plane_tol = tolerances.FILL_CORNER_PLANE_TOL
+    if not residual <= plane_tol:
+        raise InvalidGeometryError(
+            f"sides: at hole corner {i} the neighbours of sides {j} and {i} meet at a sharp edge (their "
+            f"tangent planes differ by {np.degrees(np.arcsin(min(residual, 1.0))):.3g} deg, more than "
+            f"{np.degrees(np.arcsin(plane_tol)):.3g}): no surface is G1 to both there")
+    rhs = (-tau_j * xb @ dFb) - (sig[i] * xa @ dFa)
+    M = np.c_[Fa.T, -Fb.T]
+    y, *_ = np.linalg.lstsq(M, rhs, rcond=rcond)
+    twist = np.linalg.norm(M @ y - rhs) / max(np.linalg.norm(ta), np.linalg.norm(tb), 1e-300)
+    return xa, xb, y[:nf], y[nf:], residual, twist
+
+
+def _check_corner_angles(i: int, j: int, h0: Array, tca: Array, tcb: Array, Fa: Array, Fb: Array,
+                         rational: bool) -> None:
+    """Refuse a flat corner ``i`` or a cross field there that is (nearly) tangent to its side.
+
+    ``h0`` (w,) is the corner, ``tca``, ``tcb`` (3,) the Cartesian tangents of sides ``i`` and
+    ``j = i - 1`` into the corner's patch, ``Fa``, ``Fb`` (nf, w) their fields there.
+    """
+    min_angle = tolerances.FILL_MIN_CORNER_ANGLE
+    if _angle_deg(tca, tcb) < min_angle:
+        raise InvalidGeometryError(
+            f"sides: corner {i} (start of side {i}) is flat: the sides meet at {_angle_deg(tca, tcb):.3g} deg "
+            f"from tangent (minimum {min_angle}); merge the two sides or split the hole differently")
+    for k, at, F, t_side in ((i, "start", Fa, tca), (j, "end", Fb, tcb)):
+        cross = _cart_tangent(h0, F[0], rational)
+        ang = _angle_deg(t_side, cross)
+        if not np.linalg.norm(cross) > 0 or not ang >= min_angle:
+            raise InvalidGeometryError(
+                f"sides[{k}].cross: degenerate at the {at} of the side (its angle to the boundary is "
+                f"{ang:.3g} deg): the neighbour has a pole or a collapsed edge at hole corner {i} (a sphere "
+                "or a fillet corner), where no tangent plane across the boundary is defined")
+
+
+# ---- step 3: centre, midpoints and the coefficients there
+@dataclass(frozen=True)
+class _Midpoints:
+    """The sides at their split points ``m_i``, where the internal edges start (:func:`_midpoints`).
+
+    Attributes
+    ----------
+    fields : list of (ndarray, ndarray), length n
+        Side ``i``'s fields and their s-derivatives at ``sig_i`` (:meth:`_Side.fields`), each
+        shape (1, nf, w).
+    point, tangent : ndarray, shape (n, w)
+        ``B_i(sig_i)`` and ``B_i'(sig_i)`` (homogeneous for rational data).
+    cart : ndarray, shape (n, 3)
+        The Cartesian points ``m_i``.
+    normals : ndarray, shape (n, 3)
+        Unit normals of the neighbours' tangent planes at ``m_i``.
+    """
+
+    fields: list[tuple[Array, Array]]
+    point: Array
+    tangent: Array
+    cart: Array
+    normals: Array
+
+
+def _midpoints(S: list[_Side], sig: Array, rational: bool) -> _Midpoints:
+    """Evaluate every side at its split point, with the neighbour's tangent plane there.
+
+    Raises
+    ------
+    InvalidGeometryError
+        A cross field (nearly) tangent to its side at the split point.
+    """
+    n = len(S)
     Fm = [sd.fields(sig[i]) for i, sd in enumerate(S)]
     mh = np.array([S[i].B.evaluate(sig[i]) for i in range(n)])
     mder = np.array([S[i].B.derivatives(sig[i], 1)[1] for i in range(n)])
@@ -672,23 +812,45 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
     for i in range(n):
         tc = _cart_tangent(mh[i], mder[i], rational)
         dc = _cart_tangent(mh[i], Fm[i][0][0, 0], rational)
-        if _angle_deg(tc, dc) < MIN_CORNER_ANGLE:
+        if _angle_deg(tc, dc) < tolerances.FILL_MIN_CORNER_ANGLE:
             raise InvalidGeometryError(f"sides[{i}].cross: nearly tangent to the boundary "
                                        f"({_angle_deg(tc, dc):.3g} deg); the neighbour is degenerate there")
         normals[i] = _unit(np.cross(tc, dc))
+    return _Midpoints(Fm, mh, mder, mc, normals)
+
+
+def _centre(mid: _Midpoints, rational: bool) -> tuple[Array, Array]:
+    """The centre ``C`` and the ribbon coefficients at the midpoints.
+
+    ``C`` is the mean of the midpoints, each moved half-way towards that mean within its
+    neighbour's tangent plane; the ribbon at ``m_i`` points along the projection of ``C - m_i``.
+
+    Returns
+    -------
+    C : ndarray, shape (3,)
+        Cartesian, in working coordinates.
+    c1 : ndarray, shape (n, nf)
+        Coefficients of the fields at ``m_i``.
+    """
+    n, mc, normals = len(mid.cart), mid.cart, mid.normals
 
     def proj(i: int, d: Array) -> Array:
         return d - normals[i] * (normals[i] @ d)
 
     C0 = mc.mean(0)
     C = np.mean([mc[i] + 0.5 * proj(i, C0 - mc[i]) for i in range(n)], axis=0)
-    Ch = np.r_[C, 1.0] if rational else C
-    c1 = np.zeros((n, nf))
+    c1 = np.zeros((n, mid.fields[0][0].shape[1]))
     for i in range(n):
         t = proj(i, C - mc[i])
-        target = np.r_[mh[i, 3] * t, 0.0] if rational else t
-        c1[i], *_ = np.linalg.lstsq(Fm[i][0][0].T, target, rcond=_RCOND)
-    for arr, where in ((ca0, "corner"), (cb0, "corner"), (c1, "midpoint")):
+        target = np.r_[mid.point[i, 3] * t, 0.0] if rational else t
+        c1[i], *_ = np.linalg.lstsq(mid.fields[i][0][0].T, target, rcond=tolerances.FILL_RCOND)
+    return C, c1
+
+
+def _check_inward(corners: _CornerFit, c1: Array) -> None:
+    """Refuse a fill that would leave over a neighbour: the coefficient of the cross field ``X``
+    (column 0 of ``corners.start``, ``corners.end`` and ``c1``, each (n, nf)) must be negative."""
+    for arr, where in ((corners.start, "corner"), (corners.end, "corner"), (c1, "midpoint")):
         if np.any(arr[:, 0] >= 0):
             k = int(np.argmax(arr[:, 0]))
             raise InvalidGeometryError(
@@ -696,114 +858,230 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
                 "(interior angle above 180 deg, not supported by the central split), or a cross field pointing "
                 "into the hole (it must point into its neighbour)")
 
-    # ---- centre tangent plane: an affine map of the domain, DPhi (w, 2)
+
+def _centre_map(C: Array, mc: Array, pdom: Array, rational: bool) -> Array:
+    """The derivative ``DPhi`` (w, 2) of the affine map of the domain that gives the centre's
+    tangent plane: ``C - m_i = DPhi (-p_i)`` in the least-squares sense (``mc``, ``pdom``: (n, 3),
+    (n, 2)); one map for all patches, so that their tangent planes at the centre agree."""
+    n = len(mc)
     tg = np.array([np.r_[C - mc[i], 0.0] if rational else C - mc[i] for i in range(n)])
-    DPhi = np.linalg.lstsq(-pdom, tg, rcond=_RCOND)[0].T  # g_i = DPhi (-p_i)
+    return np.linalg.lstsq(-pdom, tg, rcond=tolerances.FILL_RCOND)[0].T  # g_i = DPhi (-p_i)
 
-    # ---- internal edges: E_i, L_i (patch i), R_i (patch i+1); coefficient end derivatives
-    E: list[_Poly] = []; L: list[_Poly] = []; R: list[_Poly] = []
-    ca1d = np.zeros((n, nf)); cb1d = np.zeros((n, nf))
-    for i in range(n):
-        a, b, r, dom = _kite_relation(vdom, pdom, i, n)
-        a0, b0 = a(0.0)[0], b(0.0)[0]
-        a0d, b0d = a(0.0, 1)[0], b(0.0, 1)[0]
-        r0d = r(0.0, 1)[0]
-        F, dF = Fm[i][0][0], Fm[i][1][0]
-        rhs = r0d * c1[i].copy()
-        rhs[1] -= a0d * sig[i] - b0d * tau[i]
-        ca1d[i], cb1d[i] = 0.5 * rhs / a0, 0.5 * rhs / b0
-        T0 = c1[i] @ F
-        Ei = _Poly.hermite([(0.0, 0, mh[i]), (0.0, 1, T0), (1.0, 0, Ch), (1.0, 1, DPhi @ dom["T"]),
-                            (1.0, 2, np.zeros(w))])
-        L0, R0 = sig[i] * mder[i], -tau[i] * mder[i]
-        L0d = ca1d[i] @ F + sig[i] * c1[i] @ dF
-        R0d = cb1d[i] @ F - tau[i] * c1[i] @ dF
-        L1, L1d = DPhi @ dom["A1"], DPhi @ (dom["A1"] - dom["A0"])
-        R1, R1d = DPhi @ dom["B1"], DPhi @ (dom["B1"] - dom["B0"])
-        # l, m linear with a l + b m = r (coefficients of the quadratic identity)
-        Amat = np.array([[a.coef[0, 0], 0, b.coef[0, 0], 0],
-                         [a.coef[1, 0], a.coef[0, 0], b.coef[1, 0], b.coef[0, 0]],
-                         [0, a.coef[1, 0], 0, b.coef[1, 0]]])
-        rc = np.zeros(3); rc[:r.coef.shape[0]] = r.coef[:3, 0]
-        lm = np.linalg.lstsq(Amat, rc, rcond=_RCOND)[0]
-        ell, emm = _scalar_poly(lm[:2]), _scalar_poly(lm[2:])
-        T = Ei.deriv()
-        b1, b1d, ell0, ell1, ell0d = b(1.0)[0], b(1.0, 1)[0], ell(0.0)[0], ell(1.0)[0], ell(0.0, 1)[0]
-        Z0 = (L0 - ell0 * T(0.0)) / b0
-        Z1 = (L1 - ell1 * T(1.0)) / b1
-        Z0d = (L0d - b0d * Z0 - ell0d * T(0.0) - ell0 * T(0.0, 1)) / b0
-        Z1d = (L1d - b1d * Z1 - ell(1.0, 1)[0] * T(1.0) - ell1 * T(1.0, 1)) / b1
-        Z = _Poly.hermite([(0.0, 0, Z0), (0.0, 1, Z0d), (1.0, 0, Z1), (1.0, 1, Z1d)])
-        Li, Ri = b * Z + ell * T, -(a * Z) + emm * T
-        # self-check: R must meet its end data too (it does when the corner conditions hold)
-        scale = max(np.abs(L0).max(), np.abs(L1).max(), 1e-300)
-        err = max(np.abs(Ri(0.0) - R0).max(), np.abs(Ri(1.0) - R1).max(), np.abs(Ri(0.0, 1) - R0d).max(),
-                  np.abs(Ri(1.0, 1) - R1d).max()) / scale
-        if err > 1e-7:
-            raise ToleranceError(f"internal: the G1 data of internal edge {i} are inconsistent ({err:.2e})")
-        E.append(Ei); L.append(Li); R.append(Ri)
 
-    # ---- coefficient functions on every half side
-    def coeff_poly(v0: Array, d0: Array, v1: Array, d1: Array) -> _Poly:
-        return _Poly.hermite([(0.0, 0, v0), (0.0, 1, d0), (1.0, 0, v1), (1.0, 1, d1)])
+# ---- step 4: internal edges: E_i, L_i (patch i), R_i (patch i+1); coefficient end derivatives
+@dataclass(frozen=True)
+class _InternalEdge:
+    """Internal edge ``i``, from ``m_i`` (``t = 0``) to the centre (``t = 1``) (:func:`_internal_edge`).
 
-    patches: list[BSplineSurface] = []
-    for i in range(n):
-        j = (i - 1) % n
-        sa, sb = S[i], S[j]
-        pa = coeff_poly(ca0[i], ca0d[i], c1[i], ca1d[i])  # on u in [0,1], s = sig_i u
-        pb = coeff_poly(cb0[i], cb0d[i], c1[j], cb1d[j])  # on v in [0,1], s = 1 - tau_j v
-        Pu, Pv = max(sa.degree + 3, 4), max(sb.degree + 3, 4)
-        Ku = _half_space(sa, 0.0, sig[i], False, Pu)
-        Kv = _half_space(sb, sig[j], 1.0, True, Pv)
-        if twist[i] > TWIST_TOL:  # confine the incompatible twist to a small corner span
-            Ku, Kv = _corner_knot(Ku, Pu), _corner_knot(Kv, Pv)
-        nu, nv = len(Ku) - Pu - 1, len(Kv) - Pv - 1
-        H = np.full((nu, nv, w), np.nan)
-        cnt = np.zeros((nu, nv))
-        acc = np.zeros((nu, nv, w))
+    Attributes
+    ----------
+    curve : _Poly
+        ``E_i(t)``, quartic, coefficients (5, w).
+    left, right : _Poly
+        The cross derivatives ``L_i`` of patch ``i`` and ``R_i`` of patch ``i + 1`` along it.
+    coef_d_before, coef_d_after : ndarray, shape (nf,)
+        Derivatives of the ribbon coefficients at ``m_i``: along ``u`` on patch ``i`` (the half
+        side before ``m_i``) and along ``v`` on patch ``i + 1`` (the half after it).
+    """
 
-        def put(idx, vals):  # poles set twice (corner blocks) are averaged; they agree but for the twist
-            acc[idx] += vals
-            cnt[idx] += 1
+    curve: _Poly
+    left: _Poly
+    right: _Poly
+    coef_d_before: Array
+    coef_d_after: Array
 
-        s_a = lambda u: sig[i] * u  # noqa: E731
-        s_b = lambda v: 1.0 - tau[j] * v  # noqa: E731
-        row0 = _represent(lambda u: sa.B.evaluate(s_a(u)), Pu, Ku)
-        da = _represent(lambda u: np.einsum("mf,mfw->mw", pa(u), sa.fields(s_a(u))[0]), Pu, Ku)
-        col0 = _represent(lambda v: sb.B.evaluate(s_b(v)), Pv, Kv)
-        db = _represent(lambda v: np.einsum("mf,mfw->mw", pb(v), sb.fields(s_b(v))[0]), Pv, Kv)
-        hu0, hv0 = Ku[Pu + 1] / Pu, Kv[Pv + 1] / Pv
-        hu1, hv1 = (1.0 - Ku[nu - 1]) / Pu, (1.0 - Kv[nv - 1]) / Pv
-        put((slice(None), 0), row0)
-        put((slice(None), 1), row0 + hv0 * da)
-        put((0, slice(None)), col0)
-        put((1, slice(None)), col0 + hu0 * db)
-        Ei, Li = E[i], L[i]
-        colE = _represent(lambda v: Ei(v), Pv, Kv)
-        put((nu - 1, slice(None)), colE)
-        put((nu - 2, slice(None)), colE - hu1 * _represent(lambda v: Li(v), Pv, Kv))
-        Ej, Rj = E[j], R[j]
-        rowE = _represent(lambda u: Ej(u), Pu, Ku)
-        put((slice(None), nv - 1), rowE)
-        put((slice(None), nv - 2), rowE - hv1 * _represent(lambda u: Rj(u), Pu, Ku))
-        fixed = cnt > 0
-        H[fixed] = acc[fixed] / cnt[fixed][:, None]
-        H = _fair_interior(H, ~fixed, (Pu, Pv), (Ku, Kv))
-        if rational:
-            if np.any(H[..., 3] <= 0):
-                raise InvalidGeometryError(f"sides: the rational fill of corner {i} got a non-positive weight "
-                                           f"({H[..., 3].min():.3g}); the neighbours' weights vary too much")
-            patches.append(BSplineSurface((Pu, Pv), (Ku, Kv), H[..., :3] / H[..., 3:] + origin, H[..., 3]))
-        else:
-            patches.append(BSplineSurface((Pu, Pv), (Ku, Kv), H + origin))
-    return HoleFill(patches, unit, sig, C + origin, corner_res, twist, size)
+
+def _internal_edge(i: int, vdom: Array, pdom: Array, sig_i: float, mid: _Midpoints, c1_i: Array, Ch: Array,
+                   DPhi: Array) -> _InternalEdge:
+    """Build internal edge ``i`` and the two cross fields along it, G1 by a polynomial identity.
+
+    ``E_i`` is the Hermite quartic from ``m_i`` (tangent = the ribbon there) to the centre ``Ch``
+    (w,) (tangent from ``DPhi`` (w, 2)); its end derivatives and those of the cross fields come
+    from the corner conditions at ``m_i`` (``c1_i`` (nf,), the ribbon coefficients there) and from
+    the centre's affine map. ``vdom``, ``pdom`` (n, 2): the domain picture.
+    """
+    tau_i = 1.0 - sig_i
+    a, b, r, dom = _kite_relation(vdom, pdom, i, len(vdom))
+    a0, b0 = a(0.0)[0], b(0.0)[0]
+    a0d, b0d = a(0.0, 1)[0], b(0.0, 1)[0]
+    r0d = r(0.0, 1)[0]
+    (F,), (dF,) = mid.fields[i]
+    rhs = r0d * c1_i.copy()
+    rhs[1] -= a0d * sig_i - b0d * tau_i
+    ca1d, cb1d = 0.5 * rhs / a0, 0.5 * rhs / b0
+    T0 = c1_i @ F
+    mh, mder = mid.point[i], mid.tangent[i]
+    Ei = _Poly.hermite([(0.0, 0, mh), (0.0, 1, T0), (1.0, 0, Ch), (1.0, 1, DPhi @ dom["T"]),
+                        (1.0, 2, np.zeros(mh.shape[0]))])
+    left = (sig_i * mder, ca1d @ F + sig_i * c1_i @ dF, DPhi @ dom["A1"], DPhi @ (dom["A1"] - dom["A0"]))
+    right = (-tau_i * mder, cb1d @ F - tau_i * c1_i @ dF, DPhi @ dom["B1"], DPhi @ (dom["B1"] - dom["B0"]))
+    Li, Ri = _edge_cross_fields(i, a, b, r, Ei.deriv(), left, right)
+    return _InternalEdge(Ei, Li, Ri, ca1d, cb1d)
+
+
+def _edge_cross_fields(i: int, a: _Poly, b: _Poly, r: _Poly, T: _Poly, left: tuple[Array, Array, Array, Array],
+                       right: tuple[Array, Array, Array, Array]) -> tuple[_Poly, _Poly]:
+    """Cross fields ``L = b Z + l T``, ``R = -a Z + m T`` with ``a l + b m = r``, so that
+    ``a L + b R = r T`` holds identically (the kite relation of :func:`_kite_relation`).
+
+    ``l``, ``m`` are linear; ``Z`` is the cubic Hermite polynomial that makes ``L`` meet its end
+    data ``left = (L(0), L'(0), L(1), L'(1))``, each (w,). ``R`` then meets ``right`` (the same for
+    ``R``) when the corner conditions hold: checked, since a failure would break G1 silently.
+    ``T`` is ``E_i'``.
+
+    Raises
+    ------
+    ToleranceError
+        The end data of ``R`` are not met (an internal inconsistency).
+    """
+    L0, L0d, L1, L1d = left
+    R0, R0d, R1, R1d = right
+    # l, m linear with a l + b m = r (coefficients of the quadratic identity)
+    Amat = np.array([[a.coef[0, 0], 0, b.coef[0, 0], 0],
+                     [a.coef[1, 0], a.coef[0, 0], b.coef[1, 0], b.coef[0, 0]],
+                     [0, a.coef[1, 0], 0, b.coef[1, 0]]])
+    rc = np.zeros(3); rc[:r.coef.shape[0]] = r.coef[:3, 0]
+    lm = np.linalg.lstsq(Amat, rc, rcond=tolerances.FILL_RCOND)[0]
+    ell, emm = _scalar_poly(lm[:2]), _scalar_poly(lm[2:])
+    b0, b0d = b(0.0)[0], b(0.0, 1)[0]
+    b1, b1d, ell0, ell1, ell0d = b(1.0)[0], b(1.0, 1)[0], ell(0.0)[0], ell(1.0)[0], ell(0.0, 1)[0]
+    Z0 = (L0 - ell0 * T(0.0)) / b0
+    Z1 = (L1 - ell1 * T(1.0)) / b1
+    Z0d = (L0d - b0d * Z0 - ell0d * T(0.0) - ell0 * T(0.0, 1)) / b0
+    Z1d = (L1d - b1d * Z1 - ell(1.0, 1)[0] * T(1.0) - ell1 * T(1.0, 1)) / b1
+    Z = _Poly.hermite([(0.0, 0, Z0), (0.0, 1, Z0d), (1.0, 0, Z1), (1.0, 1, Z1d)])
+    Li, Ri = b * Z + ell * T, -(a * Z) + emm * T
+    # self-check: R must meet its end data too (it does when the corner conditions hold)
+    scale = max(np.abs(L0).max(), np.abs(L1).max(), 1e-300)
+    err = max(np.abs(Ri(0.0) - R0).max(), np.abs(Ri(1.0) - R1).max(), np.abs(Ri(0.0, 1) - R0d).max(),
+              np.abs(Ri(1.0, 1) - R1d).max()) / scale
+    if err > 1e-7:
+        raise ToleranceError(f"internal: the G1 data of internal edge {i} are inconsistent ({err:.2e})")
+    return Li, Ri
+
+
+# ---- step 5: one patch per hole corner
+def _corner_patch(i: int, S: list[_Side], sig: Array, corners: _CornerFit, c1: Array, edges: list[_InternalEdge],
+                  rational: bool, origin: Array) -> BSplineSurface:
+    """Patch ``i`` (hole corner ``V_i``): its boundary rows and ribbons fixed, the rest faired.
+
+    Its ``v = 0`` edge is ``[0, sig_i]`` of side ``i``, its ``u = 0`` edge ``[sig_{i-1}, 1]`` of
+    side ``i - 1`` (reversed), its ``u = 1`` edge internal edge ``i`` and its ``v = 1`` edge
+    internal edge ``i - 1``; ``c1`` (n, nf) are the ribbon coefficients at the midpoints, ``origin``
+    (3,) the working origin added back.
+    """
+    j = (i - 1) % len(S)
+    sa, sb = S[i], S[j]
+    pa = _coefficient_poly(corners.start[i], corners.start_d[i], c1[i], edges[i].coef_d_before)  # u: s = sig_i u
+    pb = _coefficient_poly(corners.end[i], corners.end_d[i], c1[j], edges[j].coef_d_after)  # v: s = 1 - tau_j v
+    degree, knots = _patch_space(sa, sb, sig[i], sig[j], bool(corners.twist[i] > tolerances.FILL_TWIST_TOL))
+    boundary = _boundary_ribbons(sa, sb, pa, pb, sig[i], 1.0 - sig[j], degree, knots)
+    internal = _internal_ribbons(edges[i], edges[j], degree, knots)
+    H = _assemble_poles(boundary, internal, degree, knots)
+    if rational:
+        if np.any(H[..., 3] <= 0):
+            raise InvalidGeometryError(f"sides: the rational fill of corner {i} got a non-positive weight "
+                                       f"({H[..., 3].min():.3g}); the neighbours' weights vary too much")
+        return BSplineSurface(degree, knots, H[..., :3] / H[..., 3:] + origin, H[..., 3])
+    return BSplineSurface(degree, knots, H + origin)
+
+
+def _coefficient_poly(v0: Array, d0: Array, v1: Array, d1: Array) -> _Poly:
+    """The cubic ribbon coefficients on a half side, ``t`` in [0, 1]: values and derivatives
+    (each (nf,)) at the corner (``t = 0``) and at the midpoint (``t = 1``)."""
+    return _Poly.hermite([(0.0, 0, v0), (0.0, 1, d0), (1.0, 0, v1), (1.0, 1, d1)])
+
+
+def _patch_space(sa: _Side, sb: _Side, sig_i: float, sig_j: float,
+                 twisted: bool) -> tuple[tuple[int, int], tuple[Array, Array]]:
+    """Bidegree and knots of the patch between half sides ``sa[0, sig_i]`` (u) and ``sb[sig_j, 1]``
+    (v, reversed): the sides' knots, the degree raised by 3 (cubic coefficients times the fields);
+    with ``twisted`` (an incompatible corner twist) a corner span :func:`_corner_knot` in both."""
+    Pu, Pv = max(sa.degree + 3, 4), max(sb.degree + 3, 4)
+    Ku = _half_space(sa, 0.0, sig_i, False, Pu)
+    Kv = _half_space(sb, sig_j, 1.0, True, Pv)
+    if twisted:  # confine the incompatible twist to a small corner span
+        Ku, Kv = _corner_knot(Ku, Pu), _corner_knot(Kv, Pv)
+    return (Pu, Pv), (Ku, Kv)
+
+
+def _boundary_ribbons(sa: _Side, sb: _Side, pa: _Poly, pb: _Poly, sig_i: float, tau_j: float,
+                      degree: tuple[int, int], knots: tuple[Array, Array]) -> tuple[Array, Array, Array, Array]:
+    """Poles of the two hole sides of a patch and of the ribbons (cross derivatives) along them.
+
+    Exact: each is the side (or the side's fields times the cubic coefficients ``pa``, ``pb``)
+    placed into the patch's knot space (:func:`_represent`, checked).
+
+    Returns
+    -------
+    row0, da : ndarray, shape (nu, w)
+        ``B_a(sig_i u)`` and ``F_v(u, 0) = sum_f pa_f(u) f_a(sig_i u)``, on ``(degree[0], knots[0])``.
+    col0, db : ndarray, shape (nv, w)
+        ``B_b(1 - tau_j v)`` and ``F_u(0, v) = sum_f pb_f(v) f_b(1 - tau_j v)``, on
+        ``(degree[1], knots[1])``.
+    """
+    (Pu, Pv), (Ku, Kv) = degree, knots
+    s_a = lambda u: sig_i * u  # noqa: E731
+    s_b = lambda v: 1.0 - tau_j * v  # noqa: E731
+    row0 = _represent(lambda u: sa.B.evaluate(s_a(u)), Pu, Ku)
+    da = _represent(lambda u: np.einsum("mf,mfw->mw", pa(u), sa.fields(s_a(u))[0]), Pu, Ku)
+    col0 = _represent(lambda v: sb.B.evaluate(s_b(v)), Pv, Kv)
+    db = _represent(lambda v: np.einsum("mf,mfw->mw", pb(v), sb.fields(s_b(v))[0]), Pv, Kv)
+    return row0, da, col0, db
+
+
+def _internal_ribbons(edge_u: _InternalEdge, edge_v: _InternalEdge, degree: tuple[int, int],
+                      knots: tuple[Array, Array]) -> tuple[Array, Array, Array, Array]:
+    """Poles of the two internal edges of a patch and of its cross derivatives along them.
+
+    Returns
+    -------
+    colE, colL : ndarray, shape (nv, w)
+        ``edge_u``'s curve and left field (the patch's ``u = 1`` edge), on ``(degree[1], knots[1])``.
+    rowE, rowR : ndarray, shape (nu, w)
+        ``edge_v``'s curve and right field (the ``v = 1`` edge), on ``(degree[0], knots[0])``.
+    """
+    (Pu, Pv), (Ku, Kv) = degree, knots
+    Ei, Li, Ej, Rj = edge_u.curve, edge_u.left, edge_v.curve, edge_v.right
+    colE = _represent(lambda v: Ei(v), Pv, Kv)
+    colL = _represent(lambda v: Li(v), Pv, Kv)
+    rowE = _represent(lambda u: Ej(u), Pu, Ku)
+    rowR = _represent(lambda u: Rj(u), Pu, Ku)
+    return colE, colL, rowE, rowR
+
+
+def _assemble_poles(boundary: tuple[Array, Array, Array, Array], internal: tuple[Array, Array, Array, Array],
+                    degree: tuple[int, int], knots: tuple[Array, Array]) -> Array:
+    """The patch's poles (nu, nv, w): the two outer rows on every edge from the boundary and internal
+    ribbons (:func:`_boundary_ribbons`, :func:`_internal_ribbons`), the interior faired
+    (:func:`_fair_interior`). Poles set twice (the corner blocks) are averaged: they agree but for
+    the twist."""
+    row0, da, col0, db = boundary
+    colE, colL, rowE, rowR = internal
+    (Pu, Pv), (Ku, Kv) = degree, knots
+    nu, nv = len(Ku) - Pu - 1, len(Kv) - Pv - 1
+    w = row0.shape[1]
+    hu0, hv0 = Ku[Pu + 1] / Pu, Kv[Pv + 1] / Pv
+    hu1, hv1 = (1.0 - Ku[nu - 1]) / Pu, (1.0 - Kv[nv - 1]) / Pv
+    cnt = np.zeros((nu, nv))
+    acc = np.zeros((nu, nv, w))
+    for idx, vals in (((slice(None), 0), row0), ((slice(None), 1), row0 + hv0 * da),
+                      ((0, slice(None)), col0), ((1, slice(None)), col0 + hu0 * db),
+                      ((nu - 1, slice(None)), colE), ((nu - 2, slice(None)), colE - hu1 * colL),
+                      ((slice(None), nv - 1), rowE), ((slice(None), nv - 2), rowE - hv1 * rowR)):
+        acc[idx] += vals
+        cnt[idx] += 1
+    H = np.full((nu, nv, w), np.nan)
+    fixed = cnt > 0
+    H[fixed] = acc[fixed] / cnt[fixed][:, None]
+    return _fair_interior(H, ~fixed, degree, knots)
 
 
 def _corner_knot(K: Array, degree: int) -> Array:
-    """Insert a knot of multiplicity ``degree - 1`` at :data:`CORNER_SPAN` (or half the first span)."""
+    """Insert a knot of multiplicity ``degree - 1`` at ``tolerances.FILL_CORNER_SPAN`` (or half the
+    first span)."""
     first = float(K[degree + 1])
-    kappa = min(CORNER_SPAN, 0.5 * first)
+    kappa = min(tolerances.FILL_CORNER_SPAN, 0.5 * first)
     return np.r_[K[:degree + 1], [kappa] * (degree - 1), K[degree + 1:]]
 
 

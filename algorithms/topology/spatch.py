@@ -59,8 +59,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
+from .. import tolerances
+from ..kernel._common import SCALAR, ControlPointValue
 from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError, ParameterError
+from ._common import edge_normals, index_tuples
 
 __all__ = [
     "SPatch",
@@ -69,23 +72,12 @@ __all__ = [
     "wachspress",
     "wachspress_gradient",
     "wachspress_derivatives",
-    "DOMAIN_SLACK",
-    "MAX_SIDES",
 ]
 
 Array = NDArray[np.float64]
 
-FORMAT_VERSION = 1
-
-#: How far (relative to the circumradius 1) a domain point may lie outside the regular n-gon and
-#: still be accepted. Covers round-off in callers' arithmetic (e.g. points on a side computed as
-#: ``(1 - t) v_k + t v_{k+1}``); the Wachspress coordinates are smooth across the sides, so such
-#: points evaluate to the analytic continuation, off by the same ~1e-10 at most.
-DOMAIN_SLACK: float = 1e-10
-
-#: Largest number of sides accepted. Beyond it the Wachspress denominator (degree n - 3) and the
-#: number of control points grow without practical use; the course and Loop–DeRose stop at 8.
-MAX_SIDES: int = 64
+# The domain slack and the largest number of sides are tolerances.SPATCH_DOMAIN_SLACK and
+# tolerances.SPATCH_MAX_SIDES, read at call time.
 
 #: Points processed per block in the vectorised kernels (bounds the ``points x indices x jet``
 #: work arrays to a few tens of MB).
@@ -97,19 +89,10 @@ _BLOCK_POINTS = 2048
 
 
 # ---------------------------------------------------------------------------- index sets
-@functools.lru_cache(maxsize=256)
-def _indices_cached(sides: int, depth: int) -> tuple[tuple[int, ...], ...]:
-    if sides == 1:
-        return ((depth,),)
-    out: list[tuple[int, ...]] = []
-    for first in range(depth, -1, -1):
-        out.extend((first,) + rest for rest in _indices_cached(sides - 1, depth - first))
-    return tuple(out)
-
-
 def _check_sides(sides: object, name: str = "sides") -> int:
-    if isinstance(sides, bool) or not isinstance(sides, numbers.Integral) or not 3 <= int(sides) <= MAX_SIDES:
-        raise InvalidGeometryError(f"{name}: expected an integer from 3 to {MAX_SIDES}, got {sides!r}")
+    limit = tolerances.SPATCH_MAX_SIDES
+    if isinstance(sides, bool) or not isinstance(sides, numbers.Integral) or not 3 <= int(sides) <= limit:
+        raise InvalidGeometryError(f"{name}: expected an integer from 3 to {limit}, got {sides!r}")
     return int(sides)
 
 
@@ -137,7 +120,7 @@ def spatch_indices(sides: int, depth: int) -> NDArray[np.intp]:
     """
     n = _check_sides(sides)
     d = _check_depth(depth)
-    return np.array(_indices_cached(n, d), dtype=np.intp).reshape(-1, n)
+    return np.array(index_tuples(n, d), dtype=np.intp).reshape(-1, n)
 
 
 def domain_vertices(sides: int) -> Array:
@@ -149,12 +132,6 @@ def domain_vertices(sides: int) -> Array:
     """
     n = _check_sides(sides)
     a = 2.0 * np.pi * np.arange(n) / n
-    return np.column_stack((np.cos(a), np.sin(a)))
-
-
-def _edge_normals(n: int) -> Array:
-    """Outward unit normals of the sides, shape (n, 2); side k joins vertex k and vertex k+1."""
-    a = 2.0 * np.pi * (np.arange(n) + 0.5) / n
     return np.column_stack((np.cos(a), np.sin(a)))
 
 
@@ -233,9 +210,9 @@ def _domain_points(points: ArrayLike, n: int, name: str = "points") -> tuple[Arr
         raise ParameterError(f"{name}: domain points must be finite, got {x[~np.isfinite(x)].ravel()[0]!r}")
     flat = x.reshape(-1, 2)
     if flat.shape[0]:
-        excess = flat @ _edge_normals(n).T - np.cos(np.pi / n)
+        excess = flat @ edge_normals(n).T - np.cos(np.pi / n)
         worst = np.unravel_index(int(np.argmax(excess)), excess.shape)
-        if excess[worst] > DOMAIN_SLACK:
+        if excess[worst] > tolerances.SPATCH_DOMAIN_SLACK:
             raise ParameterError(
                 f"{name}: point {flat[worst[0]].tolist()} lies outside the regular {n}-gon domain "
                 f"(beyond side {int(worst[1])} by {float(excess[worst]):.3g})"
@@ -247,7 +224,7 @@ def _wachspress_jets(x: Array, n: int, r: int) -> Array:
     """Jets of the Wachspress coordinates at points x (N, 2): shape (N, n, K)."""
     K = (r + 1) * (r + 2) // 2
     N = x.shape[0]
-    nrm = _edge_normals(n)
+    nrm = edge_normals(n)
     h = np.cos(np.pi / n)
     L = np.zeros((N, n, K))
     L[..., 0] = h - x @ nrm.T
@@ -279,7 +256,8 @@ def wachspress(points: ArrayLike, sides: int) -> Array:
     Raises
     ------
     ParameterError
-        For non-finite points or points outside the polygon (beyond :data:`DOMAIN_SLACK`).
+        For non-finite points or points outside the polygon (beyond
+        ``tolerances.SPATCH_DOMAIN_SLACK``).
     """
     n = _check_sides(sides)
     x, shape = _domain_points(points, n)
@@ -330,7 +308,7 @@ def _unit_jet(r: int) -> Array:
 @functools.lru_cache(maxsize=128)
 def _multinomial_column(n: int, depth: int) -> Array:
     """``d! / I!`` for the indices of :func:`spatch_indices` order, shape (m, 1)."""
-    idx = np.array(_indices_cached(n, depth), dtype=np.intp).reshape(-1, n)
+    idx = np.array(index_tuples(n, depth), dtype=np.intp).reshape(-1, n)
     return _multinomials(idx, depth)[:, None]
 
 
@@ -389,9 +367,9 @@ def _bernstein_values(lam: Array, n: int, depth: int) -> Array:
 def _taylor_table(n: int, d: int, j: int) -> tuple[NDArray[np.intp], NDArray[np.intp], Array]:
     """For |K| = j: rows[J, K] of J + K among depth d; each K as the list of its j sides with
     repetition (``(2, 0, 1) -> [0, 0, 2]``), shape (m_j, j); and ``d!/((d-j)! K!)``."""
-    upper = {ix: i for i, ix in enumerate(_indices_cached(n, d))}
-    Js = _indices_cached(n, d - j)
-    Ks = np.array(_indices_cached(n, j), dtype=np.intp).reshape(-1, n) if j else np.zeros((1, n), dtype=np.intp)
+    upper = {ix: i for i, ix in enumerate(index_tuples(n, d))}
+    Js = index_tuples(n, d - j)
+    Ks = np.array(index_tuples(n, j), dtype=np.intp).reshape(-1, n) if j else np.zeros((1, n), dtype=np.intp)
     rows = np.array([[upper[tuple(a + b for a, b in zip(J, K))] for K in Ks] for J in Js], dtype=np.intp)
     factors = np.array([np.repeat(np.arange(n), K) for K in Ks], dtype=np.intp).reshape(len(Ks), j)
     fac = np.array([factorial(v) for v in range(j + 1)], dtype=float)
@@ -400,7 +378,7 @@ def _taylor_table(n: int, d: int, j: int) -> tuple[NDArray[np.intp], NDArray[np.
 
 
 @dataclass(frozen=True, eq=False)
-class SPatch:
+class SPatch(ControlPointValue):
     """An ``n``-sided S-patch of depth ``d`` (Loop & DeRose 1989; course §8-2).
 
     Parameters
@@ -435,6 +413,9 @@ class SPatch:
     >>> s.evaluate(domain_vertices(3)[1])
     array([1., 0., 0.])
     """
+
+    _DICT_TYPE = "SPatch"
+    _HEADER = (("sides", SCALAR), ("depth", SCALAR))
 
     sides: int
     depth: int
@@ -507,7 +488,7 @@ class SPatch:
     def _trusted(cls, sides: int, depth: int, control_points: Array, weights: Array | None = None) -> SPatch:
         """Fast constructor for internal results valid by construction (array order, no checks)."""
         obj = object.__new__(cls)
-        obj._set(int(sides), int(depth), np.array(_indices_cached(sides, depth), dtype=np.intp),
+        obj._set(int(sides), int(depth), np.array(index_tuples(sides, depth), dtype=np.intp),
                  np.asarray(control_points, float), None if weights is None else np.asarray(weights, float))
         return obj
 
@@ -579,7 +560,7 @@ class SPatch:
         HK = [H[rows] * _multinomial_column(n, d - j)[:, :, None] for j, (rows, _, _) in enumerate(tables, 1)]
         H0 = H * _multinomial_column(n, d)
         # work per point: every Bernstein level, the Q_j and the δ^K jets
-        per_point = 2 * sum(len(_indices_cached(n, l)) for l in range(d + 1)) + sum(
+        per_point = 2 * sum(len(index_tuples(n, l)) for l in range(d + 1)) + sum(
             h.shape[1] * (c + 2 * K_len) for h in HK) + n * K_len * (n + 2)
         block = max(256, min(_BLOCK_POINTS, _BLOCK_ELEMENTS // per_point))
         for s in range(0, x.shape[0], block):
@@ -716,7 +697,7 @@ class SPatch:
     def inward_normal(self, k: int) -> Array:
         """Inward unit normal of side ``k`` of the domain polygon, shape ``(2,)``."""
         k = self._side(k)
-        return -_edge_normals(self.sides)[k]
+        return -edge_normals(self.sides)[k]
 
     def cross_boundary_derivative(self, k: int, t: ArrayLike) -> Array:
         """Derivative of the patch along the inward unit normal of domain side ``k``.
@@ -748,8 +729,8 @@ class SPatch:
         t = V.check_times(times)
         n, d, H = self.sides, self.depth, self._hpoles
         for _ in range(t):
-            old = {tuple(row): i for i, row in enumerate(np.array(_indices_cached(n, d)))}
-            new_idx = np.array(_indices_cached(n, d + 1), dtype=np.intp)
+            old = {tuple(row): i for i, row in enumerate(np.array(index_tuples(n, d)))}
+            new_idx = np.array(index_tuples(n, d + 1), dtype=np.intp)
             Hn = np.zeros((new_idx.shape[0], H.shape[1]))
             for k in range(n):
                 sel = new_idx[:, k] > 0
@@ -762,45 +743,5 @@ class SPatch:
             return SPatch._trusted(n, d, H[:, :-1] / H[:, -1:], H[:, -1].copy())
         return SPatch._trusted(n, d, H)
 
-    def transform(self, matrix: ArrayLike, translation: ArrayLike | None = None) -> SPatch:
-        """Apply ``x -> M x + b`` to the control points (affine invariance)."""
-        M, b = V.affine_map(matrix, translation, self.dim)
-        return SPatch._trusted(self.sides, self.depth, self.control_points @ M.T + b,
-                               None if self.weights is None else self.weights.copy())
-
-    # ------------------------------------------------------------------ (de)serialisation
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-safe dict (control points in :func:`spatch_indices` order)."""
-        return {
-            "type": "SPatch",
-            "version": FORMAT_VERSION,
-            "sides": self.sides,
-            "depth": self.depth,
-            "control_points": self.control_points.tolist(),
-            "weights": None if self.weights is None else self.weights.tolist(),
-        }
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> SPatch:
-        """Inverse of :meth:`to_dict` (validated)."""
-        if not isinstance(data, dict) or data.get("type") != "SPatch":
-            raise InvalidGeometryError(f"from_dict: expected a dict with type 'SPatch', got {type(data).__name__}")
-        if data.get("version", 1) > FORMAT_VERSION:
-            raise InvalidGeometryError(f"from_dict: format version {data['version']} is newer than {FORMAT_VERSION}")
-        try:
-            return cls(data["sides"], data["depth"], data["control_points"], data.get("weights"))
-        except KeyError as err:
-            raise InvalidGeometryError(f"from_dict: missing key {err}") from err
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, SPatch):
-            return NotImplemented
-        return (
-            self.sides == other.sides
-            and self.depth == other.depth
-            and np.array_equal(self.control_points, other.control_points)
-            and (self.weights is None) == (other.weights is None)
-            and (self.weights is None or np.array_equal(self.weights, other.weights))
-        )
-
-    __hash__ = None  # type: ignore[assignment]
+    # transform, to_dict, from_dict and == : ControlPointValue (kernel/_common.py), from the
+    # header ``sides``, ``depth``; control points in :func:`spatch_indices` order.

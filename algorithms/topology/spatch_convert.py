@@ -44,7 +44,8 @@ corners), so the sums are free of cancellation and the weights are positive.
 For ``n = 4`` the bidegree can be lowered exactly: the pieces are squares aligned with the
 parallelogram, on which the Wachspress coordinates are the bilinear products, so the patch is of
 bidegree ``(d, d)`` there (``W`` is constant). Those pieces are degree-reduced to ``(d, d)``, and
-the reduction is verified (re-elevation reproduces the coefficients within :data:`REDUCTION_TOL`).
+the reduction is verified (re-elevation reproduces the coefficients within
+``tolerances.SPATCH_REDUCTION_TOL``).
 For ``n >= 5`` nothing is reduced: the leading Bernstein components of the exact pieces are
 genuinely non-zero, though they can be tiny (~1e-13 of the coefficients for ``D = 25``), so a
 tolerance-driven reduction would silently turn the exact conversion into an approximation.
@@ -52,7 +53,8 @@ tolerance-driven reduction would silently turn the exact conversion into an appr
 Beyond OpenCascade's limit
 --------------------------
 When ``D > 25`` (:data:`occsurf.algorithms.tolerances.MAX_DEGREE`) a piece cannot be handed to OCC exactly.
-It is then approximated by a non-rational bi-quintic B-spline: a tensor-product least-squares fit
+It is then approximated by a non-rational B-spline of bidegree ``tolerances.SPATCH_APPROX_DEGREE``
+(bi-quintic by default): a tensor-product least-squares fit
 (:func:`occsurf.algorithms.fitting.interpolation.fit_surface`, ends interpolated) to a Chebyshev–Lobatto grid of exact
 S-patch values, with uniform knots, refined until the maximum deviation, measured on a denser grid
 offset from the fitting grid, is below ``tol``. The measured deviation is reported. Because the
@@ -72,7 +74,8 @@ from numpy.typing import NDArray
 from .. import tolerances
 from ..errors import InvalidGeometryError, ToleranceError
 from ..fitting.interpolation import fit_surface
-from .spatch import SPatch, _edge_normals, _indices_cached, domain_vertices
+from ._common import edge_normals, index_tuples
+from .spatch import SPatch, domain_vertices
 from ..kernel.surface import BSplineSurface
 
 __all__ = [
@@ -82,36 +85,13 @@ __all__ = [
     "piece_corners",
     "piece_domain_points",
     "exact_bidegree",
-    "APPROX_TOL",
-    "APPROX_DEGREE",
-    "APPROX_MAX_POLES",
-    "REDUCTION_TOL",
-    "CHECK_SAMPLES",
 ]
 
 Array = NDArray[np.float64]
 
-#: Default maximum deviation of an approximated piece, relative to the diagonal of the patch's
-#: control-point bounding box (absolute in model units once multiplied by it). ``tol=`` overrides
-#: it with an absolute value.
-APPROX_TOL: float = 1e-7
-
-#: Degree (both directions) of the B-spline pieces used when the exact bidegree exceeds 25.
-APPROX_DEGREE: int = 5
-
-#: Largest number of poles per direction the approximation may use before it gives up with a
-#: :class:`ToleranceError`.
-APPROX_MAX_POLES: int = 80
-
-#: Relative tolerance (to the largest homogeneous coefficient) within which the degree reduction
-#: of the 4-sided pieces (exact in theory) must reproduce the coefficients on re-elevation; the
-#: round-off measured is ~1e-15. If it does not, the pieces are kept at bidegree ``2d``.
-REDUCTION_TOL: float = 1e-13
-
-#: Parameter samples per direction and piece at which the deviation of the result from
-#: ``SPatch.evaluate`` is measured (exact pieces: round-off; approximations: the fit error, on a
-#: grid denser than and offset from the fitting grid).
-CHECK_SAMPLES: int = 41
+# The approximation's tolerance, degree and pole limit, the reduction check and the number of
+# check samples are tolerances.SPATCH_APPROX_TOL, SPATCH_APPROX_DEGREE, SPATCH_APPROX_MAX_POLES,
+# SPATCH_REDUCTION_TOL and SPATCH_CHECK_SAMPLES, read at call time.
 
 
 @dataclass(frozen=True)
@@ -128,7 +108,7 @@ class SPatchConversion:
         Bidegree of the pieces.
     max_deviation : float
         Largest distance between the pieces and ``SPatch.evaluate``, measured on
-        ``CHECK_SAMPLES²`` parameters per piece (denser and offset for approximations).
+        ``SPATCH_CHECK_SAMPLES²`` parameters per piece (denser and offset for approximations).
     method : str
         ``'exact'``, ``'exact-reduced'`` (exact, then exactly degree-reduced) or ``'lsq-fit'``.
     """
@@ -184,8 +164,8 @@ def _conv2(a: Array, b: Array) -> Array:
 @functools.lru_cache(maxsize=64)
 def _children(sides: int, depth: int, level: int) -> tuple[NDArray[np.intp], ...]:
     """For each multi-index J with |J| = level - 1, the rows of J + e_k among |I| = level (per k)."""
-    upper = {ix: r for r, ix in enumerate(_indices_cached(sides, level))}
-    lower = _indices_cached(sides, level - 1)
+    upper = {ix: r for r, ix in enumerate(index_tuples(sides, level))}
+    lower = index_tuples(sides, level - 1)
     out = []
     for k in range(sides):
         rows = []
@@ -200,7 +180,7 @@ def _children(sides: int, depth: int, level: int) -> tuple[NDArray[np.intp], ...
 def _scaled_w(sides: int, k: int) -> list[Array]:
     """Scaled Bernstein coefficients of Wachspress' w_j on piece k, for every j, shape (n-1, n-1)."""
     q = piece_corners(sides)[k]  # (2, 2, 2)
-    nrm = _edge_normals(sides)
+    nrm = edge_normals(sides)
     h = np.cos(np.pi / sides)
     Lc = h - np.einsum("abx,jx->jab", q, nrm)  # (n, 2, 2): L_j at the corners = (1,1)-Bernstein coefs
     Lc = np.maximum(Lc, 0.0)  # zero on the sides through a corner; clears -1e-17 round-off
@@ -293,7 +273,7 @@ def _uniform_knots(n_poles: int, p: int) -> Array:
 def _fit_piece(patch: SPatch, k: int, tol: float, p: int) -> tuple[BSplineSurface, float]:
     """Least-squares bi-``p`` B-spline of piece ``k``, refined until within ``tol`` (measured)."""
     n_poles = p + 1
-    check = _check_params(CHECK_SAMPLES * 2)
+    check = _check_params(tolerances.SPATCH_CHECK_SAMPLES * 2)
     sc, tc = np.meshgrid(check, check, indexing="ij")
     ref = patch.evaluate(piece_domain_points(patch.sides, k, sc, tc))
     while True:
@@ -308,12 +288,13 @@ def _fit_piece(patch: SPatch, k: int, tol: float, p: int) -> tuple[BSplineSurfac
         dev = float(np.max(np.linalg.norm(surf.evaluate(sc, tc) - ref, axis=-1)))
         if dev <= tol:
             return surf, dev
-        if n_poles >= APPROX_MAX_POLES:
+        max_poles = tolerances.SPATCH_APPROX_MAX_POLES
+        if n_poles >= max_poles:
             raise ToleranceError(
                 f"spatch_to_surfaces: piece {k} of the S-patch could not be approximated within tol={tol:.3g} "
-                f"with {APPROX_MAX_POLES}x{APPROX_MAX_POLES} poles of degree {p} (deviation {dev:.3g})"
+                f"with {max_poles}x{max_poles} poles of degree {p} (deviation {dev:.3g})"
             )
-        n_poles = min(APPROX_MAX_POLES, 2 * n_poles - p)
+        n_poles = min(max_poles, 2 * n_poles - p)
 
 
 def _check_params(count: int) -> Array:
@@ -331,8 +312,9 @@ def convert_spatch(patch: SPatch, *, tol: float | None = None, reduce: bool = Tr
     patch : SPatch
         A 3-D (or any dimension) S-patch.
     tol : float, optional
-        Absolute maximum deviation allowed for approximated pieces; default :data:`APPROX_TOL`
-        times the diagonal of the control points' bounding box. Unused on the exact path.
+        Absolute maximum deviation allowed for approximated pieces; default
+        ``tolerances.SPATCH_APPROX_TOL`` times the diagonal of the control points' bounding box.
+        Unused on the exact path.
     reduce : bool, default True
         For ``sides == 4``, lower the exact bidegree ``2d`` to ``d`` (exact; module notes).
 
@@ -345,7 +327,8 @@ def convert_spatch(patch: SPatch, *, tol: float | None = None, reduce: bool = Tr
     InvalidGeometryError
         ``patch`` is not an SPatch, or ``tol`` is not a positive number.
     ToleranceError
-        An approximation did not reach ``tol`` with :data:`APPROX_MAX_POLES` poles per direction.
+        An approximation did not reach ``tol`` with ``tolerances.SPATCH_APPROX_MAX_POLES`` poles per
+        direction.
 
     Notes
     -----
@@ -357,7 +340,7 @@ def convert_spatch(patch: SPatch, *, tol: float | None = None, reduce: bool = Tr
     P = patch.control_points
     size = float(np.linalg.norm(np.ptp(P, axis=0))) or 1.0
     if tol is None:
-        tol_abs = APPROX_TOL * size
+        tol_abs = tolerances.SPATCH_APPROX_TOL * size
     else:
         try:
             tol_abs = float(tol)
@@ -373,18 +356,18 @@ def convert_spatch(patch: SPatch, *, tol: float | None = None, reduce: bool = Tr
         for k in range(n):
             C = _exact_piece(patch, k)
             if reduce and n == 4:
-                R = _reduce(C, REDUCTION_TOL)
+                R = _reduce(C, tolerances.SPATCH_REDUCTION_TOL)
                 if R.shape != C.shape:
                     method = "exact-reduced"
                 C = R
             surfaces.append(_bezier_surface(C, patch.is_rational))
         exact = True
-        params = np.linspace(0.0, 1.0, CHECK_SAMPLES)
+        params = np.linspace(0.0, 1.0, tolerances.SPATCH_CHECK_SAMPLES)
     else:
         method, exact = "lsq-fit", False
         for k in range(n):
-            surfaces.append(_fit_piece(patch, k, tol_abs, APPROX_DEGREE)[0])
-        params = _check_params(CHECK_SAMPLES * 2)
+            surfaces.append(_fit_piece(patch, k, tol_abs, tolerances.SPATCH_APPROX_DEGREE)[0])
+        params = _check_params(tolerances.SPATCH_CHECK_SAMPLES * 2)
     S, T = np.meshgrid(params, params, indexing="ij")
     dev = 0.0
     for k, surf in enumerate(surfaces):

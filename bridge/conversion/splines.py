@@ -47,7 +47,7 @@ Faces and edges
 surface is trimmed to the face's UV bounds (``BRepTools.UVBounds_s``) — an edge's curve to the edge's
 parameter range — before conversion. **Orientation is not applied**: a ``REVERSED`` face keeps the
 normal of its surface (``S_u x S_v``), which then points *into* the solid; a ``REVERSED`` edge runs
-against its curve. Ask :func:`is_reversed` and apply it yourself (``surface.reverse("u")`` flips
+against its curve. Ask :func:`is_reversed` and apply it yourself (``surface.reverse(direction="u")`` flips
 the normal, ``curve.reverse()`` the direction) when you need the topological sense.
 
 Dimension
@@ -105,6 +105,8 @@ __all__ = [
     "to_edge",
     "to_cq_face",
     "to_cq_edge",
+    "make_face",
+    "make_edge",
 ]
 
 #: Tolerance given to ``BRepBuilderAPI_MakeFace`` / stored on the edges of faces we build: OCC's
@@ -514,16 +516,59 @@ def _surface_from_bspline(occ_surface: Geom_BSplineSurface) -> BSplineSurface:
 
 
 # ================================================================================= topology
-def _make_face(surface: BSplineSurface | Geom_Surface, tol: float) -> TopoDS_Face:
+def make_face(surface: BSplineSurface | Geom_Surface, tol: float | None = None) -> TopoDS_Face:
+    """An OCC ``TopoDS_Face`` bounded by the whole parameter domain of ``surface``.
+
+    The face :func:`to_face` and :func:`to_cq_face` wrap; use it directly to hand faces to OCC
+    algorithms (sewing, filling, STEP export).
+
+    Parameters
+    ----------
+    surface : BSplineSurface or Geom_Surface
+        Ours is converted with :func:`to_occ` (bit-exact); an OCC surface is used as it is.
+    tol : float, optional
+        Edge tolerance for ``BRepBuilderAPI_MakeFace``, model units; default
+        :data:`FACE_TOLERANCE` (read at call time).
+
+    Returns
+    -------
+    TopoDS_Face
+
+    Raises
+    ------
+    InvalidGeometryError
+        ``surface`` is neither, or see :func:`to_occ`.
+    KernelError
+        ``BRepBuilderAPI_MakeFace`` failed.
+    """
     occ_surface = surface if isinstance(surface, Geom_Surface) else _as_occ(surface, BSplineSurface, "surface")
     with _occ.kernel_errors("building a face (BRepBuilderAPI_MakeFace)"):
-        mf = BRepBuilderAPI_MakeFace(occ_surface, tol)
+        mf = BRepBuilderAPI_MakeFace(occ_surface, FACE_TOLERANCE if tol is None else tol)
         if not mf.IsDone():
             raise KernelError(f"BRepBuilderAPI_MakeFace failed with status {mf.Error()}")
         return mf.Face()
 
 
-def _make_edge(curve: BSplineCurve | Geom_Curve) -> TopoDS_Edge:
+def make_edge(curve: BSplineCurve | Geom_Curve) -> TopoDS_Edge:
+    """An OCC ``TopoDS_Edge`` over the whole domain of ``curve`` (what :func:`to_edge` and
+    :func:`to_cq_edge` wrap).
+
+    Parameters
+    ----------
+    curve : BSplineCurve or Geom_Curve
+        Ours is converted with :func:`to_occ` (bit-exact); an OCC curve is used as it is.
+
+    Returns
+    -------
+    TopoDS_Edge
+
+    Raises
+    ------
+    InvalidGeometryError
+        ``curve`` is neither, or see :func:`to_occ`.
+    KernelError
+        ``BRepBuilderAPI_MakeEdge`` failed.
+    """
     occ_curve = curve if isinstance(curve, Geom_Curve) else _as_occ(curve, BSplineCurve, "curve")
     with _occ.kernel_errors("building an edge (BRepBuilderAPI_MakeEdge)"):
         me = BRepBuilderAPI_MakeEdge(occ_curve)
@@ -556,25 +601,25 @@ def to_face(surface: BSplineSurface | Geom_Surface, *, tol: float = FACE_TOLERAN
     """
     import build123d as bd
 
-    return bd.Face(_make_face(surface, tol))
+    return bd.Face(make_face(surface, tol))
 
 
 def to_edge(curve: BSplineCurve | Geom_Curve):
     """A build123d ``Edge`` over the whole domain of ``curve`` (see :func:`to_face` for errors)."""
     import build123d as bd
 
-    return bd.Edge(_make_edge(curve))
+    return bd.Edge(make_edge(curve))
 
 
 def to_cq_face(surface: BSplineSurface | Geom_Surface, *, tol: float = FACE_TOLERANCE):
     """A cadquery ``Face`` bounded by the whole parameter domain of ``surface`` (as :func:`to_face`)."""
     import cadquery as cq
 
-    return cq.Face(_make_face(surface, tol))
+    return cq.Face(make_face(surface, tol))
 
 
 def to_cq_edge(curve: BSplineCurve | Geom_Curve):
     """A cadquery ``Edge`` over the whole domain of ``curve`` (as :func:`to_edge`)."""
     import cadquery as cq
 
-    return cq.Edge(_make_edge(curve))
+    return cq.Edge(make_edge(curve))

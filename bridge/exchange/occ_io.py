@@ -17,7 +17,9 @@ import numpy as np
 from occsurf.algorithms import BSplineCurve, BSplineSurface
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError, KernelError
 
-__all__ = ["FACE_TOLERANCE", "silence_occ", "statics", "one_line", "normalise", "step_bytes", "iges_bytes"]
+from ..messages import one_line
+
+__all__ = ["FACE_TOLERANCE", "silence_occ", "statics", "normalise", "step_bytes", "iges_bytes"]
 
 #: Tolerance (model units) of the faces and edges built from our surfaces and curves for export:
 #: OCC's ``Precision::Confusion()``.
@@ -52,17 +54,6 @@ def statics(values: dict[str, str | int | float]) -> Iterator[None]:
     finally:
         for name, old in reversed(saved):
             put[type(old)](name, old)
-
-
-def one_line(err: BaseException | str) -> str:
-    """``'Type: message'`` of an exception (or a str) on one line."""
-    if isinstance(err, BaseException):
-        text = str(err).strip()
-        text = f"{type(err).__name__}: {text}" if text else type(err).__name__
-    else:
-        text = err
-    return " ".join(text.split())
-
 
 
 # ------------------------------------------------------------------------------------ export

@@ -79,6 +79,7 @@ from typing import Any
 from occsurf.algorithms import BSplineCurve, BSplineSurface
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 
+from ..messages import one_line
 from . import files as _files
 from . import occ_io as _xocc
 from .occ_io import FACE_TOLERANCE  # re-exported: part of the public constants
@@ -252,7 +253,7 @@ def read_step(path: str | os.PathLike[str]) -> ImportedModel:
         try:
             status = reader.ReadStream(str(p), io.BytesIO(data))
         except Exception as err:  # noqa: BLE001 - any OCC failure is a bad file
-            raise ExchangeError(f"{p}: STEP parser failed: {_xocc.one_line(err)}") from err
+            raise ExchangeError(f"{p}: STEP parser failed: {one_line(err)}") from err
         # Checked BEFORE any transfer: TransferRoots after a failed read crashes the process.
         if status != IFSelect_ReturnStatus.IFSelect_RetDone:
             raise ExchangeError(f"{p}: not a readable STEP file (OCC read status {status.name})")
@@ -293,7 +294,7 @@ def read_iges(path: str | os.PathLike[str]) -> ImportedModel:
         try:
             status = reader.ReadFile(str(p))
         except Exception as err:  # noqa: BLE001
-            raise ExchangeError(f"{p}: IGES parser failed: {_xocc.one_line(err)}") from err
+            raise ExchangeError(f"{p}: IGES parser failed: {one_line(err)}") from err
         if status != IFSelect_ReturnStatus.IFSelect_RetDone:
             raise ExchangeError(f"{p}: not a readable IGES file (OCC read status {status.name})")
         return _build_model(p, "iges", reader)
@@ -423,7 +424,7 @@ def _build_model(p: Path, fmt: str, reader: Any) -> ImportedModel:
         try:
             reader.TransferOneRoot(i)
         except Exception as err:  # noqa: BLE001 - keep the other roots
-            warnings.append(f"root {i} not transferred: {_xocc.one_line(err)}")
+            warnings.append(f"root {i} not transferred: {one_line(err)}")
             continue
         if reader.NbShapes() == before:
             warnings.append(f"root {i} ({root.DynamicType().Name()}) gave no shape")
@@ -478,7 +479,7 @@ def _import_face(index: int, shape: Any, name: str | None) -> ImportedFace:
         if not isinstance(surface, BSplineSurface):
             surface, error = None, f"from_occ returned {type(surface).__name__}, not a BSplineSurface"
     except Exception as err:  # noqa: BLE001 - one bad face must not fail the file
-        error = _xocc.one_line(err)
+        error = one_line(err)
     return ImportedFace(
         index=index,
         name=name,
@@ -526,7 +527,7 @@ def _import_edge(index: int, shape: Any, name: str | None) -> ImportedEdge:
         if not isinstance(curve, BSplineCurve):
             curve, error = None, f"from_occ returned {type(curve).__name__}, not a BSplineCurve"
     except Exception as err:  # noqa: BLE001
-        error = _xocc.one_line(err)
+        error = one_line(err)
     return ImportedEdge(
         index=index,
         name=name,

@@ -55,10 +55,12 @@ from occsurf.algorithms.topology.nsided import HoleFill, HoleSide, closest_param
 from occsurf.algorithms.kernel.surface import BSplineSurface
 
 from .. import _occ
-from ..conversion.splines import _make_face, from_occ
+from ..conversion.splines import from_occ, make_face
+from ..messages import one_line
 
 __all__ = ["HoleReport", "FillResult", "fill_model", "find_loops", "hole_sides", "assess_joint",
-           "occ_fill", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES", "ISO_TOLERANCE"]
+           "occ_fill", "sew_faces", "edge_face_map", "neighbour_face", "SEW_TOLERANCE", "ASSESS_SAMPLES",
+           "ASSESS_END_SAMPLES", "ISO_TOLERANCE"]
 
 #: Tolerance of ``BRepBuilderAPI_Sewing`` (model units), for finding free edges and for the result.
 SEW_TOLERANCE: float = 1e-5
@@ -116,8 +118,28 @@ def _faces(shape: TopoDS_Shape) -> list[Any]:
     return out
 
 
-def _sew(shapes: list[Any], tol: float = SEW_TOLERANCE) -> TopoDS_Shape:
-    sew = BRepBuilderAPI_Sewing(tol)
+def sew_faces(shapes: list[Any], tol: float | None = None) -> TopoDS_Shape:
+    """Sew faces (and shells) into shells with ``BRepBuilderAPI_Sewing``.
+
+    Parameters
+    ----------
+    shapes : list of TopoDS_Shape
+        Faces, shells or compounds of them; coincident edges within ``tol`` are merged.
+    tol : float, optional
+        Sewing tolerance, model units; default :data:`SEW_TOLERANCE` (read at call time).
+
+    Returns
+    -------
+    TopoDS_Shape
+        ``SewedShape()``: a shell, a face (a single face has nothing to sew to) or a compound of
+        shells.
+
+    Raises
+    ------
+    KernelError
+        OCC failed inside ``Perform``.
+    """
+    sew = BRepBuilderAPI_Sewing(SEW_TOLERANCE if tol is None else tol)
     for s in shapes:
         sew.Add(s)
     with _occ.kernel_errors("sewing"):
@@ -303,13 +325,23 @@ def occ_fill(edges: list[Any], faces: list[Any]) -> Any:
         return TopoDS.Face_s(mk.Shape())
 
 
-def _edge_faces(shape: TopoDS_Shape) -> TopTools_IndexedDataMapOfShapeListOfShape:
+def edge_face_map(shape: TopoDS_Shape) -> TopTools_IndexedDataMapOfShapeListOfShape:
+    """Every edge of ``shape`` mapped to the faces it bounds (``TopExp.MapShapesAndAncestors_s``).
+
+    Look an edge's faces up with :func:`neighbour_face`; a free edge has one face, an edge
+    shared by two sewn faces two.
+    """
     m = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, m)
     return m
 
 
-def _neighbour(m: TopTools_IndexedDataMapOfShapeListOfShape, edge: Any) -> Any | None:
+def neighbour_face(m: TopTools_IndexedDataMapOfShapeListOfShape, edge: Any) -> Any | None:
+    """The (first) face that ``edge`` bounds in the map ``m`` of :func:`edge_face_map`.
+
+    For a free edge of a hole this is its neighbour face; ``None`` if the edge is not in the map or
+    bounds no face.
+    """
     idx = m.FindIndex(edge)
     if idx == 0:
         return None
@@ -322,13 +354,6 @@ def _locator(fill: HoleFill, side: int) -> Any:
         idx, u, v, _ = fill.locate(side, points)  # the distance is judged by OCC's C0Value
         return idx, u, v
     return locate
-
-
-def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split())
-    if not isinstance(err, OccsurfError):
-        text = f"{type(err).__name__}: {text}" if text else type(err).__name__
-    return text or type(err).__name__
 
 
 def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
@@ -347,8 +372,8 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
     faces = _faces(shape)
     if not faces:
         raise InvalidGeometryError("shape: the model has no faces")
-    sewn = _sew(faces)
-    e2f = _edge_faces(sewn)
+    sewn = sew_faces(faces)
+    e2f = edge_face_map(sewn)
     reports: list[HoleReport] = []
     fills: list[HoleFill | None] = []
     new_faces: list[Any] = []
@@ -359,12 +384,12 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
         if outer:
             rep.reason = "outer boundary of its shell (not filled; use --all-loops)"
             continue
-        nb = [_neighbour(e2f, e) for e in edges]
+        nb = [neighbour_face(e2f, e) for e in edges]
         try:
             t0 = time.perf_counter()
             fill = fill_hole(hole_sides(edges, nb))
             rep.seconds = time.perf_counter() - t0
-            occ_faces = [_make_face(p, 1e-7) for p in fill.patches]
+            occ_faces = [make_face(p, 1e-7) for p in fill.patches]
             occ_surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
             q = measure_fill(fill)
             rep.own_g0, rep.own_g1 = float(q.boundary_gap.max()), float(q.boundary_angle.max())
@@ -376,7 +401,7 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
             fills[-1] = fill
             new_faces += occ_faces
         except Exception as err:  # noqa: BLE001 - one hole's failure must not stop the others
-            rep.status, rep.reason = "failed", _one_line(err)
+            rep.status, rep.reason = "failed", one_line(err, expected=(OccsurfError,))
         if compare_occ and all(f is not None for f in nb):
             try:
                 t0 = time.perf_counter()
@@ -387,9 +412,9 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
                 rep.occ_g0, rep.occ_g1 = max(p[0] for p in per), max(p[1] for p in per)
                 rep.occ_status = "ok"
             except Exception as err:  # noqa: BLE001
-                rep.occ_status, rep.occ_reason = "failed", _one_line(err)
+                rep.occ_status, rep.occ_reason = "failed", one_line(err, expected=(OccsurfError,))
                 if rep.occ_seconds is None:
                     rep.occ_seconds = time.perf_counter() - t0
-    result = _sew([sewn] + new_faces) if new_faces else sewn
+    result = sew_faces([sewn] + new_faces) if new_faces else sewn
     after = sum(1 for _ in find_loops(result, all_loops=True))
     return FillResult(result, reports, fills, after)

@@ -2,7 +2,7 @@
 
 Course ch. 9 (quality assessment: colour-coded curvature, §9-8 graphical representation) and
 ch. 10 (a directional light). Pure matplotlib on the Agg canvas (no display needed); lives in
-``bridge`` beside the demos that use it, not in ``algorithms``.
+``occsurf.bridge`` (the gallery in ``occsurf.examples`` uses it), not in ``occsurf.algorithms``.
 """
 
 from __future__ import annotations
@@ -97,13 +97,40 @@ def render_surfaces(
     Path
         ``path``.
     """
-    from matplotlib import cm
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.colors import Normalize, TwoSlopeNorm
     from matplotlib.figure import Figure
 
     if color not in COLORINGS:
         raise ValueError(f"color: expected one of {', '.join(COLORINGS)}, got {color!r}")
+    grids = _grids(items, resolution, color)
+    lo, hi, norm, cmap = _colour_scale(grids, color, limits)
+    centre, half = _bounding_cube(grids)
+    nv = len(views)
+    fig = Figure(figsize=figsize or (6.4 * nv + (1.2 if color != "none" else 0), 6.0), dpi=dpi)
+    FigureCanvasAgg(fig)
+    for k, (elev, azim) in enumerate(views):
+        ax = fig.add_subplot(1, nv, k + 1, projection="3d")
+        ax.computed_zorder = False
+        for P, n, val in grids:
+            rgb = _shaded_colours(P, n, val, color, lo, hi, norm, cmap)
+            ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], facecolors=rgb, rstride=1, cstride=1,
+                            linewidth=0, antialiased=False, shade=False)
+        _draw_lines(ax, nets, curves)
+        _frame_view(ax, centre, half, elev, azim, None if panel_titles is None or k >= len(panel_titles)
+                    else panel_titles[k])
+    _annotate(fig, color, norm, cmap, title, subtitle)
+    path = Path(path)
+    fig.savefig(path)
+    return path
+
+
+# ---------------------------------------------------------------------------------------- steps
+Grid = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def _grids(items: Sequence[BSplineSurface | Grid], resolution: int, color: str) -> list[Grid]:
+    """Points ``(r, s, 3)``, normals ``(r, s, 3)`` and colour scalar ``(r, s)`` of every item:
+    surfaces sampled by :func:`surface_grid`, sampled tuples taken as float arrays."""
     grids = []
     for it in items:
         if isinstance(it, BSplineSurface):
@@ -111,6 +138,19 @@ def render_surfaces(
         else:
             P, n, val = (np.asarray(a, float) for a in it)
             grids.append((P, n, val))
+    return grids
+
+
+def _colour_scale(grids: list[Grid], color: str, limits: tuple[float, float] | None) -> tuple[float, float, Any, Any]:
+    """``(lo, hi, norm, cmap)``: the colour range over all items and its mapping.
+
+    Curvatures: symmetric about 0 at the 98th percentile of ``|value|`` on a diverging map
+    (``coolwarm``, centred on 0 when the range straddles it); height and none: min to max on
+    ``viridis``. ``limits`` overrides the range.
+    """
+    from matplotlib import cm
+    from matplotlib.colors import Normalize, TwoSlopeNorm
+
     allv = np.concatenate([g[2].ravel() for g in grids])
     if limits is not None:
         lo, hi = limits
@@ -126,49 +166,63 @@ def render_surfaces(
         cmap = cm.coolwarm
     else:
         norm, cmap = Normalize(lo, hi), cm.viridis
+    return lo, hi, norm, cmap
+
+
+def _bounding_cube(grids: list[Grid]) -> tuple[np.ndarray, float]:
+    """Centre ``(3,)`` and half side of the cube around every sampled point (equal axes)."""
     pts = np.concatenate([g[0].reshape(-1, 3) for g in grids])
     lo3, hi3 = pts.min(axis=0), pts.max(axis=0)
-    centre, half = (lo3 + hi3) / 2, max(float((hi3 - lo3).max()) / 2, 1e-12)
-    nv = len(views)
-    fig = Figure(figsize=figsize or (6.4 * nv + (1.2 if color != "none" else 0), 6.0), dpi=dpi)
-    FigureCanvasAgg(fig)
-    for k, (elev, azim) in enumerate(views):
-        ax = fig.add_subplot(1, nv, k + 1, projection="3d")
-        ax.computed_zorder = False
-        for P, n, val in grids:
-            base = np.full(P.shape[:2] + (4,), (0.72, 0.74, 0.78, 1.0)) if color == "none" else cmap(norm(np.clip(val, lo, hi)))
-            lam = np.abs(np.einsum("...i,i->...", n, _LIGHT))  # two-sided Lambert
-            shade = 0.35 + 0.65 * lam
-            rgb = base.copy()
-            rgb[..., :3] *= shade[..., None]
-            ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], facecolors=rgb, rstride=1, cstride=1,
-                            linewidth=0, antialiased=False, shade=False)
-        for net in nets:
-            net = np.asarray(net, float)
-            for row in net:
-                ax.plot(*row.T, color="0.25", lw=0.5, alpha=0.6)
-            for col in net.transpose(1, 0, 2):
-                ax.plot(*col.T, color="0.25", lw=0.5, alpha=0.6)
-        for c in curves:
-            if isinstance(c, BSplineCurve):
-                c = c.evaluate(np.linspace(*c.domain, 200))
-            ax.plot(*np.asarray(c, float).T, color="k", lw=1.6)
-        ax.set_xlim(centre[0] - half, centre[0] + half)
-        ax.set_ylim(centre[1] - half, centre[1] + half)
-        ax.set_zlim(centre[2] - half, centre[2] + half)
-        ax.set_box_aspect((1, 1, 1))
-        ax.view_init(elev=elev, azim=azim)
-        ax.set_xlabel("x")
-        ax.set_ylabel("y")
-        ax.set_zlabel("z")
-        if panel_titles is not None and k < len(panel_titles):
-            ax.set_title(panel_titles[k], fontsize=10)
+    return (lo3 + hi3) / 2, max(float((hi3 - lo3).max()) / 2, 1e-12)
+
+
+def _shaded_colours(P: np.ndarray, n: np.ndarray, val: np.ndarray, color: str, lo: float, hi: float,
+                    norm: Any, cmap: Any) -> np.ndarray:
+    """RGBA face colours ``(r, s, 4)``: the scalar's colour (grey for ``'none'``) darkened by a
+    two-sided Lambert term ``0.35 + 0.65 |n . light|`` (course ch. 10, a directional light)."""
+    base = np.full(P.shape[:2] + (4,), (0.72, 0.74, 0.78, 1.0)) if color == "none" else cmap(norm(np.clip(val, lo, hi)))
+    lam = np.abs(np.einsum("...i,i->...", n, _LIGHT))  # two-sided Lambert
+    shade = 0.35 + 0.65 * lam
+    rgb = base.copy()
+    rgb[..., :3] *= shade[..., None]
+    return rgb
+
+
+def _draw_lines(ax: Any, nets: Sequence[np.ndarray], curves: Sequence[BSplineCurve | np.ndarray]) -> None:
+    """Control nets as thin grey polylines (rows, then columns), then curves in black on top."""
+    for net in nets:
+        net = np.asarray(net, float)
+        for row in net:
+            ax.plot(*row.T, color="0.25", lw=0.5, alpha=0.6)
+        for col in net.transpose(1, 0, 2):
+            ax.plot(*col.T, color="0.25", lw=0.5, alpha=0.6)
+    for c in curves:
+        if isinstance(c, BSplineCurve):
+            c = c.evaluate(np.linspace(*c.domain, 200))
+        ax.plot(*np.asarray(c, float).T, color="k", lw=1.6)
+
+
+def _frame_view(ax: Any, centre: np.ndarray, half: float, elev: float, azim: float, title: str | None) -> None:
+    """Equal axes on the bounding cube, the camera, axis labels and the panel's title."""
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_box_aspect((1, 1, 1))
+    ax.view_init(elev=elev, azim=azim)
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_zlabel("z")
+    if title is not None:
+        ax.set_title(title, fontsize=10)
+
+
+def _annotate(fig: Any, color: str, norm: Any, cmap: Any, title: str | None, subtitle: str | None) -> None:
+    """The colour bar (unless ``color == 'none'``) and the figure's title with its subtitle."""
+    from matplotlib import cm
+
     if color != "none":
         sm = cm.ScalarMappable(norm=norm, cmap=cmap)
         label = {"mean": "mean curvature H", "gaussian": "Gaussian curvature K", "height": "z"}[color]
         fig.colorbar(sm, ax=fig.axes, shrink=0.6, pad=0.02, label=label)
     if title:
         fig.suptitle(title if not subtitle else f"{title}\n{subtitle}", fontsize=12)
-    path = Path(path)
-    fig.savefig(path)
-    return path

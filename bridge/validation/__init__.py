@@ -1,5 +1,8 @@
 """Our results measured against OpenCascade's on the same input.
 
 * :mod:`.deviation` — :func:`surface_deviation`, :func:`curve_deviation` (our evaluation, derivatives
-  and curvature against OCC's ``D2``/``D3``/``GeomLProp``) and :func:`roundtrip_deviation`.
+  and curvature against OCC's ``D2``/``D3``/``GeomLProp``) and :func:`roundtrip_deviation`;
+* :mod:`.inspect` — :func:`inspect_model`: one :class:`FaceReport` per face of an imported model
+  (type, degrees, poles, flags, and the deviation of our evaluation from OCC's), what
+  ``occsurf inspect`` prints.
 """

@@ -19,7 +19,7 @@ produced invalid data would fail loudly instead of silently testing garbage.
 
 from __future__ import annotations
 
-import os
+from collections.abc import Sequence
 
 import numpy as np
 from hypothesis import HealthCheck, assume, settings
@@ -45,13 +45,34 @@ __all__ = [
     "test_settings",
 ]
 
-def test_settings(max_examples: int = 40) -> settings:
-    """Hypothesis settings for this suite: no deadline (CI machines vary), ``max_examples``
-    multiplied by the environment variable ``OCCSURF_HYPOTHESIS_SCALE`` (default 1) for a deep run,
-    e.g. ``OCCSURF_HYPOTHESIS_SCALE=25 pytest tests/algorithms``."""
-    scale = float(os.environ.get("OCCSURF_HYPOTHESIS_SCALE", "1"))
-    return settings(max_examples=max(1, int(max_examples * scale)), deadline=None,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+
+#: Health checks that every property test of the suite suppresses unless told otherwise.
+SUITE_SUPPRESSED = (HealthCheck.too_slow, HealthCheck.filter_too_much)
+
+
+def test_settings(max_examples: int = 40, *,
+                  suppress: Sequence[HealthCheck] | None = SUITE_SUPPRESSED) -> settings:
+    """Hypothesis settings of one test (or one module) of this suite, the only place they are built.
+
+    Parameters
+    ----------
+    max_examples : int
+        The test's count at scale 1; it runs ``max(1, int(max_examples * scale))`` examples, where
+        ``scale`` is the active profile's ``max_examples`` over 100, Hypothesis' default: 1 for the
+        ``default`` and ``ci`` profiles, 25 for ``thorough`` (the profiles live in tests/conftest.py;
+        e.g. ``HYPOTHESIS_PROFILE=thorough pytest tests/algorithms``).
+    suppress : sequence of HealthCheck or None
+        Health checks to suppress (default ``too_slow`` and ``filter_too_much``); ``None`` keeps
+        the active profile's.
+
+    Returns
+    -------
+    settings
+        No deadline (machines vary); everything else (derandomization, database) from the profile.
+    """
+    scale = settings().max_examples / settings.get_profile("default").max_examples
+    extra = {} if suppress is None else {"suppress_health_check": list(suppress)}
+    return settings(max_examples=max(1, int(max_examples * scale)), deadline=None, **extra)
 
 
 test_settings.__test__ = False  # a helper, not a pytest test

@@ -15,16 +15,8 @@ from hypothesis.extra.numpy import arrays
 from numpy.testing import assert_allclose
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, tolerances
-from occsurf.algorithms.geometry.affine import (
-    AffineMap,
-    Frame,
-    Normal,
-    Point,
-    ProjectiveMap,
-    Vector,
-    affine_combination,
-    vector_combination,
-)
+from occsurf.algorithms.geometry import AffineMap, Frame, Normal, Point, ProjectiveMap, Vector, affine_combination
+from occsurf.algorithms.geometry.affine import vector_combination
 from tests.algorithms.strategies import affine_maps, curves, parameters, surfaces, test_settings
 
 RTOL = 1e-12  # exact identities, up to round-off
@@ -548,7 +540,7 @@ def test_projective_map_conditioning_is_unit_free_and_sign_free():
     number of the homogeneous matrix grows like |t|^2), and -H (the same map as H) was refused on
     splines although it maps points correctly."""
     from occsurf.algorithms import circle
-    from occsurf.algorithms.geometry.affine import ProjectiveMap
+    from occsurf.algorithms.geometry import ProjectiveMap
 
     for t in (1e6, 1e9):
         M = AffineMap(np.eye(3), [t, 0, 0]) @ ProjectiveMap(np.eye(4))
@@ -569,3 +561,23 @@ def test_vector_scaling_by_zero_division_or_nan_is_refused():
     with pytest.raises(InvalidGeometryError, match="finite scalars"):
         v * float("nan")
     assert_allclose((v / 4).coords, [0.25, 0, 0])
+
+
+def test_geometry_modules_share_helpers_through_common_without_a_cycle():
+    """affine.py (elements) and affine_maps.py (frames, maps) take their shared helpers from
+    geometry/_common.py: no module imports another's private names, and affine.py does not import
+    affine_maps (which imports affine), so there is no import cycle."""
+    import ast
+    from pathlib import Path
+
+    import occsurf.algorithms.geometry as G
+
+    root = Path(G.__file__).parent
+    for path in root.glob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.level and node.module:  # not `from .. import _validate`
+                private = [a.name for a in node.names if a.name.startswith("_")]
+                assert not private, f"{path.name} imports private names {private} from {node.module}"
+                if path.name == "affine.py":
+                    assert node.module != "affine_maps", "affine.py imports affine_maps: a cycle"

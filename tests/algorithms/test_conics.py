@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
@@ -21,13 +21,15 @@ from occsurf.algorithms import (
     ellipse,
 )
 
+from .strategies import test_settings
+
 # Exact identities evaluated in double precision: a few ulps of the coordinates' size.
 EXACT = 1e-14
 
 finite = st.floats(-100, 100, allow_nan=False)
 
 
-@settings(max_examples=60, deadline=None)
+@test_settings(60, suppress=None)
 @given(
     center=st.tuples(finite, finite, finite),
     radius=st.floats(0.01, 100),
@@ -51,7 +53,7 @@ def test_circle_is_exact_and_planar(center, radius, normal):
     assert_allclose(c.evaluate(c.domain[0]), c.evaluate(c.domain[1]), atol=8 * EXACT * scale)
 
 
-@settings(max_examples=60, deadline=None)
+@test_settings(60, suppress=None)
 @given(a0=st.floats(-7, 7), sweep=st.floats(1e-3, 2 * math.pi), r=st.floats(0.1, 10))
 def test_arc_end_points_and_radius(a0, sweep, r):
     c = arc([0.0, 0.0], r, a0, a0 + sweep)

@@ -1,4 +1,4 @@
-"""Coons patches and Gordon surfaces (algorithms/curvenet.py, course §6-17..6-25).
+"""Coons patches and Gordon surfaces (algorithms/construction/, course §6-17..6-25).
 
 Oracles: the defining formulas evaluated directly (bilinear Coons), closed forms (four lines give
 the bilinear patch; networks of iso-curves of a known surface reproduce it under the stated
@@ -21,11 +21,15 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from numpy.testing import assert_allclose
+from numpy.testing import assert_allclose, assert_array_equal
 
 from occsurf.algorithms.kernel.basis import basis_matrix
+from occsurf.algorithms.kernel.compat import make_compatible
 from occsurf.algorithms.kernel.curve import BSplineCurve
-from occsurf.algorithms.construction.coons_patches import APPROXIMATION_TOLERANCE
+from occsurf.algorithms import tolerances
+from occsurf.algorithms.construction import _common
+from occsurf.algorithms.construction import coons_patches as cp
+from occsurf.algorithms.construction import gordon_surfaces as gs
 from occsurf.algorithms.construction import (
     coons,
     coons_bicubic,
@@ -452,7 +456,7 @@ def test_polynomial_approximation_measured_error_holds_on_dense_samples():
         assert_allclose(a(np.array([0.0, 1.0])), c(np.array([0.0, 1.0])), rtol=0, atol=1e-14 * scale_of(c))
     poly = iso_u(random_surface(np.random.default_rng(31)), 0.5)
     assert polynomial_approximation(poly) == (poly, 0.0)
-    assert APPROXIMATION_TOLERANCE == 1e-6
+    assert tolerances.APPROXIMATION_TOLERANCE == 1e-6
     with pytest.raises(ToleranceError, match="could not approximate"):
         polynomial_approximation(c, 1e-30, max_subdivisions=4)
 
@@ -506,3 +510,312 @@ def test_gordon_finds_the_parameters_of_a_large_network():
     found = gordon(A, B)
     given = gordon(A, B, u_params=us, v_params=us)
     assert_allclose(found.control_points, given.control_points, atol=1e-11)
+
+
+# ------------------------------------------------------------------------------------ tolerances
+def test_network_tolerance_override_turns_an_accepted_gap_into_a_refusal_and_back():
+    b, r, t, l = random_loop(np.random.default_rng(4))
+    t2 = t.transform(np.eye(3), [0, 0, 4e-8])  # corner gaps of 4e-8 < NETWORK_TOLERANCE = 1e-7
+    coons(b, r, t2, l)
+    with tolerances.override(NETWORK_TOLERANCE=1e-8):
+        with pytest.raises(InvalidGeometryError, match=r"open at corner .*\(tol=1e-08\)"):
+            coons(b, r, t2, l)
+        coons(b, r, t2, l, tol=1e-7)  # an explicit tol= wins over the override
+    coons(b, r, t2, l)  # the default is back
+
+
+def test_network_tolerance_override_applies_to_gordon_crossings():
+    F = random_surface(np.random.default_rng(20))
+    us, vs = np.array([0, 0.4, 1.0]), np.array([0, 0.5, 1.0])
+    A, B = network(F, us, vs)
+    A[1] = A[1].transform(np.eye(3), [0, 0, 4e-8])
+    gordon(A, B, u_params=us, v_params=vs)
+    with tolerances.override(NETWORK_TOLERANCE=1e-8):
+        with pytest.raises(InvalidGeometryError, match=r"not consistent.*\(tol=1e-08\)"):
+            gordon(A, B, u_params=us, v_params=vs)
+    gordon(A, B, u_params=us, v_params=vs)
+
+
+def test_derivative_tolerance_override_decides_the_corner_compatibility_check():
+    F = random_surface(np.random.default_rng(12))
+    (b, r, t, l), (xb, xr, xt, xl) = boundary_net(F)
+    xb2 = xb.transform(np.eye(3), [0, 0, 1e-5])  # S_v along bottom 1e-5 off the tangents of left / right
+    with pytest.raises(InvalidGeometryError, match=r"^cross_derivatives\[0\]: at corner \(u0, v0\)"):
+        coons_bicubic(b, r, t, l, cross_derivatives=(xb2, xr, xt, xl))
+    with tolerances.override(DERIVATIVE_TOLERANCE=1e-3):
+        coons_bicubic(b, r, t, l, cross_derivatives=(xb2, xr, xt, xl))
+
+
+def test_approximation_tolerance_override_is_the_default_of_polynomial_approximation():
+    F = random_surface(np.random.default_rng(30), p=2, q=2, nu=5, nv=4, rational=True)
+    c = iso_u(F, 0.37)
+    _, err = polynomial_approximation(c)
+    assert 1e-10 < err <= 1e-6  # measured 6.4e-7
+    with tolerances.override(APPROXIMATION_TOLERANCE=1e-10):
+        _, err2 = polynomial_approximation(c)
+    assert err2 <= 1e-10
+
+
+def line_w(p, q, w) -> BSplineCurve:
+    return BSplineCurve(1, [0, 0, 1, 1], np.array([p, q], float), np.array(w, float))
+
+
+def test_scale_loop_weights_matches_homogeneous_corners_within_the_weight_rtol():
+    P00, P10, P11, P01 = CORNERS
+    # bottom, right, top, left: the corner-weight ratios around the loop multiply to 1 + 1e-10
+    loop = [line_w(P00, P10, [1, 2]), line_w(P10, P11, [1, 1]), line_w(P01, P11, [1, 2 * (1 + 1e-10)]),
+            line_w(P00, P01, [1, 1])]
+    assert cp._scale_loop_weights(loop) is None  # 1e-10 > HOMOGENEOUS_WEIGHT_RTOL = 1e-12
+    with tolerances.override(HOMOGENEOUS_WEIGHT_RTOL=1e-8):
+        b, r, t, l = cp._scale_loop_weights(loop)
+    assert_allclose([b.weights[0], b.weights[-1], t.weights[0], t.weights[-1]],
+                    [l.weights[0], r.weights[0], l.weights[-1], r.weights[-1]], rtol=1e-8)
+    for c, c0 in zip((b, r, t, l), loop):  # each scaled by a constant: the curves do not change
+        assert_allclose(c.weights / c0.weights, c.weights[0] / c0.weights[0], rtol=1e-15)
+        assert_allclose(c(S), c0(S), rtol=0, atol=1e-14 * scale_of(c0))
+
+
+def test_homogeneous_weight_rtol_override_decides_whether_gordon_curves_meet_homogeneously():
+    F = random_surface(np.random.default_rng(25), p=2, q=2, nu=4, nv=4, rational=True)
+    us, vs = np.array([0, 0.25, 0.5, 0.8, 1]), np.array([0, 0.3, 0.6, 1])
+    A, B = network(F, us, vs)
+    A, B = make_compatible(A), make_compatible(B)
+    assert gs._homogeneous_crossing_points(A, B, us, vs) is not None
+    # the same curve, weights scaled by 1 + 1e-8 > 1e3 HOMOGENEOUS_WEIGHT_RTOL
+    A[1] = BSplineCurve(A[1].degree, A[1].knots, A[1].control_points, A[1].weights * (1 + 1e-8))
+    assert gs._homogeneous_crossing_points(A, B, us, vs) is None
+    with tolerances.override(HOMOGENEOUS_WEIGHT_RTOL=1e-9):
+        assert gs._homogeneous_crossing_points(A, B, us, vs) is not None
+
+
+def test_gordon_search_limits_are_read_from_tolerances():
+    F = random_surface(np.random.default_rng(21))
+    us, vs = np.array([0, 0.3, 0.7, 1.0]), np.array([0, 0.25, 0.5, 0.9, 1.0])
+    A, B = network(F, us, vs)
+    spans = np.unique(A[0].knots).shape[0] - 1  # 4: GORDON_SAMPLES_PER_SPAN = 8 > 16 / 4
+    assert gs._samples(A[0]).shape == (8 * spans + 1,)
+    with tolerances.override(GORDON_SAMPLES_PER_SPAN=20):
+        assert gs._samples(A[0]).shape == (20 * spans + 1,)
+    with tolerances.override(GORDON_NEWTON_STEPS=0):
+        _, _, d0 = network_parameters(A, B)  # the closest sample pairs, not refined
+    assert d0.max() > 1e-3  # measured 0.055
+    with tolerances.override(GORDON_STARTS=1):
+        s, t, d = network_parameters(A, B)  # one start per pair suffices on this network
+    assert_allclose(s, np.broadcast_to(us, s.shape), rtol=0, atol=1e-12)
+    assert d.max() < 1e-13 * scale_of(F)
+
+
+# ------------------------------------------------------------------------------------ shared helpers
+def test_resolve_tolerance_and_curve_checks_name_the_argument():
+    c = BSplineCurve(1, [0, 0, 1, 1], [[0, 0, 0], [1, 0, 0]])
+    assert _common.resolve_tolerance(None, 0.5) == 0.5
+    assert _common.resolve_tolerance(2, 0.5) == 2.0
+    for bad in (-1.0, np.nan, np.inf):
+        with pytest.raises(InvalidGeometryError, match=r"^approx_tol: expected a finite value >= 0"):
+            _common.resolve_tolerance(bad, 0.5, "approx_tol")
+    assert _common.check_curves((c, c), "u_curves") == [c, c]
+    with pytest.raises(InvalidGeometryError, match=r"^u_curves: expected a sequence of BSplineCurve, got int"):
+        _common.check_curves(3, "u_curves")
+    with pytest.raises(InvalidGeometryError, match=r"^u_curves: expected at least 2 curves, got 1"):
+        _common.check_curves([c], "u_curves")
+    with pytest.raises(InvalidGeometryError, match=r"^u_curves\[1\]: expected a BSplineCurve, got str"):
+        _common.check_curves([c, "c"], "u_curves")
+
+
+def test_homogeneous_poles():
+    P = np.array([[0, 0, 0], [1, 2, 0], [3, 1, 1.0]])
+    w = np.array([1.0, 0.5, 2.0])
+    c = BSplineCurve(2, [0, 0, 0, 1, 1, 1], P, w)
+    assert_array_equal(_common.homogeneous_poles(c, False), P)
+    assert_allclose(_common.homogeneous_poles(c, True), np.c_[P * w[:, None], w], rtol=1e-15)
+    poly = BSplineCurve(2, [0, 0, 0, 1, 1, 1], P)
+    assert_array_equal(_common.homogeneous_poles(poly, True), np.c_[P, np.ones(3)])
+
+
+def test_unify_nets_gives_one_degree_and_knot_pair_and_keeps_every_surface():
+    rng = np.random.default_rng(40)
+    F1 = random_surface(rng, p=2, q=3, nu=5, nv=6, rational=True)
+    F2 = random_surface(rng, p=3, q=1, nu=6, nv=3, rational=True)
+    deg, kn, nets = _common.unify_nets([(F.degree, F.knots, F.homogeneous_points) for F in (F1, F2)])
+    assert deg == (3, 3)
+    assert nets[0].shape == nets[1].shape == (kn[0].shape[0] - 4, kn[1].shape[0] - 4, 4)
+    for F, H in zip((F1, F2), nets):
+        assert H.flags.c_contiguous
+        G = _common.surface_from_net(deg, kn, H, True, "test")
+        assert_allclose(G.evaluate(UU, VV), F.evaluate(UU, VV), rtol=0, atol=1e-14 * scale_of(F))
+
+
+def test_surface_from_net_divides_out_the_weights_and_refuses_non_positive_ones():
+    F = random_surface(np.random.default_rng(41), rational=True)
+    G = _common.surface_from_net(F.degree, F.knots, F.homogeneous_points, True, "gordon")
+    assert_allclose(G.control_points, F.control_points, rtol=1e-14)
+    assert_allclose(G.weights, F.weights, rtol=1e-15)
+    P = _common.surface_from_net(F.degree, F.knots, F.control_points, False, "gordon")
+    assert not P.is_rational and np.array_equal(P.control_points, F.control_points)
+    H = np.array(F.homogeneous_points)
+    H[2, 3] *= -1.0
+    with pytest.raises(InvalidGeometryError, match=r"^gordon: the homogeneous construction gives non-positive weights"):
+        _common.surface_from_net(F.degree, F.knots, H, True, "gordon")
+
+
+# ------------------------------------------------------------------------------------ Coons steps
+def test_compatible_loop_gives_each_pair_one_degree_and_one_knot_vector():
+    loop = random_loop(np.random.default_rng(3))  # degrees 3, 2, 3, 1
+    b, r, t, l = cp._compatible_loop(*loop, 1e-7, True, 1e-6)
+    assert b.degree == t.degree == 3 and l.degree == r.degree == 2
+    assert_array_equal(b.knots, t.knots)
+    assert_array_equal(l.knots, r.knots)
+    for c, c0 in zip((b, r, t, l), loop):
+        assert_allclose(c(S), c0(S), rtol=0, atol=1e-14 * scale_of(c0))
+    P = lambda c, k: c.control_points[k]  # noqa: E731
+    for (c1, k1), (c2, k2) in (((b, 0), (l, 0)), ((b, -1), (r, 0)), ((t, -1), (r, -1)), ((t, 0), (l, -1))):
+        assert_array_equal(P(c1, k1), P(c2, k2))  # one corner point, bit for bit
+
+
+def test_boolean_sum_writes_the_boundary_rows_of_its_terms():
+    A, B, C = np.random.default_rng(42).standard_normal((3, 5, 4, 3))
+    H = cp._boolean_sum(A, B, C)
+    assert_array_equal(H[1:-1, 1:-1], (A + B - C)[1:-1, 1:-1])
+    assert_array_equal(H[1:-1, [0, -1]], A[1:-1, [0, -1]])  # the v = v0, v1 boundaries come from A
+    assert_array_equal(H[[0, -1]], B[[0, -1]])  # the u = u0, u1 boundaries from B
+
+
+def test_homogeneous_coons_net_is_none_without_an_exact_nurbs_form():
+    F = random_surface(np.random.default_rng(9), p=2, q=2, nu=4, nv=4, rational=True)
+    (b, r, t, l), _ = boundary_net(F)
+    deg, kn, H = cp._homogeneous_coons_net(*cp._compatible_loop(b, r, t, l, 1e-7, True, 1e-6), "linear")
+    assert deg == (2, 2) and H.shape[-1] == 4 and np.all(H[..., -1] > 0)
+    w = np.array(t.weights)
+    w[-1] *= 2.0  # the corner-weight ratios no longer multiply to 1
+    t2 = BSplineCurve(t.degree, t.knots, t.control_points, w)
+    assert cp._homogeneous_coons_net(*cp._compatible_loop(b, r, t2, l, 1e-7, True, 1e-6), "linear") is None
+
+    def arc(a, m, e):  # a 120-degree arc: its homogeneous Coons net has weight 0 inside
+        return BSplineCurve(2, [0, 0, 0, 1, 1, 1], np.array([a, m, e], float), np.array([1.0, 0.5, 1.0]))
+
+    A_, B_, C_, D_ = [0.0, 0, 0], [1.0, 0, 0], [1.0, 1, 0], [0.0, 1, 0]
+    arcs = (arc(A_, [.5, -.5, 0], B_), arc(B_, [1.5, .5, 0], C_), arc(D_, [.5, 1.5, 0], C_), arc(A_, [-.5, .5, 0], D_))
+    assert cp._homogeneous_coons_net(*cp._compatible_loop(*arcs, 1e-7, True, 1e-6), "linear") is None
+
+
+def test_corner_data_of_a_surface_are_its_corner_derivatives():
+    F = random_surface(np.random.default_rng(10))
+    (b, r, t, l), (xb, xr, xt, xl) = boundary_net(F)
+    corners = cp._corner_data(b, t, xb, xt, l, r, xl, xr)
+    D = F.derivatives(np.array([0, 1, 1, 0.0]), np.array([0, 0, 1, 1.0]), 1)  # corners 00, 10, 11, 01
+    sc = scale_of(F)
+    assert_allclose(corners.points, D[:, 0, 0], rtol=0, atol=1e-14 * sc)
+    for field, (i, j) in (("su", (1, 0)), ("tangent_u", (1, 0)), ("sv", (0, 1)), ("tangent_v", (0, 1)),
+                          ("twist_u", (1, 1)), ("twist_v", (1, 1))):
+        # derivatives scale with the degree over the shortest span: 1e-11 x scale
+        assert_allclose(getattr(corners, field), D[:, i, j], rtol=0, atol=1e-11 * sc, err_msg=field)
+    cp._check_corner_derivatives(corners)  # compatible data: no error
+    with pytest.raises(InvalidGeometryError, match=r"^cross_derivatives\[3\]: at corner \(u0, v0\) .*along left .*"
+                                                   r"tangent of bottom"):
+        cp._check_corner_derivatives(corners._replace(su=corners.su + [0, 0, 1e-3]))
+
+
+def test_corner_twists_average_zero_or_given():
+    rng = np.random.default_rng(43)
+    corners = cp._CornerData(*rng.standard_normal((7, 4, 3)))
+    assert_array_equal(cp._corner_twists("average", corners), (corners.twist_u + corners.twist_v) / 2)
+    assert_array_equal(cp._corner_twists("zero", corners), np.zeros((4, 3)))
+    W = rng.standard_normal((4, 3))
+    assert_array_equal(cp._corner_twists(W, corners), W)
+    with pytest.raises(InvalidGeometryError, match=r"^twists: expected 'average', 'zero' or an array of shape "):
+        cp._corner_twists("adini", corners)
+    with pytest.raises(InvalidGeometryError, match=r"^twists: expected shape \(4, 3\), got \(4, 2\)"):
+        cp._corner_twists(W[:, :2], corners)
+
+
+def test_hermite_corner_patch_interpolates_the_corner_data():
+    rng = np.random.default_rng(44)
+    corners = cp._CornerData(*rng.standard_normal((7, 4, 3)))
+    W = rng.standard_normal((4, 3))
+    T = cp._hermite_corner_patch(corners, W, 2.0, 0.5)
+    patch = BSplineSurface((3, 3), ([0] * 4 + [2] * 4, [0] * 4 + [0.5] * 4), T)
+    D = patch.derivatives(np.array([0, 2, 2, 0.0]), np.array([0, 0, 0.5, 0.5]), 1)
+    assert_allclose(D[:, 0, 0], corners.points, rtol=0, atol=1e-14)
+    assert_allclose(D[:, 1, 0], corners.su, rtol=0, atol=1e-13)
+    assert_allclose(D[:, 0, 1], corners.sv, rtol=0, atol=1e-13)
+    assert_allclose(D[:, 1, 1], W, rtol=0, atol=1e-13)
+
+
+def test_bicubic_terms_each_interpolate_their_data():
+    F = random_surface(np.random.default_rng(10))
+    (b, r, t, l), (xb, xr, xt, xl) = boundary_net(F)
+    u_side, v_side = make_compatible([b, t, xb, xt]), make_compatible([l, r, xl, xr])
+    corners = cp._corner_data(*u_side, *v_side)
+    L1, L2, T = (BSplineSurface(*net) for net in
+                 cp._bicubic_terms(u_side, v_side, corners, cp._corner_twists("average", corners)))
+    sc = scale_of(F)
+    D = L1.derivatives_grid(S, [0, 1], 1)  # Hermite in v: bottom, top and their S_v at v0, v1
+    for got, c in ((D[:, 0, 0, 0], b), (D[:, 1, 0, 0], t), (D[:, 0, 0, 1], xb), (D[:, 1, 0, 1], xt)):
+        assert_allclose(got, c(S), rtol=0, atol=1e-12 * sc)
+    D = L2.derivatives_grid([0, 1], S, 1)  # Hermite in u: left, right and their S_u at u0, u1
+    for got, c in ((D[0, :, 0, 0], l), (D[1, :, 0, 0], r), (D[0, :, 1, 0], xl), (D[1, :, 1, 0], xr)):
+        assert_allclose(got, c(S), rtol=0, atol=1e-12 * sc)
+    DT = T.derivatives(np.array([0, 1, 1, 0.0]), np.array([0, 0, 1, 1.0]), 1)
+    assert_allclose(DT[:, 0, 0], corners.points, rtol=0, atol=1e-13 * sc)
+
+
+# ------------------------------------------------------------------------------------ Gordon steps
+def test_check_network_lowers_the_cross_degrees_to_the_curve_counts():
+    F = random_surface(np.random.default_rng(26))
+    A, B = network(F, np.array([0, 1.0]), np.array([0, 0.5, 1.0]))
+    assert gs._check_network(A, B, (3, 3))[2:] == (1, 2)
+    assert gs._check_network(A, B, [1, 1])[2:] == (1, 1)
+    with pytest.raises(InvalidGeometryError, match=r"^u_curves, v_curves: all curves must have one dimension"):
+        gs._check_network(A, [BSplineCurve(1, [0, 0, 1, 1], [[0, 0], [1, 1]])] * 2, (3, 3))
+
+
+def test_crossing_points_are_the_means_and_refuse_a_gap_above_tol():
+    F = random_surface(np.random.default_rng(20))
+    us, vs = np.array([0, 0.4, 1.0]), np.array([0, 0.5, 1.0])
+    A, B = network(F, us, vs)
+    A[1] = A[1].transform(np.eye(3), [0, 0, 4e-8])
+    Q = gs._crossing_points(A, B, us, vs, 1e-7)
+    exact = F.evaluate_grid(us, vs).transpose(1, 0, 2)  # (m, n, 3): Q[i, j] at (us[j], vs[i])
+    exact[1, :, 2] += 2e-8  # half the gap
+    assert_allclose(Q, exact, rtol=0, atol=1e-14 * scale_of(F))
+    with pytest.raises(InvalidGeometryError, match=r"^u_curves\[1\], v_curves\[\d\]: the network is not consistent"):
+        gs._crossing_points(A, B, us, vs, 1e-8)
+
+
+def test_gordon_terms_each_interpolate_their_curves():
+    F = random_surface(np.random.default_rng(20))
+    us, vs = np.array([0, 0.15, 0.4, 0.6, 0.85, 1.0]), np.array([0, 0.2, 0.45, 0.7, 1.0])
+    A, B = network(F, us, vs)
+    A, B = make_compatible(A), make_compatible(B)
+    Q = gs._crossing_points(A, B, us, vs, 1e-7)
+    Ku, Kv = gs._cross_knots(us, 3, (0.0, 1.0)), gs._cross_knots(vs, 3, (0.0, 1.0))
+    P1, P2, P12 = (BSplineSurface(*net) for net in gs._gordon_terms(A, B, (us, vs), Q, (3, 3), (Ku, Kv), False))
+    sc = scale_of(F)
+    for a, v in zip(A, vs):
+        assert_allclose(P1.evaluate(S, v), a(S), rtol=0, atol=1e-12 * sc)
+    for b, u in zip(B, us):
+        assert_allclose(P2.evaluate(u, S), b(S), rtol=0, atol=1e-12 * sc)
+    assert_allclose(P12.evaluate_grid(us, vs), Q.transpose(1, 0, 2), rtol=0, atol=1e-12 * sc)
+
+
+def test_polynomial_network_widens_the_tolerance_by_the_approximation_errors():
+    F = random_surface(np.random.default_rng(25), p=2, q=2, nu=4, nv=4, rational=True)
+    A, B = network(F, np.array([0, 0.25, 0.5, 0.8, 1]), np.array([0, 0.3, 0.6, 1]))
+    A2, B2, tol = gs._polynomial_network(make_compatible(A), make_compatible(B), 1e-7, 1e-8)
+    assert not any(c.is_rational for c in A2 + B2)
+    for fam, fam0 in ((A2, A), (B2, B)):
+        assert all(np.array_equal(c.knots, fam[0].knots) for c in fam)  # compatible again
+        for c, c0 in zip(fam, fam0):
+            assert np.linalg.norm(c(S) - c0(S), axis=-1).max() <= 1.1e-8
+    assert 1e-7 < tol <= 1e-7 + 2e-8
+
+
+def test_gordon_net_is_none_for_a_rational_network_not_meeting_in_homogeneous_space():
+    F = random_surface(np.random.default_rng(25), p=2, q=2, nu=4, nv=4, rational=True)
+    us, vs = np.array([0, 0.25, 0.5, 0.8, 1]), np.array([0, 0.3, 0.6, 1])
+    A, B = network(F, us, vs)
+    A, B = make_compatible(A), make_compatible(B)
+    deg, kn, H = gs._gordon_net(A, B, (us, vs), (3, 3), (None, None), 1e-7, True)
+    assert H.shape[-1] == 4 and np.all(H[..., -1] > 0)
+    A[1] = BSplineCurve(A[1].degree, A[1].knots, A[1].control_points, A[1].weights * 3)  # the same curve
+    assert gs._gordon_net(A, B, (us, vs), (3, 3), (None, None), 1e-7, True) is None

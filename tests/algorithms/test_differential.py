@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import assume, given
+from hypothesis import assume, example, given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
@@ -29,6 +29,7 @@ from occsurf.algorithms.geometry.differential import (
     surface_curvatures,
     torsion,
 )
+from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError, ParameterError, ToleranceError
 
 from .strategies import curves, surfaces, test_settings
@@ -172,6 +173,10 @@ def test_zero_first_derivative_gives_nan():
 @SETTINGS
 @given(c=curves(degrees=st.integers(2, 5), dims=st.just(3)), f=st.lists(st.floats(0, 1), min_size=1, max_size=6),
        angle=st.floats(0, 6.28), shift=st.floats(-5, 5))
+@example(  # |C' x C''| lands on the CURVATURE_ZERO threshold: one representation snaps to 0, the other not
+    c=BSplineCurve(4, [2, 2, 2, 3, 3, 3, 4, 5, 6, 7, 8, 9, 10],
+                   [[1, 1, 1], [1, 1, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1], [1, 1, 1], [1, 1, 1], [1, 1, 1]]),
+    f=[1e-12], angle=0.0, shift=0.0)
 def test_curvature_invariant_under_rigid_motion_and_refinement(c, f, angle, shift):
     lo, hi = c.domain
     u = lo + np.asarray(f) * (hi - lo)
@@ -188,8 +193,20 @@ def test_curvature_invariant_under_rigid_motion_and_refinement(c, f, angle, shif
     good = s > 1e-3 * np.max(np.linalg.norm(np.diff(c.control_points, axis=0), axis=-1)) * c.degree
     assert_allclose(k1.curvature[good], k0.curvature[good], rtol=1e-8, atol=1e-10 * scale)
     assert_allclose(k1.tangent[good], k0.tangent[good] @ Q.T, atol=1e-8)
-    elevated = c.elevate_degree()
-    assert_allclose(curvature(elevated, u)[good], k0.curvature[good], rtol=1e-8, atol=1e-10 * scale)
+    # Where the sine of the angle between C' and C'' is near tolerances.CURVATURE_ZERO, curvature snaps
+    # to 0 on one side of the threshold: round-off of the two representations may fall on either
+    # side. There both must be at most a few thresholds of |C''| / |C'|^2 (no Frenet normal in the
+    # documented sense); everywhere else they must agree.
+    d = c.derivatives(u, 2)
+    d1, d2 = np.linalg.norm(d[:, 1], axis=-1), np.linalg.norm(d[:, 2], axis=-1)
+    sine = np.linalg.norm(np.cross(d[:, 1], d[:, 2]), axis=-1) / np.maximum(d1 * d2, 1e-300)
+    near = sine <= 10 * tolerances.CURVATURE_ZERO
+    elevated = curvature(c.elevate_degree(), u)
+    clear = good & ~near
+    assert_allclose(elevated[clear], k0.curvature[clear], rtol=1e-8, atol=1e-10 * scale)
+    bound = 10 * tolerances.CURVATURE_ZERO * d2 / np.maximum(d1, 1e-300) ** 2 * (1 + 1e-8)
+    assert np.all(elevated[good & near] <= bound[good & near])
+    assert np.all(k0.curvature[good & near] <= bound[good & near])
 
 
 def test_arc_length_circle():

@@ -200,14 +200,14 @@ def test_surface_parameters():
     with pytest.raises(ParameterError, match=r"^us: "):
         s.evaluate_grid([0.5, 1.5], [0.5])
     with pytest.raises(InvalidGeometryError, match=r"^direction: expected 'u' or 'v', got 'w'"):
-        s.insert_knot(0.5, "w")
+        s.insert_knot(0.5, direction="w")
 
 
 @pytest.mark.parametrize("call, exc, match", [
-    (lambda c: c.insert_knot(0.0), ParameterError, r"^u: 0.0 must lie strictly inside the domain"),
-    (lambda c: c.insert_knot(1.0), ParameterError, r"^u: 1.0 must lie strictly inside"),
-    (lambda c: c.insert_knot(np.nan), ParameterError, r"^u: parameters must be finite"),
-    (lambda c: c.split(1.0), ParameterError, r"^u: 1.0 must lie strictly inside"),
+    (lambda c: c.insert_knot(0.0), ParameterError, r"^knot: 0.0 must lie strictly inside the domain"),
+    (lambda c: c.insert_knot(1.0), ParameterError, r"^knot: 1.0 must lie strictly inside"),
+    (lambda c: c.insert_knot(np.nan), ParameterError, r"^knot: parameters must be finite"),
+    (lambda c: c.split(1.0), ParameterError, r"^param: 1.0 must lie strictly inside"),
     (lambda c: c.refine([0.2, 1.5]), ParameterError, r"^knots: .*must lie strictly inside"),
     (lambda c: c.refine([np.nan]), InvalidGeometryError, r"^knots: expected finite values"),
     (lambda c: c.blossom([0.5, 0.5, 0.5], span=2.0), ParameterError, r"^span: parameter 2.0 is outside"),
@@ -240,14 +240,14 @@ def test_insert_beyond_multiplicity():
     with pytest.raises(InvalidGeometryError, match=r"^knots: knot .*would get multiplicity 5, above degree \+ 1 = 4"):
         c.refine([0.5] * 4)
     with pytest.raises(InvalidGeometryError, match=r"^times: v-knot 0.5 has multiplicity 0; 3 more exceeds"):
-        surface().insert_knot(0.5, "v", 3)
+        surface().insert_knot(0.5, 3, direction="v")
 
 
 def test_elevate_above_25():
     with pytest.raises(InvalidGeometryError, match=r"^times: degree 3 \+ 23 exceeds the maximum 25"):
         curve().elevate_degree(23)
     with pytest.raises(InvalidGeometryError, match=r"^times: degree 2 \+ 24 exceeds the maximum 25"):
-        surface().elevate_degree("v", 24)
+        surface().elevate_degree(24, direction="v")
     with pytest.raises(InvalidGeometryError, match=r"^times: expected a positive integer"):
         curve().elevate_degree(0)
 
@@ -283,14 +283,14 @@ def test_non_removable_knot_surface():
     s = BSplineSurface((1, 1), ([0, 0, 1, 2, 2], [0, 0, 1, 1]), net)
     before = s.control_points.copy()
     with pytest.raises(ToleranceError, match=r"^remove_knot: u-knot 1.0 \(x1\) cannot be removed"):
-        s.remove_knot(1.0, "u")
+        s.remove_knot(1.0, direction="u")
     assert_array_equal(s.control_points, before)
 
 
 @pytest.mark.parametrize("call, match", [
-    (lambda c: c.remove_knot(0.3), r"^u: 0.3 is a knot of multiplicity 0, cannot remove it 1 times"),
-    (lambda c: c.remove_knot(0.5, 2), r"^u: 0.5 is a knot of multiplicity 1, cannot remove it 2 times"),
-    (lambda c: c.remove_knot(0.0), r"^u: 0.0 must lie strictly inside"),
+    (lambda c: c.remove_knot(0.3), r"^knot: 0.3 is a knot of multiplicity 0, cannot remove it 1 times"),
+    (lambda c: c.remove_knot(0.5, 2), r"^knot: 0.5 is a knot of multiplicity 1, cannot remove it 2 times"),
+    (lambda c: c.remove_knot(0.0), r"^knot: 0.0 must lie strictly inside"),
 ])
 def test_remove_knot_arguments(call, match):
     with pytest.raises(InvalidGeometryError, match=match):
@@ -357,7 +357,7 @@ def test_operations_return_new_objects_and_leave_the_original():
     assert c.to_dict() == snapshot
     s = surface(weights=np.ones((3, 3)))
     snap = s.to_dict()
-    for op in (lambda x: x.insert_knot(0.5, "v"), lambda x: x.elevate_degree("u"), lambda x: x.swap_uv(),
-               lambda x: x.reverse("v"), lambda x: x.split(0.5, "u")[0]):
+    for op in (lambda x: x.insert_knot(0.5, direction="v"), lambda x: x.elevate_degree(direction="u"), lambda x: x.swap_uv(),
+               lambda x: x.reverse(direction="v"), lambda x: x.split(0.5, direction="u")[0]):
         assert op(s) is not s
     assert s.to_dict() == snap

@@ -9,8 +9,8 @@ Two kinds of fast path are checked:
   degrees 1 to 7, at random parameters, at every knot, at the domain ends, up to order 3.
 
 Paths are forced with the documented switches: ``OCCSURF_NO_NUMBA=1`` for NumPy, and
-``MIN_POINTS = 0`` so that the kernels run on small inputs. Without numba the kernel comparisons
-skip and the rest still runs.
+``tolerances.override(NUMBA_MIN_POINTS=0)`` so that the kernels run on small inputs. Without numba
+the kernel comparisons skip and the rest still runs.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms import BSplineCurve, BSplineSurface, tolerances
 from occsurf.algorithms import _numba_kernels as nk
 from occsurf.algorithms.kernel.basis import band_product, basis_derivatives, basis_matrix, find_span, span_groups
 
@@ -108,8 +108,9 @@ def numpy_only(monkeypatch):
 @pytest.fixture
 def with_numba(monkeypatch):
     monkeypatch.delenv(nk.ENV_DISABLE, raising=False)
-    monkeypatch.setattr(nk, "MIN_POINTS", 0)
-    assert nk.applies(1)
+    with tolerances.override(NUMBA_MIN_POINTS=0):
+        assert nk.applies(1)
+        yield
 
 
 def both_paths(monkeypatch, fn):
@@ -117,9 +118,9 @@ def both_paths(monkeypatch, fn):
     monkeypatch.setenv(nk.ENV_DISABLE, "1")
     ref = fn()
     monkeypatch.delenv(nk.ENV_DISABLE)
-    monkeypatch.setattr(nk, "MIN_POINTS", 0)
-    assert nk.applies(1)
-    return ref, fn()
+    with tolerances.override(NUMBA_MIN_POINTS=0):
+        assert nk.applies(1)
+        return ref, fn()
 
 
 # ------------------------------------------------------------- numba kernels vs NumPy paths
@@ -189,13 +190,43 @@ def test_two_dimensional_and_high_dimensional_poles(monkeypatch):
 
 @needs_numba
 def test_environment_variable_forces_numpy(monkeypatch):
-    monkeypatch.setattr(nk, "MIN_POINTS", 0)
-    monkeypatch.setenv(nk.ENV_DISABLE, "1")
-    assert not nk.applies(10**6)
-    monkeypatch.setenv(nk.ENV_DISABLE, "0")
-    assert nk.applies(10**6)
-    monkeypatch.setattr(nk, "MIN_POINTS", 100)
-    assert not nk.applies(99)
+    with tolerances.override(NUMBA_MIN_POINTS=0):
+        monkeypatch.setenv(nk.ENV_DISABLE, "1")
+        assert not nk.applies(10**6)
+        monkeypatch.setenv(nk.ENV_DISABLE, "0")
+        assert nk.applies(10**6)
+    with tolerances.override(NUMBA_MIN_POINTS=100):
+        assert not nk.applies(99)
+        assert nk.applies(100)
+
+
+@needs_numba
+def test_numba_min_points_override_routes_small_inputs_through_the_kernels(monkeypatch):
+    """tolerances.NUMBA_MIN_POINTS is read at call time: an override sends a 7-point evaluation
+    through the kernels (and leaves the default, 2**15, untouched outside the block)."""
+    monkeypatch.delenv(nk.ENV_DISABLE, raising=False)
+    c = make_curve(3, "rational", seed=11)
+    s = make_surface(2, "clamped", seed=12)
+    u = np.linspace(*c.domain, 7)
+    calls: list[str] = []
+    real_run = nk.run
+
+    def spy(name, *args):
+        calls.append(name)
+        return real_run(name, *args)
+
+    monkeypatch.setattr(nk, "run", spy)
+    ref = c.evaluate(u), s.evaluate(u, u)
+    assert calls == [] and tolerances.NUMBA_MIN_POINTS == tolerances.defaults()["NUMBA_MIN_POINTS"]
+    with tolerances.override(NUMBA_MIN_POINTS=7):
+        fast = c.evaluate(u), s.evaluate(u, u)
+        assert tolerances.NUMBA_MIN_POINTS == 7
+    assert calls == ["curve_points", "surface_points"]
+    assert_partials_close(fast[0], ref[0], 0)
+    assert_partials_close(fast[1], ref[1], 0)
+    with tolerances.override(NUMBA_MIN_POINTS=8):
+        c.evaluate(u)
+    assert calls == ["curve_points", "surface_points"]  # 7 < 8: NumPy path
 
 
 @needs_numba

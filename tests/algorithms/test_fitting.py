@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.interpolate
-from hypothesis import given
+from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, ParameterError, circle
@@ -69,6 +69,50 @@ def test_approximation_knots_every_span_has_data():
     inner = np.unique(k)
     counts = np.histogram(t, bins=inner)[0]
     assert np.all(counts >= 1)
+
+
+@test_settings(60)
+@given(gaps=st.lists(st.floats(1e-3, 1.0), min_size=4, max_size=70), p=st.integers(1, 5), data=st.data())
+def test_approximation_knots_interlace_with_the_data_for_every_pole_count(gaps, p, data):
+    """The documented contract for any increasing parameters and p + 1 <= n <= m: a parameter in
+    every knot span, and Schoenberg–Whitney with margin for the interior poles (both ends
+    interpolated): strictly increasing interior data sites k_i, each at least half a data step
+    inside the support of N_i (so the end-constrained system is well conditioned)."""
+    t = np.concatenate(([0.0], np.cumsum(gaps)))
+    m = t.shape[0]
+    assume(m >= p + 2)
+    n = data.draw(st.integers(p + 1, m - 1))
+    k = approximation_knots(t, n, p)
+    assert k.shape == (n + p + 1,)
+    assert np.all(k[: p + 1] == t[0]) and np.all(k[n:] == t[-1])
+    assert np.all(np.diff(k[p : n + 1]) > 0)  # simple interior knots, strictly inside the ends
+    counts = np.histogram(t, bins=k[p : n + 1])[0]
+    assert np.all(counts >= 1)
+    lo = np.r_[t[0], 0.5 * (t[:-1] + t[1:])]  # T(j - 1/2), T(j + 1/2) of data index j
+    hi = np.r_[0.5 * (t[:-1] + t[1:]), t[-1]]
+    j = 0
+    for i in range(1, n - 1):  # greedy matching is optimal for these nested interval constraints
+        j += 1
+        while j <= m - 2 and not (k[i] <= lo[j] and hi[j] <= k[i + p + 1]):
+            j += 1
+        assert j <= m - 2, f"no interior data site well inside the support of N_{i}"
+
+
+def test_fit_curve_near_interpolation_is_well_conditioned():
+    """Regression (hypothesis, seed=0, m=39, p=4, n=38): the knots of The NURBS Book eq. 9.69 gave
+    an interior matrix of condition 4e14 and fit_curve refused the data as rank deficient."""
+    from occsurf.algorithms.kernel.basis import basis_matrix
+
+    for m, p in ((39, 4), (58, 3), (60, 5)):
+        Q = _points(0, m)
+        u = parametrize(Q)
+        for n in (m - 1, m - 2, int(0.8 * m)):
+            c = fit_curve(Q, n, p)
+            N = basis_matrix(c.knots, p, n, u)[0]
+            assert np.linalg.cond(N[1:-1, 1:-1]) < 100
+            r = c.evaluate(u) - Q
+            assert np.abs(N[:, 1:-1].T @ r).max() <= 1e-13 * np.linalg.cond(N) * np.sqrt(m)
+            np.testing.assert_allclose(c.evaluate(u[[0, -1]]), Q[[0, -1]], atol=TOL)
 
 
 @pytest.mark.parametrize("bad, err", [

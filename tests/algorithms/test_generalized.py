@@ -251,7 +251,9 @@ def test_non_finite_net_and_too_high_valence():
     """Review: a NaN in the vertex net used to pass the consistency check (NaN > tol is False) and
     return a NaN patch; a valence beyond MAX_VALENCE used to build a dense C(n+4, 5)^2 matrix
     (8 GB at n = 16) before failing."""
-    from occsurf.algorithms.topology.generalized import MAX_VALENCE
+    from occsurf.algorithms import tolerances
+
+    MAX_VALENCE = tolerances.MAX_VALENCE
 
     n = 5
     rng = np.random.default_rng(0)
@@ -268,3 +270,21 @@ def test_non_finite_net_and_too_high_valence():
                [[0, 1 + i, 1 + (i + 1) % k] for i in range(k)])
     with pytest.raises(InvalidGeometryError, match=f"vertex 0 has valence {k}"):
         generalized_biquadratic(fan, refine="never" if fan.is_quad else "auto")
+
+
+def test_generalized_tolerances_are_read_at_call_time():
+    """MAX_VALENCE and GENERALIZED_CONSISTENCY_TOL come from occsurf.algorithms.tolerances at
+    call time (a negative consistency tolerance refuses even round-off)."""
+    from occsurf.algorithms import tolerances
+
+    rng = np.random.default_rng(4)
+    v, m, c = np.zeros(3), rng.normal(size=(5, 3)), rng.normal(size=(5, 3))
+    with tolerances.override(MAX_VALENCE=4):
+        with pytest.raises(InvalidGeometryError, match=r"mids: valence 5 exceeds MAX_VALENCE = 4"):
+            biquadratic_patch(v, m, c)
+        with pytest.raises(InvalidGeometryError, match=r"valence 5, more than MAX_VALENCE = 4"):
+            generalized_biquadratic(catmull_clark(ngon_with_skirt(5, rng)), refine="never")
+    with tolerances.override(GENERALIZED_CONSISTENCY_TOL=-1.0):
+        with pytest.raises(InvalidGeometryError, match="more than GENERALIZED_CONSISTENCY_TOL = -1.0"):
+            biquadratic_patch(v, m, c)
+    assert biquadratic_patch(v, m, c)[0].sides == 5

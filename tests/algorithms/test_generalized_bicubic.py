@@ -208,3 +208,12 @@ def test_errors():
     g = generalized_bicubic(read_obj(FIXTURES / "cube.obj"))
     with pytest.raises(InvalidGeometryError, match="patch: expected"):
         g.evaluate(26, [0.0, 0.0])
+
+
+def test_max_valence_is_read_at_call_time():
+    from occsurf.algorithms import tolerances
+
+    m = doo_sabin(read_obj(FIXTURES / "pentagonal_prism.obj"))
+    with tolerances.override(MAX_VALENCE=4):
+        with pytest.raises(InvalidGeometryError, match=r"face \d+ has 5 sides, more than MAX_VALENCE = 4"):
+            generalized_bicubic(m, refine="never")

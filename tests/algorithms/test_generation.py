@@ -18,7 +18,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from occsurf.algorithms import BSplineCurve, arc, circle, ellipse
+from occsurf.algorithms import BSplineCurve, arc, circle, ellipse, tolerances
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.construction.generation import extrude, revolve, rotational_sweep, ruled, translational_sweep
 from tests.algorithms.strategies import affine_maps, curves, fractions, test_settings
@@ -325,3 +325,31 @@ def test_axis_direction_length_is_irrelevant():
         revolve(prof, [0, 0, 0], [0.0, 0.0, 0.0])
     with pytest.raises(InvalidGeometryError, match=r"^angle: expected a real number of radians, got True"):
         revolve(prof, [0, 0, 0], [0, 0, 1], True)
+
+
+# ------------------------------------------------------------------------------------- tolerances
+def test_angle_slack_override_decides_what_counts_as_a_full_turn():
+    c = line([1, 0, 0], [1, 0, 1])
+    with pytest.raises(InvalidGeometryError, match=r"^angle: expected 0 < \|angle\| <= 2 pi"):
+        revolve(c, [0, 0, 0], [0, 0, 1], 2 * np.pi + 1e-9)  # 1e-9 > ANGLE_SLACK = 1e-12
+    with tolerances.override(ANGLE_SLACK=1e-6):
+        s = revolve(c, [0, 0, 0], [0, 0, 1], 2 * np.pi + 1e-9)
+        with pytest.raises(InvalidGeometryError, match=r"^angle"):
+            revolve(c, [0, 0, 0], [0, 0, 1], -2 * np.pi - 1e-5)
+    assert s.domain[1] == (0.0, 2 * np.pi)
+    assert_allclose(s.control_points[:, -1], c.control_points, rtol=0, atol=0)  # closed exactly
+    with pytest.raises(InvalidGeometryError, match=r"^angle"):
+        revolve(c, [0, 0, 0], [0, 0, 1], 2 * np.pi + 1e-9)  # the default is back
+
+
+def test_axis_zero_override_decides_what_counts_as_a_zero_vector():
+    c = line([1, 0, 0], [2, 0, 1])  # size 2
+    d = [0, 0, 1e-9]
+    assert_allclose(extrude(c, d).evaluate(0.5, 1.0), c.evaluate(0.5) + d, rtol=0, atol=1e-15)
+    traj = line([1e-9, 0, 0], [1e-9, 1, 0])  # starts 1e-9 off the z axis
+    rotational_sweep(c, traj)
+    with tolerances.override(AXIS_ZERO=1e-6):
+        with pytest.raises(InvalidGeometryError, match=r"^vector: expected a non-zero vector"):
+            extrude(c, d)  # 1e-9 <= 1e-6 x 2
+        with pytest.raises(InvalidGeometryError, match=r"^trajectory: its start point lies on the axis"):
+            rotational_sweep(c, traj)

@@ -10,13 +10,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms import BSplineCurve, BSplineSurface, tolerances
 from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
 from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 from occsurf.algorithms.hierarchical.curve import HierarchicalCurve
 from occsurf.algorithms.hierarchical.offsets import (
     ADDITIVE_OFFSETS,
-    FRAME_NUDGE,
     FRAME_OFFSETS,
     curve_frames,
     frames_from_partials,
@@ -124,7 +123,7 @@ def test_degenerate_normal_on_a_collapsed_edge_uses_the_nudged_frame():
     # it matches the normal at u = 1e-3 to O(1e-3) (the normal turns linearly away from the edge).
     n_in = s.normal(np.full(3, 1e-3), vs)
     assert np.all(np.einsum("ki,ki->k", F[:, :, 2], n_in) > 1 - 1e-4)
-    assert FRAME_NUDGE < 1e-3
+    assert tolerances.FRAME_NUDGE < 1e-3
     # Used as an offset frame, storing and applying an offset there is consistent.
     hs = HierarchicalSurface(s)
     o = hs.add_overlay((0.0, 0.5), (0.0, 1.0))
@@ -183,3 +182,17 @@ def test_curve_derivatives_at_the_ends_of_an_overlay_follow_the_flat_convention(
     x = np.array([0.0, ua, ub, 1.0])
     ref = hc.flatten().derivatives(x, degree)
     assert_allclose(hc.derivatives(x, degree), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+
+
+def test_hierarchical_modules_import_no_private_names():
+    """curve.py and surface.py build on core.py's public Hierarchy and Node, not on private names."""
+    import ast
+    from pathlib import Path
+
+    import occsurf.algorithms.hierarchical as Hpkg
+
+    for path in Path(Hpkg.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level and node.module:  # not `from .. import _validate`
+                private = [a.name for a in node.names if a.name.startswith("_")]
+                assert not private, f"{path.name} imports private names {private} from {node.module}"

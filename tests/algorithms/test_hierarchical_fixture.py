@@ -66,7 +66,7 @@ def test_fixture_level_one_against_an_independent_oracle():
     offsets = np.array(item["offsets"])
     # Reference vertices: the base refined (Oslo, BSplineSurface.refine); frames: the base's
     # Gram-Schmidt frames at the Greville points of the refined knots, from explicit partials.
-    r = base.refine(ku, "u").refine(kv, "v")
+    r = base.refine(ku, direction="u").refine(kv, direction="v")
     gu, gv = r.greville()
     iu = np.flatnonzero((gu >= item["region"][0][0]) & (gu <= item["region"][0][1]))
     iv = np.flatnonzero((gv >= item["region"][1][0]) & (gv <= item["region"][1][1]))

@@ -587,6 +587,120 @@ def test_drag_surface_point_errors():
         drag_surface_point(s2d, 0.5, 0.5, None, normal=[0, 0, 1])
 
 
+# ------------------------------------------------------------------ drag_surface_point, step by step
+def _plate(n: int = 4) -> BSplineSurface:
+    U = np.r_[[0.0] * 4, np.linspace(0, 1, n - 2)[1:-1], [1.0] * 4]
+    g = np.linspace(0, 3, n)
+    net = np.concatenate([np.stack(np.meshgrid(g, g, indexing="ij"), -1), np.zeros((n, n, 1))], -1)
+    return BSplineSurface((3, 3), (U, U), net)
+
+
+def test_surface_edit_window_ranges():
+    from occsurf.algorithms.manipulation.surfaces import _window_ranges
+
+    assert _window_ranges(None, (5, 4)) == ((0, 4), (0, 3))
+    assert _window_ranges(((1, 3), (np.int64(0), 2)), (5, 4)) == ((1, 3), (0, 2))
+    assert all(type(i) is int for pair in _window_ranges(((1, 3), (np.int64(0), 2)), (5, 4)) for i in pair)
+    with pytest.raises(InvalidGeometryError, match=r"^window: expected \(\(i1, i2\), \(j1, j2\)\)"):
+        _window_ranges((1, 2, 3), (5, 4))
+    with pytest.raises(InvalidGeometryError, match=r"^window\[1\]\[1\]: pole index 4 is out of range 0..3"):
+        _window_ranges(((0, 1), (0, 4)), (5, 4))
+    with pytest.raises(InvalidGeometryError, match=r"^window\[0\]\[0\]: expected a pole index"):
+        _window_ranges(((0.5, 1), (0, 1)), (5, 4))
+    with pytest.raises(InvalidGeometryError, match=r"^window: empty window \(\(3, 1\), \(0, 1\)\)"):
+        _window_ranges(((3, 1), (0, 1)), (5, 4))
+
+
+def test_surface_edit_active_poles_are_the_window_poles_acting_on_the_requested_rows():
+    from occsurf.algorithms.manipulation.surfaces import _active_poles, _surface_basis_rows
+
+    s = _plate(5)
+    G = _surface_basis_rows(s, 0.0, 0.0)  # at a corner only pole (0, 0) carries S; S_u, S_v add (1, 0), (0, 1)
+    whole = ((0, 4), (0, 4))
+    assert _active_poles(G, (5, 5), whole, [0], "corner").tolist() == [0]
+    assert _active_poles(G, (5, 5), whole, [0, 1, 2], "corner").tolist() == [0, 1, 5]
+    assert _active_poles(G, (5, 5), ((1, 4), (0, 4)), [0, 1], "corner").tolist() == [5]
+    with pytest.raises(ConstraintError, match=r"no pole of the window \(\(1, 4\), \(1, 4\)\) acts at corner"):
+        _active_poles(G, (5, 5), ((1, 4), (1, 4)), [0, 1, 2], "corner")
+    # Inside, the (p + 1) x (q + 1) poles of the span act, in u-major flat order.
+    G = _surface_basis_rows(s, 0.4, 0.7)
+    act = _active_poles(G, (5, 5), whole, [0], "inside")
+    assert act.size == 16 and np.all(np.diff(act) > 0) and np.all(G[0, act] > 0)
+    assert np.count_nonzero(G[0]) == 16
+
+
+def test_surface_edit_conditions_are_the_kronecker_rows_of_the_requests():
+    from occsurf.algorithms.manipulation.surfaces import _edit_conditions, _surface_basis_rows
+
+    s = _plate(5)
+    G = _surface_basis_rows(s, 0.4, 0.7)
+    act = np.flatnonzero(np.any(G != 0, axis=0))
+    Ga = G[:, act]
+    inv_sw = np.linspace(0.5, 2.0, act.size)
+    D0 = G @ s.control_points.reshape(-1, 3)
+    T, du = np.array([1.0, 2.0, 3.0]), np.array([3.0, 0.0, 0.5])
+    n = np.array([0.0, 0.6, 0.8])
+    J, r, names, nrm = _edit_conditions(Ga, inv_sw, D0, T, du, None, 2 * n, "(u=0.4, v=0.7)")
+    assert J.shape == (3 + 3 + 2, 3 * act.size) and r.shape == (8,) and len(names) == 8
+    assert_allclose(J[:3], np.kron(Ga[0] * inv_sw, np.eye(3)), rtol=0, atol=0)
+    assert_allclose(J[3:6], np.kron(Ga[1] * inv_sw, np.eye(3)), rtol=0, atol=0)
+    assert_allclose(J[6], np.kron(Ga[1] * inv_sw, n), atol=1e-15)
+    assert_allclose(J[7], np.kron(Ga[2] * inv_sw, n), atol=1e-15)
+    assert_allclose(r, np.r_[T - D0[0], du - D0[1], -n @ D0[1], -n @ D0[2]], atol=1e-15)
+    assert_allclose(nrm, n, atol=1e-15)
+    assert names[0] == "position (u=0.4, v=0.7) [0]" and names[6] == "normal.S_u (u=0.4, v=0.7) [0]"
+    # target=None keeps the point: zero right-hand side for the position rows.
+    J, r, _, nrm = _edit_conditions(Ga, inv_sw, D0, None, None, None, None, "here")
+    assert J.shape == (3, 3 * act.size) and np.all(r == 0) and nrm is None
+    with pytest.raises(InvalidGeometryError, match=r"^du: expected shape \(3,\), got \(2,\)"):
+        _edit_conditions(Ga, inv_sw, D0, T, [1.0, 2.0], None, None, "here")
+    with pytest.raises(InvalidGeometryError, match="^normal: expected a non-zero vector"):
+        _edit_conditions(Ga, inv_sw, D0, T, None, None, [0.0, 0.0, 0.0], "here")
+    with pytest.raises(InvalidGeometryError, match="^normal: needs a 3-D surface, this one has dim 2"):
+        _edit_conditions(Ga, inv_sw, D0[:, :2], None, None, None, [0.0, 0.0, 1.0], "here")
+
+
+def test_surface_edit_min_norm_change_and_its_checks():
+    from occsurf.algorithms.manipulation.surfaces import _min_norm_change
+
+    rng = np.random.default_rng(8)
+    J = rng.normal(size=(4, 9))
+    r = rng.normal(size=4)
+    D0 = rng.normal(size=(3, 3))
+    y = _min_norm_change(J, r, [f"c{i}" for i in range(4)], D0)
+    assert_allclose(y, sla.lstsq(J, r, lapack_driver="gelsd")[0], atol=1e-13)
+    J2 = np.vstack([J, J[0]])  # a repeated condition with another target: a conflict, named
+    with pytest.raises(ConstraintError, match=r"conflicting.*\(5 conditions, 3 active poles x 3\)") as info:
+        _min_norm_change(J2, np.r_[r, r[0] + 1.0], [f"c{i}" for i in range(5)], D0)
+    assert "c4" in info.value.labels
+    assert_allclose(_min_norm_change(J2, np.r_[r, r[0]], [f"c{i}" for i in range(5)], D0), y, atol=1e-13)
+
+
+def test_surface_edit_orientation_check():
+    from occsurf.algorithms.manipulation.surfaces import _check_orientation
+
+    D1 = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0]])  # S_u x S_v along +z
+    _check_orientation(D1, np.array([0.0, 0.6, 0.8]), "p")
+    with pytest.raises(ConstraintError, match=r"would then be \[ 0\.  0\. -1\.\] \(reversed or degenerate\)"):
+        _check_orientation(D1[[0, 2, 1]], np.array([0.0, 0.0, 1.0]), "p")
+    with pytest.raises(ConstraintError, match="would then be degenerate"):
+        _check_orientation(np.array([[0.0] * 3, [1.0, 0, 0], [2.0, 0, 0]]), np.array([0.0, 0.0, 1.0]), "p")
+
+
+def test_manipulation_modules_import_no_private_names():
+    """surfaces.py takes the parameter check from constraints.py's public as_parameter."""
+    import ast
+    from pathlib import Path
+
+    import occsurf.algorithms.manipulation as M
+
+    for path in Path(M.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level and node.module:  # not `from .. import _validate`
+                private = [a.name for a in node.names if a.name.startswith("_")]
+                assert not private, f"{path.name} imports private names {private} from {node.module}"
+
+
 # ---------------------------------------------------------------------------------------- boundary
 def test_algorithms_modules_do_not_import_occ_or_matplotlib():
     code = (

@@ -1,7 +1,7 @@
 """S-patches (course §8-1, 8-2; Loop & DeRose 1989): Wachspress coordinates, evaluation, derivatives,
 boundary curves, cross-boundary derivatives, the 3- and 4-sided identities, rational patches.
 
-Oracles written here, independent of algorithms/spatch.py: barycentric coordinates of a triangle by
+Oracles written here, independent of algorithms/topology/spatch.py: barycentric coordinates of a triangle by
 a linear solve and a triangular de Casteljau; bilinear coordinates of the square; tensor-product
 Bézier surfaces (BSplineSurface); a dict-polynomial multinomial expansion; sympy's exact
 derivatives of the Wachspress coordinates; Richardson-extrapolated central differences.
@@ -527,8 +527,9 @@ def test_invalid_points_and_sides():
 def test_too_many_sides_and_bad_index_tuples():
     """Review (issue 4 error paths): sides beyond MAX_SIDES, and index tuples that are not n
     non-negative integers summing to d, are refused with a message naming them."""
-    from occsurf.algorithms.topology.spatch import MAX_SIDES
+    from occsurf.algorithms import tolerances
 
+    MAX_SIDES = tolerances.SPATCH_MAX_SIDES
     with pytest.raises(InvalidGeometryError, match=f"sides: expected an integer from 3 to {MAX_SIDES}, got {MAX_SIDES + 1}"):
         SPatch(MAX_SIDES + 1, 1, np.zeros((MAX_SIDES + 1, 3)))
     with pytest.raises(InvalidGeometryError, match="sides"):
@@ -543,3 +544,40 @@ def test_too_many_sides_and_bad_index_tuples():
         p.boundary_indices(0, -1)
     with pytest.raises(InvalidGeometryError, match="unexpected"):
         SPatch(3, 1, {(2, -1, 0): [0, 0], (0, 1, 0): [1, 0], (0, 0, 1): [0, 1]})
+
+
+def test_spatch_tolerances_are_read_at_call_time():
+    """SPATCH_MAX_SIDES and SPATCH_DOMAIN_SLACK come from occsurf.algorithms.tolerances when a
+    patch is built or evaluated, so an override applies to the block and nothing else."""
+    from occsurf.algorithms import tolerances
+
+    with tolerances.override(SPATCH_MAX_SIDES=5):
+        with pytest.raises(InvalidGeometryError, match=r"^sides: expected an integer from 3 to 5, got 6$"):
+            SPatch(6, 1, np.zeros((6, 3)))
+        with pytest.raises(InvalidGeometryError, match="from 3 to 5"):
+            domain_vertices(6)
+        assert SPatch(5, 1, np.zeros((5, 3))).sides == 5
+    assert SPatch(6, 1, np.zeros((6, 3))).sides == 6
+    p = random_patch(np.random.default_rng(12), 5, 2)
+    v = domain_vertices(5)
+    outside = 0.5 * (v[0] + v[1]) * (1 + 1e-6)  # beyond side 0 by 8e-7
+    with pytest.raises(ParameterError, match="outside the regular 5-gon"):
+        p.evaluate(outside)
+    with tolerances.override(SPATCH_DOMAIN_SLACK=1e-5):
+        assert np.all(np.isfinite(p.evaluate(outside)))
+
+
+@pytest.mark.parametrize("n", [3, 5, 8])
+def test_shared_index_and_normal_helpers(n):
+    """The trusted helpers shared by spatch and spatch_convert (topology._common) agree with the
+    public functions: the same index order, and side k's outward normal through the midpoint of
+    vertices k and k+1 at the apothem cos(pi/n)."""
+    from occsurf.algorithms.topology._common import edge_normals, index_tuples
+
+    for d in (1, 2, 4):
+        assert np.array_equal(np.array(index_tuples(n, d)), spatch_indices(n, d))
+    assert index_tuples(n, 0) == ((0,) * n,)
+    v, nrm = domain_vertices(n), edge_normals(n)
+    mids = 0.5 * (v + np.roll(v, -1, axis=0))
+    assert_allclose(nrm * np.cos(np.pi / n), mids, rtol=0, atol=1e-15)
+    assert_allclose(np.linalg.norm(nrm, axis=1), 1.0, rtol=0, atol=1e-15)

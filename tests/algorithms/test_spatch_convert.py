@@ -1,4 +1,4 @@
-"""S-patch -> rational tensor-product pieces (algorithms/spatch_convert.py): the exact path against
+"""S-patch -> rational tensor-product pieces (algorithms/topology/spatch_convert.py): the exact path against
 SPatch.evaluate, the shared piece boundaries, the bidegrees, the approximation path and its
 measured deviation."""
 
@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from occsurf.algorithms.topology import spatch_convert as conv
+from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError, ToleranceError
 from occsurf.algorithms.topology.spatch import SPatch
 from occsurf.algorithms.topology.spatch_convert import (
@@ -138,7 +138,7 @@ def test_approximation_beyond_degree_25():
     patch = random_patch(rng, 9, 4)
     tol = 1e-5
     res = convert_spatch(patch, tol=tol)
-    assert not res.exact and res.method == "lsq-fit" and res.degree == (conv.APPROX_DEGREE,) * 2
+    assert not res.exact and res.method == "lsq-fit" and res.degree == (tolerances.SPATCH_APPROX_DEGREE,) * 2
     assert res.max_deviation <= tol
     measured = _max_error_vs_patch(patch, res.surfaces, rng, 2000)
     assert measured <= 1.5 * tol
@@ -151,10 +151,9 @@ def test_approximation_beyond_degree_25():
         assert_allclose(a, b, rtol=0, atol=1e-12)
 
 
-def test_approximation_that_cannot_reach_tol(monkeypatch):
-    monkeypatch.setattr(conv, "APPROX_MAX_POLES", 8)
+def test_approximation_that_cannot_reach_tol():
     patch = random_patch(np.random.default_rng(14), 9, 4)
-    with pytest.raises(ToleranceError, match="could not be approximated"):
+    with tolerances.override(SPATCH_APPROX_MAX_POLES=8), pytest.raises(ToleranceError, match="could not be approximated"):
         convert_spatch(patch, tol=1e-12)
 
 
@@ -165,3 +164,13 @@ def test_invalid_arguments():
     for bad in (0.0, -1.0, np.nan, "x"):
         with pytest.raises(InvalidGeometryError, match="tol"):
             convert_spatch(patch, tol=bad)
+
+
+def test_reduction_tolerance_is_read_at_call_time():
+    """SPATCH_REDUCTION_TOL is read when converting: a negative tolerance accepts no reduction,
+    so the 4-sided pieces keep the exact bidegree 2d."""
+    patch = random_patch(np.random.default_rng(16), 4, 3)
+    assert convert_spatch(patch).method == "exact-reduced" and convert_spatch(patch).degree == (3, 3)
+    with tolerances.override(SPATCH_REDUCTION_TOL=-1.0):
+        res = convert_spatch(patch)
+    assert res.method == "exact" and res.degree == (6, 6)

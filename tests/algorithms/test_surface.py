@@ -6,6 +6,7 @@ Tolerances are relative to a scale of the compared quantity (see test_curve's mo
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 
@@ -17,7 +18,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 from scipy.interpolate import NdBSpline
 from scipy.special import comb
 
-from occsurf.algorithms import BSplineSurface
+from occsurf.algorithms import BSplineCurve, BSplineSurface
 
 from .strategies import affine_maps, fractions, surfaces, test_settings
 
@@ -256,7 +257,7 @@ def test_insert_knot_keeps_geometry(s, f, times, direction):
     ax = "uv".index(direction)
     x = interior(*s.domain[ax], f)
     assume(int(np.count_nonzero(s.knots[ax] == x)) + times <= s.degree[ax])
-    s2 = s.insert_knot(x, direction, times)
+    s2 = s.insert_knot(x, times, direction=direction)
     assert s2.n_poles[ax] == s.n_poles[ax] + times and s2.n_poles[1 - ax] == s.n_poles[1 - ax]
     assert_array_equal(s2.knots[1 - ax], s.knots[1 - ax])
     assert_same_geometry(s, s2, pole_scale(s))
@@ -269,7 +270,7 @@ def test_refine_keeps_geometry(s, fs, direction):
     x = np.array([interior(*s.domain[ax], f) for f in fs])
     t = np.sort(np.concatenate((s.knots[ax], x)))
     assume(np.max(np.unique(t, return_counts=True)[1]) <= s.degree[ax] + 1)
-    s2 = s.refine(x, direction)
+    s2 = s.refine(x, direction=direction)
     assert_array_equal(s2.knots[ax], t)
     assert_same_geometry(s, s2, pole_scale(s))
 
@@ -278,7 +279,7 @@ def test_refine_keeps_geometry(s, fs, direction):
 @given(s=surfaces(**SMALL), times=st.integers(1, 2), direction=st.sampled_from("uv"))
 def test_elevate_degree_keeps_geometry(s, times, direction):
     ax = "uv".index(direction)
-    s2 = s.elevate_degree(direction, times)
+    s2 = s.elevate_degree(times, direction=direction)
     assert s2.degree[ax] == s.degree[ax] + times and s2.degree[1 - ax] == s.degree[1 - ax]
     assert s2.domain == s.domain
     assert_same_geometry(s, s2, pole_scale(s))
@@ -299,7 +300,7 @@ def test_clamp_keeps_geometry(s):
 def test_split_pieces_reproduce_the_surface(s, f, direction):
     ax = "uv".index(direction)
     lo, hi = s.domain[ax]
-    a, b = s.split(interior(lo, hi, f), direction)
+    a, b = s.split(interior(lo, hi, f), direction=direction)
     x = a.domain[ax][1]
     assert b.domain[ax] == (x, hi) and a.domain[ax][0] == lo
     assert x == pytest.approx(interior(lo, hi, f), rel=0, abs=1e-12 * max(hi - lo, 1.0))
@@ -333,7 +334,7 @@ def test_insert_then_remove_returns_the_original(s, f, times, direction):
     ax = "uv".index(direction)
     x = interior(*s.domain[ax], f)
     assume(int(np.count_nonzero(s.knots[ax] == x)) + times <= s.degree[ax])
-    back = s.insert_knot(x, direction, times).remove_knot(x, direction, times)
+    back = s.insert_knot(x, times, direction=direction).remove_knot(x, times, direction=direction)
     assert_same_surface_data(back, s, pole_scale(s))
 
 
@@ -408,12 +409,12 @@ def test_points_lie_in_the_bounding_box_of_the_active_poles(data):
 def test_reverse(data, direction):
     s = data.draw(surfaces(**SMALL))
     ax = "uv".index(direction)
-    r = s.reverse(direction)
+    r = s.reverse(direction=direction)
     u, v = data.draw(surface_points(s))
     (u0, u1), (v0, v1) = s.domain
     ur, vr = (np.clip(u0 + u1 - u, *r.domain[0]), v) if ax == 0 else (u, np.clip(v0 + v1 - v, *r.domain[1]))
     assert_allclose(r.evaluate(ur, vr), s.evaluate(u, v), rtol=0, atol=EXACT * pole_scale(s))
-    rr = r.reverse(direction)
+    rr = r.reverse(direction=direction)
     assert rr.degree == s.degree
     assert_array_equal(rr.knots[1 - ax], s.knots[1 - ax])
     # (a+b) - ((a+b) - t) is t up to one rounding of the sum; poles and weights are copied.
@@ -458,13 +459,13 @@ def test_reparametrize_keeps_the_knot_vectors_non_decreasing():
 
 
 OPERATIONS = {
-    "insert_knot": lambda s, d, x: s.insert_knot(x, d),
-    "refine": lambda s, d, x: s.refine([x, x], d),
-    "elevate_degree": lambda s, d, x: s.elevate_degree(d),
-    "split_left": lambda s, d, x: s.split(x, d)[0],
-    "split_right": lambda s, d, x: s.split(x, d)[1],
-    "reverse": lambda s, d, x: s.reverse(d),
-    "insert_remove": lambda s, d, x: s.insert_knot(x, d).remove_knot(x, d),
+    "insert_knot": lambda s, d, x: s.insert_knot(x, direction=d),
+    "refine": lambda s, d, x: s.refine([x, x], direction=d),
+    "elevate_degree": lambda s, d, x: s.elevate_degree(direction=d),
+    "split_left": lambda s, d, x: s.split(x, direction=d)[0],
+    "split_right": lambda s, d, x: s.split(x, direction=d)[1],
+    "reverse": lambda s, d, x: s.reverse(direction=d),
+    "insert_remove": lambda s, d, x: s.insert_knot(x, direction=d).remove_knot(x, direction=d),
 }
 
 
@@ -480,6 +481,40 @@ def test_operations_along_v_equal_swap_uv_then_along_u(data, name):
     # And the swap itself: S'(v, u) = S(u, v).
     u, v = data.draw(surface_points(s))
     assert_allclose(s.swap_uv().evaluate(v, u), s.evaluate(u, v), rtol=0, atol=EXACT * pole_scale(s))
+
+
+# ----------------------------------------------------------------- one directional convention
+#: The methods that work along one direction (the rule is in the BSplineSurface docstring).
+DIRECTIONAL = ("elevate_degree", "insert_knot", "refine", "remove_knot", "reverse", "split")
+
+
+def test_directional_methods_follow_the_curve_signatures():
+    """Each directional method takes the curve method's parameters (names, kinds, defaults,
+    annotations, in order), then ``direction``: keyword-only, no default. No other public
+    method takes a direction."""
+    public = [n for n, _ in inspect.getmembers(BSplineSurface, inspect.isfunction) if not n.startswith("_")]
+    takes_direction = [n for n in public if "direction" in inspect.signature(getattr(BSplineSurface, n)).parameters]
+    assert sorted(takes_direction) == list(DIRECTIONAL)
+    for name in DIRECTIONAL:
+        curve = list(inspect.signature(getattr(BSplineCurve, name)).parameters.values())
+        *leading, direction = inspect.signature(getattr(BSplineSurface, name)).parameters.values()
+        assert [(p.name, p.kind, p.default, p.annotation) for p in leading] == \
+            [(p.name, p.kind, p.default, p.annotation) for p in curve], name
+        assert direction.name == "direction", name
+        assert direction.kind is inspect.Parameter.KEYWORD_ONLY, name
+        assert direction.default is inspect.Parameter.empty, name
+
+
+def test_direction_must_be_given_by_keyword():
+    s = BSplineSurface((2, 2), ([0, 0, 0, 1, 1, 1], [0, 0, 0, 1, 1, 1]), np.zeros((3, 3, 3)))
+    with pytest.raises(TypeError, match="direction"):
+        s.insert_knot(0.5)
+    with pytest.raises(TypeError):
+        s.insert_knot(0.5, 1, "v")
+    with pytest.raises(TypeError):
+        s.elevate_degree("u")
+    assert s.insert_knot(0.5, direction="v").n_poles == (3, 4)
+    assert s.elevate_degree(direction="u").degree == (3, 2)
 
 
 # ------------------------------------------------------------------------------- serialisation

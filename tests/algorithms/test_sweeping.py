@@ -7,20 +7,21 @@ is off the fitting and check sites) plus round-off. At points not used by the al
 the cases below, asserted at ``1.5 tol`` (a cubic interpolant's error curve between 5 check points
 per span cannot rise much above its sampled maximum when the span error is O(h^4)-smooth).
 The rotation-minimising frame field is compared with an independent ODE solution (scipy
-``solve_ivp``, rtol 1e-12): measured 8e-12 with RMF_STEPS = 128, asserted at 1e-9.
+``solve_ivp``, rtol 1e-12): measured 8e-12 with SWEEP_RMF_STEPS = 128, asserted at 1e-9.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from numpy.testing import assert_allclose
+from numpy.testing import assert_allclose, assert_array_equal
 from scipy.integrate import solve_ivp
 
 import occsurf.algorithms.construction.sweeping as sw
-from occsurf.algorithms import BSplineCurve, arc, circle
+from occsurf.algorithms import BSplineCurve, arc, circle, tolerances
 from occsurf.algorithms.errors import InvalidGeometryError, ToleranceError
 from occsurf.algorithms.fitting.interpolation import interpolate_curve
+from occsurf.algorithms.kernel.basis import greville
 from occsurf.algorithms.construction.generation import translational_sweep
 from occsurf.algorithms.construction.sweeping import SweepResult, exact_sweep, sweep
 
@@ -159,7 +160,7 @@ def test_rmf_sweep_independent_of_start_normal_and_rigid_motion():
 
 
 # ------------------------------------------------------------------------------ errors
-def test_errors(monkeypatch):
+def test_errors():
     path = line([0, 0, 0], [0, 0, 1])
     prof = line([1, 0, 0], [2, 0, 0])
     with pytest.raises(InvalidGeometryError, match="frame"):
@@ -180,9 +181,8 @@ def test_errors(monkeypatch):
         sweep(prof, BSplineCurve(1, [0, 0, 1, 1], [[0, 0], [1, 1]]))
     with pytest.raises(InvalidGeometryError, match="profile"):
         sweep(None, path)
-    monkeypatch.setattr(sw, "MAX_SECTIONS", 60)
-    with pytest.raises(ToleranceError, match="not reached"):   # a jump in the twist never converges
-        sweep(prof, path, twist=lambda t: np.where(t > 0.3, 1.0, 0.0), tol=1e-6)
+    with tolerances.override(SWEEP_MAX_SECTIONS=60), pytest.raises(ToleranceError, match="not reached"):
+        sweep(prof, path, twist=lambda t: np.where(t > 0.3, 1.0, 0.0), tol=1e-6)   # a jump in the twist never converges
 
 
 def test_tol_that_is_not_a_number_is_named():
@@ -264,3 +264,119 @@ def test_rmf_sweep_along_a_closed_non_planar_path_closes():
     assert r.max_error <= 1e-7
     # an open path keeps the pure RMF (no correction)
     assert sw._FrameField(closed.segment(*closed.domain[:1], closed.domain[1] - 0.5), "rmf").holonomy == 0.0
+
+
+# ------------------------------------------------------------------------------ tolerances
+def test_sweep_tolerance_override_is_met_by_the_report():
+    path, prof = _review_path()
+    size = max(1.0, float(np.abs(prof.control_points).max()), float(np.abs(path.control_points).max()))
+    default = sweep(prof, path, return_report=True)
+    assert default.tol == 1e-6 * size
+    with tolerances.override(SWEEP_TOLERANCE=1e-9):
+        r = sweep(prof, path, return_report=True)
+    assert r.tol == 1e-9 * size
+    assert r.pole_bound <= r.tol and r.max_error <= r.tol
+    assert r.n_sections > default.n_sections
+    assert sweep(prof, path, tol=1e-9 * size, return_report=True) == r  # the same as an explicit tol=
+
+
+def test_check_and_verify_points_follow_an_override_of_their_counts():
+    assert_allclose(sw._check_fractions(), (np.arange(5) + 0.5) / 5 * 0.96 + 0.013, rtol=0, atol=0)
+    assert sw._verify_fractions().shape == (9,)
+    with tolerances.override(SWEEP_CHECKS_PER_SPAN=3, SWEEP_VERIFY_PER_SPAN=4):
+        assert sw._check_fractions().shape == (3,) and sw._verify_fractions().shape == (4,)
+        path, prof = _review_path()
+        r = sweep(prof, path, return_report=True)
+    assert r.pole_bound <= r.tol
+    # n_checked = (8 per profile span + 2 ends) x (4 per v span)
+    n_u = 8 * (np.unique(prof.knots).shape[0] - 1) + 2
+    assert r.n_checked == n_u * 4 * (np.unique(r.surface.knots[1]).shape[0] - 1)
+
+
+def test_frame_and_knot_limits_are_read_from_tolerances():
+    path = helix_path()
+    spans = np.unique(path.knots).shape[0] - 1
+    assert sw._FrameField(path, "rmf").grid.shape == (128 * spans + 1,)
+    with tolerances.override(SWEEP_RMF_STEPS=16):
+        assert sw._FrameField(path, "rmf").grid.shape == (16 * spans + 1,)
+    K = sw._initial_knots(path, "rmf", 3)
+    with tolerances.override(SWEEP_INITIAL_PIECES=4):
+        K4 = sw._initial_knots(path, "rmf", 3)
+    assert K4.shape[0] - K.shape[0] == 2 * spans  # two more cuts per span
+
+
+def test_kink_angle_override_decides_whether_a_joint_is_a_kink():
+    kink = BSplineCurve(1, [0, 0, 0.5, 1, 1], [[0, 0, 0], [0, 0, 1], [1e-6, 0, 2]])  # turns by 1e-6 rad
+    with pytest.raises(InvalidGeometryError, match=r"^path: not tangent-continuous at v = 0.5"):
+        sw._check_joints(kink, "rmf", 2.0)
+    with tolerances.override(SWEEP_KINK_ANGLE=1e-5):
+        sw._check_joints(kink, "rmf", 2.0)
+
+
+def test_close_tol_override_decides_whether_a_path_is_closed():
+    th = np.linspace(0, 2 * np.pi, 13)[:-1]
+    pts = np.c_[2 * np.cos(th), np.sin(th), 0.6 * np.sin(2 * th)]
+    P = np.vstack((pts, pts[:3]))
+    P[-1] += [0, 0, 1e-6]  # the end moves 1e-6 off the start (the tangents still agree within 1e-6)
+    almost = BSplineCurve(3, np.arange(P.shape[0] + 4, dtype=float), P).clamp()
+    assert sw._FrameField(almost, "rmf").holonomy == 0.0  # 1e-6 > SWEEP_CLOSE_TOL * size
+    with tolerances.override(SWEEP_CLOSE_TOL=1e-5, SWEEP_CLOSE_ANGLE=1e-3):
+        assert abs(sw._FrameField(almost, "rmf").holonomy) > 1.0
+
+
+# ------------------------------------------------------------------------------ the steps
+def test_absolute_tolerance():
+    assert sw._absolute_tolerance(None, 3.0) == 1e-6 * 3.0
+    with tolerances.override(SWEEP_TOLERANCE=1e-8):
+        assert sw._absolute_tolerance(None, 3.0) == 1e-8 * 3.0
+    assert sw._absolute_tolerance("1e-5", 3.0) == 1e-5
+    for bad in (0.0, -1.0, np.inf, np.nan, "a", []):
+        with pytest.raises(InvalidGeometryError, match=r"^tol: expected a positive finite number"):
+            sw._absolute_tolerance(bad, 3.0)
+
+
+def _rows(K, q=3):
+    n = K.shape[0] - q - 1
+    return BSplineCurve._trusted(q, K, np.zeros((n, 3)))
+
+
+def test_split_spans_cuts_each_bad_span_as_the_error_model_asks():
+    K = np.r_[[0.0] * 4, 0.25, 0.5, 0.75, [1.0] * 4]  # 4 spans
+    tol = 1e-6
+    err = np.array([0.0, 1e4 * tol, 2 * tol, 0.5 * tol])
+    new = np.setdiff1d(sw._split_spans(_rows(K), err, tol, (0.0, 1.0)), K)
+    # span 1: ceil(1.2 * 10) = 12 pieces; span 2: ceil(1.2 * 2^(1/4)) = 2 pieces
+    assert_allclose(new, np.r_[0.25 + 0.25 * np.arange(1, 12) / 12, 0.625], rtol=0, atol=1e-15)
+    with tolerances.override(SWEEP_MAX_SPLIT=4, SWEEP_SPLIT_SAFETY=1.0):
+        new = np.setdiff1d(sw._split_spans(_rows(K), err, tol, (0.0, 1.0)), K)
+    assert_allclose(new, np.r_[0.25 + 0.25 * np.arange(1, 4) / 4, 0.625], rtol=0, atol=1e-15)
+    with tolerances.override(SWEEP_MAX_SECTIONS=15), pytest.raises(ToleranceError, match="not reached with 15 "):
+        sw._split_spans(_rows(K), err, tol, (0.0, 1.0))  # 7 rows + 12 new ones
+    with tolerances.override(SWEEP_MIN_SPAN=0.05), pytest.raises(ToleranceError, match=r"does not fall .* v = 0\.25"):
+        sw._split_spans(_rows(K), err, tol, (0.0, 1.0))  # 0.25 / 12 < 0.05
+
+
+def test_fit_rows_interpolate_the_exact_pole_rows_at_the_greville_abscissae():
+    path, prof = _review_path()
+    ex = sw._Sweep(prof, path, "rmf", None, None)
+    K = sw._initial_knots(path, "rmf", 3)
+    rows, err = sw._fit_rows(ex, K, 3)
+    assert_array_equal(rows.knots, K)
+    sites = greville(K, 3)
+    exact = ex.place(sites, prof.control_points).reshape(sites.shape[0], -1)
+    assert_allclose(rows(sites), exact, rtol=0, atol=1e-13)
+    assert err.shape == (np.unique(K).shape[0] - 1,) and np.all(err > 0)
+
+
+def test_refine_meets_the_tolerance_at_the_verification_points():
+    path, prof = _review_path()
+    ex = sw._Sweep(prof, path, "rmf", None, None)
+    fit = sw._refine(ex, sw._initial_knots(path, "rmf", 3), 3, 1e-7)
+    assert fit.iterations >= 2 and fit.span_errors.max() <= 1e-7
+    a, b = sw._spans(fit.rows.knots, 3)
+    assert fit.verify_v.shape == (9 * a.shape[0],) and np.all(np.diff(fit.verify_v) > 0)
+    surface = sw._surface_from_rows(prof, fit.rows)
+    assert surface.degree == (prof.degree, 3) and surface.weights is not None  # the circle is rational
+    uu = np.linspace(*prof.domain, 17)
+    E = sw.exact_sweep(prof, path, uu, fit.verify_v)
+    assert np.linalg.norm(surface.evaluate_grid(uu, fit.verify_v) - E, axis=-1).max() <= fit.span_errors.max()

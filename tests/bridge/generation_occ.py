@@ -51,7 +51,7 @@ from occsurf.algorithms import BSplineCurve, BSplineSurface
 from occsurf.algorithms.errors import KernelError
 
 from occsurf.bridge import _occ
-from occsurf.bridge.conversion.splines import _make_edge, to_occ
+from occsurf.bridge.conversion.splines import make_edge, to_occ
 
 __all__ = [
     "revolution_surface",
@@ -116,7 +116,7 @@ def revolution_surface(profile: BSplineCurve, origin: ArrayLike, direction: Arra
 def revolution_face(profile: BSplineCurve, origin: ArrayLike, direction: ArrayLike, angle: float) -> TopoDS_Face:
     """``BRepPrimAPI_MakeRevol`` of the profile edge."""
     with _occ.kernel_errors("BRepPrimAPI_MakeRevol"):
-        mk = BRepPrimAPI_MakeRevol(_make_edge(profile), _ax1(origin, direction), float(angle), True)
+        mk = BRepPrimAPI_MakeRevol(make_edge(profile), _ax1(origin, direction), float(angle), True)
         mk.Build()
         if not mk.IsDone():
             raise KernelError("BRepPrimAPI_MakeRevol failed")
@@ -151,7 +151,7 @@ def extrusion_surface(curve: BSplineCurve, vector: ArrayLike) -> Geom_Surface:
 def prism_face(curve: BSplineCurve, vector: ArrayLike) -> TopoDS_Face:
     """``BRepPrimAPI_MakePrism`` of the curve edge."""
     with _occ.kernel_errors("BRepPrimAPI_MakePrism"):
-        mk = BRepPrimAPI_MakePrism(_make_edge(curve), gp_Vec(*map(float, vector)), True)
+        mk = BRepPrimAPI_MakePrism(make_edge(curve), gp_Vec(*map(float, vector)), True)
         mk.Build()
         if not mk.IsDone():
             raise KernelError("BRepPrimAPI_MakePrism failed")
@@ -167,13 +167,13 @@ def ruled_surface(c1: BSplineCurve, c2: BSplineCurve) -> Geom_Surface:
 def ruled_face(c1: BSplineCurve, c2: BSplineCurve) -> TopoDS_Face:
     """``BRepFill::Face(e1, e2)``: the ruled face between two edges."""
     with _occ.kernel_errors("BRepFill::Face"):
-        return BRepFill.Face_s(_make_edge(c1), _make_edge(c2))
+        return BRepFill.Face_s(make_edge(c1), make_edge(c2))
 
 
 # ---------------------------------------------------------------------------------- sweeps
 def _wire(curve: BSplineCurve):
     with _occ.kernel_errors("BRepBuilderAPI_MakeWire"):
-        mw = BRepBuilderAPI_MakeWire(_make_edge(curve))
+        mw = BRepBuilderAPI_MakeWire(make_edge(curve))
         if not mw.IsDone():
             raise KernelError("BRepBuilderAPI_MakeWire failed")
         return mw.Wire()

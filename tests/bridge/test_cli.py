@@ -1,4 +1,4 @@
-"""Tests of the ``occsurf`` command line (``bridge/cli.py``) and of the files in ``step_samples/``.
+"""Tests of the ``occsurf`` command line (``bridge/cli/``) and of the files in ``step_samples/``.
 
 Most tests call :func:`occsurf.bridge.cli.main` with ``--in-process`` (OCC is loaded once, in pytest); the
 ones that need a real process boundary (``python -m occsurf.bridge.cli``, crash isolation, ``--help``
@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from occsurf.bridge import cli
+from occsurf.bridge.cli import _common as cli_common
 
 REPO = Path(__file__).resolve().parents[2]
 SAMPLES = REPO / "step_samples"
@@ -340,7 +341,7 @@ def test_default_is_step_samples_from_cwd_or_package(tmp_path: Path) -> None:
 
 
 def test_no_samples_folder(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
-    monkeypatch.setattr(cli, "find_samples_dir", lambda cwd=None: None)
+    monkeypatch.setattr(cli_common, "find_samples_dir", lambda cwd=None: None)
     code, out, err = run_main(capsys, "inspect")
     assert code == 2 and out == ""
     assert err.startswith("occsurf: no step_samples/ folder found") and err.count("\n") == 1

@@ -1,4 +1,4 @@
-"""Tests of ``occsurf fill`` (bridge/cli.py) on step_samples/holes/ and on failing inputs."""
+"""Tests of ``occsurf fill`` (bridge/cli/fill.py) on step_samples/holes/ and on failing inputs."""
 
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from occsurf.bridge import cli
-from occsurf.bridge.conversion.splines import _make_face
+from occsurf.bridge.conversion.splines import make_face
 from occsurf.bridge.exchange.step_iges import read_step, write_step
-from occsurf.bridge.modeling.fill import _sew
+from occsurf.bridge.modeling.fill import sew_faces
 from occsurf.examples.hole_models import ring_model
 
 REPO = Path(__file__).resolve().parents[2]
@@ -61,7 +61,7 @@ def test_unfillable_hole_reported_others_filled(capsys, tmp_path: Path) -> None:
     good = ring_model(4, center=(0.3, 0.5), radius=0.1, width=0.08)
     sq = np.array([[0.6, 0.4], [0.8, 0.4], [0.8, 0.5], [0.8, 0.6], [0.6, 0.6]])
     flat = ring_model(5, polygon=sq, bump=0.0, radius=0.1, width=0.08)
-    src = write_step(tmp_path / "two.step", _sew([_make_face(f, 1e-7) for m in (good, flat) for f in m.faces]))
+    src = write_step(tmp_path / "two.step", sew_faces([make_face(f, 1e-7) for m in (good, flat) for f in m.faces]))
     out_file = tmp_path / "out.step"
     code, out, err = run_main(capsys, "fill", str(src), "--out", str(out_file), "--no-occ")
     assert code == 2
@@ -130,3 +130,44 @@ def test_unwritable_out_is_refused_before_any_work(capsys, tmp_path: Path) -> No
     assert code == 2 and out == "" and "does not exist or is not writable" in err
     code, out, err = run_main(capsys, "fill", str(HOLES / "dome_holes.step"), "--out", str(tmp_path))
     assert code == 2 and "is a directory" in err
+
+
+@pytest.mark.skipif(os.name != "posix", reason="needs POSIX signals")
+def test_reader_crash_is_one_line_exit_2(capsys, tmp_path: Path, monkeypatch) -> None:
+    """A segmentation fault while the worker reads the file: one line on stderr, exit 2, no output
+    file, and this process lives on. The fault comes from an audit hook (``sitecustomize`` on the
+    worker's path) on opening the file, not from a real OCC defect."""
+    hook_dir = tmp_path / "hook"
+    hook_dir.mkdir()
+    (hook_dir / "sitecustomize.py").write_text(
+        "import os, signal, sys\n"
+        "def _crash(event, args):\n"
+        "    if event == 'open' and str(args[0]).endswith('crash-me.step'):\n"
+        "        os.kill(os.getpid(), signal.SIGSEGV)\n"
+        "sys.addaudithook(_crash)\n"
+    )
+    crash = tmp_path / "crash-me.step"
+    crash.write_bytes((HOLES / "dome_holes.step").read_bytes())
+    monkeypatch.setenv("PYTHONPATH", str(hook_dir))  # the worker's environment (isolation.worker_env)
+    code, out, err = run_main(capsys, "fill", str(crash), "--out", str(tmp_path / "o.step"), "--no-occ")
+    assert code == 2 and out == ""
+    assert err.splitlines() == [
+        f"occsurf: {crash}: the worker process crashed while reading and filling this file "
+        "(killed by SIGSEGV; a fault inside OpenCascade)"
+    ]
+    assert not (tmp_path / "o.step").exists()
+
+
+def test_in_process_gives_the_same_document(capsys, tmp_path: Path) -> None:
+    """``--in-process`` skips the worker; the JSON is the same but for the times."""
+    docs = []
+    for flags in ((), ("--in-process",)):
+        code, out, err = run_main(capsys, "fill", str(HOLES / "rational_holes.step"), "--out",
+                                  str(tmp_path / f"r{len(docs)}.step"), "--json", "--no-occ", *flags)
+        assert code == 0 and err == "", err
+        doc = json.loads(out)
+        for h in doc["holes"]:
+            h.pop("seconds")
+        doc.pop("output")
+        docs.append(doc)
+    assert docs[0] == docs[1]

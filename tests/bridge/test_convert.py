@@ -288,7 +288,7 @@ def test_surface_bounds_segment_like_our_kernel(s, f):
     c, d = sorted((v0 + f[2] * (v1 - v0), v0 + f[3] * (v1 - v0)))
     assume(b - a > 1e-3 * (u1 - u0) and d - c > 1e-3 * (v1 - v0))
     assume(_clear_of_knots(s.knots[0], (a, b), u1 - u0) and _clear_of_knots(s.knots[1], (c, d), v1 - v0))
-    ours = s.split(b, "u")[0].split(a, "u")[1].split(d, "v")[0].split(c, "v")[1]
+    ours = s.split(b, direction="u")[0].split(a, direction="u")[1].split(d, direction="v")[0].split(c, direction="v")[1]
     back = from_occ(to_occ(s), (a, b, c, d))
     assert back.domain == ((a, b), (c, d))
     for x, y in zip(back.knots, ours.knots):

@@ -1,4 +1,4 @@
-"""Coons and Gordon surfaces against OpenCascade, and through STEP (algorithms/curvenet.py).
+"""Coons and Gordon surfaces against OpenCascade, and through STEP (algorithms/construction/).
 
 The distance between two surfaces is measured both ways with ``tests.bridge.generation_occ.max_distance``:
 dense samples of one surface (41 uniform values per direction plus values 1e-6, 1e-4, 1e-2 of the

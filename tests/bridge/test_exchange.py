@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, given
 from hypothesis import strategies as st
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface
@@ -28,12 +28,12 @@ from occsurf.bridge.exchange.step_iges import (
     write_iges,
     write_step,
 )
-from tests.algorithms.strategies import curves, surfaces
+from tests.algorithms.strategies import curves, surfaces, test_settings
 
 REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 
 # Hypothesis: each example writes and reads a file (a few ms); keep the suite well under a minute.
-ROUND_TRIP = settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+ROUND_TRIP = test_settings(30, suppress=[HealthCheck.function_scoped_fixture])
 
 
 # ------------------------------------------------------------------------------------ helpers

@@ -1,4 +1,4 @@
-"""Tests of bridge/fill.py: holes found in OCC shells, filled, assessed by OCC, compared with
+"""Tests of bridge/modeling/fill.py: holes found in OCC shells, filled, assessed by OCC, compared with
 BRepOffsetAPI_MakeFilling.
 
 Tolerances: OCC's LocalAnalysis G0 gap between our fill and the neighbour is round-off (measured
@@ -14,16 +14,16 @@ import numpy as np
 import pytest
 
 from occsurf.algorithms.errors import InvalidGeometryError
-from occsurf.bridge.conversion.splines import _make_face
+from occsurf.bridge.conversion.splines import make_face
 from occsurf.bridge.exchange.step_iges import read_step, write_step
-from occsurf.bridge.modeling.fill import _edge_faces, _neighbour, _sew, fill_model, find_loops, hole_sides
+from occsurf.bridge.modeling.fill import edge_face_map, fill_model, find_loops, hole_sides, neighbour_face, sew_faces
 from occsurf.examples.hole_models import ring_model
 
 SIZE = 14.0  # bounding-box diagonal of the base dome ([0, 10]^2, height ~5)
 
 
 def _shell(*models):
-    return _sew([_make_face(f, 1e-7) for m in models for f in m.faces])
+    return sew_faces([make_face(f, 1e-7) for m in models for f in m.faces])
 
 
 @pytest.fixture(scope="module")
@@ -65,7 +65,7 @@ def test_filled_model_round_trips_through_step(two_holes, tmp_path) -> None:
     p = write_step(tmp_path / "filled.step", two_holes.shape)
     model = read_step(p)
     assert len(model.faces) == 5 + 7 + 5 + 7  # the rings plus one patch per corner
-    sewn = _sew([f.face for f in model.faces])
+    sewn = sew_faces([f.face for f in model.faces])
     assert len(find_loops(sewn, all_loops=True)) == 2  # the two rings' outer loops, nothing else
 
 
@@ -73,8 +73,8 @@ def test_missing_neighbour_face_is_a_clear_error() -> None:
     m = ring_model(4)
     shell = _shell(m)
     loops = [edges for edges, outer in find_loops(shell) if not outer]
-    e2f = _edge_faces(shell)
-    faces = [_neighbour(e2f, e) for e in loops[0]]
+    e2f = edge_face_map(shell)
+    faces = [neighbour_face(e2f, e) for e in loops[0]]
     faces[2] = None
     with pytest.raises(InvalidGeometryError, match="no neighbour face"):
         hole_sides(loops[0], faces)
@@ -116,7 +116,7 @@ def _trimmed_ring(ext: float):
 
         srf = BSplineSurface((6, 6), (K, K), represent_grid(fn, (6, 6), (K, K)))
         faces.append(BRepBuilderAPI_MakeFace(to_occ(srf), s0, s1, 0.0, 1.0, 1e-7).Face())
-    return _sew(faces)
+    return sew_faces(faces)
 
 
 def test_neighbours_trimmed_by_uv_bounds_are_filled() -> None:
@@ -134,7 +134,7 @@ def test_a_face_outside_any_shell_has_its_loops_found() -> None:
     from OCP.TopoDS import TopoDS_Compound
 
     shell = _shell(ring_model(5))
-    lone = _make_face(ring_model(3, center=(0.2, 0.2), radius=0.05, width=0.04).faces[0], 1e-7)
+    lone = make_face(ring_model(3, center=(0.2, 0.2), radius=0.05, width=0.04).faces[0], 1e-7)
     comp = TopoDS_Compound()
     b = BRep_Builder()
     b.MakeCompound(comp)

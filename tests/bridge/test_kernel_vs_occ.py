@@ -35,18 +35,19 @@ degree 8 and 2.6e-12 at 9. So :func:`occ_rtol` is 1e-12 up to degree 5 and 1e-10
 
 from __future__ import annotations
 
-import os
 from fractions import Fraction
 from math import comb
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import assume, given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 from OCP.gp import gp_Ax1, gp_Ax2, gp_Ax3, gp_Circ, gp_Dir, gp_Pnt, gp_Vec
 from OCP.Geom import (
     Geom_BezierSurface,
+    Geom_BSplineCurve,
+    Geom_BSplineSurface,
     Geom_Circle,
     Geom_ConicalSurface,
     Geom_CylindricalSurface,
@@ -61,10 +62,11 @@ from OCP.Geom import (
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GeomConvert import GeomConvert
 
-from occsurf.algorithms import BSplineCurve, BSplineSurface
-from occsurf.algorithms.errors import ToleranceError
+from occsurf.algorithms import BSplineCurve, BSplineSurface, tolerances
+from occsurf.algorithms.errors import InvalidGeometryError, ToleranceError
 from occsurf.bridge import _occ
 from occsurf.bridge.conversion.splines import from_occ, to_occ
+from tests.algorithms.strategies import test_settings
 
 # ============================================================================ strategies
 #: Control-point coordinates in [-COORD, COORD]; weights in [W_MIN, W_MAX] (ratio 4: realistic).
@@ -75,17 +77,7 @@ MIN_GAP, MAX_GAP, KNOT0 = 0.25, 4.0, 10.0
 
 _float = dict(allow_nan=False, allow_infinity=False, allow_subnormal=False, width=64)
 
-
-
-def hyp_settings(max_examples: int) -> settings:
-    """No deadline (OCC calls vary in time); ``max_examples`` times the environment variable
-    ``OCCSURF_HYPOTHESIS_SCALE`` (default 1, as in tests/algorithms) for a deep run."""
-    scale = float(os.environ.get("OCCSURF_HYPOTHESIS_SCALE", "1"))
-    return settings(max_examples=max(1, int(max_examples * scale)), deadline=None,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
-
-
-SETTINGS = hyp_settings(25)
+SETTINGS = test_settings(25)  # no deadline: OCC calls vary in time
 
 
 @st.composite
@@ -397,7 +389,7 @@ def exact_surface_derivatives(s: BSplineSurface, u: float, v: float, order: int)
     return np.array([[[float(x) for x in S[k][l]] for l in r] for k in r])
 
 
-@hyp_settings(8)
+@test_settings(8)
 @given(s=surfaces(max_extra=1),
        fu=st.floats(0.01, 0.99, **_float), fv=st.floats(0.01, 0.99, **_float))
 def test_exact_oracle_surfaces(s, fu, fv):
@@ -419,7 +411,7 @@ def test_exact_oracle_surfaces(s, fu, fv):
                 assert rel_error(occ[D2_ORDER[a, b]], exact[a, b], R * gu**a * gv**b) <= occ_rtol(max(s.degree))
 
 
-@hyp_settings(15)
+@test_settings(15)
 @given(c=curves(max_extra=3), fracs=st.lists(st.floats(0.01, 0.99, **_float), min_size=2, max_size=4))
 def test_exact_oracle_curves(c, fracs):
     # Decides who is right when we and OCC differ at high degree: ours must match exact
@@ -525,7 +517,7 @@ def test_surface_insert_knots_matches_occ(s, fu, fv, tu, tv):
     tu = min(tu, s.degree[0] - int(np.count_nonzero(s.knots[0] == u)))
     tv = min(tv, s.degree[1])
     assume(tu >= 1)
-    ours = s.insert_knot(u, "u", tu).insert_knot(v, "v", tv)
+    ours = s.insert_knot(u, tu, direction="u").insert_knot(v, tv, direction="v")
     occ = to_occ(s)
     occ.InsertUKnot(u, tu, 0.0, True)  # the surface methods need the tolerance argument
     occ.InsertVKnot(v, tv, 0.0, True)
@@ -571,9 +563,9 @@ def test_surface_elevate_degree_matches_occ(s, tu, tv):
     assume(tu + tv > 0)
     ours = s
     if tu:
-        ours = ours.elevate_degree("u", tu)
+        ours = ours.elevate_degree(tu, direction="u")
     if tv:
-        ours = ours.elevate_degree("v", tv)
+        ours = ours.elevate_degree(tv, direction="v")
     occ = to_occ(s)
     occ.IncreaseDegree(s.degree[0] + tu, s.degree[1] + tv)
     back = from_occ(occ)
@@ -581,6 +573,25 @@ def test_surface_elevate_degree_matches_occ(s, tu, tv):
     for a, b in zip(back.knots, ours.knots):
         assert_array_equal(a, b)
     assert_allclose(back.control_points, ours.control_points, rtol=0, atol=_pole_atol(s))
+
+
+def test_max_degree_is_occ_max_degree():
+    """tolerances.MAX_DEGREE is OCC's own limit (``MaxDegree``), for curves and surfaces."""
+    assert tolerances.MAX_DEGREE == Geom_BSplineCurve.MaxDegree_s()
+    assert tolerances.MAX_DEGREE == Geom_BSplineSurface.MaxDegree_s()
+
+
+def test_max_degree_round_trips_through_occ_and_one_more_is_refused():
+    p = tolerances.MAX_DEGREE
+    bezier = np.r_[np.zeros(p + 1), np.ones(p + 1)]
+    c = BSplineCurve(p, bezier, np.c_[np.linspace(0, 1, p + 1), np.linspace(0, 1, p + 1) ** 2, np.zeros(p + 1)])
+    assert from_occ(to_occ(c)) == c
+    s = BSplineSurface((p, 1), (bezier, [0, 0, 1, 1]), np.random.default_rng(0).uniform(-1, 1, (p + 1, 2, 3)))
+    assert from_occ(to_occ(s)) == s
+    with pytest.raises(InvalidGeometryError, match="exceeds the maximum"):
+        c.elevate_degree()
+    with pytest.raises(InvalidGeometryError, match="exceeds the maximum"):
+        s.elevate_degree(direction="u")
 
 
 def _occ_knot_index(occ_knots, u: float) -> int:
@@ -660,8 +671,8 @@ def test_curve_remove_knot_refused_by_both(c, f):
 def test_surface_remove_knot_matches_occ(s, f):
     (u0, u1), _ = s.domain
     u = span_midpoint(s.knots[0], u0, u1, f)
-    refined = s.insert_knot(u, "u", 1)
-    ours = refined.remove_knot(u, "u", 1)
+    refined = s.insert_knot(u, 1, direction="u")
+    ours = refined.remove_knot(u, 1, direction="u")
     occ = to_occ(refined)
     assert occ.RemoveUKnot(_occ_knot_index(occ.UKnots(), u), 0, 1e-6) is True
     back = from_occ(occ)
@@ -673,7 +684,7 @@ def test_surface_remove_knot_matches_occ(s, f):
     P[most_sensitive_pole(refined.knots[0], s.degree[0], r), 0] += [1e-3, 0.0, 2e-3]
     broken = BSplineSurface(refined.degree, refined.knots, P, refined.weights)
     with pytest.raises(ToleranceError):
-        broken.remove_knot(u, "u", 1, tol=1e-9)
+        broken.remove_knot(u, 1, tol=1e-9, direction="u")
     occ = to_occ(broken)
     assert occ.RemoveUKnot(_occ_knot_index(occ.UKnots(), u), 0, 1e-9) is False
 

@@ -1,4 +1,4 @@
-"""S-patches exported to OCC faces, sewn shells and STEP (bridge/spatch_export.py): OCC's own
+"""S-patches exported to OCC faces, sewn shells and STEP (bridge/conversion/spatch_export.py): OCC's own
 evaluation of the faces against SPatch.evaluate, shell validity and free boundaries, two patches
 sewn along a common side, the approximated path, STEP round trip."""
 

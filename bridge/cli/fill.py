@@ -1,0 +1,159 @@
+"""``occsurf fill IN --out OUT.step [--all-loops] [--no-occ] [--json] [--in-process]``.
+
+Reads a STEP or IGES model, fills every hole with :func:`occsurf.bridge.modeling.fill.fill_model`
+(n G1 patches per hole, course §8-3), writes the sewn result to ``OUT`` (STEP) and prints per hole
+ours against OCC's ``BRepOffsetAPI_MakeFilling``. Exit status 0 when every hole was filled (a model
+without holes is written as it is), 2 otherwise or when the input cannot be read.
+
+The untrusted file is read, filled and written in a worker process
+(:func:`occsurf.bridge.isolation.run_jobs` with the job :func:`fill_job`): a crash inside OCC is
+reported in one line ``occsurf: IN: reason`` with exit status 2, not a dead command.
+``--in-process`` does the work in the calling process instead (no isolation).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import warnings
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from ._common import (
+    EXIT_ERROR,
+    EXIT_OK,
+    error,
+    fmt_deg,
+    fmt_dev,
+    fmt_s,
+    format_rows,
+    read_model,
+    strip_path,
+    worker_failure,
+)
+
+__all__ = ["fill_job", "add_parser", "run"]
+
+#: The job the worker runs, and what it loads before starting it.
+FILL_JOB = "occsurf.bridge.cli.fill:fill_job"
+PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.modeling.fill")
+
+_HEADER = ("hole", "sides", "status", "G0 gap", "G1 angle", "time", "OCC G0 gap", "OCC G1 angle", "OCC time")
+
+
+def fill_job(item: dict[str, Any]) -> dict[str, Any]:
+    """The worker's job: read ``item["input"]``, fill its holes, write ``item["output"]`` (STEP).
+
+    The output is written when some hole was filled, or when there was none to fill (the model
+    as it is, sewn).
+
+    Parameters
+    ----------
+    item : dict
+        ``{"input": str, "output": str, "all_loops": bool, "compare_occ": bool}``.
+
+    Returns
+    -------
+    dict
+        ``{"holes": [HoleReport as a dict, ...], "free_loops_after": int, "written": bool}``.
+
+    Raises
+    ------
+    Exception
+        Whatever reading, filling or writing raises (the command prints it on one line).
+    """
+    from ..isolation import quiet_native_stdout
+
+    src, out = Path(item["input"]), Path(item["output"])
+    with warnings.catch_warnings(), quiet_native_stdout():
+        warnings.simplefilter("ignore")
+        from ..exchange import step_iges as exchange
+        from ..modeling.fill import fill_model
+
+        model = read_model(src)
+        result = fill_model(model.shape, all_loops=item["all_loops"], compare_occ=item["compare_occ"])
+        filled = any(h.status == "filled" for h in result.holes)
+        nothing_to_do = not any(h.status != "outer" for h in result.holes)
+        if filled or nothing_to_do:  # a model without holes is written as it is (sewn)
+            exchange.write_step(out, result.shape)
+    return {"holes": [asdict(h) for h in result.holes], "free_loops_after": result.free_loops_after,
+            "written": filled or nothing_to_do}
+
+
+def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
+    all_holes = result["holes"]
+    holes = [h for h in all_holes if h["status"] != "outer"]
+    n_outer = len(all_holes) - len(holes)
+    sys.stdout.write(f"{src}: {len(holes)} holes" + (f" ({n_outer} outer boundaries left open)" if n_outer else "")
+                     + "\n")
+    rows = [_HEADER]
+    for h in holes:
+        occ = ((fmt_dev(h["occ_g0"]), fmt_deg(h["occ_g1"]), fmt_s(h["occ_seconds"])) if h["occ_status"] == "ok" else
+               ("failed: " + (h["occ_reason"] or "?"), "-", fmt_s(h["occ_seconds"])) if h["occ_status"] else
+               ("-", "-", "-"))
+        rows.append((str(h["index"]), str(h["sides"]), h["status"], fmt_dev(h["g0"]), fmt_deg(h["g1"]),
+                     fmt_s(h["seconds"]), *occ))
+    for line in format_rows(rows):
+        sys.stdout.write(line + "\n")
+    sys.stdout.write("  (G0 gap in model units, G1 angle between tangent planes: max along the hole's boundary, "
+                     "OCC LocalAnalysis_SurfaceContinuity)\n")
+    n_filled = sum(h["status"] == "filled" for h in all_holes)
+    if n_filled:
+        sys.stdout.write(f"wrote {out} ({n_filled} fills sewn in; {result['free_loops_after']} free loops left)\n")
+    elif result["written"]:
+        sys.stdout.write(f"no holes to fill; wrote {out} unchanged\n")
+
+
+def run(ns: argparse.Namespace) -> int:
+    """``occsurf fill IN --out OUT``: fill every hole (in a worker), print per hole ours vs OCC's filler."""
+    from ..isolation import ERROR, OK, run_jobs
+
+    src, out = Path(ns.input), Path(ns.out)
+    folder = out.parent if str(out.parent) else Path(".")
+    if out.is_dir() or not folder.is_dir() or not os.access(folder, os.W_OK):
+        why = "is a directory" if out.is_dir() else f"the folder {folder} does not exist or is not writable"
+        error(f"{out}: cannot write the filled model there ({why})")
+        return EXIT_ERROR
+    item = {"input": str(src), "output": str(out), "all_loops": ns.all_loops, "compare_occ": not ns.no_occ}
+    [outcome] = run_jobs(FILL_JOB, [item], isolate=not ns.in_process, preload=PRELOAD)  # no time limit
+    if outcome.status != OK:
+        why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
+               worker_failure(outcome, None, task="reading and filling this file", process="worker"))
+        error(f"{src}: {why}")
+        return EXIT_ERROR
+    result = outcome.value
+    failed = [h for h in result["holes"] if h["status"] == "failed"]
+    for h in failed:
+        error(f"{src}: hole {h['index']} ({h['sides']} sides) not filled: {h['reason']}")
+    if ns.json:
+        doc = {"input": str(src), "output": str(out) if result["written"] else None, "holes": result["holes"],
+               "free_loops_after": result["free_loops_after"]}
+        sys.stdout.write(json.dumps(doc, indent=1) + "\n")
+    else:
+        _write_table(src, out, result)
+    sys.stdout.flush()
+    return EXIT_ERROR if failed or not result["written"] else EXIT_OK
+
+
+def add_parser(sub: Any) -> None:
+    """Register ``fill`` on the sub-parsers of :func:`occsurf.bridge.cli.build_parser`."""
+    f = sub.add_parser(
+        "fill",
+        help="fill every hole of a STEP/IGES model with G1 patches and compare with OCC's filler",
+        description=("Finds the closed loops of free edges of the model's shells (the largest loop of a shell with "
+                     "several is its outer boundary and stays open unless --all-loops), fills each hole with n "
+                     "G1 patches (course 8-3), sews them in, writes OUT (STEP) and prints per hole: sides, G0 gap "
+                     "and G1 angle (OCC LocalAnalysis, max along the boundary) for our fill and for OCC's "
+                     "BRepOffsetAPI_MakeFilling. Exit status 0 when every hole was filled, 2 otherwise."),
+    )
+    f.add_argument("input", metavar="IN", help="STEP or IGES file")
+    f.add_argument("--out", required=True, metavar="OUT.step", help="where to write the filled model (STEP)")
+    f.add_argument("--all-loops", action="store_true", help="fill outer boundaries too")
+    f.add_argument("--no-occ", action="store_true", help="do not run OCC's filler for comparison")
+    f.add_argument("--json", action="store_true", help="print one JSON document instead of the table")
+    f.add_argument("--in-process", action="store_true",
+                   help="read and fill in this process, not in a worker (a crash inside OCC then ends it)")
+    f.set_defaults(func=run)

@@ -1,0 +1,323 @@
+"""``occsurf inspect [FILE|DIR ...] [--json] [--samples N] [--timeout SECONDS] [--in-process]``.
+
+Reads STEP and IGES files and prints, per face, what
+:func:`occsurf.bridge.validation.inspect.inspect_model` reports: the surface type, degrees,
+poles, rational and periodic flags, OCC's continuity class and the largest distance between our
+evaluation of the converted surface and OCC's evaluation of the original one on an ``N x N``
+grid, relative to the diagonal of the sampled points' bounding box (``-`` for analytic faces).
+Without arguments it reads every STEP/IGES file in the ``step_samples/`` folder (below the current
+directory, else the one shipped with occsurf).
+
+Exit status: 0 when every file was read; 2 when at least one could not be (each such file gets one
+line ``occsurf: PATH: reason`` on stderr and an ``error`` in the JSON, and the other files are still
+reported), or when an argument is wrong.
+
+Each file is read in a worker process (:func:`occsurf.bridge.isolation.run_jobs` with the job
+:func:`inspect_job`): a file that crashes OCC, or takes longer than ``--timeout``, is reported as an
+error and the other files are still read. ``--in-process`` reads in the calling process instead (no
+isolation; handy under a debugger). :func:`inspect_files` is the in-process library entry.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import sys
+import time
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, TextIO
+
+from ..messages import error_line
+from ..validation.inspect import DEFAULT_SAMPLES, FaceReport
+from . import _common
+from ._common import (
+    EXIT_ERROR,
+    EXIT_OK,
+    IGES_SUFFIXES,
+    SAMPLES_DIR,
+    STEP_SUFFIXES,
+    error,
+    expand,
+    fmt_dev,
+    fmt_pair,
+    fmt_periodic,
+    fmt_rational,
+    format_rows,
+    read_model,
+    sniff_format,
+    strip_path,
+    timeout_arg,
+    worker_failure,
+)
+
+if TYPE_CHECKING:
+    from ..isolation import Outcome
+
+__all__ = ["FileReport", "inspect_files", "inspect_job", "add_parser", "add_worker_parser", "run",
+           "DEFAULT_TIMEOUT", "WORKER_COMMAND"]
+
+#: Seconds one file may take in the reader process before it is killed and reported as timed out
+#: (a hang inside OCC must not hang the command); ``--timeout`` overrides it.
+DEFAULT_TIMEOUT = 300.0
+#: The hidden command that runs the reader loop on ``{"files": [[shown, path], ...], "samples": N}``.
+WORKER_COMMAND = "_inspect-worker"
+#: The job the reader process runs per file, and what it loads before the first file.
+INSPECT_JOB = "occsurf.bridge.cli.inspect:inspect_job"
+PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.validation.deviation")
+
+
+# ---------------------------------------------------------------------------------------- results
+@dataclass
+class FileReport:
+    """One file (or one argument that is not a readable file)."""
+
+    path: str
+    format: str | None = None
+    error: str | None = None
+    faces: list[FaceReport] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def n_free_form(self) -> int:
+        return sum(f.free_form for f in self.faces)
+
+    @property
+    def worst_deviation(self) -> float | None:
+        devs = [f.max_deviation for f in self.faces if f.max_deviation is not None]
+        return max(devs) if devs else None
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "path": self.path,
+            "format": self.format,
+            "error": self.error,
+            "n_faces": len(self.faces),
+            "n_free_form": self.n_free_form,
+            "worst_deviation": self.worst_deviation,
+            "seconds": round(self.seconds, 4),
+            "warnings": list(self.warnings),
+            "faces": [f.to_json() for f in self.faces],
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> FileReport:
+        faces = [FaceReport.from_json(face) for face in data.get("faces", ())]
+        return cls(path=data["path"], format=data.get("format"), error=data.get("error"), faces=faces,
+                   warnings=list(data.get("warnings", ())), seconds=float(data.get("seconds", 0.0)))
+
+
+# ---------------------------------------------------------------------------------------- reading
+def _inspect_path(shown: str, path: Path, samples: int) -> FileReport:
+    """Read one file and inspect its faces; never raises for a bad file (``error`` is set)."""
+    import numpy as np
+
+    from ..isolation import quiet_native_stdout
+
+    report = FileReport(path=shown)
+    with contextlib.suppress(Exception):  # load OCC outside the timing (a failure shows up below)
+        from ..exchange import step_iges  # noqa: F401
+        from ..validation import deviation  # noqa: F401
+    t0 = time.perf_counter()
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"), quiet_native_stdout():
+            warnings.simplefilter("ignore")
+            from ..validation.inspect import inspect_model
+
+            report.format = sniff_format(path)
+            model = read_model(path, report.format)
+            report.warnings = [error_line(w) for w in model.warnings]
+            report.faces = inspect_model(model, samples)
+    except Exception as err:  # noqa: BLE001 - report, never crash, never a traceback
+        report.error = strip_path(error_line(err), path)
+    report.seconds = time.perf_counter() - t0
+    return report
+
+
+def inspect_job(item: dict[str, Any]) -> dict[str, Any]:
+    """The reader process's job: ``{"shown", "path", "samples"}`` -> the file's report as JSON.
+
+    Never raises: a failure, even of the report's serialisation, is the file's ``error``.
+    """
+    shown = item["shown"]
+    try:
+        payload = _inspect_path(shown, Path(item["path"]), int(item["samples"])).to_json()
+        json.dumps(payload, allow_nan=False)  # fail here, per file, rather than in the parent
+    except Exception as err:  # noqa: BLE001
+        payload = FileReport(path=shown, error=error_line(err)).to_json()
+    return payload
+
+
+def inspect_files(args: Sequence[str], samples: int = DEFAULT_SAMPLES) -> list[FileReport]:
+    """Inspect every file named in ``args`` (folders expanded), in this process.
+
+    Never raises for a bad file: its report has ``error`` set. (A segmentation fault inside OCC
+    still ends the process; the command line reads files in a worker process instead.)
+
+    Parameters
+    ----------
+    args : sequence of str
+        Files and folders (a folder stands for its STEP/IGES files, sorted).
+    samples : int
+        Grid size of the deviation check.
+
+    Returns
+    -------
+    list of FileReport
+    """
+    return [_inspect_path(shown, path, samples) if path is not None else FileReport(path=shown, error=err)
+            for shown, path, err in expand(args)]
+
+
+def _report_of(shown: str, outcome: Outcome, timeout: float) -> FileReport:
+    """A file's report from the reader process's outcome."""
+    from ..isolation import ERROR, OK
+
+    if outcome.status == OK:
+        return FileReport.from_json(outcome.value)
+    if outcome.status == ERROR:
+        return FileReport(path=shown, error=outcome.error)
+    return FileReport(path=shown, error=worker_failure(outcome, timeout, task="reading this file", process="reader"))
+
+
+# ---------------------------------------------------------------------------------------- output
+_HEADER = ("face", "type", "degree", "poles", "rational", "periodic", "continuity", "max dev", "")
+_RIGHT = frozenset({0, 7})
+
+
+def _write_file_table(rep: FileReport, out: TextIO) -> None:
+    fmt = f" ({rep.format.upper()})" if rep.format else ""
+    out.write(f"{rep.path}{fmt}\n")
+    if rep.error is not None:
+        out.write(f"  error: {rep.error}\n")
+        return
+    names = {f.name for f in rep.faces}
+    shared_name = names.pop() if len(names) == 1 else None  # one product name on every face: say it once
+    if shared_name:
+        out.write(f"  name: {shared_name!r}\n")
+    rows = [_HEADER]
+    for f in rep.faces:
+        own = f.name if (f.name and not shared_name) else None
+        note = " ".join(x for x in (own and repr(own), f.error and f"[{f.error}]") if x)
+        rows.append((str(f.index), f.surface_type, fmt_pair(f.degree), fmt_pair(f.poles),
+                     fmt_rational(f.rational), fmt_periodic(f.periodic), f.continuity or "-",
+                     fmt_dev(f.max_deviation), note))
+    for line in format_rows(rows, _RIGHT):
+        out.write(line + "\n")
+    for w in rep.warnings:
+        out.write(f"  warning: {w}\n")
+    out.write(f"  {len(rep.faces)} faces, {rep.n_free_form} free-form, worst deviation "
+              f"{fmt_dev(rep.worst_deviation)} (relative to bbox diagonal), {rep.seconds:.2f} s\n")
+
+
+# ---------------------------------------------------------------------------------------- command
+def run(ns: argparse.Namespace) -> int:
+    """``occsurf inspect``: read the files (in a worker), print each file's table in order."""
+    from ..isolation import run_jobs
+
+    paths = list(ns.paths)
+    if not paths:
+        folder = _common.find_samples_dir()
+        if folder is None:
+            error(f"no {SAMPLES_DIR}/ folder found (looked in {Path.cwd() / SAMPLES_DIR} and "
+                  "in the installed package); name FILE or DIR arguments")
+            return EXIT_ERROR
+        paths = [str(folder)]
+    t0 = time.perf_counter()
+    entries = expand(paths)
+    reports: list[FileReport | None] = [None] * len(entries)
+    printed = 0
+
+    def emit(k: int, rep: FileReport) -> None:
+        """Store a report; print (stderr line, table) every report that is next in order."""
+        nonlocal printed
+        reports[k] = rep
+        while printed < len(reports) and reports[printed] is not None:
+            r = reports[printed]
+            assert r is not None
+            if r.error is not None:
+                error(f"{r.path}: {r.error}")
+            if not ns.json:
+                if printed:
+                    sys.stdout.write("\n")
+                _write_file_table(r, sys.stdout)
+                sys.stdout.flush()
+            printed += 1
+
+    todo: list[tuple[int, str]] = []
+    items: list[dict[str, Any]] = []
+    for k, (shown, path, err) in enumerate(entries):
+        if path is None:
+            emit(k, FileReport(path=shown, error=err))
+        else:
+            todo.append((k, shown))
+            items.append({"shown": shown, "path": str(path), "samples": ns.samples})
+    if items:
+        run_jobs(INSPECT_JOB, items, timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD,
+                 on_outcome=lambda o: emit(todo[o.index][0], _report_of(todo[o.index][1], o, ns.timeout)))
+    done = [r for r in reports if r is not None]
+    total = time.perf_counter() - t0
+    if ns.json:
+        doc = {"samples": ns.samples, "seconds": round(total, 4), "files": [r.to_json() for r in done]}
+        sys.stdout.write(json.dumps(doc, indent=1, allow_nan=False) + "\n")
+    elif len(done) > 1:
+        n_bad = sum(r.error is not None for r in done)
+        sys.stdout.write(f"\n{len(done)} files ({n_bad} unreadable), {sum(len(r.faces) for r in done)} faces, "
+                         f"{sum(r.n_free_form for r in done)} free-form, {total:.2f} s\n")
+    sys.stdout.flush()
+    return EXIT_ERROR if any(r.error is not None for r in done) else EXIT_OK
+
+
+def _worker(ns: argparse.Namespace) -> int:
+    """The hidden reader command: ``{"files": [[shown, path], ...], "samples": N}`` on stdin, a
+    ``start`` line before each file and a ``report`` line after it on stdout."""
+    from ..isolation import serve
+
+    job = json.loads(sys.stdin.read())
+    items = [{"shown": shown, "path": path, "samples": int(job["samples"])} for shown, path in job["files"]]
+    serve(INSPECT_JOB, items, preload=PRELOAD)
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------------------- parser
+def _samples_arg(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer from 2 to 1000, got {text!r}") from None
+    if not 2 <= n <= 1000:
+        raise argparse.ArgumentTypeError(f"expected an integer from 2 to 1000, got {n}")
+    return n
+
+
+def add_parser(sub: Any) -> None:
+    """Register ``inspect`` on the sub-parsers of :func:`occsurf.bridge.cli.build_parser`."""
+    p = sub.add_parser(
+        "inspect",
+        help="list the faces of STEP/IGES files and check our evaluation against OCC's",
+        description=("For every face: surface type, degree, poles, rational, periodic, OCC continuity, "
+                     "and the largest distance between our evaluation and OCC's on an N x N grid, "
+                     "relative to the bounding-box diagonal ('-' for faces that are not B-spline or "
+                     "Bezier). Exit status 0 when every file was read, 2 otherwise."),
+    )
+    p.add_argument("paths", nargs="*", metavar="FILE|DIR",
+                   help=f"STEP ({', '.join(STEP_SUFFIXES)}) or IGES ({', '.join(IGES_SUFFIXES)}) files, "
+                        f"or folders holding them (default: {SAMPLES_DIR}/)")
+    p.add_argument("--json", action="store_true", help="print one JSON document instead of tables")
+    p.add_argument("--samples", type=_samples_arg, default=DEFAULT_SAMPLES, metavar="N",
+                   help=f"grid size N of the deviation check (default {DEFAULT_SAMPLES})")
+    p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
+                   help=f"stop reading a file after this long and report it (default {DEFAULT_TIMEOUT:g})")
+    p.add_argument("--in-process", action="store_true",
+                   help="read the files in this process, not in a worker (a crash inside OCC then ends it)")
+    p.set_defaults(func=run)
+
+
+def add_worker_parser(sub: Any) -> None:
+    """Register the hidden reader command (no ``help=``, so it stays out of the listing)."""
+    w = sub.add_parser(WORKER_COMMAND)
+    w.set_defaults(func=_worker)

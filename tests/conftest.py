@@ -1,0 +1,53 @@
+"""Hypothesis profiles of the whole suite, registered here once.
+
+Every property test takes its settings from :func:`tests.algorithms.strategies.test_settings`,
+which gives it its own ``max_examples`` (the counts written in the tests) times the *scale* of the
+active profile: that profile's ``max_examples`` divided by 100, Hypothesis' own default.
+
+Profiles
+--------
+``default``
+    Hypothesis' built-in profile, unchanged: scale 1, every count as written in the tests.
+``ci``
+    Hypothesis' built-in ``ci`` profile, unchanged (derandomized, no example database, failing
+    examples printed as a blob to replay): scale 1. Hypothesis selects it by itself when the
+    ``CI`` environment variable is set, as ``.ci/run`` does.
+``thorough``
+    A deep run: scale 25 (a test written with 40 examples runs 1000), no deadline, failing
+    examples printed as a blob.
+
+Selection, first that applies: pytest's ``--hypothesis-profile=NAME`` (Hypothesis' plugin);
+``HYPOTHESIS_PROFILE=NAME pytest ...``; ``ci`` under CI and ``default`` elsewhere (Hypothesis' own
+choice). ``OCCSURF_HYPOTHESIS_SCALE=K`` (kept from before the profiles) gives the profile chosen by
+the environment the scale ``K``, e.g. ``OCCSURF_HYPOTHESIS_SCALE=40 pytest tests/algorithms/test_curve.py``.
+"""
+
+from __future__ import annotations
+
+import os
+
+from hypothesis import HealthCheck, settings
+from hypothesis.errors import InvalidArgument
+
+#: Hypothesis' default ``max_examples``; a profile's ``max_examples`` over this is its scale.
+BASE_EXAMPLES = 100
+#: Scale of the ``thorough`` profile ("default" and "ci" have scale 1).
+THOROUGH_SCALE = 25
+
+# "default" and "ci" are Hypothesis' built-in profiles, kept as they are; only "thorough" is new.
+try:
+    settings.get_profile("ci")
+except InvalidArgument:  # a Hypothesis older than its built-in "ci": the same settings
+    settings.register_profile("ci", derandomize=True, deadline=None, database=None, print_blob=True,
+                              suppress_health_check=[HealthCheck.too_slow])
+settings.register_profile("thorough", settings.get_profile("default"),
+                          max_examples=BASE_EXAMPLES * THOROUGH_SCALE, deadline=None,
+                          print_blob=True)
+
+_name = os.environ.get("HYPOTHESIS_PROFILE")
+if _name:
+    settings.load_profile(_name)  # an unknown name fails here, naming it
+_scale = os.environ.get("OCCSURF_HYPOTHESIS_SCALE")
+if _scale:  # the selected profile (settings() inherits it) with another scale
+    settings.register_profile("scaled", settings(), max_examples=max(1, round(BASE_EXAMPLES * float(_scale))))
+    settings.load_profile("scaled")
