@@ -1,0 +1,40 @@
+"""``occsurf audit``: quality and exchange audit of whole CAD corpora on Dask.
+
+One task per STEP/IGES file, on a Dask ``LocalCluster`` (one process per core, one thread each)
+or an existing cluster: a crash-isolated read (a persistent reader process per worker thread, so a
+segmentation fault inside OCC costs that file and names its signal), the inspect numbers of every
+face (:func:`occsurf.bridge.validation.inspect.inspect_model`), a STEP round trip, and the quality
+summary hook. Results stream into Parquet datasets (``RESULTS/files``, ``RESULTS/faces``) as
+tasks finish; ``--resume`` skips content already audited (SHA-256).
+
+==================  ================================================================================
+:mod:`.corpus`      PATH expansion (files, folders, globs, list files), STEP/IGES detection, SHA-256
+:mod:`.tasks`       the per-file task (:func:`~.tasks.audit_task` on Dask, :func:`~.tasks.audit_job`
+                    in the reader)
+:mod:`.reader`      the persistent crash-isolated reader process of each worker thread
+:mod:`.store`       the Parquet datasets: atomic part files, resume by content hash
+:mod:`.summary`     ``summary.json`` and ``summary.html``
+:mod:`.cluster`     the Dask client: ``LocalCluster`` or ``--scheduler ADDRESS``
+:mod:`.run`         :func:`audit`, the driver
+==================  ================================================================================
+
+Names are loaded on first use (``dask``, ``pyarrow`` and OCC are not imported by ``import
+occsurf.bridge.audit``).
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+__all__ = ["audit", "AuditResult", "CorpusError", "StoreError", "ClusterError", "read_files", "read_faces",
+           "write_summary"]
+
+_WHERE = {"audit": ".run", "AuditResult": ".run", "CorpusError": ".corpus", "StoreError": ".store",
+          "ClusterError": ".cluster", "read_files": ".store", "read_faces": ".store", "write_summary": ".summary"}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _WHERE:
+        return getattr(importlib.import_module(_WHERE[name], __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

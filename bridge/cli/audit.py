@@ -1,0 +1,132 @@
+"""``occsurf audit PATH... --out RESULTS [--scheduler ADDRESS] [--workers N] [--timeout S] [--resume]
+[--checks inspect,quality,roundtrip]``.
+
+Audits whole corpora of STEP/IGES files on Dask (:func:`occsurf.bridge.audit.audit`): per file
+one task that reads it crash-isolated, inspects every face (our evaluation against OCC's), round
+trips it through our STEP writer and reader, and (once available) summarises its quality. Rows go
+to Parquet datasets ``RESULTS/files/`` and ``RESULTS/faces/`` as tasks finish; ``summary.json``
+and ``summary.html`` at the end. Progress (done/failed/remaining, rate, ETA) and the Dask dashboard
+link go to stderr.
+
+Exit status: 0 when every file was audited ``ok``; 1 when the audit completed but some files are
+``error``, ``crashed`` or ``timeout`` (their rows say why); 2 on bad input (an empty corpus, a
+missing PATH, an unreachable scheduler, an unwritable or already used ``--out``, a missing
+dependency), one line on stderr and nothing audited; 130 when interrupted (Ctrl-C, SIGTERM): what
+finished is in RESULTS and ``--resume`` does the rest.
+
+Only the standard library is imported at module level.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib.util
+import signal
+import sys
+from typing import Any
+
+from ._common import EXIT_ERROR, EXIT_OK, error, timeout_arg
+
+__all__ = ["add_parser", "run", "EXIT_FAILURES", "EXIT_INTERRUPTED"]
+
+EXIT_FAILURES = 1
+EXIT_INTERRUPTED = 130
+DEFAULT_TIMEOUT = 300.0
+_CHECKS = ("inspect", "quality", "roundtrip")
+
+
+def _checks_arg(text: str) -> tuple[str, ...]:
+    names = tuple(x.strip() for x in text.split(",") if x.strip())
+    bad = [x for x in names if x not in _CHECKS]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(f"expected a comma-separated subset of {','.join(_CHECKS)}, got {text!r}")
+    return names
+
+
+def _workers_arg(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {n}")
+    return n
+
+
+def _missing_dependencies() -> list[str]:
+    return [m for m in ("dask", "distributed", "pyarrow") if importlib.util.find_spec(m) is None]
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Any:
+    """SIGTERM (a killed client) ends the run like Ctrl-C: finished rows are flushed first."""
+    def handler(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def run(ns: argparse.Namespace) -> int:
+    """Handler of ``occsurf audit``."""
+    missing = _missing_dependencies()
+    if missing:
+        error(f"audit needs {', '.join(missing)}: pip install 'occsurf[audit]'")
+        return EXIT_ERROR
+    from ..audit import ClusterError, CorpusError, StoreError, audit
+
+    def dashboard(link: str) -> None:
+        print(f"audit: Dask dashboard at {link}", file=sys.stderr, flush=True)
+
+    try:
+        with _sigterm_as_interrupt():
+            result = audit(ns.paths, ns.out, scheduler=ns.scheduler, workers=ns.workers, timeout=ns.timeout,
+                           resume=ns.resume, checks=ns.checks, samples=ns.samples, on_dashboard=dashboard)
+    except (CorpusError, StoreError, ClusterError, ValueError) as err:
+        error(" ".join(str(err).split()))
+        return EXIT_ERROR
+    except KeyboardInterrupt:  # before the run started (hashing, cluster start-up)
+        error("interrupted before any file was audited")
+        return EXIT_INTERRUPTED
+    c = result.counts
+    if result.interrupted:
+        error(f"interrupted: {sum(c.values())} of {result.n_input} files are in {ns.out}; "
+              "rerun with --resume to finish the rest")
+        return EXIT_INTERRUPTED
+    print(f"{result.n_input} files: {c['ok']} ok, {c['error']} failed, {c['crashed']} crashed, {c['timeout']} timeout "
+          f"({result.skipped} already in {ns.out}); {result.seconds:.1f} s; {ns.out}/summary.html", flush=True)
+    return EXIT_OK if c["ok"] == result.n_input else EXIT_FAILURES
+
+
+def add_parser(sub: Any) -> None:
+    """Register ``audit`` on the sub-parsers of :func:`occsurf.bridge.cli.build_parser`."""
+    p = sub.add_parser(
+        "audit",
+        help="audit whole corpora of STEP/IGES files on Dask (Parquet results, resumable)",
+        description=("Per file: a crash-isolated read, the inspect numbers of every face, a STEP round trip, "
+                     "and the quality summary; on a local Dask cluster (one process per core) or an existing "
+                     "one (--scheduler). Results: RESULTS/files/ and RESULTS/faces/ (Parquet), summary.json, "
+                     "summary.html. Exit 0: all ok; 1: some files failed; 2: bad input; 130: interrupted."),
+    )
+    p.add_argument("paths", nargs="+", metavar="PATH",
+                   help="STEP/IGES files, folders (recursive), glob patterns, or text files listing paths")
+    p.add_argument("--out", required=True, metavar="RESULTS", help="results folder (created)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
+    p.add_argument("--workers", type=_workers_arg, metavar="N",
+                   help="local worker processes, one thread each (default: one per core)")
+    p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="S",
+                   help=f"seconds one file may take before it is recorded 'timeout' (default {DEFAULT_TIMEOUT:g})")
+    p.add_argument("--resume", action="store_true", help="skip files whose content is already in RESULTS")
+    p.add_argument("--checks", type=_checks_arg, default=("inspect", "roundtrip"), metavar="LIST",
+                   help="comma-separated: inspect, quality, roundtrip (default inspect,roundtrip)")
+    p.add_argument("--samples", type=int, default=11, metavar="N", help="grid size of the deviation checks (default 11)")
+    p.set_defaults(func=run)
