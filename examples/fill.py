@@ -13,6 +13,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from occsurf.bridge.conversion.splines import make_face
+from occsurf.bridge.exchange.files import write_figure, write_text
 from occsurf.bridge.exchange.step_iges import write_step
 from occsurf.bridge.modeling.fill import fill_model, sew_faces
 from occsurf.bridge.rendering.surfaces import render_surfaces
@@ -38,7 +39,7 @@ def _table_png(path: Path, rows: list[tuple[str, ...]], title: str) -> Path:
             cell.set_facecolor("#dde6f3")
             cell.set_text_props(weight="bold")
     ax.set_title(title, fontsize=11)
-    fig.savefig(path)
+    write_figure(fig, path)
     return path
 
 
@@ -75,10 +76,10 @@ def render_fill_demo(out_dir: Path) -> list[Path]:
                 else (f"failed: {h.reason}", "-", "-"))
         rows.append((str(n), *ours, *occ))
     md = out / "fill_comparison.md"
-    md.write_text("# Hole filling: occsurf vs BRepOffsetAPI_MakeFilling (cadquery defaults)\n\n"
-                  "Max along each hole's boundary, measured by OCC LocalAnalysis_SurfaceContinuity (order G1).\n\n"
-                  + "| " + " | ".join(rows[0]) + " |\n|" + "---|" * len(rows[0]) + "\n"
-                  + "\n".join("| " + " | ".join(r) + " |" for r in rows[1:]) + "\n")
+    write_text(md, "# Hole filling: occsurf vs BRepOffsetAPI_MakeFilling (cadquery defaults)\n\n"
+               "Max along each hole's boundary, measured by OCC LocalAnalysis_SurfaceContinuity (order G1).\n\n"
+               + "| " + " | ".join(rows[0]) + " |\n|" + "---|" * len(rows[0]) + "\n"
+               + "\n".join("| " + " | ".join(r) + " |" for r in rows[1:]) + "\n")
     files.append(md)
     files.append(_table_png(out / "fill_comparison.png", rows,
                             "G1 hole filling: occsurf (G1 by construction) vs OCC BRepOffsetAPI_MakeFilling"))

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from occsurf.bridge.exchange.files import write_figure
 from occsurf.algorithms.topology.generalized import GeneralizedSurface, generalized_biquadratic, spatch_curvatures
 from occsurf.algorithms.topology.generalized_bicubic import generalized_bicubic
 from occsurf.algorithms.topology.mesh import Mesh
@@ -136,7 +137,7 @@ def render_generalized(path: Path, surface: GeneralizedSurface, *, title: str, c
     fig.colorbar(sm, ax=fig.axes, shrink=0.6, pad=0.02,
                  label="mean curvature H" if color == "mean" else "Gaussian curvature K")
     fig.suptitle(title if not subtitle else f"{title}\n{subtitle}", fontsize=11)
-    fig.savefig(path)
+    write_figure(fig, path)
     return Path(path)
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from occsurf.bridge.exchange.files import write_figure
 from occsurf.algorithms import BSplineSurface
 from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 
@@ -146,7 +147,7 @@ def _render(path: Path, panels: list[tuple[tuple, str]], suptitle: str, view=(30
     sm = cm.ScalarMappable(norm=norm, cmap=cm.RdYlBu_r)
     fig.colorbar(sm, ax=fig.axes, shrink=0.55, pad=0.05, label="detail height above the base (along its normal)")
     fig.suptitle(suptitle, fontsize=13)
-    fig.savefig(path)
+    write_figure(fig, path)
 
 
 def render_hierarchical_demo(out_dir: Path) -> list[Path]:
@@ -230,7 +231,7 @@ def _render_profiles(path: Path, before: HierarchicalSurface, after: Hierarchica
                  "referencing\nthe details stand on the bent surface as they stood on the flat one; additive "
                  "offsets keep them vertical", fontsize=12)
     fig.tight_layout(rect=(0, 0, 1, 0.92))
-    fig.savefig(path)
+    write_figure(fig, path)
 
 
 if __name__ == "__main__":  # pragma: no cover - manual use

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from occsurf.bridge.exchange.files import write_figure
 from occsurf.algorithms import (
     BSplineCurve,
     BSplineSurface,
@@ -138,7 +139,7 @@ def _render_curves(path: Path) -> tuple[BSplineCurve, dict[str, float]]:
     fig.suptitle("Constraint-based curve manipulation: minimum-norm change of the control points "
                  "(course ch. 4; Bartels & Beatty 1989, Fowler & Bartels 1993)", fontsize=12)
     fig.tight_layout(rect=(0, 0, 1, 0.95))
-    fig.savefig(path)
+    write_figure(fig, path)
     dk = _curvature_vectors(c3, np.array([u3]))[1][0]
     info = {"point error": float(np.abs(c1.evaluate(u1) - p1).max()),
             "radius": float(1 / np.linalg.norm(dk))}
@@ -195,7 +196,7 @@ def _render_surface(path: Path) -> BSplineSurface:
     fig.suptitle("drag_surface_point: minimum-norm change of the poles in the window (1..5) x (1..5) "
                  "(course ch. 4 applied to a tensor-product surface)", fontsize=12)
     fig.tight_layout(rect=(0, 0, 1, 0.95))
-    fig.savefig(path)
+    write_figure(fig, path)
     return s1
 
 

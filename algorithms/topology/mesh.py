@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
+from .._files import atomic_write
 from ..errors import ExchangeError, InvalidGeometryError
 
 __all__ = ["Mesh", "read_obj", "write_obj", "catmull_clark", "doo_sabin"]
@@ -480,8 +481,8 @@ def read_obj(path: str | os.PathLike[str]) -> Mesh:
 
 def write_obj(mesh: Mesh, path: str | os.PathLike[str], *, comment: str | None = None) -> Path:
     """Write ``mesh`` as a Wavefront OBJ file (``v`` and ``f`` records, 17 significant digits, so
-    coordinates read back bit-exact). Written to a temporary name and renamed, so a failed write
-    leaves no partial file.
+    coordinates read back bit-exact). Written atomically (:func:`occsurf.algorithms._files.atomic_write`):
+    a failed write leaves no partial file; a device or read-only target is refused.
 
     Raises
     ------
@@ -496,14 +497,8 @@ def write_obj(mesh: Mesh, path: str | os.PathLike[str], *, comment: str | None =
         out.extend(f"# {c}" for c in comment.splitlines())
     out.extend(f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.vertices.tolist())
     out.extend("f " + " ".join(str(v + 1) for v in f) for f in mesh.faces)
-    tmp = p.with_name(p.name + ".tmp")
     try:
-        tmp.write_text("\n".join(out) + "\n", encoding="utf-8")
-        os.replace(tmp, p)
-    except OSError as err:
-        try:
-            tmp.unlink()
-        except OSError:
-            pass
-        raise ExchangeError(f"write_obj: cannot write {p}: {err}") from err
+        atomic_write(p, ("\n".join(out) + "\n").encode("utf-8"))
+    except ExchangeError as err:
+        raise ExchangeError(f"write_obj: {err}") from err
     return p

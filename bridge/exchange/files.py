@@ -4,38 +4,70 @@ OCC must never parse a file that is not complete: ``TransferRoots`` after a fail
 crashes the process, and a truncated IGES file can read as a valid-looking face with wrong poles.
 The checks here run first and raise :class:`ExchangeError` naming the path.
 
-Writes go to a temporary file beside the target, are flushed to disk, then moved over the target
-with :func:`os.replace`: a failure at any point leaves no partial file and the old file intact.
+Writes go through the one atomic-write helper, :func:`occsurf.algorithms._files.atomic_write` (re-exported
+here with :func:`write_figure` and :func:`write_text` for pictures and reports): a temporary file beside
+the target, synced, then moved over it with :func:`os.replace`. A failure at any point leaves no partial
+file and the old file intact; devices, FIFOs and read-only files are refused.
 """
 
 from __future__ import annotations
 
-import contextlib
+import errno
+import io
 import os
-import tempfile
+import stat
 from pathlib import Path
+from typing import Any
 
+from occsurf.algorithms import _files as _atomic
+from occsurf.algorithms._files import (
+    atomic_write,
+    atomic_write_many,
+    check_target,
+    clean_stale_temps,
+    default_mode,
+    file_lock,
+)
 from occsurf.algorithms.errors import ExchangeError
 
-__all__ = ["load", "check_step_text", "check_iges_text", "target", "atomic_write"]
+__all__ = ["load", "check_step_text", "check_iges_text", "target", "atomic_write", "atomic_write_many",
+           "check_target", "clean_stale_temps", "file_lock", "default_mode", "write_figure", "write_text",
+           "MAX_FILE_BYTES"]
+
+#: Largest file :func:`load` reads (bytes): a bigger one is refused before it is read into memory.
+MAX_FILE_BYTES: int = 4 << 30
 
 
 def load(path: str | os.PathLike[str], kind: str) -> tuple[Path, bytes]:
-    """``(Path, bytes)`` of a readable, non-blank file; ``kind`` ('STEP'/'IGES') for messages."""
+    """``(Path, bytes)`` of a readable, non-blank regular file; ``kind`` ('STEP'/'IGES') for messages.
+
+    The file is checked before it is read: a device (a symlink to ``/dev/zero``), FIFO or socket, a
+    dangling symlink or a loop of symlinks, and a file larger than :data:`MAX_FILE_BYTES` are refused.
+    """
+    p = _atomic._as_path(path)
     try:
-        p = Path(os.fspath(path))
-    except TypeError as err:
-        raise ExchangeError(f"path: expected a str or path-like, got {type(path).__name__}") from err
-    try:
-        if p.is_dir():
-            raise ExchangeError(f"{p}: is a directory, not a {kind} file")
-        data = p.read_bytes()
-    except ExchangeError:
-        raise
+        st = os.stat(p)
     except FileNotFoundError as err:
+        if p.is_symlink():
+            raise ExchangeError(f"{p}: dangling symbolic link (to {os.readlink(p)})") from err
         raise ExchangeError(f"{p}: no such file") from err
     except OSError as err:
+        if err.errno == errno.ELOOP:
+            raise ExchangeError(f"{p}: a loop of symbolic links") from err
         raise ExchangeError(f"{p}: cannot read: {err.strerror or err}") from err
+    if stat.S_ISDIR(st.st_mode):
+        raise ExchangeError(f"{p}: is a directory, not a {kind} file")
+    if not stat.S_ISREG(st.st_mode):
+        raise ExchangeError(f"{p}: is {_atomic._kind(st.st_mode)}, not a {kind} file; not read")
+    if st.st_size > MAX_FILE_BYTES:
+        raise ExchangeError(f"{p}: {st.st_size} bytes, more than the {MAX_FILE_BYTES} a {kind} file may have here")
+    try:
+        with open(p, "rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)  # a file that grows while read cannot exceed the limit
+    except OSError as err:
+        raise ExchangeError(f"{p}: cannot read: {err.strerror or err}") from err
+    if len(data) > MAX_FILE_BYTES:
+        raise ExchangeError(f"{p}: more than {MAX_FILE_BYTES} bytes (it grew while read); not read")
     if not data.strip(b" \t\r\n\x00\x1a"):
         raise ExchangeError(f"{p}: empty file" if not data else f"{p}: file holds only blank space")
     return p, data
@@ -103,53 +135,30 @@ def check_iges_text(p: Path, data: bytes) -> None:
         raise ExchangeError(f"{p}: damaged IGES file ({found['D']} directory lines; expected a positive even number)")
 
 
-def target(path: str | os.PathLike[str]) -> Path:
-    """The path to write, checked before any work: not a directory, in an existing directory."""
-    try:
-        p = Path(os.fspath(path))
-    except TypeError as err:
-        raise ExchangeError(f"path: expected a str or path-like, got {type(path).__name__}") from err
-    if p.is_dir():
-        raise ExchangeError(f"{p}: is a directory; cannot write a file there")
-    parent = p.parent
-    if not parent.is_dir():
-        why = "is not a directory" if parent.exists() else "does not exist"
-        raise ExchangeError(f"{p}: cannot write: {parent} {why}")
+def target(path: str | os.PathLike[str], *, replace_readonly: bool = False) -> Path:
+    """The path to write, checked before any work (:func:`occsurf.algorithms._files.check_target`): not a
+    directory, device, FIFO or socket, not read-only unless ``replace_readonly``, in an existing folder."""
+    p = _atomic._as_path(path)
+    check_target(p, replace_readonly=replace_readonly)
     return p
 
 
-def default_mode() -> int:
-    """Permissions of a newly created file under the process umask (mkstemp makes 0o600)."""
-    try:
-        with open("/proc/self/status", "rb") as fh:
-            for line in fh:
-                if line.startswith(b"Umask:"):
-                    return 0o666 & ~int(line.split()[1], 8)
-    except (OSError, ValueError, IndexError):
-        pass
-    return 0o644
+def write_figure(fig: Any, path: str | os.PathLike[str], **savefig_kwargs: Any) -> Path:
+    """Save a matplotlib figure atomically (format from the suffix, PNG by default); returns ``path``.
+
+    The picture is rendered in memory first: a full disk or a killed process never leaves a truncated
+    or empty picture in place of the old one.
+    """
+    p = target(path)
+    buffer = io.BytesIO()
+    fmt = savefig_kwargs.pop("format", None) or (p.suffix[1:].lower() or "png")
+    fig.savefig(buffer, format=fmt, **savefig_kwargs)
+    atomic_write(p, buffer.getvalue())
+    return p
 
 
-def atomic_write(p: Path, data: bytes) -> None:
-    """Write ``data`` to a temporary file beside ``p``, then ``os.replace`` it over ``p``."""
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name[:80]}.", suffix=".tmp", dir=p.parent)
-    except OSError as err:
-        raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
-    try:
-        try:
-            mode = p.stat().st_mode & 0o7777
-        except OSError:
-            mode = default_mode()
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-            os.fchmod(fh.fileno(), mode)
-        os.replace(tmp, p)
-    except BaseException as err:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        if isinstance(err, OSError):
-            raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
-        raise
+def write_text(path: str | os.PathLike[str], text: str, *, encoding: str = "utf-8") -> Path:
+    """Write a text file atomically (UTF-8 by default); returns ``path``."""
+    p = target(path)
+    atomic_write(p, text.encode(encoding))
+    return p

@@ -8,9 +8,11 @@ STEP has no entity for a Forsey–Bartels hierarchy, so :func:`write_hierarchica
 * a JSON *sidecar* beside it (``model.step`` -> ``model.hierarchy.json``): the hierarchy's
   :meth:`~HierarchicalSurface.to_dict` plus a fingerprint of the STEP file it belongs to.
 
-Both are written together: each to a synced temporary file beside its target, and only when both
-are complete are they renamed over the targets (STEP first). A failed write leaves no file behind
-and the old pair untouched.
+Both are written together (:func:`occsurf.bridge.exchange.files.atomic_write_many`): each to a synced
+temporary file beside its target, and only when both are complete are they renamed over the targets,
+under an exclusive ``flock`` of their folder that readers take shared: two
+processes writing the same pair never leave the STEP file of one with the sidecar of the other. A
+failed write leaves no file behind and the old pair untouched.
 :func:`read_hierarchical_step` restores the editable hierarchy from the sidecar and checks that
 the STEP geometry still equals its flat form (a STEP file edited elsewhere, or a stale sidecar,
 raises :class:`ExchangeError` instead of silently loading details onto the wrong surface).
@@ -19,11 +21,9 @@ raises :class:`ExchangeError` instead of silently loading details onto the wrong
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -62,7 +62,7 @@ def sidecar_path(step_path: str | os.PathLike[str]) -> Path:
 
 
 def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: HierarchicalSurface | HierarchicalCurve,
-                            name: str | None = None) -> tuple[Path, Path]:
+                            name: str | None = None, *, replace_readonly: bool = False) -> tuple[Path, Path]:
     """Write the flat form to STEP and the hierarchy to a JSON sidecar, both atomically.
 
     Parameters
@@ -73,6 +73,8 @@ def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: Hierarchica
         3-D.
     name : str, optional
         Product/face name in the STEP file.
+    replace_readonly : bool
+        Replace a read-only STEP file or sidecar (refused by default).
 
     Returns
     -------
@@ -90,14 +92,11 @@ def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: Hierarchica
     if not isinstance(hierarchy, (HierarchicalSurface, HierarchicalCurve)):
         raise InvalidGeometryError(f"hierarchy: expected a HierarchicalSurface or HierarchicalCurve, got "
                                    f"{type(hierarchy).__name__}")
-    step = _files.target(path)
+    step = _files.target(path, replace_readonly=replace_readonly)
     side = sidecar_path(step)
     if side.is_dir():
         raise ExchangeError(f"{side}: is a directory; cannot write the hierarchy sidecar there")
-    other = _sidecar_owner(side)
-    if other is not None and other != step.name and (step.parent / other).exists():
-        raise ExchangeError(f"{side}: is the hierarchy sidecar of {other}, which would lose it; write {step.name} "
-                            "under another name (model.step and model.stp share one sidecar name)")
+    _files.check_target(side, replace_readonly=replace_readonly)
     flat = hierarchy.flatten()
     # The STEP bytes exactly as occsurf.bridge.exchange.step_iges.write_step makes them, kept in memory so that the
     # pair is committed together: nothing on disk changes until both files are complete.
@@ -111,44 +110,19 @@ def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: Hierarchica
         "pole_counts": hierarchy.pole_counts(),
         "hierarchy": hierarchy.to_dict(),
     }
-    _write_pair([(step, step_data), (side, (json.dumps(data, indent=1) + "\n").encode())])
+    with _files.file_lock(_lock_path(side)):  # the pair is one unit for concurrent writers and readers
+        other = _sidecar_owner(side)
+        if other is not None and other != step.name and (step.parent / other).exists():
+            raise ExchangeError(f"{side}: is the hierarchy sidecar of {other}, which would lose it; write "
+                                f"{step.name} under another name (model.step and model.stp share one sidecar name)")
+        _files.atomic_write_many([(step, step_data), (side, (json.dumps(data, indent=1) + "\n").encode())],
+                                 replace_readonly=replace_readonly)
     return step, side
 
 
-def _write_pair(items: list[tuple[Path, bytes]]) -> None:
-    """Write every file to a synced temporary file beside it, then ``os.replace`` them all.
-
-    A failure while writing removes the temporary files and leaves every target untouched; only
-    the renames themselves (one system call each) are not one transaction."""
-    tmps: list[str] = []
-    try:
-        for p, blob in items:
-            try:
-                fd, tmp = tempfile.mkstemp(prefix=f".{p.name[:80]}.", suffix=".tmp", dir=p.parent)
-            except OSError as err:
-                raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
-            tmps.append(tmp)
-            try:
-                mode = p.stat().st_mode & 0o7777
-            except OSError:
-                mode = _files.default_mode()
-            try:
-                with os.fdopen(fd, "wb") as fh:
-                    fh.write(blob)
-                    fh.flush()
-                    os.fsync(fh.fileno())
-                    os.fchmod(fh.fileno(), mode)
-            except OSError as err:
-                raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
-        for (p, _), tmp in zip(items, tmps):
-            try:
-                os.replace(tmp, p)
-            except OSError as err:
-                raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
-    finally:
-        for tmp in tmps:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
+def _lock_path(side: Path) -> Path:
+    """What locks a STEP + sidecar pair: their folder (``flock`` on the directory; no lock file is left)."""
+    return side.parent if str(side.parent) else Path(".")
 
 
 def _sidecar_owner(side: Path) -> str | None:
@@ -192,6 +166,11 @@ def read_hierarchical_step(path: str | os.PathLike[str]) -> HierarchicalSurface 
     """
     p = Path(os.fspath(path))
     side = sidecar_path(p)
+    with _files.file_lock(_lock_path(side), shared=True):
+        return _read_pair(p, side)
+
+
+def _read_pair(p: Path, side: Path) -> HierarchicalSurface | HierarchicalCurve:
     if not side.is_file():
         raise ExchangeError(f"{side}: no hierarchy sidecar beside {p.name}; use import_step_base() to start a new "
                             "hierarchy from the STEP geometry")

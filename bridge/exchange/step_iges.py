@@ -549,6 +549,7 @@ def write_step(
     names: str | Sequence[str | None] | None = None,
     *,
     precision_digits: int = STEP_DIGITS,
+    replace_readonly: bool = False,
 ) -> Path:
     """Write surfaces, curves and shapes to a STEP file (AP214, millimetres), atomically.
 
@@ -567,6 +568,10 @@ def write_step(
     precision_digits : int, default 17
         Significant digits of every real, 2 to 17. 17 makes the round trip bit-exact; OCC's own
         writer uses 13.
+    replace_readonly : bool, default False
+        Replace an existing read-only file (refused otherwise). A target that exists and is not a
+        regular file (a device such as ``/dev/null``, a FIFO, a socket) is always refused; a symlink
+        to a regular file is followed (the link stays, its target is replaced).
 
     Returns
     -------
@@ -583,13 +588,13 @@ def write_step(
         silently left out a face (one degenerate at :data:`FACE_TOLERANCE`, e.g. all of whose
         boundary collapses). No file is created or modified in any failure.
     """
-    p = _files.target(path)
+    p = _files.target(path, replace_readonly=replace_readonly)
     if isinstance(precision_digits, bool) or not isinstance(precision_digits, int) or not 2 <= precision_digits <= 17:
         raise InvalidGeometryError(f"precision_digits: expected an integer from 2 to 17, got {precision_digits!r}")
     items = _xocc.normalise(objects, names)
     _xocc.silence_occ()
     data = _xocc.step_bytes(p, items, precision_digits)
-    _files.atomic_write(p, data)
+    _files.atomic_write(p, data, replace_readonly=replace_readonly)
     return p
 
 
@@ -597,6 +602,8 @@ def write_iges(
     path: str | os.PathLike[str],
     objects: Any,
     names: str | Sequence[str | None] | None = None,
+    *,
+    replace_readonly: bool = False,
 ) -> Path:
     """Write surfaces, curves and shapes to an IGES file (millimetres, faces as 144/128), atomically.
 
@@ -605,7 +612,7 @@ def write_iges(
 
     Parameters
     ----------
-    path, objects, names
+    path, objects, names, replace_readonly
         As :func:`write_step`.
 
     Returns
@@ -617,9 +624,9 @@ def write_iges(
     InvalidGeometryError, KernelError, ExchangeError
         As :func:`write_step`.
     """
-    p = _files.target(path)
+    p = _files.target(path, replace_readonly=replace_readonly)
     items = _xocc.normalise(objects, names)
     _xocc.silence_occ()
     data = _xocc.iges_bytes(p, items)
-    _files.atomic_write(p, data)
+    _files.atomic_write(p, data, replace_readonly=replace_readonly)
     return p

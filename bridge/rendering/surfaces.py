@@ -16,6 +16,8 @@ import numpy as np
 from occsurf.algorithms import BSplineCurve, BSplineSurface
 from occsurf.algorithms.geometry.differential import surface_curvatures
 
+from ..exchange.files import write_figure
+
 __all__ = ["render_surfaces", "surface_grid"]
 
 COLORINGS = ("mean", "gaussian", "height", "none")
@@ -120,7 +122,7 @@ def render_surfaces(
                     else panel_titles[k])
     _annotate(fig, color, norm, cmap, title, subtitle)
     path = Path(path)
-    fig.savefig(path)
+    write_figure(fig, path)
     return path
 
 
