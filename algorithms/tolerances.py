@@ -133,6 +133,25 @@ _DEFAULTS: dict[str, float] = {
     # smaller than this at its own data site (the matrix is then singular or nearly so). Relative
     # to the basis' maximum of 1.
     "SCHOENBERG_WHITNEY": 1e-12,
+    # Generalised cross-validation (fit_grid smoothing="gcv") searches log10(lambda) in
+    # [FIT_GCV_MIN_LOG10, FIT_GCV_MAX_LOG10] (lambda = 1 weighs data and penalty alike).
+    "FIT_GCV_MIN_LOG10": -10.0,
+    "FIT_GCV_MAX_LOG10": 3.0,
+    # Smoothing lambda used when a gridded fit has missing (NaN) cells and none is given: keeps the
+    # poles without data defined (their second differences are minimised) and changes the fit
+    # elsewhere by ~1e-6 relative; scattered fits use FIT_SCATTERED_SMOOTHING the same way.
+    "FIT_MISSING_SMOOTHING": 1e-6,
+    "FIT_SCATTERED_SMOOTHING": 1e-6,
+    # Point projection (measured distances, parameter correction): damped Newton stops once every
+    # parameter step is below FIT_PROJECTION_STEP times the domain size, after at most
+    # FIT_PROJECTION_MAX_ITER steps.
+    "FIT_PROJECTION_STEP": 1e-12,
+    "FIT_PROJECTION_MAX_ITER": 30,
+    # Adaptive hierarchical fitting: most overlay levels below the base, and the flagged knot
+    # spans are grown by FIT_ADAPTIVE_MARGIN spans on each side before overlays are placed (an
+    # overlay's outer vertices taper to its border).
+    "FIT_ADAPTIVE_MAX_LEVELS": 6,
+    "FIT_ADAPTIVE_MARGIN": 1,
     # ---- manipulation (course ch. 3, 4) --------------------------------------------------------
     # A pivot |R[k, k]| of the equilibrated constraint matrix below RANK_RTOL * |R[0, 0]| counts as
     # zero: rows beyond it are taken as combinations of the earlier ones.
@@ -227,6 +246,45 @@ _DEFAULTS: dict[str, float] = {
     "FILL_CORNER_SPAN": 0.02,
     # Most sides of a hole (the construction works for any n; this bounds the output size).
     "FILL_MAX_SIDES": 24,
+    # ---- quality (course ch. 9, 11-2) ----------------------------------------------------------
+    # A point is flat (curvature_map kind "radius" is inf) when max(|k1|, |k2|) * size is at most
+    # this; size is the diagonal of the sampled points' bounding box (scale-free).
+    "QUALITY_FLAT_CURVATURE": 1e-9,
+    # Default minimum draft angle of classify_draft, degrees (a common moulding minimum).
+    "QUALITY_MIN_DRAFT_DEG": 1.0,
+    # Inflections of a comb are located to this fraction of the curve's parameter range (bracketed
+    # root finding on the signed curvature).
+    "QUALITY_INFLECTION_TOL": 1e-12,
+    # Section points are refined by Newton onto the exact surface-plane intersection until their
+    # distance to the plane is at most this times the model size ...
+    "QUALITY_SECTION_TOL": 1e-10,
+    # ... in at most this many steps (points that do not converge are dropped and counted).
+    "QUALITY_SECTION_NEWTON_STEPS": 30,
+    # Seed grid of a section: at least this many cells per parameter direction of a face, and at
+    # least QUALITY_SECTION_CELLS_PER_SPAN per non-empty knot span.
+    "QUALITY_SECTION_GRID": 48,
+    "QUALITY_SECTION_CELLS_PER_SPAN": 6,
+    # Section polylines of neighbouring faces whose ends lie within this distance (relative to the
+    # model size) are joined into one chain.
+    "QUALITY_CHAIN_TOL": 1e-6,
+    # face_flags. A sign change of the mean curvature counts as a wiggle only where |H| * size
+    # exceeds this on both sides (smaller is round-off on a flat or developable face).
+    "QUALITY_WIGGLE_CURVATURE": 1e-3,
+    # Flat spot: max(|k1|, |k2|) below this fraction of the face's median on a face that is curved
+    # (median max|k| * size above QUALITY_WIGGLE_CURVATURE) ...
+    "QUALITY_FLAT_SPOT_RATIO": 0.02,
+    # ... covering at least this fraction of the samples (a single crossing point is not a spot).
+    "QUALITY_FLAT_SPOT_AREA": 0.005,
+    # Curvature spike: a local maximum of |k1| + |k2| above this multiple of the median of its
+    # neighbourhood (QUALITY_SPIKE_RADIUS grid cells around it) and above 1/size.
+    "QUALITY_SPIKE_RATIO": 10.0,
+    "QUALITY_SPIKE_RADIUS": 3,
+    # Near-degenerate normal: |S_u x S_v| / max(|S_u|, |S_v|)^2 (the sine of the angle between the
+    # partials) below this, but above NORMAL_ZERO.
+    "QUALITY_NEAR_DEGENERATE": 1e-3,
+    # Ill-parametrisation: ratio of the largest to the smallest |S_u x S_v| (the Jacobian) over a
+    # face's non-degenerate samples above this.
+    "QUALITY_JACOBIAN_RATIO": 100.0,
 }
 
 _OVERRIDES: contextvars.ContextVar[Mapping[str, float]] = contextvars.ContextVar(

@@ -3,12 +3,14 @@
 Public names: the typed affine objects :class:`Point`, :class:`Vector`, :class:`Normal`,
 :class:`Frame`, :class:`AffineMap`, :class:`ProjectiveMap`, :func:`affine_combination`, and the
 differential geometry of curves and surfaces: :func:`curve_frenet`, :func:`curvature`,
-:func:`torsion`, :func:`arc_length`, :func:`rotation_minimizing_frames`, :func:`surface_curvatures`.
+:func:`torsion`, :func:`arc_length`, :func:`rotation_minimizing_frames`, :func:`surface_curvatures`,
+:func:`curvatures_from_derivatives`.
 """
 
 from .affine import Normal, Point, Vector, affine_combination
 from .affine_maps import AffineMap, Frame, ProjectiveMap
-from .differential import arc_length, curvature, curve_frenet, rotation_minimizing_frames, surface_curvatures, torsion
+from .differential import (arc_length, curvature, curvatures_from_derivatives, curve_frenet, rotation_minimizing_frames,
+                           surface_curvatures, torsion)
 
 __all__ = [
     "AffineMap",
@@ -20,6 +22,7 @@ __all__ = [
     "affine_combination",
     "arc_length",
     "curvature",
+    "curvatures_from_derivatives",
     "curve_frenet",
     "rotation_minimizing_frames",
     "surface_curvatures",

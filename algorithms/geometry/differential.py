@@ -56,6 +56,7 @@ __all__ = [
     "arc_length",
     "rotation_minimizing_frames",
     "surface_curvatures",
+    "curvatures_from_derivatives",
     "principal_curvatures",
     "is_umbilic",
     "normal_curvature",
@@ -444,7 +445,11 @@ def _check_surface(surface: object) -> BSplineSurface:
 
 
 def _forms(surface: BSplineSurface, u: ArrayLike, v: ArrayLike) -> dict[str, Array]:
-    D = surface.derivatives(u, v, 2)
+    return _forms_of(surface.derivatives(u, v, 2))
+
+
+def _forms_of(D: Array) -> dict[str, Array]:
+    """First and second fundamental forms from partials ``D`` of shape S + (>=3, >=3, 3)."""
     su, sv = D[..., 1, 0, :], D[..., 0, 1, :]
     cr = np.cross(su, sv)
     ncr = _norm(cr)
@@ -485,7 +490,29 @@ def surface_curvatures(surface: BSplineSurface, u: ArrayLike, v: ArrayLike) -> S
     zero matrix. ``K = (LN - M^2)/(EG - F^2)`` and ``H = (EN - 2FM + GL) / (2(EG - F^2))``.
     """
     s = _check_surface(surface)
-    f = _forms(s, u, v)
+    return curvatures_from_derivatives(s.derivatives(u, v, 2))
+
+
+def curvatures_from_derivatives(D: ArrayLike) -> SurfaceCurvatures:
+    """:func:`surface_curvatures` from partial derivatives computed by any evaluator.
+
+    For surfaces that are not a :class:`BSplineSurface` (hierarchical surfaces, S-patches, grids of
+    partials from ``derivatives_grid``) the same formulas and the same degenerate-point rule apply.
+
+    Parameters
+    ----------
+    D : array_like, shape S + (r + 1, r + 1, 3), r >= 2
+        ``D[..., k, l, :] = d^{k+l} S / du^k dv^l`` (the layout of ``BSplineSurface.derivatives``).
+
+    Returns
+    -------
+    SurfaceCurvatures
+        Of shape S; NaN where the normal is undefined.
+    """
+    D = np.asarray(D, dtype=float)
+    if D.ndim < 3 or D.shape[-3] < 3 or D.shape[-2] < 3 or D.shape[-1] != 3:
+        raise InvalidGeometryError(f"D: expected partials of shape (..., r+1, r+1, 3) with r >= 2, got {D.shape}")
+    f = _forms_of(D)
     su, sv, n, ok = f["su"], f["sv"], f["n"], f["ok"]
     e1 = _safe_div(su, f["lu"][..., None], ok[..., None])
     e2 = np.cross(n, e1)
