@@ -9,6 +9,7 @@ Rooms:
 ``validation``  our evaluation and curvature against OCC's on the same input
 ``modeling``    operations on OCC models: hole filling of shells (course §8-3)
 ``rendering``   PNG pictures of surfaces
+``quality``     assessment of real models: continuity across edges (course ch. 9)
 ``cli``         the ``occsurf`` command line, one module per command
 ==============  ===========================================================================
 
@@ -46,6 +47,12 @@ _EXPORTS = {
     "ImportedModel": "exchange.step_iges",
     "ImportedFace": "exchange.step_iges",
     "ImportedEdge": "exchange.step_iges",
+    "edge_continuity": "quality.continuity",
+    "check_edges": "quality.continuity",
+    "EdgeReport": "quality.continuity",
+    "Thresholds": "quality.continuity",
+    "Violation": "quality.continuity",
+    "PRESETS": "quality.continuity",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -1,0 +1,43 @@
+"""occsurf.bridge.quality: assessing real models (course ch. 9 "Assessment", 11-2), measured on OCC
+models and validated against OCC's own checks.
+
+* :mod:`.continuity` — :func:`edge_continuity`: G0 gap, G1 angle, G2 (absolute and CATIA's
+  relative %) and G3 jumps along every edge between two faces (shared edges of a shell, seams, and
+  loose faces' edges matched geometrically as Rhino's ``GlobalEdgeContinuity`` does), with each
+  edge's worst point and classification (:class:`EdgeReport`); threshold presets
+  (:data:`PRESETS`: ``'catia'``, ``'class-a'``, ``'mechanical'``, :class:`Thresholds`) and
+  :func:`check_edges` -> :class:`Violation`. Cross-validated against
+  ``LocalAnalysis_SurfaceContinuity`` and ``BRepLib::ContinuityOfFaces`` in
+  ``tests/bridge/test_continuity*.py``.
+* :mod:`._evaluators` — vectorised evaluation of faces and p-curves in OCC's parametrisation (our
+  B-splines, closed forms for elementary surfaces, OCC point by point for the rest).
+* :mod:`._pairs` — which faces meet along which edge (topology, seams, geometric matching).
+
+Names are imported lazily: importing this package does not load OCC.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_EXPORTS = {
+    name: "continuity"
+    for name in ("edge_continuity", "check_edges", "EdgeReport", "Violation", "Thresholds", "PRESETS",
+                 "ContinuityResult", "occ_fold", "occ_gap")
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'occsurf.bridge.quality' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(list(globals()) + __all__)

@@ -1,0 +1,285 @@
+"""Which faces meet along which edge: shared edges of a shell, and edges matched geometrically.
+
+A shell's faces share their edges (``TopExp.MapShapesAndAncestors_s``): that is the *topology* of
+the model. IGES files and many STEP exports carry loose faces instead, each with its own copy of a
+common boundary; like Rhino's ``GlobalEdgeContinuity``, :func:`match_free_edges` pairs such edges
+by geometry: an edge ``a`` of face ``A`` is matched to an edge ``b`` of another face when every
+sample of ``a`` (ends included) lies within ``tol`` of ``b`` (``a`` is contained in ``b``; equal
+edges are matched once). Partial overlaps (``a`` and ``b`` each sticking out of the other) are not
+matched.
+
+Each pair is described by two :class:`Side` records: the face, its evaluator, the p-curve of the
+edge on it, and the orientation of the edge in the face (orientation of the face composed), from
+which a normal flip between the faces is detected.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from OCP.BRep import BRep_Tool
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED
+from OCP.TopExp import TopExp_Explorer
+from OCP.TopoDS import TopoDS
+from OCP.TopTools import TopTools_IndexedMapOfShape
+
+from ..messages import one_line
+from ._evaluators import PCurveEvaluator, SurfaceEvaluator, pcurve_evaluator, surface_evaluator
+
+Array = NDArray[np.float64]
+
+__all__ = ["FaceData", "Side", "Pair", "collect_faces", "topology_pairs", "match_free_edges"]
+
+
+@dataclass
+class FaceData:
+    """One face: its index (as ``occsurf inspect`` numbers it), evaluator or the reason it has none."""
+
+    index: int
+    face: Any = field(repr=False)
+    reversed: bool
+    evaluator: SurfaceEvaluator | None = field(repr=False)
+    kind: str
+    error: str | None = None
+
+
+@dataclass
+class Side:
+    """One face of a pair along the edge.
+
+    ``sense`` is +1 when the edge runs along its curve's parameter in this face's boundary (edge
+    orientation composed with the face's), -1 otherwise. ``pcurve`` is ``None`` when the edge has
+    no p-curve on the face (its ``(u, v)`` are then found by projection).
+    """
+
+    face: int
+    edge: Any = field(repr=False)
+    sense: int
+    pcurve: PCurveEvaluator | None = field(repr=False)
+
+
+@dataclass
+class Pair:
+    """Two faces meeting along an edge. For ``matched == 'geometry'`` side 2 belongs to another edge,
+    whose parameter ``s`` at a parameter ``t`` of side 1 is found by projection, starting from the
+    table ``(t_table, s_table)``."""
+
+    side1: Side
+    side2: Side
+    matched: str
+    seam: bool = False
+    degenerate: bool = False
+    t_table: Array | None = field(default=None, repr=False)
+    s_table: Array | None = field(default=None, repr=False)
+    match_distance: float | None = None
+    note: str | None = None
+
+    @property
+    def first(self) -> float:
+        return self.side1.pcurve.first if self.side1.pcurve is not None else 0.0
+
+    @property
+    def last(self) -> float:
+        return self.side1.pcurve.last if self.side1.pcurve is not None else 1.0
+
+
+# ------------------------------------------------------------------------------------ faces
+def collect_faces(model: Any) -> tuple[Any, list[FaceData]]:
+    """The shape and its faces in ``TopExp_Explorer`` order (the numbering of ``occsurf inspect``).
+
+    ``model`` is an :class:`~occsurf.bridge.ImportedModel` (its converted B-spline surfaces are
+    reused) or any OCC / build123d / cadquery shape.
+    """
+    imported = getattr(model, "faces", None)
+    if isinstance(imported, list) and hasattr(model, "shape"):
+        shape = model.shape
+        pairs = [(f.face, f.surface if f.surface_type in ("BSplineSurface", "BezierSurface") else None)
+                 for f in imported]
+    else:
+        shape = getattr(model, "wrapped", model)
+        fmap = TopTools_IndexedMapOfShape()
+        ex = TopExp_Explorer(shape, TopAbs_FACE)
+        while ex.More():
+            fmap.Add(ex.Current())
+            ex.Next()
+        pairs = [(TopoDS.Face_s(fmap.FindKey(i)), None) for i in range(1, fmap.Extent() + 1)]
+    faces = []
+    for i, (face, ours) in enumerate(pairs):
+        rev = face.Orientation() == TopAbs_REVERSED
+        try:
+            occ_surface = BRep_Tool.Surface_s(face)
+            if occ_surface is None:
+                raise ValueError("the face has no surface")
+            ev = surface_evaluator(occ_surface, ours)
+            faces.append(FaceData(i, face, rev, ev, ev.kind))
+        except Exception as err:  # noqa: BLE001 - one bad face must not stop the model
+            faces.append(FaceData(i, face, rev, None, "none", f"face {i} cannot be evaluated: {one_line(err)}"))
+    return shape, faces
+
+
+def _pcurve(edge: Any, face: Any) -> PCurveEvaluator | None:
+    first, last = BRep_Tool.Range_s(edge)
+    c2d = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+    if c2d is None:
+        return None
+    return pcurve_evaluator(c2d, float(first), float(last))
+
+
+def _sense(edge: Any) -> int:
+    return 1 if edge.Orientation() == TopAbs_FORWARD else -1
+
+
+# ------------------------------------------------------------------------------------ topology
+def topology_pairs(faces: list[FaceData]) -> tuple[list[Pair], list[Side], list[str]]:
+    """Pairs of faces sharing an edge, seams (an edge twice in one face), and the free edges.
+
+    Returns
+    -------
+    pairs : list of Pair
+        ``matched == 'topology'``; an edge of ``k > 2`` faces (non-manifold) gives ``k - 1`` pairs
+        with the first face.
+    free : list of Side
+        Edges bounding one face only (candidates for :func:`match_free_edges`).
+    warnings : list of str
+    """
+    emap = TopTools_IndexedMapOfShape()
+    occurrences: dict[int, list[tuple[int, Any]]] = {}
+    for fd in faces:
+        ex = TopExp_Explorer(fd.face, TopAbs_EDGE)
+        while ex.More():
+            e = TopoDS.Edge_s(ex.Current())
+            k = emap.Add(e)
+            occurrences.setdefault(k, []).append((fd.index, e))
+            ex.Next()
+    pairs: list[Pair] = []
+    free: list[Side] = []
+    warnings: list[str] = []
+    for k in sorted(occurrences):
+        occ = occurrences[k]
+        edge0 = occ[0][1]
+        degenerated = bool(BRep_Tool.Degenerated_s(edge0))
+        sides = [_side(faces, fi, e) for fi, e in occ]
+        if len(occ) == 1:
+            if degenerated:
+                pairs.append(Pair(sides[0], sides[0], "topology", degenerate=True,
+                                  note="degenerated edge (a collapsed side or a pole): nothing to measure"))
+            else:
+                free.append(sides[0])
+            continue
+        if len(occ) > 2 and len({fi for fi, _ in occ}) > 2:
+            warnings.append(f"non-manifold edge shared by faces {sorted({fi for fi, _ in occ})}")
+        for s in sides[1:]:
+            seam = s.face == sides[0].face
+            pairs.append(Pair(sides[0], s, "topology", seam=seam, degenerate=degenerated,
+                              note="degenerated edge (a collapsed side or a pole): nothing to measure"
+                              if degenerated else None))
+    return pairs, free, warnings
+
+
+def _side(faces: list[FaceData], fi: int, edge: Any) -> Side:
+    pc = None
+    try:
+        pc = _pcurve(edge, faces[fi].face)
+    except Exception:  # noqa: BLE001 - a missing/bad p-curve is handled by projection
+        pc = None
+    return Side(fi, edge, _sense(edge), pc)
+
+
+# ------------------------------------------------------------------------------------ geometry
+def _edge_points(faces: list[FaceData], sides: list[Side], n: NDArray[np.intp]) -> tuple[list[Array], list[Array], list[Array]]:
+    """Samples of free edges: parameters, (u, v) and 3-D points, ``n[k]`` uniform samples each."""
+    ts, uvs, pts = [], [], []
+    for s, m in zip(sides, n):
+        pc = s.pcurve
+        t = np.linspace(pc.first, pc.last, int(m))
+        uv, _ = pc(t)
+        ts.append(t)
+        uvs.append(uv)
+    by_face: dict[int, list[int]] = {}
+    for k, s in enumerate(sides):
+        by_face.setdefault(s.face, []).append(k)
+    pts = [np.empty((0, 3))] * len(sides)
+    for fi, ks in by_face.items():
+        uv = np.concatenate([uvs[k] for k in ks])
+        P = faces[fi].evaluator.derivatives(uv[:, 0], uv[:, 1], 0)[:, 0, 0]
+        for k, chunk in zip(ks, np.split(P, np.cumsum([len(uvs[k]) for k in ks])[:-1])):
+            pts[k] = chunk
+    return ts, uvs, pts
+
+
+def project_on_side(faces: list[FaceData], side: Side, X: Array, s0: Array, iterations: int) -> tuple[Array, Array]:
+    """Gauss-Newton projection of points ``X (m, 3)`` onto the edge curve ``S(pcurve(s))`` of a side.
+
+    Returns ``(s, distance)``, ``s`` clipped to the edge's range.
+    """
+    pc, ev = side.pcurve, faces[side.face].evaluator
+    s = np.clip(np.asarray(s0, dtype=float), pc.first, pc.last)
+    for _ in range(iterations):
+        uv, duv = pc(s)
+        D = ev.derivatives(uv[:, 0], uv[:, 1], 1)
+        C = D[:, 0, 0]
+        dC = D[:, 1, 0] * duv[:, :1] + D[:, 0, 1] * duv[:, 1:]
+        f = C - X
+        den = np.einsum("ij,ij->i", dC, dC)
+        step = np.where(den > 0, -np.einsum("ij,ij->i", dC, f) / np.where(den > 0, den, 1.0), 0.0)
+        s = np.clip(s + step, pc.first, pc.last)
+    uv, _ = pc(s)
+    C = ev.derivatives(uv[:, 0], uv[:, 1], 0)[:, 0, 0]
+    return s, np.linalg.norm(C - X, axis=1)
+
+
+def match_free_edges(faces: list[FaceData], free: list[Side], tol: float, spacing: float,
+                     iterations: int = 6) -> list[Pair]:
+    """Pair free edges of different faces that coincide within ``tol`` (see the module docstring).
+
+    Parameters
+    ----------
+    faces : list of FaceData
+    free : list of Side
+        Edges that bound one face only.
+    tol : float
+        Largest distance (model units) of a sample of one edge from the other edge.
+    spacing : float
+        Target distance between the samples that locate candidates (a KD-tree of all samples).
+    """
+    from scipy.spatial import cKDTree
+
+    usable = [s for s in free if s.pcurve is not None and faces[s.face].evaluator is not None]
+    if len(usable) < 2:
+        return []
+    # a first coarse pass measures each edge's length, then samples at ``spacing``
+    _, _, coarse = _edge_points(faces, usable, np.full(len(usable), 9))
+    lengths = np.array([np.linalg.norm(np.diff(p, axis=0), axis=1).sum() for p in coarse])
+    n = np.clip(np.ceil(lengths / spacing).astype(int) + 1, 9, 400)
+    ts, _, pts = _edge_points(faces, usable, n)
+    owner = np.repeat(np.arange(len(usable)), n)
+    allpts = np.concatenate(pts)
+    tree = cKDTree(allpts)
+    gaps = [np.linalg.norm(np.diff(p, axis=0), axis=1).max() if len(p) > 1 else 0.0 for p in pts]
+    radius = tol + 0.5 * max(gaps) + 1e-12
+    pairs: list[Pair] = []
+    seen: set[tuple[int, int]] = set()
+    for a, side_a in enumerate(usable):
+        probes = coarse[a]
+        hits = tree.query_ball_point(probes, radius)
+        cands = set(owner[hits[0]].tolist()) if len(hits[0]) else set()
+        for h in hits[1:]:
+            cands &= set(owner[h].tolist())
+        cands.discard(a)
+        for b in sorted(cands):
+            side_b = usable[b]
+            if side_b.face == side_a.face or (b, a) in seen:
+                continue
+            t_a = np.linspace(side_a.pcurve.first, side_a.pcurve.last, 9)
+            # starting parameters on b: nearest samples of b
+            d2 = ((probes[:, None, :] - pts[b][None, :, :]) ** 2).sum(axis=2)
+            loc = d2.argmin(axis=1)
+            s, dist = project_on_side(faces, side_b, probes, ts[b][loc], iterations)
+            if dist.max() > tol:
+                continue
+            seen.add((a, b))
+            pairs.append(Pair(side_a, side_b, "geometry", t_table=t_a, s_table=s, match_distance=float(dist.max())))
+    return pairs

@@ -1,0 +1,810 @@
+"""Continuity across the edges of a model: G0 gap, G1 angle, G2 and G3 jumps (course ch. 9, 11-2).
+
+For every edge shared by two faces of a shell (``TopExp.MapShapesAndAncestors_s``), every seam,
+and, with ``loose=True``, every pair of loose faces whose boundary edges coincide within
+``match_tol`` (as Rhino's ``GlobalEdgeContinuity`` does for IGES data), :func:`edge_continuity`
+samples the edge densely (Chebyshev-Lobatto points, which cluster at the ends where faces usually
+misbehave), evaluates both faces at the ``(u, v)`` their p-curves give (vectorised: see
+:mod:`._evaluators`), and refines each measure's worst point by a bounded golden-section search
+between the samples around the largest one.
+
+Measures at a point of the edge (``P_k``, oriented unit normal ``n_k`` of face ``k``; ``T`` the
+edge tangent):
+
+``g0``
+    ``|P_1 - P_2|`` (model units).
+``g1``
+    the angle between ``n_1`` and ``n_2`` in degrees, the normals oriented as the faces are in the
+    shell (``TopAbs_REVERSED`` flips ``S_u x S_v``). If the two faces run along the edge in the
+    same direction their orientations disagree: that is reported as a *normal flip* and ``n_2`` is
+    reversed before the angle is taken. (OCC's ``LocalAnalysis_SurfaceContinuity::G1Angle`` folds
+    angles above 90 degrees instead; :func:`occ_fold` gives that value.)
+``g2``
+    ``|k_1 - k_2|``, where ``k_k`` is the normal curvature of face ``k`` across the edge, in the
+    direction ``b_k = n_k x T`` (1/model units). For a G1 joint this is the only curvature that can
+    jump: the normal curvature along ``T`` and the geodesic torsion are fixed by the shared edge and
+    normals. ``g2_rel`` is CATIA's Connect Checker percentage ``100 |k_1 - k_2| / max(|k_1|, |k_2|)``
+    (0 where both are below :data:`CURVATURE_FLOOR` times the model size's inverse).
+``g3``
+    ``|k'_1 - k'_2|``, the jump of the derivative of that cross curvature along ``b``
+    (1/model units^2), with ``g3=True`` only.
+
+Both ``k_k`` and ``k'_k`` come from the normal section of face ``k`` in the plane ``(P, n_k, b_k)``:
+writing it as a height ``h(x)`` over ``x`` along ``b_k``, ``k = h''(0)`` and ``k' = h'''(0)``,
+obtained exactly from the partials of the surface by implicit differentiation (order by order in
+``x``: ``J w_1 = (0, 1)``, ``Q_2 = S_ww(w_1, w_1)``, ``h'' = n.Q_2``;
+``J w_2 = -(T.Q_2, b.Q_2)``, ``h''' = n.(3 S_ww(w_1, w_2) + S_www(w_1, w_1, w_1))``, where ``J`` is
+the matrix of ``(T, b) . (S_u, S_v)``).
+
+OCC's ``G2CurvatureGap`` is a different measure (half the jump of the principal curvatures when the
+principal frames agree, with a rotation term); it is reported too, as ``g2_gap_occ``, computed from
+our principal curvatures with OCC's formula: that is what the cross-validation against
+``LocalAnalysis_SurfaceContinuity`` compares, on the same points.
+
+Classification of an edge (``Thresholds`` of the chosen preset):
+
+==============  ======================================================================
+``degenerate``  a degenerated edge (collapsed side, pole), or one that could not be evaluated
+                (``error`` says why)
+``seam``        the same face on both sides (the measures are still those across the seam)
+``gap``         ``g0 > g0`` tolerance: the faces do not meet
+``sharp``       ``g1 >= sharp_deg``: a crease by design
+``G0``          position continuous, tangency broken by less than ``sharp_deg`` but more than ``g1``
+``G1``          tangent continuous, curvature jump above ``g2_rel`` (or ``g2_abs``)
+``G2``          curvature continuous within the tolerances
+==============  ======================================================================
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from occsurf.algorithms.errors import InvalidGeometryError
+
+from ..messages import one_line
+from ._pairs import FaceData, Pair, collect_faces, match_free_edges, project_on_side, topology_pairs
+
+Array = NDArray[np.float64]
+
+__all__ = [
+    "Thresholds",
+    "PRESETS",
+    "EdgeReport",
+    "Violation",
+    "ContinuityResult",
+    "edge_continuity",
+    "check_edges",
+    "occ_fold",
+    "DEFAULT_SAMPLES",
+    "MATCH_RTOL",
+    "CURVATURE_FLOOR",
+    "REFINE_ITERATIONS",
+    "CLASSES",
+]
+
+#: Samples per edge (Chebyshev-Lobatto points of the edge's parameter range; odd, so the middle is one).
+DEFAULT_SAMPLES: int = 33
+#: Default ``match_tol`` for loose faces, relative to the diagonal of the model's bounding box:
+#: 1e-4 of a 100 mm part is 0.01 mm, ten times CATIA's G0 default and above the ~1e-7 relative
+#: round-off of IGES files, so exported boundaries match while distinct edges of a thin wall
+#: (>= 0.1 mm apart on such a part) do not.
+MATCH_RTOL: float = 1e-4
+#: Curvatures below this times ``1 / model size`` count as zero for ``g2_rel`` (a radius a million
+#: times the model): the relative jump between two almost flat faces is noise, not a defect.
+CURVATURE_FLOOR: float = 1e-6
+#: Golden-section iterations of the worst-point search (the bracket shrinks by 0.618 each).
+REFINE_ITERATIONS: int = 8
+#: Gauss-Newton steps when projecting onto the other edge of a geometrically matched pair.
+PROJECTION_ITERATIONS: int = 6
+#: Every classification label, in decreasing order of severity.
+CLASSES: tuple[str, ...] = ("degenerate", "gap", "sharp", "G0", "G1", "G2", "seam")
+
+_MEASURES = ("g0", "g1", "g2", "g2_rel", "g3")
+
+
+# ======================================================================================= presets
+@dataclass(frozen=True)
+class Thresholds:
+    """Tolerances an edge is checked against (model units: millimetres for STEP/IGES).
+
+    Attributes
+    ----------
+    g0 : float
+        Largest gap.
+    g1_deg : float
+        Largest angle between the normals, degrees.
+    g2_rel : float or None
+        Largest curvature jump in percent (CATIA's Connect Checker); ``None``: not checked.
+    g2_abs : float or None
+        Largest absolute curvature jump, 1/model units; ``None``: not checked.
+    g3 : float or None
+        Largest jump of the curvature derivative, 1/model units^2; needs ``g3=True``.
+    sharp_deg : float
+        Angles from this on are creases by design: classified ``'sharp'`` and not G1 violations.
+    name : str
+    """
+
+    g0: float = 0.001
+    g1_deg: float = 0.01
+    g2_rel: float | None = 2.0
+    g2_abs: float | None = None
+    g3: float | None = None
+    sharp_deg: float = 0.5
+    name: str = "custom"
+
+    def __post_init__(self) -> None:
+        for key in ("g0", "g1_deg", "g2_rel", "g2_abs", "g3", "sharp_deg"):
+            value = getattr(self, key)
+            if value is None and key in ("g2_rel", "g2_abs", "g3"):
+                continue
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+                raise InvalidGeometryError(f"Thresholds.{key}: expected a finite number >= 0, got {value!r}")
+
+    def replace(self, **changes: Any) -> Thresholds:
+        """A copy with some values changed (``name`` becomes ``'<name>+custom'`` unless given)."""
+        changes.setdefault("name", f"{self.name}+custom")
+        return replace(self, **changes)
+
+
+#: ``'catia'``: CATIA V5 Connect Checker's defaults (G0 0.001 mm, G1 0.01 deg, G2 2 %).
+#: ``'class-a'``: visible automotive/consumer surfaces: half CATIA's angle and curvature jumps
+#: (0.005 deg, 1 %), as class-A reviews ask for joints that look seamless in highlight lines, and a
+#: G3 check when requested (1e-3 per mm^2).
+#: ``'mechanical'``: machined parts: 0.01 mm gap (a typical machining tolerance, and above IGES's
+#: 10-digit round-off on metre-sized parts), 0.5 deg tangency (below what shows on a part; also
+#: NX's default angle tolerance), no curvature check (a fillet meets its plane with a 100 %
+#: curvature jump by design), creases from 5 deg on.
+PRESETS: dict[str, Thresholds] = {
+    "catia": Thresholds(0.001, 0.01, 2.0, None, None, 0.5, "catia"),
+    "class-a": Thresholds(0.001, 0.005, 1.0, None, 1e-3, 0.5, "class-a"),
+    "mechanical": Thresholds(0.01, 0.5, None, None, None, 5.0, "mechanical"),
+}
+
+
+def _thresholds(preset: str | Thresholds) -> Thresholds:
+    if isinstance(preset, Thresholds):
+        return preset
+    if isinstance(preset, str) and preset in PRESETS:
+        return PRESETS[preset]
+    raise InvalidGeometryError(f"preset: expected one of {sorted(PRESETS)} or a Thresholds, got {preset!r}")
+
+
+# ======================================================================================= reports
+def _vec(x: Any) -> list[float] | None:
+    if x is None:
+        return None
+    a = np.asarray(x, dtype=float)
+    return [float(c) for c in a] if np.all(np.isfinite(a)) else None
+
+
+def _num(x: float | None) -> float | None:
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
+@dataclass(frozen=True)
+class EdgeReport:
+    """The continuity of one edge between two faces.
+
+    Attributes
+    ----------
+    index : int
+        Position in the list :func:`edge_continuity` returns.
+    faces : (int, int)
+        The two faces, numbered as ``occsurf inspect`` numbers them (equal for a seam).
+    midpoint : ndarray, shape (3,)
+        The edge's point at the middle of its parameter range.
+    matched : str
+        ``'topology'`` (a shared edge of the shell) or ``'geometry'`` (two loose faces' edges that
+        coincide within ``match_tol``).
+    g0_max : float
+        Largest gap, model units.
+    g1_max_deg : float
+        Largest angle between the oriented normals, degrees.
+    g2_max : float
+        Largest jump of the cross normal curvature, 1/model units.
+    g2_max_rel : float
+        Largest relative jump in percent (CATIA's Connect Checker).
+    g3_max : float or None
+        Largest jump of the cross curvature's derivative, 1/model units^2 (``g3=True``).
+    g2_gap_occ_max : float
+        Largest value of OCC's ``G2CurvatureGap`` formula (for comparison with OCC).
+    worst_point : ndarray, shape (3,)
+        Where the measure that most exceeds its tolerance (of the preset given) is largest.
+    worst_points : dict
+        Per measure (``'g0'``, ``'g1'``, ``'g2'``, ``'g2_rel'``, ``'g3'``) its worst point.
+    classification : str
+        One of :data:`CLASSES` (see the module docstring).
+    samples : int
+        Points evaluated on this edge (dense samples plus the worst-point searches).
+    normal_flip : bool
+        The two faces' orientations disagree along the edge (their normals point to opposite
+        sides): ``g1`` is measured with one of them reversed.
+    length : float
+        Length of the edge (polyline of the samples), model units.
+    evaluators : (str, str)
+        How each face was evaluated: ``'bspline'``, ``'analytic'`` or ``'occ'``.
+    match_distance : float or None
+        For ``matched == 'geometry'``: the largest distance found when matching.
+    error : str or None
+        Why nothing (or only part) could be measured.
+    """
+
+    index: int
+    faces: tuple[int, int]
+    midpoint: Array
+    matched: str
+    g0_max: float
+    g1_max_deg: float
+    g2_max: float
+    g2_max_rel: float
+    g3_max: float | None
+    g2_gap_occ_max: float
+    worst_point: Array
+    worst_points: dict[str, Array] = field(repr=False)
+    classification: str
+    samples: int
+    normal_flip: bool
+    length: float
+    evaluators: tuple[str, str]
+    match_distance: float | None = None
+    error: str | None = None
+    edges: tuple[Any, Any] = field(default=(None, None), repr=False, compare=False)
+
+    def to_json(self) -> dict[str, Any]:
+        """The issue's report keys (``faces``, ``midpoint``, ``matched``, ``g0_max``, ``g1_max_deg``,
+        ``g2_max``, ``g2_max_rel``, ``worst_point``) plus the other fields; non-finite numbers
+        become ``null``."""
+        return {
+            "faces": [int(self.faces[0]), int(self.faces[1])],
+            "midpoint": _vec(self.midpoint),
+            "matched": self.matched,
+            "g0_max": _num(self.g0_max),
+            "g1_max_deg": _num(self.g1_max_deg),
+            "g2_max": _num(self.g2_max),
+            "g2_max_rel": _num(self.g2_max_rel),
+            "worst_point": _vec(self.worst_point),
+            "index": self.index,
+            "g3_max": _num(self.g3_max),
+            "g2_gap_occ_max": _num(self.g2_gap_occ_max),
+            "classification": self.classification,
+            "normal_flip": self.normal_flip,
+            "samples": self.samples,
+            "length": _num(self.length),
+            "evaluators": list(self.evaluators),
+            "match_distance": _num(self.match_distance),
+            "worst_points": {k: _vec(v) for k, v in self.worst_points.items()},
+            "error": self.error,
+        }
+
+
+@dataclass(frozen=True)
+class Violation:
+    """One edge breaking one tolerance of a :class:`Thresholds`.
+
+    ``measure`` is ``'g0'``, ``'g1'``, ``'g2_rel'``, ``'g2'``, ``'g3'`` or ``'normal_flip'``.
+    """
+
+    edge: int
+    faces: tuple[int, int]
+    measure: str
+    value: float
+    limit: float
+    point: Array
+    message: str
+
+    def to_json(self) -> dict[str, Any]:
+        return {"edge": self.edge, "faces": list(self.faces), "measure": self.measure, "value": _num(self.value),
+                "limit": _num(self.limit), "point": _vec(self.point), "message": self.message}
+
+
+class ContinuityResult(list):
+    """The list of :class:`EdgeReport` :func:`edge_continuity` returns, with what it found on the way.
+
+    Attributes
+    ----------
+    warnings : list of str
+        E.g. "no shared edges and no edges matched within 0.01: nothing to check", faces that
+        could not be evaluated, non-manifold edges.
+    match_tol : float or None
+        The matching tolerance used (``None`` when ``loose=False``).
+    thresholds : Thresholds
+    stats : dict
+        Counts (edges by topology/geometry, free edges left unmatched) and timings (seconds).
+    """
+
+    warnings: list[str]
+    match_tol: float | None
+    thresholds: Thresholds
+    stats: dict[str, Any]
+
+    def to_json(self) -> list[dict[str, Any]]:
+        return [r.to_json() for r in self]
+
+
+# ======================================================================================= measures
+def _normalize(a: Array) -> tuple[Array, Array]:
+    n = np.linalg.norm(a, axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return a / n[..., None], n
+
+
+def _dot(a: Array, b: Array) -> Array:
+    return np.einsum("...i,...i->...", a, b)
+
+
+def _section(D: Array, n: Array, T: Array, third: bool) -> tuple[Array, Array]:
+    """Cross curvature ``h''(0)`` and its derivative ``h'''(0)`` of the normal section across ``T``.
+
+    ``D (m, r+1, r+1, 3)`` partials, ``n`` oriented unit normals, ``T`` unit edge tangents.
+    """
+    b, _ = _normalize(np.cross(n, T))
+    Tk = np.cross(b, n)
+    Su, Sv = D[:, 1, 0], D[:, 0, 1]
+    J = np.stack([np.stack([_dot(Tk, Su), _dot(Tk, Sv)], -1), np.stack([_dot(b, Su), _dot(b, Sv)], -1)], -2)
+    det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        inv = np.stack([np.stack([J[:, 1, 1], -J[:, 0, 1]], -1), np.stack([-J[:, 1, 0], J[:, 0, 0]], -1)], -2) / det[:, None, None]
+    w1 = inv[:, :, 1]  # J^{-1} (0, 1)
+
+    def d2(a: Array, c: Array) -> Array:
+        return (D[:, 2, 0] * (a[:, :1] * c[:, :1]) + D[:, 1, 1] * (a[:, :1] * c[:, 1:] + a[:, 1:] * c[:, :1])
+                + D[:, 0, 2] * (a[:, 1:] * c[:, 1:]))
+
+    Q2 = d2(w1, w1)
+    k = _dot(n, Q2)
+    if not third:
+        return k, np.full_like(k, np.nan)
+    w2 = -np.einsum("mij,mj->mi", inv, np.stack([_dot(Tk, Q2), _dot(b, Q2)], -1))
+    x, y = w1[:, :1], w1[:, 1:]
+    D3 = D[:, 3, 0] * x**3 + 3 * D[:, 2, 1] * x**2 * y + 3 * D[:, 1, 2] * x * y**2 + D[:, 0, 3] * y**3
+    return k, _dot(n, 3 * d2(w1, w2) + D3)
+
+
+def occ_gap(D1: Array, D2: Array) -> Array:
+    """OCC's ``LocalAnalysis_SurfaceContinuity::G2CurvatureGap`` from our partials (OCCT 7.9 formula).
+
+    With principal curvatures ``kmax, kmin`` (signs against ``S_u x S_v``, as ``GeomLProp``),
+    ``eta = (kmin + kmax) / 2``, ``zeta = (kmax - kmin) / 2`` and ``alpha`` the angle between the
+    directions ``(|dmin| + |dmax|) / 2`` (component-wise) of the two sides::
+
+        gap = |eta_1 - eta_2| / 2 + sqrt(((zeta_1 - zeta_2) / 2)^2 cos^2 alpha + zeta^2 sin^2 alpha)
+
+    with ``zeta = (zeta_1 + zeta_2) / 2``.
+    """
+    from occsurf.algorithms.geometry.differential import curvatures_from_derivatives
+
+    c1 = curvatures_from_derivatives(D1[:, :3, :3])
+    c2 = curvatures_from_derivatives(D2[:, :3, :3])
+    mcd1, _ = _normalize((np.abs(c1.dir1) + np.abs(c1.dir2)) / 2)
+    mcd2, _ = _normalize((np.abs(c2.dir1) + np.abs(c2.dir2)) / 2)
+    alpha = np.arctan2(np.linalg.norm(np.cross(mcd1, mcd2), axis=-1), _dot(mcd1, mcd2))
+    eta1, eta2 = (c1.k1 + c1.k2) / 2, (c2.k1 + c2.k2) / 2
+    zeta1, zeta2 = (c1.k1 - c1.k2) / 2, (c2.k1 - c2.k2) / 2
+    zeta = (zeta1 + zeta2) / 2
+    return np.abs(eta1 - eta2) / 2 + np.sqrt(((zeta1 - zeta2) / 2) ** 2 * np.cos(alpha) ** 2
+                                             + zeta**2 * np.sin(alpha) ** 2)
+
+
+def occ_fold(angle_deg: Array | float) -> Array:
+    """Our G1 angle as OCC's ``G1Angle`` reports it: folded into [0, 90] degrees."""
+    a = np.asarray(angle_deg, dtype=float)
+    return np.where(a > 90.0, 180.0 - a, a)
+
+
+# ======================================================================================= engine
+class _Engine:
+    """Evaluates the measures at ``(pair, t)`` requests, all pairs at once, grouped by face."""
+
+    def __init__(self, faces: list[FaceData], pairs: list[Pair], third: bool, floor: float) -> None:
+        self.faces, self.pairs, self.third, self.floor = faces, pairs, third, floor
+        self.order = 3 if third else 2
+        self.flip = np.ones(len(pairs))
+        self.face_errors: dict[int, str] = {}
+        self.evaluated = np.zeros(len(pairs), dtype=int)
+
+    # -------------------------------------------------------------------------- batches
+    def _pcurves(self, which: int, pid: NDArray[np.intp], t: Array) -> tuple[Array, Array]:
+        uv = np.full((t.shape[0], 2), np.nan)
+        duv = np.full((t.shape[0], 2), np.nan)
+        for p in np.unique(pid):
+            sel = pid == p
+            side = self.pairs[p].side1 if which == 1 else self.pairs[p].side2
+            uv[sel], duv[sel] = side.pcurve(t[sel])
+        return uv, duv
+
+    def _surfaces(self, fid: NDArray[np.intp], uv: Array, order: int) -> Array:
+        D = np.full((fid.shape[0], order + 1, order + 1, 3), np.nan)
+        for f in np.unique(fid):
+            sel = fid == f
+            ev = self.faces[f].evaluator
+            if ev is None or f in self.face_errors:
+                continue
+            try:
+                D[sel] = ev.derivatives(uv[sel, 0], uv[sel, 1], order)
+            except Exception as err:  # noqa: BLE001 - keep the other faces
+                self.face_errors[int(f)] = f"face {f} could not be evaluated: {one_line(err)}"
+        return D
+
+    def _project(self, pid: NDArray[np.intp], t: Array, X: Array) -> Array:
+        """Side-2 parameters of geometry pairs: Gauss-Newton onto the other edge, all pairs at once."""
+        s = np.empty_like(t)
+        for p in np.unique(pid):
+            sel = pid == p
+            pr = self.pairs[p]
+            s[sel] = np.interp(t[sel], pr.t_table, pr.s_table)
+        fid = np.array([self.pairs[p].side2.face for p in pid], dtype=np.intp)
+        lo = np.array([self.pairs[p].side2.pcurve.first for p in pid])
+        hi = np.array([self.pairs[p].side2.pcurve.last for p in pid])
+        for _ in range(PROJECTION_ITERATIONS):
+            uv, duv = self._pcurves(2, pid, s)
+            D = self._surfaces(fid, uv, 1)
+            dC = D[:, 1, 0] * duv[:, :1] + D[:, 0, 1] * duv[:, 1:]
+            den = _dot(dC, dC)
+            ok = np.isfinite(den) & (den > 0)
+            step = np.where(ok, -_dot(dC, D[:, 0, 0] - X) / np.where(ok, den, 1.0), 0.0)
+            s = np.clip(s + step, lo, hi)
+        return s
+
+    # -------------------------------------------------------------------------- measures
+    def measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool = False) -> dict[str, Array]:
+        """All measures at the requests ``(pid[m], t[m])``: arrays of shape ``(m,)`` (points ``(m, 3)``)."""
+        pairs = self.pairs
+        np.add.at(self.evaluated, pid, 1)
+        f1 = np.array([pairs[p].side1.face for p in pid], dtype=np.intp)
+        f2 = np.array([pairs[p].side2.face for p in pid], dtype=np.intp)
+        uv1, duv1 = self._pcurves(1, pid, t)
+        D1 = self._surfaces(f1, uv1, self.order)
+        geo = np.array([pairs[p].matched == "geometry" for p in pid], dtype=bool)
+        s = t.copy()
+        if geo.any():
+            s[geo] = self._project(pid[geo], t[geo], D1[geo, 0, 0])
+        uv2, duv2 = self._pcurves(2, pid, s)
+        D2 = self._surfaces(f2, uv2, self.order)
+        P1, P2 = D1[:, 0, 0], D2[:, 0, 0]
+        T, _ = _normalize(D1[:, 1, 0] * duv1[:, :1] + D1[:, 0, 1] * duv1[:, 1:])
+        T2 = D2[:, 1, 0] * duv2[:, :1] + D2[:, 0, 1] * duv2[:, 1:]
+        o1 = np.array([-1.0 if self.faces[f].reversed else 1.0 for f in f1])
+        o2 = np.array([-1.0 if self.faces[f].reversed else 1.0 for f in f2])
+        n1, _ = _normalize(np.cross(D1[:, 1, 0], D1[:, 0, 1]))
+        n2, _ = _normalize(np.cross(D2[:, 1, 0], D2[:, 0, 1]))
+        sense1 = np.array([pairs[p].side1.sense for p in pid], dtype=float)
+        sense2 = np.array([pairs[p].side2.sense for p in pid], dtype=float)
+        if set_flip:
+            self._set_flip(pid, geo, sense1 * _dot(T, T2) * sense2, sense1, sense2)
+        n1 = n1 * o1[:, None]
+        n2 = n2 * (o2 * self.flip[pid])[:, None]
+        g1 = np.degrees(np.arctan2(np.linalg.norm(np.cross(n1, n2), axis=1), _dot(n1, n2)))
+        k1, dk1 = _section(D1, n1, T, self.third)
+        k2, dk2 = _section(D2, n2, T, self.third)
+        g2 = np.abs(k1 - k2)
+        big = np.maximum(np.abs(k1), np.abs(k2))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rel = np.where(big > self.floor, 100.0 * g2 / np.where(big > 0, big, 1.0), np.where(np.isnan(big), np.nan, 0.0))
+        return {"g0": np.linalg.norm(P1 - P2, axis=1), "g1": g1, "g2": g2, "g2_rel": rel,
+                "g3": np.abs(dk1 - dk2), "gap": occ_gap(D1, D2), "P": P1}
+
+    def _set_flip(self, pid: NDArray[np.intp], geo: NDArray[np.bool_], along: Array, s1: Array, s2: Array) -> None:
+        """Orientation agreement per pair: a shell's faces run along a shared edge in opposite senses.
+        Topology pairs: the senses of the edge in the two faces; geometry pairs: the tangents."""
+        for p in np.unique(pid):
+            sel = pid == p
+            if self.pairs[p].matched == "geometry":
+                d = along[sel]
+                d = d[np.isfinite(d)]
+                agree = d.size == 0 or np.median(d) < 0
+            else:
+                agree = s1[sel][0] != s2[sel][0] or self.pairs[p].seam
+            self.flip[p] = 1.0 if agree else -1.0
+
+
+# ======================================================================================= driver
+def _chebyshev(n: int) -> Array:
+    """``n`` Chebyshev-Lobatto points of [0, 1]: denser towards both ends."""
+    return 0.5 * (1.0 - np.cos(np.pi * np.arange(n) / (n - 1)))
+
+
+def _model_size(faces: list[FaceData], shape: Any) -> float:
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+
+    box = Bnd_Box()
+    BRepBndLib.Add_s(shape, box)
+    if box.IsVoid():
+        return 1.0
+    x0, y0, z0, x1, y1, z1 = box.Get()
+    d = math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2 + (z1 - z0) ** 2)
+    return d if d > 0 and math.isfinite(d) else 1.0
+
+
+def _check_args(samples: Any, match_tol: Any) -> tuple[int, float | None]:
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 3:
+        raise InvalidGeometryError(f"samples: expected an integer >= 3, got {samples!r}")
+    if match_tol is not None:
+        if isinstance(match_tol, bool) or not isinstance(match_tol, (int, float)) or not math.isfinite(match_tol) or match_tol <= 0:
+            raise InvalidGeometryError(f"match_tol: expected a finite number > 0 (model units) or None, got {match_tol!r}")
+        match_tol = float(match_tol)
+    return int(samples) | 1, match_tol  # odd: the middle of the edge is a sample
+
+
+def edge_continuity(model: Any, *, samples: int = DEFAULT_SAMPLES, g3: bool = False, loose: bool = True,
+                    match_tol: float | None = None, preset: str | Thresholds = "catia",
+                    refine: int | None = None) -> ContinuityResult:
+    """G0/G1/G2 (and G3) continuity of every edge between two faces of a model.
+
+    Parameters
+    ----------
+    model : ImportedModel or TopoDS_Shape (or a build123d / cadquery shape)
+        From :func:`~occsurf.bridge.read_step` / :func:`~occsurf.bridge.read_iges` (faces are
+        numbered as there, i.e. as ``occsurf inspect`` prints them), or any shape (faces numbered in
+        ``TopExp_Explorer`` order, each once).
+    samples : int, optional
+        Dense samples per edge (Chebyshev-Lobatto; made odd so that the middle is one), before the
+        worst-point search. Default :data:`DEFAULT_SAMPLES`.
+    g3 : bool, optional
+        Also measure the jump of the curvature derivative (needs third derivatives).
+    loose : bool, optional
+        Match the free edges of loose faces geometrically (IGES, face-by-face STEP exports).
+    match_tol : float, optional
+        Matching tolerance in model units; default :data:`MATCH_RTOL` times the diagonal of the
+        model's bounding box. Stated in the result (``.match_tol``).
+    preset : str or Thresholds, optional
+        ``'catia'`` (default), ``'class-a'``, ``'mechanical'`` (see :data:`PRESETS`) or your own
+        :class:`Thresholds`: used for ``classification`` and ``worst_point``.
+    refine : int, optional
+        Golden-section iterations of the worst-point search per measure (default
+        :data:`REFINE_ITERATIONS`; 0 keeps the dense samples only).
+
+    Returns
+    -------
+    ContinuityResult
+        A list of :class:`EdgeReport` (topology pairs first, then geometric matches), with
+        ``warnings``, ``match_tol``, ``thresholds`` and ``stats``. A face that cannot be evaluated
+        makes its edges ``'degenerate'`` with an ``error``; the others are still measured.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Bad ``samples``, ``match_tol``, ``preset``, or a ``model`` that is not a shape.
+    """
+    samples, match_tol = _check_args(samples, match_tol)
+    thresholds = _thresholds(preset)
+    refine = REFINE_ITERATIONS if refine is None else int(refine)
+    clock = time.perf_counter()
+    try:
+        shape, faces = collect_faces(model)
+    except Exception as err:  # noqa: BLE001
+        raise InvalidGeometryError(f"model: expected an ImportedModel or an OCC/build123d/cadquery shape, "
+                                   f"got {type(model).__name__} ({one_line(err)})") from err
+    size = _model_size(faces, shape)
+    pairs, free, warnings = topology_pairs(faces)
+    warnings += [f.error for f in faces if f.error]
+    n_topology = len(pairs)
+    tol = None
+    t_match = time.perf_counter()
+    if loose:
+        tol = match_tol if match_tol is not None else MATCH_RTOL * size
+        pairs += match_free_edges(faces, free, tol, spacing=size / 200.0)
+    t_match = time.perf_counter() - t_match
+    result = ContinuityResult()
+    result.match_tol, result.thresholds = tol, thresholds
+    engine = _Engine(faces, pairs, g3, CURVATURE_FLOOR / size)
+    t_measure = time.perf_counter()
+    reports = _measure_all(engine, samples, refine, thresholds)
+    t_measure = time.perf_counter() - t_measure
+    result.extend(reports)
+    matched_free = {id(p.side1) for p in pairs if p.matched == "geometry"} | {id(p.side2) for p in pairs if p.matched == "geometry"}
+    unmatched = sum(1 for s in free if id(s) not in matched_free)
+    if not result:
+        warnings.append("no shared edges" + (f" and no edges matched within {tol:.3g}" if loose else
+                        " (loose=False: free edges were not matched)") + ": nothing to check")
+    warnings += sorted(set(engine.face_errors.values()) - set(warnings))
+    result.warnings = warnings
+    result.stats = {"faces": len(faces), "topology": n_topology, "geometry": len(pairs) - n_topology,
+                    "free_edges": len(free), "unmatched_free_edges": unmatched, "model_size": size,
+                    "seconds": time.perf_counter() - clock, "seconds_matching": t_match,
+                    "seconds_measuring": t_measure, "points": int(engine.evaluated.sum()),
+                    "occ_evaluated_faces": sum(f.kind == "occ" for f in faces)}
+    return result
+
+
+_PHI = (math.sqrt(5.0) - 1.0) / 2.0
+
+
+def _why_not(engine: _Engine, p: Pair) -> str | None:
+    """Why a pair cannot be measured, or ``None``."""
+    if p.degenerate:
+        return p.note or "degenerated edge"
+    for side in (p.side1, p.side2):
+        fd = engine.faces[side.face]
+        if fd.evaluator is None:
+            return fd.error
+        if side.pcurve is None:
+            return f"the edge has no p-curve on face {side.face}"
+    return None
+
+
+def _golden(engine: _Engine, pid: NDArray[np.intp], meas: list[str], which: NDArray[np.intp],
+            a: Array, b: Array, iterations: int, best: dict[str, Array]) -> None:
+    """Batched golden-section maximisation of measure ``meas[which[k]]`` of pair ``pid[k]`` on
+    ``[a[k], b[k]]``; every evaluated point updates ``best`` (value, t, point per bracket)."""
+    if iterations <= 0 or pid.size == 0:
+        return
+    rows = np.arange(pid.size)
+
+    def f(x: Array) -> Array:
+        M = engine.measure(pid, x)
+        v = np.stack([M[m] for m in meas], axis=1)[rows, which]
+        better = np.nan_to_num(v, nan=-np.inf) > np.nan_to_num(best["value"], nan=-np.inf)
+        best["value"] = np.where(better, v, best["value"])
+        best["t"] = np.where(better, x, best["t"])
+        best["P"] = np.where(better[:, None], M["P"], best["P"])
+        return np.nan_to_num(v, nan=-np.inf)
+
+    c, d = b - _PHI * (b - a), a + _PHI * (b - a)
+    fc, fd = f(c), f(d)
+    for _ in range(iterations - 1):
+        left = fc >= fd
+        a, b = np.where(left, a, c), np.where(left, d, b)
+        x = np.where(left, b - _PHI * (b - a), a + _PHI * (b - a))
+        fx = f(x)
+        c, d, fc, fd = (np.where(left, x, d), np.where(left, c, x), np.where(left, fx, fd), np.where(left, fc, fx))
+
+
+def _measure_all(engine: _Engine, samples: int, refine: int, th: Thresholds) -> list[EdgeReport]:
+    pairs = engine.pairs
+    why = [_why_not(engine, p) for p in pairs]
+    good = np.array([i for i, w in enumerate(why) if w is None], dtype=np.intp)
+    meas = ["g0", "g1", "g2", "g2_rel"] + (["g3"] if engine.third else [])
+    s01 = _chebyshev(samples)
+    first = np.array([pairs[i].first for i in good])
+    last = np.array([pairs[i].last for i in good])
+    T = first[:, None] + (last - first)[:, None] * s01[None, :]
+    pid = np.repeat(good, samples)
+    M = engine.measure(pid, T.reshape(-1), set_flip=True) if good.size else {}
+    n = good.size
+    grid = {k: M[k].reshape(n, samples) for k in meas + ["gap"]} if n else {}
+    P = M["P"].reshape(n, samples, 3) if n else np.zeros((0, samples, 3))
+    best = {}
+    for j, m in enumerate(meas):
+        V = np.nan_to_num(grid[m], nan=-np.inf) if n else np.zeros((0, samples))
+        i = V.argmax(axis=1) if n else np.zeros(0, dtype=np.intp)
+        rows = np.arange(n)
+        best[m] = {"value": grid[m][rows, i] if n else np.zeros(0), "t": T[rows, i] if n else np.zeros(0),
+                   "P": P[rows, i] if n else np.zeros((0, 3)),
+                   "a": T[rows, np.maximum(i - 1, 0)] if n else np.zeros(0),
+                   "b": T[rows, np.minimum(i + 1, samples - 1)] if n else np.zeros(0)}
+    if n and refine > 0:
+        which = np.repeat(np.arange(len(meas)), n)
+        allbest = {k: np.concatenate([best[m][k] for m in meas]) for k in ("value", "t", "P")}
+        _golden(engine, np.tile(good, len(meas)), meas, which,
+                np.concatenate([best[m]["a"] for m in meas]), np.concatenate([best[m]["b"] for m in meas]),
+                refine, allbest)
+        for j, m in enumerate(meas):
+            for k in ("value", "t", "P"):
+                best[m][k] = allbest[k][j * n:(j + 1) * n]
+    row_of = {int(p): r for r, p in enumerate(good)}
+    reports = []
+    for idx, p in enumerate(pairs):
+        r = row_of.get(idx)
+        reports.append(_report(engine, idx, p, why[idx], r, best, grid, P, samples, th, meas))
+    return reports
+
+
+def _report(engine: _Engine, idx: int, p: Pair, why: str | None, r: int | None, best: dict, grid: dict,
+            P: Array, samples: int, th: Thresholds, meas: list[str]) -> EdgeReport:
+    faces = (p.side1.face, p.side2.face)
+    kinds = (engine.faces[faces[0]].kind, engine.faces[faces[1]].kind)
+    err = why
+    if r is not None:
+        bad = [engine.face_errors[f] for f in faces if f in engine.face_errors]
+        if bad:
+            err = "; ".join(bad)
+    if r is None or err is not None or not np.any(np.isfinite(grid["g0"][r])):
+        nan = float("nan")
+        mid = _midpoint_fallback(p)
+        return EdgeReport(idx, faces, mid, p.matched, nan, nan, nan, nan, None, nan, mid, {}, "degenerate", 0,
+                          False, nan, kinds, p.match_distance, err or "no point of the edge could be evaluated",
+                          (p.side1.edge, p.side2.edge))
+    val = {m: float(best[m]["value"][r]) for m in meas}
+    pts = {m: best[m]["P"][r] for m in meas}
+    flip = bool(engine.flip[engine.pairs.index(p)] < 0) if not p.seam else False
+    length = float(np.nansum(np.linalg.norm(np.diff(P[r], axis=0), axis=1)))
+    cls = _classify(p, val, th)
+    worst = pts[_worst_measure(val, th, cls)]
+    g3 = val.get("g3") if engine.third else None
+    return EdgeReport(idx, faces, P[r, samples // 2].copy(), p.matched, val["g0"], val["g1"], val["g2"],
+                      val["g2_rel"], g3, float(np.nanmax(grid["gap"][r])) if np.any(np.isfinite(grid["gap"][r])) else float("nan"),
+                      worst, pts, cls, int(engine.evaluated[idx]), flip, length, kinds, p.match_distance, None,
+                      (p.side1.edge, p.side2.edge))
+
+
+def _midpoint_fallback(p: Pair) -> Array:
+    """The middle of the edge's 3-D curve through OCC (for edges that could not be measured)."""
+    try:
+        from OCP.BRepAdaptor import BRepAdaptor_Curve
+
+        c = BRepAdaptor_Curve(p.side1.edge)
+        return np.array(c.Value(0.5 * (c.FirstParameter() + c.LastParameter())).Coord())
+    except Exception:  # noqa: BLE001
+        return np.full(3, np.nan)
+
+
+def _limits(th: Thresholds) -> dict[str, float | None]:
+    return {"g0": th.g0, "g1": th.g1_deg, "g2": th.g2_abs, "g2_rel": th.g2_rel, "g3": th.g3}
+
+
+def _classify(p: Pair, val: dict[str, float], th: Thresholds) -> str:
+    if p.seam:
+        return "seam"
+    g2_rel = th.g2_rel if th.g2_rel is not None else PRESETS["catia"].g2_rel
+    if not val["g0"] <= th.g0:
+        return "gap"
+    if not val["g1"] < th.sharp_deg:
+        return "sharp"
+    if not val["g1"] <= th.g1_deg:
+        return "G0"
+    if not val["g2_rel"] <= g2_rel or (th.g2_abs is not None and not val["g2"] <= th.g2_abs):
+        return "G1"
+    return "G2"
+
+
+def _worst_measure(val: dict[str, float], th: Thresholds, cls: str) -> str:
+    lim = _limits(th)
+    if lim["g2_rel"] is None:
+        lim["g2_rel"] = PRESETS["catia"].g2_rel
+    ratios = {m: val[m] / lim[m] for m in val if lim.get(m) and math.isfinite(val[m])}
+    if cls in ("gap", "sharp", "G0"):  # curvature is meaningless across a crease
+        ratios = {m: r for m, r in ratios.items() if m in ("g0", "g1")}
+    return max(ratios, key=ratios.get) if ratios else "g0"
+
+
+def check_edges(reports: list[EdgeReport], thresholds: str | Thresholds = "catia") -> list[Violation]:
+    """Every tolerance of ``thresholds`` that an edge breaks.
+
+    Rules: a gap above ``g0`` and a normal flip are always violations; an angle above ``g1_deg``
+    is one unless the edge is a crease (``g1 >= sharp_deg``, by design); curvature (``g2_rel``,
+    ``g2_abs``) and ``g3`` are checked on tangent-continuous edges only (a crease has no curvature
+    continuity to keep). Degenerate edges (nothing measured) are skipped.
+
+    Parameters
+    ----------
+    reports : list of EdgeReport
+    thresholds : str or Thresholds
+        A :data:`PRESETS` name or your own.
+
+    Returns
+    -------
+    list of Violation
+        In edge order, then measure order.
+    """
+    th = _thresholds(thresholds)
+    out: list[Violation] = []
+    for r in reports:
+        if r.classification == "degenerate":
+            continue
+        val = {"g0": r.g0_max, "g1": r.g1_max_deg, "g2": r.g2_max, "g2_rel": r.g2_max_rel, "g3": r.g3_max}
+        crease = not r.g1_max_deg < th.sharp_deg
+        tangent = r.g1_max_deg <= th.g1_deg
+        checks = [("g0", th.g0, True), ("g1", th.g1_deg, not crease), ("g2_rel", th.g2_rel, tangent),
+                  ("g2", th.g2_abs, tangent), ("g3", th.g3, tangent)]
+        units = {"g0": "", "g1": " deg", "g2_rel": " %", "g2": " /unit", "g3": " /unit^2"}
+        for m, lim, applies in checks:
+            v = val[m]
+            if lim is None or v is None or not applies or not math.isfinite(v) or v <= lim:
+                continue
+            point = r.worst_points.get(m, r.worst_point)
+            out.append(Violation(r.index, r.faces, m, float(v), float(lim), point,
+                                 f"edge {r.index} (faces {r.faces[0]}-{r.faces[1]}): {m} {v:.4g}{units[m]} > "
+                                 f"{lim:g}{units[m]} ({th.name})"))
+        if r.normal_flip:
+            out.append(Violation(r.index, r.faces, "normal_flip", 1.0, 0.0, r.midpoint,
+                                 f"edge {r.index} (faces {r.faces[0]}-{r.faces[1]}): the faces' normals point to "
+                                 "opposite sides (inconsistent orientation)"))
+    return out
