@@ -27,10 +27,10 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-__all__ = ["audit", "AuditResult", "CorpusError", "StoreError", "ClusterError", "read_files", "read_faces",
+__all__ = ["audit", "AuditResult", "AuditInputError", "CorpusError", "StoreError", "ClusterError", "read_files", "read_faces",
            "write_summary"]
 
-_WHERE = {"audit": ".run", "AuditResult": ".run", "CorpusError": ".corpus", "StoreError": ".store",
+_WHERE = {"audit": ".run", "AuditResult": ".run", "AuditInputError": ".run", "CorpusError": ".corpus", "StoreError": ".store",
           "ClusterError": ".cluster", "read_files": ".store", "read_faces": ".store", "write_summary": ".summary"}
 
 

@@ -84,6 +84,7 @@ class Reader:
         self.proc: subprocess.Popen | None = None
         self.starts = 0
         self._buf = b""
+        self._eof = False
         self._err: Any = None
 
     # ------------------------------------------------------------------------------ lifecycle
@@ -93,6 +94,7 @@ class Reader:
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._err,
                                      env=worker_env(), bufsize=0)
         self._buf = b""
+        self._eof = False
         self.starts += 1
         msg = self._read_message(time.monotonic() + STARTUP_TIMEOUT)
         if msg is None or "ready" not in msg:
@@ -130,7 +132,8 @@ class Reader:
 
     # ------------------------------------------------------------------------------ messages
     def _read_message(self, deadline: float | None) -> dict[str, Any] | None:
-        """The next protocol message; ``None`` at EOF (the reader died) or at the deadline."""
+        """The next protocol message; ``None`` at EOF (the reader died: :attr:`_eof` set) or at
+        the deadline."""
         assert self.proc is not None and self.proc.stdout is not None
         fd = self.proc.stdout.fileno()
         while True:
@@ -148,6 +151,7 @@ class Reader:
                 return None
             chunk = os.read(fd, 1 << 16)
             if not chunk:
+                self._eof = True
                 return None
             self._buf += chunk
 
@@ -168,10 +172,15 @@ class Reader:
             return Reply("ok", value=msg["report"], seconds=seconds)
         if msg is not None and "error" in msg:
             return Reply("error", error=msg["error"], seconds=seconds)
-        alive = self.proc.poll() is None
+        # EOF: the reader died by itself (its pipe closes before its exit status is available,
+        # so poll() alone would race); else no reply within the timeout and we kill it.
+        died = self._eof
+        if died:
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.proc.wait(timeout=30)
         detail = self._last_err()
         code = self.stop()
-        if alive:  # no reply within the timeout: the reader was killed by us
+        if not died:
             return Reply("timeout", error=f"no result after {timeout:g} s; the reader process was recycled",
                          exit_code=code, seconds=seconds)
         why = describe_exit(code) if code is not None else "no exit status"

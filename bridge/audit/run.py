@@ -20,12 +20,16 @@ from .corpus import Entry, expand_paths, hash_entries
 from .store import ResultStore
 from .tasks import CHECKS, DEFAULT_CHECKS, audit_task, make_item
 
-__all__ = ["AuditResult", "audit", "Progress", "STATUSES", "WINDOW_PER_WORKER"]
+__all__ = ["AuditResult", "AuditInputError", "audit", "Progress", "STATUSES", "WINDOW_PER_WORKER"]
 
 STATUSES = ("ok", "error", "crashed", "timeout")
 #: Tasks kept in flight per worker thread (enough to hide the scheduler's round trip).
 WINDOW_PER_WORKER = 4
 DEFAULT_SAMPLES = 11
+
+
+class AuditInputError(ValueError):
+    """An argument of :func:`audit` out of range (checks, timeout, workers)."""
 
 
 @dataclass
@@ -112,11 +116,11 @@ def _failure(entry: Entry, err: BaseException) -> dict[str, Any]:
 def _check_args(checks: Sequence[str], timeout: float | None, workers: int | None) -> tuple[str, ...]:
     bad = [c for c in checks if c not in CHECKS]
     if bad or not checks:
-        raise ValueError(f"checks: expected a comma-separated subset of {','.join(CHECKS)}, got {','.join(checks)!r}")
+        raise AuditInputError(f"checks: expected a comma-separated subset of {','.join(CHECKS)}, got {','.join(checks)!r}")
     if timeout is not None and not (math.isfinite(timeout) and timeout > 0):
-        raise ValueError(f"timeout: expected a positive number of seconds, got {timeout!r}")
+        raise AuditInputError(f"timeout: expected a positive number of seconds, got {timeout!r}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
-        raise ValueError(f"workers: expected a positive integer, got {workers!r}")
+        raise AuditInputError(f"workers: expected a positive integer, got {workers!r}")
     return tuple(c for c in CHECKS if c in checks)
 
 
@@ -151,7 +155,7 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
 
     Raises
     ------
-    CorpusError, StoreError, ClusterError, ValueError
+    CorpusError, StoreError, ClusterError, AuditInputError
         Bad input (nothing audited).
     KeyboardInterrupt
         Not raised: an interrupted run flushes what finished and returns ``interrupted=True``.

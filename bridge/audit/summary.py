@@ -96,7 +96,8 @@ def _charts(out: Path, doc: dict[str, Any], hashes: list[str]) -> list[tuple[str
     faces = read_faces(out, ["sha256", "max_dev", "roundtrip_dev"])
     faces = faces.filter(pc.is_in(faces["sha256"], value_set=wanted))
     files = read_files(out, ["sha256", "status", "seconds", "n_faces"])
-    files = files.filter(pc.is_in(files["sha256"], value_set=wanted)).filter(pc.equal(files["status"], "ok"))
+    files = files.filter(pc.is_in(files["sha256"], value_set=wanted))
+    files = files.filter(pc.equal(files["status"], "ok"))
     charts = []
 
     def png(fig: Any, title: str) -> None:

@@ -81,7 +81,8 @@ def run(ns: argparse.Namespace) -> int:
     if missing:
         error(f"audit needs {', '.join(missing)}: pip install 'occsurf[audit]'")
         return EXIT_ERROR
-    from ..audit import ClusterError, CorpusError, StoreError, audit
+    from ..audit import AuditInputError, ClusterError, CorpusError, StoreError, audit
+    from ..messages import error_line
 
     def dashboard(link: str) -> None:
         print(f"audit: Dask dashboard at {link}", file=sys.stderr, flush=True)
@@ -90,8 +91,11 @@ def run(ns: argparse.Namespace) -> int:
         with _sigterm_as_interrupt():
             result = audit(ns.paths, ns.out, scheduler=ns.scheduler, workers=ns.workers, timeout=ns.timeout,
                            resume=ns.resume, checks=ns.checks, samples=ns.samples, on_dashboard=dashboard)
-    except (CorpusError, StoreError, ClusterError, ValueError) as err:
+    except (CorpusError, StoreError, ClusterError, AuditInputError) as err:
         error(" ".join(str(err).split()))
+        return EXIT_ERROR
+    except Exception as err:  # noqa: BLE001 - a defect of ours: still one line, never a traceback
+        error(f"audit failed: {error_line(err)} (results written so far are in {ns.out}; --resume continues)")
         return EXIT_ERROR
     except KeyboardInterrupt:  # before the run started (hashing, cluster start-up)
         error("interrupted before any file was audited")

@@ -1,0 +1,217 @@
+"""``occsurf audit`` on real Dask clusters: a ``LocalCluster`` of two worker processes, a
+separately started ``dask scheduler`` + ``dask worker`` on 127.0.0.1, interruption and resume, a
+worker killed from outside mid-run. Each run is a fresh ``python -m occsurf.bridge.cli`` process
+with the fault hook of :mod:`audit_fixtures` (a real OCC segmentation fault, a hang, slow files).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("distributed")
+pa = pytest.importorskip("pyarrow")
+psutil = pytest.importorskip("psutil")
+
+from occsurf.bridge.audit import read_faces, read_files  # noqa: E402
+
+from .audit_fixtures import REALDATA, SAMPLES, bad_files, free_port, good_files, hook_env, run_cli  # noqa: E402
+
+pytestmark = pytest.mark.skipif(os.name != "posix", reason="needs POSIX signals and processes")
+
+STATUSES = {"ok", "error", "crashed", "timeout"}
+
+
+def _check_invariants(out: Path, n_input: int) -> tuple[list[dict], dict]:
+    """Every input has exactly one files row per content; the counts add up; summary agrees."""
+    rows = read_files(out).to_pylist()
+    hashes = [r["sha256"] for r in rows if r["sha256"]]
+    assert len(hashes) == len(set(hashes)), "a file was recorded twice"
+    assert {r["status"] for r in rows} <= STATUSES
+    summary = json.loads((out / "summary.json").read_text())
+    c = summary["counts"]
+    assert c["ok"] + c["error"] + c["crashed"] + c["timeout"] == n_input == summary["n_input"]
+    assert c["missing"] == 0
+    assert len(rows) == n_input
+    assert (out / "summary.html").read_text().count("<img") == 4
+    return rows, summary
+
+
+def test_local_cluster_two_workers_records_every_fault(tmp_path: Path) -> None:
+    """Good samples, corrupt/truncated files, a real OCC segfault and a hang on 2 local workers."""
+    corpus = tmp_path / "corpus"
+    good = good_files(corpus / "good")
+    bad = bad_files(corpus / "bad")
+    crash = corpus / "crash-me.step"
+    crash.write_bytes((SAMPLES / "loft.step").read_bytes().replace(b"ISO-10303-21;", b"ISO-10303-21;/*c*/", 1))
+    hang = corpus / "hang-me.step"
+    hang.write_bytes((SAMPLES / "loft.step").read_bytes().replace(b"ISO-10303-21;", b"ISO-10303-21;/*h*/", 1))
+    real = sorted(REALDATA.glob("*.igs"))[:1] if REALDATA.is_dir() else []
+    out = tmp_path / "results"
+    t0 = time.monotonic()
+    proc = run_cli("audit", str(corpus), *map(str, real), "--out", str(out), "--workers", "2", "--timeout", "8",
+                   env=hook_env(tmp_path))
+    elapsed = time.monotonic() - t0
+    assert proc.returncode == 1, proc.stderr  # completed, some files failed
+    assert "Traceback" not in proc.stderr
+    assert "remaining" in proc.stderr and "files/s" in proc.stderr and "ETA" in proc.stderr
+    n_input = len(good) + len(bad) + 2 + len(real)
+    rows, summary = _check_invariants(out, n_input)
+    by_name = {Path(r["path"]).name: r for r in rows}
+    assert by_name["crash-me.step"]["status"] == "crashed"
+    assert by_name["crash-me.step"]["signal"] == "SIGSEGV"
+    assert by_name["hang-me.step"]["status"] == "timeout"
+    assert "recycled" in by_name["hang-me.step"]["error"]
+    for name in bad:
+        assert by_name[name]["status"] == "error", (name, by_name[name])
+        assert by_name[name]["error"]
+    assert "truncated" in by_name["truncated.step"]["error"]
+    for p in good + real:
+        r = by_name[p.name]
+        assert r["status"] == "ok" and r["n_faces"] >= 1 and r["error"] is None, r
+        assert r["max_dev"] < 1e-12  # same bound as test_cli's SAMPLE_TOL: bit-exact data, round-off only
+        assert r["roundtrip_status"] == "ok" and r["roundtrip_max_dev"] < 1e-12
+    # both worker processes took part, and the hang did not cost much more than its timeout
+    assert len({r["worker"] for r in rows if r["worker"]}) == 2
+    assert elapsed < 120
+    # faces rows: one per face of every ok file, keyed by content hash
+    faces = read_faces(out).to_pylist()
+    per_hash = Counter(f["sha256"] for f in faces)
+    for r in rows:
+        assert per_hash.get(r["sha256"], 0) == (r["n_faces"] if r["status"] == "ok" else 0)
+    assert all(f["face"] is not None and f["type"] for f in faces)
+    assert summary["counts"] == {"ok": len(good) + len(real), "error": len(bad), "crashed": 1, "timeout": 1,
+                                 "missing": 0}
+
+
+def _reader_pids() -> list[psutil.Process]:
+    found = []
+    for p in psutil.process_iter(["cmdline"]):
+        with_cmd = p.info["cmdline"] or []
+        if "occsurf.bridge.audit.reader" in with_cmd:
+            found.append(p)
+    return found
+
+
+def _wait_for(cond, timeout: float, what: str) -> None:
+    t0 = time.monotonic()
+    while not cond():
+        if time.monotonic() - t0 > timeout:
+            raise AssertionError(f"timed out waiting for {what}")
+        time.sleep(0.1)
+
+
+def test_interrupt_then_resume_finishes_the_rest(tmp_path: Path) -> None:
+    """SIGINT mid-run: exit 130, the dataset is readable and holds what finished; --resume does the
+    rest, redoes nothing, and a renamed file is recognised by its content."""
+    corpus = tmp_path / "corpus"
+    files = good_files(corpus, n_copies=4, prefix="slow-", iges=False)
+    env = hook_env(tmp_path, OCCSURF_TEST_SLOW="0.7")
+    out = tmp_path / "results"
+    cmd = [sys.executable, "-m", "occsurf.bridge.cli", "audit", str(corpus), "--out", str(out), "--workers", "2"]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for(lambda: len(read_files(out).to_pylist()) >= 3 if (out / "files").is_dir() else False, 120,
+                  "the first results")
+        proc.send_signal(signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, stderr
+    assert "--resume" in stderr and "Traceback" not in stderr
+    first = read_files(out).to_pylist()  # readable after the interruption
+    assert 3 <= len(first) < len(files)
+    # rename an audited file: its content is known, so it is not redone
+    renamed = Path(first[0]["path"]).with_name("renamed-" + Path(first[0]["path"]).name)
+    Path(first[0]["path"]).rename(renamed)
+    proc2 = run_cli("audit", str(corpus), "--out", str(out), "--workers", "2", "--resume", env=env)
+    assert proc2.returncode == 0, proc2.stderr
+    rows, summary = _check_invariants(out, len(files))
+    assert f"({len(first)} already in" in proc2.stdout
+    assert {r["run_id"] for r in rows[: len(first)]} != {r["run_id"] for r in rows[len(first):]}
+    # without --resume an existing RESULTS is refused (one line, exit 2)
+    proc3 = run_cli("audit", str(corpus), "--out", str(out), env=env)
+    assert proc3.returncode == 2 and proc3.stderr.count("\n") == 1 and "--resume" in proc3.stderr
+    # a changed file is new: audited again
+    target = Path(rows[-1]["path"])
+    target.write_bytes(target.read_bytes().replace(b"ISO-10303-21;", b"ISO-10303-21;/*changed*/", 1))
+    proc4 = run_cli("audit", str(corpus), "--out", str(out), "--workers", "1", "--resume", env=env)
+    assert proc4.returncode == 0, proc4.stderr
+    assert len(read_files(out).to_pylist()) == len(files) + 1
+    assert f"({len(files) - 1} already in" in proc4.stdout
+
+
+def test_worker_killed_mid_run_loses_nothing(tmp_path: Path) -> None:
+    """SIGKILL to a Dask worker process while its reader is inside a file: the nanny restarts it,
+    the scheduler reruns its tasks elsewhere, and every file ends with exactly one row."""
+    corpus = tmp_path / "corpus"
+    files = good_files(corpus, n_copies=3, prefix="slow-", iges=False)
+    env = hook_env(tmp_path, OCCSURF_TEST_SLOW="1.5")
+    out = tmp_path / "results"
+    cmd = [sys.executable, "-m", "occsurf.bridge.cli", "audit", str(corpus), "--out", str(out), "--workers", "2"]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        me = psutil.Process(proc.pid)
+
+        def busy_reader() -> bool:
+            return any(r.ppid() != proc.pid and r.ppid() in {c.pid for c in me.children(recursive=True)}
+                       for r in _reader_pids())
+
+        _wait_for(lambda: (out / "files").is_dir() and len(read_files(out).to_pylist()) >= 1 and busy_reader(), 120,
+                  "a reader busy with a file")
+        victim = next(psutil.Process(r.ppid()) for r in _reader_pids()
+                      if r.ppid() in {c.pid for c in me.children(recursive=True)})
+        victim.kill()  # the Dask worker process itself (its reader exits when it sees it gone)
+        stdout, stderr = proc.communicate(timeout=240)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, stderr
+    rows, _ = _check_invariants(out, len(files))
+    assert all(r["status"] == "ok" for r in rows)
+    assert victim.pid not in {int(r["worker"].rsplit(":", 1)[1]) for r in rows[-3:]}
+
+
+def test_separately_started_scheduler_and_worker(tmp_path: Path) -> None:
+    """``dask scheduler`` and ``dask worker`` on 127.0.0.1, as on a real cluster: same results."""
+    dask_cli = Path(sys.executable).with_name("dask")
+    if not dask_cli.exists():
+        pytest.skip(f"no dask command beside {sys.executable}")
+    corpus = tmp_path / "corpus"
+    good = good_files(corpus)
+    bad = bad_files(corpus / "bad")
+    crash = corpus / "crash-me.step"
+    crash.write_bytes((SAMPLES / "swept_tube.step").read_bytes())
+    env = hook_env(tmp_path)
+    port = free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    sched = subprocess.Popen([str(dask_cli), "scheduler", "--host", "127.0.0.1", "--port", str(port),
+                              "--no-dashboard"], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    worker = subprocess.Popen([str(dask_cli), "worker", address, "--nworkers", "1", "--nthreads", "1",
+                               "--no-dashboard"], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        out = tmp_path / "results"
+        proc = run_cli("audit", str(corpus), "--out", str(out), "--scheduler", address, "--timeout", "60", env=env)
+        assert proc.returncode == 1, proc.stderr
+        rows, summary = _check_invariants(out, len(good) + len(bad) + 1)
+        c = summary["counts"]
+        assert (c["ok"], c["error"], c["crashed"]) == (len(good), len(bad), 1)
+        assert next(r for r in rows if r["path"] == str(crash))["signal"] == "SIGSEGV"
+        assert worker.poll() is None and sched.poll() is None  # the cluster outlives the audit
+    finally:
+        for p in (worker, sched):
+            p.terminate()
+        for p in (worker, sched):
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
