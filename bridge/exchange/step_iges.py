@@ -64,7 +64,12 @@ OCC must never see a file that failed to parse: ``TransferRoots`` after a failed
 crashes the process. Before OCC parses anything, a STEP file must start with ``ISO-10303-21;`` and
 end with ``END-ISO-10303-21;``; an IGES file must end with a Terminate section whose line counts
 match the Start, Global, Directory and Parameter sections (a truncated IGES file otherwise reads as
-a valid-looking face with wrong poles). Every problem raises :class:`ExchangeError` naming the path.
+a valid-looking face with wrong poles). :mod:`occsurf.bridge.exchange.checks` then refuses what
+crashes OCC's parsers (deep nesting, reference cycles, impossible B-spline counts) and prunes
+references to undefined instances; what OCC reads but should not accept silently becomes
+``ImportedModel.warnings``. Every refusal raises :class:`ExchangeError` naming the path. A file from
+an untrusted source is best read with ``isolated=True``: a crash inside OCC that no check foresaw
+then costs a worker process, not the caller.
 """
 
 from __future__ import annotations
@@ -212,7 +217,10 @@ class ImportedModel:
     edges : list of ImportedEdge
         Free edges only: curves, wires; not the edges that bound faces.
     warnings : list of str
-        Roots of the file that OCC could not transfer (their geometry is missing from ``shape``).
+        What was wrong with the file but could be read around, one line each: roots OCC could not
+        transfer (their geometry is missing from ``shape``), references to undefined instances (the
+        partial model is read), OCC's check messages, fewer faces than the file's face instances,
+        closed shells that are open (see :mod:`occsurf.bridge.exchange.checks`).
     """
 
     path: str
@@ -224,44 +232,48 @@ class ImportedModel:
 
 
 # ------------------------------------------------------------------------------------ reading
-def read_step(path: str | os.PathLike[str]) -> ImportedModel:
+#: The job the reader process of ``read_step(..., isolated=True)`` runs, and what it loads first.
+READ_JOB = "occsurf.bridge.exchange.step_iges:transfer_job"
+READ_PRELOAD = ("occsurf.bridge.exchange.step_iges",)
+
+
+def read_step(path: str | os.PathLike[str], *, isolated: bool = False, timeout: float | None = None) -> ImportedModel:
     """Read a STEP file: every face and free edge, converted to our splines.
 
     Parameters
     ----------
     path : str or path-like
+    isolated : bool, default False
+        Parse the file in a worker process (:func:`occsurf.bridge.isolation.run_jobs`): a crash or a
+        hang inside OCC becomes an :class:`ExchangeError` naming the file instead of the end of this
+        process. The shape comes back exactly (OCC's binary BRep); only the conversion to our splines
+        runs here. Use it for files from untrusted sources.
+    timeout : float, optional
+        With ``isolated``: seconds the worker may take before it is stopped (default no limit).
 
     Returns
     -------
     ImportedModel
-        ``format == 'step'``. Values in millimetres.
+        ``format == 'step'``. Values in millimetres. ``warnings`` lists what was wrong with the file
+        but could be read around (see :mod:`occsurf.bridge.exchange.checks`): references to undefined
+        instances (the partial model is read), OCC's check messages (wrong arity, a text for a number,
+        more than 3 coordinates), fewer faces than face instances, closed shells that are open.
 
     Raises
     ------
     ExchangeError
-        Missing file, a directory, an empty, truncated (no ``END-ISO-10303-21;``), unparsable or
-        garbage file, or a valid file without any face or edge. The message names the path.
+        Missing file, a directory, a device, FIFO or dangling/looping symlink; an empty, truncated (no
+        ``END-ISO-10303-21;``), unparsable or garbage file; nesting or cycles that crash OCC's parser;
+        a valid file without any face or edge; with ``isolated``, a crash or a time-out of the reader
+        process. The message names the path.
     """
-    p, data = _files.load(path, "STEP")
-    _files.check_step_text(p, data)
-    _xocc.silence_occ()
-    from OCP.IFSelect import IFSelect_ReturnStatus
-    from OCP.STEPControl import STEPControl_Reader
-
-    with _xocc.statics({"xstep.cascade.unit": "MM"}):
-        reader = STEPControl_Reader()
-        try:
-            status = reader.ReadStream(str(p), io.BytesIO(data))
-        except Exception as err:  # noqa: BLE001 - any OCC failure is a bad file
-            raise ExchangeError(f"{p}: STEP parser failed: {one_line(err)}") from err
-        # Checked BEFORE any transfer: TransferRoots after a failed read crashes the process.
-        if status != IFSelect_ReturnStatus.IFSelect_RetDone:
-            raise ExchangeError(f"{p}: not a readable STEP file (OCC read status {status.name})")
-        reader.SetSystemLengthUnit(1.0)  # millimetres
-        return _build_model(p, "step", reader)
+    if isolated:
+        return _read_isolated(path, "step", timeout)
+    p, shape, names, warnings = _transfer(path, "step")
+    return _convert(p, "step", shape, names, warnings)
 
 
-def read_iges(path: str | os.PathLike[str]) -> ImportedModel:
+def read_iges(path: str | os.PathLike[str], *, isolated: bool = False, timeout: float | None = None) -> ImportedModel:
     """Read an IGES file: every face and free edge, converted to our splines.
 
     B-spline curves are taken as the file gives them (``read.iges.bspline.continuity = 0``:
@@ -270,34 +282,165 @@ def read_iges(path: str | os.PathLike[str]) -> ImportedModel:
     Parameters
     ----------
     path : str or path-like
+    isolated, timeout
+        As :func:`read_step`.
 
     Returns
     -------
     ImportedModel
-        ``format == 'iges'``. Values in millimetres.
+        ``format == 'iges'``. Values in millimetres; ``warnings`` as :func:`read_step` (OCC's check
+        messages).
 
     Raises
     ------
     ExchangeError
-        Missing file, a directory, an empty, truncated (Terminate section missing or not matching
-        the section lengths), binary/compressed, unparsable or garbage file, or a valid file
-        without any face or edge. The message names the path.
+        Missing file, a directory, a device or broken symlink; an empty, truncated (Terminate section
+        missing or not matching the section lengths), binary/compressed, unparsable or garbage file; a
+        directory entry without its parameters, a B-spline entity (126/128) with impossible counts; a
+        valid file without any face or edge; with ``isolated``, a crash or time-out of the reader
+        process. The message names the path.
     """
-    p, data = _files.load(path, "IGES")
-    _files.check_iges_text(p, data)
+    if isolated:
+        return _read_isolated(path, "iges", timeout)
+    p, shape, names, warnings = _transfer(path, "iges")
+    return _convert(p, "iges", shape, names, warnings)
+
+
+def _occ_name(p: Path) -> str:
+    """The file name as OCC can take it (a name that is not UTF-8 would fail pybind's conversion)."""
+    return os.fsencode(p).decode("utf-8", "replace")
+
+
+def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[dict[int, str], dict[int, str]],
+                                                               list[str]]:
+    """Check, parse and transfer a file: ``(path, shape, (face names, edge names), warnings)``."""
+    from . import checks
+
+    kind = fmt.upper()
+    p, data = _files.load(path, kind)
+    if fmt == "step":
+        _files.check_step_text(p, data)
+        scan = checks.scan_step(p, data)
+        warnings = list(scan.warnings)
+    else:
+        _files.check_iges_text(p, data)
+        warnings = list(checks.scan_iges(p, data).warnings)
+        scan = None
     _xocc.silence_occ()
     from OCP.IFSelect import IFSelect_ReturnStatus
+
+    settings: dict[str, str | int | float] = {"xstep.cascade.unit": "MM"}
+    if fmt == "iges":
+        settings["read.iges.bspline.continuity"] = 0
+    with _xocc.statics(settings):
+        try:
+            reader, status = _parse(p, fmt, scan.data if scan is not None else data)
+        except Exception as err:  # noqa: BLE001 - any OCC failure is a bad file
+            raise ExchangeError(f"{p}: {kind} parser failed: {one_line(err)}") from err
+        # Checked BEFORE any transfer: TransferRoots after a failed read crashes the process.
+        if status != IFSelect_ReturnStatus.IFSelect_RetDone:
+            raise ExchangeError(f"{p}: not a readable {kind} file (OCC read status {status.name})")
+        warnings += checks.occ_check_warnings(reader, fmt, scan)
+        if fmt == "step":
+            reader.SetSystemLengthUnit(1.0)  # millimetres
+        try:
+            shape, names, root_warnings = _transfer_roots(p, reader)
+        except ExchangeError as err:
+            if not warnings:
+                raise
+            raise ExchangeError(f"{err} ({warnings[0]})") from err
+        warnings += root_warnings
+        warnings += checks.model_warnings(shape, reader, scan, _count_bare_faces(shape))
+    return p, shape, names, warnings
+
+
+def _parse(p: Path, fmt: str, data: bytes) -> tuple[Any, Any]:
+    """OCC's reader on ``data`` (the checked bytes, not the file again): ``(reader, status)``."""
+    if fmt == "step":
+        from OCP.STEPControl import STEPControl_Reader
+
+        reader = STEPControl_Reader()
+        return reader, reader.ReadStream(_occ_name(p), io.BytesIO(data))
+    import tempfile
+
     from OCP.IGESControl import IGESControl_Reader
 
-    with _xocc.statics({"xstep.cascade.unit": "MM", "read.iges.bspline.continuity": 0}):
-        reader = IGESControl_Reader()
+    reader = IGESControl_Reader()  # reads files only: a private copy of the checked bytes
+    with tempfile.TemporaryDirectory(prefix="occsurf-iges-") as tmp:
+        copy = Path(tmp) / "model.igs"
+        copy.write_bytes(data)
+        return reader, reader.ReadFile(str(copy))
+
+
+def _count_bare_faces(shape: Any) -> int:
+    """Distinct faces of ``shape`` whatever their location (an instanced part counts once)."""
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    identity = TopLoc_Location()
+    bare = TopTools_IndexedMapOfShape()
+    ex = TopExp_Explorer(shape, TopAbs_FACE)
+    while ex.More():
+        bare.Add(ex.Current().Located(identity))
+        ex.Next()
+    return bare.Extent()
+
+
+def transfer_job(item: dict[str, Any]) -> dict[str, Any]:
+    """The reader process's job of ``read_step/read_iges(..., isolated=True)``.
+
+    Parses ``item["path"]`` (``item["format"]``: ``'step'``/``'iges'``), writes the shape to
+    ``item["out"]`` as OCC binary BRep and returns the names (by face and free-edge index, in the
+    order :func:`_convert` explores them), the warnings and the counts.
+    """
+    from OCP.BinTools import BinTools
+
+    p, shape, (face_names, edge_names), warnings = _transfer(item["path"], item["format"])
+    if not BinTools.Write_s(shape, item["out"]):
+        raise ExchangeError(f"{p}: cannot pass the model on ({item['out']} not written)")
+    faces_map, edges_map = _maps(shape)
+    return {"faces": faces_map.Extent(), "edges": edges_map.Extent(), "warnings": warnings,
+            "face_names": {str(k): v for k, v in face_names.items()},
+            "edge_names": {str(k): v for k, v in edge_names.items()}}
+
+
+def _read_isolated(path: str | os.PathLike[str], fmt: str, timeout: float | None) -> ImportedModel:
+    import tempfile
+
+    from OCP.BinTools import BinTools
+    from OCP.TopoDS import TopoDS_Shape
+
+    from ..isolation import CRASHED, ERROR, OK, TIMEOUT, run_jobs
+
+    p = Path(os.fspath(path))
+    with tempfile.TemporaryDirectory(prefix="occsurf-read-") as tmp:
+        out = str(Path(tmp) / "shape.brep")
+        item = {"path": os.fspath(p), "format": fmt, "out": out}
         try:
-            status = reader.ReadFile(str(p))
-        except Exception as err:  # noqa: BLE001
-            raise ExchangeError(f"{p}: IGES parser failed: {one_line(err)}") from err
-        if status != IFSelect_ReturnStatus.IFSelect_RetDone:
-            raise ExchangeError(f"{p}: not a readable IGES file (OCC read status {status.name})")
-        return _build_model(p, "iges", reader)
+            [outcome] = run_jobs(READ_JOB, [item], timeout=timeout, preload=READ_PRELOAD)
+        except ValueError as err:  # a bad timeout
+            raise InvalidGeometryError(str(err)) from err
+        if outcome.status == ERROR:
+            raise ExchangeError(outcome.error if str(p) in (outcome.error or "") else f"{p}: {outcome.error}")
+        if outcome.status == TIMEOUT:
+            raise ExchangeError(f"{p}: reading took longer than {timeout:g} s; the reader process was stopped")
+        if outcome.status == CRASHED:
+            raise ExchangeError(f"{p}: the reader process crashed while reading the file ({outcome.exit_reason}; "
+                                "a fault inside OpenCascade)")
+        if outcome.status != OK:
+            raise ExchangeError(f"{p}: the reader process failed ({outcome.exit_reason or outcome.error})")
+        shape = TopoDS_Shape()
+        if not BinTools.Read_s(shape, out) or shape.IsNull():
+            raise ExchangeError(f"{p}: the reader process's model could not be loaded")
+    info = outcome.value
+    names = ({int(k): v for k, v in info["face_names"].items()}, {int(k): v for k, v in info["edge_names"].items()})
+    model = _convert(p, fmt, shape, names, list(info["warnings"]))
+    if (len(model.faces), len(model.edges)) != (info["faces"], info["edges"]):
+        raise ExchangeError(f"{p}: the model changed on its way from the reader process "
+                            f"({info['faces']} faces, {info['edges']} edges; got {len(model.faces)}, {len(model.edges)})")
+    return model
 
 
 def _entity_name(entity: Any) -> str | None:
@@ -408,11 +551,8 @@ def _names(
     return tuple({**r, **c, **o} for o, c, r in zip(own, part_of, roots))  # type: ignore[return-value]
 
 
-def _build_model(p: Path, fmt: str, reader: Any) -> ImportedModel:
-    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopTools import TopTools_IndexedMapOfShape
-
+def _transfer_roots(p: Path, reader: Any) -> tuple[Any, tuple[dict[int, str], dict[int, str]], list[str]]:
+    """Transfer every root: ``(shape, (face names, edge names) by 1-based map index, warnings)``."""
     n_roots = reader.NbRootsForTransfer()
     if n_roots == 0:
         raise ExchangeError(f"{p}: no transferable entities in the file")
@@ -434,6 +574,17 @@ def _build_model(p: Path, fmt: str, reader: Any) -> ImportedModel:
     shape = reader.OneShape()
     if not root_shapes or shape.IsNull():
         raise ExchangeError(f"{p}: none of the {n_roots} roots of the file could be transferred")
+    faces_map, edges_map = _maps(shape)
+    if faces_map.Extent() == 0 and edges_map.Extent() == 0:
+        raise ExchangeError(f"{p}: the file holds no faces and no curves")
+    return shape, _names(reader, root_shapes, faces_map, edges_map), warnings
+
+
+def _maps(shape: Any) -> tuple[Any, Any]:
+    """The faces and the free edges (outside every face) of ``shape``, in ``TopExp_Explorer`` order."""
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopTools import TopTools_IndexedMapOfShape
 
     faces_map = TopTools_IndexedMapOfShape()
     ex = TopExp_Explorer(shape, TopAbs_FACE)
@@ -445,10 +596,14 @@ def _build_model(p: Path, fmt: str, reader: Any) -> ImportedModel:
     while ex.More():
         edges_map.Add(ex.Current())
         ex.Next()
-    if faces_map.Extent() == 0 and edges_map.Extent() == 0:
-        raise ExchangeError(f"{p}: the file holds no faces and no curves")
+    return faces_map, edges_map
 
-    face_names, edge_names = _names(reader, root_shapes, faces_map, edges_map)
+
+def _convert(p: Path, fmt: str, shape: Any, names: tuple[dict[int, str], dict[int, str]],
+             warnings: list[str]) -> ImportedModel:
+    """The :class:`ImportedModel` of a transferred shape: every face and free edge converted."""
+    faces_map, edges_map = _maps(shape)
+    face_names, edge_names = names
     faces = [_import_face(i - 1, faces_map.FindKey(i), face_names.get(i)) for i in range(1, faces_map.Extent() + 1)]
     edges = [_import_edge(i - 1, edges_map.FindKey(i), edge_names.get(i)) for i in range(1, edges_map.Extent() + 1)]
     return ImportedModel(path=str(p), format=fmt, shape=shape, faces=faces, edges=edges, warnings=warnings)

@@ -1,0 +1,547 @@
+"""Reading checks of :mod:`occsurf.bridge.exchange.step_iges`: what OCC's readers accept silently or die on.
+
+Before OCC parses a file (no OCC here: NumPy and SciPy only)
+--------------------------------------------------------------
+:func:`scan_step` reads the DATA section of an ISO 10303-21 file as a graph of entity instances (strings
+and comments masked first) and
+
+* refuses, with :class:`ExchangeError` naming the entity, what crashes OCC's parser: parentheses nested
+  deeper than :data:`MAX_NESTING` (100000 of them overflow its stack), unbalanced parentheses, and
+  references that form a cycle (``#20 = ORIENTED_EDGE('',*,*,#20,.T.)``);
+* finds the references to instances the file does not define (a deleted line, a file cut at an entity
+  boundary with its trailer put back). OCC would leave a null handle there and crash on transfer (or
+  drop a face without a word), so the text OCC sees is *pruned*: a dangling reference inside a list is
+  removed from the list, an instance with a dangling attribute is removed, and so on up the graph. Each
+  removal is a warning; the partial model is read and reported as partial;
+* counts the face instances (``ADVANCED_FACE``, ``FACE_SURFACE``) and notes the ``CLOSED_SHELL`` ones,
+  which :func:`model_warnings` compares with what OCC built.
+
+:func:`scan_iges` checks the Directory and Parameter sections of an IGES file: every entity's parameter
+lines exist, and the B-spline curves (126) and surfaces (128) have non-negative upper indices, positive
+degrees and as many parameters as their counts imply (a negative upper index crashes OCC's reader).
+
+After OCC has read the file (OCC imported lazily)
+-------------------------------------------------
+:func:`occ_check_warnings` turns OCC's own check messages (``Interface_CheckTool``) into warnings: wrong
+arity, a text where a real is expected (read as 0), more than 3 coordinates (cut to 3), a reference of
+the wrong type. :func:`model_warnings` compares the model with the file: fewer faces than face instances,
+and shells the file calls closed that have free edges.
+
+Warnings are one line each, prefixed by what they concern (``#16 CLOSED_SHELL: ...``); at most
+:data:`MAX_WARNINGS_PER_KIND` of one kind are listed, then a count of the rest.
+"""
+
+from __future__ import annotations
+
+import re
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from occsurf.algorithms.errors import ExchangeError
+
+__all__ = ["StepScan", "IgesScan", "scan_step", "scan_iges", "occ_check_warnings", "model_warnings",
+           "MAX_NESTING", "MAX_WARNINGS_PER_KIND", "STEP_FACE_TYPES"]
+
+#: Deepest nesting of parentheses accepted in one STEP instance (real files nest 3 to 6 deep; OCC's
+#: parser recurses per level and dies of a stack overflow long before 100000).
+MAX_NESTING: int = 64
+#: Warnings of one kind listed individually before the rest are counted in one line.
+MAX_WARNINGS_PER_KIND: int = 10
+#: STEP instance types that become one face each.
+STEP_FACE_TYPES: tuple[str, ...] = ("ADVANCED_FACE", "FACE_SURFACE")
+
+_MASK = re.compile(rb"'(?:[^']|'')*'|/\*.*?\*/", re.S)
+_DEF = re.compile(rb"\s*#(\d+)\s*=\s*")
+_REF = re.compile(rb"#(\d+)")
+_TYPE = re.compile(rb"([A-Za-z_][A-Za-z0-9_]*)\s*\(")
+_DATA = re.compile(rb"\bDATA\b\s*(?:\([^)]*\))?\s*;")
+_END = re.compile(rb"END-ISO-10303-21\s*;")
+
+
+def _masked(data: bytes) -> bytes:
+    """``data`` with string contents replaced by ``_`` and comments by blanks: same length, same offsets."""
+    def hide(m: re.Match[bytes]) -> bytes:
+        s = m.group(0)
+        return b"'" + b"_" * (len(s) - 2) + b"'" if s[:1] == b"'" else b" " * len(s)
+
+    return _MASK.sub(hide, data)
+
+
+def _limited(kind_lines: list[str], what: str) -> list[str]:
+    if len(kind_lines) <= MAX_WARNINGS_PER_KIND:
+        return kind_lines
+    rest = len(kind_lines) - MAX_WARNINGS_PER_KIND
+    return kind_lines[:MAX_WARNINGS_PER_KIND] + [f"... and {rest} more {what}"]
+
+
+# ---------------------------------------------------------------------------------------- STEP
+@dataclass
+class StepScan:
+    """What :func:`scan_step` found.
+
+    Attributes
+    ----------
+    data : bytes
+        The text to give OCC: the file itself, or its pruned form when references dangle.
+    warnings : list of str
+    n_instances : int
+    face_instances : int
+        ``ADVANCED_FACE`` and ``FACE_SURFACE`` instances in ``data``.
+    closed_shells : list of int
+        Ids of the ``CLOSED_SHELL`` instances in ``data``.
+    ids : list of int
+        The instance ids of ``data`` in file order (OCC numbers the instances in this order).
+    """
+
+    data: bytes
+    warnings: list[str] = field(default_factory=list)
+    n_instances: int = 0
+    face_instances: int = 0
+    closed_shells: list[int] = field(default_factory=list)
+    ids: list[int] = field(default_factory=list)
+
+
+def _records(masked: bytes, start: int, stop: int) -> tuple[list[int], list[int], list[bytes]]:
+    """``(starts, ends, texts)`` of the ``;``-terminated records of ``masked[start:stop]``."""
+    region = masked[start:stop]
+    semis = np.flatnonzero(np.frombuffer(region, np.uint8) == ord(";"))
+    starts = np.concatenate([[0], semis[:-1] + 1]) if len(semis) else np.zeros(0, int)
+    return ([start + int(a) for a in starts], [start + int(b) for b in semis],
+            [region[a:b] for a, b in zip(starts.tolist(), semis.tolist())])
+
+
+def _check_parentheses(p: Path, masked: bytes, start: int, stop: int, semis: list[int], ids_at: Any) -> None:
+    region = np.frombuffer(masked, np.uint8)[start:stop]
+    step = (region == ord("(")).astype(np.int32) - (region == ord(")")).astype(np.int32)
+    depth = np.cumsum(step)
+    if len(depth) == 0:
+        return
+    deepest = int(depth.max())
+    if deepest > MAX_NESTING:
+        at = int(np.argmax(depth > MAX_NESTING)) + start
+        raise ExchangeError(f"{p}: damaged STEP file ({ids_at(at)}: parentheses nested {deepest} deep, more than "
+                            f"{MAX_NESTING}; OCC's parser would overflow its stack)")
+    at_semis = depth[np.asarray(semis, dtype=np.int64) - start] if semis else np.zeros(0, np.int32)
+    bad = np.flatnonzero(at_semis != 0)
+    if len(bad) or int(depth.min()) < 0:
+        where = semis[int(bad[0])] if len(bad) else int(np.argmax(depth < 0)) + start
+        raise ExchangeError(f"{p}: damaged STEP file ({ids_at(where)}: unbalanced parentheses)")
+
+
+def _cycle_error(p: Path, ids: np.ndarray, rows: np.ndarray, cols: np.ndarray, types: list[str]) -> None:
+    """Refuse a reference graph with a cycle (OCC's parser recurses round it until it dies)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(ids)
+    self_loops = rows[rows == cols]
+    if len(self_loops):
+        k = int(self_loops[0])
+        raise ExchangeError(f"{p}: damaged STEP file (#{ids[k]} {types[k]} refers to itself)")
+    if n == 0 or len(rows) == 0:
+        return
+    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n, n)).tocsr()
+    n_comp, labels = connected_components(graph, directed=True, connection="strong")
+    if n_comp == n:
+        return
+    sizes = np.bincount(labels)
+    members = np.flatnonzero(labels == int(np.argmax(sizes)))
+    shown = ", ".join(f"#{ids[k]} {types[k]}" for k in members[:6]) + (" ..." if len(members) > 6 else "")
+    raise ExchangeError(f"{p}: damaged STEP file (a cycle of references through {len(members)} instances: "
+                        f"{shown})")
+
+
+def _entity_type(text: bytes, at: int) -> str:
+    m = _TYPE.match(text, at)
+    if m is not None:
+        return m.group(1).decode("ascii").upper()
+    return "complex instance" if text[at:at + 1] == b"(" else "?"
+
+
+def scan_step(p: Path, data: bytes) -> StepScan:
+    """Check the DATA section of a STEP file and prune dangling references (see the module docstring).
+
+    Raises
+    ------
+    ExchangeError
+        Parentheses nested too deep or unbalanced, a cycle of references, no DATA section.
+    """
+    masked = _masked(data)
+    m = _DATA.search(masked)
+    end = None
+    for end in _END.finditer(masked):
+        pass
+    if m is None or end is None:
+        raise ExchangeError(f"{p}: damaged STEP file (no DATA section)")
+    start, stop = m.end(), end.start()
+    starts, semis, texts = _records(masked, start, stop)
+    ids_list: list[int] = []
+    rec_of: list[int] = []
+    types: list[str] = []
+    for k, text in enumerate(texts):
+        d = _DEF.match(text)
+        if d is None:
+            continue
+        ids_list.append(int(d.group(1)))
+        rec_of.append(k)
+        types.append(_entity_type(text, d.end()))
+    ids = np.asarray(ids_list, dtype=np.int64)
+
+    def ids_at(offset: int) -> str:
+        k = int(np.searchsorted(np.asarray(semis), offset))
+        d = _DEF.match(texts[k]) if k < len(texts) else None
+        return f"#{int(d.group(1))}" if d is not None else f"byte {offset}"
+
+    _check_parentheses(p, masked, start, stop, semis, ids_at)
+    scan = StepScan(data=data, n_instances=len(ids))
+    counts = Counter(ids_list)
+    dups = sorted(i for i, c in counts.items() if c > 1)
+    if dups:
+        scan.warnings += _limited([f"#{i}: defined {counts[i]} times (OCC keeps one)" for i in dups],
+                                  "instances defined more than once")
+    order = np.argsort(ids, kind="stable")
+    sorted_ids = ids[order]
+    refs_per = [[int(x) for x in _REF.findall(texts[rec_of[j]], _DEF.match(texts[rec_of[j]]).end())]
+                for j in range(len(ids))]
+    lengths = np.fromiter((len(r) for r in refs_per), dtype=np.int64, count=len(refs_per))
+    flat = np.fromiter((x for r in refs_per for x in r), dtype=np.int64, count=int(lengths.sum()))
+    rows = np.repeat(np.arange(len(ids)), lengths)
+    pos = np.searchsorted(sorted_ids, flat)
+    pos_c = np.minimum(pos, max(len(ids) - 1, 0))
+    found = (len(ids) > 0) & (sorted_ids[pos_c] == flat) if len(ids) else np.zeros(len(flat), bool)
+    cols = order[pos_c[found]] if len(ids) else np.zeros(0, np.int64)
+    _cycle_error(p, ids, rows[found], cols, types)
+    if not found.all():
+        scan.data, lines = _prune(data, masked, starts, semis, texts, rec_of, ids, types, refs_per,
+                                  set(flat[~found].tolist()))
+        scan.warnings += lines
+        kept = _kept_types(scan.data)
+        scan.face_instances = sum(kept[t] for t in STEP_FACE_TYPES)
+        scan.closed_shells = kept.closed_shells
+        scan.ids = kept.ids
+    else:
+        scan.face_instances = sum(t in STEP_FACE_TYPES for t in types)
+        scan.closed_shells = [int(ids[j]) for j, t in enumerate(types) if t == "CLOSED_SHELL"]
+        scan.ids = ids_list
+    return scan
+
+
+class _TypeCount(Counter):  # type: ignore[type-arg]
+    closed_shells: list[int]
+    ids: list[int]
+
+
+def _kept_types(data: bytes) -> _TypeCount:
+    masked = _masked(data)
+    out = _TypeCount()
+    out.closed_shells, out.ids = [], []
+    for m in re.finditer(rb"#(\d+)\s*=\s*(?:([A-Za-z_][A-Za-z0-9_]*)\s*)?\(", masked):
+        out.ids.append(int(m.group(1)))
+        t = (m.group(2) or b"").decode("ascii").upper()
+        out[t] += 1
+        if t == "CLOSED_SHELL":
+            out.closed_shells.append(int(m.group(1)))
+    return out
+
+
+def _attribute_depth(text: bytes, at: int) -> int:
+    """Paren depth of an instance's own attributes: 1, or 2 in a complex instance ``( A(..) B(..) )``."""
+    return 2 if text[at:at + 1] == b"(" else 1
+
+
+def _remove_refs(text: bytes, body_at: int, gone: set[int]) -> tuple[list[tuple[int, int]] | None, list[int],
+                                                                   int | None]:
+    """Where the references to ``gone`` sit in the lists of one (masked) record.
+
+    Returns ``(spans to cut, or None if the record itself must go, ids removed from lists, the id of an
+    attribute that dangles)``."""
+    top = _attribute_depth(text, body_at)
+    depth = 0
+    cut: list[tuple[int, int]] = []
+    removed: list[int] = []
+    i = body_at
+    n = len(text)
+    while i < n:
+        c = text[i]
+        if c == 40:
+            depth += 1
+        elif c == 41:
+            depth -= 1
+        elif c == 35:
+            j = i + 1
+            while j < n and 48 <= text[j] <= 57:
+                j += 1
+            ref = int(text[i + 1:j]) if j > i + 1 else None
+            if ref is not None and ref in gone:
+                if depth <= top:
+                    return None, removed, ref
+                a, b = i, j  # drop the element with one neighbouring comma
+                k = b
+                while k < n and text[k] in b" \t\r\n":
+                    k += 1
+                if k < n and text[k] == 44:
+                    b = k + 1
+                else:
+                    k = a - 1
+                    while k > body_at and text[k] in b" \t\r\n":
+                        k -= 1
+                    if text[k] == 44:
+                        a = k
+                cut.append((a, b))
+                removed.append(ref)
+            i = j
+            continue
+        i += 1
+    return cut, removed, None
+
+
+def _cut(text: bytes, spans: list[tuple[int, int]]) -> bytes:
+    out = bytearray()
+    last = 0
+    for a, b in spans:
+        out += text[last:a]
+        last = b
+    out += text[last:]
+    return bytes(out)
+
+
+def _prune(data: bytes, masked: bytes, starts: list[int], semis: list[int], texts: list[bytes], rec_of: list[int],
+           ids: np.ndarray, types: list[str], refs_per: list[list[int]], missing: set[int]) -> tuple[bytes, list[str]]:
+    """The file without its dangling references (see the module docstring) and a warning per removal."""
+    users: dict[int, list[int]] = {}
+    for j, refs in enumerate(refs_per):
+        for r in set(refs):
+            users.setdefault(r, []).append(j)
+    gone = set(missing)
+    todo = sorted({j for r in missing for j in users.get(r, ())})
+    new_text: dict[int, bytes | None] = {}
+    dangling: list[str] = []
+    dropped: list[str] = []
+    while todo:
+        nxt: set[int] = set()
+        for j in todo:
+            k = rec_of[j]
+            if new_text.get(j, b"") is None:
+                continue
+            original = data[starts[k]:semis[k]]
+            current = new_text.get(j, original)
+            masked_current = _masked(current)
+            body_at = _DEF.match(masked_current).end()
+            spans, removed, attr = _remove_refs(masked_current, body_at, gone)
+            label = f"#{ids[j]} {types[j]}"
+            if spans is None:
+                new_text[j] = None
+                why = "undefined" if attr in missing else "removed"
+                dropped.append(f"{label}: removed, its attribute refers to #{attr} ({why})")
+                if int(ids[j]) not in gone:
+                    gone.add(int(ids[j]))
+                    nxt.update(users.get(int(ids[j]), ()))
+                continue
+            new_text[j] = _cut(current, spans)  # masking keeps offsets: the spans hold in the real text
+            for r in removed:
+                why = "undefined in the file" if r in missing else "removed"
+                dangling.append(f"{label}: reference to #{r} ({why}) dropped from its list")
+        todo = sorted(nxt)
+    out = bytearray(data[:starts[0]] if starts else data)
+    last = starts[0] if starts else len(data)
+    for j, text in sorted(new_text.items(), key=lambda kv: starts[rec_of[kv[0]]]):
+        k = rec_of[j]
+        out += data[last:starts[k]]
+        if text is not None:
+            out += text
+            last = semis[k]
+        else:
+            last = semis[k] + 1
+    out += data[last:]
+    head = [f"{len(missing)} referenced instances are not defined in the file (truncated or edited?): "
+            + ", ".join(f"#{r}" for r in sorted(missing)[:8]) + (" ..." if len(missing) > 8 else "")]
+    return bytes(out), head + _limited(dropped, "instances removed") + _limited(dangling, "references dropped")
+
+
+# ---------------------------------------------------------------------------------------- IGES
+@dataclass
+class IgesScan:
+    """What :func:`scan_iges` found: ``warnings`` and the number of entities per type."""
+
+    warnings: list[str] = field(default_factory=list)
+    types: Counter = field(default_factory=Counter)  # type: ignore[type-arg]
+
+
+def _iges_numbers(text: str, delim: str, count: int) -> list[str]:
+    return [t.strip() for t in text.split(delim)[:count]]
+
+
+def scan_iges(p: Path, data: bytes) -> IgesScan:
+    """Check the Directory and Parameter sections of a fixed-format IGES file (framing checked before).
+
+    Raises
+    ------
+    ExchangeError
+        A Directory entry whose parameter lines are missing, or a B-spline curve (126) or surface (128)
+        with a negative upper index, a degree below 1 or fewer parameters than its counts imply.
+    """
+    lines = data.decode("latin-1").splitlines()
+    by_sec: dict[str, list[str]] = {"S": [], "G": [], "D": [], "P": []}
+    for line in lines:
+        sec = line[72:73]
+        if sec in by_sec:
+            by_sec[sec].append(line)
+    glob = "".join(x[:72] for x in by_sec["G"])
+    delim = ","
+    if glob[:2] == "1H" and len(glob) > 2:
+        delim = glob[2]
+    rec_end = ";"
+    scan = IgesScan()
+    d, par = by_sec["D"], by_sec["P"]
+    for k in range(0, len(d) - 1, 2):
+        a, b = d[k], d[k + 1]
+        seq = 2 * (k // 2) + 1
+        try:
+            etype = int(a[0:8])
+            ptr = int(a[8:16])
+            nlines = int(b[24:32])
+        except ValueError:
+            raise ExchangeError(f"{p}: damaged IGES file (directory entry D{seq}: unreadable type or parameter "
+                                "pointer)") from None
+        scan.types[etype] += 1
+        if ptr < 1 or nlines < 1 or ptr - 1 + nlines > len(par):
+            raise ExchangeError(f"{p}: damaged IGES file (directory entry D{seq}, type {etype}: parameter lines "
+                                f"{ptr}..{ptr + nlines - 1} not in the {len(par)} of the P section)")
+        if etype not in (126, 128):
+            continue
+        text = "".join(x[:64] for x in par[ptr - 1:ptr - 1 + nlines]).split(rec_end)[0]
+        fields = _iges_numbers(text, delim, 10**9)
+        _check_bspline(p, seq, etype, fields)
+    return scan
+
+
+def _check_bspline(p: Path, seq: int, etype: int, fields: list[str]) -> None:
+    head = 7 if etype == 126 else 10  # the type, then 6 (126) or 9 (128) integers
+    where = f"{p}: damaged IGES file (B-spline {'curve' if etype == 126 else 'surface'} {etype} at D{seq}"
+    try:
+        ints = [int(x) for x in fields[1:head]]
+    except ValueError:
+        raise ExchangeError(f"{where}: its counts are not integers)") from None
+    if len(ints) < head - 1:
+        raise ExchangeError(f"{where}: {len(fields)} parameters, too few)")
+    if etype == 126:
+        k, m = ints[0], ints[1]
+        if k < 0 or m < 1 or k < m:
+            raise ExchangeError(f"{where}: upper index K={k}, degree M={m}; need M >= 1 and K >= M)")
+        need = 1 + 6 + (k + m + 2) + (k + 1) + 3 * (k + 1) + 2
+    else:
+        k1, k2, m1, m2 = ints[:4]
+        if min(k1, k2) < 0 or min(m1, m2) < 1 or k1 < m1 or k2 < m2:
+            raise ExchangeError(f"{where}: upper indices K1={k1}, K2={k2}, degrees M1={m1}, M2={m2}; need M >= 1 "
+                                "and K >= M)")
+        c = (k1 + 1) * (k2 + 1)
+        need = 1 + 9 + (k1 + m1 + 2) + (k2 + m2 + 2) + 4 * c + 4
+    if len(fields) < need:
+        raise ExchangeError(f"{where}: {len(fields) - 1} parameters, its counts need {need - 1})")
+
+
+# ---------------------------------------------------------------------------------------- after OCC
+def _step_id(model: Any, num: int, scan: StepScan | None) -> int | None:
+    """The ``#id`` of OCC's ``num``-th instance: OCC numbers them in file order."""
+    if scan is not None and len(scan.ids) == model.NbEntities() and 1 <= num <= len(scan.ids):
+        return scan.ids[num - 1]
+    return None
+
+
+def occ_check_warnings(reader: Any, fmt: str, scan: StepScan | None = None) -> list[str]:
+    """OCC's check messages on the model it read, one warning each (unresolved references excluded:
+    :func:`scan_step` reports those)."""
+    from OCP.Interface import Interface_CheckTool
+
+    model = reader.WS().Model()
+    lines: list[str] = []
+    try:
+        it = Interface_CheckTool(model).CompleteCheckList()
+        it.Start()
+    except Exception:  # noqa: BLE001 - the checks are advisory
+        return lines
+    while it.More():
+        check, num = it.Value(), it.Number()
+        label = "file"
+        if num > 0:
+            try:
+                ent = model.Value(num)
+                name = ent.DynamicType().Name()
+                name = name.split("_", 1)[1] if "_" in name else name
+                if fmt == "step":
+                    ident = _step_id(model, num, scan)
+                    label = f"#{ident} {name}" if ident is not None else f"instance {num} ({name})"
+                else:
+                    label = f"D{2 * num - 1} {name}"  # the entity's first directory line
+            except Exception:  # noqa: BLE001
+                label = f"entity {num}"
+        msgs = [check.CFail(i) for i in range(1, check.NbFails() + 1)]
+        if num > 0:  # warnings on the file's header (a missing date) say nothing about the model
+            msgs += [check.CWarning(i) for i in range(1, check.NbWarnings() + 1)]
+        for msg in msgs:
+            text = " ".join(str(msg).split())
+            if "Unresolved Reference" in text or "reference to another entity is unresolved" in text:
+                continue
+            lines.append(f"{label}: {text} (OCC)")
+        it.Next()
+    return _limited(lines, "OCC check messages")
+
+
+def model_warnings(shape: Any, reader: Any, scan: StepScan | None, n_faces: int) -> list[str]:
+    """The model against the file: face count, and closed shells with free edges (STEP)."""
+    lines: list[str] = []
+    if scan is None:
+        return lines
+    if scan.face_instances and n_faces != scan.face_instances:
+        lines.append(f"the file has {scan.face_instances} face instances ({', '.join(STEP_FACE_TYPES)}); "
+                     f"the model read has {n_faces} faces")
+    if scan.closed_shells:
+        lines += _open_closed_shells(shape, scan)
+    return lines
+
+
+def _open_closed_shells(shape: Any, scan: StepScan) -> list[str]:
+    """The file's ``CLOSED_SHELL`` count against the shells of the model without free edges."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS
+    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    shells = TopTools_IndexedMapOfShape()
+    sx = TopExp_Explorer(shape, TopAbs_SHELL)
+    while sx.More():
+        shells.Add(sx.Current().Located(TopLoc_Location()))  # an instanced part counts once
+        sx.Next()
+    n_closed, free_counts = 0, []
+    for k in range(1, shells.Extent() + 1):
+        edges = TopTools_IndexedMapOfShape()
+        uses: list[int] = []
+        fx = TopExp_Explorer(shells.FindKey(k), TopAbs_FACE)
+        while fx.More():
+            ex = TopExp_Explorer(fx.Current(), TopAbs_EDGE)
+            while ex.More():
+                e = ex.Current()
+                if not BRep_Tool.Degenerated_s(TopoDS.Edge_s(e)):
+                    i = edges.Add(e)  # IsSame: one key per edge, whatever its orientation in a face
+                    if i > len(uses):
+                        uses.append(0)
+                    uses[i - 1] += 1
+                ex.Next()
+            fx.Next()
+        free = sum(u == 1 for u in uses)
+        if free:
+            free_counts.append(free)
+        elif uses:
+            n_closed += 1
+    n_file = len(scan.closed_shells)
+    if n_closed >= n_file:
+        return []
+    shown = ", ".join(f"#{i}" for i in scan.closed_shells[:6]) + (" ..." if n_file > 6 else "")
+    opened = f"; {len(free_counts)} open, with {', '.join(map(str, free_counts[:6]))} free edges" if free_counts else ""
+    return [f"the file has {n_file} CLOSED_SHELL ({shown}); {n_closed} shells of the model are closed{opened}"]
