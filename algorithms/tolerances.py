@@ -147,11 +147,20 @@ _DEFAULTS: dict[str, float] = {
     # FIT_PROJECTION_MAX_ITER steps.
     "FIT_PROJECTION_STEP": 1e-12,
     "FIT_PROJECTION_MAX_ITER": 30,
-    # Adaptive hierarchical fitting: most overlay levels below the base, and the flagged knot
-    # spans are grown by FIT_ADAPTIVE_MARGIN spans on each side before overlays are placed (an
-    # overlay's outer vertices taper to its border).
+    # Adaptive hierarchical fitting: most overlay levels below the base; the flagged knot spans
+    # are grown by FIT_ADAPTIVE_MARGIN spans on each side before overlays are placed (an
+    # overlay's outer vertices taper to its border); each round refines where the distance
+    # exceeds max(tol, FIT_ADAPTIVE_GREED * the current maximum) (worst places first, so the
+    # ringing of a coarse fit around a sharp feature is not refined: backfitting removes it),
+    # followed by FIT_ADAPTIVE_SWEEPS backfitting sweeps; at most FIT_ADAPTIVE_MAX_ROUNDS rounds.
     "FIT_ADAPTIVE_MAX_LEVELS": 6,
-    "FIT_ADAPTIVE_MARGIN": 1,
+    "FIT_ADAPTIVE_MARGIN": 0,
+    "FIT_ADAPTIVE_GREED": 0.1,
+    "FIT_ADAPTIVE_SWEEPS": 2,
+    "FIT_ADAPTIVE_MAX_ROUNDS": 20,
+    # Before any overlay, the base's spans are multiplied by 1.5 while the regions to refine cover
+    # more than this fraction of its domain (error everywhere: uniform refinement is cheaper).
+    "FIT_ADAPTIVE_MAX_COVER": 0.5,
     # ---- manipulation (course ch. 3, 4) --------------------------------------------------------
     # A pivot |R[k, k]| of the equilibrated constraint matrix below RANK_RTOL * |R[0, 0]| counts as
     # zero: rows beyond it are taken as combinations of the earlier ones.
@@ -246,6 +255,17 @@ _DEFAULTS: dict[str, float] = {
     "FILL_CORNER_SPAN": 0.02,
     # Most sides of a hole (the construction works for any n; this bounds the output size).
     "FILL_MAX_SIDES": 24,
+    # Trimmed hole sides (topology/nsided_sides.py): target angle (degrees) between the fitted
+    # cross field's tangent plane and the neighbour's, the issue's 0.01 deg; the fit bisects spans
+    # until it is met or the field has FILL_FIT_MAX_SPANS spans.
+    "FILL_FIT_ANGLE": 0.01,
+    "FILL_FIT_MAX_SPANS": 256,
+    # Largest distance (relative to the model's size) of a fitted boundary where edges meeting at a
+    # flat corner are merged into one side (the issue's G0 <= 1e-7 of the model size).
+    "FILL_FIT_G0": 1e-7,
+    # Fraction of a side over which the neighbour's normal is turned into the fill's corner plane
+    # where the two neighbours of a corner do not share a tangent plane (G1 is lost only there).
+    "FILL_CORNER_BLEND": 0.1,
     # ---- quality (course ch. 9, 11-2) ----------------------------------------------------------
     # A point is flat (curvature_map kind "radius" is inf) when max(|k1|, |k2|) * size is at most
     # this; size is the diagonal of the sampled points' bounding box (scale-free).
@@ -276,15 +296,28 @@ _DEFAULTS: dict[str, float] = {
     # ... covering at least this fraction of the samples (a single crossing point is not a spot).
     "QUALITY_FLAT_SPOT_AREA": 0.005,
     # Curvature spike: a local maximum of |k1| + |k2| above this multiple of the median of its
-    # neighbourhood (QUALITY_SPIKE_RADIUS grid cells around it) and above 1/size.
+    # neighbourhood (a square window QUALITY_SPIKE_WINDOW of the grid's side wide) and above 1/size.
     "QUALITY_SPIKE_RATIO": 10.0,
-    "QUALITY_SPIKE_RADIUS": 3,
+    "QUALITY_SPIKE_WINDOW": 0.25,
     # Near-degenerate normal: |S_u x S_v| / max(|S_u|, |S_v|)^2 (the sine of the angle between the
     # partials) below this, but above NORMAL_ZERO.
     "QUALITY_NEAR_DEGENERATE": 1e-3,
     # Ill-parametrisation: ratio of the largest to the smallest |S_u x S_v| (the Jacobian) over a
     # face's non-degenerate samples above this.
     "QUALITY_JACOBIAN_RATIO": 100.0,
+    # ---- lighting (course ch. 10, Warn 1983) ---------------------------------------------------
+    # A light's direction (or a normal given to shade) shorter than this cannot be made a unit
+    # vector: the direction is refused, the normal's point is shaded NaN. Absolute: directions are
+    # unitless.
+    "LIGHT_DIRECTION_ZERO": 1e-12,
+    # The light's frame takes its x axis from the model's +x projected onto the plane normal to
+    # the light's direction; where the sine of the angle between +x and the direction is below
+    # this, +x is (nearly) parallel to it and +y is projected instead.
+    "LIGHT_FRAME_DEGENERATE": 1e-6,
+    # Most lights in one setup (the renderer's fragment shader has uniforms for each).
+    "LIGHT_MAX_COUNT": 16,
+    # shade() works on blocks of this many points (the temporaries of a block stay in cache).
+    "LIGHT_BLOCK": 16384,
 }
 
 _OVERRIDES: contextvars.ContextVar[Mapping[str, float]] = contextvars.ContextVar(

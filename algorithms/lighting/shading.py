@@ -1,0 +1,271 @@
+"""Warn's lighting model, vectorised: :func:`shade` and the per-light factor :func:`light_factor`.
+
+Course ch. 10 (D. R. Warn, "Lighting Controls for Synthetic Images", Computer Graphics 17(3),
+SIGGRAPH '83, pp. 13-21), §10-2 .. §10-7. At a surface point ``P`` with unit normal ``N`` seen from
+``E``, with ``V = (E - P)/|E - P|``:
+
+.. math::
+
+    C(P) = A \\odot C_d + \\sum_j I_j(P)\\, c_j \\odot
+           \\bigl(k_d\\, C_d \\max(N\\cdot L_j, 0) + k_s\\, C_s \\max(R_j\\cdot V, 0)^s\\bigr)
+
+with ``L_j`` the unit vector from ``P`` to light ``j`` (``-direction`` for a directional light),
+``R_j = 2 (N.L_j) N - L_j`` (Phong's reflection vector: the specular term is **Phong**, not
+Blinn-Phong, as in Warn's paper; it is zero where ``N.L_j <= 0``), ``c_j`` the light's
+``intensity * color`` (lights of different colours blend additively per channel, §10-7) and
+
+.. math::
+
+    I_j(P) = \\underbrace{\\max(\\cos\\gamma, 0)^{n}}_{\\text{concentration}}\\;
+             \\underbrace{\\bigl(1 - \\mathrm{smoothstep}(\\theta-\\delta, \\theta, \\gamma)\\bigr)}_{\\text{cone}}\\;
+             \\underbrace{[\\,lo \\le F(P - O) \\le hi\\,]}_{\\text{flaps}}\\;
+             \\underbrace{(d_0/\\max(d, d_0))^k}_{\\text{fall-off}}
+
+where ``gamma`` is the angle between the light's axis and the ray from the light to ``P``, ``n``
+the concentration (``n = 0``: the factor is 1 everywhere, a plain point light), ``theta`` and
+``delta`` the cone's angle and soft-edge width (a step at ``theta`` when ``delta = 0``), ``F`` the
+light's frame (:func:`~.model.light_frame`) and ``O`` its position, ``d = |P - O|`` and ``k`` 0, 1
+or 2 (:data:`~.model.FALLOFFS`). The result is linear RGB, not clipped: two lights give exactly
+the sum of each alone.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .. import tolerances
+from ..errors import InvalidGeometryError
+from .model import LightingSetup, Material, WarnLight
+
+__all__ = ["shade", "light_factor"]
+
+
+def _as_points(value: ArrayLike, name: str) -> NDArray[np.float64]:
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidGeometryError(f"{name}: expected an array of shape (..., 3), got {type(value).__name__}") from None
+    if a.ndim == 0 or a.shape[-1] != 3:
+        raise InvalidGeometryError(f"{name}: expected an array of shape (..., 3), got shape {a.shape}")
+    return a
+
+
+def _setup(lights: LightingSetup | WarnLight | Sequence[WarnLight], material: Material | None,
+           ambient: ArrayLike | None, two_sided: bool | None) -> LightingSetup:
+    """One validated :class:`LightingSetup` from :func:`shade`'s flexible arguments."""
+    if isinstance(lights, LightingSetup):
+        setup = lights
+    elif isinstance(lights, WarnLight):
+        setup = LightingSetup(lights=(lights,))
+    else:
+        setup = LightingSetup(lights=tuple(lights) if isinstance(lights, (list, tuple)) else lights, ambient=0.0)
+    changes = {}
+    if material is not None:
+        changes["material"] = material
+    if ambient is not None:
+        changes["ambient"] = ambient if np.ndim(ambient) == 0 else tuple(np.asarray(ambient, float))
+    if two_sided is not None:
+        changes["two_sided"] = two_sided
+    return setup.replace(**changes) if changes else setup
+
+
+def shade(points: ArrayLike, normals: ArrayLike, view_point: ArrayLike,
+          lights: LightingSetup | WarnLight | Sequence[WarnLight], material: Material | None = None, *,
+          ambient: ArrayLike | None = None, two_sided: bool | None = None) -> NDArray[np.float64]:
+    """Shade surface points with Warn's lights (course ch. 10): the NumPy reference model.
+
+    Parameters
+    ----------
+    points : array_like, shape (..., 3)
+        Surface points, model units.
+    normals : array_like, shape (..., 3)
+        Normals at ``points`` (any length > 0; made unit here). A zero or non-finite normal gives
+        a NaN row.
+    view_point : array_like, shape (3,) or (..., 3)
+        The eye (broadcast against ``points``).
+    lights : LightingSetup or WarnLight or sequence of WarnLight
+        A setup (its ambient, material and ``two_sided`` are used unless given here), one light,
+        or a list of lights (ambient 0 unless given).
+    material : Material, optional
+        Overrides the setup's.
+    ambient : float or (3,) floats, optional
+        Overrides the setup's ambient light.
+    two_sided : bool, optional
+        Overrides the setup's: normals facing away from the eye are turned towards it.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Linear RGB, unclipped (the module docstring gives the formula).
+
+    Raises
+    ------
+    InvalidGeometryError
+        Arrays of the wrong shape, non-finite points, or an invalid light/material.
+    """
+    setup = _setup(lights, material, ambient, two_sided)
+    P = _as_points(points, "points")
+    N = _as_points(normals, "normals")
+    E = _as_points(view_point, "view_point")
+    try:
+        shape = np.broadcast_shapes(P.shape, N.shape, E.shape)
+    except ValueError:
+        raise InvalidGeometryError(f"points {P.shape}, normals {N.shape} and view_point {E.shape}: expected "
+                                   "shapes that broadcast") from None
+    if not np.all(np.isfinite(P)):
+        raise InvalidGeometryError("points: expected finite coordinates")
+    single_eye = E.size == 3
+    # Component-major copies (one pass each): the block kernels then read contiguous rows.
+    P, N = (np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, 3).T) for a in (P, N))
+    E = E.reshape(3, 1) if single_eye else np.ascontiguousarray(np.broadcast_to(E, shape).reshape(-1, 3).T)
+    m = P.shape[1]
+    out = np.empty((3, m))
+    block = max(1, int(tolerances.LIGHT_BLOCK))
+    with np.errstate(all="ignore"):
+        for s in range(0, m, block):
+            e = min(s + block, m)
+            out[:, s:e] = _shade_block(P[:, s:e], N[:, s:e], E if single_eye else E[:, s:e], setup)
+    return out.T.reshape(shape)
+
+
+def _ipow(x: np.ndarray, s: float) -> np.ndarray:
+    """``x ** s`` for ``x >= 0``; integer exponents up to 4096 by repeated squaring (6 products for
+    s = 40 instead of a ``pow`` per element)."""
+    if s == 1:
+        return x
+    if float(s).is_integer() and 0 < s <= 4096:
+        n = int(s)
+        result = None
+        base = x
+        while True:
+            if n & 1:
+                result = base if result is None else result * base
+            n >>= 1
+            if not n:
+                return result  # type: ignore[return-value]
+            base = base * base
+    return np.power(x, s)
+
+
+def _shade_block(P: np.ndarray, N: np.ndarray, E: np.ndarray, setup: LightingSetup) -> np.ndarray:
+    """``(3, m)`` components in (views), ``(3, m)`` RGB out (trusted input, errors ignored by the caller)."""
+    mat = setup.material
+    n_len = np.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
+    bad = ~(n_len > tolerances.LIGHT_DIRECTION_ZERO)
+    N = N * (1.0 / n_len)
+    V = E - P
+    V *= 1.0 / np.sqrt(V[0] * V[0] + V[1] * V[1] + V[2] * V[2])
+    NV = N[0] * V[0] + N[1] * V[1] + N[2] * V[2]
+    if setup.two_sided:
+        back = NV < 0
+        if back.any():
+            flip = 1.0 - 2.0 * back
+            N *= flip
+            NV *= flip
+    kd = mat.diffuse * np.asarray(mat.color)
+    ks = mat.specular * np.asarray(mat.specular_color)
+    rgb = np.empty((3, P.shape[1]))
+    rgb[:] = (np.asarray(setup.ambient) * np.asarray(mat.color))[:, None]
+    for light in setup.lights:
+        L, factor = _toward_light(P, light)
+        NL = N[0] * L[0] + N[1] * L[1] + N[2] * L[2]
+        diff = np.maximum(NL, 0.0)
+        diff *= factor
+        spec = None
+        if mat.specular > 0:
+            RV = 2.0 * NL * NV
+            RV -= L[0] * V[0] + L[1] * V[1] + L[2] * V[2]
+            np.maximum(RV, 0.0, out=RV)
+            RV *= NL > 0
+            spec = _ipow(RV, mat.shininess) if mat.shininess != 0 else (NL > 0).astype(float)
+            spec = spec * factor
+        c = light.rgb
+        for ch in range(3):
+            if c[ch] == 0:
+                continue
+            rgb[ch] += diff * (c[ch] * kd[ch])
+            if spec is not None:
+                rgb[ch] += spec * (c[ch] * ks[ch])
+    rgb[:, bad] = np.nan
+    return rgb
+
+
+def _toward_light(P: np.ndarray, light: WarnLight) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors ``(3, m)`` from the points to the light, and the light's factor ``I(P)`` ``(m,)``."""
+    d = np.asarray(light.direction)
+    m = P.shape[1]
+    if light.position is None:
+        L = np.broadcast_to(-d[:, None], (3, m))
+        factor = np.ones(m)
+        if light.has_flaps:
+            factor *= _flap_mask(P, light)
+        return L, factor
+    o = np.asarray(light.position)
+    L = o[:, None] - P
+    dist = np.sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2])
+    L *= 1.0 / dist
+    factor = (dist > 0).astype(float)  # a point at the light gets no light
+    L[:, dist == 0] = 0.0
+    if light.concentration > 0 or light.cone_angle_deg is not None:
+        cos_g = -(L[0] * d[0] + L[1] * d[1] + L[2] * d[2])
+        if light.concentration > 0:
+            factor *= _ipow(np.maximum(cos_g, 0.0), light.concentration)
+        if light.cone_angle_deg is not None:
+            factor *= _cone(cos_g, light)
+    if light.has_flaps:
+        factor *= _flap_mask(P, light)
+    if light.falloff != "none":
+        d0 = float(light.falloff_distance)  # type: ignore[arg-type]
+        ratio = d0 / np.maximum(dist, d0)
+        factor *= ratio if light.falloff == "inverse" else ratio * ratio
+    return L, factor
+
+
+def _cone(cos_g: np.ndarray, light: WarnLight) -> np.ndarray:
+    """1 inside ``angle - edge``, 0 outside ``angle``, smoothstep in the angle between."""
+    theta = math.radians(float(light.cone_angle_deg))  # type: ignore[arg-type]
+    delta = math.radians(light.cone_edge_deg)
+    if delta == 0:
+        return (cos_g >= math.cos(theta)).astype(float)
+    gamma = np.arccos(np.clip(cos_g, -1.0, 1.0))
+    t = np.clip((theta - gamma) / delta, 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def _flap_mask(P: np.ndarray, light: WarnLight) -> np.ndarray:
+    """1 where the point lies within every flap of the light's frame, else 0."""
+    F = light.frame
+    rel = P - light.origin[:, None]
+    mask = np.ones(P.shape[1], bool)
+    for k, (lo, hi) in enumerate(light.flaps):
+        if math.isinf(lo) and math.isinf(hi):
+            continue
+        q = F[k, 0] * rel[0] + F[k, 1] * rel[1] + F[k, 2] * rel[2]
+        mask &= (q >= lo) & (q <= hi)
+    return mask.astype(float)
+
+
+def light_factor(points: ArrayLike, light: WarnLight) -> NDArray[np.float64]:
+    """Warn's factor ``I(P)`` of one light (concentration x cone x flaps x fall-off), in [0, 1].
+
+    Parameters
+    ----------
+    points : array_like, shape (..., 3)
+    light : WarnLight
+
+    Returns
+    -------
+    ndarray, shape (...)
+        What multiplies the light's colour at each point before the diffuse and specular terms.
+    """
+    if not isinstance(light, WarnLight):
+        raise InvalidGeometryError(f"light: expected a WarnLight, got {type(light).__name__}")
+    P = _as_points(points, "points")
+    if not np.all(np.isfinite(P)):
+        raise InvalidGeometryError("points: expected finite coordinates")
+    with np.errstate(all="ignore"):
+        return _toward_light(P.reshape(-1, 3).T, light)[1].reshape(P.shape[:-1])

@@ -1,0 +1,313 @@
+"""Warn's lighting model (course ch. 10): closed forms, invariants, validation, the lights file."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from occsurf.algorithms import tolerances
+from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
+from occsurf.algorithms.lighting import (
+    PRESETS,
+    LightingSetup,
+    Material,
+    WarnLight,
+    dump_lights,
+    dumps_lights,
+    highlight_check,
+    key_light_with_flaps,
+    light_factor,
+    light_frame,
+    load_lights,
+    loads_lights,
+    preset,
+    setup_from_dict,
+    shade,
+    studio_three_point,
+)
+
+from .strategies import test_settings
+
+SETTINGS = test_settings(30)
+MATTE = Material(color=(1.0, 1.0, 1.0), diffuse=1.0, specular=0.0)
+coord = st.floats(-10, 10, allow_nan=False)
+vec = st.tuples(coord, coord, coord)
+
+
+def _plane(n: int = 41, half: float = 5.0) -> tuple[np.ndarray, np.ndarray]:
+    """Points of the plane z = 0 on a grid, and their normals (+z)."""
+    x, y = np.meshgrid(np.linspace(-half, half, n), np.linspace(-half, half, n), indexing="ij")
+    P = np.stack([x, y, np.zeros_like(x)], axis=-1)
+    return P, np.broadcast_to([0.0, 0.0, 1.0], P.shape)
+
+
+# ---------------------------------------------------------------------------------------- closed forms
+def test_plain_point_light_is_lambert_plus_phong() -> None:
+    """n = 0, no cone, no flaps: the textbook point light, written out independently."""
+    rng = np.random.default_rng(1)
+    P = rng.normal(size=(500, 3))
+    N = rng.normal(size=(500, 3))
+    E = np.array([3.0, -4.0, 5.0])
+    light = WarnLight(position=(2.0, 1.0, 6.0), direction=(0, 0, -1), color=(1.0, 0.5, 0.25), intensity=0.8)
+    mat = Material(color=(0.6, 0.7, 0.8), diffuse=0.9, specular=0.4, shininess=13.0)
+    got = shade(P, N, E, [light], mat, two_sided=False)
+    n = N / np.linalg.norm(N, axis=1, keepdims=True)
+    L = np.asarray(light.position) - P
+    L /= np.linalg.norm(L, axis=1, keepdims=True)
+    V = E - P
+    V /= np.linalg.norm(V, axis=1, keepdims=True)
+    NL = np.sum(n * L, axis=1)
+    R = 2 * NL[:, None] * n - L
+    spec = np.where(NL > 0, np.maximum(np.sum(R * V, axis=1), 0) ** 13.0, 0)
+    want = light.rgb * (0.9 * np.asarray(mat.color) * np.maximum(NL, 0)[:, None] + 0.4 * spec[:, None])
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-14)
+
+
+def test_concentration_zero_and_one() -> None:
+    """n = 0 reproduces the plain light exactly (the factor is 1 everywhere, even behind the light);
+    n = 1 is the plain light times cos(gamma) (a Lambertian reflector), 0 behind it."""
+    P, N = _plane()
+    pos, d = np.array([1.0, -2.0, 4.0]), np.array([0.3, 0.2, -1.0])
+    plain = WarnLight(position=tuple(pos), direction=(0, 0, 1))  # points away: irrelevant for n = 0
+    n0 = WarnLight(position=tuple(pos), direction=tuple(d), concentration=0)
+    n1 = WarnLight(position=tuple(pos), direction=tuple(d), concentration=1)
+    E = [0.0, 0.0, 10.0]
+    base = shade(P, N, E, [plain], MATTE)
+    np.testing.assert_array_equal(shade(P, N, E, [n0], MATTE), base)
+    ray = P - pos
+    cos_g = ray @ (d / np.linalg.norm(d)) / np.linalg.norm(ray, axis=-1)
+    np.testing.assert_allclose(shade(P, N, E, [n1], MATTE), base * np.maximum(cos_g, 0)[..., None], atol=1e-14)
+
+
+def test_concentration_is_cos_power() -> None:
+    pos = np.array([0.0, 0.0, 5.0])
+    light = WarnLight(position=tuple(pos), direction=(0, 0, -1), concentration=7.5)
+    P, _ = _plane(21)
+    ray = P - pos
+    cos_g = -ray[..., 2] / np.linalg.norm(ray, axis=-1)
+    np.testing.assert_allclose(light_factor(P, light), cos_g ** 7.5, rtol=1e-12)
+
+
+def test_pixels_outside_a_flap_are_ambient_only() -> None:
+    P, N = _plane(81)
+    light = WarnLight(position=(0.0, 0.0, 10.0), direction=(0, 0, -1), flaps={"x": [-1.0, 2.0], "y": [-3.0, None]})
+    setup = LightingSetup(lights=(light,), ambient=0.07, material=MATTE)
+    rgb = shade(P, N, [0.0, 0.0, 20.0], setup)
+    F = light.frame  # straight down: x = +x, y = z x x = -y
+    q = (P - np.array([0.0, 0.0, 10.0])) @ F.T
+    inside = (q[..., 0] >= -1) & (q[..., 0] <= 2) & (q[..., 1] >= -3)
+    assert inside.any() and (~inside).any()
+    np.testing.assert_array_equal(rgb[~inside], 0.07)
+    assert np.all(rgb[inside] > 0.07 + 0.05)
+
+
+def test_flap_frame_convention() -> None:
+    """x = the model's +x projected; +y where the direction is along x; y = z x x."""
+    F = light_frame([0.0, 0.0, -2.0])
+    np.testing.assert_allclose(F, [[1, 0, 0], [0, -1, 0], [0, 0, -1]], atol=1e-15)
+    F = light_frame([3.0, 0.0, 0.0])
+    np.testing.assert_allclose(F, [[0, 1, 0], [0, 0, 1], [1, 0, 0]], atol=1e-15)
+    d = np.array([1.0, 2.0, -2.0]) / 3
+    F = light_frame(d)
+    np.testing.assert_allclose(F @ F.T, np.eye(3), atol=1e-14)
+    np.testing.assert_allclose(np.cross(F[0], F[1]), d, atol=1e-14)
+    # +x projected: F[0] is parallel to x - (x.d) d
+    p = np.array([1.0, 0, 0]) - d[0] * d
+    np.testing.assert_allclose(F[0], p / np.linalg.norm(p), atol=1e-14)
+
+
+def test_degenerate_frame_threshold_is_a_tolerance() -> None:
+    d = np.array([1.0, 0.0, 1e-5])  # +x at a sine of 1e-5 from the direction
+    np.testing.assert_allclose(light_frame(d)[0], [0.0, 0.0, -1.0], atol=1e-4)  # +x projected
+    with tolerances.override(LIGHT_FRAME_DEGENERATE=1e-4):
+        F = light_frame(d)
+    np.testing.assert_allclose(F[0], [0.0, 1.0, 0.0], atol=1e-9)  # now degenerate: +y projected
+
+
+def test_cone_edge_falls_off_as_smoothstep() -> None:
+    """Full light to angle - edge, none from the angle on, 3t^2 - 2t^3 in the angle between."""
+    light = WarnLight(position=(0.0, 0.0, 0.0), direction=(0, 0, 1), cone_angle_deg=30, cone_edge_deg=6)
+    gam = np.radians(np.linspace(0, 40, 401))
+    P = np.stack([np.sin(gam), np.zeros_like(gam), np.cos(gam)], axis=-1) * 3.0
+    t = np.clip((np.radians(30) - gam) / np.radians(6), 0, 1)
+    np.testing.assert_allclose(light_factor(P, light), t * t * (3 - 2 * t), atol=1e-12)
+    g = np.degrees(gam)
+    assert np.all(light_factor(P, light)[g <= 24 - 1e-9] == 1) and np.all(light_factor(P, light)[g >= 30] == 0)
+    hard = WarnLight(position=(0.0, 0.0, 0.0), direction=(0, 0, 1), cone_angle_deg=30)
+    away = np.abs(g - 30) > 1e-6  # exactly on the edge: either side, by round-off
+    np.testing.assert_array_equal(light_factor(P, hard)[away], (g[away] < 30).astype(float))
+
+
+def test_falloff_laws() -> None:
+    P = np.array([[0.0, 0.0, -r] for r in (0.5, 2.0, 4.0, 8.0)])
+    for law, k in (("inverse", 1), ("inverse_square", 2)):
+        light = WarnLight(position=(0.0, 0.0, 0.0), direction=(0, 0, -1), falloff=law, falloff_distance=2.0)
+        np.testing.assert_allclose(light_factor(P, light), [1.0, 1.0, 0.5 ** k, 0.25 ** k], rtol=1e-14)
+
+
+@SETTINGS
+@given(pos1=vec, pos2=vec, c1=st.tuples(*[st.floats(0, 1)] * 3), c2=st.tuples(*[st.floats(0, 1)] * 3),
+       n1=st.floats(0, 20), cone=st.floats(5, 90))
+def test_two_lights_equal_the_sum_of_each_alone(pos1, pos2, c1, c2, n1, cone) -> None:
+    """Light-source colour blending (§10-7) is additive per channel."""
+    P, N = _plane(15)
+    a = WarnLight(position=pos1, direction=(0.1, 0.2, -1), color=c1, concentration=n1, flaps={"x": [-2, 3]})
+    b = WarnLight(position=pos2, direction=(-0.3, 0.1, -1), color=c2, cone_angle_deg=cone, cone_edge_deg=cone / 4)
+    E = [1.0, 2.0, 12.0]
+    both = shade(P, N, E, LightingSetup(lights=(a, b), ambient=0.0))
+    np.testing.assert_allclose(both, shade(P, N, E, [a]) + shade(P, N, E, [b]), rtol=1e-12, atol=1e-15)
+
+
+def test_coloured_lights_blend_per_channel() -> None:
+    red = WarnLight(position=(-5.0, 0.0, 5.0), direction=(1, 0, -1), color=(1, 0, 0))
+    blue = WarnLight(position=(5.0, 0.0, 5.0), direction=(-1, 0, -1), color=(0, 0, 1))
+    P, N = _plane(11)
+    rgb = shade(P, N, [0, 0, 10], [red, blue], MATTE)
+    np.testing.assert_array_equal(rgb[..., 1], 0.0)
+    np.testing.assert_allclose(rgb[..., 0], shade(P, N, [0, 0, 10], [red], MATTE)[..., 0], rtol=1e-14)
+
+
+def test_two_sided_and_degenerate_normals() -> None:
+    light = WarnLight(position=(0.0, 0.0, 5.0), direction=(0, 0, -1))
+    P = np.zeros((3, 3))
+    N = np.array([[0, 0, -1.0], [0, 0, 2.0], [0, 0, 0.0]])
+    two = shade(P, N, [0, 0, 3], [light], MATTE)
+    assert np.allclose(two[0], two[1]) and np.all(np.isnan(two[2]))
+    one = shade(P, N, [0, 0, 3], [light], MATTE, two_sided=False, ambient=0.1)
+    np.testing.assert_allclose(one[0], 0.1)
+
+
+def test_directional_light() -> None:
+    light = WarnLight(position=None, direction=(0, 0, -1), flaps={"x": [0, None]})
+    P, N = _plane(11)
+    rgb = shade(P, N, [0, 0, 10], [light], MATTE)
+    np.testing.assert_allclose(rgb[P[..., 0] >= 0], 1.0)
+    np.testing.assert_array_equal(rgb[P[..., 0] < 0], 0.0)
+    with pytest.raises(InvalidGeometryError, match="position"):
+        WarnLight(position=None, direction=(0, 0, -1), concentration=2)
+
+
+def test_shapes_broadcast_and_blocks_agree() -> None:
+    rng = np.random.default_rng(3)
+    P = rng.normal(size=(4, 5, 3))
+    N = rng.normal(size=(4, 5, 3))
+    setup = studio_three_point([0, 0, 0], 3.0)
+    full = shade(P, N, [0, -9, 2], setup)
+    assert full.shape == (4, 5, 3)
+    with tolerances.override(LIGHT_BLOCK=7):
+        np.testing.assert_array_equal(shade(P, N, [0, -9, 2], setup), full)
+    per_point_eye = shade(P, N, np.broadcast_to([0, -9, 2], P.shape), setup)
+    np.testing.assert_allclose(per_point_eye, full, rtol=1e-14)
+
+
+# ---------------------------------------------------------------------------------------- validation
+@pytest.mark.parametrize("kwargs, field", [
+    ({"concentration": -1}, "light.concentration"),
+    ({"flaps": {"x": [2, 1]}}, "light.flaps.x"),
+    ({"flaps": {"w": [0, 1]}}, "light.flaps"),
+    ({"cone_angle_deg": 0}, "light.cone.angle_deg"),
+    ({"cone_angle_deg": 95}, "light.cone.angle_deg"),
+    ({"cone_angle_deg": 20, "cone_edge_deg": 25}, "light.cone.edge_deg"),
+    ({"direction": (0, 0, 0)}, "light.direction"),
+    ({"direction": (0, 0)}, "light.direction"),
+    ({"color": (1, -0.1, 0)}, "light.color"),
+    ({"intensity": float("nan")}, "light.intensity"),
+    ({"falloff": "cubic"}, "light.falloff"),
+    ({"falloff": "inverse"}, "light.falloff_distance"),
+])
+def test_light_errors_name_the_field(kwargs, field) -> None:
+    args = {"position": (0.0, 0.0, 1.0), "direction": (0, 0, -1), **kwargs}
+    with pytest.raises(InvalidGeometryError, match=field.replace(".", r"\.")):
+        WarnLight(**args)
+
+
+def test_setup_and_material_errors() -> None:
+    with pytest.raises(InvalidGeometryError, match="material.shininess"):
+        Material(shininess=-1)
+    with pytest.raises(InvalidGeometryError, match="material.color"):
+        Material(color=(1.5, 0, 0))
+    with pytest.raises(InvalidGeometryError, match="ambient"):
+        LightingSetup(ambient=-0.1)
+    with pytest.raises(InvalidGeometryError, match=r"lights\[0\]"):
+        LightingSetup(lights=("key",))
+    with pytest.raises(InvalidGeometryError, match="at most 2"), tolerances.override(LIGHT_MAX_COUNT=2):
+        LightingSetup(lights=(WarnLight(position=None, direction=(0, 0, 1)),) * 3)
+    with pytest.raises(InvalidGeometryError, match="points"):
+        shade(np.zeros((3, 2)), np.zeros((3, 3)), [0, 0, 1], [])
+    with pytest.raises(InvalidGeometryError, match="points"):
+        shade([[np.nan, 0, 0]], [[0, 0, 1]], [0, 0, 1], [])
+    light = WarnLight(position=(0.0, 0.0, 1.0), direction=(0, 0, -1))
+    with pytest.raises(Exception):
+        light.intensity = 2.0  # frozen
+
+
+# ---------------------------------------------------------------------------------------- file & presets
+def test_issue_example_loads() -> None:
+    doc = {"ambient": 0.05, "lights": [{"position": [1, 2, 3], "direction": [0, 0, -1], "color": [1, 1, 1],
+                                        "intensity": 1.0, "concentration": 0, "cone": {"angle_deg": 30, "edge_deg": 2},
+                                        "flaps": {"x": [-1, 1], "y": [-2, 2], "z": [0, 10]}}]}
+    setup = setup_from_dict(doc)
+    light = setup.lights[0]
+    assert light.cone_angle_deg == 30 and light.cone_edge_deg == 2 and light.flaps[2] == (0.0, 10.0)
+    assert setup.ambient == (0.05, 0.05, 0.05)
+
+
+@pytest.mark.parametrize("text, field", [
+    ('{"lights": [{"position": [0,0,1], "direction": [0,0,-1], "cone": {"angle_deg": 120}}]}',
+     r"lights\[0\]\.cone\.angle_deg"),
+    ('{"lights": [{"position": [0,0,1]}]}', r"lights\[0\]\.direction: missing"),
+    ('{"lights": [{}, {"direction": [0,0,1], "concentration": -2}]}', r"lights\[0\]\.direction"),
+    ('{"lights": [{"direction": [0,0,1]}, {"position": [0,0,1], "direction": [0,0,1], "concentration": -2}]}',
+     r"lights\[1\]\.concentration"),
+    ('{"lights": [{"direction": [0,0,1], "flaps": {"y": [3, 1]}}]}', r"lights\[0\]\.flaps\.y"),
+    ('{"lights": [{"direction": [0,0,1], "colour": [1,0,0]}]}', r"lights\[0\]\.colour: unknown key"),
+    ('{"ambient": "dim"}', "ambient"),
+    ('{"material": {"shininess": -3}}', r"material\.shininess"),
+    ('{"lights": [{"direction": [0,0,1]},]}', "not valid JSON"),
+    ('[1, 2]', "lights file: expected a JSON object"),
+])
+def test_lights_file_errors_name_the_field(text, field) -> None:
+    with pytest.raises(InvalidGeometryError, match=field):
+        loads_lights(text)
+
+
+@pytest.mark.parametrize("name", sorted(PRESETS))
+def test_presets_round_trip_through_json(tmp_path, name) -> None:
+    setup = preset(name, [10.0, -3.0, 2.0], 250.0)
+    path = dump_lights(setup, tmp_path / "lights.json")
+    assert load_lights(path) == setup
+    assert json.loads(dumps_lights(setup))["lights"]
+    P, N = _plane(9, 50.0)
+    rgb = shade(P + [10.0, -3.0, 2.0], N, [10, -3, 500], setup)
+    assert np.all(np.isfinite(rgb)) and rgb.max() > 0.1
+
+
+def test_presets_scale_with_the_model() -> None:
+    small, big = studio_three_point([0, 0, 0], 1.0), studio_three_point([0, 0, 0], 1000.0)
+    np.testing.assert_allclose(np.asarray(big.lights[0].position), 1000 * np.asarray(small.lights[0].position))
+    key = key_light_with_flaps([0, 0, 0], 10.0).lights[0]
+    assert key.has_flaps and key.concentration > 1
+    assert len(highlight_check([0, 0, 0], 1.0, count=7).lights) == 7
+    with pytest.raises(InvalidGeometryError, match="size"):
+        studio_three_point([0, 0, 0], 0.0)
+    with pytest.raises(InvalidGeometryError, match="preset"):
+        preset("noir", [0, 0, 0], 1.0)
+
+
+def test_unreadable_lights_file(tmp_path) -> None:
+    with pytest.raises(ExchangeError, match="cannot read"):
+        load_lights(tmp_path / "missing.json")
+
+
+def test_key_light_band_is_where_the_flaps_say() -> None:
+    """The car-body preset lights a band, not the whole plane (flaps at work)."""
+    setup = key_light_with_flaps([0, 0, 0], 10.0)
+    P, N = _plane(101, 10.0)
+    lit = light_factor(P, setup.lights[0]) > 0
+    assert 0.02 < lit.mean() < 0.6
+    assert math.isclose(float(np.linalg.norm(setup.lights[0].direction)), 1.0)
