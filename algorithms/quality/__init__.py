@@ -12,8 +12,9 @@ lines), :func:`isophotes` -> :class:`Isophotes`, :func:`highlight_lines` (Beier 
 :func:`draft_angle`, :func:`classify_draft`; :func:`normal_hedgehog`, :func:`normal_flips`.
 
 Line curvature plots: :func:`curvature_comb` -> :class:`Comb` (porcupines with inflections),
-:func:`iso_curves` (exact iso-parameter curves). Section cuts: :func:`plane_sections`,
-:func:`axial_sections` -> :class:`Section`. Problem areas: :func:`face_flags` -> :class:`Flag`.
+:func:`iso_curves` (exact iso-parameter curves), :class:`SampledCurve`. Section cuts:
+:func:`plane_sections`, :func:`axial_sections` -> :class:`Section` of :class:`SectionCurve`.
+Problem areas: :func:`face_flags` -> :class:`Flag` (:data:`FLAG_KINDS`).
 
 Every threshold is a ``QUALITY_...`` entry of :mod:`occsurf.algorithms.tolerances`.
 """
@@ -22,6 +23,9 @@ from .curvature_maps import KINDS, SCALE_MODES, ColorScale, CurvatureMap, color_
 from .normals import (DRAFT_INSUFFICIENT, DRAFT_OK, DRAFT_UNDEFINED, DRAFT_UNDERCUT, classify_draft, draft_angle,
                       normal_flips, normal_hedgehog)
 from .reflection import Isophotes, Stripes, highlight_lines, isophotes, zebra
+from .combs import Comb, SampledCurve, curvature_comb, iso_curves
+from .sections import Section, SectionCurve, axial_sections, plane_sections
+from .flags import FLAG_KINDS, Flag, face_flags
 
 __all__ = [
     "KINDS",
@@ -44,4 +48,15 @@ __all__ = [
     "highlight_lines",
     "isophotes",
     "zebra",
+    "Comb",
+    "SampledCurve",
+    "curvature_comb",
+    "iso_curves",
+    "Section",
+    "SectionCurve",
+    "axial_sections",
+    "plane_sections",
+    "FLAG_KINDS",
+    "Flag",
+    "face_flags",
 ]

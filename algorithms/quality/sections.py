@@ -1,0 +1,539 @@
+"""Section cuts (course ch. 9): families of parallel planes and of planes through an axis cut
+through a set of faces, with the exact curvature comb of every cut.
+
+Algorithm
+---------
+1. **Seed** (per face, all planes at once): the signed distance ``h_k(u, v) = (S(u, v) - o_k) . n_k``
+   on a parameter grid; vectorised marching squares gives oriented segments between grid-edge
+   crossings (saddle cells resolved by the bilinear centre value; positive side on the left).
+2. **Refine** every crossing by Newton's method on ``h(u, v) = 0`` with the minimal-norm step
+   ``-h grad h / |grad h|^2`` (``grad h = (S_u . n, S_v . n)``), on the exact surface, until
+   ``|h| <= QUALITY_SECTION_TOL * size``.
+3. **Chain** the oriented segments into polylines by pointer doubling (``log2`` NumPy steps, no
+   per-point loop), then join polylines of neighbouring faces whose ends are within
+   ``QUALITY_CHAIN_TOL * size``.
+4. **Curvature** of the exact intersection curve at every point (Meusnier): with the surface normal
+   ``n_s``, the curve tangent ``t = m x n_s / |m x n_s|`` and the in-plane normal ``N_c = m x t``,
+
+   .. math:: \\kappa_s = \\frac{II(t)}{I(t)} \\Big/ (N_c \\cdot n_s),
+
+   signed in the plane; inflections (sign changes of ``kappa_s``) are located by bisection on the
+   exact surface to ``QUALITY_INFLECTION_TOL`` of the parameter range.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from .. import tolerances
+from ..errors import InvalidGeometryError
+from ..hierarchical.surface import HierarchicalSurface
+from ..kernel.curve import BSplineCurve
+from ..kernel.surface import BSplineSurface
+from ._common import Array, dot, positive, unit_vectors, vectors
+from .combs import Comb, _finish
+
+__all__ = ["Section", "SectionCurve", "plane_sections", "axial_sections"]
+
+MaskFn = Callable[[Array, Array], NDArray[np.bool_]]
+
+
+@dataclass(frozen=True)
+class SectionCurve:
+    """One connected piece of a section: a polyline on the exact intersection.
+
+    Attributes
+    ----------
+    points : ndarray, shape (k, 3)
+        On the surfaces and within the section tolerance of the plane.
+    uv : ndarray, shape (k, 2)
+        Parameters on ``faces[face[i]]``.
+    face : ndarray of int, shape (k,)
+        Face index of each point (a chain crosses face boundaries).
+    closed : bool
+    curvature : ndarray, shape (k,)
+        Signed curvature of the intersection curve in the plane (exact, from the surface's second
+        derivatives); NaN where the surface is tangent to the plane.
+    comb : Comb
+        The curvature comb (``params`` is the chord length along the polyline).
+    inflection_points : ndarray, shape (j, 3)
+        Sign changes of ``curvature``, refined on the exact surface.
+    spline : BSplineCurve or None
+        A cubic fit through the points (``fit=True``).
+    """
+
+    points: Array
+    uv: Array
+    face: NDArray[np.intp]
+    closed: bool
+    curvature: Array
+    comb: Comb
+    inflection_points: Array
+    spline: BSplineCurve | None = None
+
+
+@dataclass(frozen=True)
+class Section:
+    """All curves of one cutting plane ``{x : (x - origin) . normal = 0}``.
+
+    Attributes
+    ----------
+    origin, normal : ndarray, shape (3,)
+    offset : float
+        Offset along ``normal`` from the family's origin (parallel sections) or the angle in
+        radians (axial sections).
+    curves : list of SectionCurve
+    n_unconverged : int
+        Seed points dropped because Newton did not reach the tolerance (reported, never hidden).
+    """
+
+    origin: Array
+    normal: Array
+    offset: float
+    curves: list[SectionCurve] = field(default_factory=list)
+    n_unconverged: int = 0
+
+    @property
+    def combs(self) -> list[Comb]:
+        return [c.comb for c in self.curves]
+
+    @property
+    def inflection_points(self) -> Array:
+        pts = [c.inflection_points for c in self.curves]
+        return np.concatenate(pts) if pts else np.empty((0, 3))
+
+    @property
+    def n_inflections(self) -> int:
+        return int(self.inflection_points.shape[0])
+
+
+# ----------------------------------------------------------------------------------- input checks
+def _faces(faces: object) -> list[tuple[Any, MaskFn | None]]:
+    if isinstance(faces, (BSplineSurface, HierarchicalSurface)) or not isinstance(faces, Sequence):
+        raise InvalidGeometryError("faces: expected a list of surfaces or (surface, mask) pairs")
+    out = []
+    for i, f in enumerate(faces):
+        s, m = (f if isinstance(f, tuple) else (f, None))
+        if not isinstance(s, (BSplineSurface, HierarchicalSurface)) or s.dim != 3:
+            raise InvalidGeometryError(f"faces[{i}]: expected a 3-D BSplineSurface or HierarchicalSurface, got {type(s).__name__}")
+        if m is not None and not callable(m):
+            raise InvalidGeometryError(f"faces[{i}]: the mask must be a callable mask(u, v) -> bool array")
+        out.append((s, m))
+    if not out:
+        raise InvalidGeometryError("faces: expected at least one face")
+    return out
+
+
+def _grid(s: Any) -> tuple[Array, Array]:
+    (u0, u1), (v0, v1) = s.domain
+    base = s.base if isinstance(s, HierarchicalSurface) else s
+    out = []
+    for ax, (lo, hi) in enumerate(((u0, u1), (v0, v1))):
+        p, t, n = base.degree[ax], base.knots[ax], base.n_poles[ax]
+        spans = max(1, np.unique(t[p:n + 1]).size - 1)
+        cells = max(int(tolerances.QUALITY_SECTION_GRID), int(tolerances.QUALITY_SECTION_CELLS_PER_SPAN) * spans)
+        out.append(np.linspace(lo, hi, cells + 1))
+    return out[0], out[1]
+
+
+# ------------------------------------------------------------------------------ marching squares
+def _march(h: Array) -> tuple[Array, Array, Array, Array]:
+    """Oriented zero-crossing segments of ``h`` (k, mu, mv), all planes at once.
+
+    Returns ``(plane, src_edge, dst_edge, n_u_edges)``: edge ids ``< n_u_edges`` lie along u
+    (``(i, j)-(i+1, j)`` -> ``i * mv + j``), the others along v (``(i, j)-(i, j+1)``).
+    """
+    k, mu, mv = h.shape
+    pos = h >= 0
+    c = np.stack((pos[:, :-1, :-1], pos[:, 1:, :-1], pos[:, 1:, 1:], pos[:, :-1, 1:]), -1)  # (k, cu, cv, 4) CCW
+    cu, cv = mu - 1, mv - 1
+    ii, jj = np.meshgrid(np.arange(cu), np.arange(cv), indexing="ij")
+    nu_e = (mu - 1) * mv
+    eid = np.stack((ii * mv + jj, nu_e + (ii + 1) * (mv - 1) + jj, ii * mv + jj + 1, nu_e + ii * (mv - 1) + jj), -1)
+    nxt = np.roll(c, -1, axis=-1)
+    exit_ = c & ~nxt  # + -> - walking CCW along edge e (from corner e to corner e + 1)
+    entry = ~c & nxt
+    n_exit = exit_.sum(-1)
+    planes, srcs, dsts = [], [], []
+    one = n_exit == 1  # one segment: from the exit edge to the entry edge
+    pk, pi, pj = np.nonzero(one)
+    planes.append(pk)
+    srcs.append(eid[pi, pj, np.argmax(exit_[one], -1)])
+    dsts.append(eid[pi, pj, np.argmax(entry[one], -1)])
+    two = n_exit == 2  # saddle: the bilinear centre value decides which corners are joined
+    pk, pi, pj = np.nonzero(two)
+    if pk.size:
+        centre = 0.25 * (h[:, :-1, :-1] + h[:, 1:, :-1] + h[:, 1:, 1:] + h[:, :-1, 1:])[two] >= 0
+        step = np.where(centre, 1, -1)  # positive centre: cut off the negative corners
+        ex = np.argsort(~exit_[two], axis=-1, kind="stable")[:, :2]
+        for which in (0, 1):
+            e = ex[:, which]
+            planes.append(pk)
+            srcs.append(eid[pi, pj, e])
+            dsts.append(eid[pi, pj, (e + step) % 4])
+    return np.concatenate(planes), np.concatenate(srcs), np.concatenate(dsts), nu_e
+
+
+def _edge_uv(edges: Array, plane: Array, h: Array, us: Array, vs: Array, nu_e: int) -> Array:
+    """Linear interpolation of the zero of ``h`` along each grid edge: (n, 2) parameters."""
+    mv = vs.size
+    along_u = edges < nu_e
+    i = np.where(along_u, edges // mv, (edges - nu_e) // (mv - 1))
+    j = np.where(along_u, edges % mv, (edges - nu_e) % (mv - 1))
+    i2, j2 = np.where(along_u, i + 1, i), np.where(along_u, j, j + 1)
+    h0, h1 = h[plane, i, j], h[plane, i2, j2]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.clip(np.where(h0 != h1, h0 / (h0 - h1), 0.5), 0.0, 1.0)
+    return np.stack((us[i] + t * (us[i2] - us[i]), vs[j] + t * (vs[j2] - vs[j])), -1)
+
+
+def _newton(s: Any, uv: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
+    """Refine ``uv`` (p, 2) onto ``(S - o) . n = 0`` (o, n per point); returns (uv, converged)."""
+    (u0, u1), (v0, v1) = s.domain
+    uv = uv.copy()
+    done = np.zeros(uv.shape[0], bool)
+    for _ in range(int(tolerances.QUALITY_SECTION_NEWTON_STEPS)):
+        todo = np.flatnonzero(~done)
+        if todo.size == 0:
+            break
+        D = s.derivatives(uv[todo, 0], uv[todo, 1], 1)
+        h = dot(D[:, 0, 0] - o[todo], n[todo])
+        ok = np.abs(h) <= tol
+        done[todo[ok]] = True
+        g = np.stack((dot(D[:, 1, 0], n[todo]), dot(D[:, 0, 1], n[todo])), -1)
+        g2 = dot(g, g)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            step = np.where((g2 > 0)[:, None], -h[:, None] * g / g2[:, None], 0.0)
+        w = todo[~ok]
+        uv[w] = uv[w] + step[~ok]
+        uv[w, 0] = np.clip(uv[w, 0], u0, u1)
+        uv[w, 1] = np.clip(uv[w, 1], v0, v1)
+    return uv, done
+
+
+# -------------------------------------------------------------------------------------- chaining
+def _order_chains(src: Array, dst: Array) -> list[tuple[Array, bool]]:
+    """Oriented segments ``src -> dst`` (node ids 0..N-1, each node at most one in and one out)
+    ordered into chains by pointer doubling. Returns ``[(nodes, closed), ...]``."""
+    N = int(max(src.max(), dst.max())) + 1
+    nxt = np.full(N, -1)
+    nxt[src] = dst
+    has_pred = np.zeros(N, bool)
+    has_pred[dst] = True
+    used = np.zeros(N, bool)
+    used[src] = used[dst] = True
+    ncomp, lab = connected_components(coo_matrix((np.ones(src.size), (src, dst)), shape=(N, N)), directed=False)
+    # components without a start node are cycles: cut each before its smallest node
+    starts = used & ~has_pred
+    has_start = np.zeros(ncomp, bool)
+    has_start[lab[starts]] = True
+    cyc_nodes = np.flatnonzero(used & ~has_start[lab])
+    closed = np.zeros(ncomp, bool)
+    if cyc_nodes.size:
+        first = np.full(ncomp, N)
+        np.minimum.at(first, lab[cyc_nodes], cyc_nodes)
+        cut_to = first[lab[cyc_nodes]]
+        pred_of_first = cyc_nodes[nxt[cyc_nodes] == cut_to]
+        nxt[pred_of_first] = -1
+        closed[lab[cyc_nodes]] = True
+    dist = _rank(nxt)
+    nodes = np.flatnonzero(used)
+    order = np.lexsort((-dist[nodes], lab[nodes]))
+    nodes = nodes[order]
+    labs = lab[nodes]
+    cuts = np.flatnonzero(np.diff(labs)) + 1
+    return [(part, bool(closed[lab[part[0]]])) for part in np.split(nodes, cuts)]
+
+
+def _rank(nxt: Array) -> Array:
+    """Number of steps from each node to the end of its (acyclic) chain: list ranking by pointer
+    doubling (Wyllie), ``log2`` of the longest chain synchronous NumPy steps."""
+    dist = (nxt >= 0).astype(np.int64)
+    ptr = nxt.copy()
+    while True:
+        live = np.flatnonzero(ptr >= 0)
+        if live.size == 0:
+            return dist
+        p = ptr[live]
+        new_dist = dist[live] + dist[p]
+        new_ptr = ptr[p]
+        dist[live] = new_dist
+        ptr[live] = new_ptr
+
+
+# ------------------------------------------------------------------------- curvature on the cut
+def _cut_curvature(s: Any, uv: Array, m: Array, tangent_hint: Array) -> tuple[Array, Array, Array]:
+    """Signed curvature of the intersection with the plane of normal ``m`` (per point), the unit
+    tangent oriented along ``tangent_hint`` and the points. Meusnier: ``kappa_s = k_n(t) / (N_c . n_s)``."""
+    D = s.derivatives(uv[:, 0], uv[:, 1], 2)
+    su, sv = D[:, 1, 0], D[:, 0, 1]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ns = np.cross(su, sv)
+        ns /= np.linalg.norm(ns, axis=-1, keepdims=True)
+        t = np.cross(m, ns)
+        t /= np.linalg.norm(t, axis=-1, keepdims=True)
+        t *= np.where(dot(t, tangent_hint) < 0, -1.0, 1.0)[:, None]
+        E, F, G = dot(su, su), dot(su, sv), dot(sv, sv)
+        b1, b2 = dot(t, su), dot(t, sv)
+        det = E * G - F * F
+        a = (G * b1 - F * b2) / det  # t = a S_u + b S_v (t is tangent to the surface)
+        b = (E * b2 - F * b1) / det
+        L, M, N = dot(D[:, 2, 0], ns), dot(D[:, 1, 1], ns), dot(D[:, 0, 2], ns)
+        kn = (L * a * a + 2 * M * a * b + N * b * b) / (E * a * a + 2 * F * a * b + G * b * b)
+        Nc = np.cross(m, t)
+        ks = kn / dot(Nc, ns)
+    return ks, t, D[:, 0, 0]
+
+
+def _tangent_hints(P: Array, closed: bool) -> Array:
+    """Chord directions along a polyline (central differences), used to orient tangents."""
+    if P.shape[0] < 2:
+        return np.zeros_like(P)
+    if closed:
+        return np.roll(P, -1, axis=0) - np.roll(P, 1, axis=0)
+    g = np.empty_like(P)
+    g[1:-1] = P[2:] - P[:-2]
+    g[0], g[-1] = P[1] - P[0], P[-1] - P[-2]
+    return g
+
+
+def _refine_inflections(s: Any, uv_a: Array, uv_b: Array, ka: Array, o: Array, m: Array, hint: Array,
+                        tol_uv: float, tol_h: float) -> Array:
+    """Bisection, all brackets at once, on the exact cut between samples of opposite curvature sign."""
+    a, b = np.zeros(uv_a.shape[0]), np.ones(uv_a.shape[0])
+    sa = np.sign(ka)
+    span = np.linalg.norm(uv_b - uv_a, axis=1)
+    on = np.broadcast_to(o, uv_a.shape[:1] + (3,))
+    mm = np.broadcast_to(m, uv_a.shape[:1] + (3,))
+    for _ in range(80):
+        if np.all((b - a) * span <= tol_uv):
+            break
+        c = 0.5 * (a + b)
+        uv, _ok = _newton(s, uv_a + c[:, None] * (uv_b - uv_a), on, mm, tol_h)
+        kc, _, _ = _cut_curvature(s, uv, m, hint)
+        right = np.sign(kc) == sa
+        a, b = np.where(right, c, a), np.where(right, b, c)
+    c = 0.5 * (a + b)
+    uv, _ok = _newton(s, uv_a + c[:, None] * (uv_b - uv_a), on, mm, tol_h)
+    return s.evaluate(uv[:, 0], uv[:, 1])
+
+
+# ------------------------------------------------------------------------------------ the driver
+@dataclass
+class _Piece:
+    points: Array
+    uv: Array
+    face: Array
+    closed: bool
+
+
+def _face_pieces(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half: Array | None,
+                 tol_h: float) -> tuple[list[list[_Piece]], Array]:
+    """Polylines of face ``fi`` for every plane, and the count of unconverged seeds per plane."""
+    k = O.shape[0]
+    us, vs = _grid(s)
+    P = s.evaluate_grid(us, vs)
+    h = np.einsum("abc,kc->kab", P, Nm) - np.einsum("kc,kc->k", O, Nm)[:, None, None]
+    if mask is not None:
+        inside = np.asarray(mask(*np.meshgrid(us, vs, indexing="ij")), bool)
+        cell_in = inside[:-1, :-1] & inside[1:, :-1] & inside[1:, 1:] & inside[:-1, 1:]
+    pieces: list[list[_Piece]] = [[] for _ in range(k)]
+    bad = np.zeros(k, np.int64)
+    plane, src, dst, nu_e = _march(h)
+    if mask is not None and plane.size:
+        mv = vs.size
+        i = np.where(src < nu_e, src // mv, (src - nu_e) // (mv - 1))
+        j = np.where(src < nu_e, src % mv, (src - nu_e) % (mv - 1))
+        keep = cell_in[np.minimum(i, cell_in.shape[0] - 1), np.minimum(j, cell_in.shape[1] - 1)]
+        plane, src, dst = plane[keep], src[keep], dst[keep]
+    if plane.size == 0:
+        return pieces, bad
+    n_edges = nu_e + us.size * (vs.size - 1)
+    ids, inv = np.unique(np.concatenate((plane * n_edges + src, plane * n_edges + dst)), return_inverse=True)
+    node_plane, node_edge = ids // n_edges, ids % n_edges
+    uv0 = _edge_uv(node_edge, node_plane, h, us, vs, nu_e)
+    uv, conv = _newton(s, uv0, O[node_plane], Nm[node_plane], tol_h)
+    keep_node = conv.copy()
+    if mask is not None:
+        keep_node &= np.asarray(mask(uv[:, 0], uv[:, 1]), bool)
+    X = s.evaluate(uv[:, 0], uv[:, 1])
+    if half is not None:
+        keep_node &= dot(X - O[node_plane], half[node_plane]) >= -tol_h
+    np.add.at(bad, node_plane[~conv], 1)
+    a, b = inv[: src.size], inv[src.size:]
+    ok = keep_node[a] & keep_node[b]
+    if not np.any(ok):
+        return pieces, bad
+    for nodes, closed in _order_chains(a[ok], b[ok]):
+        if nodes.size < 2:
+            continue
+        pieces[int(node_plane[nodes[0]])].append(_Piece(X[nodes], uv[nodes], np.full(nodes.size, fi), closed))
+    return pieces, bad
+
+
+def _join(pieces: list[_Piece], tol: float) -> list[_Piece]:
+    """Join open polylines (of different faces) whose ends coincide within ``tol``; a loop over
+    polylines (a handful per plane), never over points."""
+    open_ = [p for p in pieces if not p.closed]
+    done = [p for p in pieces if p.closed]
+    while open_:
+        cur = open_.pop()
+        grown = True
+        while grown:
+            grown = False
+            for i, q in enumerate(open_):
+                ends = [(cur.points[-1], q.points[0], False, False), (cur.points[-1], q.points[-1], False, True),
+                        (cur.points[0], q.points[-1], True, False), (cur.points[0], q.points[0], True, True)]
+                for e1, e2, prepend, rev in ends:
+                    if np.linalg.norm(e1 - e2) <= tol:
+                        qq = _Piece(q.points[::-1], q.uv[::-1], q.face[::-1], False) if rev else q
+                        parts = (qq, cur) if prepend else (cur, qq)
+                        cur = _Piece(np.concatenate((parts[0].points, parts[1].points[1:])),
+                                     np.concatenate((parts[0].uv, parts[1].uv[1:])),
+                                     np.concatenate((parts[0].face, parts[1].face[1:])), False)
+                        open_.pop(i)
+                        grown = True
+                        break
+                if grown:
+                    break
+        if cur.points.shape[0] > 2 and np.linalg.norm(cur.points[0] - cur.points[-1]) <= tol:
+            cur = _Piece(cur.points[:-1], cur.uv[:-1], cur.face[:-1], True)
+        done.append(cur)
+    return done
+
+
+def _section_curve(piece: _Piece, faces: list[tuple[Any, MaskFn | None]], o: Array, m: Array, size: float,
+                   tol_h: float, fit: bool, scale: float | None) -> SectionCurve:
+    P, uv, face = piece.points, piece.uv, piece.face
+    # a crossing through a grid vertex is found on two grid edges: keep one of coincident points
+    keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > 100 * tol_h]
+    P, uv, face = P[keep], uv[keep], face[keep]
+    hint = _tangent_hints(P, piece.closed)
+    ks = np.empty(P.shape[0])
+    T = np.empty_like(P)
+    for fi in np.unique(face):  # one vectorised evaluation per face
+        sel = face == fi
+        ks[sel], T[sel], _ = _cut_curvature(faces[fi][0], uv[sel], m, hint[sel])
+    # inflections: opposite signs of consecutive samples on the same face, refined on the surface
+    nxt = np.roll(np.arange(P.shape[0]), -1) if piece.closed else np.arange(1, P.shape[0])
+    cur = np.arange(nxt.size)
+    zero = tolerances.QUALITY_WIGGLE_CURVATURE / max(size, np.finfo(float).tiny) * 1e-3
+    sc = np.sign(np.where(np.abs(ks) > zero, ks, 0.0))
+    br = np.flatnonzero((sc[cur] * sc[nxt] < 0))
+    infl = []
+    for fi in np.unique(face[cur[br]]):
+        sel = br[(face[cur[br]] == fi) & (face[nxt[br]] == fi)]
+        if sel.size:
+            s = faces[fi][0]
+            (u0, u1), (v0, v1) = s.domain
+            tol_uv = tolerances.QUALITY_INFLECTION_TOL * max(u1 - u0, v1 - v0)
+            infl.append(_refine_inflections(s, uv[cur[sel]], uv[nxt[sel]], ks[cur[sel]], o, m,
+                                            hint[cur[sel]], tol_uv, tol_h))
+    cross = br[face[cur[br]] != face[nxt[br]]]
+    if cross.size:  # a sign change across a face boundary: linear interpolation (a G2 break)
+        w = ks[cur[cross]] / (ks[cur[cross]] - ks[nxt[cross]])
+        infl.append(P[cur[cross]] + w[:, None] * (P[nxt[cross]] - P[cur[cross]]))
+    infl_p = np.concatenate(infl) if infl else np.empty((0, 3))
+    arc = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))))
+    spine = -np.cross(m, T)
+    comb = _finish(arc, P, np.abs(ks), ks, spine, scale, m, np.empty(0), infl_p)
+    spline = None
+    if fit and P.shape[0] >= 4:
+        from ..fitting.interpolation import interpolate_curve
+
+        pts = np.vstack((P, P[:1])) if piece.closed else P
+        spline = interpolate_curve(pts, 3)
+    return SectionCurve(points=P, uv=uv, face=face, closed=piece.closed, curvature=ks, comb=comb,
+                        inflection_points=infl_p, spline=spline)
+
+
+def _sections(faces: object, O: Array, Nm: Array, offsets: Array, half: Array | None, tol: float | None,
+              fit: bool, scale: float | None) -> list[Section]:
+    fl = _faces(faces)
+    grids = [f[0].evaluate_grid(*[np.linspace(*d, 9) for d in f[0].domain]) for f in fl]
+    allp = np.concatenate([g.reshape(-1, 3) for g in grids])
+    size = max(float(np.linalg.norm(np.ptp(allp, axis=0))), np.finfo(float).tiny)
+    tol_h = tolerances.QUALITY_SECTION_TOL * size if tol is None else positive(tol, "tol")
+    k = O.shape[0]
+    per_plane: list[list[_Piece]] = [[] for _ in range(k)]
+    bad = np.zeros(k, np.int64)
+    for fi, (s, mask) in enumerate(fl):  # a loop over faces; each face handles all planes at once
+        pieces, b = _face_pieces(fi, s, mask, O, Nm, half, tol_h)
+        bad += b
+        for i in range(k):
+            per_plane[i].extend(pieces[i])
+    out = []
+    for i in range(k):
+        joined = _join(per_plane[i], tolerances.QUALITY_CHAIN_TOL * size)
+        curves = [_section_curve(p, fl, O[i], Nm[i], size, tol_h, fit, scale) for p in joined]
+        out.append(Section(origin=O[i], normal=Nm[i], offset=float(offsets[i]), curves=curves, n_unconverged=int(bad[i])))
+    return out
+
+
+def plane_sections(faces: Sequence[Any], origin: ArrayLike, normal: ArrayLike, offsets: ArrayLike, *,
+                   tol: float | None = None, fit: bool = False, scale: float | None = None) -> list[Section]:
+    """Cut faces with the parallel planes ``(x - origin - offset * normal) . normal = 0``.
+
+    Parameters
+    ----------
+    faces : list of BSplineSurface / HierarchicalSurface, or of (surface, mask) pairs
+        ``mask(u, v) -> bool array`` tells which parameters lie inside a trimmed face; seed cells
+        with a corner outside are skipped and refined points outside are dropped.
+    origin, normal : array_like, shape (3,)
+    offsets : array_like, shape (k,)
+        Model units along the unit ``normal``.
+    tol : float, optional
+        Largest distance of a refined point to its plane (model units); default
+        :data:`~occsurf.algorithms.tolerances.QUALITY_SECTION_TOL` times the model size.
+    fit : bool
+        Also interpolate every polyline by a cubic B-spline (:attr:`SectionCurve.spline`).
+    scale : float, optional
+        Comb scale (spine length per unit curvature); default per curve (see :func:`curvature_comb`).
+
+    Returns
+    -------
+    list of Section
+        One per offset, in the given order.
+    """
+    o = vectors(origin, "origin")
+    n = unit_vectors(normal, "normal")
+    if o.shape != (3,) or n.shape != (3,):
+        raise InvalidGeometryError("origin, normal: expected one 3-vector each")
+    off = np.atleast_1d(np.asarray(offsets, dtype=float))
+    if off.ndim != 1 or off.size == 0 or not np.all(np.isfinite(off)):
+        raise InvalidGeometryError(f"offsets: expected a non-empty 1-D array of finite numbers, got {offsets!r}")
+    O = o + off[:, None] * n
+    return _sections(faces, O, np.broadcast_to(n, O.shape).copy(), off, None, tol, fit, scale)
+
+
+def axial_sections(faces: Sequence[Any], axis_origin: ArrayLike, axis_direction: ArrayLike, angles: ArrayLike, *,
+                   tol: float | None = None, fit: bool = False, scale: float | None = None) -> list[Section]:
+    """Cut faces with half-planes through an axis (meridian sections of a turned or revolved part).
+
+    The half-plane at ``angle`` contains the axis and the direction ``cos(angle) e1 + sin(angle) e2``
+    (``e1``, ``e2`` a right-handed frame perpendicular to the axis, ``e1`` the coordinate axis least
+    parallel to it, made perpendicular; ``e2 = axis x e1``); the plane normal is
+    ``axis x (cos(angle) e1 + sin(angle) e2)``. Only the half on the radial side is kept. Other
+    arguments as :func:`plane_sections`; :attr:`Section.offset` holds the angle.
+    """
+    o = vectors(axis_origin, "axis_origin")
+    a = unit_vectors(axis_direction, "axis_direction")
+    if o.shape != (3,) or a.shape != (3,):
+        raise InvalidGeometryError("axis_origin, axis_direction: expected one 3-vector each")
+    ang = np.atleast_1d(np.asarray(angles, dtype=float))
+    if ang.ndim != 1 or ang.size == 0 or not np.all(np.isfinite(ang)):
+        raise InvalidGeometryError(f"angles: expected a non-empty 1-D array of finite radians, got {angles!r}")
+    e1 = np.eye(3)[np.argmin(np.abs(a))]
+    e1 = e1 - np.dot(e1, a) * a
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    radial = np.cos(ang)[:, None] * e1 + np.sin(ang)[:, None] * e2
+    Nm = np.cross(a, radial)
+    O = np.broadcast_to(o, Nm.shape).copy()
+    return _sections(faces, O, Nm, ang, radial, tol, fit, scale)
