@@ -70,6 +70,8 @@ class SurfaceEvaluator:
     kind: str
     fn: Callable[[Array, Array, int], Array] = field(repr=False)
     occ_surface: Any = field(repr=False)
+    spline: BSplineSurface | None = field(default=None, repr=False)
+    periodic: tuple[bool, bool] = (False, False)
 
     def derivatives(self, u: Array, v: Array, order: int) -> Array:
         """``D[m, i, j, :] = d^{i+j} S / du^i dv^j`` at ``(u[m], v[m])``, ``i, j <= order``."""
@@ -95,7 +97,9 @@ def surface_evaluator(occ_surface: Geom_Surface, surface: BSplineSurface | None 
         basis = basis.BasisSurface()
     if isinstance(basis, (Geom_BSplineSurface, Geom_BezierSurface)):
         ours = surface if surface is not None and basis is occ_surface else from_occ(basis)
-        return SurfaceEvaluator("bspline", _bspline_fn(ours, basis), occ_surface)
+        periodic = (bool(basis.IsUPeriodic()), bool(basis.IsVPeriodic())) if isinstance(basis, Geom_BSplineSurface) \
+            else (False, False)
+        return SurfaceEvaluator("bspline", _bspline_fn(ours, basis), occ_surface, ours, periodic)
     analytic = _analytic_fn(basis)
     if analytic is not None:
         return SurfaceEvaluator("analytic", analytic, occ_surface)
@@ -222,6 +226,8 @@ class PCurveEvaluator:
     fn: Callable[[Array], tuple[Array, Array]] = field(repr=False)
     first: float
     last: float
+    spline: BSplineCurve | None = field(default=None, repr=False)
+    line: tuple[Array, Array] | None = field(default=None, repr=False)
 
     def __call__(self, t: Array) -> tuple[Array, Array]:
         return self.fn(np.asarray(t, dtype=float).reshape(-1))
@@ -237,7 +243,7 @@ def pcurve_evaluator(occ_curve: Geom2d_Curve, first: float, last: float) -> PCur
         o = np.array(pos.Location().Coord())
         d = np.array(pos.Direction().Coord())
         return PCurveEvaluator("line", lambda t: (o + t[:, None] * d, np.broadcast_to(d, (t.shape[0], 2))),
-                               first, last)
+                               first, last, line=(o, d))
     if isinstance(basis, (Geom2d_BSplineCurve, Geom2d_BezierCurve)) and not (
         isinstance(basis, Geom2d_BSplineCurve) and basis.IsPeriodic()
     ):
@@ -248,7 +254,7 @@ def pcurve_evaluator(occ_curve: Geom2d_Curve, first: float, last: float) -> PCur
             D = ours.derivatives(np.clip(t, a, b), 1)
             return D[:, 0], D[:, 1]
 
-        return PCurveEvaluator("bspline", spline, first, last)
+        return PCurveEvaluator("bspline", spline, first, last, spline=ours)
     return PCurveEvaluator("occ", _occ_curve2d_fn(occ_curve), first, last)
 
 

@@ -31,7 +31,7 @@ from ._evaluators import PCurveEvaluator, SurfaceEvaluator, pcurve_evaluator, su
 
 Array = NDArray[np.float64]
 
-__all__ = ["FaceData", "Side", "Pair", "collect_faces", "topology_pairs", "match_free_edges"]
+__all__ = ["FaceData", "Side", "Pair", "collect_faces", "topology_pairs", "match_free_edges", "project_batch"]
 
 
 @dataclass
@@ -189,49 +189,41 @@ def _side(faces: list[FaceData], fi: int, edge: Any) -> Side:
 
 
 # ------------------------------------------------------------------------------------ geometry
-def _edge_points(faces: list[FaceData], sides: list[Side], n: NDArray[np.intp]) -> tuple[list[Array], list[Array], list[Array]]:
-    """Samples of free edges: parameters, (u, v) and 3-D points, ``n[k]`` uniform samples each."""
-    ts, uvs, pts = [], [], []
-    for s, m in zip(sides, n):
-        pc = s.pcurve
-        t = np.linspace(pc.first, pc.last, int(m))
-        uv, _ = pc(t)
-        ts.append(t)
-        uvs.append(uv)
-    by_face: dict[int, list[int]] = {}
-    for k, s in enumerate(sides):
-        by_face.setdefault(s.face, []).append(k)
-    pts = [np.empty((0, 3))] * len(sides)
-    for fi, ks in by_face.items():
-        uv = np.concatenate([uvs[k] for k in ks])
-        P = faces[fi].evaluator.derivatives(uv[:, 0], uv[:, 1], 0)[:, 0, 0]
-        for k, chunk in zip(ks, np.split(P, np.cumsum([len(uvs[k]) for k in ks])[:-1])):
-            pts[k] = chunk
-    return ts, uvs, pts
+def _samples(curves: Any, surfaces: Any, fids: NDArray[np.intp], sides: list[Side], n: NDArray[np.intp]
+             ) -> tuple[Array, Array, NDArray[np.intp]]:
+    """Uniform samples of many edges at once: parameters, 3-D points, owner index."""
+    owner = np.repeat(np.arange(len(sides)), n)
+    first = np.array([s.pcurve.first for s in sides])
+    last = np.array([s.pcurve.last for s in sides])
+    start = np.r_[0, np.cumsum(n)[:-1]]
+    frac = (np.arange(owner.size) - start[owner]) / (n[owner] - 1)
+    t = first[owner] + (last - first)[owner] * frac
+    uv, _ = curves.evaluate(owner, t)
+    D, _ = surfaces.derivatives(fids[owner], uv[:, 0], uv[:, 1], 0)
+    return t, D[:, 0, 0], owner
 
 
-def project_on_side(faces: list[FaceData], side: Side, X: Array, s0: Array, iterations: int) -> tuple[Array, Array]:
-    """Gauss-Newton projection of points ``X (m, 3)`` onto the edge curve ``S(pcurve(s))`` of a side.
+def project_batch(curves: Any, surfaces: Any, cid: NDArray[np.intp], fid: NDArray[np.intp], lo: Array, hi: Array,
+                  X: Array, s0: Array, iterations: int) -> tuple[Array, Array]:
+    """Gauss-Newton projection of points ``X (m, 3)`` onto edge curves ``S_f(pcurve_c(s))``, all at once.
 
-    Returns ``(s, distance)``, ``s`` clipped to the edge's range.
+    Returns ``(s, distance)``, ``s`` clipped to ``[lo, hi]``.
     """
-    pc, ev = side.pcurve, faces[side.face].evaluator
-    s = np.clip(np.asarray(s0, dtype=float), pc.first, pc.last)
+    s = np.clip(s0, lo, hi)
     for _ in range(iterations):
-        uv, duv = pc(s)
-        D = ev.derivatives(uv[:, 0], uv[:, 1], 1)
-        C = D[:, 0, 0]
+        uv, duv = curves.evaluate(cid, s)
+        D, _ = surfaces.derivatives(fid, uv[:, 0], uv[:, 1], 1)
         dC = D[:, 1, 0] * duv[:, :1] + D[:, 0, 1] * duv[:, 1:]
-        f = C - X
         den = np.einsum("ij,ij->i", dC, dC)
-        step = np.where(den > 0, -np.einsum("ij,ij->i", dC, f) / np.where(den > 0, den, 1.0), 0.0)
-        s = np.clip(s + step, pc.first, pc.last)
-    uv, _ = pc(s)
-    C = ev.derivatives(uv[:, 0], uv[:, 1], 0)[:, 0, 0]
-    return s, np.linalg.norm(C - X, axis=1)
+        ok = np.isfinite(den) & (den > 0)
+        step = np.where(ok, -np.einsum("ij,ij->i", dC, D[:, 0, 0] - X) / np.where(ok, den, 1.0), 0.0)
+        s = np.clip(s + step, lo, hi)
+    uv, _ = curves.evaluate(cid, s)
+    D, _ = surfaces.derivatives(fid, uv[:, 0], uv[:, 1], 0)
+    return s, np.linalg.norm(D[:, 0, 0] - X, axis=1)
 
 
-def match_free_edges(faces: list[FaceData], free: list[Side], tol: float, spacing: float,
+def match_free_edges(faces: list[FaceData], free: list[Side], tol: float, spacing: float, surfaces: Any,
                      iterations: int = 6) -> list[Pair]:
     """Pair free edges of different faces that coincide within ``tol`` (see the module docstring).
 
@@ -244,42 +236,74 @@ def match_free_edges(faces: list[FaceData], free: list[Side], tol: float, spacin
         Largest distance (model units) of a sample of one edge from the other edge.
     spacing : float
         Target distance between the samples that locate candidates (a KD-tree of all samples).
+    surfaces : SurfaceBatch
+        The faces' batch evaluator.
     """
     from scipy.spatial import cKDTree
+
+    from ._batch import CurveBatch
 
     usable = [s for s in free if s.pcurve is not None and faces[s.face].evaluator is not None]
     if len(usable) < 2:
         return []
-    # a first coarse pass measures each edge's length, then samples at ``spacing``
-    _, _, coarse = _edge_points(faces, usable, np.full(len(usable), 9))
-    lengths = np.array([np.linalg.norm(np.diff(p, axis=0), axis=1).sum() for p in coarse])
-    n = np.clip(np.ceil(lengths / spacing).astype(int) + 1, 9, 400)
-    ts, _, pts = _edge_points(faces, usable, n)
-    owner = np.repeat(np.arange(len(usable)), n)
-    allpts = np.concatenate(pts)
-    tree = cKDTree(allpts)
-    gaps = [np.linalg.norm(np.diff(p, axis=0), axis=1).max() if len(p) > 1 else 0.0 for p in pts]
-    radius = tol + 0.5 * max(gaps) + 1e-12
-    pairs: list[Pair] = []
-    seen: set[tuple[int, int]] = set()
-    for a, side_a in enumerate(usable):
-        probes = coarse[a]
-        hits = tree.query_ball_point(probes, radius)
-        cands = set(owner[hits[0]].tolist()) if len(hits[0]) else set()
-        for h in hits[1:]:
-            cands &= set(owner[h].tolist())
-        cands.discard(a)
-        for b in sorted(cands):
-            side_b = usable[b]
-            if side_b.face == side_a.face or (b, a) in seen:
+    curves = CurveBatch([s.pcurve for s in usable])
+    fids = np.array([s.face for s in usable], dtype=np.intp)
+    K = 9
+    t_probe, probes, _ = _samples(curves, surfaces, fids, usable, np.full(len(usable), K))
+    probes3 = probes.reshape(len(usable), K, 3)
+    lengths = np.linalg.norm(np.diff(probes3, axis=1), axis=2).sum(axis=1)
+    n = np.clip(np.ceil(np.nan_to_num(lengths) / spacing).astype(np.intp) + 1, K, 400)
+    t_dense, dense, owner = _samples(curves, surfaces, fids, usable, n)
+    finite = np.all(np.isfinite(dense), axis=1)
+    tree = cKDTree(np.where(finite[:, None], dense, 1e300))
+    steps = np.linalg.norm(np.diff(dense, axis=0), axis=1)
+    steps[np.diff(owner) != 0] = 0.0
+    radius = tol + 0.5 * float(np.nanmax(steps)) + 1e-12
+    hits = tree.query_ball_point(np.nan_to_num(probes, nan=1e300), radius)
+    cand_a, cand_b = [], []
+    for a in range(len(usable)):
+        common: set[int] | None = None
+        for h in hits[a * K:(a + 1) * K]:
+            owners = set(owner[h].tolist()) if len(h) else set()
+            common = owners if common is None else common & owners
+            if not common:
+                break
+        for b in sorted(common or ()):
+            if b < a and a in _containing(hits, owner, b, K):  # equal edges: matched once
                 continue
-            t_a = np.linspace(side_a.pcurve.first, side_a.pcurve.last, 9)
-            # starting parameters on b: nearest samples of b
-            d2 = ((probes[:, None, :] - pts[b][None, :, :]) ** 2).sum(axis=2)
-            loc = d2.argmin(axis=1)
-            s, dist = project_on_side(faces, side_b, probes, ts[b][loc], iterations)
-            if dist.max() > tol:
-                continue
-            seen.add((a, b))
-            pairs.append(Pair(side_a, side_b, "geometry", t_table=t_a, s_table=s, match_distance=float(dist.max())))
+            if usable[b].face != usable[a].face:
+                cand_a.append(a)
+                cand_b.append(b)
+    if not cand_a:
+        return []
+    ca, cb = np.array(cand_a, dtype=np.intp), np.array(cand_b, dtype=np.intp)
+    X = probes3[ca].reshape(-1, 3)
+    rb = np.repeat(cb, K)
+    # start on b at its nearest dense sample
+    start = np.r_[0, np.cumsum(n)[:-1]]
+    s0 = np.empty(X.shape[0])
+    for j, b in enumerate(cb):
+        seg = dense[start[b]:start[b] + n[b]]
+        d2 = ((X[j * K:(j + 1) * K, None, :] - seg[None]) ** 2).sum(axis=2)
+        s0[j * K:(j + 1) * K] = t_dense[start[b] + d2.argmin(axis=1)]
+    lo = np.array([usable[b].pcurve.first for b in rb])
+    hi = np.array([usable[b].pcurve.last for b in rb])
+    s, dist = project_batch(curves, surfaces, rb, fids[rb], lo, hi, X, s0, iterations)
+    dist = dist.reshape(-1, K)
+    s = s.reshape(-1, K)
+    t_a = t_probe.reshape(-1, K)
+    pairs = []
+    for j, (a, b) in enumerate(zip(ca, cb)):
+        if np.all(dist[j] <= tol):
+            pairs.append(Pair(usable[a], usable[b], "geometry", t_table=t_a[a], s_table=s[j],
+                              match_distance=float(dist[j].max())))
     return pairs
+
+
+def _containing(hits: list, owner: NDArray[np.intp], a: int, K: int) -> set[int]:
+    """Edges near every probe of edge ``a`` (its candidates)."""
+    common: set[int] | None = None
+    for h in hits[a * K:(a + 1) * K]:
+        owners = set(owner[h].tolist()) if len(h) else set()
+        common = owners if common is None else common & owners
+    return common or set()

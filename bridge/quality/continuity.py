@@ -69,7 +69,8 @@ from numpy.typing import NDArray
 from occsurf.algorithms.errors import InvalidGeometryError
 
 from ..messages import one_line
-from ._pairs import FaceData, Pair, collect_faces, match_free_edges, project_on_side, topology_pairs
+from ._batch import CurveBatch, SurfaceBatch
+from ._pairs import FaceData, Pair, collect_faces, match_free_edges, topology_pairs
 
 Array = NDArray[np.float64]
 
@@ -100,9 +101,12 @@ MATCH_RTOL: float = 1e-4
 #: times the model): the relative jump between two almost flat faces is noise, not a defect.
 CURVATURE_FLOOR: float = 1e-6
 #: Golden-section iterations of the worst-point search (the bracket shrinks by 0.618 each).
-REFINE_ITERATIONS: int = 8
-#: Gauss-Newton steps when projecting onto the other edge of a geometrically matched pair.
-PROJECTION_ITERATIONS: int = 6
+REFINE_ITERATIONS: int = 6
+#: Gauss-Newton steps when projecting onto the other edge of a geometrically matched pair: from
+#: the matching table (9 points per edge) for the dense samples, then from the dense samples'
+#: table for the worst-point search (Gauss-Newton converges quadratically for the zero or tiny
+#: residuals of matched edges).
+PROJECTION_ITERATIONS: tuple[int, int] = (4, 2)
 #: Every classification label, in decreasing order of severity.
 CLASSES: tuple[str, ...] = ("degenerate", "gap", "sharp", "G0", "G1", "G2", "seam")
 
@@ -317,12 +321,17 @@ class ContinuityResult(list):
     thresholds : Thresholds
     stats : dict
         Counts (edges by topology/geometry, free edges left unmatched) and timings (seconds).
+    points : list of dict or None
+        Per report, the dense samples it was measured on (``None`` if none): ``'t'`` (the edge's
+        parameters on face ``faces[0]``), ``'s'`` (on the other edge, for geometric matches),
+        ``'uv1'``, ``'uv2'`` ``(n, 2)``: the parameters on both faces, for cross-checks with OCC.
     """
 
     warnings: list[str]
     match_tol: float | None
     thresholds: Thresholds
     stats: dict[str, Any]
+    points: list[dict[str, Array] | None]
 
     def to_json(self) -> list[dict[str, Any]]:
         return [r.to_json() for r in self]
@@ -400,50 +409,48 @@ def occ_fold(angle_deg: Array | float) -> Array:
 
 # ======================================================================================= engine
 class _Engine:
-    """Evaluates the measures at ``(pair, t)`` requests, all pairs at once, grouped by face."""
+    """Evaluates the measures at ``(pair, t)`` requests, all pairs and faces at once (:mod:`._batch`)."""
 
-    def __init__(self, faces: list[FaceData], pairs: list[Pair], third: bool, floor: float) -> None:
+    def __init__(self, faces: list[FaceData], pairs: list[Pair], third: bool, floor: float, surfaces: SurfaceBatch) -> None:
+
         self.faces, self.pairs, self.third, self.floor = faces, pairs, third, floor
         self.order = 3 if third else 2
         self.flip = np.ones(len(pairs))
         self.face_errors: dict[int, str] = {}
         self.evaluated = np.zeros(len(pairs), dtype=int)
+        self.surfaces = surfaces
+        # p-curve 2 k is side 1 of pair k, 2 k + 1 its side 2
+        self.curves = CurveBatch([c for p in pairs for c in (p.side1.pcurve, p.side2.pcurve)])
+        self.f1 = np.array([p.side1.face for p in pairs], dtype=np.intp)
+        self.f2 = np.array([p.side2.face for p in pairs], dtype=np.intp)
+        self.sense1 = np.array([p.side1.sense for p in pairs], dtype=float)
+        self.sense2 = np.array([p.side2.sense for p in pairs], dtype=float)
+        self.geo = np.array([p.matched == "geometry" for p in pairs], dtype=bool)
+        self.seam = np.array([p.seam for p in pairs], dtype=bool)
+        orient = np.array([-1.0 if f.reversed else 1.0 for f in faces])
+        self.o1 = orient[self.f1] if pairs else np.zeros(0)
+        self.o2 = orient[self.f2] if pairs else np.zeros(0)
+        big = [(p.side2.pcurve.first, p.side2.pcurve.last) if p.side2.pcurve is not None else (0.0, 1.0) for p in pairs]
+        self.lo2 = np.array([b[0] for b in big])
+        self.hi2 = np.array([b[1] for b in big])
 
     # -------------------------------------------------------------------------- batches
-    def _pcurves(self, which: int, pid: NDArray[np.intp], t: Array) -> tuple[Array, Array]:
-        uv = np.full((t.shape[0], 2), np.nan)
-        duv = np.full((t.shape[0], 2), np.nan)
-        for p in np.unique(pid):
-            sel = pid == p
-            side = self.pairs[p].side1 if which == 1 else self.pairs[p].side2
-            uv[sel], duv[sel] = side.pcurve(t[sel])
-        return uv, duv
-
     def _surfaces(self, fid: NDArray[np.intp], uv: Array, order: int) -> Array:
-        D = np.full((fid.shape[0], order + 1, order + 1, 3), np.nan)
-        for f in np.unique(fid):
-            sel = fid == f
-            ev = self.faces[f].evaluator
-            if ev is None or f in self.face_errors:
-                continue
-            try:
-                D[sel] = ev.derivatives(uv[sel, 0], uv[sel, 1], order)
-            except Exception as err:  # noqa: BLE001 - keep the other faces
-                self.face_errors[int(f)] = f"face {f} could not be evaluated: {one_line(err)}"
+        D, errors = self.surfaces.derivatives(fid, uv[:, 0], uv[:, 1], order)
+        for f, err in errors.items():
+            self.face_errors.setdefault(f, f"face {f} could not be evaluated: {one_line(err)}")
         return D
 
-    def _project(self, pid: NDArray[np.intp], t: Array, X: Array) -> Array:
+    def _project(self, pid: NDArray[np.intp], t: Array, X: Array, iterations: int) -> Array:
         """Side-2 parameters of geometry pairs: Gauss-Newton onto the other edge, all pairs at once."""
         s = np.empty_like(t)
         for p in np.unique(pid):
             sel = pid == p
             pr = self.pairs[p]
             s[sel] = np.interp(t[sel], pr.t_table, pr.s_table)
-        fid = np.array([self.pairs[p].side2.face for p in pid], dtype=np.intp)
-        lo = np.array([self.pairs[p].side2.pcurve.first for p in pid])
-        hi = np.array([self.pairs[p].side2.pcurve.last for p in pid])
-        for _ in range(PROJECTION_ITERATIONS):
-            uv, duv = self._pcurves(2, pid, s)
+        fid, lo, hi, cid = self.f2[pid], self.lo2[pid], self.hi2[pid], 2 * pid + 1
+        for _ in range(iterations):
+            uv, duv = self.curves.evaluate(cid, s)
             D = self._surfaces(fid, uv, 1)
             dC = D[:, 1, 0] * duv[:, :1] + D[:, 0, 1] * duv[:, 1:]
             den = _dot(dC, dC)
@@ -454,32 +461,26 @@ class _Engine:
 
     # -------------------------------------------------------------------------- measures
     def measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool = False) -> dict[str, Array]:
-        """All measures at the requests ``(pid[m], t[m])``: arrays of shape ``(m,)`` (points ``(m, 3)``)."""
-        pairs = self.pairs
+        """All measures at the requests ``(pid[m], t[m])``: arrays of shape ``(m,)`` (points ``(m, 3)``),
+        and the parameters used: ``'uv1'``, ``'uv2'`` ``(m, 2)``, ``'s'`` (side 2's edge parameter)."""
         np.add.at(self.evaluated, pid, 1)
-        f1 = np.array([pairs[p].side1.face for p in pid], dtype=np.intp)
-        f2 = np.array([pairs[p].side2.face for p in pid], dtype=np.intp)
-        uv1, duv1 = self._pcurves(1, pid, t)
-        D1 = self._surfaces(f1, uv1, self.order)
-        geo = np.array([pairs[p].matched == "geometry" for p in pid], dtype=bool)
+        uv1, duv1 = self.curves.evaluate(2 * pid, t)
+        D1 = self._surfaces(self.f1[pid], uv1, self.order)
+        geo = self.geo[pid]
         s = t.copy()
         if geo.any():
-            s[geo] = self._project(pid[geo], t[geo], D1[geo, 0, 0])
-        uv2, duv2 = self._pcurves(2, pid, s)
-        D2 = self._surfaces(f2, uv2, self.order)
+            s[geo] = self._project(pid[geo], t[geo], D1[geo, 0, 0], PROJECTION_ITERATIONS[0 if set_flip else 1])
+        uv2, duv2 = self.curves.evaluate(2 * pid + 1, s)
+        D2 = self._surfaces(self.f2[pid], uv2, self.order)
         P1, P2 = D1[:, 0, 0], D2[:, 0, 0]
         T, _ = _normalize(D1[:, 1, 0] * duv1[:, :1] + D1[:, 0, 1] * duv1[:, 1:])
-        T2 = D2[:, 1, 0] * duv2[:, :1] + D2[:, 0, 1] * duv2[:, 1:]
-        o1 = np.array([-1.0 if self.faces[f].reversed else 1.0 for f in f1])
-        o2 = np.array([-1.0 if self.faces[f].reversed else 1.0 for f in f2])
         n1, _ = _normalize(np.cross(D1[:, 1, 0], D1[:, 0, 1]))
         n2, _ = _normalize(np.cross(D2[:, 1, 0], D2[:, 0, 1]))
-        sense1 = np.array([pairs[p].side1.sense for p in pid], dtype=float)
-        sense2 = np.array([pairs[p].side2.sense for p in pid], dtype=float)
         if set_flip:
-            self._set_flip(pid, geo, sense1 * _dot(T, T2) * sense2, sense1, sense2)
-        n1 = n1 * o1[:, None]
-        n2 = n2 * (o2 * self.flip[pid])[:, None]
+            T2 = D2[:, 1, 0] * duv2[:, :1] + D2[:, 0, 1] * duv2[:, 1:]
+            self._set_flip(pid, self.sense1[pid] * _dot(T, T2) * self.sense2[pid])
+        n1 = n1 * self.o1[pid, None]
+        n2 = n2 * (self.o2[pid] * self.flip[pid])[:, None]
         g1 = np.degrees(np.arctan2(np.linalg.norm(np.cross(n1, n2), axis=1), _dot(n1, n2)))
         k1, dk1 = _section(D1, n1, T, self.third)
         k2, dk2 = _section(D2, n2, T, self.third)
@@ -488,20 +489,17 @@ class _Engine:
         with np.errstate(invalid="ignore", divide="ignore"):
             rel = np.where(big > self.floor, 100.0 * g2 / np.where(big > 0, big, 1.0), np.where(np.isnan(big), np.nan, 0.0))
         return {"g0": np.linalg.norm(P1 - P2, axis=1), "g1": g1, "g2": g2, "g2_rel": rel,
-                "g3": np.abs(dk1 - dk2), "gap": occ_gap(D1, D2), "P": P1}
+                "g3": np.abs(dk1 - dk2), "gap": occ_gap(D1, D2), "P": P1, "uv1": uv1, "uv2": uv2, "s": s}
 
-    def _set_flip(self, pid: NDArray[np.intp], geo: NDArray[np.bool_], along: Array, s1: Array, s2: Array) -> None:
+    def _set_flip(self, pid: NDArray[np.intp], along: Array) -> None:
         """Orientation agreement per pair: a shell's faces run along a shared edge in opposite senses.
         Topology pairs: the senses of the edge in the two faces; geometry pairs: the tangents."""
-        for p in np.unique(pid):
-            sel = pid == p
-            if self.pairs[p].matched == "geometry":
-                d = along[sel]
-                d = d[np.isfinite(d)]
-                agree = d.size == 0 or np.median(d) < 0
-            else:
-                agree = s1[sel][0] != s2[sel][0] or self.pairs[p].seam
-            self.flip[p] = 1.0 if agree else -1.0
+        topo = ~self.geo
+        self.flip = np.where(topo & ~self.seam & (self.sense1 == self.sense2), -1.0, 1.0)
+        for p in np.unique(pid[self.geo[pid]]):
+            d = along[pid == p]
+            d = d[np.isfinite(d)]
+            self.flip[p] = -1.0 if d.size and np.median(d) > 0 else 1.0
 
 
 # ======================================================================================= driver
@@ -583,6 +581,7 @@ def edge_continuity(model: Any, *, samples: int = DEFAULT_SAMPLES, g3: bool = Fa
         raise InvalidGeometryError(f"model: expected an ImportedModel or an OCC/build123d/cadquery shape, "
                                    f"got {type(model).__name__} ({one_line(err)})") from err
     size = _model_size(faces, shape)
+    surfaces = SurfaceBatch([f.evaluator for f in faces])
     pairs, free, warnings = topology_pairs(faces)
     warnings += [f.error for f in faces if f.error]
     n_topology = len(pairs)
@@ -590,13 +589,13 @@ def edge_continuity(model: Any, *, samples: int = DEFAULT_SAMPLES, g3: bool = Fa
     t_match = time.perf_counter()
     if loose:
         tol = match_tol if match_tol is not None else MATCH_RTOL * size
-        pairs += match_free_edges(faces, free, tol, spacing=size / 200.0)
+        pairs += match_free_edges(faces, free, tol, spacing=size / 200.0, surfaces=surfaces)
     t_match = time.perf_counter() - t_match
     result = ContinuityResult()
     result.match_tol, result.thresholds = tol, thresholds
-    engine = _Engine(faces, pairs, g3, CURVATURE_FLOOR / size)
+    engine = _Engine(faces, pairs, g3, CURVATURE_FLOOR / size, surfaces)
     t_measure = time.perf_counter()
-    reports = _measure_all(engine, samples, refine, thresholds)
+    reports, result.points = _measure_all(engine, samples, refine, thresholds)
     t_measure = time.perf_counter() - t_measure
     result.extend(reports)
     matched_free = {id(p.side1) for p in pairs if p.matched == "geometry"} | {id(p.side2) for p in pairs if p.matched == "geometry"}
@@ -657,7 +656,7 @@ def _golden(engine: _Engine, pid: NDArray[np.intp], meas: list[str], which: NDAr
         c, d, fc, fd = (np.where(left, x, d), np.where(left, c, x), np.where(left, fx, fd), np.where(left, fc, fx))
 
 
-def _measure_all(engine: _Engine, samples: int, refine: int, th: Thresholds) -> list[EdgeReport]:
+def _measure_all(engine: _Engine, samples: int, refine: int, th: Thresholds) -> tuple[list[EdgeReport], list]:
     pairs = engine.pairs
     why = [_why_not(engine, p) for p in pairs]
     good = np.array([i for i, w in enumerate(why) if w is None], dtype=np.intp)
@@ -669,6 +668,9 @@ def _measure_all(engine: _Engine, samples: int, refine: int, th: Thresholds) -> 
     pid = np.repeat(good, samples)
     M = engine.measure(pid, T.reshape(-1), set_flip=True) if good.size else {}
     n = good.size
+    for r, i in enumerate(good):  # the dense samples start the projections of the refinement
+        if pairs[i].matched == "geometry":
+            pairs[i].t_table, pairs[i].s_table = T[r], M["s"][r * samples:(r + 1) * samples]
     grid = {k: M[k].reshape(n, samples) for k in meas + ["gap"]} if n else {}
     P = M["P"].reshape(n, samples, 3) if n else np.zeros((0, samples, 3))
     best = {}
@@ -690,11 +692,14 @@ def _measure_all(engine: _Engine, samples: int, refine: int, th: Thresholds) -> 
             for k in ("value", "t", "P"):
                 best[m][k] = allbest[k][j * n:(j + 1) * n]
     row_of = {int(p): r for r, p in enumerate(good)}
-    reports = []
+    reports, points = [], []
     for idx, p in enumerate(pairs):
         r = row_of.get(idx)
         reports.append(_report(engine, idx, p, why[idx], r, best, grid, P, samples, th, meas))
-    return reports
+        points.append(None if r is None else {
+            "t": T[r], "s": M["s"].reshape(n, samples)[r], "uv1": M["uv1"].reshape(n, samples, 2)[r],
+            "uv2": M["uv2"].reshape(n, samples, 2)[r]})
+    return reports, points
 
 
 def _report(engine: _Engine, idx: int, p: Pair, why: str | None, r: int | None, best: dict, grid: dict,
@@ -714,7 +719,7 @@ def _report(engine: _Engine, idx: int, p: Pair, why: str | None, r: int | None, 
                           (p.side1.edge, p.side2.edge))
     val = {m: float(best[m]["value"][r]) for m in meas}
     pts = {m: best[m]["P"][r] for m in meas}
-    flip = bool(engine.flip[engine.pairs.index(p)] < 0) if not p.seam else False
+    flip = bool(engine.flip[idx] < 0) if not p.seam else False
     length = float(np.nansum(np.linalg.norm(np.diff(P[r], axis=0), axis=1)))
     cls = _classify(p, val, th)
     worst = pts[_worst_measure(val, th, cls)]
