@@ -138,7 +138,7 @@ class ResultStore:
     def add(self, file_row: dict[str, Any], face_rows: list[dict[str, Any]] = ()) -> None:
         """Buffer one file's rows; writes a part when the buffer is due."""
         self._files.append(file_row)
-        self._faces.extend(face_rows)
+        self._faces.extend(f if "sha256" in f else {**f, "sha256": file_row.get("sha256")} for f in face_rows)
         if file_row.get("sha256"):
             self.done[file_row["sha256"]] = file_row["status"]
         self.maybe_flush()
