@@ -5,6 +5,7 @@
     occsurf inspect [FILE|DIR ...] [--json] [--samples N] [--timeout SECONDS] [--in-process]
     occsurf fill IN --out OUT.step [--all-loops] [--no-occ] [--json] [--in-process]
     occsurf demo [--out DIR] [--only NAME ...]
+    occsurf audit PATH... --out RESULTS [--scheduler ADDRESS] [--workers N] [--timeout S] [--resume] [--checks LIST]
 
 One module per command, each holding its parser and a thin handler that calls the library:
 
@@ -13,6 +14,7 @@ One module per command, each holding its parser and a thin handler that calls th
                  (:func:`occsurf.bridge.validation.inspect.inspect_model`)
 :mod:`.fill`     fill the holes of a model (:func:`occsurf.bridge.modeling.fill.fill_model`)
 :mod:`.demo`     the picture gallery (:func:`occsurf.examples.gallery.run_demos`)
+:mod:`.audit`    corpora on Dask, Parquet results (:func:`occsurf.bridge.audit.audit`)
 :mod:`._common`  exit codes, file arguments, reading a model, tables, one-line errors
 ===============  ==================================================================================
 
@@ -33,7 +35,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from . import demo, fill, inspect
+from . import audit, demo, fill, inspect
 from ._common import EXIT_ERROR
 
 __all__ = ["main", "build_parser"]
@@ -49,6 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
     inspect.add_parser(sub)
     demo.add_parser(sub)
     fill.add_parser(sub)
+    audit.add_parser(sub)
     inspect.add_worker_parser(sub)  # internal, no help= so it stays out of the listing
     return parser
 
