@@ -22,6 +22,7 @@ DEMOS: dict[str, str] = {
     "hierarchical": "occsurf.examples.hierarchical:render_hierarchical_demo",  # course ch. 5
     "fill": "occsurf.examples.fill:render_fill_demo",  # course §8-3
     "generalized": "occsurf.examples.generalized:render_generalized_demo",  # course §8-6, 8-7
+    "lighting": "occsurf.examples.lighting:render_lighting_demo",  # course ch. 10
 }
 
 
