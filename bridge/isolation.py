@@ -46,6 +46,14 @@ worker's stderr is kept and its last line reported with ``crashed`` and ``failed
 ``isolate=False`` runs the jobs in the calling process instead (no protection; handy under a
 debugger: the command line's ``--in-process``).
 
+Signals
+-------
+The worker never outlives its parent: on Linux the kernel kills it when the parent dies, however it
+dies (``PR_SET_PDEATHSIG``: SIGTERM, SIGKILL, a crash of the parent), elsewhere a thread of the worker
+polls the parent's pid. The worker ignores SIGINT (Ctrl-C at a terminal reaches the whole process
+group): the parent's ``KeyboardInterrupt`` kills the worker and propagates; a SIGTERM of the parent
+ends it, and with it the worker.
+
 Only the standard library is imported here, so the command-line process stays free of NumPy and OCC.
 """
 
@@ -263,7 +271,43 @@ def serve(job: str, items: Sequence[Any], preload: Sequence[str] = ()) -> int:
     return 0
 
 
+#: Environment variable through which :func:`run_jobs` tells the worker its parent's pid.
+PARENT_PID_ENV = "OCCSURF_WORKER_PARENT"
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> None:
+    """Make sure the worker never outlives the process that started it.
+
+    Linux: ``prctl(PR_SET_PDEATHSIG, SIGKILL)``, so the kernel kills the worker when its parent dies,
+    however (SIGKILL included). Elsewhere, or if that fails, a daemon thread polls the parent pid. Either
+    way a parent already gone by the time this runs (the start-up window) ends the worker at once.
+    """
+    parent = int(os.environ.get(PARENT_PID_ENV, "0") or 0)
+    armed = False
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(Exception):
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            armed = libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
+    if parent and os.getppid() != parent:
+        os._exit(1)  # the parent died before the death signal was armed
+    if not armed and parent:
+
+        def watch() -> None:
+            while os.getppid() == parent:
+                time.sleep(0.5)
+            os._exit(1)
+
+        threading.Thread(target=watch, name="occsurf-parent-watch", daemon=True).start()
+
+
 def _worker_main() -> int:
+    _die_with_parent()
+    # Ctrl-C at a terminal reaches the whole process group: the parent decides (it stops the worker).
+    with contextlib.suppress(ValueError, OSError):
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
     spec = json.loads(sys.stdin.read())
     return serve(spec["job"], spec["items"], spec.get("preload", ()))
 
@@ -276,6 +320,7 @@ def worker_env() -> dict[str, str]:
     env = dict(os.environ)
     root = str(Path(occsurf.__file__).resolve().parent.parent)
     env["PYTHONPATH"] = os.pathsep.join(x for x in (root, env.get("PYTHONPATH")) if x)
+    env[PARENT_PID_ENV] = str(os.getpid())
     return env
 
 

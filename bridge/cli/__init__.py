@@ -36,7 +36,7 @@ import sys
 from collections.abc import Sequence
 
 from . import audit, demo, fill, inspect
-from ._common import EXIT_ERROR
+from ._common import EXIT_ERROR, guarded
 
 __all__ = ["main", "build_parser"]
 
@@ -68,4 +68,4 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_usage(sys.stderr)
         print("occsurf: error: a command is required (e.g. 'occsurf inspect')", file=sys.stderr)
         return EXIT_ERROR
-    return int(func(ns))
+    return guarded(func, ns)

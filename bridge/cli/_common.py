@@ -43,11 +43,17 @@ __all__ = [
     "fmt_deg",
     "fmt_s",
     "timeout_arg",
+    "shown_path",
+    "output_problem",
+    "guarded",
+    "EXIT_INTERRUPTED",
 ]
 
 EXIT_OK = 0
 #: Some file could not be read, or a command-line argument is wrong (argparse uses 2 as well).
 EXIT_ERROR = 2
+#: Stopped by Ctrl-C (128 + SIGINT, as shells report it).
+EXIT_INTERRUPTED = 130
 
 STEP_SUFFIXES = (".step", ".stp")
 IGES_SUFFIXES = (".iges", ".igs")
@@ -91,6 +97,79 @@ def worker_failure(outcome: Outcome, timeout: float | None, *, task: str, proces
     return f"the {process} process failed ({outcome.exit_reason})" + (f": {outcome.error}" if outcome.error else "")
 
 
+def _quiet_stdout() -> None:
+    """Point fd 1 to /dev/null: nothing more can fail there, not even the flush at exit."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stdout.fileno())
+        os.close(null)
+
+
+def guarded(func: Any, ns: argparse.Namespace) -> int:
+    """Run a command's handler with the command line's promises: one line on stderr, never a traceback.
+
+    * Ctrl-C (``KeyboardInterrupt``): ``occsurf: interrupted``, exit :data:`EXIT_INTERRUPTED` (a worker
+      process is stopped by :func:`occsurf.bridge.isolation.run_jobs` on the way out);
+    * stdout closed by its reader (``occsurf inspect DIR | head -1``): no message, exit 2;
+    * stdout that cannot be written (a full disk, ``> /dev/full``, closed): ``occsurf: cannot write the
+      output: REASON``, exit 2, so a truncated JSON document never passes for a complete one.
+    """
+    import errno
+
+    if sys.stdout is None:  # started with fd 1 closed (``occsurf inspect >&-``)
+        error("cannot write the output: standard output is closed")
+        return EXIT_ERROR
+    with contextlib.suppress(AttributeError, ValueError):  # a non-UTF-8 file name must not stop a table
+        sys.stdout.reconfigure(errors="backslashreplace")  # type: ignore[union-attr]
+    try:
+        code = int(func(ns))
+        sys.stdout.flush()
+        return code
+    except KeyboardInterrupt:
+        _quiet_stdout()
+        error("interrupted")
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        _quiet_stdout()
+        return EXIT_ERROR
+    except OSError as err:
+        if err.errno not in (errno.ENOSPC, errno.EIO, errno.EDQUOT, errno.EFBIG, errno.EBADF, errno.EPIPE):
+            raise
+        _quiet_stdout()
+        error(f"cannot write the output: {err.strerror or err}")
+        return EXIT_ERROR
+
+
+def shown_path(path: str | os.PathLike[str]) -> str:
+    """A path as it can be printed: bytes that are not UTF-8 shown as ``\\xff`` escapes."""
+    return os.fsencode(path).decode("utf-8", "backslashreplace")
+
+
+def output_problem(path: Path) -> str | None:
+    """Why ``path`` cannot be written, checked in the command-line process before any work (standard
+    library only; :func:`occsurf.algorithms._files.check_target` applies the same rules again when the
+    worker writes): ``None`` if it can be."""
+    import stat
+
+    try:
+        st = os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        st = None
+    except OSError as err:
+        return f"cannot write there: {err.strerror or err}"
+    if st is not None:
+        if stat.S_ISDIR(st.st_mode):
+            return "is a directory"
+        if not stat.S_ISREG(st.st_mode):
+            return "exists and is not a regular file (a device, FIFO or socket); refusing to replace it"
+        if not (st.st_mode & 0o222 and os.access(path, os.W_OK)):
+            return "is read-only; not replaced"
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir() or not os.access(folder, os.W_OK):
+        return f"the folder {shown_path(folder)} does not exist or is not writable"
+    return None
+
+
 # ---------------------------------------------------------------------------------------- files
 def find_samples_dir(cwd: Path | None = None) -> Path | None:
     """The ``step_samples/`` folder: below the current directory first, then the one shipped in the
@@ -106,27 +185,68 @@ def find_samples_dir(cwd: Path | None = None) -> Path | None:
 
 
 def files_in(folder: Path) -> list[Path]:
-    """The STEP and IGES files of a folder (by suffix), sorted."""
-    return sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in SUFFIXES)
+    """The STEP and IGES files of a folder (by suffix), sorted; links that lead nowhere are left out
+    (:func:`folder_entries` reports them)."""
+    return [p for p, err in folder_entries(folder) if err is None]
+
+
+def folder_entries(folder: Path) -> list[tuple[Path, str | None]]:
+    """``(path, None)`` for every STEP/IGES file of a folder (by suffix), sorted, and ``(path, reason)``
+    for every entry with such a suffix that cannot be read as a file: a dangling symlink, a loop of
+    symlinks, a device, FIFO or socket (a symlink to ``/dev/zero`` would read forever)."""
+    import errno
+    import stat
+
+    out: list[tuple[Path, str | None]] = []
+    for p in sorted(folder.iterdir()):
+        if p.suffix.lower() not in SUFFIXES:
+            continue
+        try:
+            st = os.stat(p)
+        except FileNotFoundError:
+            target = os.readlink(p) if p.is_symlink() else "?"
+            out.append((p, f"dangling symbolic link (to {shown_path(target)})"))
+            continue
+        except OSError as err:
+            why = "a loop of symbolic links" if err.errno == errno.ELOOP else f"cannot read: {err.strerror or err}"
+            out.append((p, why))
+            continue
+        if stat.S_ISDIR(st.st_mode):
+            continue  # a folder named like a file is not one
+        if not stat.S_ISREG(st.st_mode):
+            out.append((p, "not a regular file (a device, FIFO or socket); not read"))
+            continue
+        out.append((p, None))
+    return out
 
 
 def expand(args: Sequence[str]) -> list[tuple[str, Path | None, str | None]]:
-    """``(shown path, path or None, error or None)`` for every argument, folders expanded."""
+    """``(shown path, path or None, error or None)`` for every argument, folders expanded.
+
+    The shown path is printable (:func:`shown_path`); the path is the real one. Links in a folder
+    that lead nowhere are reported as errors, not skipped.
+    """
+    import errno
+
     out: list[tuple[str, Path | None, str | None]] = []
     for arg in args:
         path = Path(arg)
+        shown = shown_path(arg)
         try:
             if path.is_dir():
-                files = files_in(path)
-                if not files:
-                    out.append((arg, None, f"no STEP/IGES files ({', '.join(SUFFIXES)}) in this folder"))
-                out.extend((str(f), f, None) for f in files)
-            elif path.exists():
-                out.append((arg, path, None))
-            else:
-                out.append((arg, None, "no such file or directory"))
-        except OSError as err:  # unreadable folder, name too long, ...
-            out.append((arg, None, f"cannot read: {err.strerror or err}"))
+                entries = folder_entries(path)
+                if not entries:
+                    out.append((shown, None, f"no STEP/IGES files ({', '.join(SUFFIXES)}) in this folder"))
+                out.extend((shown_path(f), f if err is None else None, err) for f, err in entries)
+                continue
+            os.stat(path)
+            out.append((shown, path, None))
+        except FileNotFoundError:
+            why = "dangling symbolic link" if path.is_symlink() else "no such file or directory"
+            out.append((shown, None, why))
+        except OSError as err:  # unreadable folder, name too long, a loop of links...
+            why = "a loop of symbolic links" if err.errno == errno.ELOOP else f"cannot read: {err.strerror or err}"
+            out.append((shown, None, why))
     return out
 
 

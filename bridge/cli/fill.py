@@ -1,4 +1,4 @@
-"""``occsurf fill IN --out OUT.step [--all-loops] [--no-occ] [--json] [--in-process]``.
+"""``occsurf fill IN --out OUT.step [--all-loops] [--no-occ] [--json] [--timeout SECONDS] [--in-process]``.
 
 Reads a STEP or IGES model, fills every hole with :func:`occsurf.bridge.modeling.fill.fill_model`
 (n G1 patches per hole, course §8-3), writes the sewn result to ``OUT`` (STEP) and prints per hole
@@ -7,7 +7,9 @@ without holes is written as it is), 2 otherwise or when the input cannot be read
 
 The untrusted file is read, filled and written in a worker process
 (:func:`occsurf.bridge.isolation.run_jobs` with the job :func:`fill_job`): a crash inside OCC is
-reported in one line ``occsurf: IN: reason`` with exit status 2, not a dead command.
+reported in one line ``occsurf: IN: reason`` with exit status 2, not a dead command; so is a worker
+that takes longer than ``--timeout`` seconds. Warnings about the input (damage read around, see
+:mod:`occsurf.bridge.exchange.checks`) are printed as ``occsurf: IN: warning: ...`` lines on stderr.
 ``--in-process`` does the work in the calling process instead (no isolation).
 """
 
@@ -15,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import warnings
 from dataclasses import asdict
@@ -26,6 +27,9 @@ from ._common import (
     EXIT_ERROR,
     EXIT_OK,
     error,
+    output_problem,
+    shown_path,
+    timeout_arg,
     fmt_deg,
     fmt_dev,
     fmt_s,
@@ -35,7 +39,11 @@ from ._common import (
     worker_failure,
 )
 
-__all__ = ["fill_job", "add_parser", "run"]
+__all__ = ["fill_job", "add_parser", "run", "DEFAULT_TIMEOUT"]
+
+#: Seconds the worker may take to read, fill and write before it is stopped (``--timeout``); the same
+#: default as ``occsurf inspect``.
+DEFAULT_TIMEOUT = 300.0
 
 #: The job the worker runs, and what it loads before starting it.
 FILL_JOB = "occsurf.bridge.cli.fill:fill_job"
@@ -80,7 +88,7 @@ def fill_job(item: dict[str, Any]) -> dict[str, Any]:
         if filled or nothing_to_do:  # a model without holes is written as it is (sewn)
             exchange.write_step(out, result.shape)
     return {"holes": [asdict(h) for h in result.holes], "free_loops_after": result.free_loops_after,
-            "written": filled or nothing_to_do}
+            "written": filled or nothing_to_do, "warnings": list(model.warnings)}
 
 
 def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
@@ -112,19 +120,20 @@ def run(ns: argparse.Namespace) -> int:
     from ..isolation import ERROR, OK, run_jobs
 
     src, out = Path(ns.input), Path(ns.out)
-    folder = out.parent if str(out.parent) else Path(".")
-    if out.is_dir() or not folder.is_dir() or not os.access(folder, os.W_OK):
-        why = "is a directory" if out.is_dir() else f"the folder {folder} does not exist or is not writable"
-        error(f"{out}: cannot write the filled model there ({why})")
+    why = output_problem(out)
+    if why is not None:
+        error(f"{shown_path(out)}: cannot write the filled model there ({why})")
         return EXIT_ERROR
     item = {"input": str(src), "output": str(out), "all_loops": ns.all_loops, "compare_occ": not ns.no_occ}
-    [outcome] = run_jobs(FILL_JOB, [item], isolate=not ns.in_process, preload=PRELOAD)  # no time limit
+    [outcome] = run_jobs(FILL_JOB, [item], timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD)
     if outcome.status != OK:
         why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
-               worker_failure(outcome, None, task="reading and filling this file", process="worker"))
-        error(f"{src}: {why}")
+               worker_failure(outcome, ns.timeout, task="reading and filling this file", process="worker"))
+        error(f"{shown_path(src)}: {why}")
         return EXIT_ERROR
     result = outcome.value
+    for w in result.get("warnings", ()):
+        error(f"{shown_path(src)}: warning: {w}")
     failed = [h for h in result["holes"] if h["status"] == "failed"]
     for h in failed:
         error(f"{src}: hole {h['index']} ({h['sides']} sides) not filled: {h['reason']}")
@@ -154,6 +163,8 @@ def add_parser(sub: Any) -> None:
     f.add_argument("--all-loops", action="store_true", help="fill outer boundaries too")
     f.add_argument("--no-occ", action="store_true", help="do not run OCC's filler for comparison")
     f.add_argument("--json", action="store_true", help="print one JSON document instead of the table")
+    f.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
+                   help=f"stop the worker after this long and report it (default {DEFAULT_TIMEOUT:g})")
     f.add_argument("--in-process", action="store_true",
                    help="read and fill in this process, not in a worker (a crash inside OCC then ends it)")
     f.set_defaults(func=run)

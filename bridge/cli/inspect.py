@@ -1,4 +1,4 @@
-"""``occsurf inspect [FILE|DIR ...] [--json] [--samples N] [--timeout SECONDS] [--in-process]``.
+"""``occsurf inspect [FILE|DIR ...] [--json] [--samples N] [--timeout SECONDS] [--strict] [--in-process]``.
 
 Reads STEP and IGES files and prints, per face, what
 :func:`occsurf.bridge.validation.inspect.inspect_model` reports: the surface type, degrees,
@@ -10,7 +10,11 @@ directory, else the one shipped with occsurf).
 
 Exit status: 0 when every file was read; 2 when at least one could not be (each such file gets one
 line ``occsurf: PATH: reason`` on stderr and an ``error`` in the JSON, and the other files are still
-reported), or when an argument is wrong.
+reported), or when an argument is wrong. A file read around damage (references to undefined instances,
+OCC's check messages, fewer faces than the file's face instances, an open closed shell; see
+:mod:`occsurf.bridge.exchange.checks`) has ``warnings``: in the JSON, in the table, and one line
+``occsurf: PATH: warning: ...`` each on stderr; ``--strict`` makes them exit status 2 too. Links in a
+folder that lead nowhere (dangling, loops, devices) are reported as errors, not skipped.
 
 Each file is read in a worker process (:func:`occsurf.bridge.isolation.run_jobs` with the job
 :func:`inspect_job`): a file that crashes OCC, or takes longer than ``--timeout``, is reported as an
@@ -241,6 +245,8 @@ def run(ns: argparse.Namespace) -> int:
             assert r is not None
             if r.error is not None:
                 error(f"{r.path}: {r.error}")
+            for w in r.warnings:
+                error(f"{r.path}: warning: {w}")
             if not ns.json:
                 if printed:
                     sys.stdout.write("\n")
@@ -269,7 +275,8 @@ def run(ns: argparse.Namespace) -> int:
         sys.stdout.write(f"\n{len(done)} files ({n_bad} unreadable), {sum(len(r.faces) for r in done)} faces, "
                          f"{sum(r.n_free_form for r in done)} free-form, {total:.2f} s\n")
     sys.stdout.flush()
-    return EXIT_ERROR if any(r.error is not None for r in done) else EXIT_OK
+    failed = any(r.error is not None for r in done) or (ns.strict and any(r.warnings for r in done))
+    return EXIT_ERROR if failed else EXIT_OK
 
 
 def _worker(ns: argparse.Namespace) -> int:
@@ -312,6 +319,8 @@ def add_parser(sub: Any) -> None:
                    help=f"grid size N of the deviation check (default {DEFAULT_SAMPLES})")
     p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop reading a file after this long and report it (default {DEFAULT_TIMEOUT:g})")
+    p.add_argument("--strict", action="store_true",
+                   help="exit with status 2 when a file has warnings (damaged data read around)")
     p.add_argument("--in-process", action="store_true",
                    help="read the files in this process, not in a worker (a crash inside OCC then ends it)")
     p.set_defaults(func=run)
