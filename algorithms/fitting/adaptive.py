@@ -1,0 +1,420 @@
+"""Adaptive hierarchical fitting of gridded data (course §7-10).
+
+"Fitting of gridded data by tensor-product surfaces and the adaptive refinement of this fitting
+process to produce a hierarchical surface": fit a coarse base surface by least squares
+(:func:`~.gridded.fit_grid`), measure the distance of every data point to the surface, and where
+it exceeds the tolerance add overlays (course ch. 5) that refine only those knot spans; fit the
+residual at the finer level as the overlays' displacements and store them as offsets in the
+parent's frames (§5-15); repeat level by level until the tolerance holds everywhere or the level
+limit is reached.
+
+Per level
+---------
+1. For each overlay made at the previous level (the base at level 1), mark its knot spans that
+   hold a data point farther than ``tol`` from the surface, grow the marks by
+   :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MARGIN` spans and cover each connected group
+   of marked spans by one rectangle; overlapping rectangles merge. Spans holding fewer than two
+   data rows in a direction are not refined further (the data could not determine finer poles).
+2. Each rectangle becomes an overlay (midpoint knot insertion). Its world displacements ``δ``
+   are the least-squares fit of the current residual ``Q - S`` over the data in the overlay's
+   support, with the overlay's own B-splines: ``δ = A^+ R B^{+T}`` (course §7-4 on the sub-grid,
+   minimum-norm where data are sparse), then stored as frame offsets. Overlays of one level are
+   fitted one after the other, each against the residual its predecessors left.
+3. The error is measured again: the distance from each data point to the (flattened) surface by
+   point projection (:func:`~._common.project_points`), which never exceeds the residual at the
+   data parameter.
+
+Height grids keep ``x = u``, ``y = v`` exactly (displacements along z only), so the result stays a
+height field. The result is an editable :class:`~occsurf.algorithms.hierarchical.HierarchicalSurface`
+whose :meth:`flatten` is one exact B-spline surface (for STEP).
+
+References
+----------
+Course notes C25 (SIGGRAPH 1991) §7-10 and ch. 5; D. R. Forsey, R. H. Bartels, "Surface fitting
+with hierarchical splines", ACM TOG 14 (1995) 134-161.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.ndimage as ndi
+from numpy.typing import ArrayLike, NDArray
+
+from .. import tolerances
+from ..errors import InvalidGeometryError, ParameterError
+from ..hierarchical.core import Overlay
+from ..hierarchical.surface import HierarchicalSurface
+from ..kernel.basis import basis_matrix
+from ._common import project_points
+from .gridded import GridFit, _grid_data, _pair_of, _params, fit_grid
+
+__all__ = ["LevelReport", "AdaptiveFit", "fit_adaptive", "measure_grid"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class LevelReport:
+    """Statistics after fitting one level (level 0 is the base).
+
+    Attributes
+    ----------
+    level : int
+    overlays : int
+        Overlays added at this level (0 for the base).
+    control_points : int
+        Degrees of freedom stored at this level: base poles, or the overlays' offsets.
+    max_error, rms_error : float
+        Distance from the data points to the surface up to this level, measured by projection.
+    """
+
+    level: int
+    overlays: int
+    control_points: int
+    max_error: float
+    rms_error: float
+
+    def as_dict(self) -> dict:
+        return {"level": self.level, "overlays": self.overlays, "control_points": self.control_points,
+                "max_error": self.max_error, "rms_error": self.rms_error}
+
+
+@dataclass(frozen=True)
+class AdaptiveFit:
+    """Result of :func:`fit_adaptive`.
+
+    Attributes
+    ----------
+    hierarchy : HierarchicalSurface
+        Editable; ``hierarchy.flatten()`` is the exact single B-spline surface.
+    levels : tuple of LevelReport
+    distance : ndarray, shape (m, n)
+        Measured distance of each data point to the final surface (NaN on missing cells).
+    u_params, v_params : ndarray
+    converged : bool
+        ``max_error <= tol``.
+    """
+
+    hierarchy: HierarchicalSurface
+    levels: tuple[LevelReport, ...]
+    distance: Array
+    u_params: Array
+    v_params: Array
+    tol: float
+    converged: bool
+
+    @property
+    def max_error(self) -> float:
+        return self.levels[-1].max_error
+
+    @property
+    def rms_error(self) -> float:
+        return self.levels[-1].rms_error
+
+    @property
+    def control_points_total(self) -> int:
+        """Base poles plus stored offsets (course §5-17)."""
+        return int(self.hierarchy.pole_counts()["stored"])
+
+
+def measure_grid(surface, points: Array, u: Array, v: Array) -> Array:
+    """Distance of every grid point ``points[i, j]`` (shape (m, n, 3), NaN = missing) to ``surface``,
+    by projection from ``(u_i, v_j)`` (:func:`~._common.project_points`). Shape (m, n)."""
+    m, n = points.shape[:2]
+    U, W = np.meshgrid(u, v, indexing="ij")
+    ok = ~np.isnan(points).any(axis=-1)
+    out = np.full((m, n), np.nan)
+    _, _, d = project_points(surface, points[ok], U[ok], W[ok])
+    out[ok] = d
+    return out
+
+
+def _stats(dist: Array) -> tuple[float, float]:
+    e = dist[np.isfinite(dist)]
+    return float(e.max()), float(np.sqrt(np.mean(e ** 2)))
+
+
+def _boxes(marks: Array) -> list[tuple[int, int, int, int]]:
+    """Bounding boxes (i0, i1, j0, j1), end-exclusive, of the connected groups of ``marks``, merged
+    until no two overlap."""
+    lab, _ = ndi.label(marks, structure=np.ones((3, 3)))
+    boxes = [(s[0].start, s[0].stop, s[1].start, s[1].stop) for s in ndi.find_objects(lab) if s is not None]
+    merged = True
+    while merged:
+        merged = False
+        for a in range(len(boxes)):
+            for b in range(a + 1, len(boxes)):
+                p, q = boxes[a], boxes[b]
+                if p[0] < q[1] and q[0] < p[1] and p[2] < q[3] and q[2] < p[3]:
+                    boxes[a] = (min(p[0], q[0]), max(p[1], q[1]), min(p[2], q[2]), max(p[3], q[3]))
+                    del boxes[b]
+                    merged = True
+                    break
+            if merged:
+                break
+    return boxes
+
+
+def _cells(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, Array, Array]:
+    """Distinct knots ``k`` of ``[lo, hi]``, the span index of each parameter (-1 outside) and
+    the number of data parameters per span."""
+    k = np.unique(knots[(knots >= lo) & (knots <= hi)])
+    idx = np.searchsorted(k, x, side="right") - 1
+    idx = np.where(x == k[-1], k.size - 2, idx)
+    idx = np.where((x < k[0]) | (x > k[-1]), -1, idx)
+    counts = np.bincount(idx[idx >= 0], minlength=k.size - 1)
+    return k, idx, counts
+
+
+def _owner(hs: HierarchicalSurface, u: Array, v: Array) -> tuple[list[Overlay | None], Array, Array]:
+    """Per data row/column pair, the deepest node whose region holds it: returns the nodes and
+    an (m, n) index into them (0 = the base)."""
+    nodes: list[Overlay | None] = [None] + sorted(hs.overlays, key=lambda o: o.level)
+    own = np.zeros((u.size, v.size), int)
+    for k, ov in enumerate(nodes[1:], 1):
+        (a, b), (c, d) = ov.region
+        own[np.ix_((u >= a) & (u <= b), (v >= c) & (v <= d))] = k
+    return nodes, own, np.array([0] + [o.level for o in nodes[1:]])
+
+
+def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u: Array, v: Array
+             ) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """The rectangles (u_range, v_range) to refine inside ``parent`` (its knot spans holding a
+    flagged point, grown by the margin, grouped and merged)."""
+    lvl = hs.level_surface(parent)
+    (ua, ub), (va, vb) = hs.domain if parent is None else parent.region
+    ku, iu, cu = _cells(lvl.knots[0], ua, ub, u)
+    kv, iv, cv = _cells(lvl.knots[1], va, vb, v)
+    su, sv = iu >= 0, iv >= 0
+    if not su.any() or not sv.any():
+        return []
+    marks = np.zeros((ku.size - 1, kv.size - 1), bool)
+    I, J = np.nonzero(flagged[np.ix_(su, sv)])
+    marks[iu[su][I], iv[sv][J]] = True
+    marks &= (cu >= 2)[:, None] & (cv >= 2)[None, :]  # the halves of a span must still hold data rows
+    if not marks.any():
+        return []
+    margin = int(tolerances.FIT_ADAPTIVE_MARGIN)
+    if margin > 0:
+        marks = ndi.binary_dilation(marks, structure=np.ones((3, 3)), iterations=margin)
+    return [((float(ku[i0]), float(ku[i1])), (float(kv[j0]), float(kv[j1]))) for i0, i1, j0, j1 in _boxes(marks)]
+
+
+class _Fitter:
+    """The hierarchy under construction with every overlay's world displacements ``δ`` kept, so
+    that coarser levels can be refitted (backfitting) without losing the finer ones."""
+
+    def __init__(self, hs: HierarchicalSurface, P3: Array, u: Array, v: Array, heights: bool, refit_base) -> None:
+        self.hs, self.P3, self.u, self.v, self.heights = hs, P3, u, v, heights
+        self.refit_base = refit_base
+        self.delta: dict[int, Array] = {}
+        self.ops: dict[int, tuple[Array, Array, Array, Array]] = {}
+
+    def residual(self) -> Array:
+        return self.P3 - self.hs.flatten().evaluate_grid(self.u, self.v)
+
+    def _operators(self, ov: Overlay) -> tuple[Array, Array, Array, Array]:
+        if ov.id not in self.ops:
+            p, q = self.hs.degree
+            (i0, i1), (j0, j1) = ov.vertices
+            ku, kv = ov.knots
+            su = (ku[i0], ku[min(i1 + p + 1, ku.shape[0] - 1)])
+            sv = (kv[j0], kv[min(j1 + q + 1, kv.shape[0] - 1)])
+            ru = np.flatnonzero((self.u >= su[0]) & (self.u <= su[1]))
+            rv = np.flatnonzero((self.v >= sv[0]) & (self.v <= sv[1]))
+            A = basis_matrix(ku, p, ku.shape[0] - p - 1, self.u[ru])[0][:, i0:i1 + 1]
+            B = basis_matrix(kv, q, kv.shape[0] - q - 1, self.v[rv])[0][:, j0:j1 + 1]
+            self.ops[ov.id] = (ru, rv, A, B)
+        return self.ops[ov.id]
+
+    def _apply(self, ov: Overlay) -> None:
+        frames = self.hs.reference_frames(ov)
+        d = self.delta[ov.id]
+        off = self.hs.offset_mapping.inverse(d.reshape(-1, 3), None if frames is None else frames.reshape(-1, 3, 3))
+        self.hs.set_offsets(ov, np.asarray(off, float).reshape(d.shape))
+
+    def fit_overlay(self, ov: Overlay, resid: Array) -> None:
+        """Least-squares ``δ`` of ``ov`` against ``resid`` plus its own current share; updates ``resid``."""
+        ru, rv, A, B = self._operators(ov)
+        old = self.delta.get(ov.id)
+        if ru.size == 0 or rv.size == 0:
+            self.delta[ov.id] = np.zeros(ov.shape + (3,)) if old is None else old
+            self._apply(ov)
+            return
+        R = resid[np.ix_(ru, rv)]
+        if old is not None:
+            R = R + np.einsum("ia,abk,jb->ijk", A, old, B)
+        comps = [2] if self.heights else [0, 1, 2]
+        delta = np.zeros((A.shape[1], B.shape[1], 3))
+        missing = np.isnan(R).any(axis=-1)
+        if not missing.any():
+            Ap, Bp = sla.pinv(A, check_finite=False), sla.pinv(B, check_finite=False)
+            for c in comps:
+                delta[..., c] = Ap @ R[..., c] @ Bp.T
+        else:  # missing cells: Kronecker rows of the valid ones, minimum-norm least squares
+            K = np.einsum("ia,jb->ijab", A, B)[~missing].reshape(-1, A.shape[1] * B.shape[1])
+            sol = sla.lstsq(K, R[~missing][:, comps], lapack_driver="gelsd", check_finite=False)[0]
+            delta[..., comps] = sol.reshape(A.shape[1], B.shape[1], len(comps))
+        self.delta[ov.id] = delta
+        self._apply(ov)
+        resid[np.ix_(ru, rv)] = R - np.einsum("ia,abk,jb->ijk", A, delta, B)
+
+    def backfit(self) -> Array:
+        """One block Gauss-Seidel sweep: the base against the data minus every overlay's share,
+        the displacements re-applied in the new frames, then each overlay against what is left."""
+        hs = self.hs
+        share = hs.flatten().evaluate_grid(self.u, self.v) - hs.base.evaluate_grid(self.u, self.v)
+        hs.set_base(self.refit_base(self.P3 - share))
+        for ov in hs.overlays:  # parents first: each sees its parent's new frames
+            self._apply(ov)
+        resid = self.residual()
+        for ov in hs.overlays:
+            self.fit_overlay(ov, resid)
+        return self.residual()
+
+
+def _level_reports(hs: HierarchicalSurface, P3: Array, u: Array, v: Array) -> list[LevelReport]:
+    """Per level L, the surface truncated below L (finer offsets zeroed) measured against the data."""
+    out = []
+    depth = hs.depth
+    for L in range(depth + 1):
+        h = hs.copy()
+        for ov in sorted(h.overlays, key=lambda o: -o.level):
+            if ov.level > L:
+                h.set_offsets(ov, np.zeros(ov.shape + (3,)))
+        dist = measure_grid(h.flatten(), P3, u, v)
+        ovs = [o for o in hs.overlays if o.level == L]
+        cps = int(np.prod(hs.base.n_poles)) if L == 0 else sum(int(np.prod(o.shape)) for o in ovs)
+        out.append(LevelReport(L, len(ovs), cps, *_stats(dist)))
+    return out
+
+
+def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, int], tol: float, opts: dict,
+               progress) -> tuple[GridFit, Array, Array]:
+    """The base fit, with its spans multiplied by 1.5 while the places to refine cover more than
+    :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MAX_COVER` of it: when the error is
+    everywhere, uniform refinement is the cheaper hierarchy (no overlay overhead)."""
+    m, n = Q.shape[:2]
+    data = Q[..., 0] if heights else Q
+    while True:
+        base = fit_grid(data, poles, deg, **opts)
+        u, v = base.u_params, base.v_params
+        P3 = np.stack(np.broadcast_arrays(u[:, None], v[None, :], Q[..., 0]), -1) if heights else Q
+        dist = measure_grid(base.surface, P3, u, v)
+        worst = float(np.nanmax(dist))
+        if progress is not None:
+            progress(f"base {poles[0]}x{poles[1]}: max error {worst:.3g}")
+        if worst <= tol:
+            return base, P3, dist
+        flagged = dist > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
+        hs = HierarchicalSurface(base.surface, "frame")
+        boxes = _regions(hs, None, flagged, u, v)
+        (u0, u1), (v0, v1) = hs.domain
+        cover = sum((b - a) * (d - c) for (a, b), (c, d) in boxes) / ((u1 - u0) * (v1 - v0))
+        nxt = tuple(min(p + int(np.ceil(1.5 * (k - p))), cnt) for k, p, cnt in zip(poles, deg, (m, n)))
+        if cover <= float(tolerances.FIT_ADAPTIVE_MAX_COVER) or nxt == poles:
+            return base, P3, dist
+        poles = nxt
+
+
+def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3, *,
+                 base_poles: int | tuple[int, int] | None = None, x: ArrayLike | None = None,
+                 y: ArrayLike | None = None, u_params: ArrayLike | None = None, v_params: ArrayLike | None = None,
+                 method: str = "centripetal", smoothing: float = 0.0, fix_boundary: bool = False,
+                 max_levels: int | None = None, progress: Callable[[str], None] | None = None) -> AdaptiveFit:
+    """Adaptive hierarchical least-squares fit of gridded data to a tolerance (course §7-10).
+
+    Rounds of: mark the data points farther than ``max(tol, FIT_ADAPTIVE_GREED * max_error)``
+    from the surface; give each node (base or overlay) whose region is the deepest one holding
+    marked points new child overlays over the marked spans (module notes); fit them to the
+    residual; then :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_SWEEPS` backfitting sweeps
+    (the base and every overlay refitted in turn, finer displacements kept), which removes the
+    ringing a coarse fit of a sharp feature leaves far from it. Refining the worst places first
+    keeps overlays where the data need them.
+
+    Parameters
+    ----------
+    data : array_like, shape (m, n, 3) or (m, n)
+        Points, or heights over ``x, y`` (NaN = missing cell).
+    tol : float
+        Largest allowed distance from a data point to the surface (model units, > 0).
+    degree : int or (int, int)
+    base_poles : int or (int, int), optional
+        Poles of the base fit; default ``degree + 5`` (five spans), at most the data count.
+    x, y, u_params, v_params, method
+        As :func:`~.gridded.fit_grid`.
+    smoothing : float
+        Smoothing λ of the base fit.
+    fix_boundary : bool
+        The base holds the four boundary curves fitted to the boundary rows.
+    max_levels : int, optional
+        Deepest overlay level; default :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MAX_LEVELS`.
+    progress : callable, optional
+        Called with a one-line message after each round.
+
+    Returns
+    -------
+    AdaptiveFit
+        Per-level reports measure the hierarchy truncated below each level.
+    """
+    try:
+        tol = float(tol)
+    except (TypeError, ValueError) as err:
+        raise ParameterError(f"tol: expected a positive number, got {tol!r}") from err
+    if not (np.isfinite(tol) and tol > 0):
+        raise ParameterError(f"tol: expected a positive number, got {tol!r}")
+    depth_max = int(tolerances.FIT_ADAPTIVE_MAX_LEVELS) if max_levels is None else int(max_levels)
+    if depth_max < 0:
+        raise ParameterError(f"max_levels: expected an integer >= 0, got {max_levels!r}")
+    Q, heights, xs, ys = _grid_data(data, x, y)
+    m, n = Q.shape[:2]
+    if not heights and Q.shape[2] != 3:
+        raise InvalidGeometryError(f"data: adaptive fitting needs 3-D points or heights, got {Q.shape[2]}-D points")
+    pu, pv = _pair_of(degree, "degree")
+    if base_poles is None:
+        base_poles = (min(pu + 5, m), min(pv + 5, n))
+    opts = dict(x=xs if heights else None, y=ys if heights else None, u_params=u_params, v_params=v_params,
+                method=method, smoothing=smoothing, fix_boundary=fix_boundary)
+    base, P3, dist = _grow_base(Q, heights, _pair_of(base_poles, "base_poles"), (pu, pv), tol, opts, progress)
+    u, v = base.u_params, base.v_params
+    knots = base.surface.knots
+
+    def refit_base(target: Array):
+        data_ = target[..., 2] if heights else target
+        o = dict(opts, u_params=u, v_params=v, x=None, y=None)
+        return fit_grid(data_, base.surface.n_poles, (pu, pv), knots=knots, **o).surface
+
+    hs = HierarchicalSurface(base.surface, "frame")
+    fitter = _Fitter(hs, P3, u, v, heights, refit_base)
+    for rnd in range(1, int(tolerances.FIT_ADAPTIVE_MAX_ROUNDS) + 1):
+        worst = float(np.nanmax(dist))
+        if worst <= tol:
+            break
+        flagged = dist > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
+        nodes, own, lv = _owner(hs, u, v)
+        resid = fitter.residual()
+        new = []
+        for k, node in enumerate(nodes):
+            if lv[k] >= depth_max:
+                continue
+            mine = flagged & (own == k)
+            if not mine.any():
+                continue
+            for ur, vr in _regions(hs, node, mine, u, v):
+                ov = hs.add_overlay(ur, vr, node)
+                fitter.fit_overlay(ov, resid)
+                new.append(ov)
+        if not new:
+            break
+        for _ in range(int(tolerances.FIT_ADAPTIVE_SWEEPS)):
+            fitter.backfit()
+        dist = measure_grid(hs.flatten(), P3, u, v)
+        if progress is not None:
+            progress(f"round {rnd}: {len(new)} overlays added (depth {hs.depth}), "
+                     f"{hs.pole_counts()['stored']} control points, max error {np.nanmax(dist):.3g}")
+    reports = _level_reports(hs, P3, u, v)
+    return AdaptiveFit(hs, tuple(reports), dist, u, v, tol, reports[-1].max_error <= tol)

@@ -1,0 +1,806 @@
+"""Constrained and smoothed least-squares fitting of gridded data (course §7-4, §7-5, §7-7).
+
+Data on a grid, ``Q[i, j]`` at ``(u_i, v_j)``, fitted by a tensor-product spline with collocation
+matrices ``A`` (``m x N_u``, along u) and ``B`` (``n x N_v``): the least-squares problem
+``min ||A P B^T - Q||`` separates (course §7-4), its normal equations are
+``G_u P G_v = A^T Q B`` with ``G_u = A^T A``, ``G_v = B^T B``, and the ``(mn x N_u N_v)`` matrix
+``A ⊗ B`` is never formed. Everything below keeps that structure:
+
+Smoothing
+    The tensor-product difference penalty (P-splines, Eilers–Marx)
+    ``λ (R_u ⊗ G_v + G_u ⊗ R_v)``, ``R = c D^T D`` with second differences ``D`` of the poles
+    scaled by ``c = trace(G) / (2 trace(D^T D))`` so that ``λ = 1`` weighs data and penalty alike.
+    With the generalised eigenvectors ``X^T G X = I``, ``X^T R X = diag(μ)`` of each direction the
+    normal matrix is diagonal: ``P = X_u [(X_u^T A^T Q B X_v) / (1 + λ(μ_i + ν_j))] X_v^T``.
+    The influence matrix has trace ``Σ 1 / (1 + λ(μ_i + ν_j))``, so generalised cross-validation
+    (Craven and Wahba 1979) ``GCV(λ) = mn RSS / (mn - tr)^2`` costs one small product per λ.
+Separable constraints (null-space method, course §3-12)
+    Boundary curves (a pole row or column fixed), cross-boundary pole rows (a C1 join) and mirror
+    symmetry are constraints ``C_u P = D_u`` and ``P C_v^T = D_v`` that act on one index only.
+    Every solution is ``P = P_c + Z_u Y Z_v^T`` with ``Z`` orthonormal null-space bases (from the
+    pivoted QR of :class:`~occsurf.algorithms.manipulation.linalg.ConstraintFactor`), and the
+    reduced problem in ``Y`` has the same Kronecker form with ``A Z_u``, ``B Z_v``.
+Point-wise constraints
+    Points ``S(u, v) = X`` and tangent planes ``n . S_u(u_0, v_k) = 0`` (G1 to a neighbour at the
+    sites ``v_k``) are rows ``w^T (α^T P β)`` with coordinate weights ``w``: they are added to the
+    reduced problem through its Schur complement ``C N^{-1} C^T`` (``K x K``), where ``N^{-1}``
+    applies in the eigenbasis above, so again only ``N_u x N_v`` matrices appear.
+Missing data
+    NaN cells break the grid: the problem is then solved as one sparse KKT system
+    (:func:`~occsurf.algorithms.manipulation.linalg.sparse_constrained_lstsq`'s normal-equation
+    form) over the valid cells, with a small smoothing term keeping poles without data defined.
+
+References
+----------
+Course notes C25 (SIGGRAPH 1991) §7-4 Kronecker products, §7-5, §7-7 constraints; P. Dierckx,
+*Curve and Surface Fitting with Splines* (1993) §5.2 (gridded data); Eilers, Currie and Durbán,
+"Fast and compact smoothing on large multidimensional grids", CSDA 50 (2006).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.optimize
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import ArrayLike, NDArray
+
+from .. import _validate as V
+from .. import tolerances
+from ..errors import InvalidGeometryError, ParameterError
+from ..kernel.basis import basis_matrix, greville
+from ..kernel.curve import BSplineCurve
+from ..kernel.surface import BSplineSurface
+from ..manipulation.linalg import ConstraintError, ConstraintFactor
+from ._common import difference_penalty, sparse_collocation
+from .interpolation import _lsq_operator, approximation_knots, parametrize
+
+__all__ = [
+    "BoundaryCurve",
+    "CrossDerivative",
+    "FixedPoint",
+    "TangentPlane",
+    "Symmetry",
+    "GridFit",
+    "fit_grid",
+]
+
+Array = NDArray[np.float64]
+_SIDES = ("u0", "u1", "v0", "v1")
+
+
+# ----------------------------------------------------------------------------- constraints
+def _side(side: str) -> str:
+    if side not in _SIDES:
+        raise ParameterError(f"side: expected one of {', '.join(_SIDES)}, got {side!r}")
+    return side
+
+
+@dataclass(frozen=True)
+class BoundaryCurve:
+    """The surface's boundary on ``side`` equals ``curve`` exactly (separable: one pole row fixed).
+
+    ``curve`` must lie in the surface's spline space along that side (same degree; its knots are
+    those of the fit, or a subset that is refined to them). ``None``: the boundary data row is
+    fitted first (least squares with both ends interpolated, so the four boundary curves meet at
+    the data corners), then held.
+    """
+
+    side: str
+    curve: BSplineCurve | None = None
+
+
+@dataclass(frozen=True)
+class CrossDerivative:
+    """The first two pole rows at ``side`` are ``rows`` (shape ``(2, N, d)``): the surface joins a
+    neighbour with the same knots C1 (separable). ``rows[0]`` is the boundary row."""
+
+    side: str
+    rows: ArrayLike
+
+
+@dataclass(frozen=True)
+class FixedPoint:
+    """``S(u, v) = point`` (a point-wise constraint, ``d`` rows)."""
+
+    u: float
+    v: float
+    point: ArrayLike
+
+
+@dataclass(frozen=True)
+class TangentPlane:
+    """Tangent planes along a boundary: ``normals[k] . dS/dn(params[k]) = 0`` where ``dS/dn`` is the
+    derivative across ``side`` (G1 to a neighbour whose normals these are, at the sites). Where
+    ``normals[k]`` is also perpendicular to the boundary's tangent (a neighbour's normal along a
+    shared boundary held by :class:`BoundaryCurve`), the surface's normal equals it there."""
+
+    side: str
+    params: ArrayLike
+    normals: ArrayLike
+
+
+@dataclass(frozen=True)
+class Symmetry:
+    """Mirror symmetry across the middle of ``direction``: ``S(lo + hi - u, v) = M S(u, v)`` for
+    ``direction="u"``, ``M`` the reflection in the plane ``x[axis] = offset`` (``axis=None``: the
+    identity, e.g. for a symmetric height field). Needs knots symmetric about the middle."""
+
+    direction: str = "u"
+    axis: int | None = None
+    offset: float = 0.0
+
+
+Constraint = BoundaryCurve | CrossDerivative | FixedPoint | TangentPlane | Symmetry
+
+
+@dataclass(frozen=True)
+class GridFit:
+    """Result of :func:`fit_grid`.
+
+    Attributes
+    ----------
+    surface : BSplineSurface
+        3-D (a height grid gives ``x = u``, ``y = v`` exactly: poles at the Greville abscissae).
+    u_params, v_params : ndarray, shapes (m,) and (n,)
+    residual : ndarray, shape (m, n)
+        ``|Q[i, j] - S(u_i, v_j)|`` (NaN on missing cells): the deviation at the data parameters
+        (vertical for height grids), an upper bound of the distance to the surface.
+    max_error, rms_error : float
+        Of ``residual`` over the valid cells.
+    smoothing : float
+        The λ used (chosen by GCV when asked).
+    gcv : float or None
+        The GCV score at that λ (when computed).
+    method : str
+        ``"kronecker"`` or ``"sparse"`` (missing data).
+    """
+
+    surface: BSplineSurface
+    u_params: Array
+    v_params: Array
+    residual: Array
+    max_error: float
+    rms_error: float
+    smoothing: float
+    gcv: float | None = None
+    method: str = "kronecker"
+    extras: dict = field(default_factory=dict)
+
+
+# ----------------------------------------------------------------------------- data
+def _grid_data(data: ArrayLike, x: ArrayLike | None, y: ArrayLike | None) -> tuple[Array, bool, Array | None, Array | None]:
+    try:
+        Q = np.array(data, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise InvalidGeometryError(f"data: expected an (m, n) or (m, n, d) array of numbers, got {type(data).__name__}") from err
+    if Q.ndim == 2:
+        heights = True
+        Q = Q[..., None]
+    elif Q.ndim == 3 and Q.shape[2] >= 1:
+        heights = False
+    else:
+        raise InvalidGeometryError(f"data: expected shape (m, n) heights or (m, n, d) points, got {Q.shape}")
+    if np.any(np.isinf(Q)):
+        raise InvalidGeometryError("data: expected finite values or NaN (missing), got infinity")
+    m, n = Q.shape[:2]
+    xs = ys = None
+    if heights:
+        xs = np.linspace(0.0, 1.0, m) if x is None else V.as_finite_array(x, "x", ndim=1)
+        ys = np.linspace(0.0, 1.0, n) if y is None else V.as_finite_array(y, "y", ndim=1)
+        for name, t, k in (("x", xs, m), ("y", ys, n)):
+            if t.shape[0] != k or np.any(np.diff(t) <= 0):
+                raise InvalidGeometryError(f"{name}: expected {k} strictly increasing grid coordinates, got shape {t.shape}")
+    elif x is not None or y is not None:
+        raise InvalidGeometryError("x, y: grid coordinates are for (m, n) height data; (m, n, d) points carry their own")
+    return Q, heights, xs, ys
+
+
+def _params(Q: Array, heights: bool, xs, ys, u_params, v_params, method: str) -> tuple[Array, Array]:
+    m, n = Q.shape[:2]
+    if heights:
+        u = xs if u_params is None else V.as_finite_array(u_params, "u_params", ndim=1)
+        v = ys if v_params is None else V.as_finite_array(v_params, "v_params", ndim=1)
+    else:
+        filled = np.where(np.isnan(Q), np.nanmean(Q, axis=(0, 1)), Q) if np.isnan(Q).any() else Q
+        u = parametrize(filled, method) if u_params is None else V.as_finite_array(u_params, "u_params", ndim=1)
+        v = (parametrize(filled.transpose(1, 0, 2), method) if v_params is None
+             else V.as_finite_array(v_params, "v_params", ndim=1))
+    for name, t, k in (("u_params", u, m), ("v_params", v, n)):
+        if t.shape[0] != k or np.any(np.diff(t) <= 0):
+            raise InvalidGeometryError(f"{name}: expected {k} strictly increasing values, got shape {t.shape}")
+    return u, v
+
+
+def _knots(params: Array, n: int, p: int, knots, name: str) -> Array:
+    m = params.shape[0]
+    if knots is None:
+        if not p + 1 <= n <= m:
+            raise InvalidGeometryError(f"n_poles: expected {p + 1} <= {name} poles <= {m} (data count) for degree {p}, got {n}")
+        return approximation_knots(params, n, p)
+    t = V.check_knots(knots, p, n, f"knots ({name})")
+    if params[0] < t[p] - 1e-12 * (t[n] - t[p]) or params[-1] > t[n] + 1e-12 * (t[n] - t[p]):
+        raise ParameterError(f"knots ({name}): the domain [{t[p]!r}, {t[n]!r}] does not hold the data parameters "
+                             f"[{params[0]!r}, {params[-1]!r}]")
+    return t
+
+
+# ----------------------------------------------------------------------------- the diagonalised system
+class _Direction:
+    """One direction of the (reduced) Kronecker system of one coordinate.
+
+    ``G = A^T A`` and ``R = c D^T D`` on the full poles; ``Gz = Z^T G Z``, ``Rz = Z^T R Z`` on the
+    null space of the separable constraints (``Z = None``: no constraint); ``X``, ``mu`` the
+    generalised eigenpairs ``X^T Gz X = I``, ``X^T Rz X = diag(mu)``.
+    """
+
+    def __init__(self, A: Array, Z: Array | None) -> None:
+        n = A.shape[1]
+        self.Z = Z
+        self.G = A.T @ A
+        Dp = difference_penalty(n, 2)
+        tr = float(np.trace(Dp))
+        self.R = (np.trace(self.G) / (2.0 * tr)) * Dp if tr > 0 else np.zeros((n, n))
+        self.Gz = self.G if Z is None else Z.T @ self.G @ Z
+        self.Rz = self.R if Z is None else Z.T @ self.R @ Z
+        if self.Gz.shape[0] == 0:
+            self.mu, self.X = np.zeros(0), np.zeros((0, 0))
+            return
+        try:
+            mu, X = sla.eigh(self.Rz, self.Gz, check_finite=False)
+        except np.linalg.LinAlgError as err:
+            raise InvalidGeometryError(
+                "n_poles: the data do not determine every pole (a knot span without data: the Schoenberg–Whitney "
+                "condition fails); use fewer poles, the default knots, or smoothing") from err
+        self.mu, self.X = np.maximum(mu, 0.0), X
+
+    def reduce(self, M: Array, axis: int) -> Array:
+        return M if self.Z is None else np.moveaxis(np.tensordot(self.Z.T, M, axes=(1, axis)), 0, axis)
+
+    def expand(self, M: Array, axis: int) -> Array:
+        return M if self.Z is None else np.moveaxis(np.tensordot(self.Z, M, axes=(1, axis)), 0, axis)
+
+
+class _Coordinate:
+    """The separable part of one coordinate's problem: particular solution ``Pc`` and the two
+    reduced directions (null-space method, course §3-12)."""
+
+    def __init__(self, A: Array, B: Array, cu: tuple[Array, Array] | None, cv: tuple[Array, Array] | None,
+                 cache: dict) -> None:
+        Nu, Nv = A.shape[1], B.shape[1]
+        Pc = np.zeros((Nu, Nv))
+        Zs = []
+        Fs = []
+        for C in (cu, cv):
+            if C is None or C[0].shape[0] == 0:
+                Zs.append(None)
+                Fs.append(None)
+                continue
+            F = ConstraintFactor(C[0], full=True)
+            Zs.append(F.null_basis)
+            Fs.append(F)
+        if Fs[1] is not None:  # P Cv^T = Dv, i.e. Cv P^T = Dv^T (the targets, kv x Nu)
+            Pc = Fs[1].solve(cv[1]).T
+        if Fs[0] is not None:  # then Cu P = Du without disturbing the columns: Pc += Ku (Du - Cu Pc)
+            Pc = Pc + Fs[0].solve(cu[1] - cu[0] @ Pc)
+        if Fs[1] is not None and Fs[0] is not None:
+            gap = float(np.abs(cv[0] @ Pc.T - cv[1]).max())
+            scale = max(1.0, float(np.abs(cv[1]).max()), float(np.abs(cu[1]).max()))
+            if gap > tolerances.CONSISTENCY_RTOL * scale:
+                raise ConstraintError(f"constraints: the u-side and v-side constraints disagree at a corner by {gap:.3g} "
+                                      "(boundary curves must meet at the corners)")
+        self.Pc = Pc
+        key = tuple(None if Z is None else Z.tobytes() for Z in Zs)
+        if key not in cache:
+            cache[key] = (_Direction(A, Zs[0]), _Direction(B, Zs[1]))
+        self.du, self.dv = cache[key]
+        self.constrained = cu is not None or cv is not None
+
+    def weights(self, lam: float) -> Array:
+        return 1.0 / (1.0 + lam * (self.du.mu[:, None] + self.dv.mu[None, :]))
+
+    def normal(self, P: Array, lam: float) -> Array:
+        """``N P = G_u P G_v + λ (R_u P G_v + G_u P R_v)`` on the full poles."""
+        du, dv = self.du, self.dv
+        return (du.G + lam * du.R) @ P @ dv.G + lam * (du.G @ P @ dv.R)
+
+    def reduced_rhs(self, AtQB: Array, lam: float) -> Array:
+        r = AtQB - self.normal(self.Pc, lam) if self.constrained else AtQB
+        return self.du.reduce(self.dv.reduce(r, 1), 0)
+
+    def inverse(self, M: Array, W: Array) -> Array:
+        """``N_z^{-1} M`` in the reduced coordinates (M of shape (nz_u, nz_v))."""
+        Xu, Xv = self.du.X, self.dv.X
+        return Xu @ ((Xu.T @ M @ Xv) * W) @ Xv.T
+
+    def full(self, Y: Array) -> Array:
+        return self.Pc + self.du.expand(self.dv.expand(Y, 1), 0)
+
+
+def _rss(A: Array, B: Array, Q: Array, valid_all: bool, P: Array) -> float:
+    F = np.einsum("ia,abk,jb->ijk", A, P, B, optimize=True)
+    return float(np.sum((F - Q) ** 2))
+
+
+# ----------------------------------------------------------------------------- building the constraints
+@dataclass
+class _Rows:
+    """Constraints in matrix form: per coordinate the separable rows, and the point-wise rows."""
+
+    cu: list[list[tuple[Array, Array]]]  # per coordinate: (row on the u index (Nu,), target over v (Nv,))
+    cv: list[list[tuple[Array, Array]]]
+    alpha: list[Array] = field(default_factory=list)  # point-wise: (Nu,)
+    beta: list[Array] = field(default_factory=list)  # (Nv,)
+    w: list[Array] = field(default_factory=list)  # (d,) weights of the free coordinates
+    target: list[float] = field(default_factory=list)
+    labels: list[str] = field(default_factory=list)
+
+
+class _Space:
+    """The fit's spline space and data layout, shared by the constraint builders."""
+
+    def __init__(self, Q: Array, heights: bool, u: Array, v: Array, deg: tuple[int, int], tu: Array, tv: Array):
+        self.Q, self.heights, self.u, self.v = Q, heights, u, v
+        self.deg, self.knots = deg, (tu, tv)
+        self.n = (tu.shape[0] - deg[0] - 1, tv.shape[0] - deg[1] - 1)
+        self.d = Q.shape[2]
+        self.greville = (greville(tu, deg[0]), greville(tv, deg[1]))
+
+    def basis(self, ax: int, x: float, order: int = 0) -> Array:
+        t, p, n = self.knots[ax], self.deg[ax], self.n[ax]
+        lo, hi = t[p], t[n]
+        xx = V.check_parameter(x, lo, hi, "uv"[ax])
+        return basis_matrix(t, p, n, np.array([xx]), order)[order, 0]
+
+    def fixed_poles(self) -> list[Array]:
+        """Height grids: the x and y pole arrays (Greville abscissae), which reproduce ``x = u``, ``y = v``."""
+        gu, gv = self.greville
+        Nu, Nv = self.n
+        return [np.broadcast_to(gu[:, None], (Nu, Nv)), np.broadcast_to(gv[None, :], (Nu, Nv))]
+
+    def free(self, vec: Array, name: str) -> Array:
+        """The free coordinates of a 3-D (or d-D) point: z of a height grid."""
+        a = V.as_finite_array(vec, name, ndim=1)
+        if self.heights:
+            if a.shape[0] not in (1, 3):
+                raise InvalidGeometryError(f"{name}: expected 1 value (z) or 3 (x, y, z) for height data, got {a.shape[0]}")
+            return a[-1:]
+        if a.shape[0] != self.d:
+            raise InvalidGeometryError(f"{name}: expected {self.d} coordinates, got {a.shape[0]}")
+        return a
+
+
+def _side_axis(side: str) -> tuple[int, int]:
+    """(axis of the index the side fixes: 0 = a u-row, 1 = a v-column; 0 at the start, -1 at the end)."""
+    return (0 if side[0] == "u" else 1), (0 if side[1] == "0" else -1)
+
+
+def _curve_poles(space: _Space, curve: BSplineCurve, ax_along: int, name: str) -> Array:
+    p, t, n = space.deg[ax_along], space.knots[ax_along], space.n[ax_along]
+    if not isinstance(curve, BSplineCurve) or curve.is_rational:
+        raise InvalidGeometryError(f"{name}: expected a non-rational BSplineCurve, got {type(curve).__name__}")
+    if curve.degree != p:
+        raise InvalidGeometryError(f"{name}: expected degree {p} (the surface's along that side), got {curve.degree}")
+    c = curve
+    if c.knots.shape != t.shape or not np.allclose(c.knots, t, rtol=0, atol=1e-12 * (t[-1] - t[0])):
+        extra = np.setdiff1d(np.round(t, 12), np.round(c.knots, 12))
+        try:
+            c = c.refine(t[np.isin(np.round(t, 12), extra)]) if extra.size else c
+        except InvalidGeometryError as err:
+            raise InvalidGeometryError(f"{name}: its knots are not a subset of the fit's knots along that side") from err
+        if c.knots.shape != t.shape or not np.allclose(c.knots, t, rtol=0, atol=1e-12 * (t[-1] - t[0])):
+            raise InvalidGeometryError(f"{name}: its knots are not a subset of the fit's knots along that side")
+    P = np.asarray(c.control_points)
+    if space.heights:
+        return P[:, -1:]
+    if P.shape[1] != space.d:
+        raise InvalidGeometryError(f"{name}: expected a {space.d}-D curve, got {P.shape[1]}-D")
+    return P
+
+
+def _boundary_row(space: _Space, side: str) -> Array:
+    """Poles of the boundary curve fitted to the data row on ``side`` (ends interpolated)."""
+    ax, end = _side_axis(side)
+    along = 1 - ax
+    row = space.Q[end] if ax == 0 else space.Q[:, end]
+    if np.isnan(row).any():
+        raise InvalidGeometryError(f"fix_boundary: the data row on side {side} has missing (NaN) cells")
+    t = space.u if along == 0 else space.v
+    F = _lsq_operator(t, space.deg[along], space.knots[along], space.n[along])
+    return F @ row
+
+
+def _separable(space: _Space, c: Constraint, rows: _Rows, k: int) -> None:
+    Nu, Nv = space.n
+    if isinstance(c, (BoundaryCurve, CrossDerivative)):
+        side = _side(c.side)
+        ax, end = _side_axis(side)
+        N = space.n[ax]
+        if isinstance(c, BoundaryCurve):
+            targets = [_boundary_row(space, side) if c.curve is None else
+                       _curve_poles(space, c.curve, 1 - ax, f"constraints[{k}].curve")]
+        else:
+            R = V.as_finite_array(c.rows, f"constraints[{k}].rows")
+            want = (2, space.n[1 - ax], 3 if space.heights else space.d)
+            if R.shape != want:
+                raise InvalidGeometryError(f"constraints[{k}].rows: expected shape {want}, got {R.shape}")
+            targets = [r[:, -1:] if space.heights else r for r in R]
+        for depth, tgt in enumerate(targets):
+            e = np.zeros(N)
+            e[depth if end == 0 else N - 1 - depth] = 1.0
+            for co in range(space.d):
+                (rows.cu if ax == 0 else rows.cv)[co].append((e, tgt[:, co]))
+    elif isinstance(c, Symmetry):
+        if c.direction not in ("u", "v"):
+            raise ParameterError(f"constraints[{k}].direction: expected 'u' or 'v', got {c.direction!r}")
+        ax = 0 if c.direction == "u" else 1
+        t, p, N = space.knots[ax], space.deg[ax], space.n[ax]
+        if not np.allclose(t[::-1], t[p] + t[N] - t, rtol=0, atol=1e-9 * (t[N] - t[p])):
+            raise InvalidGeometryError(f"constraints[{k}]: symmetry in {c.direction} needs knots symmetric about the "
+                                       "middle of the domain (symmetric data parameters)")
+        if c.axis is not None and (space.heights or not 0 <= int(c.axis) < space.d):
+            raise InvalidGeometryError(f"constraints[{k}].axis: expected None for height data or 0..{space.d - 1}, "
+                                       f"got {c.axis!r}")
+        other = space.n[1 - ax]
+        for co in range(space.d):
+            s = -1.0 if (c.axis is not None and co == int(c.axis)) else 1.0
+            for i in range(N // 2 + (N % 2 if s < 0 else 0)):
+                e = np.zeros(N)
+                e[N - 1 - i] += 1.0
+                e[i] -= s
+                (rows.cu if ax == 0 else rows.cv)[co].append((e, np.full(other, (1 - s) * float(c.offset))))
+
+
+def _pointwise(space: _Space, c: Constraint, rows: _Rows, k: int) -> None:
+    fixed = space.fixed_poles() if space.heights else []
+    if isinstance(c, FixedPoint):
+        a, b = space.basis(0, c.u), space.basis(1, c.v)
+        pt = space.free(c.point, f"constraints[{k}].point")
+        for co in range(space.d):
+            w = np.zeros(space.d)
+            w[co] = 1.0
+            rows.alpha.append(a), rows.beta.append(b), rows.w.append(w), rows.target.append(float(pt[co]))
+            rows.labels.append(f"constraints[{k}] (point at u={c.u:g}, v={c.v:g}, coordinate {co})")
+    elif isinstance(c, TangentPlane):
+        side = _side(c.side)
+        ax, end = _side_axis(side)
+        t = V.as_finite_array(c.params, f"constraints[{k}].params", ndim=1)
+        nrm = V.as_finite_array(c.normals, f"constraints[{k}].normals")
+        if nrm.shape != (t.shape[0], 3) or (not space.heights and space.d != 3):
+            raise InvalidGeometryError(f"constraints[{k}].normals: expected shape ({t.shape[0]}, 3) on a 3-D fit, "
+                                       f"got {nrm.shape}")
+        kn, p, n = space.knots[ax], space.deg[ax], space.n[ax]
+        x0 = kn[p] if end == 0 else kn[n]
+        for s, nv in zip(t, nrm):
+            cross = space.basis(ax, x0, 1)
+            along = space.basis(1 - ax, s, 0)
+            a, b = (cross, along) if ax == 0 else (along, cross)
+            tgt = 0.0
+            if space.heights:  # x = u, y = v are fixed: their share moves to the target
+                tgt -= nv[0] * float(a @ fixed[0] @ b) + nv[1] * float(a @ fixed[1] @ b)
+                w = nv[2:3].copy()
+            else:
+                w = nv.copy()
+            rows.alpha.append(a), rows.beta.append(b), rows.w.append(w), rows.target.append(tgt)
+            rows.labels.append(f"constraints[{k}] (tangent plane on side {side} at {s:g})")
+
+
+def _build_rows(space: _Space, constraints: Sequence[Constraint], fix_boundary: bool) -> _Rows:
+    rows = _Rows([[] for _ in range(space.d)], [[] for _ in range(space.d)])
+    items = list(constraints)
+    if fix_boundary:
+        items = [BoundaryCurve(s) for s in _SIDES] + items
+    for k, c in enumerate(items):
+        if isinstance(c, (BoundaryCurve, CrossDerivative, Symmetry)):
+            _separable(space, c, rows, k)
+        elif isinstance(c, (FixedPoint, TangentPlane)):
+            _pointwise(space, c, rows, k)
+        else:
+            raise InvalidGeometryError(f"constraints[{k}]: expected BoundaryCurve, CrossDerivative, FixedPoint, "
+                                       f"TangentPlane or Symmetry, got {type(c).__name__}")
+    return rows
+
+
+def _stack(items: list[tuple[Array, Array]]) -> tuple[Array, Array] | None:
+    if not items:
+        return None
+    return np.stack([r for r, _ in items]), np.stack([t for _, t in items])
+
+
+# ----------------------------------------------------------------------------- solvers
+def _plain(A: Array, B: Array, Q: Array) -> Array:
+    """Unconstrained, unsmoothed: ``P = G_u^{-1} A^T Q B G_v^{-1}`` (Cholesky of the small Gram
+    matrices; ``A^T Q`` as a sparse product, the collocation rows having ``degree + 1`` entries)."""
+    m, n, d = Q.shape
+    As, Bs = sp.csr_matrix(A), sp.csr_matrix(B)
+    T = np.asarray(As.T @ Q.reshape(m, n * d)).reshape(-1, n, d)  # (Nu, n, d)
+    T = np.asarray(Bs.T @ T.transpose(1, 0, 2).reshape(n, -1)).reshape(-1, T.shape[0], d)  # (Nv, Nu, d)
+    try:
+        cu = sla.cho_factor(A.T @ A, check_finite=False)
+        cv = sla.cho_factor(B.T @ B, check_finite=False)
+    except np.linalg.LinAlgError as err:
+        raise InvalidGeometryError(
+            "n_poles: the data do not determine every pole (a knot span without data: the Schoenberg–Whitney "
+            "condition fails); use fewer poles, the default knots, or smoothing") from err
+    Nv, Nu = T.shape[:2]
+    T = sla.cho_solve(cv, T.reshape(Nv, -1), check_finite=False).reshape(Nv, Nu, d)
+    T = sla.cho_solve(cu, T.transpose(1, 0, 2).reshape(Nu, -1), check_finite=False)
+    return T.reshape(Nu, Nv, d)
+
+
+class _Kronecker:
+    """The constrained, smoothed problem of every coordinate on the Kronecker structure."""
+
+    def __init__(self, A: Array, B: Array, Q: Array, rows: _Rows) -> None:
+        self.A, self.B, self.Q = A, B, Q
+        cache: dict = {}
+        self.coords = [_Coordinate(A, B, _stack(rows.cu[c]), _stack(rows.cv[c]), cache) for c in range(Q.shape[2])]
+        self.AtQB = [A.T @ Q[..., c] @ B for c in range(Q.shape[2])]
+        self.rows = rows
+
+    def separable(self, lam: float) -> tuple[list[Array], list[Array]]:
+        Ys, Ws = [], []
+        for co, r in zip(self.coords, self.AtQB):
+            W = co.weights(lam)
+            Ys.append(co.inverse(co.reduced_rhs(r, lam), W))
+            Ws.append(W)
+        return Ys, Ws
+
+    def poles(self, Ys: list[Array]) -> Array:
+        return np.stack([co.full(Y) for co, Y in zip(self.coords, Ys)], -1)
+
+    def gcv(self, lam: float) -> float:
+        Ys, Ws = self.separable(lam)
+        P = self.poles(Ys)
+        rss = _rss(self.A, self.B, self.Q, True, P)
+        nobs = self.Q.size
+        tr = float(sum(W.sum() for W in Ws))
+        return nobs * rss / max(nobs - tr, 1e-300) ** 2
+
+    def choose(self) -> tuple[float, float]:
+        """λ minimising GCV: a scan of log10 λ over [FIT_GCV_MIN, FIT_GCV_MAX], then Brent around the best."""
+        lo, hi = float(tolerances.FIT_GCV_MIN_LOG10), float(tolerances.FIT_GCV_MAX_LOG10)
+        grid = np.linspace(lo, hi, 27)
+        vals = np.array([self.gcv(10.0 ** g) for g in grid])
+        i = int(np.argmin(vals))
+        a, b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+        res = scipy.optimize.minimize_scalar(lambda g: self.gcv(10.0 ** g), bounds=(a, b), method="bounded",
+                                             options={"xatol": 1e-3})
+        best = (float(res.x), float(res.fun)) if res.fun < vals[i] else (float(grid[i]), float(vals[i]))
+        return 10.0 ** best[0], best[1]
+
+    def solve(self, lam: float) -> Array:
+        Ys, Ws = self.separable(lam)
+        r = self.rows
+        if r.alpha:
+            Ys = self._pointwise(Ys, Ws)
+        return self.poles(Ys)
+
+    def _pointwise(self, Ys: list[Array], Ws: list[Array]) -> list[Array]:
+        """Point-wise rows through the Schur complement ``C N^{-1} C^T`` of the reduced problem."""
+        r = self.rows
+        K = len(r.alpha)
+        Al, Be, Wt = np.stack(r.alpha), np.stack(r.beta), np.stack(r.w)  # (K, Nu), (K, Nv), (K, d)
+        target = np.asarray(r.target)
+        S = np.zeros((K, K))
+        ab = []
+        viol = -target.copy()
+        for c, (co, Y, W) in enumerate(zip(self.coords, Ys, Ws)):
+            P0 = co.full(Y)
+            viol += Wt[:, c] * np.einsum("ki,ij,kj->k", Al, P0, Be)
+            a = co.du.reduce(Al.T, 0).T @ co.du.X  # (K, nz_u)
+            b = co.dv.reduce(Be.T, 0).T @ co.dv.X  # (K, nz_v)
+            ab.append((a, b))
+            TW = np.einsum("ki,li->kli", a, a) @ W  # (K, K, nz_v)
+            S += np.outer(Wt[:, c], Wt[:, c]) * np.einsum("klj,kj,lj->kl", TW, b, b)
+        lam_k = sla.lstsq(S, viol, lapack_driver="gelsy", check_finite=False)[0]
+        out = []
+        for c, (co, Y, W) in enumerate(zip(self.coords, Ys, Ws)):
+            a, b = ab[c]
+            M = np.einsum("k,ki,kj->ij", lam_k * Wt[:, c], a, b) * W
+            out.append(Y - co.du.X @ M @ co.dv.X.T)
+        P = self.poles(out)
+        res = np.einsum("kc,ki,ijc,kj->k", Wt, Al, P, Be) - target
+        scale = max(1.0, float(np.abs(target).max()), float(np.abs(self.Q[np.isfinite(self.Q)]).max()))
+        bad = np.flatnonzero(np.abs(res) > tolerances.LINEAR_CHECK_RTOL * scale)
+        if bad.size:
+            names = [r.labels[i] for i in bad]
+            raise ConstraintError(f"constraints: {', '.join(names[:4])}{' ...' if len(names) > 4 else ''} cannot hold "
+                                  f"together with the others (residual up to {np.abs(res).max():.3g}); they conflict "
+                                  "or act on no free pole", bad, names)
+        return out
+
+
+def _sparse_rows(rows: _Rows, Nu: int, Nv: int, d: int) -> tuple[sp.csr_matrix, Array, list[str]]:
+    """Every constraint as sparse rows on the stacked vector ``[vec(P_0), ..., vec(P_{d-1})]``."""
+    blocks, targets, labels = [], [], []
+    size = Nu * Nv
+    seen: dict[tuple[int, int, int], float] = {}
+
+    def place(M: sp.spmatrix, c: int) -> sp.csr_matrix:
+        return sp.hstack([sp.csr_matrix((M.shape[0], size * c)), M, sp.csr_matrix((M.shape[0], size * (d - c - 1)))],
+                         format="csr")
+
+    for c in range(d):
+        for ax, items in ((0, rows.cu[c]), (1, rows.cv[c])):
+            for e, tgt in items:
+                unit = np.count_nonzero(e) == 1
+                other = Nv if ax == 0 else Nu
+                keep = np.ones(other, bool)
+                if unit:  # a fixed pole row/column: drop poles already fixed (corners), checking they agree
+                    i = int(np.flatnonzero(e)[0])
+                    for j in range(other):
+                        key = (c, i, j) if ax == 0 else (c, j, i)
+                        if key in seen:
+                            keep[j] = False
+                            if abs(seen[key] - tgt[j]) > tolerances.CONSISTENCY_RTOL * max(1.0, abs(tgt[j])):
+                                raise ConstraintError("constraints: the u-side and v-side constraints disagree at a "
+                                                      f"corner by {abs(seen[key] - tgt[j]):.3g}")
+                        else:
+                            seen[key] = float(tgt[j])
+                M = sp.kron(sp.csr_matrix(e[None, :]), sp.identity(Nv)) if ax == 0 else \
+                    sp.kron(sp.identity(Nu), sp.csr_matrix(e[None, :]))
+                blocks.append(place(sp.csr_matrix(M)[keep], c))
+                targets.append(tgt[keep])
+                labels += [f"separable row (coordinate {c})"] * int(keep.sum())
+    for a, b, w, t, lab in zip(rows.alpha, rows.beta, rows.w, rows.target, rows.labels):
+        row = sp.csr_matrix(np.kron(a, b)[None, :])
+        blocks.append(sp.hstack([row * w[c] for c in range(d)], format="csr"))
+        targets.append(np.array([t]))
+        labels.append(lab)
+    if not blocks:
+        return sp.csr_matrix((0, d * size)), np.zeros(0), []
+    return sp.vstack(blocks, format="csr"), np.concatenate(targets), labels
+
+
+def _sparse_solve(A: Array, B: Array, Q: Array, rows: _Rows, lam: float) -> Array:
+    """Missing data: the normal equations over the valid cells plus the penalty, with every
+    constraint, as one sparse KKT system (SuperLU). Memory is O(data + poles)."""
+    m, n, d = Q.shape
+    Nu, Nv = A.shape[1], B.shape[1]
+    valid = ~np.isnan(Q).any(axis=2)
+    if not valid.any():
+        raise InvalidGeometryError("data: every cell is missing (NaN)")
+    K = sp.kron(sp.csr_matrix(A), sp.csr_matrix(B), format="csr")[valid.ravel()]
+    AtA = (K.T @ K).tocsr()
+    pen = sp.kron(sp.csr_matrix(difference_penalty(Nu)), sp.identity(Nv)) + \
+        sp.kron(sp.identity(Nu), sp.csr_matrix(difference_penalty(Nv)))
+    c = AtA.diagonal().sum() / max(pen.diagonal().sum(), 1e-300)
+    N1 = (AtA + (lam * c) * pen).tocsc()
+    N = sp.block_diag([N1] * d, format="csc")
+    rhs = np.concatenate([K.T @ Q[..., co][valid] for co in range(d)])
+    C, t, labels = _sparse_rows(rows, Nu, Nv, d)
+    if C.shape[0]:
+        KKT = sp.bmat([[N, C.T], [C, None]], format="csc")
+        rhs = np.concatenate([rhs, t])
+    else:
+        KKT = N
+    try:
+        x = spla.splu(KKT).solve(rhs)
+    except RuntimeError as err:
+        raise ConstraintError("data: with the missing cells the fit is singular: some poles have no data and the "
+                              f"constraints are dependent or no smoothing is given ({err})") from err
+    if not np.all(np.isfinite(x)):
+        raise InvalidGeometryError("data: the fit over the valid cells is singular; add smoothing")
+    P = x[: d * Nu * Nv].reshape(d, Nu, Nv).transpose(1, 2, 0)
+    if C.shape[0]:
+        res = np.abs(C @ x[: d * Nu * Nv] - t)
+        bad = np.flatnonzero(res > tolerances.LINEAR_CHECK_RTOL * max(1.0, float(np.abs(t).max())))
+        if bad.size:
+            raise ConstraintError(f"constraints: {', '.join(labels[i] for i in bad[:4])} are not met (residual "
+                                  f"{res.max():.3g}); they conflict", bad, [labels[i] for i in bad])
+    return P
+
+
+# ----------------------------------------------------------------------------- entry point
+def _pair_of(x, name: str) -> tuple:
+    if isinstance(x, (int, np.integer)) and not isinstance(x, bool):
+        return int(x), int(x)
+    try:
+        a, b = x
+    except (TypeError, ValueError) as err:
+        raise InvalidGeometryError(f"{name}: expected an integer or a pair, got {x!r}") from err
+    if not all(isinstance(k, (int, np.integer)) and not isinstance(k, bool) for k in (a, b)):
+        raise InvalidGeometryError(f"{name}: expected integers, got {x!r}")
+    return int(a), int(b)
+
+
+def fit_grid(data: ArrayLike, n_poles: int | tuple[int, int], degree: int | tuple[int, int] = 3, *,
+             x: ArrayLike | None = None, y: ArrayLike | None = None,
+             u_params: ArrayLike | None = None, v_params: ArrayLike | None = None, method: str = "centripetal",
+             knots: tuple[ArrayLike | None, ArrayLike | None] | None = None,
+             smoothing: float | str = 0.0, constraints: Sequence[Constraint] = (),
+             fix_boundary: bool = False) -> GridFit:
+    """Least-squares tensor-product surface of gridded data, with smoothing and constraints.
+
+    Course §7-4 (Kronecker separation), §7-5 (least squares), §7-7 (constraints); see the module
+    notes for the method. Without smoothing or constraints this is the plain least-squares fit
+    (no end interpolation): the same coefficients as scipy's ``make_lsq_spline`` applied along u,
+    then along v, with the same knots.
+
+    Parameters
+    ----------
+    data : array_like, shape (m, n, d) or (m, n)
+        Points ``Q[i, j]`` at ``(u_i, v_j)``, or heights ``z[i, j]`` over ``(x_i, y_j)``. NaN marks a
+        missing cell (the fit then uses a sparse solve).
+    n_poles : int or (int, int)
+        Poles per direction, ``degree + 1 <= n_poles <= data count`` with the default knots.
+    degree : int or (int, int)
+    x, y : array_like, shapes (m,) and (n,), optional
+        Grid coordinates of height data (default the unit square); they are the parameters.
+    u_params, v_params : array_like, optional
+        Data parameters; default ``method`` parameters averaged over grid lines (point data).
+    method : {"centripetal", "chord", "uniform"}
+    knots : (array_like or None, array_like or None), optional
+        Full knot vectors; default :func:`~.interpolation.approximation_knots` (every span holds data).
+    smoothing : float or "gcv"
+        λ of the difference penalty (module notes), ``>= 0``; ``"gcv"`` chooses it by generalised
+        cross-validation (complete data only).
+    constraints : sequence of BoundaryCurve, CrossDerivative, FixedPoint, TangentPlane, Symmetry
+    fix_boundary : bool
+        Shorthand for :class:`BoundaryCurve` on all four sides, fitted to the boundary data rows.
+
+    Returns
+    -------
+    GridFit
+
+    Raises
+    ------
+    InvalidGeometryError
+        Bad shapes, too few data for the degree, poles not determined by the data.
+    ConstraintError
+        Conflicting constraints (named).
+    """
+    Q, heights, xs, ys = _grid_data(data, x, y)
+    m, n = Q.shape[:2]
+    pu, pv = (V.as_degree(k) for k in _pair_of(degree, "degree"))
+    if m < pu + 1 or n < pv + 1:
+        raise InvalidGeometryError(f"data: a degree ({pu}, {pv}) fit needs at least {pu + 1} x {pv + 1} points, got {m} x {n}")
+    Nu, Nv = _pair_of(n_poles, "n_poles")
+    u, v = _params(Q, heights, xs, ys, u_params, v_params, method)
+    ku, kv = (None, None) if knots is None else knots
+    tu, tv = _knots(u, Nu, pu, ku, "u"), _knots(v, Nv, pv, kv, "v")
+    lam_given = smoothing
+    if isinstance(smoothing, str):
+        if smoothing != "gcv":
+            raise ParameterError(f"smoothing: expected a number >= 0 or 'gcv', got {smoothing!r}")
+    elif not (np.isfinite(float(smoothing)) and float(smoothing) >= 0):
+        raise ParameterError(f"smoothing: expected a number >= 0 or 'gcv', got {smoothing!r}")
+    space = _Space(Q, heights, u, v, (pu, pv), tu, tv)
+    A = basis_matrix(tu, pu, Nu, np.clip(u, tu[pu], tu[Nu]))[0]
+    B = basis_matrix(tv, pv, Nv, np.clip(v, tv[pv], tv[Nv]))[0]
+    rows = _build_rows(space, constraints, fix_boundary)
+    missing = bool(np.isnan(Q).any())
+    gcv = None
+    if missing:
+        if lam_given == "gcv":
+            raise ParameterError("smoothing: 'gcv' needs complete data; give a number for data with missing cells")
+        lam = float(lam_given) or float(tolerances.FIT_MISSING_SMOOTHING)
+        P = _sparse_solve(A, B, Q, rows, lam)
+    elif lam_given == 0 and not any(rows.cu) and not any(rows.cv) and not rows.alpha:
+        lam = 0.0
+        P = _plain(A, B, Q)
+    else:
+        kr = _Kronecker(A, B, Q, rows)
+        if lam_given == "gcv":
+            lam, gcv = kr.choose()
+        else:
+            lam = float(lam_given)
+        P = kr.solve(lam)
+    return _result(space, A, B, P, lam, gcv, "sparse" if missing else "kronecker")
+
+
+def _result(space: _Space, A: Array, B: Array, P: Array, lam: float, gcv: float | None, how: str) -> GridFit:
+    F = np.einsum("ia,abk,jb->ijk", A, P, B, optimize=True)
+    err = np.linalg.norm(F - space.Q, axis=-1)
+    ok = np.isfinite(err)
+    if space.heights:
+        Px, Py = space.fixed_poles()
+        P = np.stack([Px, Py, P[..., 0]], -1)
+    surf = BSplineSurface(space.deg, space.knots, np.ascontiguousarray(P))
+    e = err[ok]
+    return GridFit(surf, space.u, space.v, err, float(e.max()), float(np.sqrt(np.mean(e ** 2))), lam, gcv, how)

@@ -1,0 +1,152 @@
+"""Adaptive hierarchical fitting (course §7-10) and the point projection that measures it.
+
+Checks: the tolerance holds at every data point (distance measured by projection, and never more
+than the residual at the parameter), the course's claim (on a field with one sharp feature the
+hierarchy stores far fewer control points than the uniform least-squares fit meeting the same
+tolerance), overlays only where the error was, reproduction of the base space, the result is an
+editable hierarchy (ch. 5 edits, dict round trip) whose flat form equals it, height fields stay
+graphs, per-level reports add up, tolerances overridable.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from occsurf.algorithms import BSplineSurface, tolerances
+from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
+from occsurf.algorithms.fitting._common import project_points
+from occsurf.algorithms.fitting.adaptive import fit_adaptive, measure_grid
+from occsurf.algorithms.fitting.gridded import fit_grid
+from occsurf.algorithms.hierarchical import HierarchicalSurface
+
+EXACT = 1e-12
+
+
+def sharp(x, y):
+    return 0.2 * np.sin(2 * x) * np.cos(1.5 * y) + 0.3 * np.exp(-((x - 0.62) ** 2 + (y - 0.41) ** 2) / (2 * 0.03 ** 2))
+
+
+@pytest.fixture(scope="module")
+def sharp_fit():
+    x = np.linspace(0, 1, 121)
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    Z = sharp(X, Y)
+    return x, Z, fit_adaptive(Z, 1e-3)
+
+
+def test_tolerance_holds_and_is_measured(sharp_fit):
+    x, Z, fit = sharp_fit
+    assert fit.converged and fit.max_error <= 1e-3
+    flat = fit.hierarchy.flatten()
+    P3 = np.stack(np.broadcast_arrays(x[:, None], x[None, :], Z), -1)
+    resid = np.linalg.norm(flat.evaluate_grid(x, x) - P3, axis=-1)
+    assert np.all(fit.distance <= resid + EXACT)  # projection never worse than the start
+    assert float(np.nanmax(fit.distance)) == pytest.approx(fit.max_error)
+
+
+def test_sharp_feature_needs_far_fewer_control_points_than_uniform(sharp_fit):
+    x, Z, fit = sharp_fit
+    P3 = np.stack(np.broadcast_arrays(x[:, None], x[None, :], Z), -1)
+    uniform = None
+    for n in range(8, 121, 2):
+        g = fit_grid(Z, n, 3)
+        if np.nanmax(measure_grid(g.surface, P3, x, x)) <= 1e-3:
+            uniform = n * n
+            break
+    assert uniform is not None
+    assert fit.control_points_total * 2 < uniform, (fit.control_points_total, uniform)
+    # overlays only where the feature is: the deepest overlays lie around (0.62, 0.41)
+    deepest = [o for o in fit.hierarchy.overlays if o.level == fit.hierarchy.depth]
+    for o in deepest:
+        (a, b), (c, d) = o.region
+        assert b - a < 0.5 and d - c < 0.5
+        assert a - 0.15 <= 0.62 <= b + 0.15 and c - 0.15 <= 0.41 <= d + 0.15
+
+
+def test_level_reports_add_up(sharp_fit):
+    _, _, fit = sharp_fit
+    counts = fit.hierarchy.pole_counts()
+    assert sum(L.control_points for L in fit.levels) == counts["stored"] == fit.control_points_total
+    assert [L.level for L in fit.levels] == list(range(fit.hierarchy.depth + 1))
+    assert sum(L.overlays for L in fit.levels) == len(fit.hierarchy.overlays)
+    assert fit.levels[-1].max_error == pytest.approx(fit.max_error)
+    assert fit.levels[0].max_error > fit.levels[-1].max_error
+
+
+def test_result_is_an_editable_hierarchy(sharp_fit):
+    x, _, fit = sharp_fit
+    hs = fit.hierarchy.copy()
+    uu, vv = np.random.default_rng(0).random((2, 300))
+    np.testing.assert_allclose(hs.flatten().evaluate(uu, vv), hs.evaluate(uu, vv), atol=EXACT)
+    again = HierarchicalSurface.from_dict(hs.to_dict())
+    np.testing.assert_allclose(again.evaluate(uu, vv), hs.evaluate(uu, vv), atol=EXACT)
+    # a coarse edit: the fitted details ride along (offsets unchanged), the surface moves
+    before = hs.evaluate(uu, vv)
+    offs = {o.id: hs.offsets(o) for o in hs.overlays}
+    hs.move_vertex(None, (3, 3), (0.0, 0.0, 0.2))
+    assert np.abs(hs.evaluate(uu, vv) - before).max() > 0.01
+    for o in hs.overlays:
+        np.testing.assert_array_equal(hs.offsets(o), offs[o.id])
+    # a fine edit at the feature: only near it
+    target = hs.evaluate(0.62, 0.41) + [0, 0, 0.05]
+    far = hs.evaluate(np.array([0.05, 0.95]), np.array([0.95, 0.05]))
+    ov = hs.finest_overlay(0.62, 0.41)
+    assert ov is not None and ov.level >= 2
+    hs.drag_point(0.62, 0.41, target, overlay="finest")
+    np.testing.assert_allclose(hs.evaluate(0.62, 0.41), target, atol=1e-10)
+    np.testing.assert_allclose(hs.evaluate(np.array([0.05, 0.95]), np.array([0.95, 0.05])), far, atol=EXACT)
+
+
+def test_height_field_stays_a_graph(sharp_fit):
+    _, _, fit = sharp_fit
+    uu, vv = np.random.default_rng(1).random((2, 500))
+    P = fit.hierarchy.evaluate(uu, vv)
+    np.testing.assert_allclose(P[:, 0], uu, atol=EXACT)
+    np.testing.assert_allclose(P[:, 1], vv, atol=EXACT)
+
+
+def test_data_of_the_base_space_need_no_overlay():
+    u = np.linspace(0, 1, 30)
+    probe = fit_grid(np.zeros((30, 30)), 8, 3)
+    s = BSplineSurface((3, 3), probe.surface.knots, np.random.default_rng(4).standard_normal((8, 8, 3)))
+    fit = fit_adaptive(s.evaluate_grid(u, u), 1e-9, u_params=u, v_params=u)
+    assert len(fit.hierarchy.overlays) == 0 and fit.max_error < 1e-11
+
+
+def test_point_grids_and_level_limit():
+    u = np.linspace(0, 1, 81)
+    U, W = np.meshgrid(u, u, indexing="ij")
+    Q = np.stack([np.cos(2 * U), np.sin(2 * U), W + 0.2 * np.exp(-((U - 0.5) ** 2 + (W - 0.5) ** 2) / 0.002)], -1)
+    fit = fit_adaptive(Q, 2e-3, method="uniform")
+    assert fit.converged and fit.max_error <= 2e-3
+    with tolerances.override(FIT_ADAPTIVE_MAX_LEVELS=1):
+        one = fit_adaptive(Q, 1e-6, method="uniform")
+    assert one.hierarchy.depth <= 1 and not one.converged
+
+
+def test_project_points_closed_form_on_a_cylinder():
+    from occsurf.algorithms import extrude, circle
+
+    cyl = extrude(circle([0, 0, 0], 2.0), [0, 0, 3.0])
+    rng = np.random.default_rng(7)
+    (u0, u1), (v0, v1) = cyl.domain
+    uu, vv = u0 + (u1 - u0) * rng.random(400), v0 + (v1 - v0) * rng.random(400)
+    on = cyl.evaluate(uu, vv)
+    r = 0.3 * rng.random(400) - 0.15
+    X = on * np.c_[(2 + r) / 2, (2 + r) / 2, np.ones(400)]  # radius 2 + r, same height
+    start_u = np.clip(uu + 0.02, u0, u1)
+    _, _, d = project_points(cyl, X, start_u, vv)
+    np.testing.assert_allclose(d, np.abs(r), atol=1e-10)
+
+
+def test_bad_input():
+    Z = np.zeros((20, 20))
+    with pytest.raises(ParameterError, match="tol"):
+        fit_adaptive(Z, 0.0)
+    with pytest.raises(ParameterError, match="tol"):
+        fit_adaptive(Z, "x")
+    with pytest.raises(InvalidGeometryError, match="3-D"):
+        fit_adaptive(np.zeros((20, 20, 2)), 1e-3)
+    with pytest.raises(ParameterError, match="max_levels"):
+        fit_adaptive(Z, 1e-3, max_levels=-1)
