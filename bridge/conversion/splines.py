@@ -211,17 +211,20 @@ def from_occ(obj: Any, bounds: tuple[float, ...] | None = None, *, tol: float | 
     Raises
     ------
     InvalidGeometryError
-        Unsupported type (named), 2-D geometry, missing or malformed ``bounds``, degenerated edge.
+        Unsupported type (named), a null shape (``TopoDS_Face()``), 2-D geometry, missing or malformed
+        ``bounds``, degenerated edge, ``tol`` not a positive finite number.
     ToleranceError
         An offset could not be approximated within ``tol``.
     KernelError
         OCC failed (e.g. ``bounds`` outside a non-periodic spline's range).
     """
-    tol = APPROX_TOLERANCE if tol is None else float(tol)
+    tol = APPROX_TOLERANCE if tol is None else _positive(tol, "tol")
     wrapped = getattr(obj, "wrapped", None)
     if isinstance(wrapped, TopoDS_Shape):  # build123d / cadquery Shape
         obj = wrapped
     if isinstance(obj, TopoDS_Shape):
+        if obj.IsNull():  # every query of a null shape dereferences nothing: a segfault
+            raise InvalidGeometryError(f"from_occ: the {type(obj).__name__} is null (an empty shape)")
         return _from_shape(obj, bounds, tol)
     if isinstance(obj, Geom_Curve):
         return _from_geom_curve(obj, _check_bounds(bounds, 2, "curve"), tol)
@@ -246,7 +249,20 @@ def is_reversed(shape: Any) -> bool:
         shape = wrapped
     if not isinstance(shape, TopoDS_Shape):
         raise InvalidGeometryError(f"is_reversed: expected a TopoDS_Shape or a build123d/cadquery shape, got {type(shape).__name__}")
+    if shape.IsNull():
+        raise InvalidGeometryError(f"is_reversed: the {type(shape).__name__} is null (an empty shape)")
     return shape.Orientation() == TopAbs_REVERSED
+
+
+def _positive(value: Any, name: str) -> float:
+    """A positive, finite real (a NaN tolerance would disable every check that uses it)."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError) as err:
+        raise InvalidGeometryError(f"{name}: expected a positive number, got {value!r}") from err
+    if isinstance(value, bool) or not (np.isfinite(x) and x > 0):
+        raise InvalidGeometryError(f"{name}: expected a positive, finite number, got {value!r}")
+    return x
 
 
 def _check_bounds(bounds: tuple[float, ...] | None, n: int, what: str) -> tuple[float, ...] | None:
@@ -542,8 +558,9 @@ def make_face(surface: BSplineSurface | Geom_Surface, tol: float | None = None) 
         ``BRepBuilderAPI_MakeFace`` failed.
     """
     occ_surface = surface if isinstance(surface, Geom_Surface) else _as_occ(surface, BSplineSurface, "surface")
+    tol = FACE_TOLERANCE if tol is None else _positive(tol, "tol")
     with _occ.kernel_errors("building a face (BRepBuilderAPI_MakeFace)"):
-        mf = BRepBuilderAPI_MakeFace(occ_surface, FACE_TOLERANCE if tol is None else tol)
+        mf = BRepBuilderAPI_MakeFace(occ_surface, tol)
         if not mf.IsDone():
             raise KernelError(f"BRepBuilderAPI_MakeFace failed with status {mf.Error()}")
         return mf.Face()
