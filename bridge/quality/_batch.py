@@ -45,12 +45,13 @@ class _Stack:
 
     Spans are found for all splines with one ``searchsorted``: each spline's knots are mapped
     affinely (domain onto ``[0, 1]``) and shifted into disjoint intervals of one sorted key array;
-    the rounding of that map can misplace a parameter within ~1e-13 of a knot by one span, so the
-    span is then checked against the original knots and moved (twice, for repeated knots).
+    the rounding of that map can misplace a parameter within ~1e-13 of a knot by a span (several
+    across a repeated knot), so the span is then checked against the original knots and moved.
     """
 
     def __init__(self, knot_vectors: list[Array], degree: int, counts: list[int]) -> None:
         self.knots = np.concatenate(knot_vectors)
+        self.degree = degree
         lengths = np.array([len(k) for k in knot_vectors], dtype=np.intp)
         self.offset = np.r_[0, np.cumsum(lengths)[:-1]].astype(np.intp)
         bounds = np.array([_span_bounds(k, degree, n) for k, n in zip(knot_vectors, counts)], dtype=np.intp)
@@ -72,11 +73,12 @@ class _Stack:
         first, last = self.first[member], self.last[member]
         s = np.clip(s, first, last)
         base = self.offset[member]
-        for _ in range(2):
+        for _ in range(self.degree + 2):  # across a repeated knot: at most its multiplicity steps
             down = (x < self.knots[base + s]) & (s > first)
-            s = s - down
             up = (x >= self.knots[base + s + 1]) & (s < last)
-            s = s + up
+            if not (down.any() or up.any()):
+                break
+            s = s - down + up
         return s
 
 

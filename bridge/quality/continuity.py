@@ -324,7 +324,9 @@ class ContinuityResult(list):
     points : list of dict or None
         Per report, the dense samples it was measured on (``None`` if none): ``'t'`` (the edge's
         parameters on face ``faces[0]``), ``'s'`` (on the other edge, for geometric matches),
-        ``'uv1'``, ``'uv2'`` ``(n, 2)``: the parameters on both faces, for cross-checks with OCC.
+        ``'uv1'``, ``'uv2'`` ``(n, 2)``: the parameters on both faces, ``'P'`` ``(n, 3)`` the points
+        on ``faces[0]``, and the measures there (``'g0'``, ``'g1'``, ``'g2'``, ``'g2_rel'``,
+        ``'gap'``, with ``g3=True`` ``'g3'``), for cross-checks with OCC.
     """
 
     warnings: list[str]
@@ -698,7 +700,7 @@ def _measure_all(engine: _Engine, samples: int, refine: int, th: Thresholds) -> 
         reports.append(_report(engine, idx, p, why[idx], r, best, grid, P, samples, th, meas))
         points.append(None if r is None else {
             "t": T[r], "s": M["s"].reshape(n, samples)[r], "uv1": M["uv1"].reshape(n, samples, 2)[r],
-            "uv2": M["uv2"].reshape(n, samples, 2)[r]})
+            "uv2": M["uv2"].reshape(n, samples, 2)[r], "P": P[r], **{k: grid[k][r] for k in grid}})
     return reports, points
 
 
