@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import math
 from collections.abc import Iterator, Mapping
 from types import MappingProxyType
 
@@ -316,8 +317,10 @@ _DEFAULTS: dict[str, float] = {
     "LIGHT_FRAME_DEGENERATE": 1e-6,
     # Most lights in one setup (the renderer's fragment shader has uniforms for each).
     "LIGHT_MAX_COUNT": 16,
-    # shade() works on blocks of this many points (the temporaries of a block stay in cache).
+    # shade() works on blocks of this many points (the temporaries of a block stay in cache) ...
     "LIGHT_BLOCK": 16384,
+    # ... on this many threads at once (0: one per CPU; 1: serial). Results do not depend on it.
+    "LIGHT_THREADS": 0,
 }
 
 _OVERRIDES: contextvars.ContextVar[Mapping[str, float]] = contextvars.ContextVar(
@@ -371,14 +374,23 @@ def override(**values: float) -> Iterator[None]:
         If a name is not an overridable tolerance of this module.
     TypeError
         If a value is not a real number (or an integer limit gets a non-integer).
+    ValueError
+        If a value is NaN or infinite (a NaN tolerance disables every comparison made with it), or
+        negative (every entry is a magnitude: a tolerance, an angle, a count; 0 is accepted, e.g.
+        "no Newton step" or "exact only").
     """
     for name, value in values.items():
         if name not in _DEFAULTS:
             raise KeyError(f"override: {name!r} is not a tolerance; known: {', '.join(sorted(_DEFAULTS))}")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise TypeError(f"override: {name} must be a real number, got {value!r}")
+        if not math.isfinite(value):
+            raise ValueError(f"override: {name} must be finite, got {value!r}")
+        if value < 0:
+            raise ValueError(f"override: {name} must not be negative, got {value!r}")
         if isinstance(_DEFAULTS[name], int) and not float(value).is_integer():
             raise TypeError(f"override: {name} is an integer limit, got {value!r}")
+
     typed = {k: type(_DEFAULTS[k])(v) for k, v in values.items()}
     token = _OVERRIDES.set(MappingProxyType({**_OVERRIDES.get(), **typed}))
     try:

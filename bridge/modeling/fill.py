@@ -271,6 +271,8 @@ def _edge_samples(edge: Any, face: Any, samples: int) -> tuple[Any, list[Any], n
 def _local_analysis(s_n: Any, uv: Any, s_f: Any, u: float, v: float) -> tuple[float, float]:
     la = LocalAnalysis_SurfaceContinuity(s_n, uv.X(), uv.Y(), s_f, u, v, GeomAbs_Shape.GeomAbs_G1)
     if not la.IsDone():
+        if "NormalNotDefined" in str(la.StatusError()):  # a pole (fillet corner): no tangent plane to compare
+            return s_n.Value(uv.X(), uv.Y()).Distance(s_f.Value(u, v)), 0.0
         raise KernelError(f"LocalAnalysis_SurfaceContinuity failed ({la.StatusError()})")
     ang = la.G1Angle()
     return la.C0Value(), math.degrees(min(ang, math.pi - ang))

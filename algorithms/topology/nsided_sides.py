@@ -1,0 +1,300 @@
+"""Hole sides described by a curve and the neighbour's tangent planes (course §8-3, trimmed neighbours).
+
+:func:`~occsurf.algorithms.topology.nsided.fill_hole` needs, per side, the boundary curve ``B`` and
+a cross-boundary field ``X`` spanning the neighbour's tangent plane with ``B'``. When the side is an
+iso-line of an untrimmed neighbour, :func:`~occsurf.algorithms.topology.nsided.side_from_surface`
+gives ``X`` exactly. A real model's hole edge is a trimming curve: its p-curve is not an iso-line,
+and the neighbour's cross derivative along it is no spline of low degree. This module builds the
+side from what any source offers (a STEP model, a build123d face, our own surfaces): the boundary
+curve and the neighbour's unit normals ``N`` at sample parameters. Then
+
+.. math::
+
+    X(s) \\approx B'(s) \\times N(s)
+
+(tangent to the neighbour, across the boundary, pointing to the right of the curve seen from the
+side ``N`` points to: into the neighbour when the loop runs counter-clockwise about ``N``) is fitted
+by a cubic B-spline in the least-squares sense, the curve's own knots first, and the spans where the
+tangent plane ``span(B', X)`` misses ``N`` by more than the angle tolerance are bisected until it is
+met (or the samples no longer support another knot; what was achieved is returned). The boundary
+curve is kept exactly, so the fill's G0 to the edge curve stays exact; its G1 to the neighbour is the
+achieved fitting angle (the fill is G1 to the fitted field by construction).
+
+:func:`corner_normals` and :func:`blend_normals` treat sides without a G1 condition (sharp edges of
+the original model: only G0 is asked) and corners where the neighbours do not share a tangent plane
+(the fill's plane at a corner is spanned by the two side tangents; a neighbour whose plane differs
+there cannot be met at the corner by any surface; the normal field is turned into the corner plane
+over a short span, and the G1 error left there is reported per edge).
+
+References
+----------
+Course C25 §8-3. J. Peters, "Joining smooth patches around a vertex to form a C^k surface" (1992)
+on transversal fields; The NURBS Book, 2nd ed., §9.4 (least-squares curve fitting).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .. import tolerances
+from ..errors import InvalidGeometryError
+from ..kernel.basis import basis_matrix
+from ..kernel.curve import BSplineCurve
+from .nsided import HoleSide
+
+__all__ = ["SideFit", "side_from_normals", "fit_boundary", "corner_normals", "blend_normals", "plane_angle"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class SideFit:
+    """A side fitted by :func:`side_from_normals`.
+
+    Attributes
+    ----------
+    side : HoleSide
+        The exact curve and the fitted cross field (homogeneous 4-D for a rational curve).
+    angle : float
+        Largest angle (degrees) at the samples between ``span(B', X)`` and the neighbour's plane.
+    spans : int
+        Number of knot spans of the fitted field.
+    converged : bool
+        Whether ``angle <= angle_tol``.
+    """
+
+    side: HoleSide
+    angle: float
+    spans: int
+    converged: bool
+
+
+def _unit(v: Array) -> Array:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-300)
+
+
+def plane_angle(normals: Array, tangents: Array, cross: Array) -> Array:
+    """Angle (degrees, sign-free) between planes with ``normals`` (m, 3) and ``span(tangents, cross)``."""
+    m = _unit(np.cross(tangents, cross))
+    c = np.abs(np.einsum("mi,mi->m", _unit(normals), m))
+    return np.degrees(np.arccos(np.clip(c, 0.0, 1.0)))
+
+
+def _cartesian_tangent(curve: BSplineCurve, s: Array) -> tuple[Array, Array]:
+    """Points and Cartesian first derivatives (m, 3) of a possibly rational curve."""
+    D = curve.derivatives(s, 1)
+    return D[:, 0], D[:, 1]
+
+
+def _weights_at(curve: BSplineCurve, s: Array) -> Array:
+    if not curve.is_rational:
+        return np.ones_like(s)
+    H = BSplineCurve._trusted(curve.degree, curve.knots, curve.homogeneous_points)
+    return H.evaluate(s)[:, 3]
+
+
+def _check_inputs(curve: BSplineCurve, params: ArrayLike, normals: ArrayLike) -> tuple[Array, Array]:
+    if not isinstance(curve, BSplineCurve) or curve.dim != 3:
+        raise InvalidGeometryError(f"curve: expected a 3-D BSplineCurve, got {type(curve).__name__}"
+                                   + (f" of dimension {curve.dim}" if isinstance(curve, BSplineCurve) else ""))
+    s = np.asarray(params, float).ravel()
+    N = np.asarray(normals, float)
+    if N.ndim != 2 or N.shape != (s.shape[0], 3):
+        raise InvalidGeometryError(f"normals: expected shape ({s.shape[0]}, 3) (one per parameter), got {N.shape}")
+    if s.shape[0] < 8 or not (np.all(np.isfinite(s)) and np.all(np.isfinite(N))):
+        raise InvalidGeometryError(f"params/normals: expected at least 8 finite samples, got {s.shape[0]}")
+    lo, hi = curve.domain
+    tol = 1e-9 * (hi - lo)
+    if s.min() < lo - tol or s.max() > hi + tol:
+        raise InvalidGeometryError(f"params: expected values in the curve's domain [{lo:.6g}, {hi:.6g}], got "
+                                   f"[{s.min():.6g}, {s.max():.6g}]")
+    if np.any(np.linalg.norm(N, axis=1) < 1e-12):
+        raise InvalidGeometryError("normals: a normal is zero (the neighbour is degenerate there)")
+    order = np.argsort(s)
+    return np.clip(s[order], lo, hi), _unit(N[order])
+
+
+def _lsq(knots: Array, degree: int, s: Array, Y: Array, w: Array) -> Array:
+    n = len(knots) - degree - 1
+    A = basis_matrix(knots, degree, n, s)[0]
+    sw = np.sqrt(w)[:, None]
+    coef, *_ = np.linalg.lstsq(A * sw, Y * sw, rcond=None)
+    return coef
+
+
+def side_from_normals(curve: BSplineCurve, params: ArrayLike, normals: ArrayLike, *,
+                      angle_tol: float | None = None, max_spans: int | None = None) -> SideFit:
+    """A hole side from its boundary curve and the neighbour's normals at sample parameters.
+
+    Parameters
+    ----------
+    curve : BSplineCurve
+        The boundary (3-D, polynomial or rational), oriented along the hole's loop. Kept exactly.
+    params : array_like, shape (m,)
+        Parameters on ``curve`` of the samples (m >= 8, dense near the ends where the neighbour's
+        plane turns fastest; their order does not matter).
+    normals : array_like, shape (m, 3)
+        The neighbour's normal there (any length), oriented so that ``B' x N`` points into the
+        neighbour (away from the hole).
+    angle_tol : float, optional
+        Target angle (degrees) between the fitted tangent plane and the neighbour's; default
+        ``tolerances.FILL_FIT_ANGLE``.
+    max_spans : int, optional
+        Most knot spans of the field; default ``tolerances.FILL_FIT_MAX_SPANS``.
+
+    Returns
+    -------
+    SideFit
+        The side, the achieved angle at the samples, the span count and whether ``angle_tol`` was met.
+
+    Notes
+    -----
+    Weighted least squares (the two end samples weigh 1e4: the corner data of the fill come from
+    the ends), cubic field (or the curve's degree if higher), simple knots (C2); each round bisects
+    every span holding a sample whose angle exceeds ``angle_tol`` while the span still holds at
+    least 4 samples. For a rational curve the field is the homogeneous ``(w X, 0)``, whose Cartesian
+    cross derivative is ``X``.
+    """
+    tol = tolerances.FILL_FIT_ANGLE if angle_tol is None else float(angle_tol)
+    cap = tolerances.FILL_FIT_MAX_SPANS if max_spans is None else int(max_spans)
+    s, N = _check_inputs(curve, params, normals)
+    _, T = _cartesian_tangent(curve, s)
+    target = np.cross(T, N)  # |B'|-scaled, across the boundary, into the neighbour
+    if curve.is_rational:
+        target = np.c_[target * _weights_at(curve, s)[:, None], np.zeros(s.shape[0])]
+    lo, hi = curve.domain
+    p = max(3, curve.degree)
+    inner = np.unique(curve.knots[(curve.knots > lo) & (curve.knots < hi)])
+    w = np.ones_like(s)
+    w[[0, -1]] = 1e4
+    while True:
+        knots = np.r_[np.full(p + 1, lo), inner, np.full(p + 1, hi)]
+        coef = _lsq(knots, p, s, target, w)
+        X = BSplineCurve(p, knots, coef)
+        Xc = X.evaluate(s)[:, :3]
+        ang = plane_angle(N, T, Xc)
+        worst = float(ang.max())
+        breaks = np.r_[lo, inner, hi]
+        if worst <= tol or len(breaks) - 1 >= cap:
+            break
+        span = np.clip(np.searchsorted(breaks, s, side="right") - 1, 0, len(breaks) - 2)
+        counts = np.bincount(span, minlength=len(breaks) - 1)
+        bad = np.unique(span[ang > tol])
+        bad = bad[counts[bad] >= 2 * (p + 1)]
+        if bad.size == 0:
+            break
+        inner = np.unique(np.r_[inner, 0.5 * (breaks[bad] + breaks[bad + 1])])
+    return SideFit(HoleSide(curve, X), worst, len(breaks) - 1, worst <= tol)
+
+
+def corner_normals(t_in: ArrayLike, t_out: ArrayLike, reference: ArrayLike) -> Array:
+    """The fill's normal at each hole corner: ``t_in x t_out``, signed like ``reference``.
+
+    Parameters
+    ----------
+    t_in, t_out : array_like, shape (n, 3)
+        Tangent of the side ending at the corner and of the side starting there.
+    reference : array_like, shape (n, 3)
+        A normal of the neighbours there (its sign is kept; its direction is used where the two
+        tangents are parallel, a flat corner).
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        Unit normals.
+    """
+    a, b, r = (np.atleast_2d(np.asarray(x, float)) for x in (t_in, t_out, reference))
+    c = np.cross(a, b)
+    flat = np.linalg.norm(c, axis=1) <= 1e-9 * np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1)
+    c = np.where(flat[:, None], r, c)
+    c = np.where((np.einsum("ij,ij->i", c, r) < 0)[:, None], -c, c)
+    return _unit(c)
+
+
+def blend_normals(s: ArrayLike, normals: ArrayLike, start: ArrayLike, end: ArrayLike, span: float) -> Array:
+    """Turn a normal field into given end normals over a fraction ``span`` of the side.
+
+    ``N(s) = unit((1 - b0 - b1) N + b0 start + b1 end)`` with ``b0 = h(1 - s / span)`` and
+    ``b1 = h(1 - (1 - s) / span)``, ``h`` the C2 smoothstep clipped to [0, 1]; ``s`` on [0, 1].
+    Where the field already ends in ``start``/``end`` nothing changes.
+
+    Parameters
+    ----------
+    s : array_like, shape (m,)
+    normals : array_like, shape (m, 3)
+    start, end : array_like, shape (3,)
+    span : float
+        In (0, 0.5].
+
+    Returns
+    -------
+    ndarray, shape (m, 3)
+    """
+    if not 0.0 < span <= 0.5:
+        raise InvalidGeometryError(f"span: expected a number in (0, 0.5], got {span!r}")
+    s = np.asarray(s, float)
+    N = _unit(np.asarray(normals, float))
+
+    def h(x: Array) -> Array:
+        x = np.clip(x, 0.0, 1.0)
+        return x ** 3 * (10 - 15 * x + 6 * x * x)
+
+    b0, b1 = h(1 - s / span), h(1 - (1 - s) / span)
+    st, en = _unit(np.asarray(start, float)), _unit(np.asarray(end, float))
+    st = np.where((N[0] @ st) < 0, -st, st)
+    en = np.where((N[-1] @ en) < 0, -en, en)
+    return _unit((1 - b0 - b1)[:, None] * N + b0[:, None] * st + b1[:, None] * en)
+
+
+def fit_boundary(params: ArrayLike, points: ArrayLike, tol: float, *, max_spans: int | None = None
+                 ) -> tuple[BSplineCurve, float]:
+    """A cubic B-spline through ordered boundary samples, refined until within ``tol``.
+
+    Used where several edges meeting tangentially (a flat corner) become one side of the hole:
+    their chain is one smooth curve geometrically but not one spline (knots of full multiplicity,
+    different weights). Least squares on the given parameters (ends interpolated: weight 1e4), every
+    span holding a sample farther than ``tol`` bisected while it holds at least 8 samples.
+
+    Parameters
+    ----------
+    params : array_like, shape (m,)
+        Increasing parameters of the samples (e.g. arc length).
+    points : array_like, shape (m, 3)
+    tol : float
+        Largest distance (model units) at the samples.
+    max_spans : int, optional
+        Default ``tolerances.FILL_FIT_MAX_SPANS``.
+
+    Returns
+    -------
+    (BSplineCurve, float)
+        The curve on ``[params[0], params[-1]]`` and the largest distance at the samples.
+    """
+    s = np.asarray(params, float).ravel()
+    P = np.asarray(points, float)
+    if P.shape != (s.shape[0], 3) or s.shape[0] < 8 or np.any(np.diff(s) <= 0):
+        raise InvalidGeometryError(f"params/points: expected m >= 8 increasing parameters and (m, 3) points, got "
+                                   f"{s.shape} and {P.shape}")
+    cap = tolerances.FILL_FIT_MAX_SPANS if max_spans is None else int(max_spans)
+    lo, hi, p = float(s[0]), float(s[-1]), 3
+    inner = np.empty(0)
+    w = np.ones_like(s)
+    w[[0, -1]] = 1e4
+    while True:
+        knots = np.r_[np.full(p + 1, lo), inner, np.full(p + 1, hi)]
+        c = BSplineCurve(p, knots, _lsq(knots, p, s, P, w))
+        err = np.linalg.norm(c.evaluate(s) - P, axis=1)
+        breaks = np.r_[lo, inner, hi]
+        if err.max() <= tol or len(breaks) - 1 >= cap:
+            break
+        span = np.clip(np.searchsorted(breaks, s, side="right") - 1, 0, len(breaks) - 2)
+        counts = np.bincount(span, minlength=len(breaks) - 1)
+        bad = np.unique(span[err > tol])
+        bad = bad[counts[bad] >= 8]
+        if bad.size == 0:
+            break
+        inner = np.unique(np.r_[inner, 0.5 * (breaks[bad] + breaks[bad + 1])])
+    return c, float(err.max())

@@ -1,0 +1,494 @@
+"""Remove faces of a model and fill the hole they leave (course §8-3 on real, trimmed models).
+
+The "replace this face" workflow: :func:`refill_faces` removes faces (numbered as in ``inspect``:
+``TopExp.MapShapes_s`` order, each face once) from the model sewn into shells, finds the hole's
+loop of edges and fills it with :func:`occsurf.algorithms.topology.nsided.fill_hole`, the sides
+described by curves and fitted cross fields (:func:`occsurf.algorithms.topology.nsided_sides.side_from_normals`):
+the hole edges are trimming curves of their neighbours, not iso-lines.
+
+Per edge the continuity asked for is the original model's: an edge where the removed face met its
+neighbour tangent-continuously (within :data:`G1_EDGE_DEG`) gets G1 to the neighbour (its normals
+along the p-curve); a sharp edge gets G0 and the removed face's own tangent plane as its cross
+field (the fill then keeps the original's shape there; no surface can be G1 to a neighbour the
+original met at an angle). OCC's ``BRepOffsetAPI_MakeFilling`` gets the same constraints (G1
+with the neighbour as support face on the tangent edges, C0 on the others), with cadquery's
+defaults and with tuned parameters, and both are measured the same way, with OCC's
+``LocalAnalysis_SurfaceContinuity`` (:func:`occsurf.bridge.modeling.fill.assess_joint`). The
+filled model is sewn, checked with ``BRepCheck_Analyzer`` and written to / read back from STEP.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
+from OCP.Bnd import Bnd_Box
+from OCP.BRepBndLib import BRepBndLib
+from OCP.BRepCheck import BRepCheck_Analyzer
+from OCP.BRepClass import BRepClass_FaceClassifier
+from OCP.BRepOffsetAPI import BRepOffsetAPI_MakeFilling
+from OCP.BRepTools import BRepTools_WireExplorer
+from OCP.GeomAbs import GeomAbs_Shape
+from OCP.GeomLProp import GeomLProp_SLProps
+from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
+from OCP.IFSelect import IFSelect_ReturnStatus
+from OCP.ShapeAnalysis import ShapeAnalysis_FreeBounds
+from OCP.STEPControl import STEPControl_Reader, STEPControl_StepModelType, STEPControl_Writer
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_IN, TopAbs_OUT, TopAbs_REVERSED, TopAbs_WIRE
+from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopoDS import TopoDS, TopoDS_Shell
+from OCP.TopTools import TopTools_IndexedMapOfShape
+
+from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
+from occsurf.algorithms.topology.nsided import HoleFill, closest_parameters, fill_hole
+from occsurf.algorithms import tolerances
+from occsurf.algorithms.topology.nsided_sides import fit_boundary, side_from_normals
+
+from .. import _occ
+from ..conversion.splines import from_occ, make_face
+from ..messages import one_line
+from .fill import ASSESS_SAMPLES, SEW_TOLERANCE, assess_joint, edge_face_map
+
+__all__ = ["RefillReport", "refill_faces", "model_faces", "G1_EDGE_DEG", "OCC_TUNED", "OCC_DEFAULT"]
+
+#: An edge counts as tangent-continuous in the original model (and the fill is asked to be G1 to
+#: the neighbour there) when the removed face and the neighbour meet within this angle (degrees).
+G1_EDGE_DEG: float = 1.0
+#: Samples of the neighbour's normal per edge for the cross-field fit (plus clustered end samples).
+FIT_SAMPLES: int = 81
+#: ``BRepOffsetAPI_MakeFilling`` parameters: cadquery's ``makeNSidedSurface`` defaults, and the
+#: tuned ones of OCP_NOTES §6 (more points on each constraint, more iterations).
+OCC_DEFAULT = dict(degree=3, nb_pts_on_cur=15, nb_iter=2, anisotropy=False, tol2d=1e-5, tol3d=1e-4,
+                   tol_ang=1e-2, tol_curv=0.1, max_deg=8, max_segments=9)
+OCC_TUNED = dict(OCC_DEFAULT, nb_pts_on_cur=30, nb_iter=4, tol3d=1e-6, tol_ang=1e-3)
+
+
+@dataclass
+class RefillReport:
+    """One removal: the hole, our fill and OCC's, measured alike (JSON-safe; angles in degrees).
+
+    ``g0`` is the largest ``C0Value`` over every hole edge; ``g1`` the largest ``G1Angle`` over the
+    edges where G1 is asked (``g1_edges``); ``side_g0``/``side_g1`` per edge (``None`` for G1 where
+    only G0 is asked); ``fit_g1`` the fitted cross fields' angle to the neighbours per edge.
+    """
+
+    faces: list[int]
+    status: str  # 'filled', 'refused', 'failed'
+    reason: str | None = None
+    sides: int = 0
+    g1_edges: int = 0
+    seconds: float | None = None
+    g0: float | None = None
+    g1: float | None = None
+    side_g0: list[float] = field(default_factory=list)
+    side_g1: list[float | None] = field(default_factory=list)
+    fit_g1: list[float] = field(default_factory=list)
+    valid: bool | None = None
+    step_round_trip: bool | None = None
+    occ: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+
+# ----------------------------------------------------------------------------------- topology
+def model_faces(shape: Any) -> list[Any]:
+    """The faces of ``shape`` numbered as ``inspect`` numbers them (each face once)."""
+    m = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, TopAbs_FACE, m)
+    return [TopoDS.Face_s(m.FindKey(i)) for i in range(1, m.Extent() + 1)]
+
+
+class SewnModel:
+    """The model's faces sewn once; original face ``i`` -> sewn face; the edge -> faces map."""
+
+    def __init__(self, shape: Any) -> None:
+        _occ.silence_messages()
+        self.original = model_faces(shape)
+        sew = BRepBuilderAPI_Sewing(SEW_TOLERANCE)
+        for f in self.original:
+            sew.Add(f)
+        with _occ.kernel_errors("sewing"):
+            sew.Perform()
+        self.shape = sew.SewedShape()
+        self.faces = [TopoDS.Face_s(sew.Modified(f)) if sew.IsModified(f) else f for f in self.original]
+        self.e2f = edge_face_map(self.shape)
+        box = Bnd_Box()
+        BRepBndLib.Add_s(self.shape, box)
+        self.size = math.sqrt(box.SquareExtent()) if not box.IsVoid() else 1.0
+
+    def edge_faces(self, edge: Any) -> list[Any]:
+        idx = self.e2f.FindIndex(edge)
+        if idx == 0:
+            return []
+        return [TopoDS.Face_s(f) for f in self.e2f.FindFromIndex(idx)]
+
+    def adjacent_pairs(self, indices: list[int]) -> list[tuple[int, int]]:
+        """Pairs ``(i, j)``, ``i < j``, both in ``indices``, of faces sharing an edge."""
+        index = set(indices)
+        pairs = set()
+        for i in index:
+            ex = TopExp_Explorer(self.faces[i], TopAbs_EDGE)
+            while ex.More():
+                for g in self.edge_faces(ex.Current()):
+                    j = self.index_of(g)
+                    if j is not None and j != i and j in index:
+                        pairs.add((min(i, j), max(i, j)))
+                ex.Next()
+        return sorted(pairs)
+
+    def index_of(self, face: Any) -> int | None:
+        if not hasattr(self, "_lookup"):
+            self._lookup = {}
+            for k, f in enumerate(self.faces):
+                self._lookup.setdefault(f.TShape(), []).append(k)
+        for k in self._lookup.get(face.TShape(), []):
+            if self.faces[k].IsSame(face):
+                return k
+        return None
+
+
+def _hole_loop(model: SewnModel, removed: list[int]) -> tuple[list[Any], list[Any], list[Any]]:
+    """The hole's edges in loop order, each edge's neighbour and the removed face it bounded.
+
+    Raises
+    ------
+    InvalidGeometryError
+        The removed faces leave no closed loop, several loops (not a disk), or reach a free
+        boundary of the model (the hole is not closed).
+    """
+    shell, b = TopoDS_Shell(), BRep_Builder()
+    b.MakeShell(shell)
+    for i in removed:
+        b.Add(shell, model.faces[i])
+    fb = ShapeAnalysis_FreeBounds(shell, SEW_TOLERANCE, False, True)
+    wires, open_ = [], TopExp_Explorer(fb.GetOpenWires(), TopAbs_WIRE)
+    if open_.More():
+        raise InvalidGeometryError("the removed faces' boundary is not a closed loop")
+    wex = TopExp_Explorer(fb.GetClosedWires(), TopAbs_WIRE)
+    while wex.More():
+        wires.append(TopoDS.Wire_s(wex.Current()))
+        wex.Next()
+    if len(wires) != 1:
+        raise InvalidGeometryError(f"removing the faces leaves {len(wires)} loops (not a disk-like hole)")
+    removed_faces = [model.faces[i] for i in removed]
+    edges, nbs, owners = [], [], []
+    we = BRepTools_WireExplorer(wires[0])
+    while we.More():
+        e = we.Current()
+        fs = model.edge_faces(e)
+        nb = [f for f in fs if not any(f.IsSame(r) for r in removed_faces)]
+        own = [f for f in fs if any(f.IsSame(r) for r in removed_faces)]
+        if not nb:
+            raise InvalidGeometryError("a hole edge bounds no other face: the removed faces reach a free boundary "
+                                       "of the model (the hole is not closed)")
+        edges.append(e), nbs.append(nb[0]), owners.append(own[0] if own else None)
+        we.Next()
+    return edges, nbs, owners
+
+
+# ----------------------------------------------------------------------------------- sides
+def _edge_params(edge: Any, face: Any, k: int) -> np.ndarray:
+    a, b = BRep_Tool.Range_s(edge, face)
+    ends = np.geomspace(1e-4, 5e-2, 8)
+    f = np.unique(np.r_[np.linspace(0, 1, k), ends, 1 - ends])
+    return a + f * (b - a)
+
+
+def _normals_on(edge: Any, face: Any, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[Any]]:
+    """Points, unit normals (face orientation applied) and uv of ``face`` along ``edge``'s p-curve."""
+    s = BRep_Tool.Surface_s(face)
+    pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+    sign = -1.0 if face.Orientation() == TopAbs_REVERSED else 1.0
+    pts, nrm, uvs = [], [], []
+    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
+    for t in ts:
+        uv = pc.Value(float(t))
+        s.D1(uv.X(), uv.Y(), p, du, dv)
+        n = np.cross(du.Coord(), dv.Coord())
+        if np.linalg.norm(n) <= 1e-12 * max(du.Magnitude() * dv.Magnitude(), 1e-300) or not np.all(np.isfinite(n)):
+            pr = GeomLProp_SLProps(s, uv.X(), uv.Y(), 1, 1e-9)
+            n = np.array(pr.Normal().Coord()) if pr.IsNormalDefined() else np.full(3, np.nan)
+        pts.append(p.Coord()), nrm.append(n), uvs.append(uv)
+    N = np.array(nrm) * sign
+    good = np.all(np.isfinite(N), axis=1) & (np.linalg.norm(N, axis=1) > 0)
+    if good.sum() < 8:
+        raise InvalidGeometryError("the neighbour's normal is undefined along a hole edge")
+    return np.array(pts)[good], N[good] / np.linalg.norm(N[good], axis=1, keepdims=True), [u for u, g in zip(uvs, good) if g]
+
+
+def _side_of(face: Any, uv: Any, direction: np.ndarray) -> int:
+    """+1 if stepping from ``uv`` along the 3-D ``direction`` enters ``face``, -1 if it leaves."""
+    s = BRep_Tool.Surface_s(face)
+    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
+    s.D1(uv.X(), uv.Y(), p, du, dv)
+    J = np.c_[du.Coord(), dv.Coord()]
+    d, *_ = np.linalg.lstsq(J, direction, rcond=None)
+    scale = np.linalg.norm(d)
+    if scale == 0:
+        return 1
+    for eps in (1e-4, 1e-3, 1e-2):
+        q = gp_Pnt2d(uv.X() + eps * d[0] / scale, uv.Y() + eps * d[1] / scale)
+        st = BRepClass_FaceClassifier(face, q, 1e-9).State()
+        if st == TopAbs_IN:
+            return 1
+        if st == TopAbs_OUT:
+            return -1
+    return 1
+
+
+def _oriented_curves(edges: list[Any]) -> list[Any]:
+    curves = [from_occ(e) for e in edges]
+    n = len(curves)
+    ends = [(c.evaluate(c.domain[0]), c.evaluate(c.domain[1])) for c in curves]
+    out = []
+    for k in range(n):
+        a0, a1 = ends[k]
+        b0, b1 = ends[(k + 1) % n]
+        d_end = min(np.linalg.norm(a1 - b0), np.linalg.norm(a1 - b1))
+        d_start = min(np.linalg.norm(a0 - b0), np.linalg.norm(a0 - b1))
+        out.append(curves[k] if d_end <= d_start else curves[k].reverse())
+    return out
+
+
+def _joint_angle(edge: Any, f1: Any, f2: Any) -> float:
+    """Largest angle (degrees) between the two faces' normals along the edge (7 samples)."""
+    a1, b1 = BRep_Tool.Range_s(edge, f1)
+    a2, b2 = BRep_Tool.Range_s(edge, f2)
+    try:
+        _, n1, _ = _normals_on(edge, f1, np.linspace(a1, b1, 9))
+        _, n2, _ = _normals_on(edge, f2, np.linspace(a2, b2, 9))
+    except InvalidGeometryError:
+        return 90.0
+    if len(n1) != len(n2):  # a normal undefined on one side only (a pole): judge it sharp
+        return 90.0
+    c = np.abs(np.einsum("ij,ij->i", n1, n2))  # sign-free: face orientations need not agree here
+    return float(np.degrees(np.arccos(np.clip(c, 0, 1))).max())
+
+
+def _edge_normals(e: Any, nb: Any, own: Any, curve: Any) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Points and oriented normals along edge ``e`` (G1 edge: the neighbour's; sharp: the owner's)."""
+    tangent = own is not None and _joint_angle(e, own, nb) <= G1_EDGE_DEG
+    src = nb if tangent or own is None else own
+    P, N, uvs = _normals_on(e, src, _edge_params(e, src, FIT_SAMPLES))
+    s, _ = closest_parameters(curve, P)
+    k = len(P) // 2
+    T = curve.derivatives(s[k:k + 1], 1)[0, 1]
+    into = np.cross(T, N[k])  # must point into nb (G1 edge) or out of the removed face (sharp edge)
+    if _side_of(src, uvs[k], into) != (1 if src is nb else -1):
+        N = -N
+    return P, N, bool(tangent)
+
+
+def _groups(curves: list[Any]) -> list[list[int]]:
+    """Consecutive edges meeting at flat corners (tangents within FILL_MIN_CORNER_ANGLE) as one side."""
+    n = len(curves)
+    flat = []
+    for k in range(n):
+        a, b = curves[k], curves[(k + 1) % n]
+        ta = a.derivatives(np.array([a.domain[1]]), 1)[0, 1]
+        tb = b.derivatives(np.array([b.domain[0]]), 1)[0, 1]
+        cosang = float(ta @ tb / max(np.linalg.norm(ta) * np.linalg.norm(tb), 1e-300))
+        flat.append(np.degrees(np.arccos(np.clip(cosang, -1, 1))) < tolerances.FILL_MIN_CORNER_ANGLE)
+    if all(flat):
+        return [list(range(n))]
+    start = next(k for k in range(n) if not flat[k - 1])  # a real corner precedes edge `start`
+    groups: list[list[int]] = []
+    for j in range(n):
+        k = (start + j) % n
+        if groups and flat[k - 1]:
+            groups[-1].append(k)
+        else:
+            groups.append([k])
+    return groups
+
+
+def _merged_curve(curves: list[Any], size: float) -> tuple[Any, float]:
+    """One cubic through a chain of tangent-continuous curves, within FILL_FIT_G0 * size."""
+    pts, par, s0 = [], [], 0.0
+    for c in curves:
+        t = np.linspace(*c.domain, 121)
+        p = c.evaluate(t)
+        arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
+        keep = slice(1, None) if pts else slice(None)
+        pts.append(p[keep]), par.append(s0 + arc[keep])
+        s0 += arc[-1]
+    return fit_boundary(np.concatenate(par), np.concatenate(pts), tolerances.FILL_FIT_G0 * size)
+
+
+def refill_sides(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
+                 ) -> tuple[list[Any], list[int], list[bool], list[float]]:
+    """HoleSide data of the hole, fitted cross fields; edges at flat corners merged into one side.
+
+    Returns
+    -------
+    sides : list of HoleSide
+    side_of_edge : list of int
+        The side each edge lies on.
+    g1 : list of bool
+        Per edge: G1 to the neighbour asked (the original joint was tangent-continuous).
+    fit : list of float
+        Per side: the fitted field's angle to the neighbours' planes (degrees).
+    """
+    curves = _oriented_curves(edges)
+    groups = _groups(curves)
+    if len(groups) < 3:
+        raise InvalidGeometryError(f"the hole has {len(groups)} side(s) once tangent edges are merged "
+                                   "(n = 1 and n = 2 holes are not supported yet)")
+    sides, side_of_edge, fit = [], [0] * len(edges), []
+    g1 = [False] * len(edges)
+    for gi, group in enumerate(groups):
+        c = curves[group[0]] if len(group) == 1 else _merged_curve([curves[k] for k in group], size)[0]
+        P_all, N_all = [], []
+        for k in group:
+            P, N, g1[k] = _edge_normals(edges[k], nbs[k], owners[k], c)
+            P_all.append(P), N_all.append(N)
+            side_of_edge[k] = gi
+        P, N = np.concatenate(P_all), np.concatenate(N_all)
+        s, _ = closest_parameters(c, P)
+        res = side_from_normals(c, s, N)
+        sides.append(res.side), fit.append(res.angle)
+    return sides, side_of_edge, g1, fit
+
+
+# ----------------------------------------------------------------------------------- OCC's filler
+def occ_filling(edges: list[Any], nbs: list[Any], g1: list[bool], params: dict[str, Any]) -> Any:
+    o = params
+    mk = BRepOffsetAPI_MakeFilling(o["degree"], o["nb_pts_on_cur"], o["nb_iter"], o["anisotropy"], o["tol2d"],
+                                   o["tol3d"], o["tol_ang"], o["tol_curv"], o["max_deg"], o["max_segments"])
+    with _occ.kernel_errors("BRepOffsetAPI_MakeFilling"):
+        for e, f, t in zip(edges, nbs, g1):
+            if t:
+                mk.Add(e, f, GeomAbs_Shape.GeomAbs_G1, True)
+            else:
+                mk.Add(e, GeomAbs_Shape.GeomAbs_C0, True)
+        mk.Build()
+        if not mk.IsDone():
+            raise InvalidGeometryError("BRepOffsetAPI_MakeFilling: not done")
+        return TopoDS.Face_s(mk.Shape())
+
+
+def _measure(edges: list[Any], nbs: list[Any], g1: list[bool], surfs: list[Any], locate: Any = None,
+             samples: int = ASSESS_SAMPLES) -> tuple[list[float], list[float | None]]:
+    s0, s1 = [], []
+    for i, (e, f, t) in enumerate(zip(edges, nbs, g1)):
+        loc = None if locate is None else locate(i)
+        a, b = assess_joint(e, f, surfs, samples, locate=loc)
+        s0.append(a), s1.append(b if t else None)
+    return s0, s1
+
+
+def _round_trip(shape: Any, n_faces: int) -> bool:
+    w = STEPControl_Writer()
+    w.Transfer(shape, STEPControl_StepModelType.STEPControl_AsIs)
+    bio = io.BytesIO()
+    w.WriteStream(bio)
+    bio.seek(0)
+    r = STEPControl_Reader()
+    if r.ReadStream("refill", bio) != IFSelect_ReturnStatus.IFSelect_RetDone:
+        return False
+    r.TransferRoots()
+    return len(model_faces(r.OneShape())) == n_faces
+
+
+# ----------------------------------------------------------------------------------- the workflow
+def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool = True, check: bool = True,
+                 occ_variants: dict[str, dict[str, Any]] | None = None) -> tuple[RefillReport, Any]:
+    """Remove ``faces`` (inspect numbering) and fill the hole; returns the report and the new shape.
+
+    Parameters
+    ----------
+    model : SewnModel or TopoDS_Shape
+        The model (sew it once with :class:`SewnModel` when refilling many face sets).
+    faces : list of int
+        Indices of the faces to remove (they must form a disk: one closed loop).
+    compare_occ : bool
+        Also run ``BRepOffsetAPI_MakeFilling`` (``occ_variants``: name -> parameters; default
+        ``{"default": OCC_DEFAULT, "tuned": OCC_TUNED}``) and measure it alike.
+    check : bool
+        Sew the fill in, check the result with ``BRepCheck_Analyzer`` and round-trip it through STEP.
+
+    Returns
+    -------
+    (RefillReport, TopoDS_Shape or None)
+        The shape is ``None`` unless our fill succeeded and ``check`` is set.
+    """
+    if not isinstance(model, SewnModel):
+        model = SewnModel(getattr(model, "wrapped", model))
+    n = len(model.faces)
+    bad = [i for i in faces if not (isinstance(i, (int, np.integer)) and 0 <= i < n)]
+    if bad or not faces:
+        raise InvalidGeometryError(f"faces: expected indices 0..{n - 1} (as numbered by inspect), got {faces}")
+    rep = RefillReport(faces=sorted(int(i) for i in faces), status="refused")
+    try:
+        edges, nbs, owners = _hole_loop(model, rep.faces)
+    except OccsurfError as err:
+        rep.reason = one_line(err, expected=(OccsurfError,))
+        return rep, None
+    rep.sides = len(edges)
+    shape = None
+    g1 = [False] * len(edges)
+    try:
+        t0 = time.perf_counter()
+        sides, side_of_edge, g1, rep.fit_g1 = refill_sides(edges, nbs, owners, model.size)
+        fill = fill_hole(sides)
+        rep.seconds = time.perf_counter() - t0
+        rep.g1_edges = sum(g1)
+        occ_faces = [make_face(p, 1e-7) for p in fill.patches]
+        surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
+
+        def locate(i: int) -> Any:
+            return lambda pts: fill.locate(side_of_edge[i], pts)[:3]
+        rep.side_g0, rep.side_g1 = _measure(edges, nbs, g1, surfs, locate)
+        rep.g0 = max(rep.side_g0)
+        rep.g1 = max([a for a in rep.side_g1 if a is not None], default=0.0)
+        rep.status = "filled"
+        if check:
+            shape = _sew_in(model, rep.faces, occ_faces)
+            rep.valid = bool(BRepCheck_Analyzer(shape).IsValid())
+            rep.step_round_trip = _round_trip(shape, len(model_faces(shape)))
+    except OccsurfError as err:
+        rep.status, rep.reason = "refused", one_line(err, expected=(OccsurfError,))
+    except Exception as err:  # noqa: BLE001 - an OCC failure on one hole must not stop the others
+        rep.status, rep.reason = "failed", one_line(err, expected=(OccsurfError,))
+    if compare_occ:
+        if rep.g1_edges == 0 and rep.status != "filled":
+            g1 = [own is not None and _safe_joint(e, own, nb) for e, nb, own in zip(edges, nbs, owners)]
+        for name, params in (occ_variants or {"default": OCC_DEFAULT, "tuned": OCC_TUNED}).items():
+            rep.occ[name] = _occ_variant(edges, nbs, g1, params)
+    return rep, shape
+
+
+def _safe_joint(e: Any, own: Any, nb: Any) -> bool:
+    try:
+        return _joint_angle(e, own, nb) <= G1_EDGE_DEG
+    except Exception:  # noqa: BLE001
+        return False
+
+
+def _occ_variant(edges: list[Any], nbs: list[Any], g1: list[bool], params: dict[str, Any]) -> dict[str, Any]:
+    t0 = time.perf_counter()
+    try:
+        face = occ_filling(edges, nbs, g1, params)
+        secs = time.perf_counter() - t0
+        s0, s1 = _measure(edges, nbs, g1, [BRep_Tool.Surface_s(face)])
+        return {"status": "ok", "seconds": secs, "g0": max(s0), "g1": max([a for a in s1 if a is not None], default=0.0),
+                "side_g0": s0, "side_g1": s1}
+    except Exception as err:  # noqa: BLE001
+        return {"status": "failed", "reason": one_line(err, expected=(OccsurfError,)),
+                "seconds": time.perf_counter() - t0}
+
+
+def _sew_in(model: SewnModel, removed: list[int], new_faces: list[Any]) -> Any:
+    sew = BRepBuilderAPI_Sewing(SEW_TOLERANCE)
+    for k, f in enumerate(model.faces):
+        if k not in removed:
+            sew.Add(f)
+    for f in new_faces:
+        sew.Add(f)
+    with _occ.kernel_errors("sewing the fill in"):
+        sew.Perform()
+    return sew.SewedShape()
