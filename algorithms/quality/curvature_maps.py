@@ -25,6 +25,9 @@ from numpy.typing import ArrayLike, NDArray
 from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..geometry.differential import curvatures_from_derivatives
+from ..kernel.surface import BSplineSurface
+from ..topology.spatch import SPatch
+from . import _kernels
 from ._common import Array, check_mask, grid_axes, grid_partials, nudged_normals, surface_of
 
 __all__ = ["KINDS", "SCALE_MODES", "CurvatureMap", "ColorScale", "curvature_map", "curvature_values", "color_scale"]
@@ -197,23 +200,38 @@ def curvature_map(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, kind: 
     -----
     Tensor-product surfaces are evaluated by ``derivatives_grid`` (two banded basis products);
     the curvature formulas run in row blocks of about 65 000 points so the partials stay in cache.
+    From :data:`~occsurf.algorithms.tolerances.NUMBA_MIN_POINTS` grid points on, a B-spline surface
+    goes through an optional numba kernel that fuses the same steps per point
+    (:mod:`occsurf.algorithms.quality._kernels`; ``OCCSURF_NO_NUMBA=1`` turns it off).
     """
     kind = _check_kind(kind)
     s = surface_of(surface, patch)
     a, b = grid_axes(s, us, vs)
     m = check_mask(mask, (a.size, b.size))
-    g = grid_partials(s, a, b, m)
-    P, Nrm, k1, k2, K, H, ok = _block_curvatures(g.D)
-    degenerate = g.inside & ~ok
+    fused = _kernels.grid_curvatures(s, a, b) if isinstance(s, BSplineSurface) else None
+    if fused is not None:
+        P, Nrm, k1, k2, K, H, ok = fused
+        inside = np.ones(ok.shape, bool) if m is None else m.copy()
+        if m is not None:
+            for x in (P, Nrm):
+                x[~inside] = np.nan
+            for x in (k1, k2, K, H):
+                x[~inside] = np.nan
+    else:
+        g = grid_partials(s, a, b, m)
+        inside = g.inside
+        P, Nrm, k1, k2, K, H, ok = _block_curvatures(g.D)
+    degenerate = inside & ~ok
     if np.any(degenerate):
         iu, iv = np.nonzero(degenerate)
         Nrm[degenerate] = nudged_normals(s, np.stack((a[iu], b[iv]), axis=1))
-    finite = P[g.inside]
+    finite = P.reshape(-1, 3) if m is None and not isinstance(s, SPatch) else P[inside]
     size = float(np.linalg.norm(finite.max(axis=0) - finite.min(axis=0))) if finite.size else 0.0
     values = curvature_values(kind, k1, k2, K, H, size)
-    values = np.where(g.inside & ~degenerate, values, np.nan)
+    if m is not None or isinstance(s, SPatch) or np.any(degenerate):
+        values = np.where(inside & ~degenerate, values, np.nan)
     return CurvatureMap(points=P, normals=Nrm, values=values, k1=k1, k2=k2, gaussian=K, mean=H,
-                        degenerate=degenerate, kind=kind, mask=g.inside, us=a, vs=b, size=size)
+                        degenerate=degenerate, kind=kind, mask=inside, us=a, vs=b, size=size)
 
 
 # ------------------------------------------------------------------------------------ colour scale
