@@ -1,0 +1,389 @@
+"""The offline page of a quality report (``DIR/index.html`` of ``occsurf check``).
+
+One HTML file that opens from the file system with no network: the model overview (numbers and the
+overview pictures), a face table sortable by any column (worst first by default), the edge-
+continuity table, and per face its curvature map, zebra stripes, sections with combs and flags
+with their suggested corrections. An interactive 3-D view (rotate, zoom, switch the indicator:
+curvatures, per-pixel zebra that follows the view, isophotes, draft) runs on three.js r187,
+vendored in ``static/three-viewer.min.js`` (MIT licence, ``static/THREE_LICENSE``) and embedded in
+the page, since a page opened from ``file://`` may not load scripts as ES modules.
+
+:func:`viewer_payload` packs the triangulated faces and their per-vertex indicators (float32,
+base64); :func:`render_html` builds the page from a report's JSON and that payload.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import math
+from importlib import resources
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .report import QualityReport
+
+__all__ = ["render_html", "viewer_payload", "write_html", "VIEWER_INDICATORS", "viewer_script"]
+
+#: Indicators the 3-D view can switch between: (key, label, colour map, symmetric scale).
+VIEWER_INDICATORS: tuple[tuple[str, str, str, bool], ...] = (
+    ("mean", "mean curvature H", "diverging", True),
+    ("gaussian", "Gaussian curvature K", "diverging", True),
+    ("max", "max principal curvature k1", "diverging", True),
+    ("absolute", "|k1|+|k2|", "rainbow", False),
+    ("zebra", "zebra (per pixel, follows the view)", "stripes", False),
+    ("isophote", "isophotes (per pixel)", "stripes", False),
+    ("draft", "draft angle (pull +z), deg", "diverging", True),
+    ("shaded", "shaded", "grey", False),
+)
+#: Vertices above which the 3-D view's mesh is thinned (every k-th triangle kept is not an
+#: option: faces would get holes; instead big models are sent whole and the page stays usable
+#: up to a few hundred thousand vertices).
+MAX_VIEWER_VERTICES = 400_000
+
+
+def viewer_script() -> str:
+    """The vendored three.js bundle (read from the package data)."""
+    return resources.files("occsurf.bridge.quality").joinpath("static/three-viewer.min.js").read_text("utf-8")
+
+
+def _b64(a: Any, dtype: str) -> str:
+    import numpy as np
+
+    return base64.b64encode(np.ascontiguousarray(a, dtype=dtype).tobytes()).decode("ascii")
+
+
+def viewer_payload(report: QualityReport) -> dict[str, Any]:
+    """The faces of ``report`` as the 3-D view's data: per face base64 float32 positions and
+    normals, uint32 triangles and one float32 array per indicator (NaN kept), plus the common
+    colour range of each indicator (symmetric about 0 where the value has a sign)."""
+    import numpy as np
+
+    from .pictures import _scale
+
+    fields = [report.fields[k] for k in sorted(report.fields)]
+    total = sum(f.mesh.n_vertices for f in fields)
+    faces = []
+    if total <= MAX_VIEWER_VERTICES:
+        for f in fields:
+            N = np.nan_to_num(f.mesh.normals, nan=0.0)
+            faces.append({
+                "index": f.mesh.index, "n": f.mesh.n_vertices,
+                "points": _b64(f.mesh.points, "<f4"), "normals": _b64(N, "<f4"),
+                "triangles": _b64(f.mesh.triangles, "<u4"),
+                "values": {k: _b64(f.values[k], "<f4") for k, *_ in VIEWER_INDICATORS if k in f.values},
+            })
+    ranges = {}
+    for key, _, _, _ in VIEWER_INDICATORS:
+        if key in ("zebra", "isophote", "shaded") or not fields:
+            continue
+        lo, hi = _scale([f.values[key] for f in fields], key)
+        ranges[key] = [lo, hi]
+    return {"faces": faces, "ranges": ranges, "size": report.size, "skipped": total > MAX_VIEWER_VERTICES,
+            "n_vertices": total}
+
+
+# ---------------------------------------------------------------------------------------- page
+def _fmt(x: Any, digits: int = 3) -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, (int, float)):
+        if isinstance(x, float) and not math.isfinite(x):
+            return str(x)
+        return f"{x:.{digits}g}"
+    if isinstance(x, (list, tuple)):
+        return "(" + ", ".join(_fmt(v, digits) for v in x) + ")"
+    return html.escape(str(x))
+
+
+def _num_attr(x: Any) -> str:
+    """A ``data-v`` sort key: the number, or empty for missing values (sorted last)."""
+    if isinstance(x, bool) or x is None:
+        return ""
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return html.escape(str(x))
+    return repr(v) if math.isfinite(v) else ""
+
+
+def _face_score(face: dict[str, Any]) -> float:
+    """The face table's default order: errors first, then flags, then the worst adjacent G1."""
+    return (1e9 if face.get("error") else 0) + 1e6 * len(face.get("flags") or ()) + (face.get("worst_g1_deg") or 0.0)
+
+
+def _overview(doc: dict[str, Any], pictures: dict[str, str]) -> str:
+    status = "passed" if doc.get("passed") else "failed"
+    rows = [
+        ("file", html.escape(doc.get("path", ""))), ("format", _fmt(doc.get("format"))),
+        ("model size (bbox diagonal)", _fmt(doc.get("model_size"), 5)),
+        ("faces", str(doc.get("n_faces"))), ("edges between faces", str(doc.get("n_edges"))),
+        ("worst G1 angle", f"{_fmt(doc.get('worst_g1_deg'))} deg"), ("flags", str(doc.get("n_flags"))),
+        ("thresholds", f"{html.escape(str(doc.get('preset')))}: " + ", ".join(
+            f"{k} {_fmt(v)}" for k, v in (doc.get("thresholds") or {}).items() if k != "name")),
+        ("result", f'<span class="{status}">{status}</span> ({len(doc.get("failures") or [])} violations)'),
+        ("seconds", ", ".join(f"{k} {v:.2f}" for k, v in (doc.get("seconds") or {}).items())),
+    ]
+    out = ['<section id="overview"><h2>Model</h2><table class="kv">']
+    out += [f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in rows]
+    out.append("</table>")
+    for w in doc.get("warnings") or []:
+        out.append(f'<p class="warn">warning: {html.escape(str(w))}</p>')
+    if doc.get("failures"):
+        out.append('<details class="failures"><summary>violations</summary><ul>')
+        out += [f"<li>{html.escape(str(f))}</li>" for f in doc["failures"][:500]]
+        out.append("</ul></details>")
+    if pictures:
+        out.append('<div class="pics">')
+        for kind, name in pictures.items():
+            out.append(f'<figure><img src="{html.escape(name)}" alt="model {kind}" loading="lazy">'
+                       f"<figcaption>{html.escape(kind)}</figcaption></figure>")
+        out.append("</div>")
+    out.append("</section>")
+    return "\n".join(out)
+
+
+def _face_table(faces: list[dict[str, Any]]) -> str:
+    cols = ("face", "type", "k_min", "k_max", "flags", "worst G1 (deg)", "degenerate pts", "vertices", "status")
+    out = ['<section id="faces"><h2>Faces</h2><p class="hint">Click a column to sort; rows start worst first '
+           '(unevaluated, then flagged, then the largest angle at an adjacent edge).</p>',
+           '<table class="sortable" id="face-table"><thead><tr>']
+    out += [f'<th data-col="{i}">{c}</th>' for i, c in enumerate(cols)]
+    out.append("</tr></thead><tbody>")
+    for f in sorted(faces, key=_face_score, reverse=True):
+        n_flags = len(f.get("flags") or ())
+        status = "error" if f.get("error") else ("flagged" if n_flags else "ok")
+        cells = [
+            (f["index"], f'<a href="#face-{f["index"]}">{f["index"]}</a>'), (f.get("type"), _fmt(f.get("type"))),
+            (f.get("k_min"), _fmt(f.get("k_min"))), (f.get("k_max"), _fmt(f.get("k_max"))),
+            (n_flags, str(n_flags)), (f.get("worst_g1_deg"), _fmt(f.get("worst_g1_deg"))),
+            (f.get("n_degenerate"), str(f.get("n_degenerate", 0))), (f.get("n_vertices"), str(f.get("n_vertices", 0))),
+            (status, status),
+        ]
+        out.append(f'<tr class="{status}">' + "".join(f'<td data-v="{_num_attr(v)}">{t}</td>' for v, t in cells) + "</tr>")
+    out.append("</tbody></table></section>")
+    return "\n".join(out)
+
+
+def _edge_table(edges: list[dict[str, Any]], violations: list[dict[str, Any]]) -> str:
+    bad = {v.get("edge") for v in violations}
+    cols = ("edge", "faces", "matched", "class", "g0_max", "g1_max_deg", "g2_max", "g2_max_rel (%)", "worst_point",
+            "midpoint")
+    out = ['<section id="edges"><h2>Edge continuity</h2>']
+    if not edges:
+        out.append("<p>No edge is shared by two faces, and no loose edges matched geometrically: "
+                   "nothing to measure.</p></section>")
+        return "\n".join(out)
+    out.append('<table class="sortable" id="edge-table"><thead><tr>')
+    out += [f'<th data-col="{i}">{c}</th>' for i, c in enumerate(cols)]
+    out.append("</tr></thead><tbody>")
+    for k, e in enumerate(edges):
+        idx = e.get("index", k)
+        cls = "violation" if idx in bad else ""
+        cells = [
+            (idx, str(idx)), (None, _fmt(e.get("faces"))), (e.get("matched"), _fmt(e.get("matched"))),
+            (e.get("classification"), _fmt(e.get("classification"))), (e.get("g0_max"), _fmt(e.get("g0_max"))),
+            (e.get("g1_max_deg"), _fmt(e.get("g1_max_deg"))), (e.get("g2_max"), _fmt(e.get("g2_max"))),
+            (e.get("g2_max_rel"), _fmt(e.get("g2_max_rel"))), (None, _fmt(e.get("worst_point"), 5)),
+            (None, _fmt(e.get("midpoint"), 5)),
+        ]
+        out.append(f'<tr class="{cls}">' + "".join(f'<td data-v="{_num_attr(v)}">{t}</td>' for v, t in cells) + "</tr>")
+    out.append("</tbody></table></section>")
+    return "\n".join(out)
+
+
+def _face_sections(faces: list[dict[str, Any]]) -> str:
+    out = ['<section id="face-details"><h2>Faces in detail</h2>']
+    for f in faces:
+        out.append(f'<article class="face" id="face-{f["index"]}"><h3>face {f["index"]}: {_fmt(f.get("type"))}'
+                   + (f' <small>{html.escape(str(f["name"]))}</small>' if f.get("name") else "") + "</h3>")
+        out.append(f'<p>k_min {_fmt(f.get("k_min"))}, k_max {_fmt(f.get("k_max"))} (1/unit); Gaussian '
+                   f'{_fmt(f.get("gaussian_range"))}, mean {_fmt(f.get("mean_range"))}; worst adjacent G1 '
+                   f'{_fmt(f.get("worst_g1_deg"))} deg</p>')
+        if f.get("error"):
+            out.append(f'<p class="error">{html.escape(f["error"])}</p>')
+        for note in f.get("notes") or []:
+            out.append(f'<p class="note">{html.escape(str(note))}</p>')
+        pics = f.get("pictures") or {}
+        if pics:
+            out.append('<div class="pics">')
+            for kind, name in pics.items():
+                out.append(f'<figure><img src="{html.escape(name)}" alt="face {f["index"]} {kind}" loading="lazy">'
+                           f"<figcaption>{html.escape(kind)}</figcaption></figure>")
+            out.append("</div>")
+        flags = f.get("flags") or []
+        if flags:
+            out.append('<table class="flags"><tr><th>flag</th><th>value</th><th>location</th><th>uv</th>'
+                       "<th>suggested correction</th></tr>")
+            for g in flags:
+                out.append(f"<tr><td>{_fmt(g.get('kind'))}</td><td>{_fmt(g.get('value'))}</td>"
+                           f"<td>{_fmt(g.get('location'), 5)}</td><td>{_fmt(g.get('uv'), 4)}</td>"
+                           f"<td>{_fmt(g.get('suggestion'))}</td></tr>")
+            out.append("</table>")
+        else:
+            out.append('<p class="ok">no flags</p>')
+        out.append("</article>")
+    out.append("</section>")
+    return "\n".join(out)
+
+
+_CSS = """
+body{font:14px/1.4 system-ui,sans-serif;margin:0 1.5em 3em;color:#222;background:#fafbfc}
+h1{font-size:1.5em}h2{border-bottom:1px solid #ccd;padding-bottom:.2em;margin-top:1.6em}
+table{border-collapse:collapse;margin:.5em 0}th,td{border:1px solid #dde;padding:2px 7px;text-align:left}
+table.sortable th{cursor:pointer;background:#eef1f6;user-select:none}table.sortable th:after{content:" \\2195";color:#99a}
+tr.error td{background:#fde2e2}tr.flagged td{background:#fff5d6}tr.violation td{background:#fde2e2}
+.passed{color:#070;font-weight:bold}.failed{color:#b00;font-weight:bold}.warn,.error{color:#b00}.note{color:#555}
+.pics{display:flex;flex-wrap:wrap;gap:8px}.pics figure{margin:0}.pics img{max-width:520px;border:1px solid #dde}
+figcaption{font-size:.85em;color:#555;text-align:center}
+#viewer-wrap{position:relative;width:100%;max-width:1100px;height:620px;border:1px solid #ccd;background:#fff}
+#viewer{width:100%;height:100%;display:block}#viewer-ui{margin:.4em 0}
+#legend{position:absolute;right:10px;top:10px;background:rgba(255,255,255,.85);padding:4px 6px;font-size:12px}
+#legend canvas{display:block;width:24px;height:240px}
+nav a{margin-right:1em}
+"""
+
+_VIEWER_JS = r"""
+(function(){
+const DATA = JSON.parse(document.getElementById('viewer-data').textContent);
+const IND = JSON.parse(document.getElementById('viewer-indicators').textContent);
+const MAPS = JSON.parse(document.getElementById('viewer-maps').textContent);
+const status = document.getElementById('viewer-status');
+const canvas = document.getElementById('viewer');
+function dec(s, T){const b=atob(s);const u=new Uint8Array(b.length);for(let i=0;i<b.length;i++)u[i]=b.charCodeAt(i);return new T(u.buffer);}
+function cmap(name, t){const c=MAPS[name];if(!c)return [0.78,0.8,0.84];if(!(t>=0))t=0;if(t>1)t=1;const x=t*(c.length-1);const i=Math.min(Math.floor(x),c.length-2);const f=x-i;
+  return [0,1,2].map(k=>c[i][k]*(1-f)+c[i+1][k]*f);}
+let renderer;
+try { renderer = new THREE.WebGLRenderer({canvas, antialias:true, preserveDrawingBuffer:true}); }
+catch(e){ status.textContent = 'WebGL is not available in this browser: ' + e.message; return; }
+if (DATA.skipped){ status.textContent = 'The model has ' + DATA.n_vertices + ' mesh vertices: too many for the 3-D view; see the pictures.'; }
+const scene = new THREE.Scene(); scene.background = new THREE.Color(0xf4f6fa);
+const camera = new THREE.PerspectiveCamera(30, 1, 1e-3, 1e7);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x8899aa, 1.2));
+const key = new THREE.DirectionalLight(0xffffff, 1.6); camera.add(key); key.position.set(1,1,2); scene.add(camera);
+const group = new THREE.Group(); scene.add(group);
+const meshes = [];
+const zebraMat = new THREE.ShaderMaterial({side: THREE.DoubleSide, uniforms:{pairs:{value:7.0}, mode:{value:0}},
+  vertexShader:'varying vec3 vN; varying vec3 vP; void main(){ vec4 p = modelViewMatrix*vec4(position,1.0); vP=p.xyz; vN=normalize(normalMatrix*normal); gl_Position=projectionMatrix*p; }',
+  fragmentShader:'uniform float pairs; uniform int mode; varying vec3 vN; varying vec3 vP; void main(){ vec3 n=normalize(vN); if(!gl_FrontFacing) n=-n; vec3 d=normalize(vP); '+
+   'float s; if(mode==0){ vec3 r=reflect(d,n); s=atan(r.x, r.z+1.0)/3.14159265*pairs; } else { s=dot(n, vec3(0.0,0.0,1.0))*6.0; } '+
+   'float w=fwidth(s); float f=fract(s); float a=smoothstep(0.5-w,0.5+w,f)-smoothstep(1.0-w,1.0,f)+ (f<w? 1.0-smoothstep(0.0,w,f):0.0); '+
+   'vec3 c=mix(vec3(0.97), vec3(0.05), clamp(a,0.0,1.0)); gl_FragColor=vec4(c,1.0); }'});
+const shadedMat = new THREE.MeshPhongMaterial({vertexColors:true, side:THREE.DoubleSide, shininess:40, specular:0x333333});
+for (const f of DATA.faces){
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(dec(f.points, Float32Array), 3));
+  g.setAttribute('normal', new THREE.BufferAttribute(dec(f.normals, Float32Array), 3));
+  g.setIndex(new THREE.BufferAttribute(dec(f.triangles, Uint32Array), 1));
+  g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(3*f.n), 3));
+  const vals = {}; for (const k in f.values) vals[k] = dec(f.values[k], Float32Array);
+  const m = new THREE.Mesh(g, shadedMat); m.userData = {index: f.index, vals}; group.add(m); meshes.push(m);
+}
+function colour(ind){
+  const spec = IND.find(x=>x[0]===ind); const map = spec ? spec[2] : 'grey';
+  const r = DATA.ranges[ind] || [0,1];
+  for (const m of meshes){
+    if (ind==='zebra' || ind==='isophote'){ zebraMat.uniforms.mode.value = ind==='zebra'?0:1; m.material = zebraMat; continue; }
+    m.material = shadedMat;
+    const col = m.geometry.getAttribute('color'); const v = m.userData.vals[ind];
+    for (let i=0;i<col.count;i++){
+      let c;
+      if (ind==='shaded' || !v) c = [0.78,0.8,0.84];
+      else if (!isFinite(v[i])) c = [1,0,1];
+      else c = cmap(map, (v[i]-r[0])/((r[1]-r[0])||1));
+      col.setXYZ(i, c[0], c[1], c[2]);
+    }
+    col.needsUpdate = true;
+  }
+  drawLegend(ind, map, r);
+}
+function drawLegend(ind, map, r){
+  const box = document.getElementById('legend'); const cv = box.querySelector('canvas'); const ctx = cv.getContext('2d');
+  const show = !(ind==='zebra'||ind==='isophote'||ind==='shaded'); box.style.display = show?'block':'none'; if(!show) return;
+  for (let y=0;y<cv.height;y++){ const c = cmap(map, 1-y/(cv.height-1)); ctx.fillStyle='rgb('+c.map(x=>Math.round(255*x)).join(',')+')'; ctx.fillRect(0,y,cv.width,1); }
+  box.querySelector('.hi').textContent = r[1].toPrecision(3); box.querySelector('.lo').textContent = r[0].toPrecision(3);
+}
+const box = new THREE.Box3().setFromObject(group); const sph = box.getBoundingSphere(new THREE.Sphere());
+const R = sph.radius || 1; const dir = new THREE.Vector3(1,-1,0.8).normalize();
+camera.up.set(0,0,1); camera.position.copy(sph.center.clone().add(dir.multiplyScalar(R*4.2))); camera.near=R/100; camera.far=R*100; camera.updateProjectionMatrix();
+const controls = new THREE.OrbitControls(camera, canvas); controls.target.copy(sph.center); controls.update();
+function resize(){ const w=canvas.clientWidth, h=canvas.clientHeight; renderer.setSize(w,h,false); camera.aspect=w/h; camera.updateProjectionMatrix(); }
+const sel = document.getElementById('indicator');
+sel.addEventListener('change', ()=>{ colour(sel.value); });
+resize(); colour(sel.value);
+function loop(){ controls.update(); renderer.render(scene, camera); requestAnimationFrame(loop); }
+window.addEventListener('resize', resize); loop();
+window.occsurfViewer = {ready:true, meshes: meshes.length};
+if (!DATA.skipped) status.textContent = meshes.length + ' faces, ' + DATA.n_vertices + ' vertices: drag to rotate, wheel to zoom, right-drag to pan.';
+document.body.setAttribute('data-viewer', 'ready');
+})();
+"""
+
+_SORT_JS = r"""
+for (const t of document.querySelectorAll('table.sortable')){
+  t.querySelectorAll('th').forEach((th, i) => th.addEventListener('click', () => {
+    const body = t.tBodies[0]; const rows = Array.from(body.rows);
+    const dir = th.dataset.dir === 'desc' ? 1 : -1; th.dataset.dir = dir === 1 ? 'asc' : 'desc';
+    rows.sort((a, b) => { const x = a.cells[i].dataset.v, y = b.cells[i].dataset.v;
+      const fx = parseFloat(x), fy = parseFloat(y);
+      if (x === '' && y !== '') return 1; if (y === '' && x !== '') return -1;
+      if (!isNaN(fx) && !isNaN(fy)) return dir * (fx - fy);
+      return dir * String(x).localeCompare(String(y)); });
+    rows.forEach(r => body.appendChild(r));
+  }));
+}
+"""
+
+
+def _json_script(element_id: str, data: Any) -> str:
+    text = json.dumps(data, allow_nan=False, separators=(",", ":")).replace("</", "<\\/")
+    return f'<script type="application/json" id="{element_id}">{text}</script>'
+
+
+def render_html(doc: dict[str, Any], payload: dict[str, Any], pictures: dict[str, str] | None = None) -> str:
+    """The page for a report's JSON ``doc`` (:meth:`QualityReport.to_json`), the 3-D view's
+    ``payload`` (:func:`viewer_payload`) and the overview ``pictures`` (kind -> file name)."""
+    from ..rendering.vtk_scene import COLORMAPS
+
+    title = f"occsurf check: {Path(str(doc.get('path', ''))).name}"
+    options = "".join(f'<option value="{k}">{html.escape(label)}</option>' for k, label, _, _ in VIEWER_INDICATORS)
+    parts = [
+        "<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>",
+        f"<h1>{html.escape(title)}</h1>",
+        '<nav><a href="#overview">model</a><a href="#view3d">3-D view</a><a href="#faces">faces</a>'
+        '<a href="#edges">edges</a><a href="#face-details">faces in detail</a></nav>',
+        _overview(doc, pictures or {}),
+        '<section id="view3d"><h2>3-D view</h2><div id="viewer-ui"><label>indicator '
+        f'<select id="indicator">{options}</select></label> <span id="viewer-status">loading...</span></div>'
+        '<div id="viewer-wrap"><canvas id="viewer"></canvas><div id="legend"><div class="hi"></div>'
+        '<canvas width="24" height="240"></canvas><div class="lo"></div></div></div></section>',
+        _face_table(doc.get("faces") or []),
+        _edge_table(doc.get("edges") or [], doc.get("violations") or []),
+        _face_sections(doc.get("faces") or []),
+        '<footer><p class="note">3-D view: three.js r187 (MIT licence), embedded. Pictures: VTK, offscreen. '
+        "Curvature in 1/model units; magenta: degenerate points (undefined normal).</p></footer>",
+        _json_script("viewer-data", payload),
+        _json_script("viewer-indicators", [list(x) for x in VIEWER_INDICATORS]),
+        _json_script("viewer-maps", {k: [list(c) for c in v] for k, v in COLORMAPS.items()}),
+        f"<script>{_SORT_JS}</script>",
+        f"<script>{viewer_script()}</script>",
+        f"<script>{_VIEWER_JS}</script>",
+        "</body></html>",
+    ]
+    return "\n".join(parts)
+
+
+def write_html(path: str | Path, doc: dict[str, Any], payload: dict[str, Any],
+               pictures: dict[str, str] | None = None) -> Path:
+    """Write the page atomically to ``path``."""
+    from ..exchange.files import atomic_write
+
+    path = Path(path)
+    atomic_write(path, render_html(doc, payload, pictures).encode("utf-8"))
+    return path

@@ -1,0 +1,259 @@
+"""Pictures of a quality report, rendered offscreen by VTK (:mod:`occsurf.bridge.rendering.vtk_scene`).
+
+Course ch. 9 (§9-8 graphical display): curvature maps with their legend, zebra stripes, isophotes,
+draft angle, normals (hedgehog), section cuts with curvature combs, and flag locations. Every
+picture is a PNG of a shaded mesh from OCC's triangulation, coloured per vertex by our own
+indicators (:func:`~occsurf.bridge.quality.report.face_fields`); degenerate points are magenta.
+
+:data:`MODEL_PICTURES` are drawn for the whole model, :data:`FACE_PICTURES` for every face;
+:func:`render_report_pictures` writes them and records their paths in the report.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..messages import error_line
+
+if TYPE_CHECKING:
+    from .report import FaceField, QualityReport
+
+__all__ = ["render_report_pictures", "render_picture", "MODEL_PICTURES", "FACE_PICTURES", "PICTURE_KINDS",
+           "section_lines"]
+
+#: Every picture kind: (indicator, colour map, legend title).
+PICTURE_KINDS: dict[str, tuple[str | None, str, str, str]] = {
+    "mean": ("mean", "diverging", "H [1/unit]", "mean curvature H"),
+    "gaussian": ("gaussian", "diverging", "K [1/unit^2]", "Gaussian curvature K"),
+    "max": ("max", "diverging", "k1 [1/unit]", "max principal curvature k1"),
+    "absolute": ("absolute", "rainbow", "|k1|+|k2|", "absolute curvature |k1|+|k2|"),
+    "zebra": ("zebra", "stripes", "zebra", "zebra stripes (reflection lines, per pixel)"),
+    "isophote": ("isophote", "stripes", "n . v", "isophotes (n . v, light from the viewer, per pixel)"),
+    "draft": ("draft", "diverging", "draft [deg]", "draft angle, pull +z"),
+    "hedgehog": (None, "grey", "", "normals (hedgehog)"),
+    "sections": (None, "grey", "", "sections with curvature combs (green: inflections)"),
+}
+MODEL_PICTURES = ("mean", "gaussian", "zebra", "isophote", "draft", "hedgehog", "sections")
+FACE_PICTURES = ("mean", "zebra", "sections")
+#: Picture sizes in pixels.
+MODEL_SIZE = (900, 640)
+FACE_SIZE = (520, 380)
+#: Light/dark pairs of the per-pixel zebra (per half turn of the reflected ray) and isophotes
+#: (over n . v in [-1, 1]).
+ZEBRA_PAIRS = 8
+ISOPHOTE_PAIRS = 6
+#: Normals drawn per face (about) and their length relative to the model size.
+HEDGEHOG_PER_FACE = 60
+HEDGEHOG_LENGTH = 0.025
+#: Section planes per picture (normal to the longest side of the bounding box).
+N_SECTIONS = 9
+#: Comb teeth: longest tooth as a fraction of the shown extent.
+COMB_SCALE = 0.12
+
+
+def _scale(values: Sequence[np.ndarray], kind: str) -> tuple[float, float]:
+    """Common colour range of several faces' values (symmetric about 0 for signed curvatures)."""
+    from occsurf.algorithms.quality import color_scale
+
+    allv = np.concatenate([np.asarray(v, float).ravel() for v in values]) if values else np.zeros(1)
+    if kind == "zebra":
+        return 0.0, 1.0
+    if kind == "isophote":
+        return -1.0, 1.0
+    if kind == "draft":
+        return -90.0, 90.0
+    finite = allv[np.isfinite(allv)]
+    if finite.size == 0:
+        return -1.0, 1.0
+    mode = "symmetric" if kind in ("mean", "gaussian", "max", "min") else "clipped"
+    sc = color_scale(finite, mode)
+    lo, hi = float(sc.lo), float(sc.hi)
+    if not hi > lo:
+        pad = max(abs(lo), 1e-12)
+        lo, hi = lo - pad, hi + pad
+    return lo, hi
+
+
+Lines = tuple[list[np.ndarray], list[np.ndarray], np.ndarray]
+
+
+def section_lines(fields: Sequence[FaceField], size: float) -> tuple[Lines, dict[int, Lines]]:
+    """Section polylines through the faces, their combs and inflection points, for the whole set
+    and per face.
+
+    :data:`N_SECTIONS` planes normal to the longest side of the faces' bounding box, cut by
+    :func:`occsurf.algorithms.quality.plane_sections` on the faces' own surfaces (trimmed by
+    :func:`uv_mask`), chained across face boundaries; every cut carries its curvature comb. The
+    per-face lines are the pieces of the same cuts on that face (one family of planes, as a
+    surfacer reads sections).
+
+    Returns
+    -------
+    (lines, per_face)
+        ``lines = (polylines, comb_lines, inflections)``: section polylines ``(k, 3)``; comb
+        teeth ``(2, 3)`` and comb outlines ``(k, 3)``; inflection points ``(j, 3)``.
+        ``per_face``: the same per face index (``FaceMesh.index``).
+    """
+    from occsurf.algorithms import quality
+
+    pts = np.concatenate([f.mesh.points for f in fields])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    axis = int(np.argmax(hi - lo))
+    normal = np.eye(3)[axis]
+    ext = float(hi[axis] - lo[axis])
+    offsets = np.linspace(0.04, 0.96, N_SECTIONS) * ext
+    from .report import uv_mask
+
+    faces = [(f.surface, uv_mask(f.mesh)) for f in fields]
+    index = np.array([f.mesh.index for f in fields])
+    acc: dict[int, tuple[list, list, list]] = {}
+
+    def add(key: int, P: np.ndarray, base: np.ndarray, tips: np.ndarray, infl: np.ndarray) -> None:
+        lines, combs, inf = acc.setdefault(key, ([], [], []))
+        if len(P) < 2:
+            return
+        lines.append(P)
+        if len(tips) >= 2:
+            combs.extend(np.stack([base, tips], axis=1)[:: max(1, len(base) // 60)])
+            combs.append(tips)
+        if len(infl):
+            inf.append(infl)
+
+    for sec in quality.plane_sections(faces, lo, normal, offsets):
+        for cur in sec.curves:
+            P = np.asarray(cur.points, float)
+            base, tips = np.asarray(cur.comb.points, float), np.asarray(cur.comb.tips, float)
+            infl = np.asarray(cur.inflection_points, float).reshape(-1, 3)
+            add(-1, P, base, tips, infl)
+            aligned = len(base) == len(P)
+            for fi in np.unique(cur.face):
+                sel = np.asarray(cur.face) == fi
+                add(int(index[fi]), P[sel], base[sel] if aligned else base[:0], tips[sel] if aligned else tips[:0],
+                    infl[:0])
+
+    def pack(t: tuple[list, list, list]) -> Lines:
+        return t[0], t[1], (np.concatenate(t[2]) if t[2] else np.zeros((0, 3)))
+
+    whole = pack(acc.pop(-1, ([], [], [])))
+    return whole, {k: pack(v) for k, v in acc.items()}
+
+
+def render_picture(fields: Sequence[FaceField], kind: str, path: Path, *, size: tuple[int, int] = MODEL_SIZE,
+                   title: str = "", model_size: float = 1.0, scale: tuple[float, float] | None = None,
+                   flags: np.ndarray | None = None, edges: Sequence[np.ndarray] = (),
+                   sections: Callable[[], tuple[list, list, np.ndarray]] | None = None) -> Path:
+    """One picture of ``kind`` (a key of :data:`PICTURE_KINDS`) of some faces, written to ``path``."""
+    from ..rendering.vtk_scene import Scene
+
+    if kind not in PICTURE_KINDS:
+        raise ValueError(f"kind: expected one of {', '.join(PICTURE_KINDS)}, got {kind!r}")
+    value, cmap, legend, _ = PICTURE_KINDS[kind]
+    scene = Scene()
+    if kind in ("zebra", "isophote"):  # per pixel, from the interpolated normals; no scale to read
+        for f in fields:
+            scene.add_mesh(f.mesh.points, f.mesh.triangles, normals=f.mesh.normals, shader=kind,
+                           stripes=ZEBRA_PAIRS if kind == "zebra" else ISOPHOTE_PAIRS)
+    elif value is not None:
+        lo, hi = scale if scale is not None else _scale([f.values[value] for f in fields], value)
+        for f in fields:
+            scene.add_mesh(f.mesh.points, f.mesh.triangles, normals=f.mesh.normals, scalars=f.values[value],
+                           cmap=cmap, scale=(lo, hi))
+        scene.set_legend(legend, lo, hi, cmap=cmap)
+    else:
+        for f in fields:
+            scene.add_mesh(f.mesh.points, f.mesh.triangles, normals=f.mesh.normals, cmap="grey")
+    if kind == "hedgehog":
+        for f in fields:
+            step = max(1, f.mesh.n_vertices // HEDGEHOG_PER_FACE)
+            scene.add_hedgehog(f.mesh.points[::step], f.mesh.normals[::step], length=HEDGEHOG_LENGTH * model_size,
+                               color=(0.1, 0.2, 0.75))
+    if kind == "sections" and sections is not None:
+        lines, teeth, infl = sections()
+        scene.add_lines(lines, color=(0.05, 0.05, 0.05), width=2.0)
+        scene.add_lines(teeth, color=(0.85, 0.25, 0.1), width=1.0)
+        if len(infl):
+            scene.add_points(infl, color=(0.0, 0.6, 0.0), size=10)
+    if edges:
+        scene.add_lines(edges, color=(0.15, 0.15, 0.15), width=1.2)
+    if flags is not None and len(flags):
+        scene.add_points(flags, color=(0.95, 0.05, 0.05), size=11)
+    if title:
+        scene.set_title(title)
+    return scene.render(path, size=size, camera="iso")
+
+
+def _flag_points(report: QualityReport, faces: set[int] | None = None) -> np.ndarray:
+    pts = [f2["location"] for f in report.faces if faces is None or f.index in faces for f2 in f.flags
+           if f2.get("location") is not None and len(f2["location"]) == 3]
+    return np.asarray(pts, float).reshape(-1, 3)
+
+
+def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_pictures: Sequence[str] = MODEL_PICTURES,
+                           face_pictures: Sequence[str] = FACE_PICTURES,
+                           progress: Callable[[int, int], None] | None = None) -> dict[str, str]:
+    """Write the model's and every face's pictures into ``out_dir`` (created); paths relative to it.
+
+    Model pictures are ``model_<kind>.png`` (returned); face pictures ``face_<index>_<kind>.png``
+    (recorded in each :attr:`FaceQuality.pictures`). A picture that fails is skipped and noted on
+    its face (or in the report's warnings), never fatal.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    fields = [report.fields[k] for k in sorted(report.fields)]
+    shown: dict[str, str] = {}
+    if not fields:
+        return shown
+    scales = {v: _scale([f.values[v] for f in fields], v) for v in ("mean", "gaussian", "max", "absolute")}
+    flags_all = _flag_points(report)
+    total = len(model_pictures) + len(fields) * len(face_pictures)
+    cut: dict[str, Any] = {}
+
+    def cuts() -> tuple[Lines, dict[int, Lines]]:
+        if "v" not in cut:
+            try:
+                cut["v"] = section_lines(fields, report.size)
+            except Exception as err:  # noqa: BLE001 - the other pictures are still drawn
+                report.warnings.append(f"sections not computed: {error_line(err)}")
+                cut["v"] = (([], [], np.zeros((0, 3))), {})
+        return cut["v"]
+
+    done = 0
+    for kind in model_pictures:
+        name = f"model_{kind}.png"
+        value = PICTURE_KINDS[kind][0]
+        try:
+            render_picture(fields, kind, out / name, size=MODEL_SIZE, model_size=report.size,
+                           scale=scales.get(value or ""), flags=flags_all if kind == "mean" else None,
+                           title=f"{Path(report.path).name}: {PICTURE_KINDS[kind][3]}",
+                           sections=lambda: cuts()[0])
+            shown[kind] = name
+        except Exception as err:  # noqa: BLE001
+            report.warnings.append(f"picture {kind} not drawn: {error_line(err)}")
+        done += 1
+        if progress is not None:
+            progress(done, total)
+    by_index = {f.index: f for f in report.faces}
+    for fld in fields:
+        row = by_index[fld.mesh.index]
+        for kind in face_pictures:
+            name = f"face_{row.index}_{kind}.png"
+            if kind == "sections" and row.index not in cuts()[1]:
+                row.notes.append(f"no section plane of the model's family crosses this face ({N_SECTIONS} planes "
+                                 "normal to the longest side of the model's box)")
+            try:
+                render_picture([fld], kind, out / name, size=FACE_SIZE, model_size=report.size,
+                               flags=_flag_points(report, {row.index}) if kind == "mean" else None,
+                               title=f"face {row.index} ({row.type}): {PICTURE_KINDS[kind][3]}",
+                               sections=lambda k=row.index: cuts()[1].get(k, ([], [], np.zeros((0, 3)))))
+                row.pictures[kind] = name
+            except Exception as err:  # noqa: BLE001
+                row.notes.append(f"picture {kind} not drawn: {error_line(err)}")
+            done += 1
+            if progress is not None:
+                progress(done, total)
+    return shown
+

@@ -1,0 +1,386 @@
+"""The surface-quality report of a model: per-face indicators and the edge-continuity table.
+
+:func:`check_model` assembles, for an :class:`~occsurf.bridge.exchange.step_iges.ImportedModel`,
+what ``occsurf check`` writes to ``report.json`` and shows in its page (course ch. 9 assessment,
+§11-2):
+
+* per face (numbered as ``occsurf inspect`` numbers them): the surface type, the range of the
+  principal curvatures over the *trimmed* face (``k_min`` = smallest ``k2``, ``k_max`` = largest
+  ``k1``, 1/model units, on the vertices of OCC's triangulation evaluated by our own derivatives),
+  Gaussian and mean curvature ranges, degenerate points, and the flags of
+  :func:`occsurf.algorithms.quality.face_flags` with their locations and suggested corrections;
+* per edge: :func:`occsurf.bridge.quality.continuity.edge_continuity` (G0 gap, G1 angle, G2
+  absolute and relative, worst point, how the edge was matched), judged against a threshold preset.
+
+A face that cannot be evaluated keeps its row with ``error`` set; the rest of the model is still
+reported. The triangulated faces (:attr:`QualityReport.meshes`, with per-vertex indicators) are
+kept for the pictures (:mod:`.pictures`) and the page's 3-D view (:mod:`.html`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..messages import error_line
+
+if TYPE_CHECKING:
+    from ..exchange.step_iges import ImportedFace, ImportedModel
+    from ..rendering.tessellation import FaceMesh
+
+__all__ = ["FaceQuality", "QualityReport", "FaceField", "check_model", "face_fields", "DEFAULT_PRESET"]
+
+#: The threshold preset used when none is named (CATIA's Connect Checker defaults).
+DEFAULT_PRESET = "catia"
+#: Face flags that break each preset under ``--fail-on`` (edges are judged by
+#: :func:`.continuity.check_edges`). CATIA-like: wiggles and curvature spikes (visible defects);
+#: class A: every flag but a natural pole (near-degenerate normals are poles of revolved faces);
+#: mechanical: none (fillets, flats and poles are by design on machined parts).
+FACE_FAIL_KINDS: dict[str, frozenset[str]] = {
+    "catia": frozenset({"wiggle", "curvature_spike"}),
+    "class-a": frozenset({"wiggle", "curvature_spike", "flat_spot", "ill_parametrisation"}),
+    "mechanical": frozenset(),
+}
+#: Zebra set-up for the per-vertex fields (view along the iso camera, light lines along z): the
+#: light plane stands ZEBRA_DISTANCE model sizes behind the viewer, one light/dark pair every
+#: ZEBRA_WIDTH of that distance, so a pair is about 24 degrees of reflected direction near the
+#: middle, as CAD zebra environments are; finer stripes would be undersampled by the mesh's
+#: vertices (about 6 degrees of normal, 12 of reflected ray, apart).
+ZEBRA_DISTANCE = 10.0
+ZEBRA_WIDTH = 0.45
+ISOPHOTE_LEVELS = 12
+
+
+def _finite(x: Any) -> float | None:
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else None
+
+
+@dataclass
+class FaceField:
+    """A triangulated face with its per-vertex indicators (what the pictures and the 3-D view show).
+
+    Attributes
+    ----------
+    mesh : FaceMesh
+    values : dict of str -> ndarray, shape (n,)
+        ``'mean'``, ``'gaussian'``, ``'max'`` (k1), ``'min'`` (k2), ``'absolute'`` (|k1|+|k2|),
+        ``'zebra'`` (phase in [0, 1)), ``'isophote'`` (n . l), ``'draft'`` (degrees); NaN where
+        undefined (degenerate points).
+    degenerate : ndarray of bool, shape (n,)
+    """
+
+    mesh: FaceMesh
+    values: dict[str, np.ndarray]
+    degenerate: np.ndarray
+    surface: Any = None
+
+
+@dataclass
+class FaceQuality:
+    """One face of the report (JSON-safe fields only)."""
+
+    index: int
+    type: str
+    name: str | None = None
+    k_min: float | None = None
+    k_max: float | None = None
+    gaussian: tuple[float | None, float | None] = (None, None)
+    mean: tuple[float | None, float | None] = (None, None)
+    n_degenerate: int = 0
+    n_vertices: int = 0
+    flags: list[dict[str, Any]] = field(default_factory=list)
+    worst_g1_deg: float | None = None
+    notes: list[str] = field(default_factory=list)
+    error: str | None = None
+    pictures: dict[str, str] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "index": self.index, "type": self.type, "name": self.name, "k_min": self.k_min, "k_max": self.k_max,
+            "gaussian_range": list(self.gaussian), "mean_range": list(self.mean),
+            "n_degenerate": self.n_degenerate, "n_vertices": self.n_vertices, "flags": list(self.flags),
+            "worst_g1_deg": self.worst_g1_deg, "notes": list(self.notes), "error": self.error,
+            "pictures": dict(self.pictures),
+        }
+
+
+@dataclass
+class QualityReport:
+    """What :func:`check_model` found; :meth:`to_json` is ``report.json``."""
+
+    path: str
+    format: str | None
+    size: float
+    faces: list[FaceQuality]
+    edges: list[dict[str, Any]]
+    preset: str
+    thresholds: dict[str, Any]
+    failures: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    seconds: dict[str, float] = field(default_factory=dict)
+    violations: list[dict[str, Any]] = field(default_factory=list)
+    match_tol: float | None = None
+    fields: dict[int, FaceField] = field(default_factory=dict, repr=False)
+
+    @property
+    def passed(self) -> bool:
+        """No edge and no face breaks the preset."""
+        return not self.failures
+
+    @property
+    def worst_g1_deg(self) -> float | None:
+        vals = [e.get("g1_max_deg") for e in self.edges if _finite(e.get("g1_max_deg")) is not None]
+        return max(vals) if vals else None
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "path": self.path, "format": self.format, "model_size": self.size,
+            "n_faces": len(self.faces), "n_edges": len(self.edges),
+            "preset": self.preset, "thresholds": self.thresholds, "passed": self.passed,
+            "failures": list(self.failures), "violations": list(self.violations),
+            "match_tol": self.match_tol, "worst_g1_deg": self.worst_g1_deg,
+            "n_flags": sum(len(f.flags) for f in self.faces),
+            "warnings": list(self.warnings), "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
+            "faces": [f.to_json() for f in self.faces], "edges": list(self.edges),
+        }
+
+
+# ---------------------------------------------------------------------------------------- fields
+def face_fields(face: ImportedFace, mesh: FaceMesh, *, view_dir: Sequence[float] = (-1.0, 1.0, -0.8),
+                pull: Sequence[float] = (0.0, 0.0, 1.0), size: float = 1.0) -> FaceField:
+    """Per-vertex indicators of one meshed face, by our own exact derivatives (course §9-5..9-13).
+
+    Curvatures come from :func:`occsurf.algorithms.geometry.differential.curvatures_from_derivatives`
+    at the mesh's parameters, zebra/isophotes/draft from :mod:`occsurf.algorithms.quality` on the
+    mesh's points and normals.
+    """
+    from occsurf.algorithms.geometry.differential import curvatures_from_derivatives
+    from occsurf.algorithms.quality import curvature_values, draft_angle, isophotes, zebra
+
+    surf = face.surface
+    uv = mesh.uv
+    c = curvatures_from_derivatives(surf.derivatives(uv[:, 0], uv[:, 1], 2))
+    sign = -1.0 if mesh.reversed else 1.0  # curvature sign follows the outward normal of the face
+    k1, k2 = np.asarray(c.k1, float), np.asarray(c.k2, float)
+    if mesh.reversed:
+        k1, k2 = -k2, -k1
+    K, H = np.asarray(c.gaussian, float), sign * np.asarray(c.mean, float)
+    values = {kind: np.asarray(curvature_values(kind, k1, k2, K, H, size), float)
+              for kind in ("mean", "gaussian", "max", "min", "absolute")}
+    N = mesh.normals
+    degenerate = ~np.all(np.isfinite(N), axis=1) | ~np.isfinite(k1)
+    vd = np.asarray(view_dir, float)
+    distance = ZEBRA_DISTANCE * size
+    values["zebra"] = np.asarray(zebra(mesh.points, N, vd, width=ZEBRA_WIDTH * distance, distance=distance).phase, float)
+    values["isophote"] = np.asarray(isophotes(N, -vd, ISOPHOTE_LEVELS).intensity, float)
+    values["draft"] = np.asarray(draft_angle(N, np.asarray(pull, float)), float)
+    return FaceField(mesh=mesh, values=values, degenerate=degenerate, surface=surf)
+
+
+def _ranges(field_: FaceField) -> dict[str, Any]:
+    def rng(v: np.ndarray) -> tuple[float | None, float | None]:
+        v = v[np.isfinite(v)]
+        return (float(v.min()), float(v.max())) if v.size else (None, None)
+
+    return {"k_min": rng(field_.values["min"])[0], "k_max": rng(field_.values["max"])[1],
+            "gaussian": rng(field_.values["gaussian"]), "mean": rng(field_.values["mean"]),
+            "n_degenerate": int(field_.degenerate.sum()), "n_vertices": field_.mesh.n_vertices}
+
+
+# ---------------------------------------------------------------------------------------- faces
+def uv_mask(mesh: FaceMesh) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """``mask(u, v) -> bool array``: parameters inside the trimmed face, i.e. inside a triangle of
+    its mesh in our parameter space (OCC's trimmed triangulation; matplotlib's triangle finder)."""
+    from matplotlib.tri import Triangulation
+
+    uv = mesh.uv
+    tris = mesh.triangles[:, ::-1] if mesh.reversed else mesh.triangles
+    finder = Triangulation(uv[:, 0], uv[:, 1], tris).get_trifinder()
+
+    def mask(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
+        return np.asarray(finder(u.ravel(), v.ravel())).reshape(u.shape) >= 0
+
+    return mask
+
+
+def _flags_of(face: ImportedFace, mesh: FaceMesh, samples: int) -> list[dict[str, Any]]:
+    """:func:`occsurf.algorithms.quality.face_flags` of the face's surface on a ``samples`` grid,
+    masked to the trimmed face, as JSON dicts."""
+    from occsurf.algorithms import quality
+
+    (u0, u1), (v0, v1) = face.surface.domain
+    us, vs = np.linspace(u0, u1, samples), np.linspace(v0, v1, samples)
+    inside = uv_mask(mesh)(*np.meshgrid(us, vs, indexing="ij")) if mesh.source == "brepmesh" else None
+    if inside is not None and not inside.any():
+        return []
+    return [_flag_json(f) for f in quality.face_flags(face.surface, mask=inside, us=us, vs=vs)]
+
+
+def _flag_json(flag: Any) -> dict[str, Any]:
+    def arr(x: Any) -> Any:
+        if x is None:
+            return None
+        a = np.asarray(x, float).ravel()
+        return [_finite(v) for v in a]
+
+    if hasattr(flag, "to_json"):
+        return flag.to_json()
+    return {"kind": str(flag.kind), "location": arr(flag.location), "uv": arr(flag.uv),
+            "value": _finite(flag.value), "suggestion": str(flag.suggestion)}
+
+
+def _check_face(face: ImportedFace, mesh_of: Callable[[ImportedFace], FaceMesh], samples: int, size: float,
+                flags: bool) -> tuple[FaceQuality, FaceField | None]:
+    """One face's row and its field; never raises (``error`` set instead)."""
+    row = FaceQuality(index=face.index, type=face.surface_type, name=face.name or None)
+    if face.surface is None:
+        row.error = f"not evaluated: {face.error or 'the surface did not convert'}"
+        return row, None
+    try:
+        with np.errstate(all="ignore"):
+            mesh = mesh_of(face)
+            fld = face_fields(face, mesh, size=size)
+        r = _ranges(fld)
+        row.k_min, row.k_max = r["k_min"], r["k_max"]
+        row.gaussian, row.mean = r["gaussian"], r["mean"]
+        row.n_degenerate, row.n_vertices = r["n_degenerate"], r["n_vertices"]
+        row.notes.extend(mesh.notes)
+        if mesh.unmapped:
+            row.notes.append(f"{mesh.unmapped} mesh vertices not found on the converted surface (OCC's point shown)")
+        if row.n_degenerate:
+            row.notes.append(f"{row.n_degenerate} degenerate points (undefined normal: pole or collapsed edge), "
+                             "drawn magenta")
+    except Exception as err:  # noqa: BLE001 - one face must not hide the others
+        row.error = f"not evaluated: {error_line(err)}"
+        return row, None
+    if flags:
+        try:
+            with np.errstate(all="ignore"):
+                row.flags = _flags_of(face, fld.mesh, samples)
+        except Exception as err:  # noqa: BLE001
+            row.notes.append(f"flags not computed: {error_line(err)}")
+    return row, fld
+
+
+# ---------------------------------------------------------------------------------------- edges
+def _thresholds_json(th: Any) -> dict[str, Any]:
+    from dataclasses import asdict, is_dataclass
+
+    return asdict(th) if is_dataclass(th) else {"value": repr(th)}
+
+
+# ---------------------------------------------------------------------------------------- entry
+def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, samples: int = 41,
+                preset: str = DEFAULT_PRESET, thresholds: Any = None, edges: bool = True, flags: bool = True,
+                progress: Callable[[int, int], None] | None = None) -> QualityReport:
+    """Assess a model's surfaces: per-face indicators and flags, the edge-continuity table.
+
+    Parameters
+    ----------
+    model : ImportedModel
+        From :func:`~occsurf.bridge.exchange.step_iges.read_step` or ``read_iges``.
+    faces : sequence of int, optional
+        Face indices to report (as ``occsurf inspect`` numbers them); default all. Edges are
+        reported when one of their faces is selected.
+    samples : int, default 41
+        Grid size per face for :func:`~occsurf.algorithms.quality.face_flags` (masked to the
+        trimmed face).
+    preset : str
+        A key of :data:`occsurf.bridge.quality.continuity.PRESETS` (``'catia'``: 0.001 mm, 0.01 deg, 2 %).
+    thresholds : optional
+        Explicit thresholds overriding the preset.
+    edges, flags : bool
+        Compute the edge table / the face flags (both by default).
+    progress : callable(done, total), optional
+        Called after each face.
+
+    Returns
+    -------
+    QualityReport
+
+    Raises
+    ------
+    InvalidGeometryError
+        A face index out of range, or an unknown preset.
+    """
+    from occsurf.algorithms.errors import InvalidGeometryError
+
+    from ..rendering import tessellation
+
+    n = len(model.faces)
+    chosen = None if faces is None else sorted({int(k) for k in faces})
+    if chosen is not None and any(not 0 <= k < n for k in chosen):
+        raise InvalidGeometryError(f"faces: expected indices from 0 to {n - 1}, got {chosen}")
+    t0 = time.perf_counter()
+    size = tessellation.mesh_model(model)
+    seconds = {"mesh": time.perf_counter() - t0}
+    todo = [model.faces[k] for k in (chosen if chosen is not None else range(n))]
+    rows: list[FaceQuality] = []
+    fields: dict[int, FaceField] = {}
+    t1 = time.perf_counter()
+    for k, face in enumerate(todo):
+        row, fld = _check_face(face, lambda f: tessellation.mesh_face(f, size), samples, size, flags)
+        rows.append(row)
+        if fld is not None:
+            fields[face.index] = fld
+        if progress is not None:
+            progress(k + 1, len(todo))
+    seconds["faces"] = time.perf_counter() - t1
+    report = QualityReport(path=str(model.path), format=model.format, size=size, faces=rows, edges=[],
+                           preset=preset, thresholds={}, fields=fields,
+                           warnings=[error_line(w) for w in model.warnings])
+    if edges:
+        t2 = time.perf_counter()
+        _add_edges(report, model, chosen, preset, thresholds)
+        seconds["edges"] = time.perf_counter() - t2
+    fail_kinds = FACE_FAIL_KINDS.get(preset, FACE_FAIL_KINDS[DEFAULT_PRESET])
+    for f in rows:
+        bad = sorted({g["kind"] for g in f.flags if g.get("kind") in fail_kinds})
+        if bad:
+            report.failures.append(f"face {f.index}: {', '.join(bad)} ({preset})")
+    seconds["total"] = time.perf_counter() - t0
+    report.seconds = seconds
+    return report
+
+
+def _add_edges(report: QualityReport, model: ImportedModel, chosen: list[int] | None, preset: str,
+               thresholds: Any) -> None:
+    """Fill the edge table (:func:`.continuity.edge_continuity`), each face's worst adjacent G1
+    angle, and the edges' violations of the thresholds (:func:`.continuity.check_edges`)."""
+    from . import continuity
+
+    th = continuity._thresholds(preset if thresholds is None else thresholds)
+    result = continuity.edge_continuity(model, preset=th)
+    reports = list(result)
+    if chosen is not None:
+        keep = set(chosen)
+        reports = [r for r in reports if set(r.faces) & keep]
+    report.edges = [r.to_json() for r in reports]
+    report.thresholds = _thresholds_json(th)
+    report.match_tol = getattr(result, "match_tol", None)
+    report.warnings.extend(str(w) for w in getattr(result, "warnings", ()))
+    by_face = {f.index: f for f in report.faces}
+    for r in reports:
+        g1 = _finite(r.g1_max_deg)
+        for k in r.faces:
+            f = by_face.get(k)
+            if f is not None and g1 is not None and (f.worst_g1_deg is None or g1 > f.worst_g1_deg):
+                f.worst_g1_deg = g1
+    report.violations = [v.to_json() for v in continuity.check_edges(reports, th)]
+    report.failures.extend(_failure_text(v) for v in continuity.check_edges(reports, th))
+
+
+def _failure_text(failure: Any) -> str:
+    if hasattr(failure, "message"):
+        return str(failure.message)
+    return str(failure)

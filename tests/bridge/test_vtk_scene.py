@@ -1,0 +1,163 @@
+"""The VTK offscreen renderer (occsurf.bridge.rendering.vtk_scene) and the triangulated faces it draws.
+
+Every picture is rendered with no display (EGL offscreen) and judged by its pixels: not blank
+(many pixels differ from the background, several colours), the legend present (the colour map's
+two end colours in the scalar bar's strip on the right), stripes per pixel (many black/white
+alternations along a row), cameras that differ.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from occsurf.bridge.rendering import vtk_scene
+from occsurf.bridge.rendering.vtk_scene import COLORMAPS, Scene, colormap_rgb
+
+pytestmark = pytest.mark.skipif(not vtk_scene.render_available(), reason="VTK cannot open an offscreen window here")
+
+SIZE = (400, 300)
+
+
+def _sphere(n: int = 40, r: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A UV sphere: points, triangles, outward normals (closed form)."""
+    th, ph = np.meshgrid(np.linspace(0.05, np.pi - 0.05, n), np.linspace(0, 2 * np.pi, 2 * n), indexing="ij")
+    N = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1).reshape(-1, 3)
+    k = np.arange(n * 2 * n).reshape(n, 2 * n)
+    a, b, c, d = k[:-1, :-1].ravel(), k[1:, :-1].ravel(), k[1:, 1:].ravel(), k[:-1, 1:].ravel()
+    T = np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+    return r * N, T, N
+
+
+def _background_share(img: np.ndarray) -> float:
+    """Share of pixels that are the gradient background (light blue-grey to white, r <= g <= b)."""
+    r, g, b = (img[..., k].astype(int) for k in range(3))
+    return float(np.mean((r >= 200) & (b >= r) & (b - r <= 25) & (abs(g - (r + b) / 2) <= 8)))
+
+
+def _is_picture(img: np.ndarray, min_object: float = 0.05) -> None:
+    assert img.dtype == np.uint8 and img.shape == (SIZE[1], SIZE[0], 3)
+    assert 1 - _background_share(img) > min_object, "almost only background"
+    assert len(np.unique(img.reshape(-1, 3) // 8, axis=0)) > 20, "too few colours: flat or blank"
+
+
+def _legend_present(img: np.ndarray, cmap: str) -> None:
+    """Both end colours of the map appear in the right-hand strip where the scalar bar sits."""
+    strip = img[:, int(0.84 * img.shape[1]):, :].reshape(-1, 3).astype(int)
+    ends = np.array(COLORMAPS[cmap])[[0, -1]] * 255
+    for end in ends:
+        assert np.min(np.abs(strip - end).sum(axis=1)) < 30, f"legend end colour {end} missing"
+
+
+def test_scalar_map_with_legend() -> None:
+    P, T, N = _sphere()
+    s = Scene()
+    s.add_mesh(P, T, normals=N, scalars=P[:, 2], cmap="diverging", scale=(-1, 1))
+    s.set_legend("z", -1, 1, cmap="diverging")
+    img = s.render_array(size=SIZE)
+    _is_picture(img)
+    _legend_present(img, "diverging")
+    # without the legend the strip holds background only
+    s2 = Scene()
+    s2.add_mesh(P, T, normals=N, scalars=P[:, 2], cmap="diverging", scale=(-1, 1))
+    img2 = s2.render_array(size=SIZE)
+    assert _background_share(img2[:, int(0.9 * SIZE[0]):]) > 0.97
+
+
+@pytest.mark.parametrize("cmap", ["rainbow", "sequential"])
+def test_other_maps_and_legend(cmap: str) -> None:
+    P, T, N = _sphere()
+    s = Scene()
+    s.add_mesh(P, T, normals=N, scalars=P[:, 0], cmap=cmap, scale=(-1, 1))
+    s.set_legend("x", -1, 1, cmap=cmap)
+    img = s.render_array(size=SIZE)
+    _is_picture(img)
+    _legend_present(img, cmap)
+
+
+@pytest.mark.parametrize("shader", ["zebra", "isophote"])
+def test_per_pixel_stripes(shader: str) -> None:
+    P, T, N = _sphere(16)  # coarse mesh: the stripes must still be sharp, per pixel
+    s = Scene()
+    s.add_mesh(P, T, normals=N, shader=shader, stripes=8)
+    img = s.render_array(size=SIZE, camera="front")
+    _is_picture(img)
+    grey = img.mean(axis=2)
+    obj = grey[SIZE[1] // 2]
+    dark, light = obj < 60, obj > 200
+    assert dark.sum() > 20 and light.sum() > 20, "no black and white stripes"
+    flips = np.count_nonzero(np.diff(dark[dark | light].astype(int)))
+    assert flips >= 4, f"only {flips} stripe edges along the middle row"
+
+
+def test_nan_scalars_are_magenta_not_a_scale_colour() -> None:
+    P, T, N = _sphere()
+    vals = P[:, 2].copy()
+    vals[P[:, 2] > 0.6] = np.nan  # a degenerate cap
+    s = Scene()
+    s.add_mesh(P, T, normals=N, scalars=vals, cmap="diverging", scale=(-1, 1))
+    img = s.render_array(size=SIZE, camera="front").astype(int)
+    magenta = (img[..., 0] > 120) & (img[..., 2] > 120) & (img[..., 1] < 60)
+    assert magenta.mean() > 0.005
+
+
+def test_lines_points_hedgehog_and_rgb() -> None:
+    P, T, N = _sphere()
+    s = Scene()
+    s.add_mesh(P, T, normals=N, colors=(np.abs(N) * 255).astype(np.uint8))
+    t = np.linspace(0, 2 * np.pi, 100)
+    s.add_lines([np.column_stack([1.3 * np.cos(t), 1.3 * np.sin(t), 0 * t])], color=(0, 0, 0), width=3)
+    s.add_points(np.array([[0, 0, 1.2]]), color=(1, 0, 0), size=14)
+    s.add_hedgehog(P[::50], N[::50], length=0.4, color=(0, 0, 1))
+    s.set_title("lines, points, hedgehog")
+    img = s.render_array(size=SIZE, camera="top")
+    _is_picture(img)
+    black = (img.max(axis=2) < 40).mean()
+    assert black > 0.002  # the circle and the title
+    blue = (img[..., 2] > 150) & (img[..., 0] < 60) & (img[..., 1] < 60)
+    assert blue.sum() > 30  # hedgehog
+
+
+def test_cameras_differ_and_png_written(tmp_path) -> None:
+    P, T, N = _sphere()
+    P = P * np.array([3.0, 1.0, 0.5])  # an ellipsoid: every view differs
+    s = Scene()
+    s.add_mesh(P, T, normals=N, scalars=P[:, 0], cmap="rainbow")
+    imgs = {c: s.render_array(size=SIZE, camera=c) for c in vtk_scene.CAMERAS}
+    for a in imgs:
+        for b in imgs:
+            if a < b:
+                assert np.abs(imgs[a].astype(int) - imgs[b].astype(int)).mean() > 2, (a, b)
+    path = s.render(tmp_path / "e.png", size=SIZE, camera=(1.0, 2.0, 3.0))
+    from PIL import Image
+
+    with Image.open(path) as im:
+        assert im.size == SIZE
+
+
+def test_colormap_rgb_matches_table_and_nan() -> None:
+    rgb = colormap_rgb(np.array([-1.0, 0.0, 1.0, np.nan, 5.0]), -1.0, 1.0, "diverging")
+    ends = np.round(np.array(COLORMAPS["diverging"])[[0, -1]] * 255)
+    assert np.abs(rgb[0] - ends[0]).max() <= 1 and np.abs(rgb[2] - ends[1]).max() <= 1
+    assert tuple(rgb[3]) == (255, 0, 255)
+    assert np.array_equal(rgb[4], rgb[2])  # clipped
+
+
+def test_bad_input() -> None:
+    P, T, N = _sphere(8)
+    s = Scene()
+    with pytest.raises(ValueError, match="points"):
+        s.add_mesh(P[:, :2], T)
+    with pytest.raises(ValueError, match="scalars"):
+        s.add_mesh(P, T, scalars=np.zeros(3))
+    with pytest.raises(ValueError, match="cmap"):
+        s.add_mesh(P, T, scalars=P[:, 0], cmap="nope")
+    with pytest.raises(ValueError, match="shader"):
+        s.add_mesh(P, T, normals=N, shader="nope")
+    with pytest.raises(ValueError, match="normals"):
+        s.add_mesh(P, T, shader="zebra")
+    s.add_mesh(P, T)
+    with pytest.raises(ValueError, match="camera"):
+        s.render_array(size=SIZE, camera="nope")
+    with pytest.raises(ValueError, match="size"):
+        s.render_array(size=(4, 4))
