@@ -205,6 +205,32 @@ def test_shapes_broadcast_and_blocks_agree() -> None:
     np.testing.assert_allclose(per_point_eye, full, rtol=1e-14)
 
 
+def test_threads_and_float32() -> None:
+    """Blocks on threads give the serial result bit for bit; float32 agrees to ~1e-6."""
+    rng = np.random.default_rng(4)
+    P = rng.normal(size=(50_000, 3)) * 3
+    N = rng.normal(size=(50_000, 3))
+    setup = key_light_with_flaps([0, 0, 0], 6.0)
+    with tolerances.override(LIGHT_BLOCK=1000, LIGHT_THREADS=4):
+        threaded = shade(P, N, [1, -8, 5], setup)
+    with tolerances.override(LIGHT_BLOCK=1000, LIGHT_THREADS=1):
+        serial = shade(P, N, [1, -8, 5], setup)
+    np.testing.assert_array_equal(threaded, serial)
+    f32 = shade(P, N, [1, -8, 5], setup, dtype=np.float32)
+    assert f32.dtype == np.float32
+    # a flap edge may fall either side in float32: compare away from the light's discontinuities
+    F = setup.lights[0].frame
+    q = (P - setup.lights[0].origin) @ F.T
+    edge = np.zeros(len(P), bool)
+    for k, (lo, hi) in enumerate(setup.lights[0].flaps):
+        for b_ in (lo, hi):
+            if np.isfinite(b_):
+                edge |= np.abs(q[:, k] - b_) < 1e-4 * 6
+    np.testing.assert_allclose(f32[~edge], serial[~edge], rtol=0, atol=2e-5)
+    with pytest.raises(InvalidGeometryError, match="dtype"):
+        shade(P[:2], N[:2], [0, 0, 1], setup, dtype=np.int32)
+
+
 # ---------------------------------------------------------------------------------------- validation
 @pytest.mark.parametrize("kwargs, field", [
     ({"concentration": -1}, "light.concentration"),
