@@ -285,6 +285,8 @@ _DEFAULTS: dict[str, float] = {
     # least QUALITY_SECTION_CELLS_PER_SPAN per non-empty knot span.
     "QUALITY_SECTION_GRID": 48,
     "QUALITY_SECTION_CELLS_PER_SPAN": 6,
+    # ... but at most this many (faces with hundreds of knot spans).
+    "QUALITY_SECTION_MAX_CELLS": 256,
     # Section polylines of neighbouring faces whose ends lie within this distance (relative to the
     # model size) are joined into one chain.
     "QUALITY_CHAIN_TOL": 1e-6,

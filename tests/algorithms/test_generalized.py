@@ -274,7 +274,7 @@ def test_non_finite_net_and_too_high_valence():
 
 def test_generalized_tolerances_are_read_at_call_time():
     """MAX_VALENCE and GENERALIZED_CONSISTENCY_TOL come from occsurf.algorithms.tolerances at
-    call time (a negative consistency tolerance refuses even round-off)."""
+    call time (a zero consistency tolerance refuses even round-off)."""
     from occsurf.algorithms import tolerances
 
     rng = np.random.default_rng(4)
@@ -284,7 +284,7 @@ def test_generalized_tolerances_are_read_at_call_time():
             biquadratic_patch(v, m, c)
         with pytest.raises(InvalidGeometryError, match=r"valence 5, more than MAX_VALENCE = 4"):
             generalized_biquadratic(catmull_clark(ngon_with_skirt(5, rng)), refine="never")
-    with tolerances.override(GENERALIZED_CONSISTENCY_TOL=-1.0):
-        with pytest.raises(InvalidGeometryError, match="more than GENERALIZED_CONSISTENCY_TOL = -1.0"):
+    with tolerances.override(GENERALIZED_CONSISTENCY_TOL=0.0):
+        with pytest.raises(InvalidGeometryError, match="more than GENERALIZED_CONSISTENCY_TOL = 0.0"):
             biquadratic_patch(v, m, c)
     assert biquadratic_patch(v, m, c)[0].sides == 5

@@ -167,10 +167,10 @@ def test_invalid_arguments():
 
 
 def test_reduction_tolerance_is_read_at_call_time():
-    """SPATCH_REDUCTION_TOL is read when converting: a negative tolerance accepts no reduction,
+    """SPATCH_REDUCTION_TOL is read when converting: a zero tolerance accepts no reduction (round-off),
     so the 4-sided pieces keep the exact bidegree 2d."""
     patch = random_patch(np.random.default_rng(16), 4, 3)
     assert convert_spatch(patch).method == "exact-reduced" and convert_spatch(patch).degree == (3, 3)
-    with tolerances.override(SPATCH_REDUCTION_TOL=-1.0):
+    with tolerances.override(SPATCH_REDUCTION_TOL=0.0):
         res = convert_spatch(patch)
     assert res.method == "exact" and res.degree == (6, 6)

@@ -159,10 +159,10 @@ def test_newton_tolerances_and_limits_are_read_at_call_time(monkeypatch):
     c = _curve()
     request = [Position(0.3, [1.8, 0.1, 0.0]), Curvature(0.5, [0.0, 0.4, 0.0])]
     constrain(c, request)
-    with tolerances.override(NEWTON_TOL=-1.0), pytest.raises(InvalidGeometryError, match="tol: expected > 0"):
+    with tolerances.override(NEWTON_TOL=0.0), pytest.raises(InvalidGeometryError, match="tol: expected > 0"):
         constrain(c, request)  # the default tol is the registry's, checked like an explicit one
-    with tolerances.override(LINEAR_CHECK_RTOL=-1.0), pytest.raises(ConstraintError, match="not met after the solve"):
-        constrain(c, request)  # a negative limit refuses every linear residual
+    with tolerances.override(LINEAR_CHECK_RTOL=0.0), pytest.raises(ConstraintError, match="not met after the solve"):
+        constrain(c, request)  # a zero limit refuses every linear residual (round-off is never 0 here)
 
     import occsurf.algorithms.manipulation.curves as MC
 
@@ -185,7 +185,7 @@ def test_newton_tolerances_and_limits_are_read_at_call_time(monkeypatch):
         constrain(c, request)
     assert limits == [17] and max(steps) == 3 and any(converged)
     converged.clear()
-    with tolerances.override(KKT_RTOL=-1.0):  # no iterate is ever optimal enough
+    with tolerances.override(KKT_RTOL=0.0):  # no iterate is ever optimal enough
         try:
             constrain(c, request)
         except (ConstraintError, ConvergenceError):
@@ -207,9 +207,10 @@ def test_newton_tolerances_and_limits_are_read_at_call_time(monkeypatch):
 def test_linear_check_rtol_of_surface_edits_is_read_at_call_time():
     s = bump()
     target = s.evaluate(0.37, 0.61) + [0.1, -0.2, 0.3]
-    drag_surface_point(s, 0.37, 0.61, target)
-    with tolerances.override(LINEAR_CHECK_RTOL=-1.0), pytest.raises(ConstraintError, match="too ill-conditioned"):
-        drag_surface_point(s, 0.37, 0.61, target)  # a negative limit refuses every residual
+    plane = {"normal": [0.1, 0.2, 1.0]}  # with a tangent-plane condition the solve leaves round-off
+    drag_surface_point(s, 0.37, 0.61, target, **plane)
+    with tolerances.override(LINEAR_CHECK_RTOL=0.0), pytest.raises(ConstraintError, match="too ill-conditioned"):
+        drag_surface_point(s, 0.37, 0.61, target, **plane)  # a zero limit refuses every nonzero residual
 
 
 # ---------------------------------------------------------------------------------------- hierarchical
