@@ -1,5 +1,5 @@
 """``occsurf render FILE (--lights LIGHTS.json | --preset NAME) --out IMAGE.png [--size W H] [--view NAME]
-[--camera X Y Z --target X Y Z [--up X Y Z]] [--timeout SECONDS] [--in-process]``.
+[--camera X Y Z [--target X Y Z] [--up X Y Z]] [--samples N] [--timeout SECONDS] [--in-process]``.
 
 Renders a STEP or IGES model under Warn's studio lights (course ch. 10) to a PNG, per pixel
 (:func:`occsurf.bridge.rendering.lighting.render_model_lit`). The lights file is the JSON format
@@ -76,7 +76,7 @@ def render_job(item: dict[str, Any]) -> dict[str, Any]:
                         up=cam.get("up") or (0.0, 0.0, 1.0))
     else:
         camera = camera_for_view(item["view"], lo, hi, width / height)
-    image = render_lit(P, T, setup, normals=N, size=(width, height), camera=camera)
+    image = render_lit(P, T, setup, normals=N, size=(width, height), camera=camera, samples=item.get("samples", 4))
     write_png(item["output"], image)
     return {"faces": len(model.faces), "triangles": int(len(T)), "lights": len(setup.lights), "size": [width, height],
             "render_seconds": round(image.seconds, 4)}
@@ -144,7 +144,7 @@ def run(ns: argparse.Namespace) -> int:
         return EXIT_ERROR
     camera = None if ns.camera is None else {"position": ns.camera, "target": ns.target, "up": ns.up}
     item = {"input": str(src), "output": str(out), "lights": lights, "preset": ns.preset, "size": list(ns.size),
-            "view": ns.view, "camera": camera}
+            "view": ns.view, "camera": camera, "samples": ns.samples}
     [outcome] = run_jobs(RENDER_JOB, [item], timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD)
     if outcome.status != OK:
         why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
@@ -168,6 +168,16 @@ def _size_arg(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a number of pixels from 16 to 16384, got {text!r}") from None
     if not 16 <= n <= 16384:
         raise argparse.ArgumentTypeError(f"expected a number of pixels from 16 to 16384, got {n}")
+    return n
+
+
+def _samples_arg(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer from 0 to 16, got {text!r}") from None
+    if not 0 <= n <= 16:
+        raise argparse.ArgumentTypeError(f"expected an integer from 0 to 16, got {n}")
     return n
 
 
@@ -208,6 +218,8 @@ def add_parser(sub: Any) -> None:
                    help="point the camera looks at (with --camera; default the model's centre)")
     r.add_argument("--up", nargs=3, type=_coord_arg, default=[0.0, 0.0, 1.0], metavar=("X", "Y", "Z"),
                    help="view-up direction of --camera (default 0 0 1)")
+    r.add_argument("--samples", type=_samples_arg, default=4, metavar="N",
+                   help="multisampling of the edges, 0 (off, ~4x faster on a CPU renderer) to 16 (default 4)")
     r.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop the worker after this long and report it (default {DEFAULT_TIMEOUT:g})")
     r.add_argument("--in-process", action="store_true",

@@ -7,17 +7,19 @@ VTK's fragment shader (``vtkShaderProperty``: the ``//VTK::Light::Impl`` block o
 position and normal, in one render pass:
 
 * world position ``P`` = inverse view matrix x VTK's ``vertexVC``; normal ``N`` = the rotation of
-  the inverse view matrix x the interpolated ``normalVCVSOutput`` (the mesh's vertex normals,
-  before VTK's own back-face flip), normalised per pixel; eye = the camera position;
+  the inverse view matrix x the interpolated vertex normal (VTK's back-face flip undone),
+  normalised per pixel; eye = the camera position;
 * every light, the material and the ambient light are baked into the shader as constants (a new
   shader per setup and camera: compiling costs a few ms);
 * the result is written unclipped to the 8-bit colour buffer (clipped by OpenGL, as
   ``numpy.clip(shade(...), 0, 1)``).
 
 Why a shader and not NumPy over rasterised buffers: measured on this 2-core machine (Mesa
-llvmpipe, no GPU), rendering world normals into float buffers with ``vtkValuePass`` takes three
-passes of about 0.35 s each at 1600 x 1200 (1.05 s before any shading), while one shaded pass of
-the same 102k-triangle mesh takes about 0.2 s. ``benchmarks/bench_lighting.py`` times both.
+llvmpipe, no GPU, under load), the NumPy design needs the world normals in float buffers
+(``vtkValuePass``: one pass per component) plus a pass for the depth, 0.6-0.9 s at 1600 x 1200
+for a 100k-triangle mesh before any shading, then :func:`~occsurf.algorithms.lighting.shade` on
+the covered pixels; one shaded pass of the same mesh takes 0.19 s (0.8 s with 4x multisampling).
+``benchmarks/bench_lighting.py`` times both.
 
 Cameras (:class:`Camera`): a named view of :data:`VIEWS` (``top`` looks down -z at the whole
 model) framed on the model's bounding sphere, or an explicit position / target / up.
@@ -139,12 +141,12 @@ def pixel_world_points(image: LitImage) -> np.ndarray:
     """World positions ``(height, width, 3)`` of the pixel centres from the depth buffer (NaN on
     the background): the inverse of the projection used for the picture."""
     h, w = image.depth.shape
-    ys, xs = np.mgrid[0:h, 0:w]
-    ndc = np.stack([(xs + 0.5) / w * 2 - 1, 1 - (ys + 0.5) / h * 2, image.depth.astype(float) * 2 - 1,
-                    np.ones((h, w))], axis=-1)
+    ys, xs = np.nonzero(image.covered)
+    ndc = np.stack([(xs + 0.5) / w * 2 - 1, 1 - (ys + 0.5) / h * 2, image.depth[ys, xs].astype(float) * 2 - 1,
+                    np.ones(len(xs))], axis=-1)
     world = ndc @ np.linalg.inv(image.matrix).T
-    pts = world[..., :3] / world[..., 3:4]
-    pts[~image.covered] = np.nan
+    pts = np.full((h, w, 3), np.nan)
+    pts[ys, xs] = world[:, :3] / world[:, 3:4]
     return pts
 
 
@@ -220,7 +222,9 @@ def _shader_impl(setup: LightingSetup, inv_view: np.ndarray, eye: Sequence[float
     lines = [
         f"  mat4 warnInvView = mat4({cols});",
         "  vec3 P = (warnInvView * vec4(vertexVC.xyz, 1.0)).xyz;",
-        "  vec3 N = normalize(mat3(warnInvView) * normalVCVSOutput);",
+        # VTK's Normal::Impl turned the normal of back-facing triangles (its local normalVCVSOutput);
+        # turn it back: the mesh's own normal, as the reference gets it (tests/bridge check both sides)
+        "  vec3 N = normalize(mat3(warnInvView) * (gl_FrontFacing ? normalVCVSOutput : -normalVCVSOutput));",
         f"  vec3 V = normalize({_v3(eye)} - P);",
         "  float NV = dot(N, V);",
     ]
@@ -243,12 +247,12 @@ def render_available() -> bool:
         return False
 
 
-_WINDOWS: dict[tuple[int, int], Any] = {}
+_WINDOWS: dict[tuple[int, int, int], Any] = {}
 
 
-def _window(width: int, height: int) -> Any:
-    """A cached offscreen window (EGL: no display needed) of this size, 4x multisampled."""
-    win = _WINDOWS.get((width, height))
+def _window(width: int, height: int, samples: int = 4) -> Any:
+    """A cached offscreen window (EGL: no display needed) of this size and multisampling."""
+    win = _WINDOWS.get((width, height, samples))
     if win is None:
         import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (registers the OpenGL factories)
         from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
@@ -265,8 +269,8 @@ def _window(width: int, height: int) -> Any:
             win = vtkRenderWindow()
         win.SetOffScreenRendering(1)
         win.SetSize(width, height)
-        win.SetMultiSamples(4)
-        _WINDOWS[(width, height)] = win
+        win.SetMultiSamples(samples)
+        _WINDOWS[(width, height, samples)] = win
     return win
 
 
@@ -335,7 +339,7 @@ def _vertex_normals(P: np.ndarray, T: np.ndarray) -> np.ndarray:
 
 def render_lit(points: np.ndarray, triangles: np.ndarray, setup: LightingSetup, *, normals: np.ndarray | None = None,
                size: tuple[int, int] = (1600, 1200), view: str = "iso", camera: Camera | None = None,
-               background: Sequence[float] = BACKGROUND) -> LitImage:
+               background: Sequence[float] = BACKGROUND, samples: int = 4) -> LitImage:
     """Render a triangle mesh under ``setup``'s Warn lights, per pixel, offscreen.
 
     Parameters
@@ -353,6 +357,10 @@ def render_lit(points: np.ndarray, triangles: np.ndarray, setup: LightingSetup, 
     camera : Camera, optional
         An explicit camera.
     background : (3,) floats
+    samples : int
+        Multisampling (antialiased edges): 0 (off) .. 16. On a CPU renderer (Mesa llvmpipe) 4
+        samples cost about 4x a render without (1600 x 1200, 100k triangles: ~0.25 s -> ~1 s under
+        load); interior pixels are shaded once either way and do not change.
 
     Returns
     -------
@@ -363,11 +371,13 @@ def render_lit(points: np.ndarray, triangles: np.ndarray, setup: LightingSetup, 
     if not isinstance(setup, LightingSetup):
         raise InvalidGeometryError(f"setup: expected a LightingSetup, got {type(setup).__name__}")
     width, height = _size(size)
+    if isinstance(samples, bool) or not isinstance(samples, int) or not 0 <= samples <= 16:
+        raise InvalidGeometryError(f"samples: expected an integer from 0 to 16, got {samples!r}")
     P, T, N = _check_mesh(points, triangles, normals)
     if camera is None:
         camera = camera_for_view(view, P.min(axis=0), P.max(axis=0), width / height)
     t0 = time.perf_counter()
-    rgb, depth, matrix = _draw(P, T, N, setup, camera, width, height, background)
+    rgb, depth, matrix = _draw(P, T, N, setup, camera, (width, height, samples), background)
     return LitImage(rgb=rgb, depth=depth, camera=camera, matrix=matrix, seconds=time.perf_counter() - t0)
 
 
@@ -381,10 +391,11 @@ def _size(size: Sequence[int]) -> tuple[int, int]:
     return width, height
 
 
-def _draw(P: np.ndarray, T: np.ndarray, N: np.ndarray, setup: LightingSetup, camera: Camera, width: int,
-          height: int, background: Sequence[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _draw(P: np.ndarray, T: np.ndarray, N: np.ndarray, setup: LightingSetup, camera: Camera,
+          window: tuple[int, int, int], background: Sequence[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One shaded pass; returns ``(rgb (h, w, 3) uint8, depth (h, w) float32, world->NDC (4, 4))``."""
-    win = _window(width, height)  # first: loads the OpenGL factories (vtkShaderProperty's override)
+    width, height, _ = window
+    win = _window(*window)  # first: loads the OpenGL factories (vtkShaderProperty's override)
     from vtkmodules.util.numpy_support import vtk_to_numpy
     from vtkmodules.vtkCommonCore import vtkFloatArray, vtkUnsignedCharArray
     from vtkmodules.vtkRenderingCore import vtkLight, vtkRenderer

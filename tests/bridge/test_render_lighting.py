@@ -205,3 +205,21 @@ def test_cli_errors_are_one_line_exit_2(tmp_path, sample, case) -> None:
     assert len(lines) == 1 and expect in lines[0], r.stderr
     assert "Traceback" not in r.stderr
     assert not (tmp_path / "o.png").exists()
+
+
+def test_back_faces_follow_two_sided() -> None:
+    """Seen from below, the plane lit from above: two-sided lights its back like its front (as the
+    reference does), one-sided shows ambient only."""
+    P, T, N = _plane()
+    light = WarnLight(position=(0.0, 0.0, -6.0), direction=(0, 0, 1))  # below the plane, facing its back
+    cam = lighting.Camera(position=(0.0, -3.0, -15.0), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0))
+    mat = Material(color=(1, 1, 1), specular=0.0)
+    two = lighting.render_lit(P, T, LightingSetup(lights=(light,), ambient=0.1, material=mat), normals=N,
+                              size=SIZE, camera=cam)
+    one_setup = LightingSetup(lights=(light,), ambient=0.1, material=mat, two_sided=False)
+    one = lighting.render_lit(P, T, one_setup, normals=N, size=SIZE, camera=cam)
+    inner = binary_erosion(two.covered, iterations=2)
+    assert two.rgb[inner].mean() > 100
+    assert np.all(np.abs(one.rgb[inner].astype(int) - 26) <= 1)
+    _compare(two, LightingSetup(lights=(light,), ambient=0.1, material=mat),
+             lambda W: np.broadcast_to([0.0, 0.0, 1.0], W.shape), levels=2)
