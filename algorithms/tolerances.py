@@ -43,6 +43,10 @@ _DEFAULTS: dict[str, float] = {
     # point of the refined representation (which bounds the movement of the curve by the
     # convex-hull property). Absolute, in model units.
     "KNOT_REMOVAL": 1e-9,
+    # Largest array (bytes) an evaluation may allocate for its result or work space (evaluate_grid,
+    # derivatives of high order, S-patch index sets, deviation grids): a request above it is refused
+    # with its size named before anything is allocated or computed for minutes.
+    "MAX_ARRAY_BYTES": 1 << 31,
     # Smallest number of evaluated points for which the numba kernels are used. The first use in a
     # process costs about 0.5 s (importing numba, loading the cached kernels); from 2**15 points on
     # a kernel saves ~15 ms per scattered evaluation, so that cost is repaid after a few dozen

@@ -6,9 +6,10 @@ Algorithm
 1. **Seed** (per face, all planes at once): the signed distance ``h_k(u, v) = (S(u, v) - o_k) . n_k``
    on a parameter grid; vectorised marching squares gives oriented segments between grid-edge
    crossings (saddle cells resolved by the bilinear centre value; positive side on the left).
-2. **Refine** every crossing by Newton's method on ``h(u, v) = 0`` with the minimal-norm step
-   ``-h grad h / |grad h|^2`` (``grad h = (S_u . n, S_v . n)``), on the exact surface, until
-   ``|h| <= QUALITY_SECTION_TOL * size``.
+2. **Refine** every crossing on its grid edge (an iso-parameter segment along which ``h`` changes
+   sign, so the root is bracketed) by Newton's method safeguarded with bisection, on the exact
+   surface, until ``|h| <= QUALITY_SECTION_TOL * size``. Inflection brackets are refined with the
+   minimal-norm Newton step ``-h grad h / |grad h|^2`` (``grad h = (S_u . n, S_v . n)``).
 3. **Chain** the oriented segments into polylines by pointer doubling (``log2`` NumPy steps, no
    per-point loop), then join polylines of neighbouring faces whose ends are within
    ``QUALITY_CHAIN_TOL * size``.
@@ -17,8 +18,8 @@ Algorithm
 
    .. math:: \\kappa_s = \\frac{II(t)}{I(t)} \\Big/ (N_c \\cdot n_s),
 
-   signed in the plane; inflections (sign changes of ``kappa_s``) are located by bisection on the
-   exact surface to ``QUALITY_INFLECTION_TOL`` of the parameter range.
+   signed in the plane; inflections (sign changes of ``kappa_s``) are located by Illinois regula
+   falsi on the exact surface to ``QUALITY_INFLECTION_TOL`` of the parameter range.
 """
 
 from __future__ import annotations
@@ -138,6 +139,7 @@ def _grid(s: Any) -> tuple[Array, Array]:
         p, t, n = base.degree[ax], base.knots[ax], base.n_poles[ax]
         spans = max(1, np.unique(t[p:n + 1]).size - 1)
         cells = max(int(tolerances.QUALITY_SECTION_GRID), int(tolerances.QUALITY_SECTION_CELLS_PER_SPAN) * spans)
+        cells = min(cells, int(tolerances.QUALITY_SECTION_MAX_CELLS))
         out.append(np.linspace(lo, hi, cells + 1))
     return out[0], out[1]
 
@@ -180,8 +182,8 @@ def _march(h: Array) -> tuple[Array, Array, Array, Array]:
     return np.concatenate(planes), np.concatenate(srcs), np.concatenate(dsts), nu_e
 
 
-def _edge_uv(edges: Array, plane: Array, h: Array, us: Array, vs: Array, nu_e: int) -> Array:
-    """Linear interpolation of the zero of ``h`` along each grid edge: (n, 2) parameters."""
+def _edge_ends(edges: Array, plane: Array, h: Array, us: Array, vs: Array, nu_e: int) -> tuple[Array, Array, Array]:
+    """End parameters ``(n, 2)`` of each grid edge and the linear-interpolation zero ``t`` on it."""
     mv = vs.size
     along_u = edges < nu_e
     i = np.where(along_u, edges // mv, (edges - nu_e) // (mv - 1))
@@ -190,7 +192,42 @@ def _edge_uv(edges: Array, plane: Array, h: Array, us: Array, vs: Array, nu_e: i
     h0, h1 = h[plane, i, j], h[plane, i2, j2]
     with np.errstate(invalid="ignore", divide="ignore"):
         t = np.clip(np.where(h0 != h1, h0 / (h0 - h1), 0.5), 0.0, 1.0)
-    return np.stack((us[i] + t * (us[i2] - us[i]), vs[j] + t * (vs[j2] - vs[j])), -1)
+    return np.stack((us[i], vs[j]), -1), np.stack((us[i2], vs[j2]), -1), t
+
+
+def _on_edge(s: Any, uv0: Array, uv1: Array, t: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
+    """The zero of ``h = (S - o) . n`` on each grid edge ``uv0 -> uv1`` (bracketed: ``h`` changes
+    sign along it), by Newton's method safeguarded with bisection, all edges at once; converges
+    whenever the seed is real. Returns ``(uv, converged)``."""
+    lo, hi = np.zeros(t.size), np.ones(t.size)
+    d = uv1 - uv0
+    D0 = s.derivatives(uv0[:, 0], uv0[:, 1], 0)
+    sign0 = np.sign(dot(D0[:, 0, 0] - o, n))
+    done = np.zeros(t.size, bool)
+    for _ in range(4 * int(tolerances.QUALITY_SECTION_NEWTON_STEPS)):
+        todo = np.flatnonzero(~done)
+        if todo.size == 0:
+            break
+        uv = uv0[todo] + t[todo, None] * d[todo]
+        D = s.derivatives(uv[:, 0], uv[:, 1], 1)
+        f = dot(D[:, 0, 0] - o[todo], n[todo])
+        ok = np.abs(f) <= tol
+        done[todo[ok]] = True
+        same = np.sign(f) == sign0[todo]
+        lo[todo] = np.where(same, t[todo], lo[todo])
+        hi[todo] = np.where(same, hi[todo], t[todo])
+        fp = dot(D[:, 1, 0], n[todo]) * d[todo, 0] + dot(D[:, 0, 1], n[todo]) * d[todo, 1]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            tn = t[todo] - f / fp
+        inside = np.isfinite(tn) & (tn > lo[todo]) & (tn < hi[todo])
+        t[todo] = np.where(ok, t[todo], np.where(inside, tn, 0.5 * (lo[todo] + hi[todo])))
+        # a bracket shrunk to round-off with |f| still above tol: the tolerance is below what the
+        # surface's evaluation resolves there; stop (the final check reports it unconverged)
+        done[todo[(hi[todo] - lo[todo]) <= 4 * np.finfo(float).eps]] = True
+    uv = uv0 + t[:, None] * d
+    D = s.derivatives(uv[:, 0], uv[:, 1], 0)
+    conv = np.abs(dot(D[:, 0, 0] - o, n)) <= tol
+    return uv, conv
 
 
 def _newton(s: Any, uv: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
@@ -303,24 +340,37 @@ def _tangent_hints(P: Array, closed: bool) -> Array:
     return g
 
 
-def _refine_inflections(s: Any, uv_a: Array, uv_b: Array, ka: Array, o: Array, m: Array, hint: Array,
+def _refine_inflections(s: Any, uv_a: Array, uv_b: Array, ka: Array, kb: Array, o: Array, m: Array, hint: Array,
                         tol_uv: float, tol_h: float) -> Array:
-    """Bisection, all brackets at once, on the exact cut between samples of opposite curvature sign."""
-    a, b = np.zeros(uv_a.shape[0]), np.ones(uv_a.shape[0])
-    sa = np.sign(ka)
+    """Zeros of the signed curvature on the exact cut between samples of opposite sign: the
+    Illinois variant of regula falsi on the fraction ``c`` of the bracket (each trial point projected
+    onto the intersection by Newton), all brackets at once; stops when the bracket is below
+    ``tol_uv`` in parameter space or the curvature is zero to round-off."""
+    n = uv_a.shape[0]
+    a, b = np.zeros(n), np.ones(n)
+    fa, fb = ka.astype(float).copy(), kb.astype(float).copy()
     span = np.linalg.norm(uv_b - uv_a, axis=1)
-    on = np.broadcast_to(o, uv_a.shape[:1] + (3,))
-    mm = np.broadcast_to(m, uv_a.shape[:1] + (3,))
-    for _ in range(80):
-        if np.all((b - a) * span <= tol_uv):
+    on = np.broadcast_to(o, (n, 3))
+    mm = np.broadcast_to(m, (n, 3))
+    best = 0.5 * np.ones(n)
+    live = np.ones(n, bool)
+    for _ in range(100):
+        live &= np.abs(b - a) * span > tol_uv
+        if not np.any(live):
             break
-        c = 0.5 * (a + b)
-        uv, _ok = _newton(s, uv_a + c[:, None] * (uv_b - uv_a), on, mm, tol_h)
-        kc, _, _ = _cut_curvature(s, uv, m, hint)
-        right = np.sign(kc) == sa
-        a, b = np.where(right, c, a), np.where(right, b, c)
-    c = 0.5 * (a + b)
-    uv, _ok = _newton(s, uv_a + c[:, None] * (uv_b - uv_a), on, mm, tol_h)
+        i = np.flatnonzero(live)
+        c = (a[i] * fb[i] - b[i] * fa[i]) / (fb[i] - fa[i])
+        c = np.where(np.isfinite(c) & (c > np.minimum(a[i], b[i])) & (c < np.maximum(a[i], b[i])), c, 0.5 * (a[i] + b[i]))
+        uv, _ok = _newton(s, uv_a[i] + c[:, None] * (uv_b[i] - uv_a[i]), on[i], mm[i], tol_h)
+        fc, _, _ = _cut_curvature(s, uv, mm[i], hint[i])
+        best[i] = c
+        exact = ~np.isfinite(fc) | (fc == 0)
+        swap = fc * fb[i] < 0  # the root lies between b and c: b becomes the other end
+        a[i] = np.where(swap, b[i], a[i])
+        fa[i] = np.where(swap, fb[i], 0.5 * fa[i])  # Illinois: halve the stale end's value
+        b[i], fb[i] = c, fc
+        live[i[exact]] = False
+    uv, _ok = _newton(s, uv_a + best[:, None] * (uv_b - uv_a), on, mm, tol_h)
     return s.evaluate(uv[:, 0], uv[:, 1])
 
 
@@ -357,8 +407,8 @@ def _face_pieces(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half
     n_edges = nu_e + us.size * (vs.size - 1)
     ids, inv = np.unique(np.concatenate((plane * n_edges + src, plane * n_edges + dst)), return_inverse=True)
     node_plane, node_edge = ids // n_edges, ids % n_edges
-    uv0 = _edge_uv(node_edge, node_plane, h, us, vs, nu_e)
-    uv, conv = _newton(s, uv0, O[node_plane], Nm[node_plane], tol_h)
+    e0, e1, t0 = _edge_ends(node_edge, node_plane, h, us, vs, nu_e)
+    uv, conv = _on_edge(s, e0, e1, t0, O[node_plane], Nm[node_plane], tol_h)
     keep_node = conv.copy()
     if mask is not None:
         keep_node &= np.asarray(mask(uv[:, 0], uv[:, 1]), bool)
@@ -408,8 +458,24 @@ def _join(pieces: list[_Piece], tol: float) -> list[_Piece]:
     return done
 
 
-def _section_curve(piece: _Piece, faces: list[tuple[Any, MaskFn | None]], o: Array, m: Array, size: float,
-                   tol_h: float, fit: bool, scale: float | None) -> SectionCurve:
+@dataclass
+class _Curve:
+    """A joined polyline of one plane with its exact curvature, before its inflections are refined."""
+
+    plane: int
+    points: Array
+    uv: Array
+    face: Array
+    closed: bool
+    ks: Array
+    tangent: Array
+    hint: Array
+    brackets: tuple[Array, Array]  # sample pairs (cur, nxt) on one face with opposite curvature signs
+    inflections: list[Array] = field(default_factory=list)
+
+
+def _curve(plane: int, piece: _Piece, faces: list[tuple[Any, MaskFn | None]], m: Array, size: float,
+           tol_h: float) -> _Curve:
     P, uv, face = piece.points, piece.uv, piece.face
     # a crossing through a grid vertex is found on two grid edges: keep one of coincident points
     keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > 100 * tol_h]
@@ -420,36 +486,50 @@ def _section_curve(piece: _Piece, faces: list[tuple[Any, MaskFn | None]], o: Arr
     for fi in np.unique(face):  # one vectorised evaluation per face
         sel = face == fi
         ks[sel], T[sel], _ = _cut_curvature(faces[fi][0], uv[sel], m, hint[sel])
-    # inflections: opposite signs of consecutive samples on the same face, refined on the surface
     nxt = np.roll(np.arange(P.shape[0]), -1) if piece.closed else np.arange(1, P.shape[0])
     cur = np.arange(nxt.size)
     zero = tolerances.QUALITY_WIGGLE_CURVATURE / max(size, np.finfo(float).tiny) * 1e-3
     sc = np.sign(np.where(np.abs(ks) > zero, ks, 0.0))
-    br = np.flatnonzero((sc[cur] * sc[nxt] < 0))
-    infl = []
-    for fi in np.unique(face[cur[br]]):
-        sel = br[(face[cur[br]] == fi) & (face[nxt[br]] == fi)]
-        if sel.size:
-            s = faces[fi][0]
-            (u0, u1), (v0, v1) = s.domain
-            tol_uv = tolerances.QUALITY_INFLECTION_TOL * max(u1 - u0, v1 - v0)
-            infl.append(_refine_inflections(s, uv[cur[sel]], uv[nxt[sel]], ks[cur[sel]], o, m,
-                                            hint[cur[sel]], tol_uv, tol_h))
-    cross = br[face[cur[br]] != face[nxt[br]]]
-    if cross.size:  # a sign change across a face boundary: linear interpolation (a G2 break)
+    br = np.flatnonzero(sc[cur] * sc[nxt] < 0)
+    same = face[cur[br]] == face[nxt[br]]
+    c = _Curve(plane, P, uv, face, piece.closed, ks, T, hint, (cur[br[same]], nxt[br[same]]))
+    cross = br[~same]
+    if cross.size:  # a sign change across a face boundary (a G2 break): linear interpolation
         w = ks[cur[cross]] / (ks[cur[cross]] - ks[nxt[cross]])
-        infl.append(P[cur[cross]] + w[:, None] * (P[nxt[cross]] - P[cur[cross]]))
-    infl_p = np.concatenate(infl) if infl else np.empty((0, 3))
+        c.inflections.append(P[cur[cross]] + w[:, None] * (P[nxt[cross]] - P[cur[cross]]))
+    return c
+
+
+def _refine_all(curves: list[_Curve], faces: list[tuple[Any, MaskFn | None]], O: Array, Nm: Array, tol_h: float) -> None:
+    """Refine the inflection brackets of every curve of every plane, one batch per face."""
+    rows = [(ci, fi, a, b) for ci, c in enumerate(curves) for fi in np.unique(c.face[c.brackets[0]])
+            for a, b in [(c.brackets[0][c.face[c.brackets[0]] == fi], c.brackets[1][c.face[c.brackets[0]] == fi])]]
+    for fi in {r[1] for r in rows}:
+        mine = [r for r in rows if r[1] == fi]
+        s = faces[fi][0]
+        (u0, u1), (v0, v1) = s.domain
+        cat = lambda f: np.concatenate([f(curves[ci], a, b) for ci, _, a, b in mine])  # noqa: E731
+        owner = np.concatenate([np.full(a.size, ci) for ci, _, a, _b in mine])
+        X = _refine_inflections(
+            s, cat(lambda c, a, b: c.uv[a]), cat(lambda c, a, b: c.uv[b]), cat(lambda c, a, b: c.ks[a]),
+            cat(lambda c, a, b: c.ks[b]), cat(lambda c, a, b: np.broadcast_to(O[c.plane], (a.size, 3))),
+            cat(lambda c, a, b: np.broadcast_to(Nm[c.plane], (a.size, 3))), cat(lambda c, a, b: c.hint[a]),
+            tolerances.QUALITY_INFLECTION_TOL * max(u1 - u0, v1 - v0), tol_h)
+        for ci in np.unique(owner):
+            curves[ci].inflections.append(X[owner == ci])
+
+
+def _section_curve(c: _Curve, m: Array, fit: bool, scale: float | None) -> SectionCurve:
+    P = c.points
+    infl_p = np.concatenate(c.inflections) if c.inflections else np.empty((0, 3))
     arc = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))))
-    spine = -np.cross(m, T)
-    comb = _finish(arc, P, np.abs(ks), ks, spine, scale, m, np.empty(0), infl_p)
+    comb = _finish(arc, P, np.abs(c.ks), c.ks, -np.cross(m, c.tangent), scale, m, np.empty(0), infl_p)
     spline = None
     if fit and P.shape[0] >= 4:
         from ..fitting.interpolation import interpolate_curve
 
-        pts = np.vstack((P, P[:1])) if piece.closed else P
-        spline = interpolate_curve(pts, 3)
-    return SectionCurve(points=P, uv=uv, face=face, closed=piece.closed, curvature=ks, comb=comb,
+        spline = interpolate_curve(np.vstack((P, P[:1])) if c.closed else P, 3)
+    return SectionCurve(points=P, uv=c.uv, face=c.face, closed=c.closed, curvature=c.ks, comb=comb,
                         inflection_points=infl_p, spline=spline)
 
 
@@ -468,11 +548,12 @@ def _sections(faces: object, O: Array, Nm: Array, offsets: Array, half: Array | 
         bad += b
         for i in range(k):
             per_plane[i].extend(pieces[i])
-    out = []
-    for i in range(k):
-        joined = _join(per_plane[i], tolerances.QUALITY_CHAIN_TOL * size)
-        curves = [_section_curve(p, fl, O[i], Nm[i], size, tol_h, fit, scale) for p in joined]
-        out.append(Section(origin=O[i], normal=Nm[i], offset=float(offsets[i]), curves=curves, n_unconverged=int(bad[i])))
+    curves = [_curve(i, p, fl, Nm[i], size, tol_h) for i in range(k)
+              for p in _join(per_plane[i], tolerances.QUALITY_CHAIN_TOL * size)]
+    _refine_all(curves, fl, O, Nm, tol_h)
+    out = [Section(origin=O[i], normal=Nm[i], offset=float(offsets[i]), n_unconverged=int(bad[i])) for i in range(k)]
+    for c in curves:
+        out[c.plane].curves.append(_section_curve(c, Nm[c.plane], fit, scale))
     return out
 
 
