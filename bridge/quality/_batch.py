@@ -12,7 +12,9 @@ and one gather + ``einsum``. Only the span search (``searchsorted``) runs per sp
 Rational and polynomial splines are evaluated alike in homogeneous form (weight 1 for polynomial
 ones; the quotient rule (A4.4) then divides by exactly 1, so their values are unchanged).
 Faces and p-curves with no spline form here (analytic, OCC-evaluated) are evaluated one by one
-through their own evaluators.
+through their own evaluators. When numba is installed (and ``OCCSURF_NO_NUMBA`` unset), calls of at
+least :data:`NUMBA_MIN_POINTS` points evaluate the B-spline faces with the compiled per-surface
+kernel of :mod:`occsurf.algorithms._numba_kernels` instead (same values to ~1e-14, no gathers).
 """
 
 from __future__ import annotations
@@ -101,6 +103,14 @@ class SurfaceBatch:
             if ev is not None and ev.spline is not None:
                 members.setdefault(ev.spline.degree, []).append(f)
         self.groups: list[dict[str, Any]] = []
+        self._kargs: dict[int, tuple] = {}
+        self.dom = np.zeros((n, 4))
+        self.per = np.zeros((n, 2), dtype=bool)
+        for f, ev in enumerate(evaluators):
+            if ev is not None and ev.spline is not None:
+                (u0, u1), (v0, v1) = ev.spline.domain
+                self.dom[f] = (u0, u1, v0, v1)
+                self.per[f] = ev.periodic
         for g, ((p, q), faces) in enumerate(members.items()):
             splines = [evaluators[f].spline for f in faces]
             nu = [s.n_poles[0] for s in splines]
@@ -133,10 +143,13 @@ class SurfaceBatch:
         D = np.full((u.shape[0], order + 1, order + 1, 3), np.nan)
         errors: dict[int, BaseException] = {}
         grp = self.group[fid]
-        for g, G in enumerate(self.groups):
-            sel = np.flatnonzero(grp == g)
-            if sel.size:
-                D[sel] = self._group(G, self.local[fid[sel]], u[sel], v[sel], order)
+        if self.groups and _use_numba(u.shape[0]):
+            self._numba(fid, u, v, order, grp, D)
+        else:
+            for g, G in enumerate(self.groups):
+                sel = np.flatnonzero(grp == g)
+                if sel.size:
+                    D[sel] = self._group(G, self.local[fid[sel]], u[sel], v[sel], order)
         for f in np.unique(fid[grp < 0]):
             ev = self.evaluators[f]
             if ev is None:
@@ -147,6 +160,41 @@ class SurfaceBatch:
             except Exception as err:  # noqa: BLE001 - keep the other faces
                 errors[int(f)] = err
         return D, errors
+
+    def _numba(self, fid: Index, u: Array, v: Array, order: int, grp: Index, D: Array) -> None:
+        """The B-spline faces through the compiled per-surface kernel of
+        :mod:`occsurf.algorithms._numba_kernels` (one call per face; the NumPy stack is the fallback)."""
+        from occsurf.algorithms import _numba_kernels as nk
+
+        kernel = (nk._state["kernels"] or {}).get("surface_derivatives")
+        sel = np.flatnonzero(grp >= 0)
+        fs = fid[sel]
+        U = np.empty(u.shape[0])
+        V = np.empty(u.shape[0])
+        U[sel] = _into(u[sel], self.dom[fs, 0], self.dom[fs, 1], self.per[fs, 0])
+        V[sel] = _into(v[sel], self.dom[fs, 2], self.dom[fs, 3], self.per[fs, 1])
+        order_idx = sel[np.argsort(fs, kind="stable")]
+        f_sorted = fid[order_idx]
+        cuts = np.flatnonzero(np.diff(f_sorted)) + 1
+        for chunk in np.split(order_idx, cuts):
+            if chunk.size == 0:
+                continue
+            f = int(fid[chunk[0]])
+            ev = self.evaluators[f]
+            spline = ev.spline
+            args = self._kargs.get(f)
+            if args is None:  # span tables and read-only views built once per face
+                args = self._kargs[f] = tuple(nk._readonly(a) for a in spline._kernel_args())
+            out = np.empty((chunk.size, order + 1, order + 1, 3))
+            if kernel is not None:
+                try:
+                    kernel(*args, U[chunk], V[chunk], order, spline.is_rational, out)
+                    D[chunk] = out
+                    continue
+                except Exception:  # noqa: BLE001 - as nk.run: fall back to NumPy
+                    kernel = None
+            G = self.groups[self.group[f]]
+            D[chunk] = self._group(G, self.local[fid[chunk]], u[chunk], v[chunk], order)
 
     @staticmethod
     def _group(G: dict[str, Any], k: Index, u: Array, v: Array, order: int) -> Array:
@@ -160,9 +208,25 @@ class SurfaceBatch:
         rows = (su - p)[:, None] + np.arange(p + 1)
         cols = (sv - q)[:, None] + np.arange(q + 1)
         idx = G["H_off"][k][:, None, None] + rows[:, :, None] * nv[:, None, None] + cols[:, None, :]
-        tmp = np.einsum("mbj,mijk->mbik", Dv, G["H"][idx])
-        Hd = np.einsum("mai,mbik->mabk", Du, tmp)
+        m, r = u.shape[0], order + 1
+        tmp = np.matmul(Dv[:, None], G["H"][idx])  # (m, p+1, r, 4): contracted over v
+        Hd = np.matmul(Du, tmp.reshape(m, p + 1, -1)).reshape(m, r, r, -1)  # then over u
         return surface_quotient_rule(Hd) if G["rational"] else Hd[..., :3]
+
+
+#: Evaluations of at least this many points load numba (about 0.5 s the first time in a process,
+#: from its cache) and use its compiled per-surface kernel; once loaded it is used for any size.
+NUMBA_MIN_POINTS: int = 4096
+
+
+def _use_numba(n: int) -> bool:
+    from occsurf.algorithms import _numba_kernels as nk
+
+    if not nk.enabled():
+        return False
+    if nk._state["loaded"]:
+        return nk._state["kernels"] is not None
+    return n >= NUMBA_MIN_POINTS and nk._load() is not None
 
 
 def _into(x: Array, lo: Array, hi: Array, periodic: NDArray[np.bool_]) -> Array:
@@ -219,7 +283,7 @@ class CurveBatch:
             s = T.spans(k, x)
             Dn = basis_derivatives(T.knots, p, s + T.offset[k], x, 1)
             idx = G["H_off"][k][:, None] + (s - p)[:, None] + np.arange(p + 1)
-            Hd = curve_quotient_rule(np.einsum("mai,mik->mak", Dn, G["H"][idx]))
+            Hd = curve_quotient_rule(np.matmul(Dn, G["H"][idx]))
             uv[sel], duv[sel] = Hd[:, 0], Hd[:, 1]
         other = ~line & (grp < 0)
         for i in np.unique(cid[other]):

@@ -378,6 +378,47 @@ def _section(D: Array, n: Array, T: Array, third: bool) -> tuple[Array, Array]:
     return k, _dot(n, 3 * d2(w1, w2) + D3)
 
 
+def _principal(D: Array) -> tuple[Array, Array, Array]:
+    """Principal curvatures ``kmax >= kmin`` (against ``S_u x S_v``, as ``GeomLProp``) and the
+    component-wise mean of their directions' absolute values, ``(|dmin| + |dmax|) / 2``, normalised.
+
+    The shape operator in the orthonormal tangent frame ``e1 = S_u / |S_u|``, ``e2 = n x e1`` is
+    ``[[a, b], [b, c]]``; its eigenvectors are at the angle ``theta = atan2(2 b, a - c) / 2``.
+    """
+    Su, Sv = D[:, 1, 0], D[:, 0, 1]
+    n = _unit(_cross(Su, Sv))
+    e1 = _unit(Su)
+    e2 = _cross(n, e1)
+    L, M, N = _dot(D[:, 2, 0], n), _dot(D[:, 1, 1], n), _dot(D[:, 0, 2], n)
+    a11 = np.sqrt(_dot(Su, Su))
+    a12, a22 = _dot(Sv, e1), _dot(Sv, e2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        i11, i12, i22 = 1.0 / a11, -a12 / (a11 * a22), 1.0 / a22
+        a = L * i11 * i11
+        b = i11 * (L * i12 + M * i22)
+        c = i12 * (L * i12 + 2.0 * M * i22) + N * i22 * i22
+    half, rad = 0.5 * (a + c), np.hypot(0.5 * (a - c), b)
+    theta = 0.5 * np.arctan2(2.0 * b, a - c)
+    ct, st = np.abs(np.cos(theta))[:, None], np.abs(np.sin(theta))[:, None]
+    # |d1| + |d2| component-wise, d1 = cos e1 + sin e2, d2 = n x d1 = -sin e1 + cos e2
+    d1 = ct * e1 * np.sign(np.cos(theta))[:, None] + st * e2 * np.sign(np.sin(theta))[:, None]
+    d2 = _cross(n, d1)
+    return half + rad, half - rad, _unit(np.abs(d1) + np.abs(d2))
+
+
+def _cross(a: Array, b: Array) -> Array:
+    out = np.empty_like(a)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
+def _unit(a: Array) -> Array:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return a / np.sqrt(_dot(a, a))[:, None]
+
+
 def occ_gap(D1: Array, D2: Array) -> Array:
     """OCC's ``LocalAnalysis_SurfaceContinuity::G2CurvatureGap`` from our partials (OCCT 7.9 formula).
 
@@ -387,17 +428,14 @@ def occ_gap(D1: Array, D2: Array) -> Array:
 
         gap = |eta_1 - eta_2| / 2 + sqrt(((zeta_1 - zeta_2) / 2)^2 cos^2 alpha + zeta^2 sin^2 alpha)
 
-    with ``zeta = (zeta_1 + zeta_2) / 2``.
+    with ``zeta = (zeta_1 + zeta_2) / 2``. At an umbilic the directions, and so ``alpha``, are
+    arbitrary (OCC's and ours may differ there).
     """
-    from occsurf.algorithms.geometry.differential import curvatures_from_derivatives
-
-    c1 = curvatures_from_derivatives(D1[:, :3, :3])
-    c2 = curvatures_from_derivatives(D2[:, :3, :3])
-    mcd1, _ = _normalize((np.abs(c1.dir1) + np.abs(c1.dir2)) / 2)
-    mcd2, _ = _normalize((np.abs(c2.dir1) + np.abs(c2.dir2)) / 2)
+    a1, b1, mcd1 = _principal(D1)
+    a2, b2, mcd2 = _principal(D2)
     alpha = np.arctan2(np.linalg.norm(np.cross(mcd1, mcd2), axis=-1), _dot(mcd1, mcd2))
-    eta1, eta2 = (c1.k1 + c1.k2) / 2, (c2.k1 + c2.k2) / 2
-    zeta1, zeta2 = (c1.k1 - c1.k2) / 2, (c2.k1 - c2.k2) / 2
+    eta1, eta2 = (a1 + b1) / 2, (a2 + b2) / 2
+    zeta1, zeta2 = (a1 - b1) / 2, (a2 - b2) / 2
     zeta = (zeta1 + zeta2) / 2
     return np.abs(eta1 - eta2) / 2 + np.sqrt(((zeta1 - zeta2) / 2) ** 2 * np.cos(alpha) ** 2
                                              + zeta**2 * np.sin(alpha) ** 2)
@@ -462,15 +500,16 @@ class _Engine:
         return s
 
     # -------------------------------------------------------------------------- measures
-    def measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool = False) -> dict[str, Array]:
+    def measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool = False, s: Array | None = None) -> dict[str, Array]:
         """All measures at the requests ``(pid[m], t[m])``: arrays of shape ``(m,)`` (points ``(m, 3)``),
         and the parameters used: ``'uv1'``, ``'uv2'`` ``(m, 2)``, ``'s'`` (side 2's edge parameter)."""
         np.add.at(self.evaluated, pid, 1)
         uv1, duv1 = self.curves.evaluate(2 * pid, t)
         D1 = self._surfaces(self.f1[pid], uv1, self.order)
         geo = self.geo[pid]
-        s = t.copy()
-        if geo.any():
+        given = s is not None  # side 2's parameters given (a benchmark giving OCC and us the same points)
+        s = np.asarray(s, dtype=float) if given else t.copy()
+        if not given and geo.any():
             s[geo] = self._project(pid[geo], t[geo], D1[geo, 0, 0], PROJECTION_ITERATIONS[0 if set_flip else 1])
         uv2, duv2 = self.curves.evaluate(2 * pid + 1, s)
         D2 = self._surfaces(self.f2[pid], uv2, self.order)
