@@ -188,27 +188,33 @@ def time_numpy_per_pixel(P, T, N, setup, size, repeat):
 
 
 def time_reference(repeat):
-    from occsurf.algorithms.lighting import LightingSetup
+    """M shaded points/s of shade(): wall clock (threads as configured) and per CPU-second on one
+    thread (``time.process_time``: what a quiet core would do; the machine is shared), float64 and
+    float32, with 1 and 3 lights."""
+    from occsurf.algorithms import tolerances
+    from occsurf.algorithms.lighting import LightingSetup, shade
 
     rng = np.random.default_rng(0)
     P = rng.random((2_000_000, 3)) * 10
     N = rng.normal(size=(2_000_000, 3))
     setup = three_lights(np.array([5.0, 5.0, 5.0]), 17.0)
-    out = {}
-    for k in (1, 3):
-        s = LightingSetup(lights=setup.lights[:k], ambient=0.05, material=setup.material)
-        from occsurf.algorithms.lighting import shade
+    rows = []
+    for dtype in (np.float64, np.float32):
+        for k in (1, 3):
+            s = LightingSetup(lights=setup.lights[:k], ambient=0.05, material=setup.material)
+            shade(P[:1000], N[:1000], [5, -30, 20], s, dtype=dtype)
+            wall = min(_timed(lambda: shade(P, N, [5, -30, 20], s, dtype=dtype)) for _ in range(repeat))
+            with tolerances.override(LIGHT_THREADS=1):
+                cpu = min(_timed(lambda: shade(P, N, [5, -30, 20], s, dtype=dtype), time.process_time)
+                          for _ in range(repeat))
+            rows.append((np.dtype(dtype).name, k, len(P) / wall / 1e6, len(P) / cpu / 1e6))
+    return rows
 
-        shade(P[:1000], N[:1000], [5, -30, 20], s)
-        best = min(_timed(lambda: shade(P, N, [5, -30, 20], s)) for _ in range(repeat))
-        out[k] = len(P) / best / 1e6
-    return out
 
-
-def _timed(f) -> float:
-    t0 = time.perf_counter()
+def _timed(f, clock=time.perf_counter) -> float:
+    t0 = clock()
     f()
-    return time.perf_counter() - t0
+    return clock() - t0
 
 
 def main() -> None:
@@ -238,9 +244,10 @@ def main() -> None:
                   f"{npx:11.3f} {npx / warm:5.1f}x")
         print(f"{'':28s} numpy per-pixel: {split[0]:.3f} s for 3 value passes + depth, {split[1]:.3f} s shading "
               f"{split[2]} pixels ({split[2] / split[1] / 1e6:.1f} M/s)")
-    ref = time_reference(ns.repeat)
-    print(f"NumPy reference shade(): {ref[1]:.1f} M points/s with 1 light, {ref[3]:.1f} M points/s with 3 lights "
-          f"(2M points, best of {ns.repeat})")
+    print(f"NumPy reference shade(), 2M points, best of {ns.repeat} (M shaded points/s):")
+    print(f"  {'dtype':8s} {'lights':>6s} {'wall':>7s} {'1 thread, per CPU-s':>20s}")
+    for dtype, k, wall, cpu in time_reference(ns.repeat):
+        print(f"  {dtype:8s} {k:6d} {wall:7.1f} {cpu:20.1f}")
 
 
 if __name__ == "__main__":

@@ -193,53 +193,64 @@ def _shade_block(P: np.ndarray, N: np.ndarray, E: np.ndarray, setup: LightingSet
         L, factor = _toward_light(P, light)
         NL = N[0] * L[0] + N[1] * L[1] + N[2] * L[2]
         diff = np.maximum(NL, 0.0)
-        diff *= factor
         spec = None
         if mat.specular > 0:
             RV = 2.0 * NL * NV
             RV -= L[0] * V[0] + L[1] * V[1] + L[2] * V[2]
             np.maximum(RV, 0.0, out=RV)
-            RV *= NL > 0
+            RV *= NL > 0  # no highlight from a light behind the surface
             spec = _ipow(RV, mat.shininess) if mat.shininess != 0 else (NL > 0).astype(P.dtype)
-            spec = spec * factor
+        if factor is not None:
+            diff *= factor
+            if spec is not None:
+                spec *= factor
         c = [float(x) for x in light.rgb]
         for ch in range(3):
             if c[ch] == 0:
                 continue
-            rgb[ch] += diff * (c[ch] * kd[ch])
+            term = diff * (c[ch] * kd[ch])
             if spec is not None:
-                rgb[ch] += spec * (c[ch] * ks[ch])
-    rgb[:, bad] = np.nan
+                term += spec * (c[ch] * ks[ch])
+            rgb[ch] += term
+    if bad.any():
+        rgb[:, bad] = np.nan
     return rgb
 
 
-def _toward_light(P: np.ndarray, light: WarnLight) -> tuple[np.ndarray, np.ndarray]:
-    """Unit vectors ``(3, m)`` from the points to the light, and the light's factor ``I(P)`` ``(m,)``."""
+def _toward_light(P: np.ndarray, light: WarnLight) -> tuple[np.ndarray, np.ndarray | None]:
+    """Unit vectors ``(3, m)`` from the points to the light, and the light's factor ``I(P)`` ``(m,)``
+    (``None``: 1 everywhere)."""
     d = [float(x) for x in light.direction]
     m = P.shape[1]
+    factor = None
     if light.position is None:
         L = np.broadcast_to(-np.asarray(d, P.dtype)[:, None], (3, m))
-        factor = np.ones(m, P.dtype)
         if light.has_flaps:
-            factor *= _flap_mask(P, light)
+            factor = _flap_mask(P, light)
         return L, factor
     L = np.asarray(light.position, P.dtype)[:, None] - P
     dist = np.sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2])
     L *= 1.0 / dist
-    factor = (dist > 0).astype(P.dtype)  # a point at the light gets no light
-    L[:, dist == 0] = 0.0
+    if not dist.all():  # a point at the light gets no light
+        at = dist == 0
+        L[:, at] = 0.0
+        factor = (~at).astype(P.dtype)
+
+    def times(f: np.ndarray) -> np.ndarray:
+        return f if factor is None else factor * f
+
     if light.concentration > 0 or light.cone_angle_deg is not None:
         cos_g = -(L[0] * d[0] + L[1] * d[1] + L[2] * d[2])
         if light.concentration > 0:
-            factor *= _ipow(np.maximum(cos_g, 0.0), light.concentration)
+            factor = times(_ipow(np.maximum(cos_g, 0.0), light.concentration))
         if light.cone_angle_deg is not None:
-            factor *= _cone(cos_g, light)
+            factor = times(_cone(cos_g, light))
     if light.has_flaps:
-        factor *= _flap_mask(P, light)
+        factor = times(_flap_mask(P, light))
     if light.falloff != "none":
         d0 = float(light.falloff_distance)  # type: ignore[arg-type]
         ratio = d0 / np.maximum(dist, d0)
-        factor *= ratio if light.falloff == "inverse" else ratio * ratio
+        factor = times(ratio if light.falloff == "inverse" else ratio * ratio)
     return L, factor
 
 
@@ -286,4 +297,5 @@ def light_factor(points: ArrayLike, light: WarnLight) -> NDArray[np.float64]:
     if not np.all(np.isfinite(P)):
         raise InvalidGeometryError("points: expected finite coordinates")
     with np.errstate(all="ignore"):
-        return _toward_light(P.reshape(-1, 3).T, light)[1].reshape(P.shape[:-1])
+        factor = _toward_light(np.ascontiguousarray(P.reshape(-1, 3).T), light)[1]
+    return np.ones(P.shape[:-1]) if factor is None else factor.reshape(P.shape[:-1])
