@@ -28,7 +28,7 @@ from ..geometry.differential import curvatures_from_derivatives
 from ..kernel.surface import BSplineSurface
 from ..topology.spatch import SPatch
 from . import _kernels
-from ._common import Array, check_mask, grid_axes, grid_partials, nudged_normals, surface_of
+from ._common import Array, GridPartials, check_mask, grid_axes, grid_partials, nudged_normals, surface_of
 
 __all__ = ["KINDS", "SCALE_MODES", "CurvatureMap", "ColorScale", "curvature_map", "curvature_values", "color_scale"]
 
@@ -209,18 +209,27 @@ def curvature_map(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, kind: 
     a, b = grid_axes(s, us, vs)
     m = check_mask(mask, (a.size, b.size))
     fused = _kernels.grid_curvatures(s, a, b) if isinstance(s, BSplineSurface) else None
-    if fused is not None:
-        P, Nrm, k1, k2, K, H, ok = fused
-        inside = np.ones(ok.shape, bool) if m is None else m.copy()
-        if m is not None:
-            for x in (P, Nrm):
-                x[~inside] = np.nan
-            for x in (k1, k2, K, H):
-                x[~inside] = np.nan
-    else:
-        g = grid_partials(s, a, b, m)
-        inside = g.inside
-        P, Nrm, k1, k2, K, H, ok = _block_curvatures(g.D)
+    if fused is None:
+        return map_from_partials(s, grid_partials(s, a, b, m), kind, m)
+    P, Nrm, k1, k2, K, H, ok = fused
+    inside = np.ones(ok.shape, bool) if m is None else m.copy()
+    if m is not None:
+        for x in (P, Nrm):
+            x[~inside] = np.nan
+        for x in (k1, k2, K, H):
+            x[~inside] = np.nan
+    return _assemble(s, a, b, m, kind, inside, (P, Nrm, k1, k2, K, H, ok))
+
+
+def map_from_partials(s: Any, g: GridPartials, kind: str, mask: NDArray[np.bool_] | None) -> CurvatureMap:
+    """A :class:`CurvatureMap` from grid partials already computed (trusted arguments; shared with
+    :func:`~occsurf.algorithms.quality.face_flags`, which needs the partials too)."""
+    return _assemble(s, g.us, g.vs, mask, kind, g.inside, _block_curvatures(g.D))
+
+
+def _assemble(s: Any, a: Array, b: Array, m: NDArray[np.bool_] | None, kind: str, inside: NDArray[np.bool_],
+              parts: tuple[Array, ...]) -> CurvatureMap:
+    P, Nrm, k1, k2, K, H, ok = parts
     degenerate = inside & ~ok
     if np.any(degenerate):
         iu, iv = np.nonzero(degenerate)

@@ -16,8 +16,8 @@ from scipy import ndimage
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ._common import Array, grid_partials, surface_of
-from .curvature_maps import CurvatureMap, curvature_map
+from ._common import Array, check_mask, grid_axes, grid_partials, surface_of
+from .curvature_maps import CurvatureMap, map_from_partials
 
 __all__ = ["FLAG_KINDS", "Flag", "face_flags"]
 
@@ -152,11 +152,18 @@ def _spikes(cm: CurvatureMap, size: float) -> list[Flag]:
     Af = np.where(valid, A, np.nan)
     fill = np.where(valid, A, np.nanmedian(Af))
     local_max = fill >= ndimage.maximum_filter(fill, size=2 * r + 1, mode="nearest")
-    med = ndimage.median_filter(fill, size=2 * r + 1, mode="nearest")
+    cand = valid & local_max & (A * size > 1.0)
+    ci, cj = np.nonzero(cand)
+    if ci.size == 0:
+        return []
+    # neighbourhood medians at the candidates only: their windows gathered in one array
+    pad = np.pad(fill, r, mode="edge")
+    win = np.lib.stride_tricks.sliding_window_view(pad, (2 * r + 1, 2 * r + 1))[ci, cj]
+    med = np.median(win.reshape(ci.size, -1), axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = np.where(med > 0, A / med, np.inf)
-    spike = valid & local_max & (ratio > tolerances.QUALITY_SPIKE_RATIO) & (A * size > 1.0)
-    return [_flag("curvature_spike", cm, i, j, ratio[i, j], 1) for i, j in zip(*np.nonzero(spike))]
+        ratio = np.where(med > 0, A[ci, cj] / med, np.inf)
+    keep = ratio > tolerances.QUALITY_SPIKE_RATIO
+    return [_flag("curvature_spike", cm, i, j, q, 1) for i, j, q in zip(ci[keep], cj[keep], ratio[keep])]
 
 
 def _degenerate(cm: CurvatureMap, D: Array) -> tuple[list[Flag], NDArray[np.bool_]]:
@@ -225,8 +232,12 @@ def face_flags(surface: Any, *, mask: ArrayLike | None = None, thresholds: Mappi
             raise InvalidGeometryError(f"thresholds: only QUALITY_ tolerances apply here, got {bad}")
         with tolerances.override(**dict(thresholds)):
             return face_flags(surface, mask=mask, us=us, vs=vs, patch=patch)
-    cm = curvature_map(surface, us, vs, "absolute", mask=mask, patch=patch)
-    D = grid_partials(surface_of(surface, patch), cm.us, cm.vs, None if mask is None else cm.mask).D
+    s = surface_of(surface, patch)
+    a, b = grid_axes(s, us, vs)
+    m = check_mask(mask, (a.size, b.size))
+    g = grid_partials(s, a, b, m)
+    cm = map_from_partials(s, g, "absolute", m)
+    D = g.D
     size = max(cm.size, np.finfo(float).tiny)
     degenerate, _near = _degenerate(cm, D)
     return degenerate + _wiggles(cm, D, size) + _flat_spots(cm, size) + _spikes(cm, size)
