@@ -148,7 +148,7 @@ def _grid(s: Any) -> tuple[Array, Array]:
 def _march(h: Array) -> tuple[Array, Array, Array, Array]:
     """Oriented zero-crossing segments of ``h`` (k, mu, mv), all planes at once.
 
-    Returns ``(plane, src_edge, dst_edge, n_u_edges)``: edge ids ``< n_u_edges`` lie along u
+    Returns ``(plane, src_edge, dst_edge, n_u_edges, cell)`` (``cell = i * (mv - 1) + j``): edge ids ``< n_u_edges`` lie along u
     (``(i, j)-(i+1, j)`` -> ``i * mv + j``), the others along v (``(i, j)-(i, j+1)``).
     """
     k, mu, mv = h.shape
@@ -162,10 +162,11 @@ def _march(h: Array) -> tuple[Array, Array, Array, Array]:
     exit_ = c & ~nxt  # + -> - walking CCW along edge e (from corner e to corner e + 1)
     entry = ~c & nxt
     n_exit = exit_.sum(-1)
-    planes, srcs, dsts = [], [], []
+    planes, srcs, dsts, cells = [], [], [], []
     one = n_exit == 1  # one segment: from the exit edge to the entry edge
     pk, pi, pj = np.nonzero(one)
     planes.append(pk)
+    cells.append(pi * cv + pj)
     srcs.append(eid[pi, pj, np.argmax(exit_[one], -1)])
     dsts.append(eid[pi, pj, np.argmax(entry[one], -1)])
     two = n_exit == 2  # saddle: the bilinear centre value decides which corners are joined
@@ -177,9 +178,10 @@ def _march(h: Array) -> tuple[Array, Array, Array, Array]:
         for which in (0, 1):
             e = ex[:, which]
             planes.append(pk)
+            cells.append(pi * cv + pj)
             srcs.append(eid[pi, pj, e])
             dsts.append(eid[pi, pj, (e + step) % 4])
-    return np.concatenate(planes), np.concatenate(srcs), np.concatenate(dsts), nu_e
+    return np.concatenate(planes), np.concatenate(srcs), np.concatenate(dsts), nu_e, np.concatenate(cells)
 
 
 def _edge_ends(edges: Array, plane: Array, h: Array, us: Array, vs: Array, nu_e: int) -> tuple[Array, Array, Array]:
@@ -392,15 +394,13 @@ def _face_pieces(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half
     h = np.einsum("abc,kc->kab", P, Nm) - np.einsum("kc,kc->k", O, Nm)[:, None, None]
     if mask is not None:
         inside = np.asarray(mask(*np.meshgrid(us, vs, indexing="ij")), bool)
-        cell_in = inside[:-1, :-1] & inside[1:, :-1] & inside[1:, 1:] & inside[:-1, 1:]
+        # cells with a corner inside the trim: their refined points are tested against the mask again
+        cell_in = (inside[:-1, :-1] | inside[1:, :-1] | inside[1:, 1:] | inside[:-1, 1:]).ravel()
     pieces: list[list[_Piece]] = [[] for _ in range(k)]
     bad = np.zeros(k, np.int64)
-    plane, src, dst, nu_e = _march(h)
+    plane, src, dst, nu_e, cell = _march(h)
     if mask is not None and plane.size:
-        mv = vs.size
-        i = np.where(src < nu_e, src // mv, (src - nu_e) // (mv - 1))
-        j = np.where(src < nu_e, src % mv, (src - nu_e) % (mv - 1))
-        keep = cell_in[np.minimum(i, cell_in.shape[0] - 1), np.minimum(j, cell_in.shape[1] - 1)]
+        keep = cell_in[cell]
         plane, src, dst = plane[keep], src[keep], dst[keep]
     if plane.size == 0:
         return pieces, bad
@@ -565,7 +565,8 @@ def plane_sections(faces: Sequence[Any], origin: ArrayLike, normal: ArrayLike, o
     ----------
     faces : list of BSplineSurface / HierarchicalSurface, or of (surface, mask) pairs
         ``mask(u, v) -> bool array`` tells which parameters lie inside a trimmed face; seed cells
-        with a corner outside are skipped and refined points outside are dropped.
+        with no corner inside are skipped and refined points outside are dropped (a cut ends at the
+        last grid-edge crossing inside the trim, within one seed cell of the trim curve).
     origin, normal : array_like, shape (3,)
     offsets : array_like, shape (k,)
         Model units along the unit ``normal``.

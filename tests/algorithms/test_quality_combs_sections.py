@@ -216,3 +216,20 @@ def test_section_bad_input():
         plane_sections([sphere()], [0, 0, 0], [0, 0, 1], [np.nan])
     with pytest.raises(InvalidGeometryError, match="angles"):
         axial_sections([sphere()], [0, 0, 0], [0, 0, 1], [])
+
+
+def test_sections_and_iso_curves_of_a_hierarchical_surface():
+    from occsurf.algorithms.hierarchical import HierarchicalSurface
+
+    hs = HierarchicalSurface(wavy(8, 4))
+    o = hs.add_overlay((0.2, 0.8), (0.2, 0.8))
+    hs.move_vertex(o, (3, 3), [0.0, 0.0, 0.3])
+    flat = hs.flatten()
+    (a,) = plane_sections([hs], [2.0, 0, 0], [1, 0, 0], [0.0])
+    (b,) = plane_sections([flat], [2.0, 0, 0], [1, 0, 0], [0.0])
+    assert len(a.curves) == len(b.curves) == 1
+    assert_allclose(a.curves[0].points, b.curves[0].points, atol=1e-9)
+    assert_allclose(a.curves[0].curvature, b.curves[0].curvature, rtol=1e-7, atol=1e-9)
+    c = iso_curves(hs, "v", [0.5])[0]
+    t = np.linspace(0, 1, 11)
+    assert_allclose(c.evaluate(t), hs.evaluate(t, np.full_like(t, 0.5)), atol=1e-12)

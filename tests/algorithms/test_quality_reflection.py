@@ -149,3 +149,37 @@ def test_hedgehog_and_flips():
     assert_allclose(ang[:2], [0, np.degrees(0.1)], atol=1e-12)
     with pytest.raises(InvalidGeometryError, match="normals_b"):
         normal_flips(n, m[:2])
+
+
+def test_per_pixel_shapes_broadcast():
+    """Indicators take any leading shape (a (H, W) normal buffer of a renderer)."""
+    rng = np.random.default_rng(1)
+    N = rng.normal(size=(4, 5, 6, 3))
+    P = rng.normal(size=(4, 5, 6, 3))
+    assert zebra(P, N, [0, 0, -1.0], stripe_dir=[0, 1, 0], width=0.3, distance=4.0).phase.shape == (4, 5, 6)
+    assert isophotes(N, [0, 0, 1.0], 4).band.shape == (4, 5, 6)
+    assert highlight_lines(P, N, [0, 0, 0], [1, 0, 0]).shape == (4, 5, 6)
+    assert draft_angle(N, [0, 0, 1]).shape == (4, 5, 6)
+    # per-pixel results equal per-vertex ones
+    z1 = zebra(P, N, [0, 0, -1.0], stripe_dir=[0, 1, 0], width=0.3, distance=4.0)
+    z2 = zebra(P.reshape(-1, 3), N.reshape(-1, 3), [0, 0, -1.0], stripe_dir=[0, 1, 0], width=0.3, distance=4.0)
+    assert_allclose(z1.phase.ravel(), z2.phase, equal_nan=True)
+
+
+def test_hedgehog_on_hierarchical_and_spatch():
+    from occsurf.algorithms.hierarchical import HierarchicalSurface
+    from occsurf.algorithms.topology import SPatch, spatch_indices
+
+    from .test_quality_maps import wavy
+
+    hs = HierarchicalSurface(wavy(8, 2))
+    P, T = normal_hedgehog(hs, 6, 7, 0.1)
+    ref = curvature_map(hs.flatten(), 6, 7)
+    assert_allclose((T - P) / 0.1, ref.normals, atol=1e-9)
+    idx = spatch_indices(4, 2)
+    net = np.c_[idx[:, :2] * 0.5, np.zeros(idx.shape[0])]
+    patch = SPatch(4, 2, net)
+    P2, T2 = normal_hedgehog(patch, np.linspace(-1, 1, 9), np.linspace(-1, 1, 9), 1.0)
+    inside = np.isfinite(P2[..., 0])
+    assert inside.sum() > 20
+    assert_allclose(np.abs((T2 - P2)[inside][:, 2]), 1.0, atol=1e-12)  # a flat patch: normals along z
