@@ -355,27 +355,24 @@ def _section(D: Array, n: Array, T: Array, third: bool) -> tuple[Array, Array]:
 
     ``D (m, r+1, r+1, 3)`` partials, ``n`` oriented unit normals, ``T`` unit edge tangents.
     """
-    b, _ = _normalize(np.cross(n, T))
-    Tk = np.cross(b, n)
+    b = _unit(_cross(n, T))
+    Tk = _cross(b, n)
     Su, Sv = D[:, 1, 0], D[:, 0, 1]
-    J = np.stack([np.stack([_dot(Tk, Su), _dot(Tk, Sv)], -1), np.stack([_dot(b, Su), _dot(b, Sv)], -1)], -2)
-    det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+    j11, j12, j21, j22 = _dot(Tk, Su), _dot(Tk, Sv), _dot(b, Su), _dot(b, Sv)
     with np.errstate(invalid="ignore", divide="ignore"):
-        inv = np.stack([np.stack([J[:, 1, 1], -J[:, 0, 1]], -1), np.stack([-J[:, 1, 0], J[:, 0, 0]], -1)], -2) / det[:, None, None]
-    w1 = inv[:, :, 1]  # J^{-1} (0, 1)
-
-    def d2(a: Array, c: Array) -> Array:
-        return (D[:, 2, 0] * (a[:, :1] * c[:, :1]) + D[:, 1, 1] * (a[:, :1] * c[:, 1:] + a[:, 1:] * c[:, :1])
-                + D[:, 0, 2] * (a[:, 1:] * c[:, 1:]))
-
-    Q2 = d2(w1, w1)
+        inv_det = 1.0 / (j11 * j22 - j12 * j21)
+    x1, y1 = (-j12 * inv_det)[:, None], (j11 * inv_det)[:, None]  # w1 = J^{-1} (0, 1)
+    Suu, Suv, Svv = D[:, 2, 0], D[:, 1, 1], D[:, 0, 2]
+    Q2 = Suu * (x1 * x1) + Suv * (2.0 * x1 * y1) + Svv * (y1 * y1)
     k = _dot(n, Q2)
     if not third:
         return k, np.full_like(k, np.nan)
-    w2 = -np.einsum("mij,mj->mi", inv, np.stack([_dot(Tk, Q2), _dot(b, Q2)], -1))
-    x, y = w1[:, :1], w1[:, 1:]
-    D3 = D[:, 3, 0] * x**3 + 3 * D[:, 2, 1] * x**2 * y + 3 * D[:, 1, 2] * x * y**2 + D[:, 0, 3] * y**3
-    return k, _dot(n, 3 * d2(w1, w2) + D3)
+    r1, r2 = _dot(Tk, Q2), _dot(b, Q2)  # w2 = -J^{-1} (r1, r2)
+    x2 = (-(j22 * r1 - j12 * r2) * inv_det)[:, None]
+    y2 = (-(-j21 * r1 + j11 * r2) * inv_det)[:, None]
+    B = Suu * (x1 * x2) + Suv * (x1 * y2 + y1 * x2) + Svv * (y1 * y2)
+    D3 = D[:, 3, 0] * x1**3 + 3 * D[:, 2, 1] * x1**2 * y1 + 3 * D[:, 1, 2] * x1 * y1**2 + D[:, 0, 3] * y1**3
+    return k, _dot(n, 3.0 * B + D3)
 
 
 def _principal(D: Array) -> tuple[Array, Array, Array]:
@@ -433,7 +430,8 @@ def occ_gap(D1: Array, D2: Array) -> Array:
     """
     a1, b1, mcd1 = _principal(D1)
     a2, b2, mcd2 = _principal(D2)
-    alpha = np.arctan2(np.linalg.norm(np.cross(mcd1, mcd2), axis=-1), _dot(mcd1, mcd2))
+    c = _cross(mcd1, mcd2)
+    alpha = np.arctan2(np.sqrt(_dot(c, c)), _dot(mcd1, mcd2))
     eta1, eta2 = (a1 + b1) / 2, (a2 + b2) / 2
     zeta1, zeta2 = (a1 - b1) / 2, (a2 - b2) / 2
     zeta = (zeta1 + zeta2) / 2
@@ -500,7 +498,8 @@ class _Engine:
         return s
 
     # -------------------------------------------------------------------------- measures
-    def measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool = False, s: Array | None = None) -> dict[str, Array]:
+    def measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool = False, s: Array | None = None,
+                gap: bool = False) -> dict[str, Array]:
         """All measures at the requests ``(pid[m], t[m])``: arrays of shape ``(m,)`` (points ``(m, 3)``),
         and the parameters used: ``'uv1'``, ``'uv2'`` ``(m, 2)``, ``'s'`` (side 2's edge parameter)."""
         np.add.at(self.evaluated, pid, 1)
@@ -514,23 +513,25 @@ class _Engine:
         uv2, duv2 = self.curves.evaluate(2 * pid + 1, s)
         D2 = self._surfaces(self.f2[pid], uv2, self.order)
         P1, P2 = D1[:, 0, 0], D2[:, 0, 0]
-        T, _ = _normalize(D1[:, 1, 0] * duv1[:, :1] + D1[:, 0, 1] * duv1[:, 1:])
-        n1, _ = _normalize(np.cross(D1[:, 1, 0], D1[:, 0, 1]))
-        n2, _ = _normalize(np.cross(D2[:, 1, 0], D2[:, 0, 1]))
+        T = _unit(D1[:, 1, 0] * duv1[:, :1] + D1[:, 0, 1] * duv1[:, 1:])
+        n1 = _unit(_cross(D1[:, 1, 0], D1[:, 0, 1]))
+        n2 = _unit(_cross(D2[:, 1, 0], D2[:, 0, 1]))
         if set_flip:
             T2 = D2[:, 1, 0] * duv2[:, :1] + D2[:, 0, 1] * duv2[:, 1:]
             self._set_flip(pid, self.sense1[pid] * _dot(T, T2) * self.sense2[pid])
         n1 = n1 * self.o1[pid, None]
         n2 = n2 * (self.o2[pid] * self.flip[pid])[:, None]
-        g1 = np.degrees(np.arctan2(np.linalg.norm(np.cross(n1, n2), axis=1), _dot(n1, n2)))
+        c12 = _cross(n1, n2)
+        g1 = np.degrees(np.arctan2(np.sqrt(_dot(c12, c12)), _dot(n1, n2)))
         k1, dk1 = _section(D1, n1, T, self.third)
         k2, dk2 = _section(D2, n2, T, self.third)
         g2 = np.abs(k1 - k2)
         big = np.maximum(np.abs(k1), np.abs(k2))
         with np.errstate(invalid="ignore", divide="ignore"):
             rel = np.where(big > self.floor, 100.0 * g2 / np.where(big > 0, big, 1.0), np.where(np.isnan(big), np.nan, 0.0))
-        return {"g0": np.linalg.norm(P1 - P2, axis=1), "g1": g1, "g2": g2, "g2_rel": rel,
-                "g3": np.abs(dk1 - dk2), "gap": occ_gap(D1, D2), "P": P1, "uv1": uv1, "uv2": uv2, "s": s}
+        d12 = P1 - P2
+        return {"g0": np.sqrt(_dot(d12, d12)), "g1": g1, "g2": g2, "g2_rel": rel,
+                "g3": np.abs(dk1 - dk2), "gap": occ_gap(D1, D2) if gap else np.full_like(g2, np.nan), "P": P1, "uv1": uv1, "uv2": uv2, "s": s}
 
     def _set_flip(self, pid: NDArray[np.intp], along: Array) -> None:
         """Orientation agreement per pair: a shell's faces run along a shared edge in opposite senses.
@@ -707,7 +708,7 @@ def _measure_all(engine: _Engine, samples: int, refine: int, th: Thresholds) -> 
     last = np.array([pairs[i].last for i in good])
     T = first[:, None] + (last - first)[:, None] * s01[None, :]
     pid = np.repeat(good, samples)
-    M = engine.measure(pid, T.reshape(-1), set_flip=True) if good.size else {}
+    M = engine.measure(pid, T.reshape(-1), set_flip=True, gap=True) if good.size else {}
     n = good.size
     for r, i in enumerate(good):  # the dense samples start the projections of the refinement
         if pairs[i].matched == "geometry":
