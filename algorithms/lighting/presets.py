@@ -8,8 +8,8 @@ lights a 10 mm bracket and a 4 m car body alike; the model's +z is up, and the f
 * :func:`key_light_with_flaps` - one concentrated key light with flaps, the course's car-body
   figures (§10-5): a band of light laid across the body, so the highlight sits where the
   designer wants to read the surface.
-* :func:`highlight_check` - a row of lights over a glossy material: a row of crisp highlights
-  whose shape and spacing show the surface's curvature flow (as a light tunnel does).
+* :func:`highlight_check` - parallel bands of light cut by flaps: light-section stripes whose
+  edges are plane sections of the surface (their bends show its shape, as a light tunnel does).
 """
 
 from __future__ import annotations
@@ -71,20 +71,28 @@ def key_light_with_flaps(center: Sequence[float], size: float, *, concentration:
                          material=Material(color=(0.62, 0.08, 0.06), diffuse=0.85, specular=0.5, shininess=60))
 
 
-def highlight_check(center: Sequence[float], size: float, *, count: int = 5) -> LightingSetup:
-    """A row of ``count`` lights above the model along x, over a glossy dark material.
+def highlight_check(center: Sequence[float], size: float, *, count: int = 9, pitch: float = 0.08,
+                    width: float = 0.025) -> LightingSetup:
+    """Parallel bands of light cut by flaps: light-section stripes across the model.
 
-    Each light leaves a crisp highlight; on a fair surface the highlights form an evenly spaced,
-    smoothly bending row, and a kink or a flat spot shows as a jump or a bunching of it.
+    ``count`` lights share one position above the front of the model, each with ``y`` flaps
+    ``pitch * size`` apart and ``width * size`` wide (light's frame). A flap is a plane through
+    the light, so each band's edges on the surface are plane sections of it: on a fair surface
+    the stripes bend smoothly and evenly; a kink, a flat spot or a wave shows as a kink, a
+    straight run or a wobble of the stripes, from any view (the stripes stay on the surface).
     """
     c, s = _frame(center, size)
     if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= 12:
         raise InvalidGeometryError(f"count: expected an integer from 1 to 12, got {count!r}")
-    xs = np.linspace(-0.8, 0.8, count) if count > 1 else np.zeros(1)
-    lights = tuple(_aimed(f"strip {k}", c, (x, -0.4, 1.5), s, intensity=0.9 / np.sqrt(count))
-                   for k, x in enumerate(xs))
-    return LightingSetup(lights=lights, ambient=0.04,
-                         material=Material(color=(0.12, 0.13, 0.15), diffuse=0.6, specular=0.9, shininess=400))
+    for name, value in (("pitch", pitch), ("width", width)):
+        if not (np.isfinite(value) and value > 0):
+            raise InvalidGeometryError(f"{name}: expected a positive fraction of the model size, got {value!r}")
+    offsets = (np.arange(count) - (count - 1) / 2) * pitch * s
+    lights = tuple(_aimed(f"stripe {k}", c, (0.0, -0.9, 1.6), s, intensity=1.0,
+                          flaps={"y": [float(o - width * s / 2), float(o + width * s / 2)]})
+                   for k, o in enumerate(offsets))
+    return LightingSetup(lights=lights, ambient=0.05,
+                         material=Material(color=(0.80, 0.80, 0.82), diffuse=0.8, specular=0.4, shininess=60))
 
 
 #: Preset name -> function(center, size) -> LightingSetup.

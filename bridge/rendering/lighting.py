@@ -89,23 +89,30 @@ class Camera:
 
 
 def camera_for_view(view: str, lo: Sequence[float], hi: Sequence[float], aspect: float = 4 / 3,
-                    *, margin: float = 1.05) -> Camera:
+                    *, margin: float = 1.06) -> Camera:
     """The camera of a named view (:data:`VIEWS`) that shows the whole box ``[lo, hi]``.
 
-    The camera looks at the box's centre from the view's direction, far enough that the box's
-    bounding sphere (times ``margin``) fits both the vertical and the horizontal opening.
+    The camera looks at the box's centre from the view's direction, at the smallest distance at
+    which all eight corners of the box lie inside the picture (both openings divided by
+    ``margin``): a long part fills the frame instead of a fraction of its bounding sphere.
     """
     if view not in VIEWS:
         raise InvalidGeometryError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
     lo_, hi_ = np.asarray(lo, float), np.asarray(hi, float)
     centre = (lo_ + hi_) / 2
-    radius = max(float(np.linalg.norm(hi_ - lo_)) / 2, 1e-9) * margin
-    half_v = math.radians(VIEW_ANGLE) / 2
-    half = min(half_v, math.atan(math.tan(half_v) * aspect))
-    dist = radius / math.sin(half)
     d, up = VIEWS[view]
-    d_ = np.asarray(d) / np.linalg.norm(d)
-    return Camera(position=tuple(centre + dist * d_), target=tuple(centre), up=up)
+    back = np.asarray(d, float) / np.linalg.norm(d)  # from the target towards the camera
+    right = np.cross(-back, up)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(right, -back)
+    corners = np.array([[x, y, z] for x in (lo_[0], hi_[0]) for y in (lo_[1], hi_[1]) for z in (lo_[2], hi_[2])])
+    rel = corners - centre
+    tan_v = math.tan(math.radians(VIEW_ANGLE) / 2) / margin
+    tan_h = tan_v * aspect
+    need = rel @ back + np.maximum(np.abs(rel @ right) / tan_h, np.abs(rel @ true_up) / tan_v)
+    size = max(float(np.linalg.norm(hi_ - lo_)), 1e-9)
+    dist = max(float(need.max()), 0.05 * size) + 1e-3 * size  # never inside the box's near corner
+    return Camera(position=tuple(centre + dist * back), target=tuple(centre), up=up)
 
 
 @dataclass
