@@ -4,6 +4,7 @@
 
     occsurf inspect [FILE|DIR ...] [--json] [--samples N] [--timeout SECONDS] [--in-process]
     occsurf fill IN --out OUT.step [--all-loops] [--no-occ] [--json] [--in-process]
+    occsurf render FILE (--lights LIGHTS.json | --preset NAME) --out IMAGE.png [--size W H] [--view NAME]
     occsurf demo [--out DIR] [--only NAME ...]
     occsurf audit PATH... --out RESULTS [--scheduler ADDRESS] [--workers N] [--timeout S] [--resume] [--checks LIST]
 
@@ -13,6 +14,7 @@ One module per command, each holding its parser and a thin handler that calls th
 :mod:`.inspect`  faces of STEP/IGES files, our evaluation against OCC's
                  (:func:`occsurf.bridge.validation.inspect.inspect_model`)
 :mod:`.fill`     fill the holes of a model (:func:`occsurf.bridge.modeling.fill.fill_model`)
+:mod:`.render`   a model under Warn's lights to a PNG (:func:`occsurf.bridge.rendering.lighting.render_lit`)
 :mod:`.demo`     the picture gallery (:func:`occsurf.examples.gallery.run_demos`)
 :mod:`.audit`    corpora on Dask, Parquet results (:func:`occsurf.bridge.audit.audit`)
 :mod:`._common`  exit codes, file arguments, reading a model, tables, one-line errors
@@ -35,7 +37,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from . import audit, demo, fill, inspect
+from . import audit, demo, fill, inspect, render
 from ._common import EXIT_ERROR, guarded
 
 __all__ = ["main", "build_parser"]
@@ -51,6 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     inspect.add_parser(sub)
     demo.add_parser(sub)
     fill.add_parser(sub)
+    render.add_parser(sub)
     audit.add_parser(sub)
     inspect.add_worker_parser(sub)  # internal, no help= so it stays out of the listing
     return parser
