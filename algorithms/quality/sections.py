@@ -387,7 +387,29 @@ class _Piece:
 
 def _face_pieces(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half: Array | None,
                  tol_h: float) -> tuple[list[list[_Piece]], Array]:
-    """Polylines of face ``fi`` for every plane, and the count of unconverged seeds per plane."""
+    """Polylines of face ``fi`` for every plane, and the count of unconverged seeds per plane.
+
+    Planes that miss the convex hull of the face's control net (the surface lies inside it for
+    positive weights) are skipped without evaluating anything."""
+    k = O.shape[0]
+    pieces_all: list[list[_Piece]] = [[] for _ in range(k)]
+    bad_all = np.zeros(k, np.int64)
+    if isinstance(s, BSplineSurface):
+        hp = s.control_points.reshape(-1, 3) @ Nm.T - np.einsum("kc,kc->k", O, Nm)
+        active = np.flatnonzero((hp.min(axis=0) <= tol_h) & (hp.max(axis=0) >= -tol_h))
+    else:
+        active = np.arange(k)
+    if active.size == 0:
+        return pieces_all, bad_all
+    pieces, bad = _face_pieces_of(fi, s, mask, O[active], Nm[active], None if half is None else half[active], tol_h)
+    for j, i in enumerate(active):
+        pieces_all[i] = pieces[j]
+        bad_all[i] = bad[j]
+    return pieces_all, bad_all
+
+
+def _face_pieces_of(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half: Array | None,
+                    tol_h: float) -> tuple[list[list[_Piece]], Array]:
     k = O.shape[0]
     us, vs = _grid(s)
     P = s.evaluate_grid(us, vs)
