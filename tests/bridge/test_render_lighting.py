@@ -223,3 +223,26 @@ def test_back_faces_follow_two_sided() -> None:
     assert np.all(np.abs(one.rgb[inner].astype(int) - 26) <= 1)
     _compare(two, LightingSetup(lights=(light,), ambient=0.1, material=mat),
              lambda W: np.broadcast_to([0.0, 0.0, 1.0], W.shape), levels=2)
+
+
+def test_bspline_surface_matches_the_reference() -> None:
+    """A curved B-spline surface (exact grid points and normals) against shade() at the pixels'
+    positions, with the normal of the exact surface found by projecting each pixel's point."""
+    from occsurf.algorithms import BSplineSurface
+
+    k = np.array([0.0] * 4 + [1.0] * 4)
+    x, y = np.meshgrid(np.linspace(-2, 2, 4), np.linspace(-2, 2, 4), indexing="ij")
+    z = 0.6 - 0.15 * (x ** 2 + y ** 2)  # a cap: the bicubic interpolant of a paraboloid's net
+    surf = BSplineSurface(degree=(3, 3), knots=(k, k), control_points=np.stack([x, y, z], -1))
+    setup = studio_three_point([0, 0, 0], 5.0)
+    img = lighting.render_surfaces_lit(surf, setup, resolution=201, size=SIZE, view="iso")
+    assert img.covered.mean() > 0.2
+    u = np.linspace(0, 1, 401)
+    D = surf.derivatives(*np.meshgrid(u, u, indexing="ij"), 1).reshape(-1, 2, 2, 3)
+    pts, nrm = D[:, 0, 0], np.cross(D[:, 1, 0], D[:, 0, 1])
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(pts)
+    _compare(img, setup, lambda W: nrm[tree.query(W)[1]], levels=4)
+    with pytest.raises(ValueError, match="surfaces"):
+        lighting.render_surfaces_lit([], setup)
