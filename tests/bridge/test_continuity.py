@@ -158,3 +158,118 @@ def test_bad_thresholds() -> None:
         Thresholds(g1_deg=-1.0)
     with pytest.raises(InvalidGeometryError, match="model"):
         edge_continuity("not a shape")
+
+
+# ---------------------------------------------------------------------------------------- search
+def _bump_face(d: float):
+    """``z = d b(y)`` over ``0 <= x <= 1``, ``b(y) = 3 y (1 - y)^2`` (cubic Bezier 0, 1, 0, 0): largest,
+    4/9, at ``y = 1/3``, between the samples of a coarse grid."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.Geom import Geom_BSplineSurface
+
+    from occsurf.bridge._occ import int_array, pnt_array2, real_array
+
+    P = np.zeros((2, 4, 3))
+    for i in range(2):
+        for j, z in enumerate((0.0, d, 0.0, 0.0)):
+            P[i, j] = (i, j / 3, z)
+    s = Geom_BSplineSurface(pnt_array2(P), real_array([0.0, 1.0]), real_array([0.0, 1.0]),
+                            int_array([2, 2]), int_array([4, 4]), 1, 3)
+    return BRepBuilderAPI_MakeFace(s, 1e-7).Face()
+
+
+def test_worst_point_search_finds_the_maximum_between_samples() -> None:
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
+
+    d = 0.01
+    sew = BRepBuilderAPI_Sewing(d)
+    sew.Add(cm.face_a())
+    sew.Add(_bump_face(d))
+    sew.Perform()
+    shell = sew.SewedShape()
+    coarse = _one(shell, samples=5, refine=0)
+    fine = _one(shell, samples=5, refine=30)
+    brute = _one(shell, samples=20001, refine=0)
+    assert coarse.matched == fine.matched == "topology"
+    assert coarse.g0_max < 4 * d / 9 - 1e-3 * d  # the samples miss the top
+    # the sewn edge's p-curves agree within the sewing tolerance only (same-parameter), so the gap
+    # is the vertical 4/9 d up to ~1e-4 relative; the search must find the brute-force maximum
+    assert fine.g0_max == pytest.approx(4 * d / 9, rel=1e-3)
+    assert fine.g0_max == pytest.approx(brute.g0_max, rel=1e-8)
+    np.testing.assert_allclose(fine.worst_points["g0"][:2], [0.0, 1 / 3], atol=1e-2)
+    assert fine.samples > coarse.samples == 5
+    assert fine.classification == "gap"
+
+
+# ---------------------------------------------------------------------------------------- bad input
+def test_degenerate_edges_and_seams_of_a_sphere() -> None:
+    import cadquery as cq
+
+    sphere = cq.Solid.makeSphere(2.0, angleDegrees1=-90, angleDegrees2=90).wrapped
+    result = edge_continuity(sphere)
+    kinds = sorted(r.classification for r in result)
+    assert kinds == ["degenerate", "degenerate", "seam"]  # two poles, one seam
+    for r in result:
+        if r.classification == "degenerate":
+            assert r.error and "degenerated" in r.error and math.isnan(r.g0_max)
+            assert json.loads(json.dumps(r.to_json()))["g0_max"] is None
+        else:  # the seam closes smoothly
+            assert r.g0_max <= 1e-12 and r.g1_max_deg <= 1e-6 and r.g2_max_rel <= 1e-6
+    assert check_edges(result, "class-a") == []
+
+
+def test_a_face_that_cannot_be_evaluated_spares_the_others(monkeypatch) -> None:
+    import cadquery as cq
+
+    from occsurf.bridge.quality import _evaluators
+
+    box = cq.Workplane().box(10, 8, 6).edges("|Z").fillet(2.0).val().wrapped
+    real = _evaluators._analytic_fn
+
+    def broken(s):
+        fn = real(s)
+        if type(s).__name__ == "Geom_CylindricalSurface":
+            def fail(u, v, order):
+                raise RuntimeError("cannot evaluate this cylinder")
+            return fail
+        return fn
+
+    monkeypatch.setattr(_evaluators, "_analytic_fn", broken)
+    result = edge_continuity(box)
+    bad = [r for r in result if r.error]
+    good = [r for r in result if not r.error]
+    assert len(bad) == 16 and len(good) == 8  # every edge of the 4 fillets; the box's own 8 edges
+    for r in bad:
+        assert r.classification == "degenerate" and "could not be evaluated" in r.error
+        assert "cannot evaluate this cylinder" in r.error
+    assert all(r.classification == "sharp" and r.g1_max_deg == pytest.approx(90.0) for r in good)
+    assert any("could not be evaluated" in w for w in result.warnings)
+
+
+def test_surface_with_no_vectorised_form_goes_through_occ() -> None:
+    """A face on an offset surface (no closed form here) is evaluated by OCC point by point."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.Geom import Geom_OffsetSurface, Geom_Plane
+    from OCP.gp import gp_Ax3, gp_Dir, gp_Pnt
+    from OCP.TopoDS import TopoDS_Compound
+
+    plane = Geom_Plane(gp_Ax3(gp_Pnt(0, 0, -0.25), gp_Dir(0, 0, 1), gp_Dir(1, 0, 0)))
+    face_b = BRepBuilderAPI_MakeFace(Geom_OffsetSurface(plane, 0.25), 0.0, 1.0, 0.0, 1.0, 1e-7).Face()
+    comp = TopoDS_Compound()
+    bld = BRep_Builder()
+    bld.MakeCompound(comp)
+    bld.Add(comp, cm.face_a())
+    bld.Add(comp, face_b)
+    result = edge_continuity(comp)
+    r = _one(comp)
+    assert sorted(r.evaluators) == ["analytic", "occ"] and result.stats["occ_evaluated_faces"] == 1
+    assert r.g0_max <= TOL and r.g1_max_deg <= ANGLE_TOL and r.classification == "G2"
+
+
+def test_model_without_shared_edges() -> None:
+    result = edge_continuity(cm.face_a())
+    assert result == [] and result.stats["free_edges"] == 4
+    assert any("no shared edges" in w and "nothing to check" in w for w in result.warnings)
+    far = edge_continuity(cm.loose("offset", 0.5))  # 0.5 apart: beyond the default match_tol
+    assert far == [] and far.stats["unmatched_free_edges"] == 8
