@@ -11,6 +11,7 @@ One subpackage per family of course chapters:
 ``manipulation``   linear algebra, constraints, dragging (ch. 3, 4)
 ``hierarchical``   hierarchical B-splines (ch. 5)
 ``topology``       S-patches, n-sided holes, meshes, generalized B-splines (ch. 8)
+``quality``        curvature maps, combs, sections, zebra, draft, problem flags (ch. 9, 11-2)
 =================  ==========================================================================
 
 Cross-cutting modules stay at this level: :mod:`.errors` (the exception hierarchy),
