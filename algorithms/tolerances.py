@@ -312,6 +312,19 @@ _DEFAULTS: dict[str, float] = {
     # Ill-parametrisation: ratio of the largest to the smallest |S_u x S_v| (the Jacobian) over a
     # face's non-degenerate samples above this.
     "QUALITY_JACOBIAN_RATIO": 100.0,
+    # Edge continuity (occsurf.bridge.quality.continuity). Dense samples per edge (Chebyshev-Lobatto
+    # points of its parameter range, made odd so that the middle is one), before the search ...
+    "CONTINUITY_SAMPLES": 33,
+    # ... and golden-section iterations of the worst-point search per measure (the bracket of two
+    # sample spacings shrinks by 0.618 each).
+    "CONTINUITY_REFINE_ITERATIONS": 6,
+    # Default matching tolerance of loose faces' edges, relative to the model's bounding-box
+    # diagonal: 1e-4 of a 100 mm part is 0.01 mm, ten times CATIA's G0 default and far above IGES's
+    # 10-digit round-off, while distinct edges of a 0.1 mm wall stay apart.
+    "CONTINUITY_MATCH_RTOL": 1e-4,
+    # Curvatures below this times 1 / model size count as zero for the relative G2 jump (a radius
+    # a million times the model): between two almost flat faces the ratio is noise.
+    "CONTINUITY_CURVATURE_FLOOR": 1e-6,
     # ---- lighting (course ch. 10, Warn 1983) ---------------------------------------------------
     # A light's direction (or a normal given to shade) shorter than this cannot be made a unit
     # vector: the direction is refused, the normal's point is shaded NaN. Absolute: directions are

@@ -30,6 +30,7 @@ from OCP.BRep import BRep_Tool
 from OCP.GeomAbs import GeomAbs_Shape
 from OCP.LocalAnalysis import LocalAnalysis_SurfaceContinuity
 
+from occsurf.algorithms import tolerances
 from occsurf.bridge import read_iges, read_step
 from occsurf.bridge.quality import continuity as C
 from occsurf.bridge.quality import edge_continuity, occ_fold
@@ -50,8 +51,8 @@ def _engine(model, samples: int):
     size = C._model_size(faces, shape)
     surfaces = SurfaceBatch([f.evaluator for f in faces])
     pairs, free, _ = topology_pairs(faces)
-    pairs += match_free_edges(faces, free, C.MATCH_RTOL * size, size / 200.0, surfaces)
-    engine = C._Engine(faces, pairs, False, C.CURVATURE_FLOOR / size, surfaces)
+    pairs += match_free_edges(faces, free, tolerances.CONTINUITY_MATCH_RTOL * size, size / 200.0, surfaces)
+    engine = C._Engine(faces, pairs, False, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
     good = np.array([i for i, p in enumerate(pairs) if C._why_not(engine, p) is None], dtype=np.intp)
     s01 = C._chebyshev(samples)
     first = np.array([pairs[i].first for i in good])

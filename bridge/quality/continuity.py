@@ -24,7 +24,7 @@ edge tangent):
     direction ``b_k = n_k x T`` (1/model units). For a G1 joint this is the only curvature that can
     jump: the normal curvature along ``T`` and the geodesic torsion are fixed by the shared edge and
     normals. ``g2_rel`` is CATIA's Connect Checker percentage ``100 |k_1 - k_2| / max(|k_1|, |k_2|)``
-    (0 where both are below :data:`CURVATURE_FLOOR` times the model size's inverse).
+    (0 where both are below ``tolerances.CONTINUITY_CURVATURE_FLOOR`` / model size).
 ``g3``
     ``|k'_1 - k'_2|``, the jump of the derivative of that cross curvature along ``b``
     (1/model units^2), with ``g3=True`` only.
@@ -66,6 +66,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError
 
 from ..messages import one_line
@@ -83,25 +84,15 @@ __all__ = [
     "edge_continuity",
     "check_edges",
     "occ_fold",
-    "DEFAULT_SAMPLES",
-    "MATCH_RTOL",
-    "CURVATURE_FLOOR",
-    "REFINE_ITERATIONS",
     "CLASSES",
 ]
 
-#: Samples per edge (Chebyshev-Lobatto points of the edge's parameter range; odd, so the middle is one).
-DEFAULT_SAMPLES: int = 33
-#: Default ``match_tol`` for loose faces, relative to the diagonal of the model's bounding box:
-#: 1e-4 of a 100 mm part is 0.01 mm, ten times CATIA's G0 default and above the ~1e-7 relative
-#: round-off of IGES files, so exported boundaries match while distinct edges of a thin wall
-#: (>= 0.1 mm apart on such a part) do not.
-MATCH_RTOL: float = 1e-4
-#: Curvatures below this times ``1 / model size`` count as zero for ``g2_rel`` (a radius a million
-#: times the model): the relative jump between two almost flat faces is noise, not a defect.
-CURVATURE_FLOOR: float = 1e-6
-#: Golden-section iterations of the worst-point search (the bracket shrinks by 0.618 each).
-REFINE_ITERATIONS: int = 6
+# Defaults read at call time from the tolerance registry (override with
+# ``occsurf.algorithms.tolerances.override(CONTINUITY_...=...)`` or the keywords):
+# ``CONTINUITY_SAMPLES`` (33 dense samples per edge), ``CONTINUITY_REFINE_ITERATIONS`` (6
+# golden-section steps per measure), ``CONTINUITY_MATCH_RTOL`` (``match_tol`` = 1e-4 of the model's
+# bounding-box diagonal) and ``CONTINUITY_CURVATURE_FLOOR`` (curvatures below 1e-6 / model size
+# count as zero for ``g2_rel``).
 #: Gauss-Newton steps when projecting onto the other edge of a geometrically matched pair: from
 #: the matching table (9 points per edge) for the dense samples, then from the dense samples'
 #: table for the worst-point search (Gauss-Newton converges quadratically for the zero or tiny
@@ -573,9 +564,20 @@ def _check_args(samples: Any, match_tol: Any) -> tuple[int, float | None]:
     return int(samples) | 1, match_tol  # odd: the middle of the edge is a sample
 
 
-def edge_continuity(model: Any, *, samples: int = DEFAULT_SAMPLES, g3: bool = False, loose: bool = True,
+def _check_face_pairs(face_pairs: Any, n_faces: int) -> set[tuple[int, int]]:
+    try:
+        chosen = {tuple(sorted((int(a), int(b)))) for a, b in face_pairs}
+    except (TypeError, ValueError) as err:
+        raise InvalidGeometryError(f"face_pairs: expected pairs of face indices, got {face_pairs!r}") from err
+    bad = sorted(i for pair in chosen for i in pair if not 0 <= i < n_faces)
+    if bad:
+        raise InvalidGeometryError(f"face_pairs: face indices must be in [0, {n_faces - 1}], got {bad}")
+    return chosen
+
+
+def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False, loose: bool = True,
                     match_tol: float | None = None, preset: str | Thresholds = "catia",
-                    refine: int | None = None) -> ContinuityResult:
+                    refine: int | None = None, face_pairs: Any = None) -> ContinuityResult:
     """G0/G1/G2 (and G3) continuity of every edge between two faces of a model.
 
     Parameters
@@ -586,20 +588,23 @@ def edge_continuity(model: Any, *, samples: int = DEFAULT_SAMPLES, g3: bool = Fa
         ``TopExp_Explorer`` order, each once).
     samples : int, optional
         Dense samples per edge (Chebyshev-Lobatto; made odd so that the middle is one), before the
-        worst-point search. Default :data:`DEFAULT_SAMPLES`.
+        worst-point search. Default ``tolerances.CONTINUITY_SAMPLES`` (33).
     g3 : bool, optional
         Also measure the jump of the curvature derivative (needs third derivatives).
     loose : bool, optional
         Match the free edges of loose faces geometrically (IGES, face-by-face STEP exports).
     match_tol : float, optional
-        Matching tolerance in model units; default :data:`MATCH_RTOL` times the diagonal of the
-        model's bounding box. Stated in the result (``.match_tol``).
+        Matching tolerance in model units; default ``tolerances.CONTINUITY_MATCH_RTOL`` (1e-4) times
+        the diagonal of the model's bounding box. Stated in the result (``.match_tol``).
     preset : str or Thresholds, optional
         ``'catia'`` (default), ``'class-a'``, ``'mechanical'`` (see :data:`PRESETS`) or your own
         :class:`Thresholds`: used for ``classification`` and ``worst_point``.
     refine : int, optional
         Golden-section iterations of the worst-point search per measure (default
-        :data:`REFINE_ITERATIONS`; 0 keeps the dense samples only).
+        ``tolerances.CONTINUITY_REFINE_ITERATIONS``, 6; 0 keeps the dense samples only).
+    face_pairs : iterable of (int, int), optional
+        Only the edges between these pairs of faces (in either order), e.g. chosen pairs of loose
+        faces; default every pair.
 
     Returns
     -------
@@ -611,11 +616,14 @@ def edge_continuity(model: Any, *, samples: int = DEFAULT_SAMPLES, g3: bool = Fa
     Raises
     ------
     InvalidGeometryError
-        Bad ``samples``, ``match_tol``, ``preset``, or a ``model`` that is not a shape.
+        Bad ``samples``, ``match_tol``, ``preset``, ``refine``, ``face_pairs`` (not pairs of face
+        indices of the model), or a ``model`` that is not a shape.
     """
-    samples, match_tol = _check_args(samples, match_tol)
+    samples, match_tol = _check_args(tolerances.CONTINUITY_SAMPLES if samples is None else samples, match_tol)
     thresholds = _thresholds(preset)
-    refine = REFINE_ITERATIONS if refine is None else int(refine)
+    refine = tolerances.CONTINUITY_REFINE_ITERATIONS if refine is None else refine
+    if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
+        raise InvalidGeometryError(f"refine: expected an integer >= 0, got {refine!r}")
     clock = time.perf_counter()
     try:
         shape, faces = collect_faces(model)
@@ -630,12 +638,16 @@ def edge_continuity(model: Any, *, samples: int = DEFAULT_SAMPLES, g3: bool = Fa
     tol = None
     t_match = time.perf_counter()
     if loose:
-        tol = match_tol if match_tol is not None else MATCH_RTOL * size
+        tol = match_tol if match_tol is not None else tolerances.CONTINUITY_MATCH_RTOL * size
         pairs += match_free_edges(faces, free, tol, spacing=size / 200.0, surfaces=surfaces)
     t_match = time.perf_counter() - t_match
+    if face_pairs is not None:
+        chosen = _check_face_pairs(face_pairs, len(faces))
+        pairs = [p for p in pairs if tuple(sorted((p.side1.face, p.side2.face))) in chosen]
+        n_topology = sum(p.matched == "topology" for p in pairs)
     result = ContinuityResult()
     result.match_tol, result.thresholds = tol, thresholds
-    engine = _Engine(faces, pairs, g3, CURVATURE_FLOOR / size, surfaces)
+    engine = _Engine(faces, pairs, g3, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
     t_measure = time.perf_counter()
     reports, result.points = _measure_all(engine, samples, refine, thresholds)
     t_measure = time.perf_counter() - t_measure

@@ -273,3 +273,34 @@ def test_model_without_shared_edges() -> None:
     assert any("no shared edges" in w and "nothing to check" in w for w in result.warnings)
     far = edge_continuity(cm.loose("offset", 0.5))  # 0.5 apart: beyond the default match_tol
     assert far == [] and far.stats["unmatched_free_edges"] == 8
+
+
+# ---------------------------------------------------------------------------------------- options
+def test_tolerances_are_read_at_call_time() -> None:
+    from occsurf.algorithms import tolerances
+
+    shape = cm.loose("offset", 0.01)
+    assert edge_continuity(shape) == []  # 0.01 apart > 1e-4 of the diagonal (~0.02)
+    with tolerances.override(CONTINUITY_MATCH_RTOL=0.01):  # 0.022: matches the one joint
+        wide = edge_continuity(shape)
+    assert len(wide) == 1 and wide.match_tol == pytest.approx(0.01 * wide.stats["model_size"])
+    with tolerances.override(CONTINUITY_SAMPLES=7, CONTINUITY_REFINE_ITERATIONS=0):
+        r = _one(cm.sewn("cylinder", 2.0))
+    assert r.samples == 7
+    with tolerances.override(CONTINUITY_CURVATURE_FLOOR=1e3):  # 1/R = 0.5 now counts as flat
+        assert _one(cm.sewn("cylinder", 2.0)).g2_max_rel == 0.0
+
+
+def test_chosen_face_pairs() -> None:
+    import cadquery as cq
+
+    box = cq.Workplane().box(10, 8, 6).edges("|Z").fillet(2.0).val().wrapped
+    every = edge_continuity(box)
+    pair = every[0].faces
+    only = edge_continuity(box, face_pairs=[pair[::-1]])
+    assert [r.faces for r in only] == [pair]
+    assert edge_continuity(box, face_pairs=[]) == []
+    with pytest.raises(InvalidGeometryError, match="face_pairs"):
+        edge_continuity(box, face_pairs=[(0, 99)])
+    with pytest.raises(InvalidGeometryError, match="refine"):
+        edge_continuity(box, refine=-1)
