@@ -151,11 +151,12 @@ def pixel_world_points(image: LitImage) -> np.ndarray:
     the background): the inverse of the projection used for the picture."""
     h, w = image.depth.shape
     ys, xs = np.nonzero(image.covered)
-    ndc = np.stack([(xs + 0.5) / w * 2 - 1, 1 - (ys + 0.5) / h * 2, image.depth[ys, xs].astype(float) * 2 - 1,
-                    np.ones(len(xs))], axis=-1)
-    world = ndc @ np.linalg.inv(image.matrix).T
+    ndc = ((xs + 0.5) * (2.0 / w) - 1, 1 - (ys + 0.5) * (2.0 / h), image.depth[ys, xs].astype(np.float64) * 2.0 - 1)
+    inv = np.linalg.inv(image.matrix)
+    # the 4 x 4 product written out: a BLAS matmul of (n, 4) by (4, 4) stalls on a busy machine
+    hom = [inv[k, 0] * ndc[0] + inv[k, 1] * ndc[1] + inv[k, 2] * ndc[2] + inv[k, 3] for k in range(4)]
     pts = np.full((h, w, 3), np.nan)
-    pts[ys, xs] = world[:, :3] / world[:, 3:4]
+    pts[ys, xs] = np.stack([hom[0] / hom[3], hom[1] / hom[3], hom[2] / hom[3]], axis=-1)
     return pts
 
 
