@@ -8,7 +8,7 @@ Rooms:
 ``exchange``    STEP/IGES reading and lossless writing, hierarchical STEP + sidecar
 ``validation``  our evaluation and curvature against OCC's on the same input
 ``modeling``    operations on OCC models: hole filling of shells (course §8-3)
-``rendering``   PNG pictures of surfaces
+``rendering``   PNG pictures of surfaces; per-pixel pictures under Warn's lights (course ch. 10)
 ``quality``     assessment of real models: continuity across edges (course ch. 9)
 ``cli``         the ``occsurf`` command line, one module per command
 ==============  ===========================================================================
@@ -53,6 +53,9 @@ _EXPORTS = {
     "Thresholds": "quality.continuity",
     "Violation": "quality.continuity",
     "PRESETS": "quality.continuity",
+    "render_lit": "rendering.lighting",
+    "render_model_lit": "rendering.lighting",
+    "render_surfaces_lit": "rendering.lighting",
 }
 
 __all__ = sorted(_EXPORTS)
