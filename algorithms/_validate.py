@@ -23,6 +23,9 @@ def as_degree(value: object, name: str = "degree") -> int:
 
 
 def as_finite_array(value: ArrayLike, name: str, ndim: int | None = None) -> NDArray[np.float64]:
+    if np.iscomplexobj(value) or (isinstance(value, (list, tuple)) and _holds_complex(value)):
+        raise InvalidGeometryError(f"{name}: expected real numbers, got complex values (the imaginary parts would "
+                                   "be dropped)")
     try:
         a = np.array(value, dtype=float)
     except (TypeError, ValueError) as err:
@@ -99,6 +102,52 @@ def check_parameter(u: object, lo: float, hi: float, name: str = "u") -> float:
     if a.ndim != 0:
         raise ParameterError(f"{name}: expected one parameter, got an array of shape {a.shape}")
     return float(a)
+
+
+def _holds_complex(value: object) -> bool:
+    try:
+        return bool(np.iscomplexobj(np.asarray(value)))
+    except (TypeError, ValueError):
+        return False
+
+
+def check_tol(tol: object, name: str = "tol") -> float:
+    """A tolerance: a finite, non-negative real (a NaN would pass every ``dev > tol`` check)."""
+    if isinstance(tol, bool) or not isinstance(tol, numbers.Real):
+        raise InvalidGeometryError(f"{name}: expected a non-negative real number, got {tol!r}")
+    x = float(tol)
+    if not (np.isfinite(x) and x >= 0):
+        raise InvalidGeometryError(f"{name}: expected a finite, non-negative number, got {tol!r}")
+    return x
+
+
+def check_size(shape: tuple[int, ...], what: str, itemsize: int = 8) -> None:
+    """Refuse before allocating: an array of ``shape`` (``itemsize`` bytes per element) may not exceed
+    ``tolerances.MAX_ARRAY_BYTES``. The message names the request and its size."""
+    n = 1
+    for k in shape:
+        n *= int(k)
+    size = n * itemsize
+    limit = tolerances.MAX_ARRAY_BYTES
+    if size > limit:
+        raise InvalidGeometryError(f"{what}: needs an array of shape {tuple(int(k) for k in shape)} "
+                                   f"({size / 2**30:.3g} GiB), more than MAX_ARRAY_BYTES = {limit / 2**30:.3g} GiB; "
+                                   "ask for less (or raise the limit with tolerances.override(MAX_ARRAY_BYTES=...))")
+
+
+def check_homogeneous(points: NDArray[np.float64], weights: NDArray[np.float64] | None) -> None:
+    """Rational poles whose homogeneous form ``w P`` overflows (poles 1e150, weights 1e200) would
+    evaluate to inf or NaN: refused. Evaluation is a convex combination of ``w P`` and ``w``, so
+    finite products cannot overflow later."""
+    if weights is None:
+        return
+    with np.errstate(over="ignore", invalid="ignore"):
+        wp = points * weights[..., None]
+    if not np.all(np.isfinite(wp)):
+        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(wp))[0][:-1])
+        raise InvalidGeometryError(f"control_points, weights: the weighted pole at index {bad} overflows "
+                                   f"(|P| {float(np.abs(points[bad]).max()):.3g} x w {float(weights[bad]):.3g}); "
+                                   "scale the model or the weights down")
 
 
 def check_times(times: object, name: str = "times") -> int:

@@ -406,9 +406,11 @@ class Hierarchy:
         out = []
         for i, n in zip(idx, shape):
             i = int(i)
-            if not -n <= i < n:
+            if i < 0:  # no Python wrap-around: -1 silently moved the last vertex
+                raise InvalidGeometryError(f"index: {index!r} has a negative entry; expected 0 <= index < {shape}")
+            if i >= n:
                 raise InvalidGeometryError(f"index: {index!r} is outside the vertex array of shape {shape}")
-            out.append(i % n)
+            out.append(i)
         return tuple(out)
 
     def _vector(self, value: ArrayLike, name: str) -> Array:

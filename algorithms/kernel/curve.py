@@ -28,6 +28,7 @@ from .knots import (
     merge_knots,
     multiplicity,
     refine_poles,
+    check_rescaled,
     rescale_knots,
     remove_knot_lsq,
     snap_knot,
@@ -94,6 +95,7 @@ class BSplineCurve(ControlPointValue):
             raise InvalidGeometryError(f"control_points: a degree-{p} curve needs at least {p + 1} poles, got {n}")
         t = V.check_knots(self.knots, p, n)
         w = None if self.weights is None else V.check_weights(self.weights, (n,))
+        V.check_homogeneous(P, w)
         self._set(p, t, P, w)
 
     def _set(self, p: int, t: Array, P: Array, w: Array | None) -> None:
@@ -215,6 +217,8 @@ class BSplineCurve(ControlPointValue):
         order = V.check_order(order)
         flat, shape = self._params(u)
         p, n = self.degree, self.n_poles
+        V.check_size((flat.shape[0], order + 1, max(p + 1, self.dim + 1)), f"derivatives of order {order} at "
+                     f"{flat.shape[0]} points")
         if _nk.applies(flat.shape[0]):
             out = np.empty((flat.shape[0], order + 1, self.dim))
             args = (self.knots, p, *_nk.span_table(self.knots, p, n), self._hpoles, flat, order, self.is_rational, out)
@@ -269,7 +273,11 @@ class BSplineCurve(ControlPointValue):
         x = float(V.check_parameters(u, lo, hi, name))
         if x <= lo or x >= hi:
             raise ParameterError(f"{name}: {x!r} must lie strictly inside the domain ({lo!r}, {hi!r})")
-        return snap_knot(self.knots, x)
+        snapped = snap_knot(self.knots, x)
+        if snapped <= lo or snapped >= hi:  # within the knot tolerance of an end: a piece would be empty
+            raise ParameterError(f"{name}: {x!r} is within the knot tolerance of the domain end {snapped!r} "
+                                 f"(domain ({lo!r}, {hi!r})); no interior knot can be placed there")
+        return snapped
 
     def insert_knot(self, knot: float, times: int = 1) -> BSplineCurve:
         """Insert ``knot`` ``times`` times by Boehm's algorithm (course §2-10; A5.1).
@@ -354,7 +362,7 @@ class BSplineCurve(ControlPointValue):
             ``knot`` is not a knot, or has fewer than ``times`` copies.
         """
         times = V.check_times(times)
-        tol = tolerances.KNOT_REMOVAL if tol is None else float(tol)
+        tol = V.check_tol(tolerances.KNOT_REMOVAL if tol is None else tol)
         x = self._interior_knot(knot, "knot")
         s = multiplicity(self.knots, x)
         if s < times:
@@ -425,6 +433,10 @@ class BSplineCurve(ControlPointValue):
         if not a < b:
             raise ParameterError(f"segment: expected u0 < u1, got {a!r} >= {b!r}")
         c = self.clamp()
+        # an end within the knot tolerance of the domain's is that end (split refuses to cut there)
+        a, b = snap_knot(c.knots, a), snap_knot(c.knots, b)
+        if not a < b:
+            raise ParameterError(f"segment: u0 = {u0!r} and u1 = {u1!r} are the same knot within its tolerance")
         if b < hi:
             c = c.split(b)[0]
         if a > lo:
@@ -444,5 +456,5 @@ class BSplineCurve(ControlPointValue):
         a, b = float(start), float(end)
         if not (np.isfinite(a) and np.isfinite(b) and a < b):
             raise ParameterError(f"reparametrize: expected finite start < end, got {start!r}, {end!r}")
-        t = rescale_knots(self.knots, self.domain, (a, b))
+        t = check_rescaled(rescale_knots(self.knots, self.domain, (a, b)), self.knots, (a, b), "reparametrize")
         return BSplineCurve._trusted(self.degree, t, self.control_points, self.weights)

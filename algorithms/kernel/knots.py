@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import tolerances
+from ..errors import ParameterError
 from .basis import find_span
 from .blossom import blossom_basis
 
@@ -291,6 +292,16 @@ def split_poles(knots: Array, degree: int, poles: Array, u: float) -> tuple[tupl
         t = tau
     a = int(np.searchsorted(t, u, side="left"))
     return (t[: a + p + 1], H[:a]), (t[a:], H[a:])
+
+
+def check_rescaled(t: Array, knots: Array, new: tuple[float, float], what: str) -> Array:
+    """Refuse a rescaled knot vector that lost the knots' structure: overflow (``b - a`` beyond the
+    largest double made every knot ``inf`` or ``nan``) or distinct knots merged by rounding."""
+    if not (np.isfinite(new[1] - new[0]) and np.all(np.isfinite(t))):
+        raise ParameterError(f"{what}: the domain {new!r} is too long for doubles (its length overflows)")
+    if np.count_nonzero(np.diff(t) > 0) != np.count_nonzero(np.diff(knots) > 0):
+        raise ParameterError(f"{what}: the domain {new!r} is too short to keep the distinct knots apart")
+    return t
 
 
 def rescale_knots(knots: Array, old: tuple[float, float], new: tuple[float, float]) -> Array:

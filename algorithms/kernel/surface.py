@@ -30,6 +30,7 @@ from .knots import (
     merge_knots,
     multiplicity,
     refine_poles,
+    check_rescaled,
     rescale_knots,
     remove_knot_lsq,
     snap_knot,
@@ -124,6 +125,7 @@ class BSplineSurface(ControlPointValue):
         U = V.check_knots(kn[0], p, nu, "knots[0] (U)")
         Vk = V.check_knots(kn[1], q, nv, "knots[1] (V)")
         w = None if self.weights is None else V.check_weights(self.weights, (nu, nv))
+        V.check_homogeneous(P, w)
         self._set((p, q), (U, Vk), P, w)
 
     def _set(self, deg: tuple[int, int], kn: tuple[Array, Array], P: Array, w: Array | None) -> None:
@@ -270,6 +272,8 @@ class BSplineSurface(ControlPointValue):
         """
         order = V.check_order(order)
         a, b, shape = self._uv(u, v)
+        V.check_size((a.shape[0], order + 1, order + 1, self.dim + 1), f"derivatives of order {order} at "
+                     f"{a.shape[0]} points")
         if _nk.applies(a.shape[0]):
             out = np.empty((a.shape[0], order + 1, order + 1, self.dim))
             if _nk.run("surface_derivatives", *self._kernel_args(), a, b, order, self.is_rational, out):
@@ -346,6 +350,7 @@ class BSplineSurface(ControlPointValue):
         """
         a, b = self._grid_params(us, vs)
         mu, mv = a.shape[0], b.shape[0]
+        V.check_size((mu, mv, self._hpoles.shape[-1]), f"evaluate_grid of {mu} x {mv} points")
         G = self._grid_v(b, 0)  # (n_u, m_v, 1, k)
         su, Nu = self._grid_basis(0, a, 0)
         k = G.shape[3]
@@ -374,6 +379,7 @@ class BSplineSurface(ControlPointValue):
             return self.evaluate_grid(us, vs)[:, :, None, None, :]
         a, b = self._grid_params(us, vs)
         mu, mv, r1, d = a.shape[0], b.shape[0], order + 1, self.dim
+        V.check_size((mu, mv, r1, r1, d + 1), f"derivatives_grid of order {order} on {mu} x {mv} points")
         G = self._grid_v(b, order)  # (n_u, m_v, r+1, k)
         k = G.shape[3]
         su, Du = self._grid_basis(0, a, order)
@@ -460,7 +466,11 @@ class BSplineSurface(ControlPointValue):
         x = float(V.check_parameters(value, lo, hi, name))
         if x <= lo or x >= hi:
             raise ParameterError(f"{name}: {x!r} must lie strictly inside the {'uv'[ax]} domain ({lo!r}, {hi!r})")
-        return snap_knot(self.knots[ax], x)
+        snapped = snap_knot(self.knots[ax], x)
+        if snapped <= lo or snapped >= hi:  # within the knot tolerance of an end: a piece would be empty
+            raise ParameterError(f"{name}: {x!r} is within the knot tolerance of the {'uv'[ax]} domain end {snapped!r} "
+                                 f"(domain ({lo!r}, {hi!r})); no interior knot can be placed there")
+        return snapped
 
     def insert_knot(self, knot: float, times: int = 1, *, direction: Direction) -> BSplineSurface:
         """Insert ``knot`` in u or v, ``times`` times (Boehm, course §2-10). The surface is unchanged.
@@ -523,7 +533,7 @@ class BSplineSurface(ControlPointValue):
         """
         ax = _axis(direction)
         times = V.check_times(times)
-        tol = tolerances.KNOT_REMOVAL if tol is None else float(tol)
+        tol = V.check_tol(tolerances.KNOT_REMOVAL if tol is None else tol)
         x = self._interior(knot, ax, "knot")
         s = multiplicity(self.knots[ax], x)
         if s < times:
@@ -596,5 +606,6 @@ class BSplineSurface(ControlPointValue):
             a, b = float(a), float(b)
             if not (np.isfinite(a) and np.isfinite(b) and a < b):
                 raise ParameterError(f"reparametrize: expected finite start < end in {'uv'[ax]}, got {a!r}, {b!r}")
-            kn.append(rescale_knots(self.knots[ax], self.domain[ax], (a, b)))
+            kn.append(check_rescaled(rescale_knots(self.knots[ax], self.domain[ax], (a, b)), self.knots[ax], (a, b),
+                                     f"reparametrize ({'uv'[ax]})"))
         return BSplineSurface._trusted(self.degree, tuple(kn), self.control_points, self.weights)

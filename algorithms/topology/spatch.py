@@ -52,7 +52,7 @@ import functools
 import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from math import factorial
+from math import comb, factorial
 from typing import Any
 
 import numpy as np
@@ -120,6 +120,9 @@ def spatch_indices(sides: int, depth: int) -> NDArray[np.intp]:
     """
     n = _check_sides(sides)
     d = _check_depth(depth)
+    # m rows, built as Python tuples first (about 24 bytes per entry with the array): refuse before
+    # spending minutes and gigabytes on them (spatch_indices(5, 200) has 6.9e7 rows)
+    V.check_size((comb(n + d - 1, n - 1), n), f"spatch_indices({n}, {d})", itemsize=24)
     return np.array(index_tuples(n, d), dtype=np.intp).reshape(-1, n)
 
 
@@ -623,10 +626,18 @@ class SPatch(ControlPointValue):
         Notes
         -----
         Exact (Taylor-mode differentiation of the Wachspress quotient, the Bernstein products and,
-        for rational patches, the weight quotient); cost grows like ``order**4``.
+        for rational patches, the weight quotient); the cost grows steeply with ``order`` (about
+        ``order**6``), so ``order`` above ``tolerances.SPATCH_MAX_DERIVATIVE_ORDER`` and work arrays
+        above ``tolerances.MAX_ARRAY_BYTES`` are refused before any work (InvalidGeometryError).
         """
         r = V.check_order(order)
+        if r > tolerances.SPATCH_MAX_DERIVATIVE_ORDER:
+            raise InvalidGeometryError(
+                f"order: {r} exceeds SPATCH_MAX_DERIVATIVE_ORDER = {tolerances.SPATCH_MAX_DERIVATIVE_ORDER} (the "
+                "cost grows like order**6: 2.3 s per point at order 25); raise it with tolerances.override")
         x, shape = _domain_points(points, self.sides)
+        V.check_size((x.shape[0], (r + 1) * (r + 2) // 2, max(self._hpoles.shape[1], 1) * 4),
+                     f"SPatch.derivatives of order {r} at {x.shape[0]} points")
         D = _jet_to_derivatives(self._jets(x, r), r)
         return D.reshape(shape + (r + 1, r + 1, self.dim))
 

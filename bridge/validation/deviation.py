@@ -48,6 +48,7 @@ from OCP.GeomLProp import GeomLProp_SLProps
 from OCP.gp import gp_Pnt, gp_Vec
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms._validate import check_size
 from occsurf.algorithms.errors import InvalidGeometryError
 
 from .. import _occ
@@ -232,7 +233,8 @@ def surface_deviation(ours: BSplineSurface, occ_surface: Any = None, samples: in
         against OCC's on identical data).
     samples : int
         Grid of ``samples x samples`` parameters, uniform over ``ours.domain``, ends included
-        (those within 4 ulps of a knot moved onto it, see the module docstring).
+        (those within 4 ulps of a knot moved onto it, see the module docstring). A grid whose
+        arrays would exceed ``tolerances.MAX_ARRAY_BYTES`` is refused (InvalidGeometryError).
 
     Returns
     -------
@@ -240,6 +242,8 @@ def surface_deviation(ours: BSplineSurface, occ_surface: Any = None, samples: in
     """
     _check(ours, BSplineSurface, "ours")
     m = _check_samples(samples)
+    # ours (3x3 partials), OCC's 6 vectors and normals per grid point: refused before allocating
+    check_size((m, m, 9 * 3 + 6 * 3 + 3), f"surface_deviation with samples={m} ({m} x {m} grid)")
     occ_s = to_occ(ours) if occ_surface is None else occ_surface
     (u0, u1), (v0, v1) = ours.domain
     us = _snap_to_knots(np.linspace(u0, u1, m), ours.knots[0])

@@ -44,7 +44,7 @@ def test_curve_overlays_leave_the_curve_unchanged_and_flatten_exactly(c, data):
     rng = np.random.default_rng(0)
     hc.set_offsets(o2, rng.uniform(-1, 1, o2.shape + (c.dim,)))
     hc.move_vertex(None, 0, np.ones(c.dim))
-    hc.move_vertex(o1, -1, -np.ones(c.dim))
+    hc.move_vertex(o1, o1.shape[0] - 1, -np.ones(c.dim))  # the last vertex (negative indices are refused)
     f = hc.flatten()
     big = max(scale, float(np.abs(f.control_points).max()))
     assert_allclose(hc.evaluate(x), f.evaluate(x), rtol=0, atol=1e-10 * big)
