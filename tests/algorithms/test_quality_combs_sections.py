@@ -14,7 +14,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from occsurf.algorithms import BSplineCurve, BSplineSurface, circle, tolerances
+from occsurf.algorithms import BSplineCurve, circle, tolerances
 from occsurf.algorithms.construction import extrude
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.quality import (SampledCurve, axial_sections, curvature_comb, iso_curves, plane_sections)

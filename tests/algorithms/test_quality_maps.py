@@ -20,7 +20,7 @@ from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
 from occsurf.algorithms.geometry import curvatures_from_derivatives, surface_curvatures
 from occsurf.algorithms.hierarchical import HierarchicalSurface
 from occsurf.algorithms.quality import KINDS, color_scale, curvature_map, curvature_values
-from occsurf.algorithms.topology import SPatch, generalized_biquadratic, Mesh
+from occsurf.algorithms.topology import SPatch, generalized_biquadratic
 
 from .strategies import surfaces, test_settings
 

@@ -13,8 +13,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from occsurf.algorithms import BSplineCurve, tolerances
-from occsurf.algorithms.construction import revolve
+from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.quality import (DRAFT_INSUFFICIENT, DRAFT_OK, DRAFT_UNDEFINED, DRAFT_UNDERCUT, classify_draft,
                                         curvature_map, draft_angle, highlight_lines, isophotes, normal_flips,
