@@ -60,7 +60,11 @@ def render_job(item: dict[str, Any]) -> dict[str, Any]:
     from ..isolation import quiet_native_stdout
     from ..rendering.lighting import Camera, camera_for_view, mesh_of_model, render_lit, write_png
 
-    setup = setup_from_dict(item["lights"]) if item.get("lights") is not None else None  # fail before reading
+    from occsurf.algorithms._files import check_target
+
+    # fail before reading the model: the lights, then the target (again: it may have changed)
+    setup = setup_from_dict(item["lights"]) if item.get("lights") is not None else None
+    check_target(item["output"])
     with warnings.catch_warnings(), np.errstate(all="ignore"), quiet_native_stdout():
         warnings.simplefilter("ignore")
         model = read_model(Path(item["input"]))
@@ -149,8 +153,12 @@ def run(ns: argparse.Namespace) -> int:
     if outcome.status != OK:
         why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
                worker_failure(outcome, ns.timeout, task="reading and rendering this file", process="worker"))
-        where = ns.lights if (outcome.status == ERROR and outcome.error and outcome.error.startswith(
-            ("lights", "ambient", "material", "two_sided"))) else src
+        where: Path | str = src
+        if outcome.status == ERROR and outcome.error:
+            if outcome.error.startswith(("lights", "ambient", "material", "two_sided")):
+                where = ns.lights
+            elif outcome.error.startswith(str(out) + ": "):  # writing the picture failed
+                where, why = out, strip_path(outcome.error, out)
         error(f"{where}: {why}")
         return EXIT_ERROR
     r = outcome.value
