@@ -260,7 +260,7 @@ class CurveBatch:
             H = [np.c_[s.control_points * (1.0 if s.weights is None else s.weights[:, None]),
                        np.ones(s.n_poles) if s.weights is None else s.weights] for s in splines]
             self.groups.append({"p": p, "T": _Stack([s.knots for s in splines], p, [s.n_poles for s in splines]),
-                                "H": np.concatenate(H),
+                                "H": np.concatenate(H), "rational": any(s.weights is not None for s in splines),
                                 "H_off": np.cumsum([0] + [len(h) for h in H[:-1]]).astype(np.intp)})
             self.group[ids] = g
             self.local[ids] = np.arange(len(ids))
@@ -283,7 +283,8 @@ class CurveBatch:
             s = T.spans(k, x)
             Dn = basis_derivatives(T.knots, p, s + T.offset[k], x, 1)
             idx = G["H_off"][k][:, None] + (s - p)[:, None] + np.arange(p + 1)
-            Hd = curve_quotient_rule(np.matmul(Dn, G["H"][idx]))
+            Hd = np.matmul(Dn, G["H"][idx])
+            Hd = curve_quotient_rule(Hd) if G["rational"] else Hd[..., :2]
             uv[sel], duv[sel] = Hd[:, 0], Hd[:, 1]
         other = ~line & (grp < 0)
         for i in np.unique(cid[other]):

@@ -493,7 +493,7 @@ class _Engine:
                 gap: bool = False) -> dict[str, Array]:
         """All measures at the requests ``(pid[m], t[m])``: arrays of shape ``(m,)`` (points ``(m, 3)``),
         and the parameters used: ``'uv1'``, ``'uv2'`` ``(m, 2)``, ``'s'`` (side 2's edge parameter)."""
-        np.add.at(self.evaluated, pid, 1)
+        self.evaluated += np.bincount(pid, minlength=len(self.pairs))
         uv1, duv1 = self.curves.evaluate(2 * pid, t)
         D1 = self._surfaces(self.f1[pid], uv1, self.order)
         geo = self.geo[pid]
