@@ -9,9 +9,12 @@ worker started with several threads is safe.)
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import logging
 import os
+import signal
+from collections.abc import Iterator
 from typing import Any
 
 __all__ = ["ClusterError", "open_client", "default_workers", "dashboard_available"]
@@ -55,9 +58,31 @@ def open_client(scheduler: str | None = None, workers: int | None = None,
                                f"{' '.join(str(err).split()) or 'no answer'})") from err
     n = workers or default_workers()
     try:
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=":0" if dashboard_available() else None,
-                               silence_logs=logging.ERROR)
+        with _sigint_ignored():  # inherited by the worker processes: see _sigint_ignored
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                   dashboard_address=":0" if dashboard_available() else None,
+                                   silence_logs=logging.ERROR)
     except Exception as err:  # noqa: BLE001 - any start-up failure is one line for the user
         raise ClusterError(f"cannot start a local Dask cluster of {n} workers: {err}") from err
     return Client(cluster, set_as_default=False), cluster
+
+
+@contextlib.contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """Ignore SIGINT while the local workers are spawned, so that they inherit "ignored".
+
+    Ctrl-C in a terminal signals the whole process group. The client handles it (flushes the
+    finished rows, closes the cluster); workers that also took it would die mid-task with a
+    traceback each. A signal ignored at exec stays ignored, and Python then installs no
+    KeyboardInterrupt handler of its own. Only the main thread may change handlers: elsewhere
+    this does nothing.
+    """
+    try:
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)

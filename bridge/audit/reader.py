@@ -209,6 +209,10 @@ def _watch_parent(parent: int) -> None:
 
 
 def _serve(preload: list[str]) -> int:
+    # Ctrl-C in a terminal reaches the whole process group: the reader is stopped by its parent
+    # only, so that an interrupted audit records nothing false (a reader dying of SIGINT would
+    # look like a crash of the file it was reading).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True).start()
     sys.stdout.flush()
     channel = os.fdopen(os.dup(1), "w", encoding="utf-8", newline="\n")

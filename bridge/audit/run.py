@@ -161,17 +161,18 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
         Not raised: an interrupted run flushes what finished and returns ``interrupted=True``.
     """
     checks = _check_args(tuple(checks), timeout, workers)
-    entries = hash_entries(expand_paths(paths))
+    entries = expand_paths(paths)  # every refusal (corpus, --out, scheduler) before the long work
     store = ResultStore(out, resume=resume, flush_seconds=flush_seconds)
-    from .cluster import open_client
+    from .cluster import dashboard_available, open_client
 
     client, cluster = open_client(scheduler, workers)
     t0 = time.monotonic()
-    bar = Progress(len(entries), progress)
     dashboard = None
     try:
-        from .cluster import dashboard_available
-
+        if progress is not None:
+            print(f"audit: {len(entries)} files; hashing their contents", file=progress, flush=True)
+        hash_entries(entries)
+        bar = Progress(len(entries), progress)
         if dashboard_available() and getattr(client, "dashboard_link", None):
             dashboard = client.dashboard_link
             if on_dashboard is not None:

@@ -44,7 +44,7 @@ __all__ = ["CHECKS", "DEFAULT_CHECKS", "QUALITY_HOOK", "PRELOAD", "JOB", "audit_
 CHECKS = ("inspect", "quality", "roundtrip")
 DEFAULT_CHECKS = ("inspect", "roundtrip")
 #: ``module:function`` of the quality summary (issue 11, surface quality); optional.
-QUALITY_HOOK = "occsurf.bridge.validation.quality:summarize_model"
+QUALITY_HOOK = "occsurf.bridge.quality:summarize_model"
 #: Modules the reader loads before its first file (its start-up is not part of any timeout).
 PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.validation.deviation",
            "occsurf.bridge.validation.inspect")

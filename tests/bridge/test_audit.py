@@ -236,3 +236,18 @@ def test_cli_imports_no_dask_numpy_or_occ_at_module_level() -> None:
             "print(sorted(m for m in ('numpy', 'dask', 'distributed', 'pyarrow', 'OCP') if m in sys.modules))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert proc.stdout.strip() == "[]"
+
+
+def test_a_task_dask_gave_up_on_is_recorded_crashed_not_dropped() -> None:
+    from distributed import KilledWorker
+
+    from occsurf.bridge.audit.run import _failure, _rows
+
+    entry = corpus.Entry("/x/a.step", sha256="a", size=3)
+    from types import SimpleNamespace
+
+    res = _failure(entry, KilledWorker("occsurf-audit-a", SimpleNamespace(address="tcp://127.0.0.1:1"), 3))
+    row, faces = _rows(entry, res, "run")
+    assert row["status"] == "crashed" and "KilledWorker" in row["error"] and faces == []
+    row, _ = _rows(entry, _failure(entry, RuntimeError("lost")), "run")
+    assert row["status"] == "error" and "RuntimeError: lost" in row["error"]

@@ -117,11 +117,12 @@ def test_interrupt_then_resume_finishes_the_rest(tmp_path: Path) -> None:
     env = hook_env(tmp_path, OCCSURF_TEST_SLOW="0.7")
     out = tmp_path / "results"
     cmd = [sys.executable, "-m", "occsurf.bridge.cli", "audit", str(corpus), "--out", str(out), "--workers", "2"]
-    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
     try:
         _wait_for(lambda: len(read_files(out).to_pylist()) >= 3 if (out / "files").is_dir() else False, 120,
                   "the first results")
-        proc.send_signal(signal.SIGINT)
+        os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C in a terminal: the whole process group, workers included
         stdout, stderr = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:
@@ -130,6 +131,7 @@ def test_interrupt_then_resume_finishes_the_rest(tmp_path: Path) -> None:
     assert "--resume" in stderr and "Traceback" not in stderr
     first = read_files(out).to_pylist()  # readable after the interruption
     assert 3 <= len(first) < len(files)
+    assert all(r["status"] == "ok" for r in first)  # the interruption recorded nothing false
     # rename an audited file: its content is known, so it is not redone
     renamed = Path(first[0]["path"]).with_name("renamed-" + Path(first[0]["path"]).name)
     Path(first[0]["path"]).rename(renamed)
