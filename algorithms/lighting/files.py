@@ -14,8 +14,8 @@ Format (``occsurf render --lights FILE``; every key but ``lights[].direction`` i
          "color": [r, g, b], "intensity": 1.0,
          "concentration": 0,                # Warn's cos^n reflector, n >= 0
          "cone": {"angle_deg": 30, "edge_deg": 2},
-         "flaps": {"x": [lo, hi], "y": [lo, hi], "z": [lo, hi]},   # light's frame, model units;
-                                                                   # null for an open side
+         "flaps": {"x": [lo, hi], "y": [lo, hi], "z": [lo, hi],    # light's frame, model units;
+                   "edge": 0.0},                                   # null for an open side; soft edge
          "falloff": "none",                 # or "inverse", "inverse_square" ...
          "falloff_distance": 100.0}         # ... with full intensity up to this distance
       ]
@@ -69,14 +69,19 @@ def _renamed(err: InvalidGeometryError, old: str, new: str) -> InvalidGeometryEr
 def _light(obj: Any, where: str) -> WarnLight:
     d = _keys(obj, _LIGHT_KEYS, where, required=("direction",))
     cone = d.get("cone")
-    angle = edge = None
+    angle = cone_edge = None
     if cone is not None:
         c = _keys(cone, _CONE_KEYS, f"{where}.cone", required=("angle_deg",))
-        angle, edge = c["angle_deg"], c.get("edge_deg", 0.0)
+        angle, cone_edge = c["angle_deg"], c.get("edge_deg", 0.0)
+    flaps = d.get("flaps")
+    edge = 0.0
+    if isinstance(flaps, dict) and "edge" in flaps:
+        flaps = dict(flaps)
+        edge = flaps.pop("edge")
     try:
         return WarnLight(position=d.get("position"), direction=d["direction"], color=d.get("color", (1.0, 1.0, 1.0)),
                          intensity=d.get("intensity", 1.0), concentration=d.get("concentration", 0.0),
-                         cone_angle_deg=angle, cone_edge_deg=0.0 if edge is None else edge, flaps=d.get("flaps"),
+                         cone_angle_deg=angle, cone_edge_deg=0.0 if cone_edge is None else cone_edge, flaps=flaps, flap_edge=edge,
                          falloff=d.get("falloff", "none"), falloff_distance=d.get("falloff_distance"),
                          name=d.get("name", ""))
     except InvalidGeometryError as err:
@@ -123,6 +128,8 @@ def setup_to_dict(setup: LightingSetup) -> dict[str, Any]:
                  if not (math.isinf(lo) and math.isinf(hi))}
         if flaps:
             d["flaps"] = flaps
+            if light.flap_edge:
+                flaps["edge"] = light.flap_edge
         if light.falloff != "none":
             d["falloff"] = light.falloff
             d["falloff_distance"] = light.falloff_distance

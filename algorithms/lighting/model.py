@@ -160,6 +160,10 @@ class WarnLight:
         Barn doors: the light reaches only points whose coordinates in the light's frame
         (:func:`light_frame`, origin at ``position``, model units) lie within these bounds
         (``-inf``/``inf`` for an open side). Accepts ``{"x": [lo, hi], ...}`` too.
+    flap_edge : float, default 0
+        Width of the flaps' soft edge, model units, >= 0: the light rises from 0 at a flap to full
+        at ``flap_edge`` inside it, by the same smoothstep as the cone (0: a sharp cut, as barn
+        doors close to the light give; a soft edge keeps a narrow band from aliasing).
     falloff : str, default 'none'
         One of :data:`FALLOFFS`.
     falloff_distance : float or None
@@ -176,6 +180,7 @@ class WarnLight:
     cone_angle_deg: float | None = None
     cone_edge_deg: float = 0.0
     flaps: Any = None
+    flap_edge: float = 0.0
     falloff: str = "none"
     falloff_distance: float | None = None
     name: str = ""
@@ -200,6 +205,7 @@ class WarnLight:
         else:
             put(self, "cone_edge_deg", _real(self.cone_edge_deg, f"{where}.cone.edge_deg", lo=0.0))
         put(self, "flaps", _flaps(self.flaps, f"{where}.flaps"))
+        put(self, "flap_edge", _real(self.flap_edge, f"{where}.flaps.edge", lo=0.0))
         if self.falloff not in FALLOFFS:
             raise InvalidGeometryError(f"{where}.falloff: expected one of {', '.join(FALLOFFS)}, got {self.falloff!r}")
         if self.falloff != "none" or self.falloff_distance is not None:

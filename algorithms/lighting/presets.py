@@ -89,7 +89,8 @@ def highlight_check(center: Sequence[float], size: float, *, count: int = 9, pit
             raise InvalidGeometryError(f"{name}: expected a positive fraction of the model size, got {value!r}")
     offsets = (np.arange(count) - (count - 1) / 2) * pitch * s
     lights = tuple(_aimed(f"stripe {k}", c, (0.0, -0.9, 1.6), s, intensity=1.0,
-                          flaps={"y": [float(o - width * s / 2), float(o + width * s / 2)]})
+                          flaps={"y": [float(o - width * s / 2), float(o + width * s / 2)]},
+                          flap_edge=0.15 * width * s)  # soft edges: the stripes do not alias
                    for k, o in enumerate(offsets))
     return LightingSetup(lights=lights, ambient=0.05,
                          material=Material(color=(0.80, 0.80, 0.82), diffuse=0.8, specular=0.4, shininess=60))

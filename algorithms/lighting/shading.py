@@ -24,7 +24,9 @@ Blinn-Phong, as in Warn's paper; it is zero where ``N.L_j <= 0``), ``c_j`` the l
 where ``gamma`` is the angle between the light's axis and the ray from the light to ``P``, ``n``
 the concentration (``n = 0``: the factor is 1 everywhere, a plain point light), ``theta`` and
 ``delta`` the cone's angle and soft-edge width (a step at ``theta`` when ``delta = 0``), ``F`` the
-light's frame (:func:`~.model.light_frame`) and ``O`` its position, ``d = |P - O|`` and ``k`` 0, 1
+light's frame (:func:`~.model.light_frame`) and ``O`` its position, ``S_k`` 1 between the flaps
+``lo_k .. hi_k`` of axis ``k`` and 0 outside (a step, or a smoothstep rising over ``flap_edge``
+inside each flap), ``d = |P - O|`` and ``k`` 0, 1
 or 2 (:data:`~.model.FALLOFFS`). The result is linear RGB, not clipped: two lights give exactly
 the sum of each alone.
 """
@@ -266,16 +268,24 @@ def _cone(cos_g: np.ndarray, light: WarnLight) -> np.ndarray:
 
 
 def _flap_mask(P: np.ndarray, light: WarnLight) -> np.ndarray:
-    """1 where the point lies within every flap of the light's frame, else 0."""
+    """1 inside every flap of the light's frame (``flap_edge`` inside it), 0 outside, smoothstep
+    over the soft edge."""
     F = light.frame.tolist()
     rel = P - np.asarray(light.origin, P.dtype)[:, None]
-    mask = np.ones(P.shape[1], bool)
+    e = light.flap_edge
+    mask = np.ones(P.shape[1], bool) if e == 0 else np.ones(P.shape[1], P.dtype)
     for k, (lo, hi) in enumerate(light.flaps):
         if math.isinf(lo) and math.isinf(hi):
             continue
         q = F[k][0] * rel[0] + F[k][1] * rel[1] + F[k][2] * rel[2]
-        mask &= (q >= lo) & (q <= hi)
-    return mask.astype(P.dtype)
+        if e == 0:
+            mask &= (q >= lo) & (q <= hi)
+            continue
+        for t in ((q - lo) / e if math.isfinite(lo) else None, (hi - q) / e if math.isfinite(hi) else None):
+            if t is not None:
+                np.clip(t, 0.0, 1.0, out=t)
+                mask *= t * t * (3.0 - 2.0 * t)
+    return mask.astype(P.dtype) if e == 0 else mask
 
 
 def light_factor(points: ArrayLike, light: WarnLight) -> NDArray[np.float64]:

@@ -179,12 +179,17 @@ float warnCone(float cosg, float theta, float delta) {
   float t = clamp((theta - acos(clamp(cosg, -1.0, 1.0))) / delta, 0.0, 1.0);
   return t * t * (3.0 - 2.0 * t);
 }
-float warnFlaps(vec3 rel, mat3 frameT, vec3 lo, vec3 hi) {
+float warnFlaps(vec3 rel, mat3 frameT, vec3 lo, vec3 hi, float e) {
   vec3 q = frameT * rel;
-  return all(greaterThanEqual(q, lo)) && all(lessThanEqual(q, hi)) ? 1.0 : 0.0;
+  if (e <= 0.0) return all(greaterThanEqual(q, lo)) && all(lessThanEqual(q, hi)) ? 1.0 : 0.0;
+  vec3 a = clamp((q - lo) / e, 0.0, 1.0);
+  vec3 b = clamp((hi - q) / e, 0.0, 1.0);
+  a = a * a * (3.0 - 2.0 * a);
+  b = b * b * (3.0 - 2.0 * b);
+  return a.x * a.y * a.z * b.x * b.y * b.z;
 }
 vec3 warnLight(vec3 P, vec3 N, vec3 V, float NV, bool directional, vec3 pos, vec3 dir, mat3 frameT,
-               vec3 lo, vec3 hi, vec3 rgb, float conc, float theta, float delta, float fallK, float d0,
+               vec3 lo, vec3 hi, float flapEdge, vec3 rgb, float conc, float theta, float delta, float fallK, float d0,
                vec3 kd, vec3 ks, float shin) {
   vec3 L; float factor = 1.0; float dist = 0.0;
   if (directional) { L = -dir; }
@@ -197,7 +202,7 @@ vec3 warnLight(vec3 P, vec3 N, vec3 V, float NV, bool directional, vec3 pos, vec
     factor *= warnCone(cosg, theta, delta);
     if (fallK > 0.0) factor *= pow(d0 / max(dist, d0), fallK);
   }
-  factor *= warnFlaps(P - (directional ? vec3(0.0) : pos), frameT, lo, hi);
+  factor *= warnFlaps(P - (directional ? vec3(0.0) : pos), frameT, lo, hi, flapEdge);
   float NL = dot(N, L);
   if (NL <= 0.0 || factor <= 0.0) return vec3(0.0);
   float RV = max(2.0 * NL * NV - dot(L, V), 0.0);
@@ -217,7 +222,8 @@ def _light_call(light: WarnLight) -> str:
     # mat3 is column-major: columns = the frame's rows, transposed, so frameT * rel = F @ rel.
     frameT = f"transpose(mat3({_v3(F[0])}, {_v3(F[1])}, {_v3(F[2])}))"
     return (f"warnLight(P, N, V, NV, {'true' if light.position is None else 'false'}, {_v3(pos)}, "
-            f"{_v3(light.direction)}, {frameT}, {_v3(lo)}, {_v3(hi)}, {_v3(light.rgb)}, {_f(light.concentration)}, "
+            f"{_v3(light.direction)}, {frameT}, {_v3(lo)}, {_v3(hi)}, {_f(light.flap_edge)}, {_v3(light.rgb)}, "
+            f"{_f(light.concentration)}, "
             f"{_f(theta)}, {_f(math.radians(light.cone_edge_deg))}, {_f(fall)}, "
             f"{_f(light.falloff_distance or 1.0)}, kd, ks, shin)")
 

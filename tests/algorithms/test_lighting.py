@@ -106,6 +106,22 @@ def test_pixels_outside_a_flap_are_ambient_only() -> None:
     assert np.all(rgb[inside] > 0.07 + 0.05)
 
 
+def test_soft_flap_edge_is_a_smoothstep_inside_the_flap() -> None:
+    light = WarnLight(position=(0.0, 0.0, 10.0), direction=(0, 0, -1), flaps={"x": [-1.0, 2.0]}, flap_edge=0.5)
+    x = np.linspace(-2, 3, 501)
+    P = np.stack([x, np.zeros_like(x), np.zeros_like(x)], axis=-1)
+    t_lo = np.clip((x + 1.0) / 0.5, 0, 1)
+    t_hi = np.clip((2.0 - x) / 0.5, 0, 1)
+    want = t_lo * t_lo * (3 - 2 * t_lo) * t_hi * t_hi * (3 - 2 * t_hi)
+    np.testing.assert_allclose(light_factor(P, light), want, atol=1e-12)
+    assert np.all(light_factor(P, light)[(x < -1) | (x > 2)] == 0)  # still nothing outside the flaps
+    doc = json.loads(dumps_lights(LightingSetup(lights=(light,))))
+    assert doc["lights"][0]["flaps"]["edge"] == 0.5
+    assert loads_lights(json.dumps(doc)).lights[0] == light
+    with pytest.raises(InvalidGeometryError, match=r"lights\[0\]\.flaps\.edge"):
+        loads_lights('{"lights": [{"direction": [0, 0, 1], "flaps": {"x": [0, 1], "edge": -1}}]}')
+
+
 def test_flap_frame_convention() -> None:
     """x = the model's +x projected; +y where the direction is along x; y = z x x."""
     F = light_frame([0.0, 0.0, -2.0])

@@ -72,12 +72,15 @@ def _compare(img, setup, normal_of, *, levels: float, margin: int = 2) -> tuple[
 
 def test_plane_with_flaps_cone_and_concentration_matches_the_reference() -> None:
     """A known scene: the plane z = 0 seen from the top under a concentrated light with flaps and a
-    soft cone, plus a coloured directional light; every kept pixel within 2 levels."""
+    soft cone, a coloured directional light with flaps and a light with soft flap edges; every
+    kept pixel within 2 levels."""
     P, T, N = _plane()
     key = WarnLight(position=(0.5, -1.0, 6.0), direction=(0.0, 0.2, -1.0), concentration=3.0,
                     cone_angle_deg=32, cone_edge_deg=8, flaps={"x": [-2.5, 3.0], "y": [-4.0, None]})
+    soft = WarnLight(position=(-3.0, 2.0, 5.0), direction=(0.5, -0.2, -1.0), color=(0.5, 0.4, 0.1),
+                     flaps={"x": [-1.0, 1.0]}, flap_edge=0.6)
     blue = WarnLight(position=None, direction=(0.3, 0.2, -1.0), color=(0.1, 0.2, 0.6), flaps={"y": [-1.0, 2.0]})
-    setup = LightingSetup(lights=(key, blue), ambient=0.06,
+    setup = LightingSetup(lights=(key, blue, soft), ambient=0.06,
                           material=Material(color=(0.8, 0.7, 0.6), diffuse=0.8, specular=0.3, shininess=20))
     img = lighting.render_lit(P, T, setup, normals=N, size=SIZE, view="top")
     ref8, keep = _compare(img, setup, lambda W: np.broadcast_to([0.0, 0.0, 1.0], W.shape), levels=2)
