@@ -173,7 +173,8 @@ def topology_pairs(faces: list[FaceData]) -> tuple[list[Pair], list[Side], list[
             warnings.append(f"non-manifold edge shared by faces {sorted({fi for fi, _ in occ})}")
         for s in sides[1:]:
             seam = s.face == sides[0].face
-            pairs.append(Pair(sides[0], s, "topology", seam=seam, degenerate=degenerated,
+            first, second = (s, sides[0]) if sides[0].pcurve is None and s.pcurve is not None else (sides[0], s)
+            pairs.append(Pair(first, second, "topology", seam=seam, degenerate=degenerated,
                               note="degenerated edge (a collapsed side or a pole): nothing to measure"
                               if degenerated else None))
     return pairs, free, warnings

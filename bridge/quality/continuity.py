@@ -462,6 +462,9 @@ class _Engine:
         big = [(p.side2.pcurve.first, p.side2.pcurve.last) if p.side2.pcurve is not None else (0.0, 1.0) for p in pairs]
         self.lo2 = np.array([b[0] for b in big])
         self.hi2 = np.array([b[1] for b in big])
+        # side 2 without a p-curve: its (u, v) by projecting side 1's points onto its surface
+        self.on_surface = np.array([p.side2.pcurve is None and p.matched == "topology" for p in pairs], dtype=bool)
+        self._grids: dict[int, tuple[Array, Array]] = {}
 
     # -------------------------------------------------------------------------- batches
     def _surfaces(self, fid: NDArray[np.intp], uv: Array, order: int) -> Array:
@@ -488,6 +491,41 @@ class _Engine:
             s = np.clip(s + step, lo, hi)
         return s
 
+    def _grid(self, f: int) -> tuple[Array, Array]:
+        """A 17 x 17 grid of the face's UV box and its points: starting points of projections."""
+        if f not in self._grids:
+            from OCP.BRepTools import BRepTools
+
+            u0, u1, v0, v1 = BRepTools.UVBounds_s(self.faces[f].face)
+            uu, vv = np.meshgrid(np.linspace(u0, u1, 17), np.linspace(v0, v1, 17), indexing="ij")
+            uv = np.c_[uu.ravel(), vv.ravel()]
+            D = self._surfaces(np.full(uv.shape[0], f, dtype=np.intp), uv, 0)
+            self._grids[f] = (uv, D[:, 0, 0])
+        return self._grids[f]
+
+    def _project_surface(self, fid: NDArray[np.intp], X: Array) -> Array:
+        """``(u, v)`` of the feet of points ``X`` on faces ``fid``: nearest grid point, then
+        Gauss-Newton steps ``(J^T J) d = -J^T (S - X)`` within the face's UV box."""
+        uv = np.empty((X.shape[0], 2))
+        lo, hi = np.empty((X.shape[0], 2)), np.empty((X.shape[0], 2))
+        for f in np.unique(fid):
+            sel = fid == f
+            g_uv, g_P = self._grid(int(f))
+            d2 = ((X[sel][:, None, :] - g_P[None]) ** 2).sum(axis=2)
+            uv[sel] = g_uv[np.nanargmin(np.nan_to_num(d2, nan=np.inf), axis=1)]
+            lo[sel], hi[sel] = g_uv.min(axis=0), g_uv.max(axis=0)
+        for _ in range(PROJECTION_ITERATIONS[0] * 2):
+            D = self._surfaces(fid, uv, 1)
+            Su, Sv, f = D[:, 1, 0], D[:, 0, 1], D[:, 0, 0] - X
+            a, b, c = _dot(Su, Su), _dot(Su, Sv), _dot(Sv, Sv)
+            r1, r2 = _dot(Su, f), _dot(Sv, f)
+            det = a * c - b * b
+            ok = np.isfinite(det) & (det > 0)
+            det = np.where(ok, det, 1.0)
+            step = np.stack([np.where(ok, -(c * r1 - b * r2) / det, 0.0), np.where(ok, -(a * r2 - b * r1) / det, 0.0)], -1)
+            uv = np.clip(uv + step, lo, hi)
+        return uv
+
     # -------------------------------------------------------------------------- measures
     def measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool = False, s: Array | None = None,
                 gap: bool = False) -> dict[str, Array]:
@@ -502,6 +540,9 @@ class _Engine:
         if not given and geo.any():
             s[geo] = self._project(pid[geo], t[geo], D1[geo, 0, 0], PROJECTION_ITERATIONS[0 if set_flip else 1])
         uv2, duv2 = self.curves.evaluate(2 * pid + 1, s)
+        proj = self.on_surface[pid]
+        if proj.any():
+            uv2[proj] = self._project_surface(self.f2[pid[proj]], D1[proj, 0, 0])
         D2 = self._surfaces(self.f2[pid], uv2, self.order)
         P1, P2 = D1[:, 0, 0], D2[:, 0, 0]
         T = _unit(D1[:, 1, 0] * duv1[:, :1] + D1[:, 0, 1] * duv1[:, 1:])
@@ -678,8 +719,10 @@ def _why_not(engine: _Engine, p: Pair) -> str | None:
         fd = engine.faces[side.face]
         if fd.evaluator is None:
             return fd.error
-        if side.pcurve is None:
-            return f"the edge has no p-curve on face {side.face}"
+    if p.side1.pcurve is None:  # topology_pairs puts a lone p-curve on side 1
+        return f"the edge has no p-curve on face {p.side1.face} nor on face {p.side2.face}"
+    if p.side2.pcurve is None and p.matched == "geometry":
+        return f"the edge has no p-curve on face {p.side2.face}"
     return None
 
 

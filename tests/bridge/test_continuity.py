@@ -349,3 +349,26 @@ def test_batched_evaluation_matches_each_surface(monkeypatch) -> None:
             for i, j in ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2)):
                 scale = np.abs(ref[:, i, j]).max()
                 np.testing.assert_allclose(D[order][:, i, j], ref[:, i, j], rtol=0, atol=1e-12 * scale)
+
+
+def test_a_missing_pcurve_is_replaced_by_projection(monkeypatch) -> None:
+    """Without a p-curve on one face, that face's (u, v) come from projecting the other face's
+    points: the same measures as with both p-curves (the exact feet on these surfaces)."""
+    from occsurf.bridge.quality import _pairs
+
+    ref = {tuple(sorted(r.faces)): r for r in edge_continuity(cm.sewn("cylinder", 2.0))}
+    real = _pairs._pcurve
+
+    def no_pcurve_on_the_cylinder(edge, face):
+        from OCP.BRep import BRep_Tool
+
+        if type(BRep_Tool.Surface_s(face)).__name__ == "Geom_CylindricalSurface":
+            return None
+        return real(edge, face)
+
+    monkeypatch.setattr(_pairs, "_pcurve", no_pcurve_on_the_cylinder)
+    got = {tuple(sorted(r.faces)): r for r in edge_continuity(cm.sewn("cylinder", 2.0))}
+    r, s = got[(0, 1)], ref[(0, 1)]
+    assert r.error is None and r.matched == "topology"
+    assert r.g0_max <= 1e-12 and r.g1_max_deg <= 1e-6
+    assert r.g2_max == pytest.approx(s.g2_max, rel=1e-9) and r.classification == s.classification
