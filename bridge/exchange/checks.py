@@ -162,8 +162,12 @@ def _entity_type(text: bytes, at: int) -> str:
     return "complex instance" if text[at:at + 1] == b"(" else "?"
 
 
-def scan_step(p: Path, data: bytes) -> StepScan:
+def scan_step(p: Path, data: bytes, broken: dict[int, str] | None = None) -> StepScan:
     """Check the DATA section of a STEP file and prune dangling references (see the module docstring).
+
+    ``broken`` names instances to remove as well (id -> why), with the same propagation: those OCC's
+    parser could not read (:func:`occ_broken_ids`: a reference of the wrong type leaves a null field
+    that its transfer dereferences).
 
     Raises
     ------
@@ -215,9 +219,10 @@ def scan_step(p: Path, data: bytes) -> StepScan:
     found = (len(ids) > 0) & (sorted_ids[pos_c] == flat) if len(ids) else np.zeros(len(flat), bool)
     cols = order[pos_c[found]] if len(ids) else np.zeros(0, np.int64)
     _cycle_error(p, ids, rows[found], cols, types)
-    if not found.all():
-        scan.data, lines = _prune(data, masked, starts, semis, texts, rec_of, ids, types, refs_per,
-                                  set(flat[~found].tolist()))
+    broken = {i: why for i, why in (broken or {}).items() if i in counts}
+    if not found.all() or broken:
+        scan.data, lines = _prune(data, starts, semis, rec_of, ids, types, refs_per,
+                                  set(flat[~found].tolist()), broken)
         scan.warnings += lines
         kept = _kept_types(scan.data)
         scan.face_instances = sum(kept[t] for t in STEP_FACE_TYPES)
@@ -309,18 +314,23 @@ def _cut(text: bytes, spans: list[tuple[int, int]]) -> bytes:
     return bytes(out)
 
 
-def _prune(data: bytes, masked: bytes, starts: list[int], semis: list[int], texts: list[bytes], rec_of: list[int],
-           ids: np.ndarray, types: list[str], refs_per: list[list[int]], missing: set[int]) -> tuple[bytes, list[str]]:
-    """The file without its dangling references (see the module docstring) and a warning per removal."""
+def _prune(data: bytes, starts: list[int], semis: list[int], rec_of: list[int], ids: np.ndarray, types: list[str],
+           refs_per: list[list[int]], missing: set[int], broken: dict[int, str]) -> tuple[bytes, list[str]]:
+    """The file without its dangling references and ``broken`` instances (see the module docstring),
+    and a warning per removal."""
     users: dict[int, list[int]] = {}
     for j, refs in enumerate(refs_per):
         for r in set(refs):
             users.setdefault(r, []).append(j)
-    gone = set(missing)
-    todo = sorted({j for r in missing for j in users.get(r, ())})
+    gone = set(missing) | set(broken)
+    todo = sorted({j for r in gone for j in users.get(r, ())})
     new_text: dict[int, bytes | None] = {}
     dangling: list[str] = []
     dropped: list[str] = []
+    for j, ident in enumerate(ids.tolist()):
+        if ident in broken:
+            new_text[j] = None
+            dropped.append(f"#{ident} {types[j]}: removed, {broken[ident]}")
     while todo:
         nxt: set[int] = set()
         for j in todo:
@@ -358,7 +368,7 @@ def _prune(data: bytes, masked: bytes, starts: list[int], semis: list[int], text
             last = semis[k] + 1
     out += data[last:]
     head = [f"{len(missing)} referenced instances are not defined in the file (truncated or edited?): "
-            + ", ".join(f"#{r}" for r in sorted(missing)[:8]) + (" ..." if len(missing) > 8 else "")]
+            + ", ".join(f"#{r}" for r in sorted(missing)[:8]) + (" ..." if len(missing) > 8 else "")] if missing else []
     return bytes(out), head + _limited(dropped, "instances removed") + _limited(dangling, "references dropped")
 
 
@@ -452,6 +462,35 @@ def _step_id(model: Any, num: int, scan: StepScan | None) -> int | None:
     return None
 
 
+#: OCC check failures that leave a null field in the instance read (its transfer would dereference it).
+_NULL_FIELD_FAILS = ("illegal type", "Count of Parameters", "not an Entity", "Unresolved Reference",
+                     "reference to another entity is unresolved")
+
+
+def occ_broken_ids(reader: Any, scan: StepScan) -> dict[int, str]:
+    """Instances OCC's STEP parser read with a null field (a reference of the wrong type, a wrong number
+    of parameters): ``{id: why}``, to be removed (:func:`scan_step`) before OCC transfers anything."""
+    from OCP.Interface import Interface_CheckTool
+
+    model = reader.WS().Model()
+    out: dict[int, str] = {}
+    try:
+        it = Interface_CheckTool(model).CompleteCheckList()
+        it.Start()
+    except Exception:  # noqa: BLE001
+        return out
+    while it.More():
+        check, num = it.Value(), it.Number()
+        ident = _step_id(model, num, scan) if num > 0 else None
+        if ident is not None:
+            fails = [" ".join(str(check.CFail(i)).split()) for i in range(1, check.NbFails() + 1)]
+            bad = [f for f in fails if any(k in f for k in _NULL_FIELD_FAILS)]
+            if bad:
+                out[ident] = f"OCC cannot read it ({bad[0]})"
+        it.Next()
+    return out
+
+
 def occ_check_warnings(reader: Any, fmt: str, scan: StepScan | None = None) -> list[str]:
     """OCC's check messages on the model it read, one warning each (unresolved references excluded:
     :func:`scan_step` reports those)."""
@@ -484,8 +523,8 @@ def occ_check_warnings(reader: Any, fmt: str, scan: StepScan | None = None) -> l
             msgs += [check.CWarning(i) for i in range(1, check.NbWarnings() + 1)]
         for msg in msgs:
             text = " ".join(str(msg).split())
-            if "Unresolved Reference" in text or "reference to another entity is unresolved" in text:
-                continue
+            if fmt == "step" and ("Unresolved Reference" in text or "reference to another entity is unresolved" in text):
+                continue  # scan_step reported (and pruned) them
             lines.append(f"{label}: {text} (OCC)")
         it.Next()
     return _limited(lines, "OCC check messages")

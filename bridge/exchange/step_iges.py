@@ -340,6 +340,8 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
         # Checked BEFORE any transfer: TransferRoots after a failed read crashes the process.
         if status != IFSelect_ReturnStatus.IFSelect_RetDone:
             raise ExchangeError(f"{p}: not a readable {kind} file (OCC read status {status.name})")
+        if scan is not None:
+            reader, scan, warnings = _without_broken(p, data, reader, scan, warnings)
         warnings += checks.occ_check_warnings(reader, fmt, scan)
         if fmt == "step":
             reader.SetSystemLengthUnit(1.0)  # millimetres
@@ -352,6 +354,30 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
         warnings += root_warnings
         warnings += checks.model_warnings(shape, reader, scan, _count_bare_faces(shape))
     return p, shape, names, warnings
+
+
+def _without_broken(p: Path, data: bytes, reader: Any, scan: Any, warnings: list[str]) -> tuple[Any, Any, list[str]]:
+    """Parse again without the instances OCC read with a null field (a reference of the wrong type:
+    transferring them crashes the process), as long as it finds such instances (at most 3 rounds)."""
+    from OCP.IFSelect import IFSelect_ReturnStatus
+
+    from . import checks
+
+    broken: dict[int, str] = {}
+    for _ in range(3):
+        new = checks.occ_broken_ids(reader, scan)
+        if not new or new.keys() <= broken.keys():
+            break
+        broken.update(new)
+        scan = checks.scan_step(p, data, broken)
+        warnings = list(scan.warnings)
+        try:
+            reader, status = _parse(p, "step", scan.data)
+        except Exception as err:  # noqa: BLE001
+            raise ExchangeError(f"{p}: STEP parser failed: {one_line(err)}") from err
+        if status != IFSelect_ReturnStatus.IFSelect_RetDone:
+            raise ExchangeError(f"{p}: not a readable STEP file (OCC read status {status.name})")
+    return reader, scan, warnings
 
 
 def _parse(p: Path, fmt: str, data: bytes) -> tuple[Any, Any]:
