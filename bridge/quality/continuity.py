@@ -532,18 +532,24 @@ class _Engine:
         """All measures at the requests ``(pid[m], t[m])``: arrays of shape ``(m,)`` (points ``(m, 3)``),
         and the parameters used: ``'uv1'``, ``'uv2'`` ``(m, 2)``, ``'s'`` (side 2's edge parameter)."""
         self.evaluated += np.bincount(pid, minlength=len(self.pairs))
-        uv1, duv1 = self.curves.evaluate(2 * pid, t)
-        D1 = self._surfaces(self.f1[pid], uv1, self.order)
-        geo = self.geo[pid]
+        m = pid.shape[0]
+        geo, proj = self.geo[pid], self.on_surface[pid]
         given = s is not None  # side 2's parameters given (a benchmark giving OCC and us the same points)
         s = np.asarray(s, dtype=float) if given else t.copy()
-        if not given and geo.any():
-            s[geo] = self._project(pid[geo], t[geo], D1[geo, 0, 0], PROJECTION_ITERATIONS[0 if set_flip else 1])
-        uv2, duv2 = self.curves.evaluate(2 * pid + 1, s)
-        proj = self.on_surface[pid]
-        if proj.any():
-            uv2[proj] = self._project_surface(self.f2[pid[proj]], D1[proj, 0, 0])
-        D2 = self._surfaces(self.f2[pid], uv2, self.order)
+        if (given or not geo.any()) and not proj.any():
+            # side 2's (u, v) do not depend on side 1's points: both sides in one batch
+            uv, duv = self.curves.evaluate(np.r_[2 * pid, 2 * pid + 1], np.r_[t, s])
+            D = self._surfaces(np.r_[self.f1[pid], self.f2[pid]], uv, self.order)
+            uv1, uv2, duv1, duv2, D1, D2 = uv[:m], uv[m:], duv[:m], duv[m:], D[:m], D[m:]
+        else:
+            uv1, duv1 = self.curves.evaluate(2 * pid, t)
+            D1 = self._surfaces(self.f1[pid], uv1, self.order)
+            if not given and geo.any():
+                s[geo] = self._project(pid[geo], t[geo], D1[geo, 0, 0], PROJECTION_ITERATIONS[0 if set_flip else 1])
+            uv2, duv2 = self.curves.evaluate(2 * pid + 1, s)
+            if proj.any():
+                uv2[proj] = self._project_surface(self.f2[pid[proj]], D1[proj, 0, 0])
+            D2 = self._surfaces(self.f2[pid], uv2, self.order)
         P1, P2 = D1[:, 0, 0], D2[:, 0, 0]
         T = _unit(D1[:, 1, 0] * duv1[:, :1] + D1[:, 0, 1] * duv1[:, 1:])
         n1 = _unit(_cross(D1[:, 1, 0], D1[:, 0, 1]))
