@@ -166,6 +166,12 @@ _DEFAULTS: dict[str, float] = {
     # Before any overlay, the base's spans are multiplied by 1.5 while the regions to refine cover
     # more than this fraction of its domain (error everywhere: uniform refinement is cheaper).
     "FIT_ADAPTIVE_MAX_COVER": 0.5,
+    # Overlay displacements are minimum-norm least squares with singular values below
+    # FIT_OVERLAY_RCOND times the largest dropped: an overlay vertex whose B-spline reaches the
+    # data only with its tail (at the support's edge) is left at zero; inverting its tiny singular
+    # value made the surface swing far between the samples (1e4 x the data size measured on a
+    # thread face of build123d's screw, with machine-precision cut-off).
+    "FIT_OVERLAY_RCOND": 1e-3,
     # ---- manipulation (course ch. 3, 4) --------------------------------------------------------
     # A pivot |R[k, k]| of the equilibrated constraint matrix below RANK_RTOL * |R[0, 0]| counts as
     # zero: rows beyond it are taken as combinations of the earlier ones.

@@ -20,6 +20,7 @@ DEMOS: dict[str, str] = {
     "generation": "occsurf.examples.generation:render_generation_demo",  # course §6-26..6-33
     "curvenet": "occsurf.examples.curvenet:render_curvenet_demo",  # course §6-20..6-25
     "hierarchical": "occsurf.examples.hierarchical:render_hierarchical_demo",  # course ch. 5
+    "fitting": "occsurf.examples.fitting:render_fitting_demo",  # course §7-10
     "fill": "occsurf.examples.fill:render_fill_demo",  # course §8-3
     "generalized": "occsurf.examples.generalized:render_generalized_demo",  # course §8-6, 8-7
     "lighting": "occsurf.examples.lighting:render_lighting_demo",  # course ch. 10

@@ -17,8 +17,10 @@ Per level
    data rows in a direction are not refined further (the data could not determine finer poles).
 2. Each rectangle becomes an overlay (midpoint knot insertion). Its world displacements ``δ``
    are the least-squares fit of the current residual ``Q - S`` over the data in the overlay's
-   support, with the overlay's own B-splines: ``δ = A^+ R B^{+T}`` (course §7-4 on the sub-grid,
-   minimum-norm where data are sparse), then stored as frame offsets. Overlays of one level are
+   support, with the overlay's own B-splines: ``δ = A^+ R B^{+T}`` (course §7-4 on the sub-grid;
+   singular values below :data:`~occsurf.algorithms.tolerances.FIT_OVERLAY_RCOND` times the
+   largest are dropped, so a vertex that touches the data only with the tail of its B-spline
+   stays put instead of swinging between the samples), then stored as frame offsets. Overlays of one level are
    fitted one after the other, each against the residual its predecessors left.
 3. The error is measured again: the distance from each data point to the (flattened) surface by
    point projection (:func:`~._common.project_points`), which never exceeds the residual at the
@@ -49,6 +51,7 @@ from ..errors import InvalidGeometryError, ParameterError
 from ..hierarchical.core import Overlay
 from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.basis import basis_matrix
+from ..kernel.surface import BSplineSurface
 from ._common import project_points
 from .gridded import GridFit, _grid_data, _pair_of, _params, fit_grid
 
@@ -97,6 +100,10 @@ class AdaptiveFit:
     u_params, v_params : ndarray
     converged : bool
         ``max_error <= tol``.
+    level_surfaces : tuple of BSplineSurface
+        Per level L, the flat surface of the hierarchy truncated below L (finer offsets zeroed).
+    level_distances : tuple of ndarray, each (m, n)
+        Their measured distances to the data (the per-level error picture).
     """
 
     hierarchy: HierarchicalSurface
@@ -106,6 +113,8 @@ class AdaptiveFit:
     v_params: Array
     tol: float
     converged: bool
+    level_surfaces: tuple = ()
+    level_distances: tuple = ()
 
     @property
     def max_error(self) -> float:
@@ -252,12 +261,14 @@ class _Fitter:
         delta = np.zeros((A.shape[1], B.shape[1], 3))
         missing = np.isnan(R).any(axis=-1)
         if not missing.any():
-            Ap, Bp = sla.pinv(A, check_finite=False), sla.pinv(B, check_finite=False)
+            rc = float(tolerances.FIT_OVERLAY_RCOND)
+            Ap, Bp = sla.pinv(A, rtol=rc, check_finite=False), sla.pinv(B, rtol=rc, check_finite=False)
             for c in comps:
                 delta[..., c] = Ap @ R[..., c] @ Bp.T
         else:  # missing cells: Kronecker rows of the valid ones, minimum-norm least squares
             K = np.einsum("ia,jb->ijab", A, B)[~missing].reshape(-1, A.shape[1] * B.shape[1])
-            sol = sla.lstsq(K, R[~missing][:, comps], lapack_driver="gelsd", check_finite=False)[0]
+            sol = sla.lstsq(K, R[~missing][:, comps], cond=float(tolerances.FIT_OVERLAY_RCOND), lapack_driver="gelsd",
+                            check_finite=False)[0]
             delta[..., comps] = sol.reshape(A.shape[1], B.shape[1], len(comps))
         self.delta[ov.id] = delta
         self._apply(ov)
@@ -277,48 +288,72 @@ class _Fitter:
         return self.residual()
 
 
-def _level_reports(hs: HierarchicalSurface, P3: Array, u: Array, v: Array) -> list[LevelReport]:
-    """Per level L, the surface truncated below L (finer offsets zeroed) measured against the data."""
-    out = []
+def _level_reports(hs: HierarchicalSurface, P3: Array, u: Array, v: Array
+                   ) -> tuple[list[LevelReport], list[BSplineSurface], list[Array]]:
+    """Per level L, the surface truncated below L (finer offsets zeroed) measured against the data:
+    the reports, the truncated flat surfaces and their distance arrays."""
+    out, surfs, dists = [], [], []
     depth = hs.depth
     for L in range(depth + 1):
         h = hs.copy()
         for ov in sorted(h.overlays, key=lambda o: -o.level):
             if ov.level > L:
                 h.set_offsets(ov, np.zeros(ov.shape + (3,)))
-        dist = measure_grid(h.flatten(), P3, u, v)
+        flat = h.flatten()
+        dist = measure_grid(flat, P3, u, v)
         ovs = [o for o in hs.overlays if o.level == L]
         cps = int(np.prod(hs.base.n_poles)) if L == 0 else sum(int(np.prod(o.shape)) for o in ovs)
         out.append(LevelReport(L, len(ovs), cps, *_stats(dist)))
-    return out
+        surfs.append(flat)
+        dists.append(dist)
+    return out, surfs, dists
 
 
 def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, int], tol: float, opts: dict,
                progress) -> tuple[GridFit, Array, Array]:
-    """The base fit, with its spans multiplied by 1.5 while the places to refine cover more than
-    :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MAX_COVER` of it: when the error is
-    everywhere, uniform refinement is the cheaper hierarchy (no overlay overhead)."""
+    """The base fit, its spans multiplied by 1.5 while the places to refine cover more than
+    :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MAX_COVER` of it (when the error is
+    everywhere, uniform refinement is the cheaper hierarchy: no overlay overhead).
+
+    Each step grows u, v or both, whichever lowers the error most per added pole (the largest
+    ``-log(e_new / e) / log(n_new / n)``; both when none gains 0.1): data that vary along one
+    direction only (a ruled or extruded face) do not pay for poles along the other.
+    """
     m, n = Q.shape[:2]
     data = Q[..., 0] if heights else Q
+
+    def attempt(poles_):
+        base_ = fit_grid(data, poles_, deg, **opts)
+        u_, v_ = base_.u_params, base_.v_params
+        P3_ = np.stack(np.broadcast_arrays(u_[:, None], v_[None, :], Q[..., 0]), -1) if heights else Q
+        dist_ = measure_grid(base_.surface, P3_, u_, v_)
+        return base_, P3_, dist_, float(np.nanmax(dist_))
+
+    cur = attempt(poles)
     while True:
-        base = fit_grid(data, poles, deg, **opts)
-        u, v = base.u_params, base.v_params
-        P3 = np.stack(np.broadcast_arrays(u[:, None], v[None, :], Q[..., 0]), -1) if heights else Q
-        dist = measure_grid(base.surface, P3, u, v)
-        worst = float(np.nanmax(dist))
+        base, P3, dist, worst = cur
         if progress is not None:
             progress(f"base {poles[0]}x{poles[1]}: max error {worst:.3g}")
         if worst <= tol:
             return base, P3, dist
         flagged = dist > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
         hs = HierarchicalSurface(base.surface, "frame")
-        boxes = _regions(hs, None, flagged, u, v)
+        boxes = _regions(hs, None, flagged, base.u_params, base.v_params)
         (u0, u1), (v0, v1) = hs.domain
         cover = sum((b - a) * (d - c) for (a, b), (c, d) in boxes) / ((u1 - u0) * (v1 - v0))
-        nxt = tuple(min(p + int(np.ceil(1.5 * (k - p))), cnt) for k, p, cnt in zip(poles, deg, (m, n)))
-        if cover <= float(tolerances.FIT_ADAPTIVE_MAX_COVER) or nxt == poles:
+        grown = [min(p + int(np.ceil(1.5 * (k - p))), cnt) for k, p, cnt in zip(poles, deg, (m, n))]
+        options = {tuple(grown), (grown[0], poles[1]), (poles[0], grown[1])} - {tuple(poles)}
+        if cover <= float(tolerances.FIT_ADAPTIVE_MAX_COVER) or not options:
             return base, P3, dist
-        poles = nxt
+        best, score, tried = None, np.inf, {}
+        for cand in sorted(options):
+            trial = tried[cand] = attempt(cand)
+            gain = np.log(max(trial[3], 1e-300) / worst) / np.log(np.prod(cand) / np.prod(poles))
+            if gain < score:
+                best, score = (cand, trial), gain
+        if score > -0.1 and tuple(grown) in tried:  # no direction helps on its own yet: grow both
+            best = (tuple(grown), tried[tuple(grown)])
+        poles, cur = best
 
 
 def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3, *,
@@ -416,5 +451,5 @@ def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3,
         if progress is not None:
             progress(f"round {rnd}: {len(new)} overlays added (depth {hs.depth}), "
                      f"{hs.pole_counts()['stored']} control points, max error {np.nanmax(dist):.3g}")
-    reports = _level_reports(hs, P3, u, v)
-    return AdaptiveFit(hs, tuple(reports), dist, u, v, tol, reports[-1].max_error <= tol)
+    reports, surfs, dists = _level_reports(hs, P3, u, v)
+    return AdaptiveFit(hs, tuple(reports), dists[-1], u, v, tol, reports[-1].max_error <= tol, tuple(surfs), tuple(dists))

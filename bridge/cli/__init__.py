@@ -4,8 +4,10 @@
 
     occsurf inspect [FILE|DIR ...] [--json] [--samples N] [--timeout SECONDS] [--in-process]
     occsurf fill IN --out OUT.step [--all-loops] [--no-occ] [--json] [--in-process]
+    occsurf fit DATA --tol T --out OUT.step [--json] [--ctrl NU NV] [--degree D] [--smooth S] [--fix-boundary]
     occsurf render FILE (--lights LIGHTS.json | --preset NAME) --out IMAGE.png [--size W H] [--view NAME]
     occsurf demo [--out DIR] [--only NAME ...]
+    occsurf check FILE [--out DIR] [--json] [--faces N ...] [--fail-on PRESET] [--timeout S] [--in-process]
     occsurf audit PATH... --out RESULTS [--scheduler ADDRESS] [--workers N] [--timeout S] [--resume] [--checks LIST]
 
 One module per command, each holding its parser and a thin handler that calls the library:
@@ -14,9 +16,11 @@ One module per command, each holding its parser and a thin handler that calls th
 :mod:`.inspect`  faces of STEP/IGES files, our evaluation against OCC's
                  (:func:`occsurf.bridge.validation.inspect.inspect_model`)
 :mod:`.fill`     fill the holes of a model (:func:`occsurf.bridge.modeling.fill.fill_model`)
+:mod:`.fit`      fit data to a surface within a tolerance (:func:`occsurf.bridge.modeling.fit.fit_input`)
 :mod:`.render`   a model under Warn's lights to a PNG (:func:`occsurf.bridge.rendering.lighting.render_lit`)
 :mod:`.demo`     the picture gallery (:func:`occsurf.examples.gallery.run_demos`)
 :mod:`.audit`    corpora on Dask, Parquet results (:func:`occsurf.bridge.audit.audit`)
+:mod:`.check`    surface-quality report, page and JSON (:func:`occsurf.bridge.quality.report.check_model`)
 :mod:`._common`  exit codes, file arguments, reading a model, tables, one-line errors
 ===============  ==================================================================================
 
@@ -37,7 +41,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from . import audit, demo, fill, inspect, render
+from . import audit, check, demo, fill, fit, inspect, render
 from ._common import EXIT_ERROR, guarded
 
 __all__ = ["main", "build_parser"]
@@ -53,8 +57,10 @@ def build_parser() -> argparse.ArgumentParser:
     inspect.add_parser(sub)
     demo.add_parser(sub)
     fill.add_parser(sub)
+    fit.add_parser(sub)
     render.add_parser(sub)
     audit.add_parser(sub)
+    check.add_parser(sub)
     inspect.add_worker_parser(sub)  # internal, no help= so it stays out of the listing
     return parser
 

@@ -62,7 +62,8 @@ def sidecar_path(step_path: str | os.PathLike[str]) -> Path:
 
 
 def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: HierarchicalSurface | HierarchicalCurve,
-                            name: str | None = None, *, replace_readonly: bool = False) -> tuple[Path, Path]:
+                            name: str | None = None, *, replace_readonly: bool = False,
+                            sidecar: str | os.PathLike[str] | None = None) -> tuple[Path, Path]:
     """Write the flat form to STEP and the hierarchy to a JSON sidecar, both atomically.
 
     Parameters
@@ -75,6 +76,9 @@ def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: Hierarchica
         Product/face name in the STEP file.
     replace_readonly : bool
         Replace a read-only STEP file or sidecar (refused by default).
+    sidecar : str or path-like, optional
+        Where the sidecar goes instead of :func:`sidecar_path` (``occsurf fit`` writes ``OUT.json``);
+        :func:`read_hierarchical_step` then needs the same ``sidecar=``.
 
     Returns
     -------
@@ -93,7 +97,7 @@ def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: Hierarchica
         raise InvalidGeometryError(f"hierarchy: expected a HierarchicalSurface or HierarchicalCurve, got "
                                    f"{type(hierarchy).__name__}")
     step = _files.target(path, replace_readonly=replace_readonly)
-    side = sidecar_path(step)
+    side = sidecar_path(step) if sidecar is None else Path(os.fspath(sidecar))
     if side.is_dir():
         raise ExchangeError(f"{side}: is a directory; cannot write the hierarchy sidecar there")
     _files.check_target(side, replace_readonly=replace_readonly)
@@ -149,8 +153,10 @@ def _samples(obj: Any, params: tuple[np.ndarray, ...]) -> np.ndarray:
     return obj.evaluate(params[0])
 
 
-def read_hierarchical_step(path: str | os.PathLike[str]) -> HierarchicalSurface | HierarchicalCurve:
-    """Restore the editable hierarchy written by :func:`write_hierarchical_step`.
+def read_hierarchical_step(path: str | os.PathLike[str], *, sidecar: str | os.PathLike[str] | None = None
+                           ) -> HierarchicalSurface | HierarchicalCurve:
+    """Restore the editable hierarchy written by :func:`write_hierarchical_step` (``sidecar``: its
+    path when it was written elsewhere than :func:`sidecar_path`).
 
     The sidecar must name this STEP file, and the file must be the one written with it (its SHA-256
     is stored) or, if it was saved again, its first face (or free edge, for a curve) must equal the
@@ -165,7 +171,7 @@ def read_hierarchical_step(path: str | os.PathLike[str]) -> HierarchicalSurface 
         writing). Messages name the path.
     """
     p = Path(os.fspath(path))
-    side = sidecar_path(p)
+    side = sidecar_path(p) if sidecar is None else Path(os.fspath(sidecar))
     with _files.file_lock(_lock_path(side), shared=True):
         return _read_pair(p, side)
 
