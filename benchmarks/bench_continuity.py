@@ -52,7 +52,7 @@ def _engine(model, samples: int):
     surfaces = SurfaceBatch([f.evaluator for f in faces])
     pairs, free, _ = topology_pairs(faces)
     pairs += match_free_edges(faces, free, tolerances.CONTINUITY_MATCH_RTOL * size, size / 200.0, surfaces)
-    engine = C._Engine(faces, pairs, False, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
+    engine = C.Engine(faces, pairs, False, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
     good = np.array([i for i, p in enumerate(pairs) if C._why_not(engine, p) is None], dtype=np.intp)
     s01 = C._chebyshev(samples)
     first = np.array([pairs[i].first for i in good])

@@ -78,7 +78,8 @@ from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError
 
 from ..messages import one_line
-from ._batch import CurveBatch, SurfaceBatch
+from ._batch import SurfaceBatch
+from ._engine import Engine, occ_fold, occ_gap
 from ._pairs import FaceData, Pair, collect_faces, match_free_edges, topology_pairs
 
 Array = NDArray[np.float64]
@@ -101,11 +102,6 @@ __all__ = [
 # golden-section steps per measure), ``CONTINUITY_MATCH_RTOL`` (``match_tol`` = 1e-4 of the model's
 # bounding-box diagonal) and ``CONTINUITY_CURVATURE_FLOOR`` (curvatures below 1e-6 / model size
 # count as zero for ``g2_rel``).
-#: Gauss-Newton steps when projecting onto the other edge of a geometrically matched pair: from
-#: the matching table (9 points per edge) for the dense samples, then from the dense samples'
-#: table for the worst-point search (Gauss-Newton converges quadratically for the zero or tiny
-#: residuals of matched edges).
-PROJECTION_ITERATIONS: tuple[int, int] = (4, 2)
 #: Every classification label, in decreasing order of severity.
 CLASSES: tuple[str, ...] = ("degenerate", "gap", "sharp", "G0", "G1", "G2", "seam")
 
@@ -338,258 +334,6 @@ class ContinuityResult(list):
         return [r.to_json() for r in self]
 
 
-# ======================================================================================= measures
-def _normalize(a: Array) -> tuple[Array, Array]:
-    n = np.linalg.norm(a, axis=-1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return a / n[..., None], n
-
-
-def _dot(a: Array, b: Array) -> Array:
-    return np.einsum("...i,...i->...", a, b)
-
-
-def _section(D: Array, n: Array, T: Array, third: bool) -> tuple[Array, Array]:
-    """Cross curvature ``h''(0)`` and its derivative ``h'''(0)`` of the normal section across ``T``.
-
-    ``D (m, r+1, r+1, 3)`` partials, ``n`` oriented unit normals, ``T`` unit edge tangents.
-    """
-    b = _unit(_cross(n, T))
-    Tk = _cross(b, n)
-    Su, Sv = D[:, 1, 0], D[:, 0, 1]
-    j11, j12, j21, j22 = _dot(Tk, Su), _dot(Tk, Sv), _dot(b, Su), _dot(b, Sv)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        inv_det = 1.0 / (j11 * j22 - j12 * j21)
-    x1, y1 = (-j12 * inv_det)[:, None], (j11 * inv_det)[:, None]  # w1 = J^{-1} (0, 1)
-    Suu, Suv, Svv = D[:, 2, 0], D[:, 1, 1], D[:, 0, 2]
-    Q2 = Suu * (x1 * x1) + Suv * (2.0 * x1 * y1) + Svv * (y1 * y1)
-    k = _dot(n, Q2)
-    if not third:
-        return k, np.full_like(k, np.nan)
-    r1, r2 = _dot(Tk, Q2), _dot(b, Q2)  # w2 = -J^{-1} (r1, r2)
-    x2 = (-(j22 * r1 - j12 * r2) * inv_det)[:, None]
-    y2 = (-(-j21 * r1 + j11 * r2) * inv_det)[:, None]
-    B = Suu * (x1 * x2) + Suv * (x1 * y2 + y1 * x2) + Svv * (y1 * y2)
-    D3 = D[:, 3, 0] * x1**3 + 3 * D[:, 2, 1] * x1**2 * y1 + 3 * D[:, 1, 2] * x1 * y1**2 + D[:, 0, 3] * y1**3
-    return k, _dot(n, 3.0 * B + D3)
-
-
-def _principal(D: Array) -> tuple[Array, Array, Array]:
-    """Principal curvatures ``kmax >= kmin`` (against ``S_u x S_v``, as ``GeomLProp``) and the
-    component-wise mean of their directions' absolute values, ``(|dmin| + |dmax|) / 2``, normalised.
-
-    The shape operator in the orthonormal tangent frame ``e1 = S_u / |S_u|``, ``e2 = n x e1`` is
-    ``[[a, b], [b, c]]``; its eigenvectors are at the angle ``theta = atan2(2 b, a - c) / 2``.
-    """
-    Su, Sv = D[:, 1, 0], D[:, 0, 1]
-    n = _unit(_cross(Su, Sv))
-    e1 = _unit(Su)
-    e2 = _cross(n, e1)
-    L, M, N = _dot(D[:, 2, 0], n), _dot(D[:, 1, 1], n), _dot(D[:, 0, 2], n)
-    a11 = np.sqrt(_dot(Su, Su))
-    a12, a22 = _dot(Sv, e1), _dot(Sv, e2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        i11, i12, i22 = 1.0 / a11, -a12 / (a11 * a22), 1.0 / a22
-        a = L * i11 * i11
-        b = i11 * (L * i12 + M * i22)
-        c = i12 * (L * i12 + 2.0 * M * i22) + N * i22 * i22
-    half, rad = 0.5 * (a + c), np.hypot(0.5 * (a - c), b)
-    theta = 0.5 * np.arctan2(2.0 * b, a - c)
-    ct, st = np.abs(np.cos(theta))[:, None], np.abs(np.sin(theta))[:, None]
-    # |d1| + |d2| component-wise, d1 = cos e1 + sin e2, d2 = n x d1 = -sin e1 + cos e2
-    d1 = ct * e1 * np.sign(np.cos(theta))[:, None] + st * e2 * np.sign(np.sin(theta))[:, None]
-    d2 = _cross(n, d1)
-    return half + rad, half - rad, _unit(np.abs(d1) + np.abs(d2))
-
-
-def _cross(a: Array, b: Array) -> Array:
-    out = np.empty_like(a)
-    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return out
-
-
-def _unit(a: Array) -> Array:
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return a / np.sqrt(_dot(a, a))[:, None]
-
-
-def occ_gap(D1: Array, D2: Array) -> Array:
-    """OCC's ``LocalAnalysis_SurfaceContinuity::G2CurvatureGap`` from our partials (OCCT 7.9 formula).
-
-    With principal curvatures ``kmax, kmin`` (signs against ``S_u x S_v``, as ``GeomLProp``),
-    ``eta = (kmin + kmax) / 2``, ``zeta = (kmax - kmin) / 2`` and ``alpha`` the angle between the
-    directions ``(|dmin| + |dmax|) / 2`` (component-wise) of the two sides::
-
-        gap = |eta_1 - eta_2| / 2 + sqrt(((zeta_1 - zeta_2) / 2)^2 cos^2 alpha + zeta^2 sin^2 alpha)
-
-    with ``zeta = (zeta_1 + zeta_2) / 2``. At an umbilic the directions, and so ``alpha``, are
-    arbitrary (OCC's and ours may differ there).
-    """
-    a1, b1, mcd1 = _principal(D1)
-    a2, b2, mcd2 = _principal(D2)
-    c = _cross(mcd1, mcd2)
-    alpha = np.arctan2(np.sqrt(_dot(c, c)), _dot(mcd1, mcd2))
-    eta1, eta2 = (a1 + b1) / 2, (a2 + b2) / 2
-    zeta1, zeta2 = (a1 - b1) / 2, (a2 - b2) / 2
-    zeta = (zeta1 + zeta2) / 2
-    return np.abs(eta1 - eta2) / 2 + np.sqrt(((zeta1 - zeta2) / 2) ** 2 * np.cos(alpha) ** 2
-                                             + zeta**2 * np.sin(alpha) ** 2)
-
-
-def occ_fold(angle_deg: Array | float) -> Array:
-    """Our G1 angle as OCC's ``G1Angle`` reports it: folded into [0, 90] degrees."""
-    a = np.asarray(angle_deg, dtype=float)
-    return np.where(a > 90.0, 180.0 - a, a)
-
-
-# ======================================================================================= engine
-class _Engine:
-    """Evaluates the measures at ``(pair, t)`` requests, all pairs and faces at once (:mod:`._batch`)."""
-
-    def __init__(self, faces: list[FaceData], pairs: list[Pair], third: bool, floor: float, surfaces: SurfaceBatch) -> None:
-
-        self.faces, self.pairs, self.third, self.floor = faces, pairs, third, floor
-        self.order = 3 if third else 2
-        self.flip = np.ones(len(pairs))
-        self.face_errors: dict[int, str] = {}
-        self.evaluated = np.zeros(len(pairs), dtype=int)
-        self.surfaces = surfaces
-        # p-curve 2 k is side 1 of pair k, 2 k + 1 its side 2
-        self.curves = CurveBatch([c for p in pairs for c in (p.side1.pcurve, p.side2.pcurve)])
-        self.f1 = np.array([p.side1.face for p in pairs], dtype=np.intp)
-        self.f2 = np.array([p.side2.face for p in pairs], dtype=np.intp)
-        self.sense1 = np.array([p.side1.sense for p in pairs], dtype=float)
-        self.sense2 = np.array([p.side2.sense for p in pairs], dtype=float)
-        self.geo = np.array([p.matched == "geometry" for p in pairs], dtype=bool)
-        self.seam = np.array([p.seam for p in pairs], dtype=bool)
-        orient = np.array([-1.0 if f.reversed else 1.0 for f in faces])
-        self.o1 = orient[self.f1] if pairs else np.zeros(0)
-        self.o2 = orient[self.f2] if pairs else np.zeros(0)
-        big = [(p.side2.pcurve.first, p.side2.pcurve.last) if p.side2.pcurve is not None else (0.0, 1.0) for p in pairs]
-        self.lo2 = np.array([b[0] for b in big])
-        self.hi2 = np.array([b[1] for b in big])
-        # side 2 without a p-curve: its (u, v) by projecting side 1's points onto its surface
-        self.on_surface = np.array([p.side2.pcurve is None and p.matched == "topology" for p in pairs], dtype=bool)
-        self._grids: dict[int, tuple[Array, Array]] = {}
-
-    # -------------------------------------------------------------------------- batches
-    def _surfaces(self, fid: NDArray[np.intp], uv: Array, order: int) -> Array:
-        D, errors = self.surfaces.derivatives(fid, uv[:, 0], uv[:, 1], order)
-        for f, err in errors.items():
-            self.face_errors.setdefault(f, f"face {f} could not be evaluated: {one_line(err)}")
-        return D
-
-    def _project(self, pid: NDArray[np.intp], t: Array, X: Array, iterations: int) -> Array:
-        """Side-2 parameters of geometry pairs: Gauss-Newton onto the other edge, all pairs at once."""
-        s = np.empty_like(t)
-        for p in np.unique(pid):
-            sel = pid == p
-            pr = self.pairs[p]
-            s[sel] = np.interp(t[sel], pr.t_table, pr.s_table)
-        fid, lo, hi, cid = self.f2[pid], self.lo2[pid], self.hi2[pid], 2 * pid + 1
-        for _ in range(iterations):
-            uv, duv = self.curves.evaluate(cid, s)
-            D = self._surfaces(fid, uv, 1)
-            dC = D[:, 1, 0] * duv[:, :1] + D[:, 0, 1] * duv[:, 1:]
-            den = _dot(dC, dC)
-            ok = np.isfinite(den) & (den > 0)
-            step = np.where(ok, -_dot(dC, D[:, 0, 0] - X) / np.where(ok, den, 1.0), 0.0)
-            s = np.clip(s + step, lo, hi)
-        return s
-
-    def _grid(self, f: int) -> tuple[Array, Array]:
-        """A 17 x 17 grid of the face's UV box and its points: starting points of projections."""
-        if f not in self._grids:
-            from OCP.BRepTools import BRepTools
-
-            u0, u1, v0, v1 = BRepTools.UVBounds_s(self.faces[f].face)
-            uu, vv = np.meshgrid(np.linspace(u0, u1, 17), np.linspace(v0, v1, 17), indexing="ij")
-            uv = np.c_[uu.ravel(), vv.ravel()]
-            D = self._surfaces(np.full(uv.shape[0], f, dtype=np.intp), uv, 0)
-            self._grids[f] = (uv, D[:, 0, 0])
-        return self._grids[f]
-
-    def _project_surface(self, fid: NDArray[np.intp], X: Array) -> Array:
-        """``(u, v)`` of the feet of points ``X`` on faces ``fid``: nearest grid point, then
-        Gauss-Newton steps ``(J^T J) d = -J^T (S - X)`` within the face's UV box."""
-        uv = np.empty((X.shape[0], 2))
-        lo, hi = np.empty((X.shape[0], 2)), np.empty((X.shape[0], 2))
-        for f in np.unique(fid):
-            sel = fid == f
-            g_uv, g_P = self._grid(int(f))
-            d2 = ((X[sel][:, None, :] - g_P[None]) ** 2).sum(axis=2)
-            uv[sel] = g_uv[np.nanargmin(np.nan_to_num(d2, nan=np.inf), axis=1)]
-            lo[sel], hi[sel] = g_uv.min(axis=0), g_uv.max(axis=0)
-        for _ in range(PROJECTION_ITERATIONS[0] * 2):
-            D = self._surfaces(fid, uv, 1)
-            Su, Sv, f = D[:, 1, 0], D[:, 0, 1], D[:, 0, 0] - X
-            a, b, c = _dot(Su, Su), _dot(Su, Sv), _dot(Sv, Sv)
-            r1, r2 = _dot(Su, f), _dot(Sv, f)
-            det = a * c - b * b
-            ok = np.isfinite(det) & (det > 0)
-            det = np.where(ok, det, 1.0)
-            step = np.stack([np.where(ok, -(c * r1 - b * r2) / det, 0.0), np.where(ok, -(a * r2 - b * r1) / det, 0.0)], -1)
-            uv = np.clip(uv + step, lo, hi)
-        return uv
-
-    # -------------------------------------------------------------------------- measures
-    def measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool = False, s: Array | None = None,
-                gap: bool = False) -> dict[str, Array]:
-        """All measures at the requests ``(pid[m], t[m])``: arrays of shape ``(m,)`` (points ``(m, 3)``),
-        and the parameters used: ``'uv1'``, ``'uv2'`` ``(m, 2)``, ``'s'`` (side 2's edge parameter)."""
-        self.evaluated += np.bincount(pid, minlength=len(self.pairs))
-        m = pid.shape[0]
-        geo, proj = self.geo[pid], self.on_surface[pid]
-        given = s is not None  # side 2's parameters given (a benchmark giving OCC and us the same points)
-        s = np.asarray(s, dtype=float) if given else t.copy()
-        if (given or not geo.any()) and not proj.any():
-            # side 2's (u, v) do not depend on side 1's points: both sides in one batch
-            uv, duv = self.curves.evaluate(np.r_[2 * pid, 2 * pid + 1], np.r_[t, s])
-            D = self._surfaces(np.r_[self.f1[pid], self.f2[pid]], uv, self.order)
-            uv1, uv2, duv1, duv2, D1, D2 = uv[:m], uv[m:], duv[:m], duv[m:], D[:m], D[m:]
-        else:
-            uv1, duv1 = self.curves.evaluate(2 * pid, t)
-            D1 = self._surfaces(self.f1[pid], uv1, self.order)
-            if not given and geo.any():
-                s[geo] = self._project(pid[geo], t[geo], D1[geo, 0, 0], PROJECTION_ITERATIONS[0 if set_flip else 1])
-            uv2, duv2 = self.curves.evaluate(2 * pid + 1, s)
-            if proj.any():
-                uv2[proj] = self._project_surface(self.f2[pid[proj]], D1[proj, 0, 0])
-            D2 = self._surfaces(self.f2[pid], uv2, self.order)
-        P1, P2 = D1[:, 0, 0], D2[:, 0, 0]
-        T = _unit(D1[:, 1, 0] * duv1[:, :1] + D1[:, 0, 1] * duv1[:, 1:])
-        n1 = _unit(_cross(D1[:, 1, 0], D1[:, 0, 1]))
-        n2 = _unit(_cross(D2[:, 1, 0], D2[:, 0, 1]))
-        if set_flip:
-            T2 = D2[:, 1, 0] * duv2[:, :1] + D2[:, 0, 1] * duv2[:, 1:]
-            self._set_flip(pid, self.sense1[pid] * _dot(T, T2) * self.sense2[pid])
-        n1 = n1 * self.o1[pid, None]
-        n2 = n2 * (self.o2[pid] * self.flip[pid])[:, None]
-        c12 = _cross(n1, n2)
-        g1 = np.degrees(np.arctan2(np.sqrt(_dot(c12, c12)), _dot(n1, n2)))
-        k1, dk1 = _section(D1, n1, T, self.third)
-        k2, dk2 = _section(D2, n2, T, self.third)
-        g2 = np.abs(k1 - k2)
-        big = np.maximum(np.abs(k1), np.abs(k2))
-        with np.errstate(invalid="ignore", divide="ignore"):
-            rel = np.where(big > self.floor, 100.0 * g2 / np.where(big > 0, big, 1.0), np.where(np.isnan(big), np.nan, 0.0))
-        d12 = P1 - P2
-        return {"g0": np.sqrt(_dot(d12, d12)), "g1": g1, "g2": g2, "g2_rel": rel,
-                "g3": np.abs(dk1 - dk2), "gap": occ_gap(D1, D2) if gap else np.full_like(g2, np.nan), "P": P1, "uv1": uv1, "uv2": uv2, "s": s}
-
-    def _set_flip(self, pid: NDArray[np.intp], along: Array) -> None:
-        """Orientation agreement per pair: a shell's faces run along a shared edge in opposite senses.
-        Topology pairs: the senses of the edge in the two faces; geometry pairs: the tangents."""
-        topo = ~self.geo
-        self.flip = np.where(topo & ~self.seam & (self.sense1 == self.sense2), -1.0, 1.0)
-        for p in np.unique(pid[self.geo[pid]]):
-            d = along[pid == p]
-            d = d[np.isfinite(d)]
-            self.flip[p] = -1.0 if d.size and np.median(d) > 0 else 1.0
-
-
 # ======================================================================================= driver
 def _chebyshev(n: int) -> Array:
     """``n`` Chebyshev-Lobatto points of [0, 1]: denser towards both ends."""
@@ -702,7 +446,7 @@ def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False,
         n_topology = sum(p.matched == "topology" for p in pairs)
     result = ContinuityResult()
     result.match_tol, result.thresholds = tol, thresholds
-    engine = _Engine(faces, pairs, g3, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
+    engine = Engine(faces, pairs, g3, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
     t_measure = time.perf_counter()
     reports, result.points = _measure_all(engine, samples, refine, thresholds)
     t_measure = time.perf_counter() - t_measure
@@ -725,7 +469,7 @@ def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False,
 _PHI = (math.sqrt(5.0) - 1.0) / 2.0
 
 
-def _why_not(engine: _Engine, p: Pair) -> str | None:
+def _why_not(engine: Engine, p: Pair) -> str | None:
     """Why a pair cannot be measured, or ``None``."""
     if p.degenerate:
         return p.note or "degenerated edge"
@@ -740,7 +484,7 @@ def _why_not(engine: _Engine, p: Pair) -> str | None:
     return None
 
 
-def _golden(engine: _Engine, pid: NDArray[np.intp], meas: list[str], which: NDArray[np.intp],
+def _golden(engine: Engine, pid: NDArray[np.intp], meas: list[str], which: NDArray[np.intp],
             a: Array, b: Array, iterations: int, best: dict[str, Array]) -> None:
     """Batched golden-section maximisation of measure ``meas[which[k]]`` of pair ``pid[k]`` on
     ``[a[k], b[k]]``; every evaluated point updates ``best`` (value, t, point per bracket)."""
@@ -767,7 +511,7 @@ def _golden(engine: _Engine, pid: NDArray[np.intp], meas: list[str], which: NDAr
         c, d, fc, fd = (np.where(left, x, d), np.where(left, c, x), np.where(left, fx, fd), np.where(left, fc, fx))
 
 
-def _measure_all(engine: _Engine, samples: int, refine: int, th: Thresholds) -> tuple[list[EdgeReport], list]:
+def _measure_all(engine: Engine, samples: int, refine: int, th: Thresholds) -> tuple[list[EdgeReport], list]:
     pairs = engine.pairs
     why = [_why_not(engine, p) for p in pairs]
     good = np.array([i for i, w in enumerate(why) if w is None], dtype=np.intp)
@@ -813,7 +557,7 @@ def _measure_all(engine: _Engine, samples: int, refine: int, th: Thresholds) -> 
     return reports, points
 
 
-def _report(engine: _Engine, idx: int, p: Pair, why: str | None, r: int | None, best: dict, grid: dict,
+def _report(engine: Engine, idx: int, p: Pair, why: str | None, r: int | None, best: dict, grid: dict,
             P: Array, samples: int, th: Thresholds, meas: list[str]) -> EdgeReport:
     faces = (p.side1.face, p.side2.face)
     kinds = (engine.faces[faces[0]].kind, engine.faces[faces[1]].kind)
