@@ -1,0 +1,188 @@
+"""``occsurf check`` end to end: exit codes, the JSON keys, the files written, one-line errors,
+and the page opened in a real headless Chromium (Debian's ``chromium``; skipped with the reason
+when it is not installed)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from occsurf.bridge.cli import main
+
+SAMPLES = Path(__file__).resolve().parents[2] / "step_samples"
+REALDATA = Path(__file__).resolve().parents[3] / "shared" / "realdata"
+FACE_KEYS = {"index", "type", "k_min", "k_max", "flags"}
+EDGE_KEYS = {"faces", "midpoint", "matched", "g0_max", "g1_max_deg", "g2_max", "g2_max_rel", "worst_point"}
+
+
+def _one_error_line(err: str) -> str:
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("occsurf: ") and "Traceback" not in err
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def loft_out(tmp_path_factory):
+    """One run through the worker process (the default), shared by the tests that read its output."""
+    out = tmp_path_factory.mktemp("loft_check")
+    proc = subprocess.run([sys.executable, "-m", "occsurf.bridge.cli", "check", str(SAMPLES / "loft.step"),
+                           "--out", str(out), "--json"], capture_output=True, text=True, timeout=600)
+    return out, proc
+
+
+def test_json_and_files(loft_out) -> None:
+    out, proc = loft_out
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert json.loads((out / "report.json").read_text()) == doc
+    assert (out / "index.html").is_file() and not list(out.glob(".viewer*")) and not list(out.glob(".progress*"))
+    assert [f["index"] for f in doc["faces"]] == list(range(11))
+    assert all(FACE_KEYS <= set(f) for f in doc["faces"])
+    assert doc["edges"] and all(EDGE_KEYS <= set(e) for e in doc["edges"])
+    for f in doc["faces"]:
+        for name in f["pictures"].values():
+            assert (out / name).stat().st_size > 2000
+    # faces numbered as `occsurf inspect` numbers them
+    from occsurf.bridge.cli.inspect import inspect_files
+
+    (rep,) = inspect_files([str(SAMPLES / "loft.step")], samples=3)
+    assert [(f.index, f.surface_type) for f in rep.faces] == [(f["index"], f["type"]) for f in doc["faces"]]
+
+
+def test_fail_on_gates(tmp_path, capsys) -> None:
+    path = str(SAMPLES / "loft.step")
+    assert main(["check", path, "--out", str(tmp_path / "a"), "--fail-on", "catia", "--in-process"]) == 1
+    out = capsys.readouterr().out
+    assert "--fail-on catia: FAILED" in out
+    doc = json.loads((tmp_path / "a" / "report.json").read_text())
+    assert doc["passed"] is False and doc["failures"]
+    # the same model passes the mechanical preset (no curvature checks; its creases are by design)
+    rc = main(["check", path, "--out", str(tmp_path / "b"), "--fail-on", "mechanical", "--in-process", "--faces", "9"])
+    doc = json.loads((tmp_path / "b" / "report.json").read_text())
+    assert rc == (0 if doc["passed"] else 1)
+    assert rc == 0, doc["failures"]
+
+
+def test_faces_option(tmp_path, capsys) -> None:
+    assert main(["check", str(SAMPLES / "loft.step"), "--out", str(tmp_path), "--faces", "0,2-3", "--json",
+                 "--in-process"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert [f["index"] for f in doc["faces"]] == [0, 2, 3]
+    assert main(["check", str(SAMPLES / "loft.step"), "--out", str(tmp_path), "--faces", "99", "--in-process"]) == 2
+    assert "faces" in _one_error_line(capsys.readouterr().err)
+    assert main(["check", str(SAMPLES / "loft.step"), "--out", str(tmp_path), "--faces", "x"]) == 2
+    _one_error_line(capsys.readouterr().err)
+
+
+def test_unreadable_and_missing(tmp_path, capsys) -> None:
+    bad = tmp_path / "bad.step"
+    bad.write_text("ISO-10303-21;\nHEADER;\nthis is not a model\n")
+    assert main(["check", str(bad), "--out", str(tmp_path / "o")]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert str(bad) in line and "truncated" in line
+    assert not (tmp_path / "o" / "index.html").exists()
+    assert main(["check", str(tmp_path / "nope.step"), "--out", str(tmp_path / "o")]) == 2
+    assert "no such file" in _one_error_line(capsys.readouterr().err)
+
+
+def test_unwritable_out(tmp_path, capsys) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert main(["check", str(SAMPLES / "loft.step"), "--out", str(blocker / "sub")]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert "--out" in line and "cannot write" in line
+
+
+def test_model_without_shared_edges(tmp_path, capsys) -> None:
+    """Loose faces far apart: nothing to match; the faces are still reported, the page says so."""
+    from build123d import Box, Compound, Pos, export_step
+
+    faces = list(Box(1, 1, 1).faces())[:1] + list((Pos(10, 0, 0) * Box(1, 1, 1)).faces())[:1]
+    path = tmp_path / "loose.step"
+    export_step(Compound(faces), str(path))
+    assert main(["check", str(path), "--out", str(tmp_path / "o"), "--json", "--in-process"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert len(doc["faces"]) == 2 and doc["edges"] == []
+    assert "nothing to measure" in (tmp_path / "o" / "index.html").read_text()
+
+
+# ---------------------------------------------------------------------------------------- browser
+def _chromium() -> tuple[str, str] | None:
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    driver = shutil.which("chromedriver")
+    return (browser, driver) if browser and driver else None
+
+
+@pytest.mark.skipif(_chromium() is None, reason="Debian packages chromium and chromium-driver not installed "
+                                               "(.ci/run installs them)")
+def test_page_in_headless_chromium(loft_out) -> None:
+    """Open index.html from the file system in headless Chromium (WebGL through SwiftShader, the
+    network cut off): the viewer script finishes, the 3-D canvas shows the model (a screenshot of
+    the canvas element, not blank, many colours), switching the indicator to zebra changes the
+    picture, and the face and edge tables are there, sortable."""
+    import io
+    import time
+
+    from PIL import Image
+
+    webdriver = pytest.importorskip("selenium.webdriver")
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import Select, WebDriverWait
+
+    out, proc = loft_out
+    assert proc.returncode == 0
+    browser, driver_path = _chromium()
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = browser
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
+                "--enable-unsafe-swiftshader", "--disable-background-networking", "--window-size=1300,1000",
+                "--host-resolver-rules=MAP * ~NOTFOUND"):
+        opts.add_argument(arg)
+    drv = webdriver.Chrome(service=webdriver.ChromeService(executable_path=driver_path), options=opts)
+    try:
+        drv.get((out / "index.html").resolve().as_uri())
+        WebDriverWait(drv, 60).until(lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-viewer") == "ready")
+        status = drv.find_element(By.ID, "viewer-status").text
+        assert status.startswith("11 faces,"), status  # not "WebGL is not available ..."
+        canvas = drv.find_element(By.ID, "viewer")
+        drv.execute_script("arguments[0].scrollIntoView()", canvas)
+
+        def shot() -> np.ndarray:
+            time.sleep(0.5)  # a few animation frames
+            return np.asarray(Image.open(io.BytesIO(canvas.screenshot_as_png)).convert("RGB")).astype(int)
+
+        img = shot()
+        model = np.abs(img - np.array([0xF4, 0xF6, 0xFA])).sum(axis=2) > 40
+        assert model.mean() > 0.03, "the 3-D canvas is blank"
+        assert len(np.unique(img[model] // 16, axis=0)) > 10, "the model is drawn in one flat colour"
+        Select(drv.find_element(By.ID, "indicator")).select_by_value("zebra")
+        for _ in range(10):  # SwiftShader compiles the stripe shader on first use
+            zebra = shot()
+            zmodel = np.abs(zebra - np.array([0xF4, 0xF6, 0xFA])).sum(axis=2) > 40
+            g = zebra.mean(axis=2)
+            grey = g[zmodel]
+            rows = [r[(r < 50) | (r > 220)] < 50 for r in g[:: max(1, g.shape[0] // 20)]]
+            edges = sum(int(np.count_nonzero(np.diff(r.astype(int)))) for r in rows if r.size)
+            if (grey < 50).mean() > 0.02 and (grey > 220).mean() > 0.01 and edges >= 10:
+                break
+        else:
+            raise AssertionError(f"no zebra stripes: {(grey < 50).mean():.3f} dark, {(grey > 220).mean():.3f} light, "
+                                 f"{edges} stripe edges")
+        rows = drv.find_elements(By.CSS_SELECTOR, "#face-table tbody tr")
+        assert len(rows) == 11
+        assert drv.find_elements(By.CSS_SELECTOR, "#edge-table tbody tr")
+        header = drv.find_elements(By.CSS_SELECTOR, "#face-table th")[0]
+        header.click()
+        first = [r.find_elements(By.TAG_NAME, "td")[0].text for r in drv.find_elements(By.CSS_SELECTOR, "#face-table tbody tr")]
+        header.click()
+        second = [r.find_elements(By.TAG_NAME, "td")[0].text for r in drv.find_elements(By.CSS_SELECTOR, "#face-table tbody tr")]
+        assert sorted(first, key=int) in (first, second) and second == first[::-1]
+    finally:
+        drv.quit()

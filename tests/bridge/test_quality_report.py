@@ -1,0 +1,260 @@
+"""check_model (occsurf.bridge.quality.report), its pictures and its page, called from Python.
+
+Closed forms: on a sphere of radius R every principal curvature is 1/R in magnitude and both have
+the same sign; on a cylinder one is 0 and the other 1/R; on a plane both are 0. The values are our
+exact derivatives at OCC's mesh vertices mapped onto our converted surface (Newton inversion for
+analytic faces), so they match to round-off (1e-9 relative leaves the inversion's 2x-deflection
+acceptance far behind: a vertex off the surface would give a wrong radius by its offset).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from occsurf.bridge import read_step
+from occsurf.bridge.quality import pictures as P
+from occsurf.bridge.quality.html import render_html, viewer_payload
+from occsurf.bridge.quality.report import FACE_FAIL_KINDS, check_model
+from occsurf.bridge.rendering import tessellation, vtk_scene
+
+SAMPLES = Path(__file__).resolve().parents[2] / "step_samples"
+
+
+def _write(shape, tmp_path: Path, name: str) -> Path:
+    from build123d import export_step
+
+    path = tmp_path / name
+    export_step(shape, str(path))
+    return path
+
+
+@pytest.fixture(scope="module")
+def loft():
+    return read_step(SAMPLES / "loft.step")
+
+
+@pytest.fixture(scope="module")
+def loft_report(loft):
+    return check_model(loft)
+
+
+def test_sphere_and_cylinder_closed_forms(tmp_path) -> None:
+    from build123d import Cylinder, Pos, Sphere
+
+    R, r = 2.0, 0.75
+    model = read_step(_write(Sphere(R) + Pos(6, 0, 0) * Cylinder(r, 3.0), tmp_path, "sc.step"))
+    rep = check_model(model, edges=False, flags=False)
+    assert len(rep.faces) == len(model.faces)
+    seen = set()
+    for row in rep.faces:
+        assert row.error is None, row.error
+        if row.type == "Sphere":
+            fld = rep.fields[row.index]
+            k1, k2 = fld.values["max"], fld.values["min"]
+            ok = np.isfinite(k1)
+            assert ok.mean() > 0.95
+            np.testing.assert_allclose(np.abs(k1[ok]), 1 / R, rtol=1e-9)
+            np.testing.assert_allclose(k1[ok], k2[ok], rtol=1e-9)
+            assert abs(row.k_min) == pytest.approx(1 / R, rel=1e-9) and abs(row.k_max) == pytest.approx(1 / R, rel=1e-9)
+            seen.add("sphere")
+        elif row.type == "Cylinder":
+            got = sorted([abs(row.k_min), abs(row.k_max)])
+            assert got[0] == pytest.approx(0.0, abs=1e-9) and got[1] == pytest.approx(1 / r, rel=1e-9)
+            seen.add("cylinder")
+        elif row.type == "Plane":
+            assert abs(row.k_min) < 1e-9 and abs(row.k_max) < 1e-9
+    assert seen == {"sphere", "cylinder"}
+
+
+def test_outward_orientation_sign(tmp_path) -> None:
+    """Convex solids: with outward normals the mean curvature has one sign on every curved face
+    (a reversed face must not flip it)."""
+    from build123d import Cylinder, Sphere
+
+    for shape in (Sphere(1.5), Cylinder(1.0, 2.0)):
+        model = read_step(_write(shape, tmp_path, "c.step"))
+        rep = check_model(model, edges=False, flags=False)
+        signs = {np.sign(np.nanmedian(rep.fields[f.index].values["mean"])) for f in rep.faces if f.type != "Plane"}
+        assert len(signs) == 1 and 0 not in signs
+
+
+def test_report_json_keys_and_edges(loft_report) -> None:
+    doc = json.loads(json.dumps(loft_report.to_json(), allow_nan=False))
+    assert doc["n_faces"] == len(doc["faces"]) == 11
+    for f in doc["faces"]:
+        assert {"index", "type", "k_min", "k_max", "flags"} <= set(f)
+        for g in f["flags"]:
+            assert {"kind", "location", "uv", "value", "suggestion"} <= set(g)
+    assert doc["edges"], "the loft's faces share edges"
+    for e in doc["edges"]:
+        assert {"faces", "midpoint", "matched", "g0_max", "g1_max_deg", "g2_max", "g2_max_rel", "worst_point"} <= set(e)
+        assert len(e["faces"]) == 2 and len(e["midpoint"]) == 3 and e["matched"] in ("topology", "geometry")
+    worst = max(e["g1_max_deg"] for e in doc["edges"])
+    assert doc["worst_g1_deg"] == pytest.approx(worst)
+    by_index = {f["index"]: f for f in doc["faces"]}
+    for e in doc["edges"]:
+        for k in e["faces"]:
+            assert by_index[k]["worst_g1_deg"] >= e["g1_max_deg"] - 1e-12
+
+
+def test_face_failures_follow_the_preset(loft) -> None:
+    catia = check_model(loft, preset="catia")
+    mech = check_model(loft, preset="mechanical")
+    flagged = {f.index for f in catia.faces if any(g["kind"] in FACE_FAIL_KINDS["catia"] for g in f.flags)}
+    assert flagged, "the loft's sides wiggle (sections show several inflections)"
+    assert {int(x.split()[1].rstrip(":")) for x in catia.failures if x.startswith("face ")} == flagged
+    assert not [x for x in mech.failures if x.startswith("face ")]
+
+
+def test_selected_faces_and_bad_index(loft) -> None:
+    rep = check_model(loft, faces=[0, 9], flags=False)
+    assert [f.index for f in rep.faces] == [0, 9]
+    assert all(set(e["faces"]) & {0, 9} for e in rep.edges)
+    from occsurf.algorithms.errors import InvalidGeometryError
+
+    with pytest.raises(InvalidGeometryError, match="faces"):
+        check_model(loft, faces=[99])
+    with pytest.raises(InvalidGeometryError, match="preset"):
+        check_model(loft, preset="nope")
+
+
+def test_a_face_that_cannot_be_evaluated_is_still_reported(loft, monkeypatch) -> None:
+    faces = list(loft.faces)
+    faces[3] = dataclasses.replace(faces[3], surface=None, error="conversion failed (test)")
+    model = dataclasses.replace(loft, faces=faces)
+    real = tessellation.mesh_face
+
+    def broken(face, size):
+        if face.index == 5:
+            raise RuntimeError("Standard_Failure: BRep_Tool: no surface")
+        return real(face, size)
+
+    monkeypatch.setattr(tessellation, "mesh_face", broken)
+    rep = check_model(model, flags=False)
+    rows = {f.index: f for f in rep.faces}
+    assert len(rows) == 11
+    assert "conversion failed (test)" in rows[3].error and 3 not in rep.fields
+    assert "no surface" in rows[5].error and 5 not in rep.fields
+    assert all(rows[k].error is None and rows[k].k_max is not None for k in rows if k not in (3, 5))
+    assert rep.edges  # the edge table is still measured
+
+
+def test_degenerate_points_reported(tmp_path) -> None:
+    from build123d import Cone
+
+    model = read_step(_write(Cone(1.0, 0.0, 2.0), tmp_path, "cone.step"))  # apex: collapsed edge
+    rep = check_model(model, edges=False, flags=False)
+    cone = [f for f in rep.faces if f.type == "Cone"][0]
+    fld = rep.fields[cone.index]
+    assert cone.n_degenerate == int(fld.degenerate.sum()) > 0  # the apex vertices
+    assert any("degenerate" in n for n in cone.notes)
+    assert np.isnan(fld.values["mean"][fld.degenerate]).all()  # never coloured as a value
+    apex = fld.mesh.points[fld.degenerate]
+    np.testing.assert_allclose(apex[:, :2], 0.0, atol=1e-9)
+
+
+@pytest.mark.skipif(not vtk_scene.render_available(), reason="VTK cannot open an offscreen window here")
+def test_every_picture_kind(loft_report, tmp_path) -> None:
+    """Every picture kind of the model and of each face is drawn: not blank; curvature and draft
+    maps carry their legend."""
+    from PIL import Image
+
+    shown = P.render_report_pictures(loft_report, tmp_path)
+    assert set(shown) == set(P.MODEL_PICTURES)
+    for kind, name in shown.items():
+        img = np.asarray(Image.open(tmp_path / name).convert("RGB"))
+        assert img.shape[:2] == (P.MODEL_SIZE[1], P.MODEL_SIZE[0])
+        body = img[:, : int(0.8 * img.shape[1])].reshape(-1, 3).astype(int)
+        r, g, b = body.T
+        background = (r >= 200) & (b >= r) & (b - r <= 25)
+        assert 1 - background.mean() > 0.1, f"{kind}: almost blank"
+        assert len(np.unique(body // 16, axis=0)) > 10, f"{kind}: flat"
+        strip = img[:, int(0.84 * img.shape[1]):].reshape(-1, 3).astype(int)
+        cmap = P.PICTURE_KINDS[kind][1]
+        if cmap in ("diverging", "rainbow"):
+            for end in np.array(vtk_scene.COLORMAPS[cmap])[[0, -1]] * 255:
+                assert np.min(np.abs(strip - end).sum(axis=1)) < 30, f"{kind}: legend missing"
+    sections = np.asarray(Image.open(tmp_path / shown["sections"]).convert("RGB")).astype(int)
+    comb = (sections[..., 0] > 170) & (sections[..., 1] < 110) & (sections[..., 2] < 80)
+    assert comb.sum() > 200, "no curvature comb drawn"
+    for row in loft_report.faces:
+        assert set(row.pictures) == set(P.FACE_PICTURES), (row.index, row.notes)
+        for name in row.pictures.values():
+            assert (tmp_path / name).stat().st_size > 2000
+
+
+def test_page_is_offline_and_complete(loft_report) -> None:
+    doc = loft_report.to_json()
+    page = render_html(doc, viewer_payload(loft_report), {"mean": "model_mean.png"})
+    assert "http://" not in page.replace("http://www.w3.org", "") and "https://" not in page.split("<script>")[0]
+    assert "<script src=" not in page and "<link" not in page
+    assert 'id="face-table"' in page and 'id="edge-table"' in page and 'id="viewer"' in page
+    for f in doc["faces"]:
+        assert f'id="face-{f["index"]}"' in page
+    assert "three.js r187" in page and "MIT" in page
+    payload = viewer_payload(loft_report)
+    assert len(payload["faces"]) == 11 and set(payload["ranges"]) >= {"mean", "gaussian", "draft"}
+
+
+def test_vendored_viewer_and_licence() -> None:
+    from importlib import resources
+
+    static = resources.files("occsurf.bridge.quality").joinpath("static")
+    head = static.joinpath("three-viewer.min.js").read_text("utf-8")[:400]
+    assert "three.js r187" in head and "MIT License" in head
+    assert "MIT License" in static.joinpath("THREE_LICENSE").read_text("utf-8")
+    import tomllib
+
+    data = tomllib.loads((Path(__file__).resolve().parents[2] / "pyproject.toml").read_text("utf-8"))
+    assert "static/three-viewer.min.js" in data["tool"]["setuptools"]["package-data"]["occsurf.bridge.quality"]
+
+
+def test_cli_preset_names_match_the_library() -> None:
+    from occsurf.bridge.cli.check import PRESET_NAMES
+    from occsurf.bridge.quality import continuity
+
+    assert sorted(PRESET_NAMES) == sorted(continuity.PRESETS) == sorted(FACE_FAIL_KINDS)
+
+
+def test_python_access_edges_and_coloured_meshes(loft_report, tmp_path) -> None:
+    from build123d import Edge
+
+    from occsurf.bridge.quality import export
+
+    lines = export.section_curves(loft_report)
+    assert lines["sections"] and lines["combs"]
+    edges = export.as_edges(lines["sections"])
+    assert edges and all(isinstance(e, Edge) for e in edges)
+    for e, pl in zip(edges, lines["sections"]):
+        chord = float(np.linalg.norm(np.diff(pl, axis=0), axis=1).sum())
+        assert e.length == pytest.approx(chord, rel=1e-2)  # a spline through the cut points
+    teeth = export.as_edges([c for c in lines["combs"] if len(c) == 2], smooth=False)
+    assert teeth and all(e.geom_type.name == "LINE" for e in teeth[:5])
+
+    mesh = export.colored_mesh(loft_report, "mean")
+    n = sum(f.mesh.n_vertices for f in loft_report.fields.values())
+    assert mesh.points.shape == (n, 3) and mesh.colors.shape == (n, 3) and mesh.colors.dtype == np.uint8
+    assert mesh.lo == -mesh.hi  # symmetric, as the pictures
+    np.testing.assert_array_equal(mesh.colors, vtk_scene.colormap_rgb(mesh.values, mesh.lo, mesh.hi, "diverging"))
+    assert len(np.unique(mesh.colors, axis=0)) > 50
+    from vtkmodules.vtkIOPLY import vtkPLYReader
+
+    reader = vtkPLYReader()
+    reader.SetFileName(str(mesh.write_ply(tmp_path / "m.ply")))
+    reader.Update()
+    assert reader.GetOutput().GetNumberOfPoints() == n and reader.GetOutput().GetNumberOfCells() == len(mesh.triangles)
+    with pytest.raises(ValueError, match="indicator"):
+        export.colored_mesh(loft_report, "nope")
+
+    fld = loft_report.fields[3]
+    segs = export.reflection_lines(fld)
+    assert segs.shape[1:] == (2, 3) and len(segs) > 20
+    lo, hi = fld.mesh.points.min(axis=0), fld.mesh.points.max(axis=0)
+    assert np.all(segs >= lo - 1e-9) and np.all(segs <= hi + 1e-9)
+    # every segment crosses a stripe boundary: its ends sit on edges of one triangle
+    assert np.all(np.linalg.norm(segs[:, 0] - segs[:, 1], axis=1) < np.ptp(fld.mesh.points, axis=0).max() / 5)
