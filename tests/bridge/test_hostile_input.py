@@ -1,0 +1,397 @@
+"""Issue 17: hostile input. Corrupt files (generated here from clean ones), special files, killed and
+concurrent writes, signals, closed and full stdout, non-UTF-8 names.
+
+Every case below was a segfault, a destroyed file or silently accepted corruption before.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+import signal
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from occsurf.algorithms import BSplineSurface
+from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
+from occsurf.bridge.exchange import files
+from occsurf.bridge.exchange.checks import MAX_NESTING, scan_step
+from occsurf.bridge.exchange.step_iges import read_iges, read_step, write_iges, write_step
+
+from . import corrupt_files as C
+
+REPO = Path(__file__).resolve().parents[2]
+posix = pytest.mark.skipif(os.name != "posix", reason="POSIX files and signals")
+
+
+# ---------------------------------------------------------------------------------------- fixtures
+@pytest.fixture(scope="module")
+def clean(tmp_path_factory) -> dict[str, Path]:
+    """A box with filleted edges (10 faces, one closed shell) as STEP and IGES, and one B-spline face."""
+    import cadquery as cq
+
+    folder = tmp_path_factory.mktemp("clean")
+    box = cq.Workplane().box(1, 2, 3).edges("|Z").fillet(0.2).val().wrapped
+    out = {"step": write_step(folder / "box.step", [box]), "iges": write_iges(folder / "box.igs", [box])}
+    P = np.zeros((2, 2, 3))
+    P[..., 0], P[..., 1] = [[0, 0], [1, 1]], [[0, 1], [0, 1]]
+    P[1, 1, 2] = 0.5
+    out["patch_iges"] = write_iges(folder / "patch.igs", [BSplineSurface((1, 1), ([0, 0, 1, 1],) * 2, P)])
+    return out
+
+
+def _cli(*args: str, stdout=subprocess.PIPE, timeout: float = 300, **kw) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "occsurf.bridge.cli", *args], stdout=stdout,
+                          stderr=subprocess.PIPE, cwd=REPO, timeout=timeout, **kw)
+
+
+def _read_in_child(path: Path, isolated: bool = False) -> tuple[int, str]:
+    """Read in a fresh interpreter: ``(exit status, last line)`` (a segfault is -11, not a dead test run)."""
+    code = ("import sys\nfrom occsurf.bridge.exchange.step_iges import read_step, read_iges\n"
+            f"p = {str(path)!r}\nr = read_iges if p.endswith(('.igs', '.iges')) else read_step\n"
+            "try:\n    m = r(p, isolated=%r, timeout=120)\n    print('faces', len(m.faces), len(m.warnings))\n"
+            "except Exception as e:\n    print(type(e).__name__, e)\n" % isolated)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=300)
+    lines = proc.stdout.strip().splitlines()
+    return proc.returncode, lines[-1] if lines else proc.stderr.strip()[-300:]
+
+
+# ---------------------------------------------------------------------------------------- crashes
+def test_the_four_segfaults_of_the_issue_are_refusals_in_process(clean, tmp_path):
+    st = C.StepText.parse(clean["step"].read_bytes())
+    k = next(i for i, r in enumerate(st.records) if b"ORIENTED_EDGE" in r)
+    own = int(st.records[k].split(b"=")[0].strip()[1:])
+    selfref = st.records[k].split(b"=", 1)[0] + b"= ORIENTED_EDGE('',*,*,#%d,.T.);\n" % own
+    cases = {
+        "selfref.step": (st.join(st.records[:k] + (selfref,) + st.records[k + 1:]), "refers to itself"),
+        "nested.step": (C.step_replace(st.join(), b"CARTESIAN_POINT('',(", b"CARTESIAN_POINT(''," + b"(" * 100000
+                                       + b"0." + b")" * 100000 + b",("), "nested 1000"),
+        "cut.step": (C.step_cut(st, len(st.records) // 2), "not defined in the file"),
+    }
+    iges = C.IgesText.parse(clean["patch_iges"].read_bytes())
+    lines = list(iges.lines)
+    k128 = next(i for i, ln in enumerate(lines) if ln[72:73] == b"P" and ln.startswith(b"128,"))
+    lines[k128] = lines[k128].replace(b"128,1,1,1,1,0,0,1,0,0,0.,", b"128,-3,1,1,1,0,0,1,0,0,0,")
+    assert len(lines[k128]) == 80
+    cases["negative.igs"] = (iges.join(lines), "K1=-3")
+    for name, (data, word) in cases.items():
+        code, line = _read_in_child(C.write(tmp_path, name, data))
+        assert code == 0, (name, code, line)  # no signal death
+        assert line.startswith("ExchangeError") and word in line and name in line, (name, line)
+
+
+def test_a_crash_in_the_reader_becomes_an_exchange_error_naming_the_file(clean, tmp_path, monkeypatch):
+    import occsurf.bridge.exchange.step_iges as xs
+
+    monkeypatch.setattr(xs, "READ_JOB", "tests.bridge.hostile_jobs:crash")
+    with pytest.raises(ExchangeError, match=r"box\.step: the reader process crashed .*SIGSEGV"):
+        read_step(clean["step"], isolated=True, timeout=60)
+    monkeypatch.setattr(xs, "READ_JOB", "tests.bridge.hostile_jobs:hang")
+    t0 = time.perf_counter()
+    with pytest.raises(ExchangeError, match=r"box\.step: reading took longer than 2 s"):
+        read_step(clean["step"], isolated=True, timeout=2)
+    assert time.perf_counter() - t0 < 60
+
+
+def test_isolated_read_gives_the_same_model(clean):
+    for path, reader in ((clean["step"], read_step), (clean["iges"], read_iges)):
+        here, there = reader(path), reader(path, isolated=True, timeout=120)
+        assert len(here.faces) == len(there.faces) == 10 and len(here.edges) == len(there.edges)
+        for a, b in zip(here.faces, there.faces):
+            assert (a.surface_type, a.name, a.continuity) == (b.surface_type, b.name, b.continuity)
+            if a.surface is not None:  # binary BRep: bit-exact
+                assert np.array_equal(a.surface.control_points, b.surface.control_points)
+        assert here.warnings == there.warnings == []
+    with pytest.raises(ExchangeError, match="refers to itself"):
+        read_step(_selfref(clean, Path(str(clean["step"]) + ".bad.step")), isolated=True, timeout=120)
+
+
+def _selfref(clean, path: Path) -> Path:
+    st = C.StepText.parse(clean["step"].read_bytes())
+    k = next(i for i, r in enumerate(st.records) if b"ORIENTED_EDGE" in r)
+    own = st.records[k].split(b"=", 1)[0].strip()
+    path.write_bytes(st.join(st.records[:k] + (own + b" = ORIENTED_EDGE('',*,*," + own + b",.T.);\n",)
+                             + st.records[k + 1:]))
+    return path
+
+
+def test_from_occ_of_a_null_shape_raises():
+    from OCP.TopoDS import TopoDS_Edge, TopoDS_Face, TopoDS_Shape
+
+    from occsurf.bridge.conversion.splines import from_occ, is_reversed
+
+    for shape in (TopoDS_Face(), TopoDS_Edge(), TopoDS_Shape()):
+        with pytest.raises(InvalidGeometryError, match="null"):
+            from_occ(shape)
+    with pytest.raises(InvalidGeometryError, match="null"):
+        is_reversed(TopoDS_Face())
+    with pytest.raises(InvalidGeometryError, match="tol"):
+        from_occ(TopoDS_Face(), tol=float("nan"))
+
+
+# ---------------------------------------------------------------------------------------- warnings
+def test_corruption_read_around_is_reported(clean, tmp_path):
+    st = C.StepText.parse(clean["step"].read_bytes())
+    faces = [i for i, r in enumerate(st.records) if b"ADVANCED_FACE" in r]
+    assert len(faces) == 10
+    no_face = read_step(C.write(tmp_path, "noface.step", C.step_delete(st, faces[3])))
+    assert len(no_face.faces) == 9
+    text = " | ".join(no_face.warnings)
+    assert "not defined in the file" in text and "CLOSED_SHELL" in text and "free edges" in text
+    point = next(r for r in st.records if b"CARTESIAN_POINT('',(" in r and r.count(b",") == 3)
+    head = point[: point.index(b"(", point.index(b"(") + 1) + 1]
+    words = read_step(C.write(tmp_path, "text.step", C.step_replace(st.join(), point, head + b"'abc',"
+                                                                     + point[len(head) + point[len(head):].index(b",") + 1:])))
+    assert any("not a Real" in w for w in words.warnings), words.warnings
+    four = read_step(C.write(tmp_path, "four.step", C.step_replace(st.join(), point, head + b"7.0," + point[len(head):])))
+    assert any("More than 3 coordinates" in w for w in four.warnings), four.warnings
+    for keep in (len(st.records) - 3, len(st.records) // 2):  # cut at a record, trailer put back
+        try:
+            cut = read_step(C.write(tmp_path, "cut.step", C.step_cut(st, keep)))
+        except ExchangeError as err:  # nothing left to transfer: refused, saying why
+            assert "none of the 1 roots" in str(err) and "not defined in the file" in str(err)
+        else:  # a partial model, reported as one
+            assert len(cut.faces) <= 10 and any("not defined in the file" in w for w in cut.warnings)
+    assert read_step(clean["step"]).warnings == []  # a clean file has none
+
+
+def test_scan_limits_and_speed_on_real_data():
+    data = Path(REPO / "step_samples" / "loft.step").read_bytes()
+    t0 = time.perf_counter()
+    scan = scan_step(Path("loft.step"), data)
+    assert scan.warnings == [] and scan.data is data and scan.face_instances == 11
+    assert time.perf_counter() - t0 < 2.0
+    deep = data.replace(b"DATA;", b"DATA;\n#999999 = X(" + b"(" * (MAX_NESTING + 1) + b")" * (MAX_NESTING + 1)
+                        + b");", 1)
+    with pytest.raises(ExchangeError, match="nested"):
+        scan_step(Path("deep.step"), deep)
+
+
+REALDATA = Path("/work/shared/realdata")
+
+
+@pytest.mark.skipif(not REALDATA.is_dir(), reason="no /work/shared/realdata (public STEP/IGES corpus)")
+def test_real_files_read_without_warnings():
+    for path in sorted(REALDATA.iterdir()):
+        if path.suffix.lower() in (".step", ".stp"):
+            assert read_step(path).warnings == [], path
+        elif path.suffix.lower() in (".iges", ".igs"):
+            # the lens file's Global section lacks its last-change date: a header warning, not listed
+            assert read_iges(path).warnings == [], path
+
+
+# ---------------------------------------------------------------------------------------- files
+@posix
+def test_special_and_read_only_targets_are_refused(tmp_path, clean):
+    P = np.random.default_rng(0).random((3, 3, 3))
+    s = BSplineSurface((2, 2), ([0, 0, 0, 1, 1, 1],) * 2, P)
+    fifo = tmp_path / "pipe.step"
+    os.mkfifo(fifo)
+    for target in (Path("/dev/null"), fifo):
+        with pytest.raises(ExchangeError, match="refusing to replace"):
+            write_step(target, [s])
+        with pytest.raises(ExchangeError, match="refusing to replace"):
+            files.atomic_write(target, b"x")
+    assert stat.S_ISCHR(os.stat("/dev/null").st_mode) and stat.S_ISFIFO(os.stat(fifo).st_mode)
+    ro = tmp_path / "ro.step"
+    ro.write_bytes(b"keep")
+    ro.chmod(0o444)
+    with pytest.raises(ExchangeError, match="read-only"):
+        write_step(ro, [s])
+    assert ro.read_bytes() == b"keep"
+    write_step(ro, [s], replace_readonly=True)
+    assert ro.read_bytes().startswith(b"ISO-10303-21") and stat.S_IMODE(ro.stat().st_mode) == 0o444
+    real = tmp_path / "real.step"
+    link = tmp_path / "link.step"
+    real.write_bytes(b"old")
+    link.symlink_to(real)
+    write_step(link, [s])
+    assert link.is_symlink() and real.read_bytes().startswith(b"ISO-10303-21")  # the link survives
+
+
+@posix
+def test_reading_special_files_and_links(tmp_path):
+    (tmp_path / "zero.step").symlink_to("/dev/zero")
+    (tmp_path / "dangling.step").symlink_to(tmp_path / "nowhere.step")
+    (tmp_path / "a.step").symlink_to(tmp_path / "b.step")
+    (tmp_path / "b.step").symlink_to(tmp_path / "a.step")
+    for name, word in (("zero.step", "character device"), ("dangling.step", "dangling"), ("a.step", "loop")):
+        t0 = time.perf_counter()
+        with pytest.raises(ExchangeError, match=word):
+            read_step(tmp_path / name)
+        assert time.perf_counter() - t0 < 5  # /dev/zero is not read until memory runs out
+
+
+def _kill_during_write(folder: str) -> None:
+    def slow(fh):
+        fh.write(b"partial")
+        fh.flush()
+        os.kill(os.getpid(), signal.SIGKILL)
+
+    files.atomic_write(Path(folder) / "pic.png", slow)
+
+
+@posix
+def test_killed_write_keeps_the_old_file_and_its_temp_is_cleaned_next_time(tmp_path):
+    target = tmp_path / "pic.png"
+    target.write_bytes(b"old picture")
+    proc = multiprocessing.get_context("fork").Process(target=_kill_during_write, args=(str(tmp_path),))
+    proc.start()
+    proc.join(60)
+    assert proc.exitcode == -signal.SIGKILL
+    assert target.read_bytes() == b"old picture"
+    temps = [p for p in tmp_path.iterdir() if p.name.endswith(files._atomic.TEMP_SUFFIX)]
+    assert len(temps) == 1  # what kill -9 leaves
+    files.atomic_write(tmp_path / "other.md", b"new")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["other.md", "pic.png"]
+
+
+def test_full_disk_keeps_the_old_picture(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    target = tmp_path / "pic.png"
+    target.write_bytes(b"old picture")
+    fig = Figure()
+    fig.add_subplot().plot([0, 1], [1, 0])
+
+    def full(fd):  # noqa: ARG001 - the disk fills up while the picture is flushed
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(os, "fsync", full)
+    with pytest.raises(ExchangeError, match="No space left"):
+        files.write_figure(fig, target)
+    monkeypatch.undo()
+    assert target.read_bytes() == b"old picture" and [p.name for p in tmp_path.iterdir()] == ["pic.png"]
+    files.write_figure(fig, target)
+    assert target.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def _hier_writer(args: tuple[str, int]) -> None:
+    from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
+    from occsurf.bridge.exchange.hierarchical_io import write_hierarchical_step
+
+    path, k = args
+    P = np.zeros((4, 4, 3))
+    P[..., 0], P[..., 1] = np.meshgrid(np.arange(4.0), np.arange(4.0), indexing="ij")
+    P[..., 2] = k  # each writer its own height
+    hs = HierarchicalSurface(BSplineSurface((3, 3), ([0] * 4 + [1] * 4,) * 2, P))
+    for _ in range(3):
+        write_hierarchical_step(path, hs, name=f"writer {k}")
+
+
+@posix
+def test_concurrent_hierarchical_writes_leave_a_matching_pair(tmp_path):
+    from occsurf.bridge.exchange.hierarchical_io import read_hierarchical_step
+
+    path = str(tmp_path / "m.step")
+    ctx = multiprocessing.get_context("spawn")
+    with ctx.Pool(4) as pool:
+        pool.map(_hier_writer, [(path, k) for k in range(8)])
+    h = read_hierarchical_step(path)  # the STEP file and the sidecar of one writer (the hash matches)
+    assert float(h.base.control_points[0, 0, 2]) in range(8)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.hierarchy.json", "m.step"]
+
+
+# ---------------------------------------------------------------------------------------- CLI
+def test_inspect_warnings_json_stderr_and_strict(clean, tmp_path):
+    st = C.StepText.parse(clean["step"].read_bytes())
+    face = next(i for i, r in enumerate(st.records) if b"ADVANCED_FACE" in r)
+    bad = C.write(tmp_path, "noface.step", C.step_delete(st, face))
+    proc = _cli("inspect", str(bad), str(clean["step"]), "--json")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert [len(f["warnings"]) > 0 for f in doc["files"]] == [True, False]
+    assert doc["files"][0]["n_faces"] == 9
+    err = proc.stderr.decode()
+    assert err.count(": warning: ") == len(doc["files"][0]["warnings"]) and "Traceback" not in err
+    strict = _cli("inspect", str(bad), "--strict")
+    assert strict.returncode == 2 and b"warning:" in strict.stdout
+    assert _cli("inspect", str(clean["step"]), "--strict").returncode == 0
+
+
+@posix
+def test_inspect_stdout_head_closed_full_and_odd_names(clean, tmp_path):
+    folder = tmp_path / "d"
+    folder.mkdir()
+    for k in range(3):
+        (folder / f"{k}.step").write_bytes(clean["step"].read_bytes())
+    odd = os.fsencode(str(folder)) + b"/caf\xe9.step"
+    with open(odd, "wb") as fh:
+        fh.write(clean["step"].read_bytes())
+    (folder / "zero.step").symlink_to("/dev/zero")
+    (folder / "gone.step").symlink_to(folder / "nowhere")
+    (folder / "x.step").symlink_to(folder / "y.step")
+    (folder / "y.step").symlink_to(folder / "x.step")
+    head = subprocess.run(f"{sys.executable} -m occsurf.bridge.cli inspect {folder} | head -1", shell=True,
+                          capture_output=True, cwd=REPO, timeout=300)
+    assert b"Traceback" not in head.stderr and head.stdout.count(b"\n") == 1
+    full = _cli("inspect", str(folder), "--json", stdout=open("/dev/full", "wb"))
+    assert full.returncode == 2 and b"cannot write the output" in full.stderr and b"Traceback" not in full.stderr
+    closed = subprocess.run(f"{sys.executable} -m occsurf.bridge.cli inspect {folder}/0.step >&-", shell=True,
+                            capture_output=True, cwd=REPO, timeout=300)
+    assert closed.returncode == 2 and b"standard output is closed" in closed.stderr
+    proc = _cli("inspect", str(folder), "--json")
+    assert proc.returncode == 2 and b"Traceback" not in proc.stderr
+    errors = {Path(f["path"]).name: f["error"] for f in json.loads(proc.stdout)["files"]}
+    assert errors["caf\\xe9.step"] is None  # printable, and read
+    assert "not a regular file" in errors["zero.step"] and "dangling" in errors["gone.step"]
+    assert "loop" in errors["x.step"] and "loop" in errors["y.step"]
+
+
+@posix
+def test_ctrl_c_and_parent_death_stop_the_worker(tmp_path):
+    log = tmp_path / "log"
+    script = ("import sys\nfrom occsurf.bridge.isolation import run_jobs\n"
+              "print('ready', flush=True)\n"
+              f"run_jobs('tests.bridge.isolation_jobs:behave', [{{'name': 'a', 'do': 'sleep', 'log': {str(log)!r}}}],"
+              " timeout=600)\n")
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
+        log.unlink(missing_ok=True)
+        parent = subprocess.Popen([sys.executable, "-c", script], cwd=REPO, stdout=subprocess.PIPE,
+                                  stderr=subprocess.PIPE)
+        deadline = time.time() + 120
+        while not log.exists() and time.time() < deadline:
+            time.sleep(0.1)
+        children = [int(x) for x in Path(f"/proc/{parent.pid}/task/{parent.pid}/children").read_text().split()]
+        assert len(children) == 1, children
+        parent.send_signal(sig)
+        parent.wait(60)
+        worker = children[0]
+        for _ in range(100):
+            try:
+                state = Path(f"/proc/{worker}/stat").read_text().split(")")[-1].split()[0]
+            except FileNotFoundError:
+                state = "gone"
+            if state in ("Z", "X", "gone"):
+                break
+            time.sleep(0.1)
+        assert state in ("Z", "X", "gone"), (sig, state)  # dead (a zombie until pid 1 reaps it)
+
+
+def test_cli_ctrl_c_is_one_line(clean):
+    proc = subprocess.Popen([sys.executable, "-m", "occsurf.bridge.cli", "inspect", str(clean["step"]),
+                             str(clean["iges"]), "--samples", "1000"], cwd=REPO, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    time.sleep(4)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and err.decode().strip().splitlines()[-1] == "occsurf: interrupted"
+    assert b"Traceback" not in err
+
+
+def test_fill_refuses_devices_and_reads_in_a_worker_with_a_timeout(clean, tmp_path):
+    proc = _cli("fill", str(clean["step"]), "--out", "/dev/null")
+    assert proc.returncode == 2 and b"not a regular file" in proc.stderr
+    assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
+    bad = _selfref(clean, tmp_path / "selfref.step")
+    proc = _cli("fill", str(bad), "--out", str(tmp_path / "out.step"), "--timeout", "120")
+    assert proc.returncode == 2 and b"refers to itself" in proc.stderr and b"Traceback" not in proc.stderr
+    assert not (tmp_path / "out.step").exists()
+    assert _cli("fill", str(bad), "--out", str(tmp_path / "o.step"), "--timeout", "0").returncode == 2
