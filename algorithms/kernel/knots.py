@@ -312,7 +312,8 @@ def rescale_knots(knots: Array, old: tuple[float, float], new: tuple[float, floa
     clipped into ``[a, b]`` (a product can round one ulp past an end).
     """
     (lo, hi), (a, b) = old, new
-    t = a + (knots - lo) * ((b - a) / (hi - lo))
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflowing b - a: check_rescaled says so
+        t = a + (knots - lo) * ((b - a) / (hi - lo))
     inside = (knots > lo) & (knots < hi)
     t[inside] = np.clip(t[inside], a, b)
     t[knots == lo] = a
