@@ -267,10 +267,10 @@ scene.add(new THREE.HemisphereLight(0xffffff, 0x8899aa, 1.2));
 const key = new THREE.DirectionalLight(0xffffff, 1.6); camera.add(key); key.position.set(1,1,2); scene.add(camera);
 const group = new THREE.Group(); scene.add(group);
 const meshes = [];
-const zebraMat = new THREE.ShaderMaterial({side: THREE.DoubleSide, uniforms:{pairs:{value:7.0}, mode:{value:0}},
+const zebraMat = new THREE.ShaderMaterial({side: THREE.DoubleSide, uniforms:{pairs:{value:8.0}, mode:{value:0}},
   vertexShader:'varying vec3 vN; varying vec3 vP; void main(){ vec4 p = modelViewMatrix*vec4(position,1.0); vP=p.xyz; vN=normalize(normalMatrix*normal); gl_Position=projectionMatrix*p; }',
   fragmentShader:'uniform float pairs; uniform int mode; varying vec3 vN; varying vec3 vP; void main(){ vec3 n=normalize(vN); if(!gl_FrontFacing) n=-n; vec3 d=normalize(vP); '+
-   'float s; if(mode==0){ vec3 r=reflect(d,n); s=atan(r.x, r.z+1.0)/3.14159265*pairs; } else { s=dot(n, vec3(0.0,0.0,1.0))*6.0; } '+
+   'float s; if(mode==0){ vec3 r=reflect(d,n); s=asin(clamp(r.x,-1.0,1.0))/3.14159265*2.0*pairs+0.25; } else { s=dot(n, vec3(0.0,0.0,1.0))*6.0; } '+
    'float w=fwidth(s); float f=fract(s); float a=smoothstep(0.5-w,0.5+w,f)-smoothstep(1.0-w,1.0,f)+ (f<w? 1.0-smoothstep(0.0,w,f):0.0); '+
    'vec3 c=mix(vec3(0.97), vec3(0.05), clamp(a,0.0,1.0)); gl_FragColor=vec4(c,1.0); }'});
 const shadedMat = new THREE.MeshPhongMaterial({vertexColors:true, side:THREE.DoubleSide, shininess:40, specular:0x333333});

@@ -49,14 +49,15 @@ COLORMAPS: dict[str, tuple[tuple[float, float, float], ...]] = {
 }
 #: Per-pixel stripe shaders (GLSL replacing VTK's lighting): the stripe coordinate from the
 #: view-space normal, anti-aliased by its screen-space derivative (``fwidth``). The camera looks
-#: along -z in view coordinates; zebra: the reflected ray's angle about the view-up axis
-#: (cylindrical light tubes around the viewer, Klass 1980); isophote: ``n . v``.
+#: along -z in view coordinates; zebra: the angle of the reflected ray from the plane spanned by
+#: the view-up and view directions (light tubes parallel to the view-up axis at infinity, Klass
+#: 1980: a plane reflects one uniform shade, no seam or pole in the pattern); isophote: ``n . v``.
 PIXEL_SHADERS: dict[str, str] = {
     "zebra": """
   vec3 zn = normalize(normalVCVSOutput);
   if (!gl_FrontFacing) { zn = -zn; }
   vec3 zr = reflect(vec3(0.0, 0.0, -1.0), zn);
-  float zs = atan(zr.x, zr.z) / 3.14159265 * PAIRS + 0.25;
+  float zs = asin(clamp(zr.x, -1.0, 1.0)) / 3.14159265 * 2.0 * PAIRS + 0.25;
 """,
     "isophote": """
   vec3 zn = normalize(normalVCVSOutput);
@@ -236,8 +237,8 @@ class Scene:
             A key of :data:`COLORMAPS` or ``'stripes'`` (``stripes`` black/white pairs over ``scale``).
         shader : {"zebra", "isophote"}, optional
             Per-pixel stripes from the interpolated normal, fixed to the view (:data:`PIXEL_SHADERS`):
-            ``'zebra'``, reflection lines of vertical light tubes around the viewer (``stripes``
-            light/dark pairs per half turn of the reflected ray); ``'isophote'``, bands of equal
+            ``'zebra'``, reflection lines of light tubes parallel to the view-up axis at infinity
+            (``stripes`` light/dark pairs per half turn of the reflected ray); ``'isophote'``, bands of equal
             ``n . v`` (``stripes`` pairs over [-1, 1]). Needs ``normals``; overrides colours.
         """
         from vtkmodules.util.numpy_support import numpy_to_vtk
@@ -404,7 +405,7 @@ class Scene:
         try:
             win.AddRenderer(self._renderer)
             self._decorate()
-            self._place_camera(camera, zoom)
+            self._place_camera(camera, zoom, width / height)
             win.Render()
             grab = vtkWindowToImageFilter()
             grab.SetInput(win)
@@ -480,7 +481,9 @@ class Scene:
                 light.SetIntensity(intensity)
                 self._renderer.AddLight(light)
 
-    def _place_camera(self, camera: str | Sequence[float], zoom: float) -> None:
+    def _place_camera(self, camera: str | Sequence[float], zoom: float, aspect: float = 4 / 3) -> None:
+        """Look at the bounding box from the preset direction and zoom so its eight corners fill the
+        frame (the legend's strip on the right kept free)."""
         if isinstance(camera, str):
             if camera not in CAMERAS:
                 raise ValueError(f"camera: expected one of {', '.join(CAMERAS)} or a direction, got {camera!r}")
@@ -500,7 +503,22 @@ class Scene:
         cam.SetViewUp(*up)
         cam.SetViewAngle(30.0)
         self._renderer.ResetCamera()
-        cam.Zoom(zoom * (0.88 if self._legend is not None else 1.0))
+        corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        m = cam.GetViewTransformMatrix()
+        V = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+        c = corners @ V.T
+        depth = np.maximum(-c[:, 2], 1e-12)
+        half = np.tan(np.radians(cam.GetViewAngle()) / 2)
+        width_share = 0.80 if self._legend is not None else 0.94  # the scalar bar takes the right ~16 %
+        need = max(float(np.max(np.abs(c[:, 1]) / depth)) / (0.94 * half),
+                   float(np.max(np.abs(c[:, 0]) / depth)) / (width_share * half * aspect), 1e-9)
+        cam.Zoom(zoom / need)
+        if self._legend is not None:  # shift the model left, clear of the legend
+            right = np.array(cam.GetViewUp())
+            right = np.cross(np.array(cam.GetDirectionOfProjection()), right)
+            shift = right * (-(1 - width_share) * half * aspect * cam.GetDistance() / (zoom / need))
+            cam.SetFocalPoint(*(np.array(cam.GetFocalPoint()) - shift))
+            cam.SetPosition(*(np.array(cam.GetPosition()) - shift))
         self._renderer.ResetCameraClippingRange()
 
 
