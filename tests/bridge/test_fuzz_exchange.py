@@ -1,0 +1,128 @@
+"""Issue 17: mutated STEP/IGES text through every reading command's isolated path.
+
+Each example writes a batch of damaged copies of a clean model (deleted lines, swapped references,
+cuts at an entity boundary with the trailer put back; :mod:`corrupt_files`) and reads them with
+
+* ``occsurf inspect DIR --json`` (one worker for the batch; a crash costs one file),
+* ``occsurf fill FILE --out ...`` (its worker reads, fills and writes),
+* ``read_step`` / ``read_iges(..., isolated=True)`` in this very process (the caller).
+
+and asserts: the caller is never killed by a signal, nothing prints a traceback, the exit status is
+0 or 2, and a file read with a face count other than the clean model's always carries a warning.
+
+``OCCSURF_FUZZ_LOG=path`` appends one JSON line of counts per example (the counts the issue asks
+for: how many files were read cleanly, read with warnings, refused, crashed a worker, timed out).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from collections import Counter
+from pathlib import Path
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from occsurf.algorithms.errors import ExchangeError
+from occsurf.bridge.exchange.step_iges import read_iges, read_step, write_iges, write_step
+
+from ..algorithms.strategies import test_settings
+from . import corrupt_files as C
+
+REPO = Path(__file__).resolve().parents[2]
+BATCH = 6
+
+
+@pytest.fixture(scope="module")
+def bases(tmp_path_factory) -> dict[str, tuple[Path, int]]:
+    import cadquery as cq
+
+    folder = tmp_path_factory.mktemp("fuzz-base")
+    box = cq.Workplane().box(1, 2, 3).edges("|Z").fillet(0.2).val().wrapped
+    out = {}
+    for fmt, writer, reader, name in (("step", write_step, read_step, "box.step"),
+                                      ("iges", write_iges, read_iges, "box.igs")):
+        path = writer(folder / name, [box])
+        out[fmt] = (path, len(reader(path).faces))
+    return out
+
+
+mutation = st.tuples(st.sampled_from(["delete", "swap", "cut"]), st.integers(0, 10**6), st.integers(0, 10**6))
+
+
+def _mutate(fmt: str, clean: bytes, kind: str, a: int, b: int) -> bytes:
+    if fmt == "step":
+        text = C.StepText.parse(clean)
+        n, refs = len(text.records), len(text.references())
+        if kind == "delete":
+            return C.step_delete(text, a % n)
+        if kind == "swap":
+            return C.step_swap(text, a % refs, b % refs)
+        return C.step_cut(text, 1 + a % (n - 1))
+    text = C.IgesText.parse(clean)
+    if kind == "delete":
+        return C.iges_delete_line(text, a)
+    if kind == "swap":
+        return C.iges_swap(text, a, b)
+    return C.iges_cut(text, 1 + a % (text.n_entities() - 1))
+
+
+def _no_traceback(proc: subprocess.CompletedProcess) -> None:
+    assert b"Traceback" not in proc.stderr and b"Traceback" not in proc.stdout, proc.stderr[-2000:]
+    assert proc.returncode in (0, 2), (proc.returncode, proc.stderr[-2000:])
+
+
+def _log(counts: Counter) -> None:
+    path = os.environ.get("OCCSURF_FUZZ_LOG")
+    if path:
+        with open(path, "a", encoding="utf-8") as fh:
+            fh.write(json.dumps(dict(counts)) + "\n")
+
+
+@test_settings(max_examples=4)
+@given(fmt=st.sampled_from(["step", "iges"]), mutations=st.lists(mutation, min_size=BATCH, max_size=BATCH))
+def test_mutated_files_through_every_reading_command(bases, tmp_path_factory, fmt, mutations):
+    clean, n_clean = bases[fmt]
+    folder = tmp_path_factory.mktemp("fuzz")
+    suffix = clean.suffix
+    paths = [C.write(folder, f"{k}_{kind}{suffix}", _mutate(fmt, clean.read_bytes(), kind, a, b))
+             for k, (kind, a, b) in enumerate(mutations)]
+    counts: Counter = Counter(files=len(paths), format=fmt)
+
+    # occsurf inspect: one worker for the batch
+    proc = subprocess.run([sys.executable, "-m", "occsurf.bridge.cli", "inspect", str(folder), "--json",
+                           "--samples", "5", "--timeout", "120"], capture_output=True, cwd=REPO, timeout=1800)
+    _no_traceback(proc)
+    for f in json.loads(proc.stdout)["files"]:
+        if f["error"] is not None:
+            counts["inspect_crashed" if "crashed" in f["error"] else
+                   "inspect_timeout" if "longer than" in f["error"] else "inspect_refused"] += 1
+            continue
+        counts["inspect_warned" if f["warnings"] else "inspect_clean"] += 1
+        if f["n_faces"] != n_clean:
+            counts["inspect_face_count_differs"] += 1
+            assert f["warnings"], (f["path"], f["n_faces"], n_clean)
+
+    # occsurf fill: reads, fills and writes in its worker
+    out = folder / "filled.step"
+    proc = subprocess.run([sys.executable, "-m", "occsurf.bridge.cli", "fill", str(paths[0]), "--out", str(out),
+                           "--no-occ", "--timeout", "120"], capture_output=True, cwd=REPO, timeout=1800)
+    _no_traceback(proc)
+    counts["fill_exit_0" if proc.returncode == 0 else "fill_exit_2"] += 1
+
+    # the Python API, isolated, in this process: must return or raise ExchangeError, never kill us
+    reader = read_step if fmt == "step" else read_iges
+    try:
+        model = reader(paths[1], isolated=True, timeout=120)
+    except ExchangeError as err:
+        counts["api_crashed" if "crashed" in str(err) else "api_refused"] += 1
+        assert str(paths[1]) in str(err)
+    else:
+        counts["api_warned" if model.warnings else "api_clean"] += 1
+        if len(model.faces) != n_clean:
+            assert model.warnings, (paths[1], len(model.faces), n_clean)
+    _log(counts)
