@@ -132,7 +132,8 @@ def colored_mesh(source: QualityReport | FaceField | Sequence[FaceField], indica
         lo, hi = 0.0, 1.0
         colors = np.where(np.isfinite(V), np.where(V < 0.5, 245, 15), 128).astype(np.uint8)[:, None].repeat(3, 1)
     else:
-        lo, hi = scale if scale is not None else _scale([f.values[indicator] for f in fields], indicator)
+        size = getattr(source, "size", None) or 1.0
+        lo, hi = scale if scale is not None else _scale([f.values[indicator] for f in fields], indicator, size)
         kind = PICTURE_KINDS.get(indicator)
         name = cmap or (kind[1] if kind is not None and kind[1] not in ("stripes", "grey") else "diverging")
         colors = colormap_rgb(V, lo, hi, name)

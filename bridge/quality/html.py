@@ -79,7 +79,7 @@ def viewer_payload(report: QualityReport) -> dict[str, Any]:
     for key, _, _, _ in VIEWER_INDICATORS:
         if key in ("zebra", "isophote", "shaded") or not fields:
             continue
-        lo, hi = _scale([f.values[key] for f in fields], key)
+        lo, hi = _scale([f.values[key] for f in fields], key, report.size)
         ranges[key] = [lo, hi]
     return {"faces": faces, "ranges": ranges, "size": report.size, "skipped": total > MAX_VIEWER_VERTICES,
             "n_vertices": total}

@@ -46,36 +46,57 @@ FACE_SIZE = (520, 380)
 #: (over n . v in [-1, 1]).
 ZEBRA_PAIRS = 8
 ISOPHOTE_PAIRS = 6
-#: Normals drawn per face (about) and their length relative to the model size.
-HEDGEHOG_PER_FACE = 60
-HEDGEHOG_LENGTH = 0.025
+#: Normals drawn: one per cell of a grid of side size / HEDGEHOG_CELLS; length relative to the size.
+HEDGEHOG_CELLS = 30
+HEDGEHOG_LENGTH = 0.03
 #: Section planes per picture (normal to the longest side of the bounding box).
 N_SECTIONS = 9
 #: Comb teeth: longest tooth as a fraction of the shown extent.
 COMB_SCALE = 0.12
 
 
-def _scale(values: Sequence[np.ndarray], kind: str) -> tuple[float, float]:
-    """Common colour range of several faces' values (symmetric about 0 for signed curvatures)."""
+#: Smallest half-range of a curvature colour scale, times the model size (1/unit; squared for
+#: Gaussian curvature): a flat face's round-off (1e-14) is drawn as zero, not as a full scale.
+FLAT_SCALE = 1e-6
+
+
+def _scale(values: Sequence[np.ndarray], kind: str, size: float = 1.0) -> tuple[float, float]:
+    """Common colour range of several faces' values (symmetric about 0 for signed curvatures),
+    from :func:`occsurf.algorithms.quality.color_scale`, never narrower than :data:`FLAT_SCALE`."""
     from occsurf.algorithms.quality import color_scale
 
-    allv = np.concatenate([np.asarray(v, float).ravel() for v in values]) if values else np.zeros(1)
     if kind == "zebra":
         return 0.0, 1.0
     if kind == "isophote":
         return -1.0, 1.0
     if kind == "draft":
         return -90.0, 90.0
+    allv = np.concatenate([np.asarray(v, float).ravel() for v in values]) if values else np.zeros(1)
     finite = allv[np.isfinite(allv)]
+    floor = FLAT_SCALE / size ** (2 if kind == "gaussian" else 1)
     if finite.size == 0:
-        return -1.0, 1.0
+        return -floor, floor
     mode = "symmetric" if kind in ("mean", "gaussian", "max", "min") else "clipped"
     sc = color_scale(finite, mode)
     lo, hi = float(sc.lo), float(sc.hi)
-    if not hi > lo:
-        pad = max(abs(lo), 1e-12)
-        lo, hi = lo - pad, hi + pad
+    if hi - lo < 2 * floor:
+        mid = 0.0 if mode == "symmetric" else (lo + hi) / 2
+        lo, hi = mid - floor, mid + floor
     return lo, hi
+
+
+def _hedgehog_points(fields: Sequence[FaceField], size: float) -> tuple[np.ndarray, np.ndarray]:
+    """About evenly spread vertices for the normals: one per cell of a grid of side
+    ``size / HEDGEHOG_CELLS`` (small faces get few, large faces many)."""
+    P = np.concatenate([f.mesh.points for f in fields])
+    N = np.concatenate([f.mesh.normals for f in fields])
+    ok = np.all(np.isfinite(N), axis=1)
+    P, N = P[ok], N[ok]
+    if not len(P):
+        return P, N
+    keys = np.floor((P - P.min(axis=0)) / (size / HEDGEHOG_CELLS)).astype(np.int64)
+    _, first = np.unique(keys, axis=0, return_index=True)
+    return P[first], N[first]
 
 
 Lines = tuple[list[np.ndarray], list[np.ndarray], np.ndarray]
@@ -158,7 +179,7 @@ def render_picture(fields: Sequence[FaceField], kind: str, path: Path, *, size: 
             scene.add_mesh(f.mesh.points, f.mesh.triangles, normals=f.mesh.normals, shader=kind,
                            stripes=ZEBRA_PAIRS if kind == "zebra" else ISOPHOTE_PAIRS)
     elif value is not None:
-        lo, hi = scale if scale is not None else _scale([f.values[value] for f in fields], value)
+        lo, hi = scale if scale is not None else _scale([f.values[value] for f in fields], value, model_size)
         for f in fields:
             scene.add_mesh(f.mesh.points, f.mesh.triangles, normals=f.mesh.normals, scalars=f.values[value],
                            cmap=cmap, scale=(lo, hi))
@@ -167,10 +188,8 @@ def render_picture(fields: Sequence[FaceField], kind: str, path: Path, *, size: 
         for f in fields:
             scene.add_mesh(f.mesh.points, f.mesh.triangles, normals=f.mesh.normals, cmap="grey")
     if kind == "hedgehog":
-        for f in fields:
-            step = max(1, f.mesh.n_vertices // HEDGEHOG_PER_FACE)
-            scene.add_hedgehog(f.mesh.points[::step], f.mesh.normals[::step], length=HEDGEHOG_LENGTH * model_size,
-                               color=(0.1, 0.2, 0.75))
+        hp, hn = _hedgehog_points(fields, model_size)
+        scene.add_hedgehog(hp, hn, length=HEDGEHOG_LENGTH * model_size, color=(0.1, 0.2, 0.75))
     if kind == "sections" and sections is not None:
         lines, teeth, infl = sections()
         scene.add_lines(lines, color=(0.05, 0.05, 0.05), width=2.0)
@@ -207,7 +226,7 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
     shown: dict[str, str] = {}
     if not fields:
         return shown
-    scales = {v: _scale([f.values[v] for f in fields], v) for v in ("mean", "gaussian", "max", "absolute")}
+    scales = {v: _scale([f.values[v] for f in fields], v, report.size) for v in ("mean", "gaussian", "max", "absolute")}
     flags_all = _flag_points(report)
     total = len(model_pictures) + len(fields) * len(face_pictures)
     cut: dict[str, Any] = {}
@@ -247,7 +266,7 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
             try:
                 render_picture([fld], kind, out / name, size=FACE_SIZE, model_size=report.size,
                                flags=_flag_points(report, {row.index}) if kind == "mean" else None,
-                               title=f"face {row.index} ({row.type}): {PICTURE_KINDS[kind][3]}",
+                               title=f"face {row.index} ({row.type}): {kind}",
                                sections=lambda k=row.index: cuts()[1].get(k, ([], [], np.zeros((0, 3)))))
                 row.pictures[kind] = name
             except Exception as err:  # noqa: BLE001
