@@ -1,4 +1,4 @@
-"""``occsurf check FILE [--out DIR] [--json] [--faces ...] [--fail-on PRESET]``: the surface-quality report.
+"""``occsurf check FILE [--out DIR] [--json] [--faces ...] [--fail-on PRESET] [--no-pictures]``: the surface-quality report.
 
 Reads a STEP or IGES model in a worker process (:func:`occsurf.bridge.isolation.run_jobs`, as
 ``occsurf inspect`` does: a crash or a hang inside OCC costs the command, not the terminal) and
@@ -99,7 +99,7 @@ def check_job(item: dict[str, Any]) -> dict[str, Any]:
 
     with np.errstate(all="ignore"), quiet_native_stdout():
         return check_file(item["path"], item["out"], faces=item.get("faces"), preset=item.get("preset", "catia"),
-                          progress=progress)
+                          pictures=bool(item.get("pictures", True)), progress=progress)
 
 
 def write_outputs(out: Path, result: dict[str, Any]) -> None:
@@ -235,7 +235,7 @@ def run(ns: argparse.Namespace) -> int:
     os.close(fd)
     progress_path = Path(progress_name)
     item = {"path": str(path.resolve()), "out": str(out.resolve()), "faces": faces, "preset": preset,
-            "progress": progress_name}
+            "progress": progress_name, "pictures": not ns.no_pictures}
     try:
         with _Progress(progress_path, enabled=sys.stderr.isatty() and not ns.json):
             (outcome,) = run_jobs(CHECK_JOB, [item], timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD)
@@ -284,6 +284,8 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--fail-on", choices=PRESET_NAMES, metavar="PRESET",
                    help=f"exit 1 when an edge or face breaks this preset ({', '.join(PRESET_NAMES)}); it is also the "
                         "preset the report is judged against (default catia)")
+    p.add_argument("--no-pictures", action="store_true",
+                   help="skip the PNG pictures (the page keeps its tables and 3-D view): a faster CI gate")
     p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop the checker after this long (default {DEFAULT_TIMEOUT:g})")
     p.add_argument("--in-process", action="store_true",

@@ -64,7 +64,9 @@ def test_fail_on_gates(tmp_path, capsys) -> None:
     doc = json.loads((tmp_path / "a" / "report.json").read_text())
     assert doc["passed"] is False and doc["failures"]
     # the same model passes the mechanical preset (no curvature checks; its creases are by design)
-    rc = main(["check", path, "--out", str(tmp_path / "b"), "--fail-on", "mechanical", "--in-process", "--faces", "9"])
+    rc = main(["check", path, "--out", str(tmp_path / "b"), "--fail-on", "mechanical", "--in-process", "--faces", "9",
+               "--no-pictures"])
+    assert not list((tmp_path / "b").glob("*.png")) and (tmp_path / "b" / "index.html").is_file()
     doc = json.loads((tmp_path / "b" / "report.json").read_text())
     assert rc == (0 if doc["passed"] else 1)
     assert rc == 0, doc["failures"]
