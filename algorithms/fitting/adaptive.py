@@ -24,7 +24,9 @@ Per level
    fitted one after the other, each against the residual its predecessors left.
 3. The error is measured again: the distance from each data point to the (flattened) surface by
    point projection (:func:`~._common.project_points`), which never exceeds the residual at the
-   data parameter.
+   data parameter; on the four boundary rows the residual at the parameters counts too
+   (:func:`boundary_error`), so the surface's border stays within ``tol`` of the data's border
+   (a corner of a least-squares fit can flare out along the surface, near every data point).
 
 Height grids keep ``x = u``, ``y = v`` exactly (displacements along z only), so the result stays a
 height field. The result is an editable :class:`~occsurf.algorithms.hierarchical.HierarchicalSurface`
@@ -55,7 +57,7 @@ from ..kernel.surface import BSplineSurface
 from ._common import project_points
 from .gridded import GridFit, _grid_data, _pair_of, _params, fit_grid
 
-__all__ = ["LevelReport", "AdaptiveFit", "fit_adaptive", "measure_grid"]
+__all__ = ["LevelReport", "AdaptiveFit", "fit_adaptive", "measure_grid", "boundary_error"]
 
 Array = NDArray[np.float64]
 
@@ -99,7 +101,8 @@ class AdaptiveFit:
         Measured distance of each data point to the final surface (NaN on missing cells).
     u_params, v_params : ndarray
     converged : bool
-        ``max_error <= tol``.
+        ``max_error <= tol``, and the boundary rows are within ``tol`` of the surface's border at
+        their parameters (:func:`boundary_error`).
     level_surfaces : tuple of BSplineSurface
         Per level L, the flat surface of the hierarchy truncated below L (finer offsets zeroed).
     level_distances : tuple of ndarray, each (m, n)
@@ -140,6 +143,19 @@ def measure_grid(surface, points: Array, u: Array, v: Array) -> Array:
     _, _, d = project_points(surface, points[ok], U[ok], W[ok])
     out[ok] = d
     return out
+
+
+def boundary_error(surface, points: Array, u: Array, v: Array, dist: Array) -> Array:
+    """``dist`` with the four boundary rows raised to the deviation at the data parameters,
+    ``|Q - S(u, v)|``: a fit whose border slides along the surface (a flared corner) is near every
+    data point, so the distance misses it, but its border is that far from the data's border."""
+    e = dist.copy()
+    for idx in ((0, slice(None)), (-1, slice(None)), (slice(None), 0), (slice(None), -1)):
+        uu, vv = u[idx[0]], v[idx[1]]
+        S = surface.evaluate_grid(np.atleast_1d(uu), np.atleast_1d(vv)).reshape(points[idx].shape)
+        r = np.linalg.norm(points[idx] - S, axis=-1)
+        e[idx] = np.fmax(e[idx], r)
+    return e
 
 
 def _stats(dist: Array) -> tuple[float, float]:
@@ -327,7 +343,7 @@ def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, 
         u_, v_ = base_.u_params, base_.v_params
         P3_ = np.stack(np.broadcast_arrays(u_[:, None], v_[None, :], Q[..., 0]), -1) if heights else Q
         dist_ = measure_grid(base_.surface, P3_, u_, v_)
-        return base_, P3_, dist_, float(np.nanmax(dist_))
+        return base_, P3_, dist_, float(np.nanmax(boundary_error(base_.surface, P3_, u_, v_, dist_)))
 
     cur = attempt(poles)
     while True:
@@ -336,7 +352,8 @@ def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, 
             progress(f"base {poles[0]}x{poles[1]}: max error {worst:.3g}")
         if worst <= tol:
             return base, P3, dist
-        flagged = dist > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
+        flagged = boundary_error(base.surface, P3, base.u_params, base.v_params, dist) > \
+            max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
         hs = HierarchicalSurface(base.surface, "frame")
         boxes = _regions(hs, None, flagged, base.u_params, base.v_params)
         (u0, u1), (v0, v1) = hs.domain
@@ -426,10 +443,11 @@ def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3,
     hs = HierarchicalSurface(base.surface, "frame")
     fitter = _Fitter(hs, P3, u, v, heights, refit_base)
     for rnd in range(1, int(tolerances.FIT_ADAPTIVE_MAX_ROUNDS) + 1):
-        worst = float(np.nanmax(dist))
+        err = boundary_error(hs.flatten(), P3, u, v, dist)
+        worst = float(np.nanmax(err))
         if worst <= tol:
             break
-        flagged = dist > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
+        flagged = err > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
         nodes, own, lv = _owner(hs, u, v)
         resid = fitter.residual()
         new = []
@@ -452,4 +470,5 @@ def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3,
             progress(f"round {rnd}: {len(new)} overlays added (depth {hs.depth}), "
                      f"{hs.pole_counts()['stored']} control points, max error {np.nanmax(dist):.3g}")
     reports, surfs, dists = _level_reports(hs, P3, u, v)
-    return AdaptiveFit(hs, tuple(reports), dists[-1], u, v, tol, reports[-1].max_error <= tol, tuple(surfs), tuple(dists))
+    border = float(np.nanmax(boundary_error(surfs[-1], P3, u, v, dists[-1])))
+    return AdaptiveFit(hs, tuple(reports), dists[-1], u, v, tol, border <= tol, tuple(surfs), tuple(dists))
