@@ -150,3 +150,28 @@ def test_bad_input():
         fit_adaptive(np.zeros((20, 20, 2)), 1e-3)
     with pytest.raises(ParameterError, match="max_levels"):
         fit_adaptive(Z, 1e-3, max_levels=-1)
+
+
+def test_adaptive_tolerances_are_read_at_call_time():
+    x = np.linspace(0, 1, 41)
+    Z = sharp(*np.meshgrid(x, x, indexing="ij"))
+    with tolerances.override(FIT_ADAPTIVE_MAX_COVER=1.0, FIT_ADAPTIVE_MAX_LEVELS=0):
+        fixed = fit_adaptive(Z, 1e-6)  # the base never grows, no overlay: the default 8 x 8 base
+    assert fixed.hierarchy.base.n_poles == (8, 8) and not fixed.hierarchy.overlays
+    with tolerances.override(FIT_ADAPTIVE_MAX_COVER=0.0, FIT_ADAPTIVE_MAX_LEVELS=0):
+        grown = fit_adaptive(Z, 1e-6)  # any place to refine grows the base
+    assert np.prod(grown.hierarchy.base.n_poles) > 64
+    s = fixed.hierarchy.flatten()
+    P3 = np.stack(np.broadcast_arrays(x[:, None], x[None, :], Z), -1)
+    with tolerances.override(FIT_PROJECTION_MAX_ITER=0):  # no Newton step: the residual at the parameters
+        d0 = measure_grid(s, P3, x, x)
+    np.testing.assert_allclose(d0, np.linalg.norm(s.evaluate_grid(x, x) - P3, axis=-1), atol=EXACT)
+    assert np.all(measure_grid(s, P3, x, x) <= d0 + EXACT)
+
+
+def test_franke_on_a_coarse_grid_reaches_the_tolerance():
+    from occsurf.examples.fitting import franke
+
+    x = np.linspace(0, 1, 33)
+    fit = fit_adaptive(franke(*np.meshgrid(x, x, indexing="ij")), 1e-3)
+    assert fit.converged and fit.max_error <= 1e-3
