@@ -309,7 +309,7 @@ function drawLegend(ind, map, r){
 }
 const box = new THREE.Box3().setFromObject(group); const sph = box.getBoundingSphere(new THREE.Sphere());
 const R = sph.radius || 1; const dir = new THREE.Vector3(1,-1,0.8).normalize();
-camera.up.set(0,0,1); camera.position.copy(sph.center.clone().add(dir.multiplyScalar(R*4.2))); camera.near=R/100; camera.far=R*100; camera.updateProjectionMatrix();
+camera.up.set(0,0,1); camera.position.copy(sph.center.clone().add(dir.multiplyScalar(R*3.3))); camera.near=R/100; camera.far=R*100; camera.updateProjectionMatrix();
 const controls = new THREE.OrbitControls(camera, canvas); controls.target.copy(sph.center); controls.update();
 function resize(){ const w=canvas.clientWidth, h=canvas.clientHeight; renderer.setSize(w,h,false); camera.aspect=w/h; camera.updateProjectionMatrix(); }
 const sel = document.getElementById('indicator');

@@ -41,7 +41,7 @@ MODEL_PICTURES = ("mean", "gaussian", "zebra", "isophote", "draft", "hedgehog", 
 FACE_PICTURES = ("mean", "zebra", "sections")
 #: Picture sizes in pixels.
 MODEL_SIZE = (900, 640)
-FACE_SIZE = (520, 380)
+FACE_SIZE = (440, 330)
 #: Light/dark pairs of the per-pixel zebra (per half turn of the reflected ray) and isophotes
 #: (over n . v in [-1, 1]).
 ZEBRA_PAIRS = 8

@@ -204,11 +204,40 @@ def uv_mask(mesh: FaceMesh) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
 
     uv = mesh.uv
     tris = mesh.triangles[:, ::-1] if mesh.reversed else mesh.triangles
-    finder = Triangulation(uv[:, 0], uv[:, 1], tris).get_trifinder()
+    a, b, c = uv[tris[:, 0]], uv[tris[:, 1]], uv[tris[:, 2]]
+    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    span = float(np.ptp(uv, axis=0).prod()) or 1.0
+    tris = tris[np.abs(area) > 1e-14 * span]  # collapsed triangles (poles, seams) confuse the finder
+    tris = np.where((area[np.abs(area) > 1e-14 * span] < 0)[:, None], tris[:, ::-1], tris)
+    try:
+        finder = Triangulation(uv[:, 0], uv[:, 1], tris).get_trifinder()
+    except (RuntimeError, ValueError):  # overlapping triangles in the parameter plane (a face across its seam)
+        return _triangle_mask(uv, tris)
 
     def mask(u: np.ndarray, v: np.ndarray) -> np.ndarray:
         u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
         return np.asarray(finder(u.ravel(), v.ravel())).reshape(u.shape) >= 0
+
+    return mask
+
+
+def _triangle_mask(uv: np.ndarray, tris: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """The same mask by brute force: a point is inside when it is inside one triangle
+    (barycentric test, vectorised over points in blocks against every triangle)."""
+    a, b, c = uv[tris[:, 0]], uv[tris[:, 1]], uv[tris[:, 2]]
+    det = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+
+    def mask(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
+        q = np.column_stack([u.ravel(), v.ravel()])
+        out = np.zeros(len(q), bool)
+        for s in range(0, len(q), 256):
+            dx = q[s:s + 256, None, 0] - a[None, :, 0]
+            dy = q[s:s + 256, None, 1] - a[None, :, 1]
+            l1 = (dx * (c[:, 1] - a[:, 1]) - dy * (c[:, 0] - a[:, 0])) / det
+            l2 = (dy * (b[:, 0] - a[:, 0]) - dx * (b[:, 1] - a[:, 1])) / det
+            out[s:s + 256] = np.any((l1 >= -1e-12) & (l2 >= -1e-12) & (l1 + l2 <= 1 + 1e-12), axis=1)
+        return out.reshape(u.shape)
 
     return mask
 
