@@ -396,7 +396,7 @@ class Scene:
                      zoom: float = 1.0) -> np.ndarray:
         """Render and return the image as ``(height, width, 3)`` uint8 (row 0 at the top)."""
         from vtkmodules.util.numpy_support import vtk_to_numpy
-        from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
+        from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
 
         width, height = int(size[0]), int(size[1])
         if width < 16 or height < 16:
@@ -407,14 +407,9 @@ class Scene:
             self._decorate()
             self._place_camera(camera, zoom, width / height)
             win.Render()
-            grab = vtkWindowToImageFilter()
-            grab.SetInput(win)
-            grab.SetInputBufferTypeToRGB()
-            grab.ReadFrontBufferOff()
-            grab.Update()
-            img = grab.GetOutput()
-            w, h, _ = img.GetDimensions()
-            arr = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3].copy()
+            buf = vtkUnsignedCharArray()
+            win.GetPixelData(0, 0, width - 1, height - 1, 0, buf, 0)  # back buffer: a third faster than
+            arr = vtk_to_numpy(buf).reshape(height, width, 3)[::-1].copy()  # vtkWindowToImageFilter
         finally:
             win.RemoveRenderer(self._renderer)
         return arr
