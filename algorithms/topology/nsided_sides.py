@@ -78,9 +78,9 @@ def _unit(v: Array) -> Array:
 
 def plane_angle(normals: Array, tangents: Array, cross: Array) -> Array:
     """Angle (degrees, sign-free) between planes with ``normals`` (m, 3) and ``span(tangents, cross)``."""
-    m = _unit(np.cross(tangents, cross))
-    c = np.abs(np.einsum("mi,mi->m", _unit(normals), m))
-    return np.degrees(np.arccos(np.clip(c, 0.0, 1.0)))
+    m, n = _unit(np.cross(tangents, cross)), _unit(normals)
+    c = np.abs(np.einsum("mi,mi->m", n, m))
+    return np.degrees(np.arctan2(np.linalg.norm(np.cross(n, m), axis=-1), c))  # accurate near 0
 
 
 def _cartesian_tangent(curve: BSplineCurve, s: Array) -> tuple[Array, Array]:
@@ -256,7 +256,8 @@ def fit_boundary(params: ArrayLike, points: ArrayLike, tol: float, *, max_spans:
     Used where several edges meeting tangentially (a flat corner) become one side of the hole:
     their chain is one smooth curve geometrically but not one spline (knots of full multiplicity,
     different weights). Least squares on the given parameters (ends interpolated: weight 1e4), every
-    span holding a sample farther than ``tol`` bisected while it holds at least 8 samples.
+    span holding a sample farther than ``tol`` bisected while it holds at least 8 samples. The end
+    poles are then set to the end samples, so the curve starts and ends exactly there.
 
     Parameters
     ----------
@@ -285,7 +286,9 @@ def fit_boundary(params: ArrayLike, points: ArrayLike, tol: float, *, max_spans:
     w[[0, -1]] = 1e4
     while True:
         knots = np.r_[np.full(p + 1, lo), inner, np.full(p + 1, hi)]
-        c = BSplineCurve(p, knots, _lsq(knots, p, s, P, w))
+        coef = _lsq(knots, p, s, P, w)
+        coef[0], coef[-1] = P[0], P[-1]  # clamped: the ends interpolated exactly (the sides must meet)
+        c = BSplineCurve(p, knots, coef)
         err = np.linalg.norm(c.evaluate(s) - P, axis=1)
         breaks = np.r_[lo, inner, hi]
         if err.max() <= tol or len(breaks) - 1 >= cap:
