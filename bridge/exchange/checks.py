@@ -373,12 +373,19 @@ def _prune(data: bytes, starts: list[int], semis: list[int], rec_of: list[int], 
 
 
 # ---------------------------------------------------------------------------------------- IGES
+#: IGES surfaces that OCC makes a face of when they stand alone (not physically dependent).
+IGES_SURFACE_TYPES = frozenset({114, 118, 120, 122, 128, 140, 190, 192, 194, 196, 198})
+
+
 @dataclass
 class IgesScan:
-    """What :func:`scan_iges` found: ``warnings`` and the number of entities per type."""
+    """What :func:`scan_iges` found: ``warnings``, the number of entities per type and the number of
+    faces the file describes (``face_instances``: faces 510, else trimmed or bounded surfaces 144/143
+    and stand-alone surfaces that are not physically dependent)."""
 
     warnings: list[str] = field(default_factory=list)
     types: Counter = field(default_factory=Counter)  # type: ignore[type-arg]
+    face_instances: int = 0
 
 
 def _iges_numbers(text: str, delim: str, count: int) -> list[str]:
@@ -406,6 +413,7 @@ def scan_iges(p: Path, data: bytes) -> IgesScan:
         delim = glob[2]
     rec_end = ";"
     scan = IgesScan()
+    loose = 0
     d, par = by_sec["D"], by_sec["P"]
     for k in range(0, len(d) - 1, 2):
         a, b = d[k], d[k + 1]
@@ -418,6 +426,9 @@ def scan_iges(p: Path, data: bytes) -> IgesScan:
             raise ExchangeError(f"{p}: damaged IGES file (directory entry D{seq}: unreadable type or parameter "
                                 "pointer)") from None
         scan.types[etype] += 1
+        dependent = a[66:68] in ("01", "03")  # physically dependent: part of another entity
+        if etype in (143, 144) or (etype in IGES_SURFACE_TYPES and not dependent):
+            loose += not dependent
         if ptr < 1 or nlines < 1 or ptr - 1 + nlines > len(par):
             raise ExchangeError(f"{p}: damaged IGES file (directory entry D{seq}, type {etype}: parameter lines "
                                 f"{ptr}..{ptr + nlines - 1} not in the {len(par)} of the P section)")
@@ -426,6 +437,7 @@ def scan_iges(p: Path, data: bytes) -> IgesScan:
         text = "".join(x[:64] for x in par[ptr - 1:ptr - 1 + nlines]).split(rec_end)[0]
         fields = _iges_numbers(text, delim, 10**9)
         _check_bspline(p, seq, etype, fields)
+    scan.face_instances = scan.types[510] if scan.types[510] else loose
     return scan
 
 
@@ -530,15 +542,15 @@ def occ_check_warnings(reader: Any, fmt: str, scan: StepScan | None = None) -> l
     return _limited(lines, "OCC check messages")
 
 
-def model_warnings(shape: Any, reader: Any, scan: StepScan | None, n_faces: int) -> list[str]:
+def model_warnings(shape: Any, reader: Any, scan: StepScan | IgesScan | None, n_faces: int) -> list[str]:
     """The model against the file: face count, and closed shells with free edges (STEP)."""
     lines: list[str] = []
     if scan is None:
         return lines
+    what = ", ".join(STEP_FACE_TYPES) if isinstance(scan, StepScan) else "entities 510, or 143/144 and surfaces"
     if scan.face_instances and n_faces != scan.face_instances:
-        lines.append(f"the file has {scan.face_instances} face instances ({', '.join(STEP_FACE_TYPES)}); "
-                     f"the model read has {n_faces} faces")
-    if scan.closed_shells:
+        lines.append(f"the file has {scan.face_instances} face instances ({what}); the model read has {n_faces} faces")
+    if isinstance(scan, StepScan) and scan.closed_shells:
         lines += _open_closed_shells(shape, scan)
     return lines
 

@@ -324,7 +324,8 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
         warnings = list(scan.warnings)
     else:
         _files.check_iges_text(p, data)
-        warnings = list(checks.scan_iges(p, data).warnings)
+        iges_scan = checks.scan_iges(p, data)
+        warnings = list(iges_scan.warnings)
         scan = None
     _xocc.silence_occ()
     from OCP.IFSelect import IFSelect_ReturnStatus
@@ -352,7 +353,7 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
                 raise
             raise ExchangeError(f"{err} ({warnings[0]})") from err
         warnings += root_warnings
-        warnings += checks.model_warnings(shape, reader, scan, _count_bare_faces(shape))
+        warnings += checks.model_warnings(shape, reader, scan if fmt == "step" else iges_scan, _count_bare_faces(shape))
     return p, shape, names, warnings
 
 
