@@ -1,4 +1,4 @@
-"""``occsurf fill IN --out OUT.step [--all-loops] [--no-occ] [--json] [--timeout SECONDS] [--in-process]``.
+"""``occsurf fill IN --out OUT.step [--faces I ...] [--all-loops] [--no-occ] [--json] [--timeout SECONDS] [--in-process]``.
 
 Reads a STEP or IGES model, fills every hole with :func:`occsurf.bridge.modeling.fill.fill_model`
 (n G1 patches per hole, course §8-3), writes the sewn result to ``OUT`` (STEP) and prints per hole
@@ -82,6 +82,8 @@ def fill_job(item: dict[str, Any]) -> dict[str, Any]:
         from ..modeling.fill import fill_model
 
         model = read_model(src)
+        if item.get("faces"):
+            return _refill_job(item, model, exchange)
         result = fill_model(model.shape, all_loops=item["all_loops"], compare_occ=item["compare_occ"])
         filled = any(h.status == "filled" for h in result.holes)
         nothing_to_do = not any(h.status != "outer" for h in result.holes)
@@ -89,6 +91,25 @@ def fill_job(item: dict[str, Any]) -> dict[str, Any]:
             exchange.write_step(out, result.shape)
     return {"holes": [asdict(h) for h in result.holes], "free_loops_after": result.free_loops_after,
             "written": filled or nothing_to_do, "warnings": list(model.warnings)}
+
+
+def _refill_job(item: dict[str, Any], model: Any, exchange: Any) -> dict[str, Any]:
+    """``--faces``: remove the faces, fill the hole(s) they leave, write the model if any was filled."""
+    from ..modeling.refill import refill_model
+
+    reports, shape = refill_model(model.shape, item["faces"], compare_occ=item["compare_occ"])
+    if shape is not None:
+        exchange.write_step(Path(item["output"]), shape)
+    holes = []
+    for k, r in enumerate(reports):
+        d, t = r.occ.get("default", {}), r.occ.get("tuned", {})
+        holes.append({"index": k, "faces": r.faces, "sides": r.sides, "g1_edges": r.g1_edges,
+                      "status": "filled" if r.status == "filled" else "failed", "reason": r.reason,
+                      "seconds": r.seconds, "g0": r.g0, "g1": r.g1, "side_g0": r.side_g0, "side_g1": r.side_g1,
+                      "valid": r.valid, "step_round_trip": r.step_round_trip,
+                      "occ_status": d.get("status"), "occ_reason": d.get("reason"), "occ_seconds": d.get("seconds"),
+                      "occ_g0": d.get("g0"), "occ_g1": d.get("g1"), "occ_tuned": t or None})
+    return {"holes": holes, "free_loops_after": None, "written": shape is not None, "warnings": list(model.warnings)}
 
 
 def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
@@ -109,7 +130,10 @@ def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
     sys.stdout.write("  (G0 gap in model units, G1 angle between tangent planes: max along the hole's boundary, "
                      "OCC LocalAnalysis_SurfaceContinuity)\n")
     n_filled = sum(h["status"] == "filled" for h in all_holes)
-    if n_filled:
+    if n_filled and result["free_loops_after"] is None:  # --faces
+        faces = ", ".join(" ".join(map(str, h["faces"])) for h in all_holes if h["status"] == "filled")
+        sys.stdout.write(f"wrote {out} (faces {faces} replaced by {n_filled} fills)\n")
+    elif n_filled:
         sys.stdout.write(f"wrote {out} ({n_filled} fills sewn in; {result['free_loops_after']} free loops left)\n")
     elif result["written"]:
         sys.stdout.write(f"no holes to fill; wrote {out} unchanged\n")
@@ -124,7 +148,8 @@ def run(ns: argparse.Namespace) -> int:
     if why is not None:
         error(f"{shown_path(out)}: cannot write the filled model there ({why})")
         return EXIT_ERROR
-    item = {"input": str(src), "output": str(out), "all_loops": ns.all_loops, "compare_occ": not ns.no_occ}
+    item = {"input": str(src), "output": str(out), "all_loops": ns.all_loops, "compare_occ": not ns.no_occ,
+            "faces": list(ns.faces or [])}
     [outcome] = run_jobs(FILL_JOB, [item], timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD)
     if outcome.status != OK:
         why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
@@ -161,6 +186,9 @@ def add_parser(sub: Any) -> None:
     f.add_argument("input", metavar="IN", help="STEP or IGES file")
     f.add_argument("--out", required=True, metavar="OUT.step", help="where to write the filled model (STEP)")
     f.add_argument("--all-loops", action="store_true", help="fill outer boundaries too")
+    f.add_argument("--faces", type=int, nargs="+", metavar="I", default=None,
+                   help="remove these faces (numbered as in inspect's table) and refill the hole(s) they leave: "
+                        "adjacent faces make one hole; G1 is asked where the original was tangent-continuous")
     f.add_argument("--no-occ", action="store_true", help="do not run OCC's filler for comparison")
     f.add_argument("--json", action="store_true", help="print one JSON document instead of the table")
     f.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",

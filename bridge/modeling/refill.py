@@ -55,7 +55,7 @@ from ..conversion.splines import from_occ, make_face
 from ..messages import one_line
 from .fill import ASSESS_SAMPLES, SEW_TOLERANCE, assess_joint, edge_face_map
 
-__all__ = ["RefillReport", "refill_faces", "model_faces", "G1_EDGE_DEG", "OCC_TUNED", "OCC_DEFAULT"]
+__all__ = ["RefillReport", "refill_faces", "refill_model", "face_components", "model_faces", "G1_EDGE_DEG", "OCC_TUNED", "OCC_DEFAULT"]
 
 #: An edge counts as tangent-continuous in the original model (and the fill is asked to be G1 to
 #: the neighbour there) when the removed face and the neighbour meet within this angle (degrees).
@@ -497,6 +497,7 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         rep.g0 = max(rep.side_g0)
         rep.g1 = max([a for a in rep.side_g1 if a is not None], default=0.0)
         rep.status = "filled"
+        rep._fill_faces = occ_faces  # for refill_model (not a field: not serialised)
         if check:
             shape = _sew_in(model, rep.faces, occ_faces)
             rep.valid = bool(BRepCheck_Analyzer(shape).IsValid())
@@ -564,3 +565,58 @@ def _sew_in(model: SewnModel, removed: list[int], new_faces: list[Any]) -> Any:
     with _occ.kernel_errors("sewing the fill in"):
         sew.Perform()
     return sew.SewedShape()
+
+
+def face_components(model: SewnModel, faces: list[int]) -> list[list[int]]:
+    """The faces grouped into edge-connected sets: each set leaves one hole."""
+    left, out = set(int(i) for i in faces), []
+    pairs = model.adjacent_pairs(sorted(left))
+    while left:
+        comp, todo = set(), [min(left)]
+        while todo:
+            i = todo.pop()
+            if i in comp:
+                continue
+            comp.add(i)
+            todo += [b if a == i else a for a, b in pairs if i in (a, b)]
+        out.append(sorted(comp))
+        left -= comp
+    return out
+
+
+def refill_model(shape: Any, faces: list[int], *, compare_occ: bool = True) -> tuple[list[RefillReport], Any]:
+    """Remove ``faces`` (inspect numbering) and fill every hole they leave (one per edge-connected set).
+
+    Returns
+    -------
+    (list of RefillReport, TopoDS_Shape or None)
+        One report per hole; the sewn model with every fill that succeeded (``None`` when none did),
+        whose ``valid``/``step_round_trip`` are recorded on every filled report.
+
+    Raises
+    ------
+    InvalidGeometryError
+        ``faces`` empty or out of range, or ``shape`` not a non-null shape.
+    """
+    from OCP.TopoDS import TopoDS_Shape
+
+    shape = getattr(shape, "wrapped", shape)
+    if not isinstance(shape, TopoDS_Shape) or shape.IsNull():
+        raise InvalidGeometryError(f"shape: expected a non-null TopoDS_Shape, got {type(shape).__name__}")
+    model = SewnModel(shape)
+    n = len(model.faces)
+    bad = [i for i in faces if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < n]
+    if bad or not faces:
+        raise InvalidGeometryError(f"faces: expected face indices 0..{n - 1} (numbered as by inspect), got {list(faces)}")
+    reports = [refill_faces(model, comp, compare_occ=compare_occ, check=False)[0]
+               for comp in face_components(model, list(faces))]
+    filled = [r for r in reports if r.status == "filled"]
+    if not filled:
+        return reports, None
+    removed = sorted({i for r in filled for i in r.faces})
+    result = _sew_in(model, removed, [f for r in filled for f in r._fill_faces])
+    valid = bool(BRepCheck_Analyzer(result).IsValid())
+    trip = _round_trip(result, len(model_faces(result)))
+    for r in filled:
+        r.valid, r.step_round_trip = valid, trip
+    return reports, result

@@ -171,3 +171,27 @@ def test_in_process_gives_the_same_document(capsys, tmp_path: Path) -> None:
         doc.pop("output")
         docs.append(doc)
     assert docs[0] == docs[1]
+
+
+_LENS = Path(__file__).resolve().parents[2].parent / "shared" / "realdata" / "pythonocc-core__sunglasses_lens.igs"
+
+
+@pytest.mark.skipif(not _LENS.is_file(), reason=f"{_LENS} is absent (public real models)")
+def test_fill_faces_replaces_a_trimmed_face_and_reports_ours_beside_occ(capsys, tmp_path: Path) -> None:
+    out = tmp_path / "lens.step"
+    rc, stdout, stderr = run_main(capsys, "fill", str(_LENS), "--out", str(out), "--faces", "1", "--json",
+                                  "--in-process")
+    assert rc == 0, stderr
+    doc = json.loads(stdout)
+    [h] = doc["holes"]
+    assert h["faces"] == [1] and h["status"] == "filled" and h["valid"] and h["step_round_trip"]
+    assert h["g0"] <= h["occ_g0"] and h["g1"] <= h["occ_g1"] and h["occ_tuned"]["status"] == "ok"
+    assert len(read_step(out).faces) == 12
+
+
+@pytest.mark.skipif(not _LENS.is_file(), reason=f"{_LENS} is absent (public real models)")
+def test_fill_faces_out_of_range_is_one_line_and_writes_nothing(capsys, tmp_path: Path) -> None:
+    out = tmp_path / "lens.step"
+    rc, stdout, stderr = run_main(capsys, "fill", str(_LENS), "--out", str(out), "--faces", "1", "99", "--in-process")
+    assert rc == 2 and not out.exists()
+    assert stderr.count("\n") == 1 and "faces: expected face indices 0..8" in stderr and "Traceback" not in stderr
