@@ -36,8 +36,14 @@ PICTURE_KINDS: dict[str, tuple[str | None, str, str, str]] = {
     "draft": ("draft", "diverging", "draft [deg]", "draft angle, pull +z"),
     "hedgehog": (None, "grey", "", "normals (hedgehog)"),
     "sections": (None, "grey", "", "sections with curvature combs (green: inflections)"),
+    "edges": (None, "grey", "", "edges: G2 green, G1 blue, G0 orange, sharp black, gap magenta; red: violations"),
 }
-MODEL_PICTURES = ("mean", "gaussian", "zebra", "isophote", "draft", "hedgehog", "sections")
+#: Colours of the edge classes of :func:`occsurf.bridge.quality.continuity.edge_continuity`.
+EDGE_COLORS: dict[str, tuple[float, float, float]] = {
+    "G2": (0.1, 0.65, 0.2), "G1": (0.15, 0.35, 0.9), "G0": (0.95, 0.55, 0.0), "sharp": (0.05, 0.05, 0.05),
+    "gap": (0.9, 0.0, 0.9), "seam": (0.55, 0.55, 0.55), "degenerate": (0.5, 0.0, 0.5),
+}
+MODEL_PICTURES = ("mean", "gaussian", "zebra", "isophote", "draft", "hedgehog", "sections", "edges")
 FACE_PICTURES = ("mean", "zebra", "sections")
 #: Picture sizes in pixels.
 MODEL_SIZE = (900, 640)
@@ -165,7 +171,7 @@ def section_lines(fields: Sequence[FaceField], size: float) -> tuple[Lines, dict
 
 def render_picture(fields: Sequence[FaceField], kind: str, path: Path, *, size: tuple[int, int] = MODEL_SIZE,
                    title: str = "", model_size: float = 1.0, scale: tuple[float, float] | None = None,
-                   flags: np.ndarray | None = None, edges: Sequence[np.ndarray] = (),
+                   flags: np.ndarray | None = None, edges: Sequence[tuple[str, np.ndarray]] = (),
                    sections: Callable[[], tuple[list, list, np.ndarray]] | None = None) -> Path:
     """One picture of ``kind`` (a key of :data:`PICTURE_KINDS`) of some faces, written to ``path``."""
     from ..rendering.vtk_scene import Scene
@@ -196,13 +202,19 @@ def render_picture(fields: Sequence[FaceField], kind: str, path: Path, *, size: 
         scene.add_lines(teeth, color=(0.85, 0.25, 0.1), width=1.0)
         if len(infl):
             scene.add_points(infl, color=(0.0, 0.6, 0.0), size=10)
-    if edges:
-        scene.add_lines(edges, color=(0.15, 0.15, 0.15), width=1.2)
+    if kind == "edges":
+        for cls, colour in EDGE_COLORS.items():
+            scene.add_lines([pl for c, pl in edges if c == cls], color=colour, width=3.0)
     if flags is not None and len(flags):
         scene.add_points(flags, color=(0.95, 0.05, 0.05), size=11)
     if title:
         scene.set_title(title)
     return scene.render(path, size=size, camera="iso")
+
+
+def _violation_points(report: QualityReport) -> np.ndarray:
+    pts = [v.get("point") for v in report.violations if v.get("point") is not None and len(v["point"]) == 3]
+    return np.asarray(pts, float).reshape(-1, 3)
 
 
 def _flag_points(report: QualityReport, faces: set[int] | None = None) -> np.ndarray:
@@ -246,7 +258,9 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
         value = PICTURE_KINDS[kind][0]
         try:
             render_picture(fields, kind, out / name, size=MODEL_SIZE, model_size=report.size,
-                           scale=scales.get(value or ""), flags=flags_all if kind == "mean" else None,
+                           scale=scales.get(value or ""),
+                           flags=flags_all if kind == "mean" else (_violation_points(report) if kind == "edges" else None),
+                           edges=report.edge_lines,
                            title=f"{Path(report.path).name}: {PICTURE_KINDS[kind][3]}",
                            sections=lambda: cuts()[0])
             shown[kind] = name

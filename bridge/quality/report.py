@@ -129,6 +129,7 @@ class QualityReport:
     seconds: dict[str, float] = field(default_factory=dict)
     violations: list[dict[str, Any]] = field(default_factory=list)
     match_tol: float | None = None
+    edge_lines: list[tuple[str, np.ndarray]] = field(default_factory=list, repr=False)
     fields: dict[int, FaceField] = field(default_factory=dict, repr=False)
 
     @property
@@ -405,8 +406,32 @@ def _add_edges(report: QualityReport, model: ImportedModel, chosen: list[int] | 
             f = by_face.get(k)
             if f is not None and g1 is not None and (f.worst_g1_deg is None or g1 > f.worst_g1_deg):
                 f.worst_g1_deg = g1
+    report.edge_lines = _edge_lines(reports)
     report.violations = [v.to_json() for v in continuity.check_edges(reports, th)]
     report.failures.extend(_failure_text(v) for v in continuity.check_edges(reports, th))
+
+
+#: Points per edge polyline in the edge picture.
+EDGE_POINTS = 24
+
+
+def _edge_lines(reports: Sequence[Any]) -> list[tuple[str, np.ndarray]]:
+    """``(classification, polyline (k, 3))`` of every measured edge, from its first side's 3-D curve
+    (OCC's ``BRepAdaptor_Curve``; one call per point, the edge count is small)."""
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+
+    out = []
+    for r in reports:
+        edge = (getattr(r, "edges", None) or (None,))[0]
+        if edge is None:
+            continue
+        try:
+            c = BRepAdaptor_Curve(edge)
+            ts = np.linspace(c.FirstParameter(), c.LastParameter(), EDGE_POINTS)
+            out.append((str(r.classification), np.array([c.Value(float(t)).Coord() for t in ts])))
+        except Exception:  # noqa: BLE001 - a degenerated edge has no curve: nothing to draw
+            continue
+    return out
 
 
 def _failure_text(failure: Any) -> str:

@@ -324,6 +324,8 @@ class Scene:
         cells = [np.arange(s, s + len(p)) for s, p in zip(starts, lines)]
         mapper = vtkPolyDataMapper()
         mapper.SetInputData(_polydata(P, cells, "lines"))
+        # lines on a surface (edges, sections) are pulled towards the eye so the surface never hides them
+        mapper.SetRelativeCoincidentTopologyLineOffsetParameters(-2.0, -2000.0)
         actor = vtkActor()
         actor.SetMapper(mapper)
         prop = actor.GetProperty()

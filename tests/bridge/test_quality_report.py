@@ -182,6 +182,9 @@ def test_every_picture_kind(loft_report, tmp_path) -> None:
     sections = np.asarray(Image.open(tmp_path / shown["sections"]).convert("RGB")).astype(int)
     comb = (sections[..., 0] > 170) & (sections[..., 1] < 110) & (sections[..., 2] < 80)
     assert comb.sum() > 200, "no curvature comb drawn"
+    edges = np.asarray(Image.open(tmp_path / shown["edges"]).convert("RGB")).astype(int)
+    coloured = (edges.max(axis=2) - edges.min(axis=2)) > 80  # class colours on a grey model
+    assert coloured.sum() > 100, "no classified edge drawn"
     for row in loft_report.faces:
         assert set(row.pictures) == set(P.FACE_PICTURES), (row.index, row.notes)
         for name in row.pictures.values():
