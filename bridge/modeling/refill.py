@@ -48,7 +48,7 @@ from OCP.TopTools import TopTools_IndexedMapOfShape
 from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.topology.nsided import HoleFill, closest_parameters, fill_hole
 from occsurf.algorithms import tolerances
-from occsurf.algorithms.topology.nsided_sides import fit_boundary, side_from_normals
+from occsurf.algorithms.topology.nsided_sides import blend_normals, corner_normals, fit_boundary, side_from_normals
 
 from .. import _occ
 from ..conversion.splines import from_occ, make_face
@@ -353,6 +353,37 @@ def _fit_traces(traces: list[tuple[np.ndarray, np.ndarray, np.ndarray]], tol: fl
     return fit_boundary(arc / arc[-1], P, tol)[0]
 
 
+def _corner_treatment(curves: list[Any], fields: list[tuple[np.ndarray, np.ndarray]]
+                      ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Where a side's normal at a hole corner leaves the corner's plane (spanned by the two side
+    tangents: the only plane a fill can have there), turn it into that plane over
+    ``tolerances.FILL_CORNER_BLEND`` of the side (:func:`blend_normals`). This happens at the
+    corners of sharp sides taken from two different removed faces, and where two neighbours meet
+    at a sharp edge at the corner: no surface is G1 to both there, and the G1 lost near that corner
+    is what the per-edge measurement reports. Elsewhere the fields are left as they are."""
+    n = len(curves)
+    t_end = [c.derivatives(np.array([c.domain[1]]), 1)[0, 1] for c in curves]
+    t_start = [c.derivatives(np.array([c.domain[0]]), 1)[0, 1] for c in curves]
+    out = []
+    for i, (c, (s, N)) in enumerate(zip(curves, fields)):
+        lo, hi = c.domain
+        ref = 0.5 * (N[0] + fields[i - 1][1][-1])
+        start = corner_normals(t_end[i - 1], t_start[i], ref)[0]
+        ref = 0.5 * (N[-1] + fields[(i + 1) % n][1][0])
+        end = corner_normals(t_end[i], t_start[(i + 1) % n], ref)[0]
+        off = max(_angle(N[0], start), _angle(N[-1], end))
+        if off > 1e-6:
+            N = blend_normals((s - lo) / (hi - lo), N, start if _angle(N[0], start) > 1e-6 else N[0],
+                              end if _angle(N[-1], end) > 1e-6 else N[-1], tolerances.FILL_CORNER_BLEND)
+        out.append((s, N))
+    return out
+
+
+def _angle(a: np.ndarray, b: np.ndarray) -> float:
+    """Angle (degrees) between two directions, sign-free."""
+    return float(np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b)), abs(float(a @ b)))))
+
+
 def refill_sides(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, follow_neighbour: bool = True
                  ) -> tuple[list[Any], list[int], list[bool], list[float]]:
     """HoleSide data of the hole, fitted cross fields; edges at flat corners merged into one side.
@@ -388,13 +419,19 @@ def refill_sides(edges: list[Any], nbs: list[Any], owners: list[Any], size: floa
         bounds.append(c)
     bounds = _snap_ends(bounds)
     sides, fit, g1 = [], [], [False] * len(edges)
-    for group, c in zip(groups, bounds):  # 2. the cross fields
+    fields = []
+    for group, c in zip(groups, bounds):  # 2. the neighbours' (or the removed faces') normals
         P_all, N_all = [], []
         for k in group:
             P, N, g1[k] = _edge_normals(edges[k], nbs[k], owners[k], c)
             P_all.append(P), N_all.append(N)
         P, N = np.concatenate(P_all), np.concatenate(N_all)
         s, _ = closest_parameters(c, P)
+        order = np.argsort(s, kind="stable")
+        fields.append((s[order], N[order]))
+    fields = _corner_treatment(bounds, fields)
+    sides, fit = [], []
+    for c, (s, N) in zip(bounds, fields):  # 3. the cross fields
         res = side_from_normals(c, s, N)
         sides.append(res.side), fit.append(res.angle)
     return sides, side_of_edge, g1, fit
