@@ -70,7 +70,6 @@ def _stats(vals: list[float]) -> str:
 
 
 def summary(rows: list[dict]) -> str:
-    holes = [r for r in rows if r["sides"] > 0 or r["status"] != "refused" or r["occ"]]
     closed = [r for r in rows if r["occ"] or r["status"] == "filled"]
     out = [f"{len(rows)} face sets removed, {len(closed)} left a closed disk-like hole", "",
            "| filler | holes filled | G0 median / worst | G1 median / worst (deg) | time median | "
