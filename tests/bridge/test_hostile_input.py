@@ -375,11 +375,13 @@ def test_ctrl_c_and_parent_death_stop_the_worker(tmp_path):
         assert state in ("Z", "X", "gone"), (sig, state)  # dead (a zombie until pid 1 reaps it)
 
 
-def test_cli_ctrl_c_is_one_line(clean):
-    proc = subprocess.Popen([sys.executable, "-m", "occsurf.bridge.cli", "inspect", str(clean["step"]),
-                             str(clean["iges"]), "--samples", "1000"], cwd=REPO, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
-    time.sleep(4)
+def test_cli_ctrl_c_is_one_line(tmp_path):
+    rng = np.random.default_rng(5)
+    surfaces = [BSplineSurface((3, 3), ([0.0] * 4 + [1.0] * 4,) * 2, rng.random((4, 4, 3))) for _ in range(20)]
+    slow = write_step(tmp_path / "slow.step", surfaces)  # 20 free-form faces on 1000 x 1000 grids: minutes
+    proc = subprocess.Popen([sys.executable, "-m", "occsurf.bridge.cli", "inspect", str(slow), "--samples", "1000"],
+                            cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    time.sleep(6)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130 and err.decode().strip().splitlines()[-1] == "occsurf: interrupted"
