@@ -73,15 +73,18 @@ def demo_setups() -> dict[str, tuple[str, LightingSetup]]:
 
 
 def render_lighting_demo(out_dir: Path) -> list[Path]:
-    """Write the six pictures and ``contact_sheet.png`` into ``out_dir``; returns the paths."""
+    """Write the six pictures, ``contact_sheet.png`` and the lit surface as ``hood.step`` into
+    ``out_dir``; returns the paths."""
     from PIL import Image, ImageDraw
 
+    from occsurf.bridge.exchange.step_iges import write_step
     from occsurf.bridge.rendering.lighting import Camera, render_lit, write_png
     from occsurf.bridge.rendering.tessellation import grid_mesh
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    mesh = grid_mesh(demo_hood(), 161)
+    hood = demo_hood()
+    mesh = grid_mesh(hood, 161)
     camera = Camera(position=(2.6, -5.6, 4.2), target=(0.0, 0.0, 0.15), up=(0.0, 0.0, 1.0), view_angle=30.0)
     files, tiles = [], []
     for stem, (caption, setup) in demo_setups().items():
@@ -95,4 +98,7 @@ def render_lighting_demo(out_dir: Path) -> list[Path]:
     for k, tile in enumerate(tiles):
         sheet.paste(tile, ((k % 3) * w, (k // 3) * h))
     files.append(write_png(out_dir / "contact_sheet.png", np.asarray(sheet)))
+    step = out_dir / "hood.step"
+    write_step(step, [hood], names=["hood"])
+    files.append(step)
     return files
