@@ -29,6 +29,7 @@ _EXPORTS = {
     for name in ("edge_continuity", "check_edges", "EdgeReport", "Violation", "Thresholds", "PRESETS",
                  "ContinuityResult", "occ_fold", "occ_gap")
 }
+_EXPORTS.update({name: "report" for name in ("check_model", "summarize_model", "QualityReport")})
 
 __all__ = sorted(_EXPORTS)
 

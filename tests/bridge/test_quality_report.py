@@ -261,3 +261,26 @@ def test_python_access_edges_and_coloured_meshes(loft_report, tmp_path) -> None:
     assert np.all(segs >= lo - 1e-9) and np.all(segs <= hi + 1e-9)
     # every segment crosses a stripe boundary: its ends sit on edges of one triangle
     assert np.all(np.linalg.norm(segs[:, 0] - segs[:, 1], axis=1) < np.ptp(fld.mesh.points, axis=0).max() / 5)
+
+
+def test_summarize_model_is_the_audit_quality_hook() -> None:
+    """``occsurf audit --checks quality`` calls summarize_model through its hook: the numbers it
+    stores come from check_model, with designed creases excluded from the worst G1."""
+    from occsurf.bridge.audit.tasks import audit_job, make_item
+    from occsurf.bridge.quality import summarize_model
+
+    model = read_step(SAMPLES / "loft.step")
+    summary = summarize_model(model)
+    report = check_model(model, samples=21)
+    smooth = [e["g1_max_deg"] for e in report.edges if e["classification"] in {"gap", "G0", "G1", "G2"}]
+    sharp = [e["g1_max_deg"] for e in report.edges if e["classification"] == "sharp"]
+    assert sharp and max(sharp) > 45          # the loft's caps meet its skin at designed creases ...
+    assert summary["worst_g1_deg"] == pytest.approx(max(smooth))   # ... which do not count here
+    assert summary["worst_g1_deg"] < 1e-6     # the lofted skin is G1 (C2 B-spline) across its seams
+    assert summary["flags"] == [f"face {f.index}: {g['kind']}" for f in report.faces for g in f.flags]
+    assert summary["curvature_spikes"] == sum(g["kind"] == "curvature_spike" for f in report.faces for g in f.flags)
+
+    out = audit_job(make_item(str(SAMPLES / "loft.step"), "0" * 64, ("inspect", "quality"), 5, None))
+    assert out["quality_status"] == "ok"
+    assert out["quality"]["worst_g1_deg"] == pytest.approx(summary["worst_g1_deg"])
+    assert out["quality"]["flags"] == summary["flags"]
