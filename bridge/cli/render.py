@@ -18,14 +18,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import stat
 import sys
 import warnings
 from pathlib import Path
 from typing import Any
 
-from ._common import EXIT_ERROR, EXIT_OK, error, read_model, strip_path, timeout_arg, worker_failure
+from ._common import EXIT_ERROR, EXIT_OK, error, output_problem, read_model, strip_path, timeout_arg, worker_failure
 
 __all__ = ["render_job", "add_parser", "run", "VIEW_NAMES"]
 
@@ -86,27 +84,6 @@ def render_job(item: dict[str, Any]) -> dict[str, Any]:
             "render_seconds": round(image.seconds, 4)}
 
 
-def _output_problem(path: Path) -> str | None:
-    """Why the PNG cannot be written at ``path`` (standard library only), or ``None``."""
-    try:
-        st = os.stat(path)
-    except (FileNotFoundError, NotADirectoryError):
-        st = None
-    except OSError as err:
-        return f"cannot write there: {err.strerror or err}"
-    if st is not None:
-        if stat.S_ISDIR(st.st_mode):
-            return "is a directory"
-        if not stat.S_ISREG(st.st_mode):
-            return "exists and is not a regular file; refusing to replace it"
-        if not os.access(path, os.W_OK):
-            return "is read-only; not replaced"
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir() or not os.access(folder, os.W_OK):
-        return f"the folder {folder} does not exist or is not writable"
-    return None
-
-
 def _read_lights(path: Path) -> tuple[dict[str, Any] | None, str | None]:
     """The lights file parsed as JSON (validated later, in the worker), or why it cannot be."""
     try:
@@ -136,7 +113,7 @@ def run(ns: argparse.Namespace) -> int:
         if why is not None:
             error(f"{ns.lights}: {why}")
             return EXIT_ERROR
-    why = _output_problem(out)
+    why = output_problem(out)
     if why is not None:
         error(f"{out}: cannot write the picture there ({why})")
         return EXIT_ERROR

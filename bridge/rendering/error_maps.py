@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from .vtk_scene import new_window
+
 __all__ = ["ErrorPanel", "render_error_maps"]
 
 #: Error colours, low to high (blue, cyan, green, yellow, red); values above the tolerance are red.
@@ -110,26 +112,6 @@ def _lookup(lo: float, hi: float) -> Any:
     lut.SetNanColor(0.7, 0.7, 0.7, 1.0)
     lut.Build()
     return lut
-
-
-def _window(width: int, height: int) -> Any:
-    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (registers the OpenGL factories)
-    from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
-
-    vtkObject.GlobalWarningDisplayOff()
-    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
-    try:
-        from vtkmodules.vtkRenderingOpenGL2 import vtkEGLRenderWindow
-
-        win = vtkEGLRenderWindow()
-    except ImportError:
-        from vtkmodules.vtkRenderingCore import vtkRenderWindow
-
-        win = vtkRenderWindow()
-    win.SetOffScreenRendering(1)
-    win.SetSize(int(width), int(height))
-    win.SetMultiSamples(4)
-    return win
 
 
 def _text(renderer: Any, text: str, size: int, y: float) -> None:
@@ -237,7 +219,7 @@ def render_error_maps(path: str | Path, panels: Sequence[ErrorPanel], *, tol: fl
     bar_w = 170
     head = 50 if title else 0
     W, H = ncol * panel_size[0] + bar_w, nrow * panel_size[1] + head
-    win = _window(W, H)
+    win = new_window(W, H, multisamples=4)
     for k, panel in enumerate(panels):
         r, c = divmod(k, ncol)
         ren = _panel(panel, lut, lo, hi, floor, camera)
