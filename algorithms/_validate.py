@@ -96,6 +96,20 @@ def check_parameters(u: ArrayLike, lo: float, hi: float, name: str = "u") -> NDA
     return np.clip(a, lo, hi)
 
 
+def check_uv(u: ArrayLike, v: ArrayLike, domain: tuple[tuple[float, float], tuple[float, float]]
+             ) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[int, ...]]:
+    """Surface parameters ``u, v`` checked against ``domain``, broadcast together and flattened;
+    returns ``(u, v, shape)`` with ``shape`` the broadcast shape."""
+    (u0, u1), (v0, v1) = domain
+    a = check_parameters(u, u0, u1, "u")
+    b = check_parameters(v, v0, v1, "v")
+    try:
+        a, b = np.broadcast_arrays(a, b)
+    except ValueError as err:
+        raise ParameterError(f"u, v: shapes {np.shape(a)} and {np.shape(b)} do not broadcast") from err
+    return a.reshape(-1), b.reshape(-1), a.shape
+
+
 def check_parameter(u: object, lo: float, hi: float, name: str = "u") -> float:
     """One finite parameter inside ``[lo, hi]`` (:func:`check_parameters` for a scalar)."""
     a = check_parameters(u, lo, hi, name)

@@ -331,14 +331,7 @@ class HierarchicalSurface(Hierarchy):
         return self._base_h_cache
 
     def _uv(self, u: ArrayLike, v: ArrayLike) -> tuple[Array, Array, tuple[int, ...]]:
-        (u0, u1), (v0, v1) = self._domain
-        a = V.check_parameters(u, u0, u1, "u")
-        b = V.check_parameters(v, v0, v1, "v")
-        try:
-            a, b = np.broadcast_arrays(a, b)
-        except ValueError as err:
-            raise ParameterError(f"u, v: shapes {np.shape(a)} and {np.shape(b)} do not broadcast") from err
-        return a.reshape(-1), b.reshape(-1), a.shape
+        return V.check_uv(u, v, self._domain)
 
     def _scattered_h(self, a: Array, b: Array, order: int) -> Array:
         """Homogeneous partials ``(m, r+1, r+1, k)`` at scattered parameters."""
