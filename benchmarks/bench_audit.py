@@ -145,7 +145,7 @@ def main() -> None:
         files = build_corpus(tmp / "corpus", args.files) if (tmp / "corpus").mkdir() is None else []
         size_mb = sum(p.stat().st_size for p in files) / 1e6
         print(f"corpus: {len(files)} files, {size_mb:.1f} MB (step_samples + realdata, repeated); "
-              f"{os.cpu_count()} cores, shared machine (under load)")
+              f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at the start")
         if args.overhead_only:
             per_task, tps = scheduler_overhead()
             print(f"scheduler: {per_task * 1e3:.1f} ms round trip with one task in flight; {tps:.0f} tasks/s with 512")
