@@ -30,6 +30,7 @@ from .errors import (
 from .kernel import (
     BSplineCurve,
     BSplineSurface,
+    TrimmedSurface,
     arc,
     circle,
     conic_arc,
@@ -208,6 +209,7 @@ __all__ = [
     "conic_type",
     "BSplineCurve",
     "BSplineSurface",
+    "TrimmedSurface",
     "OccsurfError",
     "InvalidGeometryError",
     "ParameterError",

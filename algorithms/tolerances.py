@@ -52,6 +52,22 @@ _DEFAULTS: dict[str, float] = {
     # a kernel saves ~15 ms per scattered evaluation, so that cost is repaid after a few dozen
     # calls, and below it the NumPy path takes a few milliseconds anyway.
     "NUMBA_MIN_POINTS": 1 << 15,
+    # Trimmed surfaces (kernel/trimmed.py). The p-curves of a face are refined to polylines that
+    # stay within TRIM_POLYLINE of them (relative to the diagonal of the surface's parameter box) for
+    # point classification, in at most TRIM_POLYLINE_LEVELS halvings of the initial samples.
+    "TRIM_POLYLINE": 1e-8,
+    "TRIM_POLYLINE_LEVELS": 30,
+    # Points within TRIM_ON (relative to the parameter box's diagonal) of a loop are classified ON
+    # the boundary (contained in the face): the band absorbs the polyline error and round-off.
+    "TRIM_ON": 1e-7,
+    # Largest gap between consecutive p-curves of a loop (or between a p-curve and the surface's
+    # domain), relative to the parameter box's diagonal. Imported faces carry gaps of the order of
+    # their edge tolerances (1e-7 .. 1e-4 of the model size); larger ones mean an open loop.
+    "TRIM_LOOP_GAP": 1e-3,
+    # Area of a trimmed face: Gauss-Legendre on knot spans cut in 2^level pieces, level raised until
+    # two successive values agree to TRIM_AREA_RTOL, at most TRIM_AREA_LEVELS times.
+    "TRIM_AREA_RTOL": 1e-12,
+    "TRIM_AREA_LEVELS": 6,
     # ---- geometry (course ch. 1, §6-0..6-14) ---------------------------------------------------
     # Tolerance on weights that must sum to one (affine combinations).
     "WEIGHT_SUM": 1e-12,

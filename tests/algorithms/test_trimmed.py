@@ -1,0 +1,186 @@
+"""TrimmedSurface (algorithms/kernel/trimmed.py): closed-form areas, classification against exact
+geometry, trims respected by evaluation, value semantics, bad input."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+
+from occsurf.algorithms import BSplineCurve, BSplineSurface, TrimmedSurface, circle, tolerances
+from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
+from occsurf.algorithms.kernel.trimmed import INSIDE, ON, OUTSIDE, classify_points
+from tests.algorithms.strategies import test_settings
+
+R = 0.25
+
+
+def _line(a, b) -> BSplineCurve:
+    return BSplineCurve(1, [0, 0, 1, 1], [a, b])
+
+
+def _square(ccw: bool = True):
+    pts = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    loop = tuple(_line(pts[i], pts[(i + 1) % 4]) for i in range(4))
+    return loop if ccw else tuple(c.reverse() for c in loop[::-1])
+
+
+def _hole(center=(0.5, 0.5), r=R) -> BSplineCurve:
+    c = circle([center[0], center[1], 0.0], r)
+    return BSplineCurve(c.degree, c.knots, c.control_points[:, :2], c.weights)
+
+
+def _plate(size=4.0, holes=True) -> TrimmedSurface:
+    P = np.zeros((2, 2, 3))
+    P[1, :, 0] = size
+    P[:, 1, 1] = size
+    s = BSplineSurface((1, 1), ([0, 0, 1, 1], [0, 0, 1, 1]), P)
+    return TrimmedSurface(s, _square(), [(_hole(),)] if holes else [])
+
+
+def _dome() -> BSplineSurface:
+    """A curved bicubic patch (J = |S_u x S_v| not constant)."""
+    u = np.linspace(0, 1, 4)
+    U, V = np.meshgrid(u, u, indexing="ij")
+    P = np.stack([3 * U, 2 * V, 0.8 * np.sin(np.pi * U) * np.cos(np.pi * V)], axis=-1)
+    k = [0, 0, 0, 0, 1, 1, 1, 1]
+    return BSplineSurface((3, 3), (k, k), P)
+
+
+def test_area_of_plate_with_hole_is_closed_form():
+    t = _plate()
+    assert_allclose(t.area(), 16.0 * (1 - np.pi * R ** 2), rtol=1e-13)
+    assert_allclose(_plate(holes=False).area(), 16.0, rtol=1e-14)
+
+
+def test_area_of_curved_patch_agrees_with_dense_quadrature():
+    s = _dome()
+    t = TrimmedSurface(s, _square(), [(_hole(),)])
+    # independent check: tensor Gauss on the whole patch minus polar Gauss on the hole
+    x, w = np.polynomial.legendre.leggauss(60)
+    a = (x + 1) / 2
+    U, Vv = np.meshgrid(a, a, indexing="ij")
+    D = s.derivatives(U, Vv, 1)
+    whole = np.einsum("i,j,ij->", w / 2, w / 2, np.linalg.norm(np.cross(D[..., 1, 0, :], D[..., 0, 1, :]), axis=-1))
+    rr, th = R * (x + 1) / 2, np.pi * (x + 1)
+    RR, TT = np.meshgrid(rr, th, indexing="ij")
+    D = s.derivatives(0.5 + RR * np.cos(TT), 0.5 + RR * np.sin(TT), 1)
+    J = np.linalg.norm(np.cross(D[..., 1, 0, :], D[..., 0, 1, :]), axis=-1) * RR
+    hole = np.einsum("i,j,ij->", w * R / 2, w * np.pi, J)
+    assert_allclose(t.area(), whole - hole, rtol=1e-10)
+
+
+def test_loops_are_oriented_whatever_the_input():
+    a = TrimmedSurface(_plate().surface, _square(ccw=False), [(_hole(),)])
+    b = TrimmedSurface(_plate().surface, _square(), [(_hole().reverse(),)])
+    assert_allclose(a.area(), b.area(), rtol=1e-14)
+    assert a.area() > 0
+
+
+@given(st.lists(st.tuples(st.floats(-0.2, 1.2), st.floats(-0.2, 1.2)), min_size=1, max_size=200))
+@test_settings(60)
+def test_classification_agrees_with_exact_geometry(pts):
+    t = _plate()
+    P = np.array(pts)
+    state = t.classify(P[:, 0], P[:, 1])
+    d_hole = np.hypot(P[:, 0] - 0.5, P[:, 1] - 0.5) - R
+    in_square = np.all((P > 0) & (P < 1), axis=1)
+    d_square = np.min(np.abs(np.c_[P, 1 - P]), axis=1)
+    expected = np.where(in_square & (d_hole > 0), INSIDE, OUTSIDE)
+    margin = 1e-6
+    clear = (np.abs(d_hole) > margin) & (d_square > margin)
+    assert np.array_equal(state[clear], expected[clear])
+    assert np.all(state[(np.abs(d_hole) < 1e-12) & in_square] == ON)
+
+
+def test_classification_is_vectorised_and_handles_many_points():
+    t = _plate()
+    rng = np.random.default_rng(3)
+    u, v = rng.random((2, 300, 400))
+    state = t.classify(u, v)
+    assert state.shape == (300, 400)
+    inside = np.hypot(u - 0.5, v - 0.5) > R
+    assert np.array_equal(state >= ON, inside | (state == ON))
+
+
+def test_classify_points_even_odd_and_on_band():
+    sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]], float)
+    st_ = classify_points([[0.5, 0.5], [2, 0.5], [1.0, 0.5], [0.5, 1e-9]], sq[:-1], sq[1:], tol=1e-8)
+    assert list(st_) == [INSIDE, OUTSIDE, ON, ON]
+
+
+def test_evaluation_respects_the_trims():
+    t = _plate()
+    assert_allclose(t.evaluate(0.1, 0.1), [0.4, 0.4, 0.0], atol=1e-15)
+    with pytest.raises(ParameterError, match="1 of 2 parameter points lie outside the trimmed face"):
+        t.evaluate([0.1, 0.5], [0.1, 0.5])
+    out = t.evaluate([0.1, 0.5], [0.1, 0.5], outside="nan")
+    assert np.all(np.isnan(out[1])) and np.all(np.isfinite(out[0]))
+    D = t.derivatives([0.5, 0.9], [0.5, 0.9], 2, outside="nan")
+    assert np.all(np.isnan(D[0])) and np.all(np.isfinite(D[1]))
+    k = t.curvatures([0.5, 0.9], [0.5, 0.9], outside="nan")
+    assert np.isnan(k.mean[0]) and k.mean[1] == 0.0
+    with pytest.raises(ParameterError):
+        t.normal(0.5, 0.5)
+    with pytest.raises(InvalidGeometryError, match="outside"):
+        t.evaluate(0.1, 0.1, outside="clip")
+
+
+def test_normal_follows_orientation():
+    t = _plate()
+    flipped = TrimmedSurface(t.surface, t.outer, t.inner, reversed=True)
+    assert_allclose(t.normal(0.1, 0.1), [0, 0, 1])
+    assert_allclose(flipped.normal(0.1, 0.1), [0, 0, -1])
+
+
+def test_dict_round_trip_is_exact():
+    t = TrimmedSurface(_dome(), _square(), [(_hole(),)], reversed=True)
+    back = TrimmedSurface.from_dict(json.loads(json.dumps(t.to_dict())))
+    assert back == t and back.reversed
+    with pytest.raises(InvalidGeometryError, match="TrimmedSurface"):
+        TrimmedSurface.from_dict({"type": "BSplineSurface"})
+    d = t.to_dict()
+    del d["outer"]
+    with pytest.raises(InvalidGeometryError, match="missing key"):
+        TrimmedSurface.from_dict(d)
+
+
+def test_transform_maps_geometry_and_orientation():
+    t = _plate()
+    big = t.transform(2 * np.eye(3), [1, 2, 3])
+    assert_allclose(big.area(), 4 * t.area(), rtol=1e-13)
+    assert_allclose(big.evaluate(0.1, 0.1), [1.8, 2.8, 3.0])
+    mirrored = t.transform(np.diag([1.0, 1.0, -1.0]))
+    assert mirrored.reversed and not t.reversed
+    assert_allclose(mirrored.area(), t.area(), rtol=1e-14)
+
+
+def test_bad_input_is_named():
+    s = _plate().surface
+    with pytest.raises(InvalidGeometryError, match="surface: expected a BSplineSurface"):
+        TrimmedSurface("plane", _square())
+    with pytest.raises(InvalidGeometryError, match=r"outer\[0\]: expected a 2-D BSplineCurve"):
+        TrimmedSurface(s, (circle([0, 0, 0], 1.0),))
+    with pytest.raises(InvalidGeometryError, match="the loop is open"):
+        TrimmedSurface(s, _square()[:3])
+    with pytest.raises(InvalidGeometryError, match="leaves the surface's domain"):
+        TrimmedSurface(s, _square(), [(_hole((0.5, 0.5), 0.7),)])
+    with pytest.raises(InvalidGeometryError, match="inner: expected a sequence of loops"):
+        TrimmedSurface(s, _square(), _hole())
+    with pytest.raises(ParameterError, match="finite"):
+        _plate().classify(np.nan, 0.5)
+
+
+def test_tolerance_override_changes_the_boundary_band():
+    t = _plate()
+    u, v = 0.5 + R + 1e-5, 0.5
+    assert t.classify(u, v) == INSIDE
+    with tolerances.override(TRIM_ON=1e-4):
+        assert _plate().classify(u, v) == ON
+    with tolerances.override(TRIM_POLYLINE=1e-3):
+        coarse = _plate().polylines()
+    assert len(coarse[1]) < len(t.polylines()[1])
