@@ -158,6 +158,11 @@ _DEFAULTS: dict[str, float] = {
     # [FIT_GCV_MIN_LOG10, FIT_GCV_MAX_LOG10] (lambda = 1 weighs data and penalty alike).
     "FIT_GCV_MIN_LOG10": -10.0,
     "FIT_GCV_MAX_LOG10": 3.0,
+    # GCV of a grid with missing cells: the influence trace is exact (a multi-right-hand-side
+    # solve) while the sparse system has at most FIT_GCV_EXACT_TRACE unknowns, else Hutchinson's
+    # estimate with FIT_GCV_PROBES Rademacher probes (standard deviation <= sqrt(2 tr / probes)).
+    "FIT_GCV_EXACT_TRACE": 2500,
+    "FIT_GCV_PROBES": 40,
     # Smoothing lambda used when a gridded fit has missing (NaN) cells and none is given: keeps the
     # poles without data defined (their second differences are minimised) and changes the fit
     # elsewhere by ~1e-6 relative; scattered fits use FIT_SCATTERED_SMOOTHING the same way.
@@ -188,6 +193,10 @@ _DEFAULTS: dict[str, float] = {
     # value made the surface swing far between the samples (1e4 x the data size measured on a
     # thread face of build123d's screw, with machine-precision cut-off).
     "FIT_OVERLAY_RCOND": 1e-3,
+    # Scattered adaptive fitting refines a knot span only when it holds at least this many points
+    # (its four halves could not determine finer poles otherwise; a grid's rule is two data rows
+    # each way, i.e. at least four points).
+    "FIT_ADAPTIVE_SPAN_POINTS": 4,
     # ---- manipulation (course ch. 3, 4) --------------------------------------------------------
     # A pivot |R[k, k]| of the equilibrated constraint matrix below RANK_RTOL * |R[0, 0]| counts as
     # zero: rows beyond it are taken as combinations of the earlier ones.
@@ -284,8 +293,9 @@ _DEFAULTS: dict[str, float] = {
     # FILL_CORNER_SPAN (the G1 error left near the corner is proportional to it).
     "FILL_TWIST_TOL": 1e-8,
     "FILL_CORNER_SPAN": 0.02,
-    # Most sides of a hole (the construction works for any n; this bounds the output size).
-    "FILL_MAX_SIDES": 24,
+    # Most sides of a hole (the construction works for any n: 48 sides measured G1 to 5e-10 deg in
+    # 6 s; this bounds the output size, n patches, and the time).
+    "FILL_MAX_SIDES": 96,
     # Trimmed hole sides (topology/nsided_sides.py): target angle (degrees) between the fitted
     # cross field's tangent plane and the neighbour's, the 0.01 deg; the fit bisects spans
     # until it is met or the field has FILL_FIT_MAX_SPANS spans.
@@ -332,6 +342,10 @@ _DEFAULTS: dict[str, float] = {
     # neighbourhood (a square window QUALITY_SPIKE_WINDOW of the grid's side wide) and above 1/size.
     "QUALITY_SPIKE_RATIO": 10.0,
     "QUALITY_SPIKE_WINDOW": 0.25,
+    # Next to a degenerate point, a spike candidate's neighbourhood is a true cone (whose curvature
+    # grows as 1 / distance to the apex: geometry, not a spike) when every tangent plane passes
+    # through the apex: |n . (X - apex)| at most this times |X - apex| (the sine of the angle).
+    "QUALITY_CONE_APEX_TOL": 1e-6,
     # Near-degenerate normal: |S_u x S_v| / max(|S_u|, |S_v|)^2 (the sine of the angle between the
     # partials) below this, but above NORMAL_ZERO.
     "QUALITY_NEAR_DEGENERATE": 1e-3,

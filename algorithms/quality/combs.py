@@ -38,12 +38,18 @@ class SampledCurve:
         Increasing parameters of the samples.
     points, d1, d2 : ndarray, shape (k, 3)
         Point and first and second derivatives with respect to ``params``.
+    derivatives : callable, optional
+        ``derivatives(t) -> (m, 3, 3)``: point, first and second derivative of the exact curve at
+        parameters ``t (m,)`` inside ``[params[0], params[-1]]``. When given, inflections are
+        root-found on it; without it, on the quintic Hermite interpolant of the samples (which
+        matches their points, first and second derivatives).
     """
 
     params: Array
     points: Array
     d1: Array
     d2: Array
+    derivatives: Callable[[Array], Array] | None = None
 
 
 @dataclass(frozen=True)
@@ -197,8 +203,11 @@ def curvature_comb(curve: BSplineCurve | SampledCurve, n: int = 200, *, scale: f
     Inflections of a B-spline curve are the sign changes of ``(C' x C'') . m``, bracketed on at
     least 16 samples per knot span and located by vectorised bisection on the exact curve to
     :data:`~occsurf.algorithms.tolerances.QUALITY_INFLECTION_TOL` of the parameter range. Those of a
-    sampled curve are interpolated linearly in the signed curvature between samples (second-order
-    accurate); :func:`~occsurf.algorithms.quality.plane_sections` refines its own on the exact surface.
+    sampled curve are root-found the same way, on its exact ``derivatives`` when it has them, else on
+    the piecewise quintic Hermite interpolant of its samples (points, first and second derivatives
+    matched at every sample; the signed curvature's numerator ``(x' x x'') . m`` of each piece is
+    a polynomial, bisected to the same tolerance);
+    :func:`~occsurf.algorithms.quality.plane_sections` refines its own on the exact surface.
     """
     if isinstance(curve, SampledCurve):
         return _sampled_comb(curve, scale, plane_normal)
@@ -240,14 +249,47 @@ def _sampled_comb(c: SampledCurve, scale: float | None, plane_normal: ArrayLike 
     infl_t, infl_p = np.empty(0), np.empty((0, 3))
     if m is not None:
         zero = tolerances.CURVATURE_ZERO * float(np.nanmax(kappa, initial=0.0))
-        nz = np.flatnonzero(np.abs(ks) > zero)
-        sv = np.sign(ks[nz])
-        k = np.flatnonzero(sv[1:] != sv[:-1])
-        i, j = nz[k], nz[k + 1]
-        w = ks[i] / (ks[i] - ks[j])
-        infl_t = t[i] + w * (t[j] - t[i])
-        infl_p = P[i] + w[:, None] * (P[j] - P[i])
+        if c.derivatives is not None:
+            exact = c.derivatives
+
+            def deriv(x: Array) -> Array:
+                D = np.asarray(exact(x), float)
+                if D.shape != (x.size, 3, 3):
+                    raise InvalidGeometryError(f"curve.derivatives: expected an array of shape ({x.size}, 3, 3) "
+                                               f"(point, first, second derivative), got {D.shape}")
+                return D
+        else:
+            def deriv(x: Array) -> Array:
+                return _hermite5(t, P, d1, d2, x)
+
+        def f(x: Array) -> Array:
+            D = deriv(x)
+            return dot(np.cross(D[:, 1], D[:, 2]), m)
+
+        infl_t = find_sign_changes(f, t, ks, zero, tolerances.QUALITY_INFLECTION_TOL * float(t[-1] - t[0]))
+        infl_p = deriv(infl_t)[:, 0] if infl_t.size else np.empty((0, 3))
     return _finish(t, P, kappa, ks, spine, scale, m, infl_t, infl_p)
+
+
+def _hermite5(t: Array, P: Array, d1: Array, d2: Array, x: Array) -> Array:
+    """Point, first and second derivative ``(m, 3, 3)`` at ``x (m,)`` of the piecewise quintic
+    Hermite interpolant of samples ``(t, P, d1, d2)``: on ``[t_i, t_i+1]``, with ``s = (x - t_i) / h``,
+    ``p(s) = sum_k c_k s^k`` where ``c0 = P_i``, ``c1 = h d1_i``, ``c2 = h^2 d2_i / 2`` and
+    ``c3, c4, c5`` solve the three conditions at ``s = 1`` in closed form."""
+    i = np.clip(np.searchsorted(t, x, side="right") - 1, 0, t.size - 2)
+    h = (t[i + 1] - t[i])[:, None]
+    s = ((x - t[i]) / h[:, 0])[:, None]
+    p0, v0, a0 = P[i], h * d1[i], h * h * d2[i]
+    p1, v1, a1 = P[i + 1], h * d1[i + 1], h * h * d2[i + 1]
+    r0, r1, r2 = p1 - p0 - v0 - 0.5 * a0, v1 - v0 - a0, a1 - a0
+    c3 = 10 * r0 - 4 * r1 + 0.5 * r2
+    c4 = -15 * r0 + 7 * r1 - r2
+    c5 = 6 * r0 - 3 * r1 + 0.5 * r2
+    c2 = 0.5 * a0
+    pt = p0 + s * (v0 + s * (c2 + s * (c3 + s * (c4 + s * c5))))
+    dp = v0 + s * (2 * c2 + s * (3 * c3 + s * (4 * c4 + s * 5 * c5)))
+    ddp = 2 * c2 + s * (6 * c3 + s * (12 * c4 + s * 20 * c5))
+    return np.stack((pt, dp / h, ddp / (h * h)), axis=1)
 
 
 def iso_curves(surface: BSplineSurface | HierarchicalSurface, direction: str, values: ArrayLike) -> list[BSplineCurve]:

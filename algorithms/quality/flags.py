@@ -16,7 +16,7 @@ from scipy import ndimage
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ._common import Array, check_mask, grid_axes, grid_partials, surface_of
+from ._common import Array, check_mask, trim_mask, grid_axes, grid_partials, surface_of
 from .curvature_maps import CurvatureMap, map_from_partials
 
 __all__ = ["FLAG_KINDS", "Flag", "face_flags"]
@@ -163,7 +163,44 @@ def _spikes(cm: CurvatureMap, size: float) -> list[Flag]:
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.where(med > 0, A[ci, cj] / med, np.inf)
     keep = ratio > tolerances.QUALITY_SPIKE_RATIO
+    if np.any(keep) and np.any(cm.degenerate & cm.mask):
+        k = np.flatnonzero(keep)
+        keep[k] = _apex_ratio(cm, A, valid, ci[k], cj[k], r) > tolerances.QUALITY_SPIKE_RATIO
     return [_flag("curvature_spike", cm, i, j, q, 1) for i, j, q in zip(ci[keep], cj[keep], ratio[keep])]
+
+
+def _apex_ratio(cm: CurvatureMap, A: Array, valid: NDArray[np.bool_], ci: Array, cj: Array, r: int) -> Array:
+    """The spike ratio of candidates next to a cone apex, with the apex's own growth taken out.
+
+    Near the apex ``X0`` of a true cone (every tangent plane passes through the apex:
+    ``|n . (X - X0)| <= QUALITY_CONE_APEX_TOL |X - X0|`` at every valid sample of the candidate's
+    window) the curvature grows as ``1 / |X - X0|`` (a right circular cone of half-angle ``a``:
+    ``|k1| + |k2| = 1 / (|X - X0| tan a)``), which is the geometry, not a defect: the ratio is then
+    measured on ``(|k1| + |k2|) |X - X0|``. Candidates whose window is not conical (a dent next to
+    a sphere's pole, a spike on a cone away from its generators' law) keep ``inf`` here, i.e. their
+    plain ratio. ``X0`` is the degenerate sample nearest to the candidate. Returns ``(c,)``.
+    """
+    deg = np.argwhere(cm.degenerate & cm.mask)
+    apex_pts = cm.points[deg[:, 0], deg[:, 1]]
+    X = cm.points[ci, cj]
+    X0 = apex_pts[np.argmin(np.linalg.norm(X[:, None] - apex_pts[None], axis=-1), axis=1)]  # (c, 3)
+    w = 2 * r + 1
+    P = np.lib.stride_tricks.sliding_window_view(np.pad(cm.points, ((r, r), (r, r), (0, 0)), mode="edge"),
+                                                 (w, w), axis=(0, 1))[ci, cj]  # (c, 3, w, w)
+    Nw = np.lib.stride_tricks.sliding_window_view(np.pad(cm.normals, ((r, r), (r, r), (0, 0)), mode="edge"),
+                                                  (w, w), axis=(0, 1))[ci, cj]
+    Aw = np.lib.stride_tricks.sliding_window_view(np.pad(A, r, mode="edge"), (w, w))[ci, cj]
+    Vw = np.lib.stride_tricks.sliding_window_view(np.pad(valid, r, mode="edge"), (w, w))[ci, cj]
+    rel = P - X0[:, :, None, None]
+    dist = np.linalg.norm(rel, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        off = np.abs(np.einsum("cxij,cxij->cij", Nw, rel)) / dist
+        conical = np.all(np.where(Vw & (dist > 0), off <= tolerances.QUALITY_CONE_APEX_TOL, True), axis=(1, 2))
+        scaled = np.where(Vw & (dist > 0), Aw * dist, np.nan).reshape(ci.size, -1)
+        med = np.nanmedian(scaled, axis=1)
+        own = A[ci, cj] * np.linalg.norm(X - X0, axis=1)
+        ratio = np.where(med > 0, own / med, np.inf)
+    return np.where(conical, ratio, np.inf)
 
 
 def _degenerate(cm: CurvatureMap, D: Array) -> tuple[list[Flag], NDArray[np.bool_]]:
@@ -220,6 +257,9 @@ def face_flags(surface: Any, *, mask: ArrayLike | None = None, thresholds: Mappi
       over at least ``QUALITY_FLAT_SPOT_AREA`` of the samples.
     * curvature spike: a local maximum of ``|k1| + |k2|`` above ``QUALITY_SPIKE_RATIO`` x the median
       of its neighbourhood (a window ``QUALITY_SPIKE_WINDOW`` of the grid's side) and above ``1 / size``.
+      Next to the apex of a true cone (all tangent planes of the window through the apex, within
+      ``QUALITY_CONE_APEX_TOL``) the ratio is taken on ``(|k1| + |k2|) |X - apex|``: the cone's
+      ``1 / distance`` growth is its geometry, not a spike.
     * near-degenerate normal: ``|S_u x S_v| / max(|S_u|, |S_v|)^2 < QUALITY_NEAR_DEGENERATE``
       (degenerate points included); ill-parametrisation: ``max |S_u x S_v| / min > QUALITY_JACOBIAN_RATIO``
       over the other samples.
@@ -234,7 +274,7 @@ def face_flags(surface: Any, *, mask: ArrayLike | None = None, thresholds: Mappi
             return face_flags(surface, mask=mask, us=us, vs=vs, patch=patch)
     s = surface_of(surface, patch)
     a, b = grid_axes(s, us, vs)
-    m = check_mask(mask, (a.size, b.size))
+    m = trim_mask(surface, a, b, check_mask(mask, (a.size, b.size)))
     g = grid_partials(s, a, b, m)
     cm = map_from_partials(s, g, "absolute", m)
     D = g.D

@@ -256,6 +256,32 @@ def _newton(s: Any, uv: Array, o: Array, n: Array, tol: float) -> tuple[Array, N
     return uv, done
 
 
+def _to_trim(s: Any, keep: Callable[[Array, Array, Array], NDArray[np.bool_]], uv_in: Array, uv_out: Array, o: Array,
+             n: Array, tol_h: float) -> Array:
+    """March each cut from its last point inside the trim (``uv_in``) to the trim boundary, towards
+    its next point outside (``uv_out``; both on the intersection): bisection along the cut, every
+    trial point projected onto the intersection by :func:`_newton` and tested by ``keep(uv, X, i)``,
+    all segments at once, until the inside and outside points are within ``tol_h`` of each other
+    in model space (so the returned inside point is within ``tol_h`` of the boundary that
+    ``keep`` draws). Returns the inside ends ``(p, 2)``."""
+    lo, hi = uv_in.copy(), uv_out.copy()
+    X_lo, X_hi = s.evaluate(lo[:, 0], lo[:, 1]), s.evaluate(hi[:, 0], hi[:, 1])
+    live = np.linalg.norm(X_hi - X_lo, axis=1) > tol_h
+    for _ in range(4 * int(tolerances.QUALITY_SECTION_NEWTON_STEPS)):
+        i = np.flatnonzero(live)
+        if i.size == 0:
+            break
+        mid, conv = _newton(s, 0.5 * (lo[i] + hi[i]), o[i], n[i], tol_h)
+        Xm = s.evaluate(mid[:, 0], mid[:, 1])
+        inside = conv & keep(mid, Xm, i)
+        j, k = i[inside], i[~inside]
+        lo[j], X_lo[j] = mid[inside], Xm[inside]
+        hi[k], X_hi[k] = mid[~inside], Xm[~inside]
+        live[i] = np.linalg.norm(X_hi[i] - X_lo[i], axis=1) > tol_h
+        live[i[~conv]] = False  # the cut turned tangent to the plane: keep the last inside point
+    return lo
+
+
 # -------------------------------------------------------------------------------------- chaining
 def _order_chains(src: Array, dst: Array) -> list[tuple[Array, bool]]:
     """Oriented segments ``src -> dst`` (node ids 0..N-1, each node at most one in and one out)
@@ -440,6 +466,25 @@ def _face_pieces_of(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, h
     np.add.at(bad, node_plane[~conv], 1)
     a, b = inv[: src.size], inv[src.size:]
     ok = keep_node[a] & keep_node[b]
+    cross = conv[a] & conv[b] & (keep_node[a] != keep_node[b])
+    if np.any(cross):  # a segment leaving the trim: its outside end is moved onto the trim boundary
+        ci = np.flatnonzero(cross)
+        a_in = keep_node[a[ci]]
+        inner, outer = np.where(a_in, a[ci], b[ci]), np.where(a_in, b[ci], a[ci])
+        pl = node_plane[inner]
+
+        def keep(uv_: Array, X_: Array, i: Array) -> NDArray[np.bool_]:
+            k = np.ones(uv_.shape[0], bool) if mask is None else np.asarray(mask(uv_[:, 0], uv_[:, 1]), bool)
+            return k if half is None else k & (dot(X_ - O[pl[i]], half[pl[i]]) >= -tol_h)
+
+        uv_end = _to_trim(s, keep, uv[inner], uv[outer], O[pl], Nm[pl], tol_h)
+        new = uv.shape[0] + np.arange(ci.size)
+        uv = np.concatenate((uv, uv_end))
+        X = np.concatenate((X, s.evaluate(uv_end[:, 0], uv_end[:, 1])))
+        node_plane = np.concatenate((node_plane, pl))
+        a, b = a.copy(), b.copy()
+        a[ci], b[ci] = np.where(a_in, a[ci], new), np.where(a_in, new, b[ci])
+        ok[ci] = True
     if not np.any(ok):
         return pieces, bad
     for nodes, closed in _order_chains(a[ok], b[ok]):
@@ -587,8 +632,9 @@ def plane_sections(faces: Sequence[Any], origin: ArrayLike, normal: ArrayLike, o
     ----------
     faces : list of BSplineSurface / HierarchicalSurface, or of (surface, mask) pairs
         ``mask(u, v) -> bool array`` tells which parameters lie inside a trimmed face; seed cells
-        with no corner inside are skipped and refined points outside are dropped (a cut ends at the
-        last grid-edge crossing inside the trim, within one seed cell of the trim curve).
+        with no corner inside are skipped, refined points outside are dropped, and a cut that leaves
+        the trim is marched on from its last point inside to the trim boundary (bisection along the
+        exact intersection, to within ``tol`` of the boundary the mask draws).
     origin, normal : array_like, shape (3,)
     offsets : array_like, shape (k,)
         Model units along the unit ``normal``.

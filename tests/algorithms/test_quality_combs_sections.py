@@ -233,3 +233,57 @@ def test_sections_and_iso_curves_of_a_hierarchical_surface():
     c = iso_curves(hs, "v", [0.5])[0]
     t = np.linspace(0, 1, 11)
     assert_allclose(c.evaluate(t), hs.evaluate(t, np.full_like(t, 0.5)), atol=1e-12)
+
+
+# ------------------------------------------------------------------------------ trims and samples
+def test_sections_reach_the_trim_boundary():
+    """A dome trimmed to a disk in parameter space: every cut is marched on to the trim (its ends on
+    the disk's circle to the section tolerance), not stopped at the last seed-grid crossing inside."""
+    from .test_quality_flags import dome
+
+    s = dome()
+    R = 0.3
+
+    def mask(u, v):
+        return (np.asarray(u) - 0.5) ** 2 + (np.asarray(v) - 0.5) ** 2 < R**2
+
+    secs = plane_sections([(s, mask)], [0, 0, 0], [1, 0, 0], np.linspace(0.35, 0.65, 7))
+    ends = []
+    for sec in secs:
+        assert len(sec.curves) == 1
+        c = sec.curves[0]
+        assert np.all(mask(c.uv[:, 0], c.uv[:, 1]))
+        ends.append(c.uv[[0, -1]])
+    r = np.linalg.norm(np.concatenate(ends) - 0.5, axis=1)
+    # the ends of each cut are on the trim circle |uv - centre| = R
+    # (the seed grid's last crossings inside lie up to one cell, 1/48 of the domain, short of it)
+    assert_allclose(r, R, atol=1e-8)
+
+
+def test_sampled_curve_inflections_are_root_found():
+    """y = sin x sampled at 13 points: the inflection at pi is root-found on the quintic Hermite
+    interpolant of the samples (points, first and second derivatives), far closer than linear
+    interpolation of the curvature between samples, and to 1e-12 on the exact derivatives."""
+    t = np.linspace(0.3, 5.9, 13)
+    P = np.c_[t, np.sin(t), 0 * t]
+    d1 = np.c_[1 + 0 * t, np.cos(t), 0 * t]
+    d2 = np.c_[0 * t, -np.sin(t), 0 * t]
+    cb = curvature_comb(SampledCurve(t, P, d1, d2), plane_normal=[0, 0, 1])
+    assert cb.n_inflections == 1
+    err = abs(cb.inflection_params[0] - np.pi)
+    i = np.searchsorted(t, np.pi) - 1
+    ks = -np.sin(t) / (1 + np.cos(t) ** 2) ** 1.5
+    linear = t[i] + ks[i] / (ks[i] - ks[i + 1]) * (t[i + 1] - t[i])
+    assert err < 1e-5 and err < 1e-2 * abs(linear - np.pi)
+    assert_allclose(cb.inflection_points[0], [cb.inflection_params[0], np.sin(cb.inflection_params[0]), 0], atol=1e-5)
+
+    def exact(x):
+        x = np.asarray(x, float)
+        return np.stack((np.c_[x, np.sin(x), 0 * x], np.c_[1 + 0 * x, np.cos(x), 0 * x],
+                         np.c_[0 * x, -np.sin(x), 0 * x]), axis=1)
+
+    cb = curvature_comb(SampledCurve(t, P, d1, d2, derivatives=exact), plane_normal=[0, 0, 1])
+    assert_allclose(cb.inflection_params, [np.pi], atol=1e-11)
+    assert_allclose(cb.inflection_points, [[np.pi, 0, 0]], atol=1e-11)
+    with pytest.raises(InvalidGeometryError, match="derivatives"):
+        curvature_comb(SampledCurve(t, P, d1, d2, derivatives=lambda x: np.zeros((len(x), 3))), plane_normal=[0, 0, 1])
