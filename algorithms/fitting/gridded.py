@@ -26,9 +26,14 @@ Point-wise constraints
     reduced problem through its Schur complement ``C N^{-1} C^T`` (``K x K``), where ``N^{-1}``
     applies in the eigenbasis above, so again only ``N_u x N_v`` matrices appear.
 Missing data
-    NaN cells break the grid: the problem is then solved as one sparse KKT system
-    (:func:`~occsurf.algorithms.manipulation.linalg.sparse_constrained_lstsq`'s normal-equation
-    form) over the valid cells, with a small smoothing term keeping poles without data defined.
+    NaN cells break the grid: the problem is then solved as one sparse KKT system over the valid
+    cells (:mod:`._missing`), with the same smoothing term (its Gram matrices those of the complete
+    grid), a small λ by default keeping poles without data defined.
+GCV with constraints
+    Point-wise rows make the fit ``f = K (N^{-1} - N^{-1} C^T S^{-1} C N^{-1}) K^T y + const``, so
+    the influence trace loses ``tr(S^{-1} C N^{-1} G N^{-1} C^T)``, a ``K x K`` product computed in
+    the eigenbasis (``N^{-1} G N^{-1} = X W^2 X^T``) beside ``S`` itself. Separable constraints
+    only reduce the problem (the trace is that of the reduced one).
 
 References
 ----------
@@ -57,6 +62,7 @@ from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 from ..manipulation.linalg import ConstraintError, ConstraintFactor
 from ._common import difference_penalty, sparse_collocation
+from ._missing import SparseGrid
 from .interpolation import _lsq_operator, approximation_knots, parametrize
 
 __all__ = [
@@ -321,6 +327,23 @@ class _Coordinate:
         return self.Pc + self.du.expand(self.dv.expand(Y, 1), 0)
 
 
+def choose_smoothing(score) -> tuple[float, float]:
+    """λ minimising ``score(λ)`` (GCV): a scan of log10 λ over [FIT_GCV_MIN_LOG10, FIT_GCV_MAX_LOG10]
+    (27 values), then Brent's bounded search between the neighbours of the best; returns
+    ``(λ, score)``."""
+    lo, hi = float(tolerances.FIT_GCV_MIN_LOG10), float(tolerances.FIT_GCV_MAX_LOG10)
+    grid = np.linspace(lo, hi, 27)
+    vals = np.array([score(10.0 ** g) for g in grid])
+    i = int(np.argmin(vals))
+    a, b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    if not b > a:
+        return 10.0 ** float(grid[i]), float(vals[i])
+    res = scipy.optimize.minimize_scalar(lambda g: score(10.0 ** g), bounds=(a, b), method="bounded",
+                                         options={"xatol": 1e-3})
+    best = (float(res.x), float(res.fun)) if res.fun < vals[i] else (float(grid[i]), float(vals[i]))
+    return 10.0 ** best[0], best[1]
+
+
 def _rss(A: Array, B: Array, Q: Array, valid_all: bool, P: Array) -> float:
     F = np.einsum("ia,abk,jb->ijk", A, P, B, optimize=True)
     return float(np.sum((F - Q) ** 2))
@@ -553,40 +576,48 @@ class _Kronecker:
     def poles(self, Ys: list[Array]) -> Array:
         return np.stack([co.full(Y) for co, Y in zip(self.coords, Ys)], -1)
 
-    def gcv(self, lam: float) -> float:
+    def trace(self, lam: float) -> float:
+        """``tr H`` of the influence matrix at λ (module notes): ``Σ_c Σ W_c`` for the separable
+        problem, less ``tr(S^+ C N^{-1} G N^{-1} C^T)`` for the point-wise rows."""
         Ys, Ws = self.separable(lam)
+        tr = float(sum(W.sum() for W in Ws))
+        if self.rows.alpha:
+            tr -= self._pointwise(Ys, Ws)[1]
+        return tr
+
+    def gcv(self, lam: float) -> float:
+        """``nobs RSS / (nobs - tr H)^2`` with every constraint in force."""
+        Ys, Ws = self.separable(lam)
+        tr = float(sum(W.sum() for W in Ws))
+        if self.rows.alpha:
+            Ys, corr = self._pointwise(Ys, Ws)
+            tr -= corr
         P = self.poles(Ys)
         rss = _rss(self.A, self.B, self.Q, True, P)
         nobs = self.Q.size
-        tr = float(sum(W.sum() for W in Ws))
         return nobs * rss / max(nobs - tr, 1e-300) ** 2
 
     def choose(self) -> tuple[float, float]:
-        """λ minimising GCV: a scan of log10 λ over [FIT_GCV_MIN, FIT_GCV_MAX], then Brent around the best."""
-        lo, hi = float(tolerances.FIT_GCV_MIN_LOG10), float(tolerances.FIT_GCV_MAX_LOG10)
-        grid = np.linspace(lo, hi, 27)
-        vals = np.array([self.gcv(10.0 ** g) for g in grid])
-        i = int(np.argmin(vals))
-        a, b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-        res = scipy.optimize.minimize_scalar(lambda g: self.gcv(10.0 ** g), bounds=(a, b), method="bounded",
-                                             options={"xatol": 1e-3})
-        best = (float(res.x), float(res.fun)) if res.fun < vals[i] else (float(grid[i]), float(vals[i]))
-        return 10.0 ** best[0], best[1]
+        return choose_smoothing(self.gcv)
 
     def solve(self, lam: float) -> Array:
         Ys, Ws = self.separable(lam)
         r = self.rows
         if r.alpha:
-            Ys = self._pointwise(Ys, Ws)
+            Ys = self._pointwise(Ys, Ws)[0]
         return self.poles(Ys)
 
-    def _pointwise(self, Ys: list[Array], Ws: list[Array]) -> list[Array]:
-        """Point-wise rows through the Schur complement ``C N^{-1} C^T`` of the reduced problem."""
+    def _pointwise(self, Ys: list[Array], Ws: list[Array]) -> tuple[list[Array], float]:
+        """Point-wise rows through the Schur complement ``S = C N^{-1} C^T`` of the reduced problem.
+
+        Returns the corrected reduced solutions and the influence-trace correction
+        ``tr(S^+ C N^{-1} G N^{-1} C^T)`` (in the eigenbasis ``N^{-1} G N^{-1} = X W^2 X^T``)."""
         r = self.rows
         K = len(r.alpha)
         Al, Be, Wt = np.stack(r.alpha), np.stack(r.beta), np.stack(r.w)  # (K, Nu), (K, Nv), (K, d)
         target = np.asarray(r.target)
         S = np.zeros((K, K))
+        S2 = np.zeros((K, K))
         ab = []
         viol = -target.copy()
         for c, (co, Y, W) in enumerate(zip(self.coords, Ys, Ws)):
@@ -597,7 +628,10 @@ class _Kronecker:
             ab.append((a, b))
             TW = np.einsum("ki,li->kli", a, a) @ W  # (K, K, nz_v)
             S += np.outer(Wt[:, c], Wt[:, c]) * np.einsum("klj,kj,lj->kl", TW, b, b)
+            TW2 = np.einsum("ki,li->kli", a, a) @ (W * W)
+            S2 += np.outer(Wt[:, c], Wt[:, c]) * np.einsum("klj,kj,lj->kl", TW2, b, b)
         lam_k = sla.lstsq(S, viol, lapack_driver="gelsy", check_finite=False)[0]
+        corr = float(np.trace(sla.lstsq(S, S2, lapack_driver="gelsy", check_finite=False)[0]))
         out = []
         for c, (co, Y, W) in enumerate(zip(self.coords, Ys, Ws)):
             a, b = ab[c]
@@ -612,88 +646,7 @@ class _Kronecker:
             raise ConstraintError(f"constraints: {', '.join(names[:4])}{' ...' if len(names) > 4 else ''} cannot hold "
                                   f"together with the others (residual up to {np.abs(res).max():.3g}); they conflict "
                                   "or act on no free pole", bad, names)
-        return out
-
-
-def _sparse_rows(rows: _Rows, Nu: int, Nv: int, d: int) -> tuple[sp.csr_matrix, Array, list[str]]:
-    """Every constraint as sparse rows on the stacked vector ``[vec(P_0), ..., vec(P_{d-1})]``."""
-    blocks, targets, labels = [], [], []
-    size = Nu * Nv
-    seen: dict[tuple[int, int, int], float] = {}
-
-    def place(M: sp.spmatrix, c: int) -> sp.csr_matrix:
-        return sp.hstack([sp.csr_matrix((M.shape[0], size * c)), M, sp.csr_matrix((M.shape[0], size * (d - c - 1)))],
-                         format="csr")
-
-    for c in range(d):
-        for ax, items in ((0, rows.cu[c]), (1, rows.cv[c])):
-            for e, tgt in items:
-                unit = np.count_nonzero(e) == 1
-                other = Nv if ax == 0 else Nu
-                keep = np.ones(other, bool)
-                if unit:  # a fixed pole row/column: drop poles already fixed (corners), checking they agree
-                    i = int(np.flatnonzero(e)[0])
-                    for j in range(other):
-                        key = (c, i, j) if ax == 0 else (c, j, i)
-                        if key in seen:
-                            keep[j] = False
-                            if abs(seen[key] - tgt[j]) > tolerances.CONSISTENCY_RTOL * max(1.0, abs(tgt[j])):
-                                raise ConstraintError("constraints: the u-side and v-side constraints disagree at a "
-                                                      f"corner by {abs(seen[key] - tgt[j]):.3g}")
-                        else:
-                            seen[key] = float(tgt[j])
-                M = sp.kron(sp.csr_matrix(e[None, :]), sp.identity(Nv)) if ax == 0 else \
-                    sp.kron(sp.identity(Nu), sp.csr_matrix(e[None, :]))
-                blocks.append(place(sp.csr_matrix(M)[keep], c))
-                targets.append(tgt[keep])
-                labels += [f"separable row (coordinate {c})"] * int(keep.sum())
-    for a, b, w, t, lab in zip(rows.alpha, rows.beta, rows.w, rows.target, rows.labels):
-        row = sp.csr_matrix(np.kron(a, b)[None, :])
-        blocks.append(sp.hstack([row * w[c] for c in range(d)], format="csr"))
-        targets.append(np.array([t]))
-        labels.append(lab)
-    if not blocks:
-        return sp.csr_matrix((0, d * size)), np.zeros(0), []
-    return sp.vstack(blocks, format="csr"), np.concatenate(targets), labels
-
-
-def _sparse_solve(A: Array, B: Array, Q: Array, rows: _Rows, lam: float) -> Array:
-    """Missing data: the normal equations over the valid cells plus the penalty, with every
-    constraint, as one sparse KKT system (SuperLU). Memory is O(data + poles)."""
-    m, n, d = Q.shape
-    Nu, Nv = A.shape[1], B.shape[1]
-    valid = ~np.isnan(Q).any(axis=2)
-    if not valid.any():
-        raise InvalidGeometryError("data: every cell is missing (NaN)")
-    K = sp.kron(sp.csr_matrix(A), sp.csr_matrix(B), format="csr")[valid.ravel()]
-    AtA = (K.T @ K).tocsr()
-    pen = sp.kron(sp.csr_matrix(difference_penalty(Nu)), sp.identity(Nv)) + \
-        sp.kron(sp.identity(Nu), sp.csr_matrix(difference_penalty(Nv)))
-    c = AtA.diagonal().sum() / max(pen.diagonal().sum(), 1e-300)
-    N1 = (AtA + (lam * c) * pen).tocsc()
-    N = sp.block_diag([N1] * d, format="csc")
-    rhs = np.concatenate([K.T @ Q[..., co][valid] for co in range(d)])
-    C, t, labels = _sparse_rows(rows, Nu, Nv, d)
-    if C.shape[0]:
-        KKT = sp.bmat([[N, C.T], [C, None]], format="csc")
-        rhs = np.concatenate([rhs, t])
-    else:
-        KKT = N
-    try:
-        x = spla.splu(KKT).solve(rhs)
-    except RuntimeError as err:
-        raise ConstraintError("data: with the missing cells the fit is singular: some poles have no data and the "
-                              f"constraints are dependent or no smoothing is given ({err})") from err
-    if not np.all(np.isfinite(x)):
-        raise InvalidGeometryError("data: the fit over the valid cells is singular; add smoothing")
-    P = x[: d * Nu * Nv].reshape(d, Nu, Nv).transpose(1, 2, 0)
-    if C.shape[0]:
-        res = np.abs(C @ x[: d * Nu * Nv] - t)
-        bad = np.flatnonzero(res > tolerances.LINEAR_CHECK_RTOL * max(1.0, float(np.abs(t).max())))
-        if bad.size:
-            raise ConstraintError(f"constraints: {', '.join(labels[i] for i in bad[:4])} are not met (residual "
-                                  f"{res.max():.3g}); they conflict", bad, [labels[i] for i in bad])
-    return P
+        return out, corr
 
 
 # ----------------------------------------------------------------------------- entry point
@@ -739,7 +692,9 @@ def fit_grid(data: ArrayLike, n_poles: int | tuple[int, int], degree: int | tupl
         Full knot vectors; default :func:`~.interpolation.approximation_knots` (every span holds data).
     smoothing : float or "gcv"
         λ of the difference penalty (module notes), ``>= 0``; ``"gcv"`` chooses it by generalised
-        cross-validation (complete data only).
+        cross-validation, with every constraint in force and over the valid cells of data with
+        missing ones (the influence trace of :mod:`._missing`); ``extras["trace"]`` then holds
+        the influence matrix's trace at the chosen λ.
     constraints : sequence of BoundaryCurve, CrossDerivative, FixedPoint, TangentPlane, Symmetry
     fix_boundary : bool
         Shorthand for :class:`BoundaryCurve` on all four sides, fitted to the boundary data rows.
@@ -779,11 +734,15 @@ def fit_grid(data: ArrayLike, n_poles: int | tuple[int, int], degree: int | tupl
     rows = _build_rows(space, constraints, fix_boundary)
     missing = bool(np.isnan(Q).any())
     gcv = None
+    extras: dict = {}
     if missing:
+        sg = SparseGrid(A, B, Q, rows)
         if lam_given == "gcv":
-            raise ParameterError("smoothing: 'gcv' needs complete data; give a number for data with missing cells")
-        lam = float(lam_given) or float(tolerances.FIT_MISSING_SMOOTHING)
-        P = _sparse_solve(A, B, Q, rows, lam)
+            lam, gcv = choose_smoothing(sg.gcv)
+            extras["trace"] = sg.trace(lam)
+        else:
+            lam = float(lam_given) or float(tolerances.FIT_MISSING_SMOOTHING)
+        P = sg.solve(lam)
     elif lam_given == 0 and not any(rows.cu) and not any(rows.cv) and not rows.alpha:
         lam = 0.0
         P = _plain(A, B, Q)
@@ -791,10 +750,13 @@ def fit_grid(data: ArrayLike, n_poles: int | tuple[int, int], degree: int | tupl
         kr = _Kronecker(A, B, Q, rows)
         if lam_given == "gcv":
             lam, gcv = kr.choose()
+            extras["trace"] = kr.trace(lam)
         else:
             lam = float(lam_given)
         P = kr.solve(lam)
-    return _result(space, A, B, P, lam, gcv, "sparse" if missing else "kronecker", measure)
+    fit = _result(space, A, B, P, lam, gcv, "sparse" if missing else "kronecker", measure)
+    fit.extras.update(extras)
+    return fit
 
 
 def _result(space: _Space, A: Array, B: Array, P: Array, lam: float, gcv: float | None, how: str,

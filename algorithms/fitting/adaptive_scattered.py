@@ -1,0 +1,465 @@
+"""Adaptive hierarchical fitting of scattered data (course §7-10, carried over from grids to clouds).
+
+The gridded process of :mod:`.adaptive` on a point cloud ``X_k`` with parameters ``(u_k, v_k)``:
+
+1. Base: sparse least squares (:func:`~.scattered.fit_scattered`, a tiny difference penalty keeps
+   poles over holes defined), its spans multiplied by 1.5 while the places to refine cover more
+   than :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MAX_COVER` of the domain.
+2. Each round, the points farther than ``max(tol, FIT_ADAPTIVE_GREED * max_error)`` from the
+   surface (distance by point projection, :func:`~._common.project_points`) are binned into the
+   knot spans of the deepest node (base or overlay) whose region holds them (``np.bincount`` over
+   span ids); spans holding fewer than :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_SPAN_POINTS`
+   points are not refined (the data could not determine finer poles); each connected group of
+   marked spans becomes one overlay (midpoint knot insertion, course ch. 5).
+3. An overlay's world displacements ``δ`` are the least-squares fit of the residual
+   ``X_k - S(u_k, v_k)`` over the points in the overlay's support, with the overlay's own
+   B-splines: the sparse collocation matrix ``A`` (``(p+1)(q+1)`` entries per row, restricted to
+   the overlay's vertex block) gives ``(A^T A + ρ I) δ = A^T R`` with the ridge
+   ``ρ = FIT_OVERLAY_RCOND^2 max diag(A^T A)``: the counterpart of the gridded path's truncated
+   pseudo-inverse (a vertex that sees the data only with the tail of its B-spline stays at zero
+   instead of swinging between the points; singular values of ``A`` below ``FIT_OVERLAY_RCOND``
+   times the largest are damped). The normal matrix is factorised once (SuperLU) per overlay: the
+   parameters do not change, so the backfitting sweeps reuse it, as they reuse the base's.
+4. :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_SWEEPS` block Gauss-Seidel sweeps (base,
+   then every overlay, against what the others leave), then the error is measured again.
+
+The result is an editable :class:`~occsurf.algorithms.hierarchical.HierarchicalSurface` (frame
+offsets, course §5-15) whose :meth:`flatten` is one exact B-spline surface (for STEP).
+
+References
+----------
+Course notes C25 (SIGGRAPH 1991) §7-10; D. R. Forsey, R. H. Bartels, "Surface fitting with
+hierarchical splines", ACM TOG 14 (1995) 134-161; Hoschek, "Intrinsic parametrization for
+approximation", CAGD 5 (1988) 27-31 (parameter correction of the base).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.ndimage as ndi
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import ArrayLike, NDArray
+
+from .. import _validate as V
+from .. import tolerances
+from ..errors import InvalidGeometryError, ParameterError
+from ..hierarchical.core import Overlay
+from ..hierarchical.surface import HierarchicalSurface
+from ..kernel.surface import BSplineSurface
+from ._common import difference_penalty, project_points
+from .adaptive import LevelReport, _boxes, _stats
+from .gridded import _pair_of
+from .scattered import _local, base_parameters, fit_scattered, plane_parameters, scattered_collocation
+
+__all__ = ["ScatteredAdaptiveFit", "fit_adaptive_scattered", "measure_points"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ScatteredAdaptiveFit:
+    """Result of :func:`fit_adaptive_scattered`.
+
+    Attributes
+    ----------
+    hierarchy : HierarchicalSurface
+        Editable; ``hierarchy.flatten()`` is the exact single B-spline surface.
+    levels : tuple of LevelReport
+        Per level L, the hierarchy truncated below L measured against the points.
+    distance : ndarray, shape (k,)
+        Measured distance of each point to the final surface (point projection).
+    u, v : ndarray, shape (k,)
+        The points' parameters used by the fit (given, from ``base``, or from the best-fit plane,
+        then corrected on the base fit when asked).
+    tol : float
+    converged : bool
+        ``max_error <= tol``.
+    level_surfaces : tuple of BSplineSurface
+        Per level, the flat surface of the truncated hierarchy.
+    level_distances : tuple of ndarray, each (k,)
+        Their measured distances (the per-level error picture).
+    """
+
+    hierarchy: HierarchicalSurface
+    levels: tuple[LevelReport, ...]
+    distance: Array
+    u: Array
+    v: Array
+    tol: float
+    converged: bool
+    level_surfaces: tuple = ()
+    level_distances: tuple = ()
+
+    @property
+    def max_error(self) -> float:
+        return self.levels[-1].max_error
+
+    @property
+    def rms_error(self) -> float:
+        return self.levels[-1].rms_error
+
+    @property
+    def control_points_total(self) -> int:
+        """Base poles plus stored offsets (course §5-17)."""
+        return int(self.hierarchy.pole_counts()["stored"])
+
+
+def measure_points(surface, X: Array, u: Array, v: Array) -> Array:
+    """Distance of every point ``X[k]`` to ``surface`` by projection from ``(u_k, v_k)``
+    (:func:`~._common.project_points`), shape (k,)."""
+    return project_points(surface, X, u, v)[2]
+
+
+def block_collocation(knots: tuple[Array, Array], degree: tuple[int, int], vertices: tuple[tuple[int, int], ...],
+                      u: Array, v: Array) -> sp.csr_matrix:
+    """The collocation matrix of the B-splines of one vertex block of a level net at scattered
+    parameters: ``A[k, (i - i0) n_b + (j - j0)] = N_i(u_k) M_j(v_k)`` for ``i0 <= i <= i1``,
+    ``j0 <= j <= j1``; shape ``(k, (i1 - i0 + 1) (j1 - j0 + 1))``, at most ``(p+1)(q+1)`` entries per row."""
+    (tu, tv), (p, q) = knots, degree
+    nu, nv = tu.shape[0] - p - 1, tv.shape[0] - q - 1
+    (i0, i1), (j0, j1) = vertices
+    vals, cols, _ = _local((tu, tv), (p, q), (nu, nv), u, v)
+    i, j = cols // nv, cols % nv
+    keep = (i >= i0) & (i <= i1) & (j >= j0) & (j <= j1)
+    nb = j1 - j0 + 1
+    rows = np.broadcast_to(np.arange(u.size)[:, None], cols.shape)[keep]
+    return sp.csr_matrix((vals[keep], (rows, (i[keep] - i0) * nb + (j[keep] - j0))),
+                         shape=(u.size, (i1 - i0 + 1) * nb))
+
+
+class _BaseSolver:
+    """The base's penalised normal equations on fixed parameters, factorised once (SuperLU)."""
+
+    def __init__(self, surface: BSplineSurface, u: Array, v: Array, lam: float) -> None:
+        self.knots, self.deg, self.n = surface.knots, surface.degree, surface.n_poles
+        self.A = scattered_collocation(self.knots, self.deg, self.n, u, v)
+        G = (self.A.T @ self.A).tocsr()
+        nu, nv = self.n
+        pen = sp.kron(sp.csr_matrix(difference_penalty(nu)), sp.identity(nv)) + \
+            sp.kron(sp.identity(nu), sp.csr_matrix(difference_penalty(nv)))
+        c = G.diagonal().sum() / max(pen.diagonal().sum(), 1e-300)
+        self.lu = spla.splu((G + (lam * c) * pen).tocsc())
+
+    def __call__(self, target: Array) -> BSplineSurface:
+        P = self.lu.solve(np.asarray(self.A.T @ target))
+        return BSplineSurface(self.deg, self.knots, P.reshape(self.n + (target.shape[1],)))
+
+
+class _ScatteredFitter:
+    """The hierarchy under construction with every overlay's world displacements ``δ`` kept (so
+    that coarser levels can be refitted without losing the finer ones), and per overlay its
+    points, collocation block and factorised normal matrix."""
+
+    def __init__(self, hs: HierarchicalSurface, X: Array, u: Array, v: Array, refit_base: _BaseSolver | None) -> None:
+        self.hs, self.X, self.u, self.v = hs, X, u, v
+        self.refit_base = refit_base
+        self.delta: dict[int, Array] = {}
+        self.ops: dict[int, tuple[Array, sp.csr_matrix, object]] = {}
+
+    def residual(self) -> Array:
+        return self.X - self.hs.evaluate(self.u, self.v)
+
+    def operators(self, ov: Overlay) -> tuple[Array, sp.csr_matrix, object]:
+        if ov.id not in self.ops:
+            p, q = self.hs.degree
+            (i0, i1), (j0, j1) = ov.vertices
+            ku, kv = ov.knots
+            su = (ku[i0], ku[min(i1 + p + 1, ku.shape[0] - 1)])
+            sv = (kv[j0], kv[min(j1 + q + 1, kv.shape[0] - 1)])
+            idx = np.flatnonzero((self.u >= su[0]) & (self.u <= su[1]) & (self.v >= sv[0]) & (self.v <= sv[1]))
+            A = block_collocation(ov.knots, (p, q), ov.vertices, self.u[idx], self.v[idx])
+            G = (A.T @ A).tocsc()
+            ridge = float(tolerances.FIT_OVERLAY_RCOND) ** 2 * max(float(G.diagonal().max(initial=0.0)), 1e-300)
+            lu = spla.splu((G + ridge * sp.identity(G.shape[0], format="csc")).tocsc())
+            self.ops[ov.id] = (idx, A, lu)
+        return self.ops[ov.id]
+
+    def _apply(self, ov: Overlay) -> None:
+        frames = self.hs.reference_frames(ov)
+        d = self.delta[ov.id]
+        off = self.hs.offset_mapping.inverse(d.reshape(-1, 3), None if frames is None else frames.reshape(-1, 3, 3))
+        self.hs.set_offsets(ov, np.asarray(off, float).reshape(d.shape))
+
+    def fit_overlay(self, ov: Overlay, resid: Array) -> None:
+        """Least-squares ``δ`` of ``ov`` against ``resid`` plus its own current share; updates ``resid``."""
+        idx, A, lu = self.operators(ov)
+        old = self.delta.get(ov.id)
+        R = resid[idx]
+        if old is not None:
+            R = R + A @ old.reshape(-1, 3)
+        delta = lu.solve(np.asarray(A.T @ R)) if idx.size else np.zeros((A.shape[1], 3))
+        self.delta[ov.id] = delta.reshape(ov.shape + (3,))
+        self._apply(ov)
+        resid[idx] = R - A @ delta
+
+    def backfit(self) -> None:
+        """One block Gauss-Seidel sweep: the base against the data minus every overlay's share,
+        the displacements re-applied in the new frames, then each overlay against what is left."""
+        hs = self.hs
+        if self.refit_base is not None:
+            share = hs.evaluate(self.u, self.v) - hs.base.evaluate(self.u, self.v)
+            hs.set_base(self.refit_base(self.X - share))
+            for ov in hs.overlays:  # parents first: each sees its parent's new frames
+                self._apply(ov)
+        resid = self.residual()
+        for ov in hs.overlays:
+            self.fit_overlay(ov, resid)
+
+
+def _owner(hs: HierarchicalSurface, u: Array, v: Array) -> tuple[list[Overlay | None], Array, Array]:
+    """Per point, the deepest node whose region holds it: the nodes, a (k,) index into them
+    (0 = the base) and the nodes' levels."""
+    nodes: list[Overlay | None] = [None] + sorted(hs.overlays, key=lambda o: o.level)
+    own = np.zeros(u.size, int)
+    for k, ov in enumerate(nodes[1:], 1):
+        (a, b), (c, d) = ov.region
+        own[(u >= a) & (u <= b) & (v >= c) & (v <= d)] = k
+    return nodes, own, np.array([0] + [o.level for o in nodes[1:]])
+
+
+def _span_index(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, Array]:
+    k = np.unique(knots[(knots >= lo) & (knots <= hi)])
+    idx = np.searchsorted(k, x, side="right") - 1
+    idx = np.where(x == k[-1], k.size - 2, idx)
+    idx = np.where((x < k[0]) | (x > k[-1]), -1, idx)
+    return k, idx
+
+
+def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u: Array, v: Array
+             ) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """Rectangles (u_range, v_range) to refine inside ``parent``: its knot spans holding a flagged
+    point and at least FIT_ADAPTIVE_SPAN_POINTS points, grown by the margin, grouped and merged."""
+    lvl = hs.level_surface(parent)
+    (ua, ub), (va, vb) = hs.domain if parent is None else parent.region
+    ku, iu = _span_index(lvl.knots[0], ua, ub, u)
+    kv, iv = _span_index(lvl.knots[1], va, vb, v)
+    inside = (iu >= 0) & (iv >= 0)
+    nu, nv = ku.size - 1, kv.size - 1
+    cell = iu * nv + iv
+    counts = np.bincount(cell[inside], minlength=nu * nv).reshape(nu, nv)
+    marks = np.zeros(nu * nv, bool)
+    marks[cell[inside & flagged]] = True
+    marks = marks.reshape(nu, nv) & (counts >= int(tolerances.FIT_ADAPTIVE_SPAN_POINTS))
+    if not marks.any():
+        return []
+    margin = int(tolerances.FIT_ADAPTIVE_MARGIN)
+    if margin > 0:
+        marks = ndi.binary_dilation(marks, structure=np.ones((3, 3)), iterations=margin)
+    return [((float(ku[i0]), float(ku[i1])), (float(kv[j0]), float(kv[j1]))) for i0, i1, j0, j1 in _boxes(marks)]
+
+
+def _grow_base(X: Array, u: Array, v: Array, poles: tuple[int, int], deg: tuple[int, int], tol: float, lam: float,
+               progress) -> tuple[BSplineSurface, Array]:
+    """The base fit, its spans multiplied by 1.5 while the regions to refine cover more than
+    FIT_ADAPTIVE_MAX_COVER of the domain; each step grows u, v or both, whichever lowers the
+    error most per added pole (as :func:`.adaptive._grow_base`)."""
+    cap = max(deg[0] + 1, deg[1] + 1, int(np.sqrt(X.shape[0] / 2)))
+
+    def attempt(poles_):
+        f = fit_scattered(X, poles_, deg, params=np.c_[u, v], smoothing=lam, measure=False)
+        dist_ = measure_points(f.surface, X, u, v)
+        return f.surface, dist_, float(dist_.max())
+
+    cur = attempt(poles)
+    while True:
+        surf, dist, worst = cur
+        if progress is not None:
+            progress(f"base {poles[0]}x{poles[1]}: max error {worst:.3g}")
+        if worst <= tol:
+            return surf, dist
+        flagged = dist > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
+        hs = HierarchicalSurface(surf, "frame")
+        boxes = _regions(hs, None, flagged, u, v)
+        (u0, u1), (v0, v1) = hs.domain
+        cover = sum((b - a) * (d - c) for (a, b), (c, d) in boxes) / ((u1 - u0) * (v1 - v0))
+        grown = [min(p + int(np.ceil(1.5 * (k - p))), cap) for k, p in zip(poles, deg)]
+        options = {tuple(grown), (grown[0], poles[1]), (poles[0], grown[1])} - {tuple(poles)}
+        if cover <= float(tolerances.FIT_ADAPTIVE_MAX_COVER) or not options:
+            return surf, dist
+        best, score, tried = None, np.inf, {}
+        for cand in sorted(options):
+            trial = tried[cand] = attempt(cand)
+            gain = np.log(max(trial[2], 1e-300) / worst) / np.log(np.prod(cand) / np.prod(poles))
+            if gain < score:
+                best, score = (cand, trial), gain
+        if score > -0.1 and tuple(grown) in tried:  # no direction helps on its own yet: grow both
+            best = (tuple(grown), tried[tuple(grown)])
+        poles, cur = best
+
+
+def _level_reports(hs: HierarchicalSurface, X: Array, u: Array, v: Array
+                   ) -> tuple[list[LevelReport], list[BSplineSurface], list[Array]]:
+    """Per level L, the hierarchy truncated below L (finer offsets zeroed), measured."""
+    out, surfs, dists = [], [], []
+    for L in range(hs.depth + 1):
+        h = hs.copy()
+        for ov in sorted(h.overlays, key=lambda o: -o.level):
+            if ov.level > L:
+                h.set_offsets(ov, np.zeros(ov.shape + (3,)))
+        flat = h.flatten()
+        dist = measure_points(flat, X, u, v)
+        ovs = [o for o in hs.overlays if o.level == L]
+        cps = int(np.prod(hs.base.n_poles)) if L == 0 else sum(int(np.prod(o.shape)) for o in ovs)
+        out.append(LevelReport(L, len(ovs), cps, *_stats(dist)))
+        surfs.append(flat)
+        dists.append(dist)
+    return out, surfs, dists
+
+
+def _corrected(X: Array, u: Array, v: Array, poles: tuple[int, int], deg: tuple[int, int], lam: float
+               ) -> tuple[Array, Array]:
+    """One parameter correction (Hoschek): fit, then each point's foot point on the fit. A foot
+    point that lands on the domain's border (the point lies beyond the surface's edge) takes one
+    unclamped Gauss-Newton step from there instead, so the parameters, and with them the next fit's
+    knot box, grow to cover the data rather than pinning such points to the border curve."""
+    surf = fit_scattered(X, poles, deg, params=np.c_[u, v], smoothing=lam, measure=False).surface
+    a, b, _ = project_points(surf, X, u, v)
+    (u0, u1), (v0, v1) = surf.domain
+    edge = (a <= u0) | (a >= u1) | (b <= v0) | (b >= v1)
+    if edge.any():
+        D = surf.derivatives(a[edge], b[edge], 1)
+        r = X[edge] - D[:, 0, 0]
+        Su, Sv = D[:, 1, 0], D[:, 0, 1]
+        g11, g12, g22 = (np.einsum("ij,ij->i", p, q) for p, q in ((Su, Su), (Su, Sv), (Sv, Sv)))
+        r1, r2 = np.einsum("ij,ij->i", r, Su), np.einsum("ij,ij->i", r, Sv)
+        det = g11 * g22 - g12 * g12
+        ok = det > 1e-300
+        du = np.where(ok, (g22 * r1 - g12 * r2) / np.where(ok, det, 1.0), 0.0)
+        dv = np.where(ok, (g11 * r2 - g12 * r1) / np.where(ok, det, 1.0), 0.0)
+        a, b = a.copy(), b.copy()
+        a[edge] += du
+        b[edge] += dv
+    return a, b
+
+
+def _parameters(X: Array, params, base, corrections: int) -> tuple[Array, Array]:
+    if params is not None:
+        uv = V.as_finite_array(params, "params")
+        if uv.shape != (X.shape[0], 2):
+            raise InvalidGeometryError(f"params: expected shape ({X.shape[0]}, 2), got {uv.shape}")
+        return uv[:, 0].copy(), uv[:, 1].copy()
+    if base is not None:
+        if not isinstance(base, BSplineSurface) or base.dim != 3:
+            raise InvalidGeometryError(f"base: expected a 3-D BSplineSurface, got {type(base).__name__}")
+        return base_parameters(base, X)
+    return plane_parameters(X)
+
+
+def fit_adaptive_scattered(points: ArrayLike, tol: float, degree: int | tuple[int, int] = 3, *,
+                           params: ArrayLike | None = None, base: BSplineSurface | None = None,
+                           base_poles: int | tuple[int, int] | None = None,
+                           knots: tuple[ArrayLike, ArrayLike] | None = None, smoothing: float | None = None,
+                           corrections: int = 0, max_levels: int | None = None,
+                           progress: Callable[[str], None] | None = None) -> ScatteredAdaptiveFit:
+    """Adaptive hierarchical least-squares fit of a point cloud to a tolerance (course §7-10).
+
+    See the module notes for the process. On gridded data given as points with the grid's
+    parameters it follows :func:`~.adaptive.fit_adaptive` (same base, same refinement rule, the
+    overlay solves differing only in how vertices without data are damped).
+
+    Parameters
+    ----------
+    points : array_like, shape (k, 3)
+    tol : float
+        Largest allowed distance from a point to the surface (model units, > 0).
+    degree : int or (int, int)
+    params : array_like, shape (k, 2), optional
+        ``(u, v)`` of each point; default the foot points on ``base``, else coordinates on the
+        points' best-fit plane scaled to [0, 1]^2.
+    base : BSplineSurface, optional
+        A surface the points lie near (a scan over a CAD face).
+    base_poles : int or (int, int), optional
+        Poles of the first base fit; default ``degree + 5``.
+    knots : (array_like, array_like), optional
+        Full knot vectors of the base (e.g. a gridded fit's, to compare the paths); the base is
+        then not grown. Default clamped, uniform over the parameters' bounding box.
+    smoothing : float, optional
+        λ of the base's difference penalty; default
+        :data:`~occsurf.algorithms.tolerances.FIT_SCATTERED_SMOOTHING` (keeps holes defined).
+    corrections : int
+        Parameter-correction steps on the base (the points' parameters then become their foot
+        points on it, fixed for the overlays).
+    max_levels : int, optional
+        Deepest overlay level; default :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MAX_LEVELS`.
+    progress : callable, optional
+        Called with a one-line message after each round.
+
+    Returns
+    -------
+    ScatteredAdaptiveFit
+
+    Raises
+    ------
+    ParameterError
+        A non-positive ``tol``, a negative ``max_levels``/``corrections``/``smoothing``.
+    InvalidGeometryError
+        Bad shapes, too few points for the degree, parameters spanning no area.
+    """
+    try:
+        tol = float(tol)
+    except (TypeError, ValueError) as err:
+        raise ParameterError(f"tol: expected a positive number, got {tol!r}") from err
+    if not (np.isfinite(tol) and tol > 0):
+        raise ParameterError(f"tol: expected a positive number, got {tol!r}")
+    depth_max = int(tolerances.FIT_ADAPTIVE_MAX_LEVELS) if max_levels is None else int(max_levels)
+    if depth_max < 0:
+        raise ParameterError(f"max_levels: expected an integer >= 0, got {max_levels!r}")
+    if int(corrections) < 0:
+        raise ParameterError(f"corrections: expected an integer >= 0, got {corrections!r}")
+    X = V.as_finite_array(points, "points")
+    if X.ndim != 2 or X.shape[1] != 3:
+        raise InvalidGeometryError(f"points: expected shape (k, 3), got {X.shape}")
+    pu, pv = (V.as_degree(k) for k in _pair_of(degree, "degree"))
+    if X.shape[0] < (pu + 1) * (pv + 1):
+        raise InvalidGeometryError(f"points: a degree ({pu}, {pv}) fit needs at least {(pu + 1) * (pv + 1)} points, "
+                                   f"got {X.shape[0]}")
+    lam = float(tolerances.FIT_SCATTERED_SMOOTHING) if smoothing is None else float(smoothing)
+    if not (np.isfinite(lam) and lam >= 0):
+        raise ParameterError(f"smoothing: expected a number >= 0, got {smoothing!r}")
+    u, v = _parameters(X, params, base, int(corrections))
+    if not (u.max() > u.min() and v.max() > v.min()):
+        raise InvalidGeometryError("params: the points' parameters span no area (collinear or coincident points)")
+    poles = _pair_of(base_poles, "base_poles") if base_poles is not None else (pu + 5, pv + 5)
+    for _ in range(int(corrections)):
+        u, v = _corrected(X, u, v, poles, (pu, pv), lam)
+    if knots is None:
+        surf, dist = _grow_base(X, u, v, poles, (pu, pv), tol, lam, progress)
+    else:
+        tu = V.check_knots(knots[0], pu, np.size(knots[0]) - pu - 1, "knots[0]")
+        tv = V.check_knots(knots[1], pv, np.size(knots[1]) - pv - 1, "knots[1]")
+        u, v = np.clip(u, tu[pu], tu[-pu - 1]), np.clip(v, tv[pv], tv[-pv - 1])
+        surf = fit_scattered(X, (tu.size - pu - 1, tv.size - pv - 1), (pu, pv), params=np.c_[u, v], knots=(tu, tv),
+                             smoothing=lam, measure=False).surface
+        dist = measure_points(surf, X, u, v)
+    hs = HierarchicalSurface(surf, "frame")
+    fitter = _ScatteredFitter(hs, X, u, v, _BaseSolver(surf, u, v, lam))
+    for rnd in range(1, int(tolerances.FIT_ADAPTIVE_MAX_ROUNDS) + 1):
+        worst = float(dist.max())
+        if worst <= tol:
+            break
+        flagged = dist > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
+        nodes, own, lv = _owner(hs, u, v)
+        resid = fitter.residual()
+        new = []
+        for k, node in enumerate(nodes):
+            if lv[k] >= depth_max or not np.any(flagged & (own == k)):
+                continue
+            for ur, vr in _regions(hs, node, flagged & (own == k), u, v):
+                ov = hs.add_overlay(ur, vr, node)
+                fitter.fit_overlay(ov, resid)
+                new.append(ov)
+        if not new:
+            break
+        for _ in range(int(tolerances.FIT_ADAPTIVE_SWEEPS)):
+            fitter.backfit()
+        dist = measure_points(hs, X, u, v)
+        if progress is not None:
+            progress(f"round {rnd}: {len(new)} overlays added (depth {hs.depth}), "
+                     f"{hs.pole_counts()['stored']} control points, max error {dist.max():.3g}")
+    reports, surfs, dists = _level_reports(hs, X, u, v)
+    return ScatteredAdaptiveFit(hs, tuple(reports), dists[-1], u, v, tol, reports[-1].max_error <= tol,
+                                tuple(surfs), tuple(dists))
