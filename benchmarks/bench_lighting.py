@@ -16,8 +16,8 @@ flaps added to the key light):
   ``vtkValuePass`` (one pass per component), positions from the depth buffer, then
   :func:`occsurf.algorithms.lighting.shade` on the covered pixels.
 
-Then the NumPy reference alone: :func:`shade` on 2M random points with 1 and with 3 lights
-(M shaded points/s; best of ``--repeat``).
+Then the reference alone: :func:`shade` on 2M random points with 1 and with 3 lights (M shaded
+points/s; best of ``--repeat``), by its compiled kernel (numba) and by its NumPy path.
 
 Run: ``python benchmarks/bench_lighting.py [--repeat 5] [--size 1600 1200]``. The machine has 2
 cores and no GPU (Mesa llvmpipe renders on the CPU).
@@ -190,7 +190,10 @@ def time_numpy_per_pixel(P, T, N, setup, size, repeat):
 def time_reference(repeat):
     """M shaded points/s of shade(): wall clock (threads as configured) and per CPU-second on one
     thread (``time.process_time``: what a quiet core would do; the machine is shared), float64 and
-    float32, with 1 and 3 lights."""
+    float32, with 1 and 3 lights, by the compiled kernel (numba, when installed) and by the NumPy
+    path (``OCCSURF_NO_NUMBA=1``) in the same run."""
+    import os
+
     from occsurf.algorithms import tolerances
     from occsurf.algorithms.lighting import LightingSetup, shade
 
@@ -199,15 +202,21 @@ def time_reference(repeat):
     N = rng.normal(size=(2_000_000, 3))
     setup = three_lights(np.array([5.0, 5.0, 5.0]), 17.0)
     rows = []
-    for dtype in (np.float64, np.float32):
-        for k in (1, 3):
-            s = LightingSetup(lights=setup.lights[:k], ambient=0.05, material=setup.material)
-            shade(P[:1000], N[:1000], [5, -30, 20], s, dtype=dtype)
-            wall = min(_timed(lambda: shade(P, N, [5, -30, 20], s, dtype=dtype)) for _ in range(repeat))
-            with tolerances.override(LIGHT_THREADS=1):
-                cpu = min(_timed(lambda: shade(P, N, [5, -30, 20], s, dtype=dtype), time.process_time)
-                          for _ in range(repeat))
-            rows.append((np.dtype(dtype).name, k, len(P) / wall / 1e6, len(P) / cpu / 1e6))
+    for path in ("compiled", "numpy"):
+        if path == "numpy":
+            os.environ["OCCSURF_NO_NUMBA"] = "1"
+        try:
+            for dtype in (np.float64, np.float32):
+                for k in (1, 3):
+                    s = LightingSetup(lights=setup.lights[:k], ambient=0.05, material=setup.material)
+                    shade(P[:100_000], N[:100_000], [5, -30, 20], s, dtype=dtype)  # compiles once per machine
+                    wall = min(_timed(lambda: shade(P, N, [5, -30, 20], s, dtype=dtype)) for _ in range(repeat))
+                    with tolerances.override(LIGHT_THREADS=1):
+                        cpu = min(_timed(lambda: shade(P, N, [5, -30, 20], s, dtype=dtype), time.process_time)
+                                  for _ in range(repeat))
+                    rows.append((path, np.dtype(dtype).name, k, len(P) / wall / 1e6, len(P) / cpu / 1e6))
+        finally:
+            os.environ.pop("OCCSURF_NO_NUMBA", None)
     return rows
 
 
@@ -217,37 +226,48 @@ def _timed(f, clock=time.perf_counter) -> float:
     return clock() - t0
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--size", type=int, nargs=2, default=[1600, 1200])
-    ns = ap.parse_args()
-    size = tuple(ns.size)
-    import tempfile
-
-    out = Path(tempfile.mkdtemp()) / "bench.png"
+def render_table(size, repeat, out: Path) -> None:
     meshes = [hood_mesh()]
     extra = linkrods_mesh()
     if extra is not None:
         meshes.append(extra)
     print(f"Warn lighting, {size[0]} x {size[1]}, 3 lights (concentration, cone with soft edge, flaps); "
-          f"median of {ns.repeat} (seconds)")
+          f"median of {repeat} (seconds)")
     print(f"{'model':28s} {'triangles':>9s} {'samples':>7s} {'ours cold':>9s} {'ours warm':>9s} {'(min)':>6s} "
           f"{'+png':>6s} {'vtk phong':>9s} {'numpy/pixel':>11s} {'ratio':>6s}")
     for name, P, T, N in meshes:
         setup = three_lights((P.min(axis=0) + P.max(axis=0)) / 2, float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))))
-        npx, split = time_numpy_per_pixel(P, T, N, setup, size, max(1, ns.repeat // 2))
+        npx, split = time_numpy_per_pixel(P, T, N, setup, size, max(1, repeat // 2))
         for samples in (0, 4):
-            cold, warm, best, png, _ = time_ours(P, T, N, setup, size, ns.repeat, out, samples)
-            phong = time_vtk_phong(P, T, N, setup, size, ns.repeat, samples)
+            cold, warm, best, png, _ = time_ours(P, T, N, setup, size, repeat, out, samples)
+            phong = time_vtk_phong(P, T, N, setup, size, repeat, samples)
             print(f"{name:28s} {len(T):9d} {samples:7d} {cold:9.3f} {warm:9.3f} {best:6.3f} {png:6.3f} {phong:9.3f} "
                   f"{npx:11.3f} {npx / warm:5.1f}x")
         print(f"{'':28s} numpy per-pixel: {split[0]:.3f} s for 3 value passes + depth, {split[1]:.3f} s shading "
               f"{split[2]} pixels ({split[2] / split[1] / 1e6:.1f} M/s)")
-    print(f"NumPy reference shade(), 2M points, best of {ns.repeat} (M shaded points/s):")
-    print(f"  {'dtype':8s} {'lights':>6s} {'wall':>7s} {'1 thread, per CPU-s':>20s}")
-    for dtype, k, wall, cpu in time_reference(ns.repeat):
-        print(f"  {dtype:8s} {k:6d} {wall:7.1f} {cpu:20.1f}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--size", type=int, nargs=2, default=[1600, 1200])
+    ap.add_argument("--only", choices=["render", "reference"], help="time one part only")
+    ns = ap.parse_args()
+    size = tuple(ns.size)
+    import tempfile
+
+    out = Path(tempfile.mkdtemp()) / "bench.png"
+    if ns.only != "reference":
+        render_table(size, ns.repeat, out)
+    if ns.only == "render":
+        return
+    print(f"Reference shade(), 2M points, best of {ns.repeat} (M shaded points/s; compiled = the numba kernel, "
+          f"numpy = OCCSURF_NO_NUMBA=1):")
+    print(f"  {'path':9s} {'dtype':8s} {'lights':>6s} {'wall':>7s} {'1 thread, per CPU-s':>20s} {'vs numpy':>9s}")
+    rows = time_reference(ns.repeat)
+    numpy_wall = {(d, k): w for p, d, k, w, _ in rows if p == "numpy"}
+    for path, dtype, k, wall, cpu in rows:
+        print(f"  {path:9s} {dtype:8s} {k:6d} {wall:7.1f} {cpu:20.1f} {wall / numpy_wall[dtype, k]:8.1f}x")
 
 
 if __name__ == "__main__":

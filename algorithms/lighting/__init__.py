@@ -8,13 +8,16 @@ renderer (:mod:`occsurf.bridge.rendering.lighting`) implements the same formulas
 Public names
 ------------
 Model (§10-2 .. §10-4, :mod:`.model`): :class:`WarnLight` (position, direction, colour, intensity,
-concentration ``cos^n``, cone with a soft edge, flaps in the light's frame, distance fall-off),
+concentration ``cos^n`` - Warn's exponent, 0 a plain light - or the same counted from 1 as
+``WarnLight.concentration_ratio = n + 1``, cone with a soft edge, flaps in the light's frame,
+distance fall-off),
 :class:`Material` (Lambert diffuse + **Phong** specular), :class:`LightingSetup` (lights, ambient,
 material), :func:`light_frame`, :data:`FALLOFFS`.
 
 Shading (:mod:`.shading`): :func:`shade` ``(points, normals, view_point, lights, material) ->
 (..., 3)`` linear RGB, vectorised; :func:`light_factor` (one light's concentration x cone x flaps x
-fall-off). Several lights add; coloured lights blend per channel (§10-7).
+fall-off). Several lights add; coloured lights blend per channel (§10-7). Large inputs go through
+an optional numba kernel (:mod:`._kernels`) that repeats the NumPy path's operations.
 
 Presets (:mod:`.presets`): :func:`studio_three_point`, :func:`key_light_with_flaps` (the course's
 car-body figures), :func:`highlight_check`; :data:`PRESETS`, :func:`preset`.

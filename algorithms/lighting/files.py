@@ -12,7 +12,8 @@ Format (``occsurf render --lights FILE``; every key but ``lights[].direction`` i
          "position": [x, y, z],             # null: a directional light at infinity
          "direction": [dx, dy, dz],         # where the light points (made unit)
          "color": [r, g, b], "intensity": 1.0,
-         "concentration": 0,                # Warn's cos^n reflector, n >= 0
+         "concentration": 0,                # Warn's cos^n reflector, n >= 0 (0: a plain light) ...
+         "concentration_ratio": 1,          # ... or the same as C = n + 1 >= 1 (1: a plain light)
          "cone": {"angle_deg": 30, "edge_deg": 2},
          "flaps": {"x": [lo, hi], "y": [lo, hi], "z": [lo, hi],    # light's frame, model units;
                    "edge": 0.0},                                   # null for an open side; soft edge
@@ -20,6 +21,11 @@ Format (``occsurf render --lights FILE``; every key but ``lights[].direction`` i
          "falloff_distance": 100.0}         # ... with full intensity up to this distance
       ]
     }
+
+A light gives at most one of ``concentration`` (Warn's exponent ``n``, the intensity at angle
+``gamma`` from the axis is ``cos(gamma)**n``) and ``concentration_ratio`` (``C = n + 1``: the
+intensity on the axis over the mean over the directions lit, so 1 is a plain light; see
+:attr:`~.model.WarnLight.concentration_ratio`). Files are written with ``concentration``.
 
 The flaps are given in the light's frame: ``z`` along its direction, ``x`` the projection of the
 model's +x onto the plane normal to it (+y where +x is parallel to the direction), ``y = z x x``,
@@ -42,8 +48,8 @@ from .model import LightingSetup, Material, WarnLight
 __all__ = ["setup_from_dict", "setup_to_dict", "load_lights", "dump_lights", "loads_lights", "dumps_lights"]
 
 _TOP_KEYS = {"ambient", "two_sided", "material", "lights", "comment"}
-_LIGHT_KEYS = {"name", "position", "direction", "color", "intensity", "concentration", "cone", "flaps", "falloff",
-               "falloff_distance", "comment"}
+_LIGHT_KEYS = {"name", "position", "direction", "color", "intensity", "concentration", "concentration_ratio", "cone",
+               "flaps", "falloff", "falloff_distance", "comment"}
 _CONE_KEYS = {"angle_deg", "edge_deg"}
 _MATERIAL_KEYS = {"color", "diffuse", "specular", "shininess", "specular_color"}
 
@@ -78,12 +84,17 @@ def _light(obj: Any, where: str) -> WarnLight:
     if isinstance(flaps, dict) and "edge" in flaps:
         flaps = dict(flaps)
         edge = flaps.pop("edge")
+    fields = dict(position=d.get("position"), direction=d["direction"], color=d.get("color", (1.0, 1.0, 1.0)),
+                  intensity=d.get("intensity", 1.0), cone_angle_deg=angle,
+                  cone_edge_deg=0.0 if cone_edge is None else cone_edge, flaps=flaps, flap_edge=edge,
+                  falloff=d.get("falloff", "none"), falloff_distance=d.get("falloff_distance"), name=d.get("name", ""))
     try:
-        return WarnLight(position=d.get("position"), direction=d["direction"], color=d.get("color", (1.0, 1.0, 1.0)),
-                         intensity=d.get("intensity", 1.0), concentration=d.get("concentration", 0.0),
-                         cone_angle_deg=angle, cone_edge_deg=0.0 if cone_edge is None else cone_edge, flaps=flaps, flap_edge=edge,
-                         falloff=d.get("falloff", "none"), falloff_distance=d.get("falloff_distance"),
-                         name=d.get("name", ""))
+        if "concentration_ratio" in d:
+            if "concentration" in d:
+                raise InvalidGeometryError("light.concentration_ratio: give either concentration (Warn's exponent n) "
+                                           "or concentration_ratio (C = n + 1), not both")
+            return WarnLight.with_concentration_ratio(d["concentration_ratio"], **fields)
+        return WarnLight(concentration=d.get("concentration", 0.0), **fields)
     except InvalidGeometryError as err:
         raise _renamed(err, "light", where) from None
 

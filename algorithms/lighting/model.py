@@ -149,7 +149,9 @@ class WarnLight:
     concentration : float, default 0
         Warn's reflector exponent ``n >= 0``: the light's intensity towards a point at angle
         ``gamma`` from the axis is ``cos(gamma)**n`` (nothing behind the light for ``n > 0``);
-        ``n = 0`` is a plain point light, uniform in every direction.
+        ``n = 0`` is a plain point light, uniform in every direction. The same control counted
+        so that 1 is the plain light is :attr:`concentration_ratio` ``C = n + 1``
+        (:meth:`with_concentration_ratio`; ``"concentration_ratio"`` in a lights file).
     cone_angle_deg : float or None
         Half-angle of the light's cone, in ``(0, 90]`` degrees; ``None``: no cone.
     cone_edge_deg : float, default 0
@@ -219,6 +221,35 @@ class WarnLight:
                                        "or cone: they need a position to measure angles from")
         if not isinstance(self.name, str):
             raise InvalidGeometryError(f"{where}.name: expected a string, got {self.name!r}")
+
+    @property
+    def concentration_ratio(self) -> float:
+        """Warn's concentration counted from 1: ``C = n + 1`` (``n`` = :attr:`concentration`).
+
+        ``C`` is the light's intensity on its axis over its mean intensity across the directions
+        it lights: a plain light (``n = 0``) lights every direction evenly, ``C = 1``; a reflector
+        ``cos^n`` lights the half-space in front of it, where the mean of ``cos^n`` is
+        ``1 / (n + 1)``, so ``C = n + 1``: 2 is a Lambertian reflector (``cos``), 41 Warn's
+        spotlight ``cos^40``. Only the counting differs from Warn's exponent; the light is his.
+        """
+        return self.concentration + 1.0
+
+    @classmethod
+    def with_concentration_ratio(cls, concentration_ratio: float, **fields: Any) -> WarnLight:
+        """A light given its :attr:`concentration_ratio` ``C >= 1`` (``C = 1``: a plain light)
+        instead of Warn's exponent ``n = C - 1``; ``fields`` are the other constructor arguments.
+
+        Raises
+        ------
+        InvalidGeometryError
+            ``C`` is not a finite number >= 1 (message names ``light.concentration_ratio``), or
+            ``fields`` also gives ``concentration``.
+        """
+        if "concentration" in fields:
+            raise InvalidGeometryError("light.concentration_ratio: give either concentration (Warn's exponent n) or "
+                                       "concentration_ratio (C = n + 1), not both")
+        ratio = _real(concentration_ratio, "light.concentration_ratio", lo=1.0)
+        return cls(concentration=ratio - 1.0, **fields)
 
     @property
     def frame(self) -> np.ndarray:

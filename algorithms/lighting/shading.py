@@ -35,13 +35,15 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
+from . import _kernels
 from .model import LightingSetup, Material, WarnLight
 
 __all__ = ["shade", "light_factor"]
@@ -101,8 +103,19 @@ def shade(points: ArrayLike, normals: ArrayLike, view_point: ArrayLike,
     two_sided : bool, optional
         Overrides the setup's: normals facing away from the eye are turned towards it.
     dtype : numpy.float64 or numpy.float32
-        Arithmetic precision: float64 (the reference) or float32 (the renderer's precision, about
-        twice as fast; relative error ~1e-6 of each term, invisible in an 8-bit picture).
+        Precision of the result. The NumPy path computes in it: float64 (the reference) or float32
+        (the renderer's precision, about twice as fast; relative error ~1e-6 of each term,
+        invisible in an 8-bit picture). The compiled path computes in float64 either way and
+        stores the result as ``dtype``.
+
+    Notes
+    -----
+    From :data:`~occsurf.algorithms.tolerances.NUMBA_MIN_POINTS` points on, when numba is
+    installed (and ``OCCSURF_NO_NUMBA`` is not set), an optional compiled kernel
+    (:mod:`._kernels`) shades the points, all lights in one pass per point, with the same
+    operations in the same order: the same numbers, to the last ulps of ``pow`` and ``acos``.
+    Blocks of :data:`~occsurf.algorithms.tolerances.LIGHT_BLOCK` points run on
+    :data:`~occsurf.algorithms.tolerances.LIGHT_THREADS` threads either way.
 
     Returns
     -------
@@ -128,29 +141,68 @@ def shade(points: ArrayLike, normals: ArrayLike, view_point: ArrayLike,
     if not np.all(np.isfinite(P)):
         raise InvalidGeometryError("points: expected finite coordinates")
     single_eye = E.size == 3
+    m = math.prod(shape[:-1])
+    kern = _kernels.shade_points(m)
+    if kern is not None:
+        out = _shade_compiled(kern, P, N, E, shape, single_eye, setup, dtype)
+        if out is not None:
+            return out.reshape(shape)
     # Component-major copies (one pass each): the block kernels then read contiguous rows.
     P, N = (np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, 3).T, dtype) for a in (P, N))
     E = (E.reshape(3, 1) if single_eye else np.broadcast_to(E, shape).reshape(-1, 3).T).astype(dtype)
-    m = P.shape[1]
     out = np.empty((3, m), dtype)
-    block = max(1, int(tolerances.LIGHT_BLOCK))
 
     def run(s: int) -> None:
         e = min(s + block, m)
         with np.errstate(all="ignore"):
             out[:, s:e] = _shade_block(P[:, s:e], N[:, s:e], E if single_eye else E[:, s:e], setup)
 
-    starts = range(0, m, block)
+    block = max(1, int(tolerances.LIGHT_BLOCK))
+    _on_threads(run, range(0, m, block))
+    return out.T.reshape(shape)
+
+
+def _on_threads(run: Callable[[int], Any], starts: Sequence[int]) -> list[Any]:
+    """``run(s)`` for every block start, on up to ``LIGHT_THREADS`` threads (0: one per CPU).
+    NumPy's loops and the compiled kernel release the GIL: blocks run side by side, and each
+    point's result does not depend on its block, so the output is the same on any thread count."""
     threads = min(len(starts), max(1, int(tolerances.LIGHT_THREADS) or (os.cpu_count() or 1)))
-    if threads > 1:  # NumPy releases the GIL in its loops: blocks run side by side, results identical
+    if threads > 1:
         from concurrent.futures import ThreadPoolExecutor
 
         with ThreadPoolExecutor(threads) as pool:
-            list(pool.map(run, starts))
-    else:
-        for s in starts:
-            run(s)
-    return out.T.reshape(shape)
+            return list(pool.map(run, starts))
+    return [run(s) for s in starts]
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    """A read-only view: the kernel is compiled for one signature whatever the caller's flags."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
+
+
+def _shade_compiled(kern: Any, P: np.ndarray, N: np.ndarray, E: np.ndarray, shape: tuple[int, ...],
+                    single_eye: bool, setup: LightingSetup, dtype: type) -> np.ndarray | None:
+    """``(m, 3)`` colours by the numba kernel of :mod:`._kernels` (float64 arithmetic, stored as
+    ``dtype``), or None when the kernel fails (the caller then takes the NumPy path)."""
+    P, N = (_readonly(np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, 3), np.float64)) for a in (P, N))
+    E = _readonly(np.ascontiguousarray(E.reshape(1, 3) if single_eye else np.broadcast_to(E, shape).reshape(-1, 3),
+                                       np.float64))
+    m = P.shape[0]
+    out = np.empty((m, 3), dtype)
+    mat = setup.material
+    args = (_kernels.pack_lights(setup), _readonly(np.asarray(setup.ambient) * np.asarray(mat.color)),
+            bool(setup.two_sided), bool(mat.specular > 0), float(mat.shininess))
+    block = max(1, int(tolerances.LIGHT_BLOCK))
+
+    def run(s: int) -> bool:
+        e = min(s + block, m)
+        return _kernels.run(kern, P[s:e], N[s:e], E if single_eye else E[s:e], *args, out[s:e])
+
+    if not run(0):  # the first block on this thread: compiles (once per machine), or fails
+        return None
+    return out if all(_on_threads(run, range(block, m, block))) else None
 
 
 def _ipow(x: np.ndarray, s: float) -> np.ndarray:

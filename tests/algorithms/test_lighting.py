@@ -353,3 +353,185 @@ def test_key_light_band_is_where_the_flaps_say() -> None:
     lit = light_factor(P, setup.lights[0]) > 0
     assert 0.02 < lit.mean() < 0.6
     assert math.isclose(float(np.linalg.norm(setup.lights[0].direction)), 1.0)
+
+
+# ---------------------------------------------------------------------------------------- concentration, counted from 1
+def test_concentration_ratio_one_reproduces_a_plain_light() -> None:
+    """The issue's wording: concentration 1 reproduces a plain light - with the concentration counted
+    as C = n + 1 (WarnLight.concentration_ratio); Warn's exponent n = 0 is the same light."""
+    P, N = _plane()
+    pos, d = (1.0, -2.0, 4.0), (0.3, 0.2, -1.0)
+    E = [0.0, 0.0, 10.0]
+    plain = shade(P, N, E, [WarnLight(position=pos, direction=(0, 0, 1))], MATTE)
+    c1 = WarnLight.with_concentration_ratio(1, position=pos, direction=d)
+    assert c1.concentration == 0 and c1.concentration_ratio == 1
+    np.testing.assert_array_equal(shade(P, N, E, [c1], MATTE), plain)
+    np.testing.assert_array_equal(light_factor(P - [0.0, 0.0, 9.0], c1), 1.0)  # behind the light too
+    doc = {"lights": [{"position": list(pos), "direction": list(d), "concentration_ratio": 1}]}
+    assert setup_from_dict(doc).lights[0] == c1
+    # C = n + 1 for every n: C = 2 is Warn's n = 1 (cos), C = 41 his n = 40
+    for ratio in (2.0, 3.5, 41.0):
+        a = WarnLight.with_concentration_ratio(ratio, position=pos, direction=d)
+        b = WarnLight(position=pos, direction=d, concentration=ratio - 1)
+        assert a == b and a.concentration_ratio == ratio
+        doc["lights"][0]["concentration_ratio"] = ratio
+        assert setup_from_dict(doc).lights[0] == b
+    # written back with Warn's exponent
+    assert json.loads(dumps_lights(setup_from_dict(doc)))["lights"][0]["concentration"] == 40.0
+
+
+@pytest.mark.parametrize("n", [0.0, 1.0, 7.5, 40.0])
+def test_concentration_ratio_is_peak_over_mean_intensity(n) -> None:
+    """The meaning documented for C: the intensity on the axis over the mean intensity across the
+    directions the light reaches (the whole sphere for n = 0, the half-space in front for n > 0),
+    integrated numerically over a fine grid of directions."""
+    light = WarnLight(position=(0.0, 0.0, 0.0), direction=(0, 0, 1), concentration=n)
+    k = 4000
+    gamma = (np.arange(k) + 0.5) * np.pi / k  # midpoint rule in the polar angle from the axis
+    dirs = np.stack([np.sin(gamma), np.zeros(k), np.cos(gamma)], axis=-1)
+    intensity = light_factor(dirs, light)
+    solid = np.sin(gamma)  # the solid angle of each ring (axisymmetric), up to a common factor
+    lit = intensity > 0
+    mean = np.sum(intensity * solid) / np.sum(solid[lit])
+    assert math.isclose(intensity[0] / mean, light.concentration_ratio, rel_tol=1e-4)
+
+
+def test_concentration_ratio_errors_name_the_field() -> None:
+    with pytest.raises(InvalidGeometryError, match=r"light\.concentration_ratio: expected 1 <= "):
+        WarnLight.with_concentration_ratio(0.5, position=(0.0, 0.0, 1.0), direction=(0, 0, -1))
+    with pytest.raises(InvalidGeometryError, match=r"light\.concentration_ratio: give either"):
+        WarnLight.with_concentration_ratio(2, position=(0.0, 0.0, 1.0), direction=(0, 0, -1), concentration=1)
+    with pytest.raises(InvalidGeometryError, match=r"light\.concentration_ratio: expected a finite number"):
+        WarnLight.with_concentration_ratio("high", position=(0.0, 0.0, 1.0), direction=(0, 0, -1))
+    for text, field in [
+        ('{"lights": [{"position": [0,0,1], "direction": [0,0,-1], "concentration_ratio": 0}]}',
+         r"lights\[0\]\.concentration_ratio: expected 1 <="),
+        ('{"lights": [{"position": [0,0,1], "direction": [0,0,-1], "concentration_ratio": 2, "concentration": 1}]}',
+         r"lights\[0\]\.concentration_ratio: give either"),
+        ('{"lights": [{"direction": [0,0,-1], "concentration_ratio": 3}]}', r"lights\[0\]\.position"),
+    ]:
+        with pytest.raises(InvalidGeometryError, match=field):
+            loads_lights(text)
+    # a directional light may give C = 1 (n = 0): nothing to measure an angle from is needed
+    assert loads_lights('{"lights": [{"direction": [0,0,-1], "concentration_ratio": 1}]}').lights[0].concentration == 0
+
+
+# ---------------------------------------------------------------------------------------- compiled kernel
+try:
+    import numba  # noqa: F401
+
+    HAVE_NUMBA = True
+except ImportError:
+    HAVE_NUMBA = False
+
+needs_numba = pytest.mark.skipif(not HAVE_NUMBA, reason="numba is not installed (optional)")
+kernel_must_run = pytest.mark.filterwarnings("error:occsurf. numba lighting kernel failed:RuntimeWarning")
+
+
+def _every_control(seed: int) -> LightingSetup:
+    """Lights using every control: concentration (integer and not), hard and soft cones, hard and
+    soft flaps, both fall-offs, a directional light with flaps, a coloured light."""
+    rng = np.random.default_rng(seed)
+    lights = [
+        WarnLight(position=tuple(rng.uniform(-3, 3, 2)) + (6.0,), direction=(0.1, 0.2, -1), concentration=3.0,
+                  cone_angle_deg=35, cone_edge_deg=9, flaps={"x": [-2.5, 3.0], "y": [-4.0, None]}),
+        WarnLight(position=(-3.0, 2.0, 5.0), direction=(0.5, -0.2, -1.0), color=(0.5, 0.4, 0.1), concentration=2.7,
+                  flaps={"x": [-1.0, 1.0], "z": [0.0, 7.0]}, flap_edge=0.6, falloff="inverse_square",
+                  falloff_distance=4.0),
+        WarnLight(position=(2.0, -2.0, 3.0), direction=(-0.2, 0.3, -1.0), cone_angle_deg=25, falloff="inverse",
+                  falloff_distance=2.0),
+        WarnLight(position=None, direction=(0.3, 0.2, -1.0), color=(0.1, 0.2, 0.6), flaps={"y": [-1.0, 2.0]},
+                  flap_edge=float(rng.uniform(0, 0.5))),
+    ]
+    mat = Material(color=(0.8, 0.7, 0.6), diffuse=0.8, specular=0.3, shininess=float(rng.choice([20.0, 13.5, 0.0, 1.0])))
+    return LightingSetup(lights=tuple(lights), ambient=(0.05, 0.06, 0.04), material=mat, two_sided=bool(seed % 2))
+
+
+def _points(seed: int, m: int = 20_000) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(100 + seed)
+    P = rng.uniform(-5, 5, (m, 3)) * [1, 1, 0.4]
+    N = rng.normal(size=(m, 3))
+    N[:50] = 0.0  # degenerate normals: NaN rows
+    P[50] = (-3.0, 2.0, 5.0)  # a point at a light: no light from it
+    return P, N
+
+
+@needs_numba
+@kernel_must_run
+@pytest.mark.parametrize("seed", range(6))
+def test_compiled_kernel_matches_the_numpy_reference(seed, monkeypatch) -> None:
+    """Both paths on every control, degenerate normals and a point at a light: the same numbers
+    to 1e-13 (the kernel repeats the reference's operations; pow and acos may differ in an ulp)."""
+    setup = _every_control(seed)
+    P, N = _points(seed)
+    E = [1.0, -8.0, 12.0] if seed < 3 else P + [0.5, -3.0, 9.0]  # one eye, or one per point
+    with tolerances.override(NUMBA_MIN_POINTS=0):
+        fast = shade(P, N, E, setup)
+    monkeypatch.setenv("OCCSURF_NO_NUMBA", "1")
+    ref = shade(P, N, E, setup)
+    assert np.array_equal(np.isnan(fast), np.isnan(ref)) and np.isnan(ref[:50]).all()
+    np.testing.assert_allclose(fast, ref, rtol=1e-13, atol=1e-15)
+    assert np.all(fast[51:] > 0)  # a picture, not zeros
+
+
+@needs_numba
+@kernel_must_run
+def test_compiled_kernel_is_bit_identical_on_integer_exponents(monkeypatch) -> None:
+    """Integer exponents, hard cones and flaps use no transcendental function besides sqrt: the two
+    paths give the same bits (the kernel repeats the reference's operations in its order)."""
+    light = WarnLight(position=(0.5, -1.0, 6.0), direction=(0.0, 0.2, -1.0), concentration=3.0, cone_angle_deg=32,
+                      flaps={"x": [-2.5, 3.0]}, flap_edge=0.3, falloff="inverse", falloff_distance=3.0)
+    setup = studio_three_point([0, 0, 0], 8.0).replace(lights=(light, *studio_three_point([0, 0, 0], 8.0).lights))
+    P, N = _points(7)
+    with tolerances.override(NUMBA_MIN_POINTS=0):
+        fast = shade(P, N, [1, -9, 4], setup)
+    monkeypatch.setenv("OCCSURF_NO_NUMBA", "1")
+    np.testing.assert_array_equal(fast, shade(P, N, [1, -9, 4], setup))
+
+
+@needs_numba
+@kernel_must_run
+def test_compiled_kernel_threads_blocks_float32_and_threshold(monkeypatch) -> None:
+    """Any block size and thread count give the same bits; float32 output is the float64 result
+    rounded; below NUMBA_MIN_POINTS (read at call time) the NumPy path runs."""
+    from occsurf.algorithms.lighting import _kernels
+
+    setup = _every_control(1)
+    P, N = _points(1, 9_999)
+    with tolerances.override(NUMBA_MIN_POINTS=0, LIGHT_THREADS=1, LIGHT_BLOCK=100_000):
+        serial = shade(P, N, [1, -8, 12], setup)
+    with tolerances.override(NUMBA_MIN_POINTS=0, LIGHT_THREADS=3, LIGHT_BLOCK=777):
+        np.testing.assert_array_equal(shade(P, N, [1, -8, 12], setup), serial)
+        f32 = shade(P, N, [1, -8, 12], setup, dtype=np.float32)
+    assert f32.dtype == np.float32
+    np.testing.assert_array_equal(f32, serial.astype(np.float32))
+    calls = []
+    real = _kernels.run
+    monkeypatch.setattr(_kernels, "run", lambda *a: calls.append(1) or real(*a))
+    with tolerances.override(NUMBA_MIN_POINTS=len(P) + 1):
+        shade(P, N, [1, -8, 12], setup)
+    assert calls == []
+    with tolerances.override(NUMBA_MIN_POINTS=len(P)):
+        shade(P, N, [1, -8, 12], setup)
+    assert calls
+
+
+@needs_numba
+def test_a_failing_kernel_falls_back_to_numpy(monkeypatch) -> None:
+    from occsurf.algorithms.lighting import _kernels
+
+    setup = _every_control(2)
+    P, N = _points(2, 2000)
+    monkeypatch.setenv("OCCSURF_NO_NUMBA", "1")
+    ref = shade(P, N, [1, -8, 12], setup)
+    monkeypatch.delenv("OCCSURF_NO_NUMBA")
+
+    def broken(*args):
+        raise TypeError("no matching signature")
+
+    monkeypatch.setitem(_kernels._state, "kernel", broken)
+    monkeypatch.setitem(_kernels._state, "loaded", True)
+    with tolerances.override(NUMBA_MIN_POINTS=0), pytest.warns(RuntimeWarning, match="lighting kernel failed"):
+        got = shade(P, N, [1, -8, 12], setup)
+    np.testing.assert_array_equal(got, ref)
+    assert _kernels._state["kernel"] is None
