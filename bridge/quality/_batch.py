@@ -140,9 +140,11 @@ class SurfaceBatch:
 
     def derivatives(self, fid: Index, u: Array, v: Array, order: int) -> tuple[Array, dict[int, BaseException]]:
         """``D (m, order+1, order+1, 3)`` and the faces whose evaluation raised (their points NaN)."""
-        D = np.full((u.shape[0], order + 1, order + 1, 3), np.nan)
-        errors: dict[int, BaseException] = {}
         grp = self.group[fid]
+        # every row of a B-spline face is written below; only the others start as NaN
+        D = np.empty((u.shape[0], order + 1, order + 1, 3))
+        D[grp < 0] = np.nan
+        errors: dict[int, BaseException] = {}
         if self.groups and _use_numba(u.shape[0]):
             self._numba(fid, u, v, order, grp, D)
         else:
@@ -168,33 +170,32 @@ class SurfaceBatch:
 
         kernel = (nk._state["kernels"] or {}).get("surface_derivatives")
         sel = np.flatnonzero(grp >= 0)
-        fs = fid[sel]
-        U = np.empty(u.shape[0])
-        V = np.empty(u.shape[0])
-        U[sel] = _into(u[sel], self.dom[fs, 0], self.dom[fs, 1], self.per[fs, 0])
-        V[sel] = _into(v[sel], self.dom[fs, 2], self.dom[fs, 3], self.per[fs, 1])
-        order_idx = sel[np.argsort(fs, kind="stable")]
-        f_sorted = fid[order_idx]
-        cuts = np.flatnonzero(np.diff(f_sorted)) + 1
-        for chunk in np.split(order_idx, cuts):
-            if chunk.size == 0:
+        # the points sorted by face, so each face's parameters and results are contiguous slices
+        # of one buffer (one gather and one scatter in all, not one per face)
+        order_idx = sel[np.argsort(fid[sel], kind="stable")]
+        fs = fid[order_idx]
+        U = np.ascontiguousarray(_into(u[order_idx], self.dom[fs, 0], self.dom[fs, 1], self.per[fs, 0]))
+        V = np.ascontiguousarray(_into(v[order_idx], self.dom[fs, 2], self.dom[fs, 3], self.per[fs, 1]))
+        out = np.empty((order_idx.size, order + 1, order + 1, 3))
+        bounds = np.r_[0, np.flatnonzero(np.diff(fs)) + 1, fs.size]
+        for a, b in zip(bounds[:-1].tolist(), bounds[1:].tolist()):
+            if a == b:
                 continue
-            f = int(fid[chunk[0]])
-            ev = self.evaluators[f]
-            spline = ev.spline
+            f = int(fs[a])
+            spline = self.evaluators[f].spline
             args = self._kargs.get(f)
             if args is None:  # span tables and read-only views built once per face
-                args = self._kargs[f] = tuple(nk._readonly(a) for a in spline._kernel_args())
-            out = np.empty((chunk.size, order + 1, order + 1, 3))
+                args = self._kargs[f] = tuple(nk._readonly(x) for x in spline._kernel_args())
             if kernel is not None:
                 try:
-                    kernel(*args, U[chunk], V[chunk], order, spline.is_rational, out)
-                    D[chunk] = out
+                    kernel(*args, U[a:b], V[a:b], order, spline.is_rational, out[a:b])
                     continue
                 except Exception:  # noqa: BLE001 - as nk.run: fall back to NumPy
                     kernel = None
+            chunk = order_idx[a:b]
             G = self.groups[self.group[f]]
-            D[chunk] = self._group(G, self.local[fid[chunk]], u[chunk], v[chunk], order)
+            out[a:b] = self._group(G, self.local[fid[chunk]], u[chunk], v[chunk], order)
+        D[order_idx] = out
 
     @staticmethod
     def _group(G: dict[str, Any], k: Index, u: Array, v: Array, order: int) -> Array:
