@@ -14,11 +14,16 @@ goes through this module, so each of those conversions exists exactly once.
   naming the argument instead of an OCC ``Standard_ConstructionError``.
 * :func:`kernel_errors` turns any exception raised inside OCC into :class:`KernelError`
   (``raise ... from err``).
+* :func:`quiet_messages` keeps OCC's translator banners off stdout *during* a bridge call and gives
+  every default message printer its caller's trace level back afterwards (importing the bridge, or
+  calling it, never changes a printer's level for the rest of the process). :func:`silence_messages`
+  is the explicit, process-wide alternative for scripts that want OCC quiet everywhere.
 """
 
 from __future__ import annotations
 
 import contextlib
+import threading
 from collections.abc import Iterator
 
 import numpy as np
@@ -33,6 +38,7 @@ from occsurf.algorithms.errors import InvalidGeometryError, KernelError
 
 __all__ = [
     "MAX_DEGREE",
+    "quiet_messages",
     "silence_messages",
     "real_array",
     "int_array",
@@ -59,16 +65,58 @@ MAX_DEGREE: int = int(Geom_BSplineCurve.MaxDegree_s())
 
 # ---------------------------------------------------------------------------------------- messages
 def silence_messages() -> None:
-    """Lower every default message printer to ``Message_Fail`` (OCP_NOTES §0). Idempotent.
+    """Lower every default message printer to ``Message_Fail`` for the rest of the process.
 
-    OCC's STEP/IGES translators and some algorithms print statistics banners on stdout; after this
-    only failures are printed.
+    An explicit, process-wide choice for scripts and benchmarks (OCP_NOTES §0): OCC's STEP/IGES
+    translators and some algorithms print statistics banners on stdout; after this only failures
+    are printed, inside and outside occsurf. The bridge itself never calls it: it uses
+    :func:`quiet_messages`, which restores the caller's levels.
     """
     for printer in Message.DefaultMessenger_s().Printers():
         printer.SetTraceLevel(Message_Gravity.Message_Fail)
 
 
-silence_messages()
+_QUIET_LOCK = threading.Lock()
+_quiet_depth = 0
+_quiet_saved: list[tuple[object, object]] = []
+
+
+@contextlib.contextmanager
+def quiet_messages() -> Iterator[None]:
+    """Only failures reach OCC's default message printers inside the block; afterwards every printer
+    has exactly the trace level it had before.
+
+    Used around each bridge call that runs OCC code which prints (the STEP/IGES translators through
+    :func:`occsurf.bridge.exchange.occ_io.statics`, hole filling, sewing). Usable as a decorator.
+    Nests, and is safe across threads: the levels are saved by the first block entered and restored
+    when the last one is left, so concurrent calls never leave a lowered level behind. A printer
+    the caller set to ``Message_Fail`` (or added) stays as the caller set it.
+
+    Examples
+    --------
+    >>> from OCP.Message import Message, Message_Gravity                     # doctest: +SKIP
+    >>> printer = Message.DefaultMessenger_s().Printers().First()            # doctest: +SKIP
+    >>> printer.SetTraceLevel(Message_Gravity.Message_Trace)                 # doctest: +SKIP
+    >>> occsurf.bridge.read_step("part.step"); printer.GetTraceLevel()       # doctest: +SKIP
+    <Message_Gravity.Message_Trace: 0>
+    """
+    global _quiet_depth
+    with _QUIET_LOCK:
+        if _quiet_depth == 0:
+            _quiet_saved[:] = [(p, p.GetTraceLevel()) for p in Message.DefaultMessenger_s().Printers()]
+            for printer, level in _quiet_saved:
+                if int(level.value) < int(Message_Gravity.Message_Fail.value):
+                    printer.SetTraceLevel(Message_Gravity.Message_Fail)
+        _quiet_depth += 1
+    try:
+        yield
+    finally:
+        with _QUIET_LOCK:
+            _quiet_depth -= 1
+            if _quiet_depth == 0:
+                for printer, level in _quiet_saved:
+                    printer.SetTraceLevel(level)
+                _quiet_saved.clear()
 
 
 # ---------------------------------------------------------------------------------------- errors

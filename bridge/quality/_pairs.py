@@ -99,7 +99,9 @@ def collect_faces(model: Any) -> tuple[Any, list[FaceData]]:
         pairs = [(f.face, f.surface if f.surface_type in ("BSplineSurface", "BezierSurface") else None)
                  for f in imported]
     else:
-        shape = getattr(model, "wrapped", model)
+        from ..conversion.shapes import as_shape
+
+        shape = as_shape(model, "model")
         fmap = TopTools_IndexedMapOfShape()
         ex = TopExp_Explorer(shape, TopAbs_FACE)
         while ex.More():

@@ -214,6 +214,26 @@ def _check(obj: Any, cls: type, name: str) -> None:
         raise InvalidGeometryError(f"{name}: expected a {cls.__name__}, got {type(obj).__name__}")
 
 
+def _occ_surface_of(obj: Any) -> Any:
+    """A ``Geom_Surface`` as it is; the surface of a face-like object with exactly one face."""
+    from OCP.BRep import BRep_Tool
+    from OCP.Geom import Geom_Surface
+
+    from ..conversion.shapes import as_faces, is_shape_like
+
+    if isinstance(obj, Geom_Surface):
+        return obj
+    if not is_shape_like(obj):
+        raise InvalidGeometryError(f"occ_surface: expected a Geom_Surface or a face, got {type(obj).__name__}")
+    faces = as_faces(obj, "occ_surface")
+    if len(faces) != 1:
+        raise InvalidGeometryError(f"occ_surface: expected a shape with exactly one face, got {len(faces)} faces")
+    surface = BRep_Tool.Surface_s(faces[0])
+    if surface is None:
+        raise InvalidGeometryError("occ_surface: the face has no surface")
+    return surface
+
+
 def _check_samples(samples: Any, minimum: int = 2) -> int:
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < minimum:
         raise InvalidGeometryError(f"samples: expected an integer >= {minimum}, got {samples!r}")
@@ -228,9 +248,11 @@ def surface_deviation(ours: BSplineSurface, occ_surface: Any = None, samples: in
     ----------
     ours : BSplineSurface
         3-D.
-    occ_surface : Geom_Surface, optional
+    occ_surface : Geom_Surface, or a face, optional
         Evaluated at the same ``(u, v)``; default ``to_occ(ours)`` (which checks our evaluator
-        against OCC's on identical data).
+        against OCC's on identical data). A face (``TopoDS_Face``, build123d / cadquery ``Face``, or
+        a Shell, Solid, Compound holding exactly one face) stands for its surface
+        (``BRep_Tool.Surface_s``, the face's location applied).
     samples : int
         Grid of ``samples x samples`` parameters, uniform over ``ours.domain``, ends included
         (those within 4 ulps of a knot moved onto it, see the module docstring). A grid whose
@@ -244,7 +266,7 @@ def surface_deviation(ours: BSplineSurface, occ_surface: Any = None, samples: in
     m = _check_samples(samples)
     # ours (3x3 partials), OCC's 6 vectors and normals per grid point: refused before allocating
     check_size((m, m, 9 * 3 + 6 * 3 + 3), f"surface_deviation with samples={m} ({m} x {m} grid)")
-    occ_s = to_occ(ours) if occ_surface is None else occ_surface
+    occ_s = to_occ(ours) if occ_surface is None else _occ_surface_of(occ_surface)
     (u0, u1), (v0, v1) = ours.domain
     us = _snap_to_knots(np.linspace(u0, u1, m), ours.knots[0])
     vs = _snap_to_knots(np.linspace(v0, v1, m), ours.knots[1])
