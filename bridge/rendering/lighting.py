@@ -22,7 +22,9 @@ the covered pixels; one shaded pass of the same mesh takes 0.19 s (0.8 s with 4x
 ``benchmarks/bench_lighting.py`` times both.
 
 Cameras (:class:`Camera`): a named view of :data:`VIEWS` (``top`` looks down -z at the whole
-model) framed on the model's bounding sphere, or an explicit position / target / up.
+model) framed on the model's bounding box, or an explicit position / target / up. The window
+cache, the cameras and the pixel read-back are those of :mod:`.vtk_scene` (one offscreen
+window and camera code path for every VTK picture).
 Entry points: :func:`render_lit` (a mesh -> :class:`LitImage` with colours, depth and camera),
 :func:`render_surfaces_lit` (B-spline surfaces), :func:`render_model_lit` (an imported STEP/IGES
 model, through :func:`mesh_of_model`), :func:`write_png` (atomic), :func:`pixel_world_points`
@@ -42,52 +44,19 @@ import numpy as np
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.lighting import LightingSetup, WarnLight
 
+from .vtk_scene import VIEW_ANGLE, VIEWS, Camera, apply_camera, fit_camera, read_pixels, render_available, vtk_matrix
+from .vtk_scene import _polydata, _vertex_normals
+from .vtk_scene import window as _window
+
 if TYPE_CHECKING:
     from ..exchange.step_iges import ImportedModel
 
 __all__ = ["VIEWS", "Camera", "LitImage", "camera_for_view", "render_lit", "render_model_lit", "mesh_of_model",
-           "write_png", "pixel_world_points", "render_surfaces_lit", "render_available"]
+           "write_png", "pixel_world_points", "render_surfaces_lit", "render_available", "VIEW_ANGLE"]
 
-#: Named views: direction from the target *to* the camera, and the view-up vector.
-VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
-    "iso": ((1.0, -1.0, 0.8), (0.0, 0.0, 1.0)),
-    "top": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
-    "bottom": ((0.0, 0.0, -1.0), (0.0, -1.0, 0.0)),
-    "front": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
-    "back": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
-    "left": ((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-    "right": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-}
-#: Vertical opening angle of the perspective camera, degrees.
-VIEW_ANGLE = 30.0
 #: Background colour (RGB in [0, 1]): Warn's studio pictures are on black; a dark grey keeps the
 #: silhouette of unlit parts visible.
 BACKGROUND = (0.08, 0.08, 0.09)
-
-
-@dataclass(frozen=True)
-class Camera:
-    """A perspective camera: ``position``, ``target`` (focal point), ``up`` and vertical view angle."""
-
-    position: tuple[float, float, float]
-    target: tuple[float, float, float]
-    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    view_angle: float = VIEW_ANGLE
-
-    def __post_init__(self) -> None:
-        for name in ("position", "target", "up"):
-            v = np.asarray(getattr(self, name), float)
-            if v.shape != (3,) or not np.all(np.isfinite(v)):
-                raise InvalidGeometryError(f"camera.{name}: expected 3 finite numbers, got {getattr(self, name)!r}")
-            object.__setattr__(self, name, tuple(float(x) for x in v))
-        d = np.subtract(self.target, self.position)
-        if np.linalg.norm(d) == 0:
-            raise InvalidGeometryError("camera.target: expected a point other than camera.position")
-        if np.linalg.norm(np.cross(d, self.up)) <= 1e-9 * np.linalg.norm(d) * np.linalg.norm(self.up):
-            raise InvalidGeometryError(f"camera.up: expected a direction not parallel to the line of sight, got "
-                                       f"{list(self.up)}")
-        if not 0 < float(self.view_angle) < 180:
-            raise InvalidGeometryError(f"camera.view_angle: expected 0 < angle < 180 degrees, got {self.view_angle}")
 
 
 def camera_for_view(view: str, lo: Sequence[float], hi: Sequence[float], aspect: float = 4 / 3,
@@ -97,24 +66,11 @@ def camera_for_view(view: str, lo: Sequence[float], hi: Sequence[float], aspect:
     The camera looks at the box's centre from the view's direction, at the smallest distance at
     which all eight corners of the box lie inside the picture (both openings divided by
     ``margin``): a long part fills the frame instead of a fraction of its bounding sphere.
+    (:func:`~occsurf.bridge.rendering.vtk_scene.fit_camera`, the framing of every VTK picture.)
     """
-    if view not in VIEWS:
+    if not isinstance(view, str) or view not in VIEWS:
         raise InvalidGeometryError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
-    lo_, hi_ = np.asarray(lo, float), np.asarray(hi, float)
-    centre = (lo_ + hi_) / 2
-    d, up = VIEWS[view]
-    back = np.asarray(d, float) / np.linalg.norm(d)  # from the target towards the camera
-    right = np.cross(-back, up)
-    right /= np.linalg.norm(right)
-    true_up = np.cross(right, -back)
-    corners = np.array([[x, y, z] for x in (lo_[0], hi_[0]) for y in (lo_[1], hi_[1]) for z in (lo_[2], hi_[2])])
-    rel = corners - centre
-    tan_v = math.tan(math.radians(VIEW_ANGLE) / 2) / margin
-    tan_h = tan_v * aspect
-    need = rel @ back + np.maximum(np.abs(rel @ right) / tan_h, np.abs(rel @ true_up) / tan_v)
-    size = max(float(np.linalg.norm(hi_ - lo_)), 1e-9)
-    dist = max(float(need.max()), 0.05 * size) + 1e-3 * size  # never inside the box's near corner
-    return Camera(position=tuple(centre + dist * back), target=tuple(centre), up=up)
+    return fit_camera(view, lo, hi, aspect, margin=margin)
 
 
 @dataclass
@@ -254,58 +210,12 @@ def _shader_impl(setup: LightingSetup, inv_view: np.ndarray, eye: Sequence[float
 
 
 # ---------------------------------------------------------------------------------------- VTK
-def render_available() -> bool:
-    """True when VTK can open an offscreen window here."""
-    try:
-        _window(16, 16).Render()
-        return True
-    except Exception:  # noqa: BLE001
-        return False
-
-
-_WINDOWS: dict[tuple[int, int, int], Any] = {}
-
-
-def _window(width: int, height: int, samples: int = 4) -> Any:
-    """A cached offscreen window (EGL: no display needed) of this size and multisampling."""
-    win = _WINDOWS.get((width, height, samples))
-    if win is None:
-        import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (registers the OpenGL factories)
-        from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
-
-        vtkObject.GlobalWarningDisplayOff()
-        vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
-        try:
-            from vtkmodules.vtkRenderingOpenGL2 import vtkEGLRenderWindow
-
-            win = vtkEGLRenderWindow()
-        except ImportError:  # a build without EGL: the default (offscreen) window
-            from vtkmodules.vtkRenderingCore import vtkRenderWindow
-
-            win = vtkRenderWindow()
-        win.SetOffScreenRendering(1)
-        win.SetSize(width, height)
-        win.SetMultiSamples(samples)
-        _WINDOWS[(width, height, samples)] = win
-    return win
-
-
 def _actor(points: np.ndarray, triangles: np.ndarray, normals: np.ndarray) -> Any:
     """A VTK actor of the mesh with per-vertex normals."""
-    from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
-    from vtkmodules.vtkCommonCore import vtkPoints
-    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+    from vtkmodules.util.numpy_support import numpy_to_vtk
     from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
 
-    pts = vtkPoints()
-    pts.SetData(numpy_to_vtk(np.ascontiguousarray(points, float), deep=True))
-    cells = vtkCellArray()
-    offsets = np.arange(0, 3 * len(triangles) + 1, 3, dtype=np.int64)
-    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True),
-                  numpy_to_vtkIdTypeArray(np.ascontiguousarray(triangles, np.int64).ravel(), deep=True))
-    pd = vtkPolyData()
-    pd.SetPoints(pts)
-    pd.SetPolys(cells)
+    pd = _polydata(points, triangles, "triangles")
     pd.GetPointData().SetNormals(numpy_to_vtk(np.ascontiguousarray(normals, np.float32), deep=True))
     mapper = vtkPolyDataMapper()
     mapper.SetInputData(pd)
@@ -340,17 +250,6 @@ def _check_mesh(points: Any, triangles: Any, normals: Any) -> tuple[np.ndarray, 
         if bad.any():  # degenerate points (a sphere's pole): the mesh's own normal there
             N[bad] = _vertex_normals(P, T)[bad]
     return P, T.astype(np.int64), N
-
-
-def _vertex_normals(P: np.ndarray, T: np.ndarray) -> np.ndarray:
-    """Area-weighted vertex normals ``(n, 3)`` of a triangle mesh (counter-clockwise = outside)."""
-    fn = np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])
-    N = np.zeros_like(P)
-    for k in range(3):
-        np.add.at(N, T[:, k], fn)
-    length = np.linalg.norm(N, axis=1, keepdims=True)
-    with np.errstate(all="ignore"):
-        return np.where(length > 0, N / length, np.array([0.0, 0.0, 1.0]))
 
 
 def render_lit(points: np.ndarray, triangles: np.ndarray, setup: LightingSetup, *, normals: np.ndarray | None = None,
@@ -412,8 +311,6 @@ def _draw(P: np.ndarray, T: np.ndarray, N: np.ndarray, setup: LightingSetup, cam
     """One shaded pass; returns ``(rgb (h, w, 3) uint8, depth (h, w) float32, world->NDC (4, 4))``."""
     width, height, _ = window
     win = _window(*window)  # first: loads the OpenGL factories (vtkShaderProperty's override)
-    from vtkmodules.util.numpy_support import vtk_to_numpy
-    from vtkmodules.vtkCommonCore import vtkFloatArray, vtkUnsignedCharArray
     from vtkmodules.vtkRenderingCore import vtkLight, vtkRenderer
 
     renderer = vtkRenderer()
@@ -425,14 +322,8 @@ def _draw(P: np.ndarray, T: np.ndarray, N: np.ndarray, setup: LightingSetup, cam
     renderer.AddLight(light)
     actor = _actor(P, T, N)
     renderer.AddActor(actor)
-    cam = renderer.GetActiveCamera()
-    cam.SetPosition(*camera.position)
-    cam.SetFocalPoint(*camera.target)
-    cam.SetViewUp(*camera.up)
-    cam.SetViewAngle(camera.view_angle)
-    cam.OrthogonalizeViewUp()
-    renderer.ResetCameraClippingRange(*_padded_bounds(P))
-    view = _matrix(cam.GetViewTransformMatrix())
+    cam = apply_camera(renderer, camera, _padded_bounds(P))
+    view = vtk_matrix(cam.GetViewTransformMatrix())
     actor.GetShaderProperty().AddFragmentShaderReplacement("//VTK::Light::Dec", True,
                                                            "//VTK::Light::Dec\n" + _FUNCTIONS, False)
     actor.GetShaderProperty().AddFragmentShaderReplacement(
@@ -440,16 +331,11 @@ def _draw(P: np.ndarray, T: np.ndarray, N: np.ndarray, setup: LightingSetup, cam
     win.AddRenderer(renderer)
     try:
         win.Render()
-        px = vtkUnsignedCharArray()
-        win.GetPixelData(0, 0, width - 1, height - 1, 0, px, 0)
-        zf = vtkFloatArray()
-        win.GetZbufferData(0, 0, width - 1, height - 1, zf)
-        rgb = vtk_to_numpy(px).reshape(height, width, -1)[::-1, :, :3].copy()
-        depth = vtk_to_numpy(zf).reshape(height, width)[::-1].copy()
-        matrix = _matrix(cam.GetCompositeProjectionTransformMatrix(width / height, -1, 1))
+        rgb, depth = read_pixels(win, width, height, depth=True)
+        matrix = vtk_matrix(cam.GetCompositeProjectionTransformMatrix(width / height, -1, 1))
     finally:
         win.RemoveRenderer(renderer)
-    return rgb, depth, matrix
+    return rgb, depth, matrix  # type: ignore[return-value]
 
 
 def _padded_bounds(P: np.ndarray) -> list[float]:
@@ -458,8 +344,7 @@ def _padded_bounds(P: np.ndarray) -> list[float]:
     return [lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad, lo[2] - pad, hi[2] + pad]
 
 
-def _matrix(m: Any) -> np.ndarray:
-    return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+_matrix = vtk_matrix  # the name benchmarks/bench_lighting.py and older callers use
 
 
 # ---------------------------------------------------------------------------------------- models

@@ -17,9 +17,13 @@ display), not a painter's algorithm. One :class:`Scene` collects
 * one legend (:meth:`Scene.set_legend`, a scalar bar with its title) and a title;
 
 and renders them from a camera preset (:data:`CAMERAS`: ``'iso'``, ``'top'``, ``'front'``,
-``'right'``, or an explicit direction) to a PNG of a given size (:meth:`Scene.render`) or to an
-array (:meth:`Scene.render_array`). The same scene API serves the lighting pictures of course
-ch. 10 (lights are settable with :meth:`Scene.set_lights`).
+``'right'``, any other of :data:`VIEWS`, or an explicit direction) to a PNG of a given size
+(:meth:`Scene.render`) or to an array (:meth:`Scene.render_array`).
+
+This module is also the one offscreen-window and camera code path of every VTK picture: the
+per-pixel Warn renderer of course ch. 10 (:mod:`.lighting`) draws through the same
+:func:`window` cache, frames with the same :func:`fit_camera` into the same :class:`Camera`,
+puts it on VTK with :func:`apply_camera` and reads pixels back with :func:`read_pixels`.
 """
 
 from __future__ import annotations
@@ -31,15 +35,24 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Scene", "CAMERAS", "COLORMAPS", "colormap_rgb", "render_available"]
+__all__ = ["Scene", "CAMERAS", "VIEWS", "VIEW_ANGLE", "Camera", "fit_camera", "apply_camera", "window",
+           "new_window", "read_pixels", "COLORMAPS", "colormap_rgb", "render_available"]
 
-#: Camera presets: direction *from* the target *to* the camera, and the view-up vector.
-CAMERAS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
+#: Named views: direction *from* the target *to* the camera, and the view-up vector (``top``
+#: looks down -z with +y up).
+VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
     "iso": ((1.0, -1.0, 0.8), (0.0, 0.0, 1.0)),
     "top": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
+    "bottom": ((0.0, 0.0, -1.0), (0.0, -1.0, 0.0)),
     "front": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
+    "back": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
+    "left": ((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
     "right": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
 }
+#: The presets of the quality pictures (every key of :data:`VIEWS` is accepted).
+CAMERAS = {name: VIEWS[name] for name in ("iso", "top", "front", "right")}
+#: Vertical opening angle of the perspective camera, degrees (before any zoom).
+VIEW_ANGLE = 30.0
 #: Colour maps by name: control colours (RGB in [0, 1]) spread evenly over the scale.
 COLORMAPS: dict[str, tuple[tuple[float, float, float], ...]] = {
     "diverging": ((0.23, 0.30, 0.75), (0.55, 0.69, 0.99), (0.87, 0.87, 0.87), (0.96, 0.60, 0.48), (0.71, 0.02, 0.15)),
@@ -151,15 +164,174 @@ def new_window(width: int, height: int, *, multisamples: int = 0) -> Any:
     return win
 
 
-_WINDOWS: dict[tuple[int, int], Any] = {}
+_WINDOWS: dict[tuple[int, int, int], Any] = {}
 
 
-def _window(width: int, height: int) -> Any:
-    """A cached offscreen window of this size (creating an OpenGL context costs ~50 ms per picture)."""
-    win = _WINDOWS.get((width, height))
+def window(width: int, height: int, multisamples: int = 0) -> Any:
+    """The cached offscreen window of this size and multisampling (:func:`new_window`; creating an
+    OpenGL context costs ~50 ms per picture). Callers add their renderer, render, read the pixels
+    and remove the renderer again."""
+    key = (int(width), int(height), int(multisamples))
+    win = _WINDOWS.get(key)
     if win is None:
-        win = _WINDOWS[(width, height)] = new_window(width, height)
+        win = _WINDOWS[key] = new_window(*key[:2], multisamples=key[2])
     return win
+
+
+def read_pixels(win: Any, width: int, height: int, *, depth: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
+    """The back buffer just rendered: RGB ``(height, width, 3)`` uint8 with row 0 at the top, and
+    (``depth=True``) the OpenGL depth ``(height, width)`` float32 in [0, 1] (1: background)."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkCommonCore import vtkFloatArray, vtkUnsignedCharArray
+
+    buf = vtkUnsignedCharArray()
+    win.GetPixelData(0, 0, width - 1, height - 1, 0, buf, 0)  # back buffer: a third faster than
+    rgb = vtk_to_numpy(buf).reshape(height, width, -1)[::-1, :, :3].copy()  # vtkWindowToImageFilter
+    if not depth:
+        return rgb, None
+    zf = vtkFloatArray()
+    win.GetZbufferData(0, 0, width - 1, height - 1, zf)
+    return rgb, vtk_to_numpy(zf).reshape(height, width)[::-1].copy()
+
+
+# ---------------------------------------------------------------------------------------- cameras
+@dataclass(frozen=True)
+class Camera:
+    """A perspective camera: ``position``, ``target`` (focal point), ``up`` and vertical view angle
+    in degrees."""
+
+    position: tuple[float, float, float]
+    target: tuple[float, float, float]
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    view_angle: float = VIEW_ANGLE
+
+    def __post_init__(self) -> None:
+        from occsurf.algorithms.errors import InvalidGeometryError
+
+        for name in ("position", "target", "up"):
+            v = np.asarray(getattr(self, name), float)
+            if v.shape != (3,) or not np.all(np.isfinite(v)):
+                raise InvalidGeometryError(f"camera.{name}: expected 3 finite numbers, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, tuple(float(x) for x in v))
+        d = np.subtract(self.target, self.position)
+        if np.linalg.norm(d) == 0:
+            raise InvalidGeometryError("camera.target: expected a point other than camera.position")
+        if np.linalg.norm(np.cross(d, self.up)) <= 1e-9 * np.linalg.norm(d) * np.linalg.norm(self.up):
+            raise InvalidGeometryError(f"camera.up: expected a direction not parallel to the line of sight, got "
+                                       f"{list(self.up)}")
+        if not 0 < float(self.view_angle) < 180:
+            raise InvalidGeometryError(f"camera.view_angle: expected 0 < angle < 180 degrees, got {self.view_angle}")
+
+
+def _view_axes(position: np.ndarray, target: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """Rows ``sideways, up, back`` of VTK's view rotation (``vtkPerspectiveTransform.SetupCamera``)."""
+    back = position - target
+    back = back / np.linalg.norm(back)
+    side = np.cross(up, back)
+    side = side / np.linalg.norm(side)
+    return np.stack([side, np.cross(back, side), back])
+
+
+def fit_camera(view: str | Sequence[float], lo: Sequence[float], hi: Sequence[float], aspect: float = 4 / 3, *,
+               margin: float = 1.06, keep_distance: bool = False, width_share: float = 0.94,
+               shift_left: bool = False, zoom: float = 1.0) -> Camera:
+    """The camera that looks at the box ``[lo, hi]`` from a named view (:data:`VIEWS`) or from a
+    direction (target to camera; up +z, or +y within ~18 degrees of the z axis) and shows all its
+    eight corners.
+
+    Two framings, one code path:
+
+    * ``keep_distance=False`` (Warn pictures, ``occsurf render``): the view angle stays
+      :data:`VIEW_ANGLE` and the camera moves to the smallest distance at which every corner lies
+      inside the picture, both openings divided by ``margin`` (a long part fills the frame
+      instead of a fraction of its bounding sphere).
+    * ``keep_distance=True`` (:class:`Scene`): the camera stands where VTK's ``ResetCamera``
+      puts it (the box's bounding sphere fits the view) and the view angle narrows until the
+      corners fill ``0.94`` of the height and ``width_share`` of the width, times ``zoom``;
+      ``shift_left`` moves the model left by the rest of the width, clear of a legend on the
+      right.
+    """
+    from occsurf.algorithms.errors import InvalidGeometryError
+
+    if isinstance(view, str):
+        if view not in VIEWS:
+            raise InvalidGeometryError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
+        direction, up = VIEWS[view]
+    else:
+        direction = tuple(float(x) for x in view)
+        up = (0.0, 0.0, 1.0) if abs(direction[2]) < 0.95 * np.linalg.norm(direction) else (0.0, 1.0, 0.0)
+    lo_, hi_ = np.asarray(lo, float), np.asarray(hi, float)
+    centre = (lo_ + hi_) / 2
+    corners = np.array([[x, y, z] for x in (lo_[0], hi_[0]) for y in (lo_[1], hi_[1]) for z in (lo_[2], hi_[2])])
+    if not keep_distance:
+        back = np.asarray(direction, float) / np.linalg.norm(direction)
+        right = np.cross(-back, up)
+        right /= np.linalg.norm(right)
+        true_up = np.cross(right, -back)
+        rel = corners - centre
+        tan_v = np.tan(np.radians(VIEW_ANGLE) / 2) / margin
+        tan_h = tan_v * aspect
+        need = rel @ back + np.maximum(np.abs(rel @ right) / tan_h, np.abs(rel @ true_up) / tan_v)
+        size = max(float(np.linalg.norm(hi_ - lo_)), 1e-9)
+        dist = max(float(need.max()), 0.05 * size) + 1e-3 * size  # never inside the box's near corner
+        return Camera(position=tuple(centre + dist * back), target=tuple(centre), up=up)
+    return _fit_by_view_angle(np.asarray(direction, float), np.asarray(up, float), centre, corners, aspect,
+                              width_share, shift_left, zoom)
+
+
+def _fit_by_view_angle(direction: np.ndarray, up: np.ndarray, centre: np.ndarray, corners: np.ndarray,
+                       aspect: float, width_share: float, shift_left: bool, zoom: float) -> Camera:
+    """:func:`fit_camera` with ``keep_distance``: VTK's ``ResetCamera`` on the box, then
+    ``vtkCamera.Zoom`` (the view angle divided) and the legend's shift, computed here."""
+    radius = max(float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0))) / 2, 1e-9)
+    d = direction / np.linalg.norm(direction)
+    vn = centre + d * radius * 4.0 - centre  # the view plane normal VTK derives from the first placement
+    vn = vn / np.linalg.norm(vn)
+    up = up / np.linalg.norm(up)
+    angle = np.radians(VIEW_ANGLE)
+    if aspect < 1.0:  # ResetCamera fits the sphere in the narrower, horizontal opening
+        angle = 2.0 * np.arctan(np.tan(angle * 0.5) * aspect)
+    sq = float(np.sum((corners.max(axis=0) - corners.min(axis=0)) ** 2))
+    sphere = np.sqrt(sq if sq != 0 else 1.0) * 0.5
+    distance = sphere / np.sin(angle * 0.5)
+    if abs(float(up @ vn)) > 0.999:
+        up = np.array([-up[2], up[0], up[1]])
+        up = up / np.linalg.norm(up)
+    position = centre + distance * vn
+    axes = _view_axes(position, centre, up)
+    c = (corners - position) @ axes.T
+    depth = np.maximum(-c[:, 2], 1e-12)
+    half = np.tan(np.radians(VIEW_ANGLE) / 2)
+    need = max(float(np.max(np.abs(c[:, 1]) / depth)) / (0.94 * half),
+               float(np.max(np.abs(c[:, 0]) / depth)) / (width_share * half * aspect), 1e-9)
+    target = centre
+    if shift_left:  # move the model left, clear of the legend
+        dop = (centre - position) / np.linalg.norm(centre - position)
+        shift = np.cross(dop, up) * (-(1 - width_share) * half * aspect * distance / (zoom / need))
+        target, position = centre - shift, position - shift
+    return Camera(position=tuple(position), target=tuple(target), up=tuple(up), view_angle=VIEW_ANGLE / (zoom / need))
+
+
+def apply_camera(renderer: Any, camera: Camera, clip_bounds: Sequence[float] | None = None) -> Any:
+    """Put ``camera`` on ``renderer``'s active VTK camera (view-up orthogonalised) and fit the
+    clipping range to ``clip_bounds`` ``[x0, x1, y0, y1, z0, z1]`` (default: every visible prop);
+    returns the VTK camera."""
+    cam = renderer.GetActiveCamera()
+    cam.SetPosition(*camera.position)
+    cam.SetFocalPoint(*camera.target)
+    cam.SetViewUp(*camera.up)
+    cam.SetViewAngle(camera.view_angle)
+    cam.OrthogonalizeViewUp()
+    if clip_bounds is None:
+        renderer.ResetCameraClippingRange()
+    else:
+        renderer.ResetCameraClippingRange(*clip_bounds)
+    return cam
+
+
+def vtk_matrix(m: Any) -> np.ndarray:
+    """A ``vtkMatrix4x4`` as a ``(4, 4)`` array."""
+    return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
 
 
 def _polydata(points: np.ndarray, cells: Sequence[np.ndarray], kind: str) -> Any:
@@ -208,7 +380,8 @@ class Scene:
     """
 
     def __init__(self, *, background: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> None:
-        from vtkmodules.vtkRenderingCore import vtkRenderer
+        import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (before the renderer: else a first scene gets
+        from vtkmodules.vtkRenderingCore import vtkRenderer  # VTK's generic renderer, which draws nothing)
 
         self._renderer = vtkRenderer()
         self._renderer.SetBackground(*background)
@@ -367,6 +540,7 @@ class Scene:
         prop.SetPointSize(size)
         prop.RenderPointsAsSpheresOn()
         self._renderer.AddActor(actor)
+        self._bounds.append(P)  # framed like every other prop (VTK's ResetCamera counted them)
 
     def add_hedgehog(self, points: np.ndarray, vectors: np.ndarray, *, length: float | None = None,
                      color: tuple[float, float, float] = (0.1, 0.1, 0.6), width: float = 1.5) -> None:
@@ -401,21 +575,16 @@ class Scene:
     def render_array(self, *, size: tuple[int, int] = (800, 600), camera: str | Sequence[float] = "iso",
                      zoom: float = 1.0) -> np.ndarray:
         """Render and return the image as ``(height, width, 3)`` uint8 (row 0 at the top)."""
-        from vtkmodules.util.numpy_support import vtk_to_numpy
-        from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
-
         width, height = int(size[0]), int(size[1])
         if width < 16 or height < 16:
             raise ValueError(f"size: expected at least 16 x 16 pixels, got {size!r}")
-        win = _window(width, height)
+        win = window(width, height)
         try:
             win.AddRenderer(self._renderer)
             self._decorate()
             self._place_camera(camera, zoom, width / height)
             win.Render()
-            buf = vtkUnsignedCharArray()
-            win.GetPixelData(0, 0, width - 1, height - 1, 0, buf, 0)  # back buffer: a third faster than
-            arr = vtk_to_numpy(buf).reshape(height, width, 3)[::-1].copy()  # vtkWindowToImageFilter
+            arr, _ = read_pixels(win, width, height)
         finally:
             win.RemoveRenderer(self._renderer)
         return arr
@@ -484,43 +653,21 @@ class Scene:
 
     def _place_camera(self, camera: str | Sequence[float], zoom: float, aspect: float = 4 / 3) -> None:
         """Look at the bounding box from the preset direction and zoom so its eight corners fill the
-        frame (the legend's strip on the right kept free)."""
-        if isinstance(camera, str):
-            if camera not in CAMERAS:
-                raise ValueError(f"camera: expected one of {', '.join(CAMERAS)} or a direction, got {camera!r}")
-            direction, up = CAMERAS[camera]
-        else:
-            direction = tuple(float(x) for x in camera)
-            up = (0.0, 0.0, 1.0) if abs(direction[2]) < 0.95 * np.linalg.norm(direction) else (0.0, 1.0, 0.0)
+        frame (the legend's strip on the right kept free): :func:`fit_camera` with
+        ``keep_distance``."""
+        from occsurf.algorithms.errors import InvalidGeometryError
+
+        if isinstance(camera, str) and camera not in VIEWS:
+            raise ValueError(f"camera: expected one of {', '.join(VIEWS)} or a direction, got {camera!r}")
         pts = np.concatenate(self._bounds) if self._bounds else np.zeros((1, 3))
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
-        centre = (lo + hi) / 2
-        radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-9)
-        d = np.asarray(direction, float)
-        d = d / np.linalg.norm(d)
-        cam = self._renderer.GetActiveCamera()
-        cam.SetFocalPoint(*centre)
-        cam.SetPosition(*(centre + d * radius * 4.0))
-        cam.SetViewUp(*up)
-        cam.SetViewAngle(30.0)
-        self._renderer.ResetCamera()
-        corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-        m = cam.GetViewTransformMatrix()
-        V = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
-        c = corners @ V.T
-        depth = np.maximum(-c[:, 2], 1e-12)
-        half = np.tan(np.radians(cam.GetViewAngle()) / 2)
-        width_share = 0.80 if self._legend is not None else 0.94  # the scalar bar takes the right ~16 %
-        need = max(float(np.max(np.abs(c[:, 1]) / depth)) / (0.94 * half),
-                   float(np.max(np.abs(c[:, 0]) / depth)) / (width_share * half * aspect), 1e-9)
-        cam.Zoom(zoom / need)
-        if self._legend is not None:  # shift the model left, clear of the legend
-            right = np.array(cam.GetViewUp())
-            right = np.cross(np.array(cam.GetDirectionOfProjection()), right)
-            shift = right * (-(1 - width_share) * half * aspect * cam.GetDistance() / (zoom / need))
-            cam.SetFocalPoint(*(np.array(cam.GetFocalPoint()) - shift))
-            cam.SetPosition(*(np.array(cam.GetPosition()) - shift))
-        self._renderer.ResetCameraClippingRange()
+        legend = self._legend is not None
+        try:
+            cam = fit_camera(camera, pts.min(axis=0), pts.max(axis=0), aspect, keep_distance=True,
+                             width_share=0.80 if legend else 0.94,  # the scalar bar takes the right ~16 %
+                             shift_left=legend, zoom=zoom)
+        except InvalidGeometryError as err:
+            raise ValueError(str(err)) from None
+        apply_camera(self._renderer, cam)
 
 
 def _finite_range(values: np.ndarray) -> tuple[float, float]:

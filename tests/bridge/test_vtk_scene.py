@@ -161,3 +161,88 @@ def test_bad_input() -> None:
         s.render_array(size=SIZE, camera="nope")
     with pytest.raises(ValueError, match="size"):
         s.render_array(size=(4, 4))
+
+
+# ---------------------------------------------------------------------------------------- one window and camera path
+def _vtk_reset_and_zoom(direction, up, lo, hi, aspect, legend, zoom):
+    """The oracle: VTK's own ResetCamera + vtkCamera.Zoom + the legend's shift, as the Scene framed
+    its pictures before fit_camera computed it (a renderer in a window of that aspect)."""
+    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkRenderer
+
+    w, h = (300, int(round(300 / aspect))) if aspect >= 1 else (int(round(300 * aspect)), 300)
+    win = vtk_scene.window(w, h)
+    ren = vtkRenderer()
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    mapper = vtkPolyDataMapper()
+    mapper.SetInputData(vtk_scene._polydata(corners, [np.arange(8)], "lines"))
+    actor = vtkActor()
+    actor.SetMapper(mapper)
+    ren.AddActor(actor)
+    win.AddRenderer(ren)
+    try:
+        centre = (np.asarray(lo) + np.asarray(hi)) / 2
+        radius = max(float(np.linalg.norm(np.subtract(hi, lo))) / 2, 1e-9)
+        d = np.asarray(direction, float) / np.linalg.norm(direction)
+        cam = ren.GetActiveCamera()
+        cam.SetFocalPoint(*centre)
+        cam.SetPosition(*(centre + d * radius * 4.0))
+        cam.SetViewUp(*up)
+        cam.SetViewAngle(30.0)
+        ren.ResetCamera()
+        V = vtk_scene.vtk_matrix(cam.GetViewTransformMatrix())
+        c = np.c_[corners, np.ones(8)] @ V.T
+        depth = np.maximum(-c[:, 2], 1e-12)
+        half = np.tan(np.radians(cam.GetViewAngle()) / 2)
+        share = 0.80 if legend else 0.94
+        need = max(float(np.max(np.abs(c[:, 1]) / depth)) / (0.94 * half),
+                   float(np.max(np.abs(c[:, 0]) / depth)) / (share * half * aspect), 1e-9)
+        cam.Zoom(zoom / need)
+        if legend:
+            right = np.cross(np.array(cam.GetDirectionOfProjection()), np.array(cam.GetViewUp()))
+            shift = right * (-(1 - share) * half * aspect * cam.GetDistance() / (zoom / need))
+            cam.SetFocalPoint(*(np.array(cam.GetFocalPoint()) - shift))
+            cam.SetPosition(*(np.array(cam.GetPosition()) - shift))
+        return np.array(cam.GetPosition()), np.array(cam.GetFocalPoint()), cam.GetViewAngle()
+    finally:
+        win.RemoveRenderer(ren)
+
+
+@pytest.mark.parametrize("view", ["iso", "top", "front", "right", (1.0, 2.0, 3.0), (0.0, 0.1, 1.0)])
+@pytest.mark.parametrize("aspect, legend, zoom", [(4 / 3, False, 1.0), (4 / 3, True, 1.3), (0.75, True, 1.0)])
+def test_scene_framing_is_vtks_reset_camera_and_zoom(view, aspect, legend, zoom) -> None:
+    """fit_camera(keep_distance=True) computes what VTK's ResetCamera + Zoom did for the Scene (the
+    pictures of occsurf check and fit stay as they were), to round-off."""
+    lo, hi = np.array([-3.0, -1.0, -0.5]), np.array([3.0, 1.2, 0.5])
+    direction, up = vtk_scene.VIEWS[view] if isinstance(view, str) else (view, None)
+    cam = vtk_scene.fit_camera(view, lo, hi, aspect, keep_distance=True, width_share=0.80 if legend else 0.94,
+                               shift_left=legend, zoom=zoom)
+    if up is None:
+        up = cam.up
+    pos, focal, angle = _vtk_reset_and_zoom(direction, up, lo, hi, aspect, legend, zoom)
+    scale = float(np.linalg.norm(hi - lo))
+    np.testing.assert_allclose(cam.position, pos, atol=1e-12 * scale * 10)
+    np.testing.assert_allclose(cam.target, focal, atol=1e-12 * scale * 10)
+    assert abs(cam.view_angle - angle) <= 1e-12 * angle
+
+
+def test_one_window_cache_for_scenes_and_warn_pictures() -> None:
+    """The Warn renderer draws in the Scene's cached windows (one per size and multisampling) with
+    the same cameras: no second window or camera code path."""
+    from occsurf.algorithms.lighting import studio_three_point
+    from occsurf.bridge.rendering import lighting
+
+    assert lighting._window is vtk_scene.window and lighting.Camera is vtk_scene.Camera
+    assert lighting.VIEWS is vtk_scene.VIEWS and lighting.render_available is vtk_scene.render_available
+    P, T, N = _sphere()
+    s = Scene()
+    s.add_mesh(P, T, normals=N)
+    s.render_array(size=(208, 160))
+    win = vtk_scene.window(208, 160)
+    lighting.render_lit(P, T, studio_three_point([0, 0, 0], 2.0), normals=N, size=(208, 160), samples=0)
+    assert vtk_scene.window(208, 160) is win and win.GetRenderers().GetNumberOfItems() == 0
+    lighting.render_lit(P, T, studio_three_point([0, 0, 0], 2.0), normals=N, size=(208, 160), samples=4)
+    assert vtk_scene.window(208, 160, 4) is not win and vtk_scene.window(208, 160, 4).GetMultiSamples() == 4
+    cam = lighting.camera_for_view("top", P.min(axis=0), P.max(axis=0), 1.3)
+    assert cam == vtk_scene.fit_camera("top", P.min(axis=0), P.max(axis=0), 1.3)
+    with pytest.raises(ValueError, match="camera: expected one of iso, top, bottom"):
+        s.render_array(size=(208, 160), camera="diagonal")
