@@ -193,6 +193,27 @@ def test_fill_model_returns_a_build123d_or_cadquery_solid():
         bridge.fill_model(ball, as_="occ")
 
 
+def test_refill_takes_build123d_and_cadquery_shells():
+    """refill_model / refill_faces on the same sphere as a build123d Shell, a cadquery Shell and a
+    TopoDS_Shell: the same faces removed, the same outcome."""
+    from occsurf.bridge.modeling.refill import refill_faces, refill_model
+
+    faces = [bd.Sphere(5).faces()[0]]
+    for plane in (bd.Plane.XZ, bd.Plane.YZ, bd.Plane.XY.offset(3)):
+        faces = [g for f in faces for half in f.split(plane, keep=bd.Keep.BOTH) for g in half.faces()]
+    ball = bd.Shell(faces)
+    cap = [i for i, f in enumerate(ball.faces()) if f.center().Z > 3]
+    assert len(cap) == 4
+    outcomes = []
+    for thing in (ball, cq.Shell(ball.wrapped), ball.wrapped):
+        reports, _ = refill_model(thing, cap, compare_occ=False)
+        assert len(reports) == 1 and sorted(reports[0].faces) == cap
+        outcomes.append((reports[0].status, reports[0].reason))
+    assert outcomes[0] == outcomes[1] == outcomes[2]
+    report, _ = refill_faces(cq.Shell(ball.wrapped), cap, compare_occ=False, check=False)
+    assert (report.status, report.reason) == outcomes[0]
+
+
 def test_fill_model_keeps_an_open_result_a_shell():
     """Four side faces of a box: two free loops, one taken as the outer boundary (not filled), so
     the result stays open: a Shell, not a Solid."""
