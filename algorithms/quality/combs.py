@@ -169,7 +169,9 @@ def _finish(params: Array, P: Array, kappa: Array, ks: Array | None, spine: Arra
     size = float(np.linalg.norm(np.ptp(P, axis=0))) if P.size else 0.0
     if scale is None:
         kmax = float(np.nanmax(kappa)) if np.any(np.isfinite(kappa)) else 0.0
-        scale = 0.2 * size / kmax if kmax > 0 else 0.0
+        # a straight curve (a cut of a plane) has round-off curvature only: no spines, not a full-size
+        # comb of noise
+        scale = 0.2 * size / kmax if kmax * size > tolerances.QUALITY_FLAT_CURVATURE else 0.0
     elif not np.isfinite(float(scale)):
         raise InvalidGeometryError(f"scale: expected a finite number, got {scale!r}")
     amount = kappa if ks is None else ks

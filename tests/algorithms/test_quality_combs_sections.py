@@ -287,3 +287,18 @@ def test_sampled_curve_inflections_are_root_found():
     assert_allclose(cb.inflection_points, [[np.pi, 0, 0]], atol=1e-11)
     with pytest.raises(InvalidGeometryError, match="derivatives"):
         curvature_comb(SampledCurve(t, P, d1, d2, derivatives=lambda x: np.zeros((len(x), 3))), plane_normal=[0, 0, 1])
+
+
+def test_cut_of_a_plane_has_no_comb_noise():
+    """A tilted plane's cuts are straight: round-off curvature (1e-13) must not be blown up into a
+    full-size comb (the default scale makes the largest spine 20 % of the extent)."""
+    from occsurf.algorithms import BSplineSurface
+
+    g = np.linspace(0, 1, 5)
+    X, Y = np.meshgrid(g, g, indexing="ij")
+    net = np.stack([X * np.cos(0.3) + 0.1 * Y, Y, 0.37 * X + 0.21 * Y], -1)
+    s = BSplineSurface((3, 3), (np.r_[0, 0, 0, 0, 0.5, 1, 1, 1, 1],) * 2, net)
+    for sec in plane_sections([s], [0, 0, 0], [0.3, 0.8, 0.1], [0.2, 0.4, 0.6]):
+        for c in sec.curves:
+            assert np.max(np.abs(c.curvature)) < 1e-9
+            assert_allclose(c.comb.tips, c.comb.points, atol=0)
