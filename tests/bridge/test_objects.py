@@ -270,3 +270,48 @@ def test_shape_object_makes_a_solid_of_a_closed_shell():
     assert isinstance(solid, bd.Solid) and solid.is_valid and abs(solid.volume - 6.0) < 1e-12
     open_shell = sew_faces([f.wrapped for f in bd.Box(1, 2, 3).faces()[:5]])
     assert isinstance(shape_object(open_shell, "cadquery"), cq.Shell)
+
+
+# ------------------------------------------------------------------------------------ objects -> STEP -> objects
+def test_build123d_tree_through_occsurfs_writer_and_back(tmp_path):
+    """build123d assembly -> model_from_object -> write_step (XCAF, 17 digits) -> read_step(as_=...):
+    labels, colours, placements, the shared part and every face (area, wires, position) survive."""
+    from occsurf.bridge import write_step
+
+    original = _two_plates()
+    model = model_from_object(original)
+    tree = model.assembly
+    assert tree.name == "assembly" and [c.name for c in tree.children] == ["plate_a", "plate_b"]
+    assert tree.children[0].part == tree.children[1].part  # one part, two instances
+    np.testing.assert_allclose(tree.children[1].location[:3, 3], (30, 0, 5), atol=1e-12)
+    path = write_step(tmp_path / "plates.step", model)
+    back = read_step(path)
+    assert back.assembly is not None and back.assembly.children[0].part == back.assembly.children[1].part
+    ours = read_step(path, as_="build123d")
+    assert ours.label == "assembly" and [c.label for c in ours.children] == ["plate_a", "plate_b"]
+    for mine, theirs in zip(ours.children, original.children):
+        np.testing.assert_allclose(tuple(mine.color), tuple(theirs.color), atol=COLOUR_ATOL)
+        np.testing.assert_allclose(_loc(mine.global_location), _loc(theirs.global_location), atol=1e-12)
+    assert ours.children[0].wrapped.IsPartner(ours.children[1].wrapped)
+    _assert_same_faces(ours.faces(), original.faces(), rtol=1e-14)
+
+
+def test_cadquery_assembly_through_occsurfs_writer_keeps_face_colours(tmp_path):
+    from occsurf.bridge import write_step
+
+    box = cq.Workplane().box(4, 5, 6)
+    assy = cq.Assembly(name="top")
+    assy.add(box, name="block", color=cq.Color(*BLUE[:3], 1.0, False), loc=cq.Location((1, 2, 3)))
+    assy["block"].addSubshape(box.faces(">Z").val(), name="lid", color=cq.Color(*RED[:3], 1.0, False))
+    model = model_from_object(assy)
+    lid = [f for f in model.faces if f.name == "lid"]
+    assert len(lid) == 1 and lid[0].color == RED and lid[0].instance == "top/block"
+    path = write_step(tmp_path / "block.step", model)
+    back = read_step(path, as_="cadquery")
+    block = next(a for _, a in back.traverse() if a.obj is not None)
+    assert block.name == "block"
+    np.testing.assert_allclose(block.color.toTuple(), BLUE, atol=COLOUR_ATOL)
+    (sub, col), = block._subshape_colors.items()
+    np.testing.assert_allclose(col.toTuple(), RED, atol=COLOUR_ATOL)
+    assert list(block._subshape_names.values()) == ["lid"]
+    _assert_same_faces(back.toCompound().Faces(), assy.toCompound().Faces(), rtol=1e-14)
