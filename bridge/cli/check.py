@@ -1,21 +1,32 @@
-"""``occsurf check FILE [--out DIR] [--json] [--faces ...] [--fail-on PRESET] [--no-pictures]``: the surface-quality report.
+"""``occsurf check FILE_OR_DIR ... [--out DIR] [--json] [--faces ...] [--fail-on PRESET] [--no-pictures]``: the surface-quality report.
 
-Reads a STEP or IGES model in a worker process (:func:`occsurf.bridge.isolation.run_jobs`, as
-``occsurf inspect`` does: a crash or a hang inside OCC costs the command, not the terminal) and
-runs :func:`occsurf.bridge.quality.report.check_model` there: per face (numbered as ``occsurf
-inspect`` numbers them) the curvature range and flags, per edge between two faces the G0/G1/G2
-continuity against a threshold preset. Writes
+Reads each STEP or IGES model in a worker process (:func:`occsurf.bridge.isolation.run_jobs`, as
+``occsurf inspect`` does: a crash or a hang inside OCC costs that file, not the terminal, and the
+other files are still checked) and runs :func:`occsurf.bridge.quality.report.check_model` there:
+per face (numbered as ``occsurf inspect`` numbers them) the curvature range and flags, per edge
+between two faces the G0/G1/G2 continuity against a threshold preset. Folders are searched
+recursively for STEP/IGES files. For one file, ``DIR`` gets
 
 * ``DIR/report.json``: every number (``faces``: index, type, k_min, k_max, flags, ...; ``edges``:
   faces, midpoint, matched, g0_max, g1_max_deg, g2_max, g2_max_rel, worst_point, ...);
 * ``DIR/index.html``: one offline page (overview, sortable face table, edge table, per-face
   pictures and flags, an interactive 3-D view) with its PNG pictures beside it;
 
-both atomically. A progress bar runs on stderr when it is a terminal.
+for several files (or a folder) each file gets those in a folder of its own below ``DIR`` (its path
+relative to the folder given, ``.`` of the suffix made ``_``: ``DIR/sub/part_step/``), and ``DIR``
+gets an ``index.html`` and a ``report.json`` over all files (per file: status, faces, edges, the
+worst G1 edge, flags by kind, violations, seconds, crashed faces). Everything is written atomically.
+A progress bar runs on stderr when it is a terminal.
 
-Exit status: 0 when the model was read and reported; 2 when it could not be read, an argument is
-wrong or ``--out`` cannot be written (one line on stderr); with ``--fail-on PRESET``, 1 when an
-edge or a face breaks that preset's thresholds (a CI gate).
+Crash isolation per face: the worker notes on a file which piece it is working on (the mesh, a
+face, the edges, a picture) before each step. When the worker dies (a segmentation fault inside
+OCC), the file is checked again without the piece at fault (a face is reported with ``error``
+naming the crash, the edges or a picture are left out with a warning), up to
+:data:`MAX_RETRIES` times; the report keeps every other face.
+
+Exit status: 0 when every model was read and reported; 2 when one could not be read, an argument is
+wrong or ``--out`` cannot be written (one line on stderr per problem); else, with ``--fail-on
+PRESET``, 1 when an edge or a face of any file breaks that preset's thresholds (a CI gate).
 """
 
 from __future__ import annotations
@@ -34,7 +45,8 @@ from typing import Any
 from ..messages import error_line
 from ._common import EXIT_ERROR, EXIT_OK, error, strip_path, timeout_arg, worker_failure
 
-__all__ = ["add_parser", "run", "check_job", "check_file", "PRESET_NAMES", "EXIT_FAILED", "DEFAULT_TIMEOUT"]
+__all__ = ["add_parser", "run", "check_job", "check_file", "collect_files", "file_summary", "PRESET_NAMES", "EXIT_FAILED",
+           "DEFAULT_TIMEOUT", "MAX_RETRIES"]
 
 #: Exit status when ``--fail-on`` finds an edge or a face that breaks the preset.
 EXIT_FAILED = 1
@@ -43,6 +55,8 @@ EXIT_FAILED = 1
 PRESET_NAMES = ("catia", "class-a", "mechanical")
 #: Seconds the worker may take for the whole model before it is stopped.
 DEFAULT_TIMEOUT = 1800.0
+#: Times a file is checked again after its worker crashed, each time without the piece at fault.
+MAX_RETRIES = 8
 CHECK_JOB = "occsurf.bridge.cli.check:check_job"
 PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.quality.report", "occsurf.bridge.quality.continuity",
            "occsurf.bridge.rendering.vtk_scene")
@@ -50,12 +64,17 @@ PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.quality.report",
 
 # ---------------------------------------------------------------------------------------- worker
 def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, faces: list[int] | None = None,
-               preset: str = "catia", pictures: bool = True, progress: Any = None) -> dict[str, Any]:
+               preset: str = "catia", pictures: bool = True, progress: Any = None,
+               skip: dict[str, Any] | None = None, trace: Any = None) -> dict[str, Any]:
     """Read, assess and draw one model; the library side of ``occsurf check`` (in this process).
 
     Writes the pictures and ``.viewer.json`` (the 3-D view's data) into ``out``; returns
     ``{"report": report JSON, "pictures": {kind: file}, "viewer": path of the viewer data}``.
     ``index.html`` and ``report.json`` are written by :func:`write_outputs`.
+
+    ``skip`` leaves out what crashed an earlier attempt: ``{"faces": {index: reason}, "edges":
+    reason, "pictures": {file name: reason}, "mesh_each": bool}``; ``trace(stage)`` is called
+    before each piece of work (see :func:`~occsurf.bridge.quality.report.check_model`).
     """
     from ..exchange.files import atomic_write
     from ..quality.html import viewer_payload
@@ -64,19 +83,26 @@ def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, fac
     from ._common import read_model, sniff_format
 
     p = Path(path)
+    skip = skip or {}
+    note = trace if trace is not None else (lambda stage: None)
     t0 = time.perf_counter()
+    note("read")
     model = read_model(p, sniff_format(p))
     t_read = time.perf_counter() - t0
     report = check_model(model, faces=faces, preset=preset,
-                         progress=None if progress is None else (lambda k, n: progress("faces", k, n)))
+                         progress=None if progress is None else (lambda k, n: progress("faces", k, n)),
+                         skip={int(k): v for k, v in (skip.get("faces") or {}).items()},
+                         edges=skip.get("edges") or True, trace=note, mesh_each=bool(skip.get("mesh_each")))
     report.path = str(path)
     shown: dict[str, str] = {}
     out = Path(out)
     if pictures:
         t1 = time.perf_counter()
         shown = render_report_pictures(report, out, progress=None if progress is None else
-                                       (lambda k, n: progress("pictures", k, n)))
+                                       (lambda k, n: progress("pictures", k, n)),
+                                       skip=skip.get("pictures"), trace=note)
         report.seconds["pictures"] = time.perf_counter() - t1
+    note("viewer")
     report.seconds["read"] = t_read
     report.seconds["total"] = time.perf_counter() - t0
     viewer = out / ".viewer.json"
@@ -91,15 +117,22 @@ def check_job(item: dict[str, Any]) -> dict[str, Any]:
     from ..isolation import quiet_native_stdout
 
     progress_file = item.get("progress")
+    trace_file = item.get("trace")
 
     def progress(stage: str, k: int, n: int) -> None:
         if progress_file:
             with contextlib.suppress(OSError), open(progress_file, "a", encoding="utf-8") as fh:
                 fh.write(f"{stage} {k} {n}\n")
 
+    def trace(stage: str) -> None:
+        if trace_file:  # written through to the kernel before the step: it survives a crash of this process
+            with contextlib.suppress(OSError), open(trace_file, "w", encoding="utf-8") as fh:
+                fh.write(stage)
+
     with np.errstate(all="ignore"), quiet_native_stdout():
         return check_file(item["path"], item["out"], faces=item.get("faces"), preset=item.get("preset", "catia"),
-                          pictures=bool(item.get("pictures", True)), progress=progress)
+                          pictures=bool(item.get("pictures", True)), progress=progress, skip=item.get("skip"),
+                          trace=trace)
 
 
 def write_outputs(out: Path, result: dict[str, Any]) -> None:
@@ -198,6 +231,145 @@ def _parse_faces(values: list[str] | None) -> list[int] | None:
     return sorted(out)
 
 
+# ---------------------------------------------------------------------------------------- files
+def collect_files(args: list[str]) -> list[tuple[str, Path | None, str | None, str]]:
+    """``(shown path, path or None, error or None, output folder name)`` for every argument, folders
+    searched recursively (sorted) for STEP/IGES files by suffix.
+
+    The output folder name is the file's path relative to the folder argument (just its name for a
+    file argument), suffix dot made ``_`` (``sub/part.step`` -> ``sub/part_step``), made unique.
+    Links that lead nowhere, devices and unreadable folders are reported as errors, not skipped.
+    """
+    from ._common import SUFFIXES, expand, folder_entries, shown_path
+
+    out: list[tuple[str, Path | None, str | None, str]] = []
+    for arg in args:
+        root = Path(arg)
+        if not root.is_dir():
+            (shown, path, err), = expand([arg])
+            out.append((shown, path, err, root.name.replace(".", "_") or "model"))
+            continue
+        found: list[tuple[Path, str | None]] = []
+        walk_errors: list[OSError] = []
+        for folder, dirs, _files in os.walk(root, onerror=walk_errors.append):
+            dirs.sort()
+            found.extend(folder_entries(Path(folder)))
+        for err in walk_errors:
+            out.append((shown_path(err.filename or arg), None, f"cannot read this folder: {err.strerror or err}", ""))
+        found.sort(key=lambda t: (len(t[0].relative_to(root).parts) > 1, str(t[0])))
+        if not found and not walk_errors:
+            out.append((shown_path(arg), None, f"no STEP/IGES files ({', '.join(SUFFIXES)}) in this folder or below", ""))
+        for f, err in found:
+            rel = f.relative_to(root)
+            out.append((shown_path(f), f if err is None else None, err, str(rel.with_name(rel.name.replace(".", "_")))))
+    seen: dict[str, int] = {}
+    unique = []
+    for shown, path, err, name in out:
+        base = name.replace(os.sep, "/") or "model"
+        seen[base] = seen.get(base, 0) + 1
+        unique.append((shown, path, err, base if seen[base] == 1 else f"{base}-{seen[base]}"))
+    return unique
+
+
+def _smooth_worst(edges: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The edge with the largest G1 angle among those meant to be tangent-continuous."""
+    from math import isfinite
+
+    smooth = ("gap", "G0", "G1", "G2")
+    cand = [e for e in edges if e.get("classification") in smooth and isinstance(e.get("g1_max_deg"), (int, float))
+            and isfinite(e["g1_max_deg"])]
+    if not cand:
+        return None
+    e = max(cand, key=lambda e: e["g1_max_deg"])
+    return {k: e.get(k) for k in ("faces", "g1_max_deg", "classification", "matched", "midpoint", "worst_point")}
+
+
+def file_summary(shown: str, folder: str | None, doc: dict[str, Any] | None = None, *, error_text: str | None = None,
+                 crashed: dict[str, Any] | None = None, thumbnail: str | None = None) -> dict[str, Any]:
+    """One file's row of the summary ``report.json`` (and of its ``index.html``): ``status`` is
+    ``ok``, ``failed`` (breaks the preset) or ``unreadable`` (``error`` says why); ``crashed_faces``
+    and ``skipped`` name what was left out after a crash of the checker; ``thumbnail`` is a picture
+    of the model relative to the summary's folder."""
+    row: dict[str, Any] = {"path": shown, "report": None if folder is None else f"{folder}/index.html",
+                           "data": None if folder is None else f"{folder}/report.json"}
+    if doc is None:
+        row.update(status="unreadable", error=error_text, n_faces=None, n_edges=None, worst_g1_deg=None,
+                   worst_g1_edge=None, flags={}, n_violations=None, passed=None, crashed_faces=[], skipped=[],
+                   seconds=None, report=None, data=None, thumbnail=None)
+        return row
+    flags: dict[str, int] = {}
+    for f in doc.get("faces") or []:
+        for g in f.get("flags") or []:
+            flags[g["kind"]] = flags.get(g["kind"], 0) + 1
+    crashed = crashed or {}
+    crashed_faces = sorted(int(k) for k in (crashed.get("faces") or {}))
+    skipped = ([f"edges not measured: {crashed['edges']}"] if crashed.get("edges") else []) + [
+        f"picture {k} not drawn: {v}" for k, v in (crashed.get("pictures") or {}).items()]
+    row.update(status="ok" if doc.get("passed", True) else "failed", error=None, n_faces=doc.get("n_faces"),
+               n_edges=doc.get("n_edges"), worst_g1_deg=doc.get("worst_g1_deg"),
+               worst_g1_edge=_smooth_worst(doc.get("edges") or []), flags=dict(sorted(flags.items())),
+               n_violations=len(doc.get("failures") or []), passed=bool(doc.get("passed", True)),
+               crashed_faces=crashed_faces, skipped=skipped, seconds=(doc.get("seconds") or {}).get("total"),
+               thumbnail=None if thumbnail is None or folder is None else f"{folder}/{thumbnail}")
+    return row
+
+
+# ---------------------------------------------------------------------------------------- retries
+def _crash_skip(stage: str, reason: str, skip: dict[str, Any]) -> dict[str, Any] | None:
+    """``skip`` grown by the piece named ``stage`` (what the crashed worker was doing), or ``None``
+    when nothing can be left out (reading the file, or the same piece again)."""
+    new = json.loads(json.dumps(skip))
+    words = stage.split()
+    if stage == "mesh" and not new.get("mesh_each"):
+        new["mesh_each"] = True
+    elif len(words) == 3 and words[:2] == ["mesh", "face"] and words[2].isdigit():
+        new.setdefault("faces", {})[words[2]] = f"not evaluated: OCC's mesher crashed on this face ({reason})"
+    elif len(words) == 2 and words[0] == "face" and words[1].isdigit():
+        new.setdefault("faces", {})[words[1]] = f"not evaluated: checking this face crashed the checker ({reason})"
+    elif stage == "edges" and not new.get("edges"):
+        new["edges"] = f"measuring them crashed the checker ({reason})"
+    elif len(words) == 2 and words[0] == "picture":
+        new.setdefault("pictures", {})[words[1]] = f"drawing it crashed the checker ({reason})"
+    else:
+        return None
+    return None if new == skip else new
+
+
+def _run_all(items: list[dict[str, Any]], ns: argparse.Namespace, report: Any) -> list[Any]:
+    """Run the worker on every item; an item whose worker crashed is run again without the piece
+    at fault (:func:`_crash_skip`), up to :data:`MAX_RETRIES` times. ``report(k, outcome)`` is
+    called with each final outcome; returns them in the order of ``items``."""
+    from ..isolation import CRASHED, run_jobs
+
+    final: dict[int, Any] = {}
+    todo = list(range(len(items)))
+    for attempt in range(MAX_RETRIES + 1):
+        if not todo:
+            break
+        batch = [items[k] for k in todo]
+        again = []
+
+        def settle(o: Any, todo: list[int] = todo, batch: list[dict[str, Any]] = batch) -> None:
+            k = todo[o.index]
+            if o.status == CRASHED and attempt < MAX_RETRIES:
+                try:
+                    stage = Path(batch[o.index]["trace"]).read_text("utf-8").strip()
+                except OSError:
+                    stage = ""
+                grown = _crash_skip(stage, o.exit_reason or "crashed", batch[o.index].get("skip") or {})
+                if grown is not None:
+                    items[k] = dict(items[k], skip=grown)
+                    again.append(k)
+                    return
+            final[k] = o
+            report(k, o)
+
+        run_jobs(CHECK_JOB, batch, timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD, on_outcome=settle)
+        todo = sorted(again)
+    return [final[k] for k in range(len(items))]
+
+
+# ---------------------------------------------------------------------------------------- output
 def _summary(doc: dict[str, Any], out: Path, fail_on: str | None) -> str:
     g1 = doc.get("worst_g1_deg")
     lines = [
@@ -207,62 +379,144 @@ def _summary(doc: dict[str, Any], out: Path, fail_on: str | None) -> str:
         f"  report: {out / 'index.html'}",
         f"  data:   {out / 'report.json'}",
     ]
+    crashed = [f["index"] for f in doc.get("faces") or [] if "crashed the checker" in str(f.get("error") or "")
+               or "mesher crashed" in str(f.get("error") or "")]
+    if crashed:
+        lines.insert(1, f"  faces {', '.join(map(str, crashed))} crashed the checker and are left out")
     if fail_on:
         lines.append(f"  --fail-on {fail_on}: {'passed' if doc.get('passed') else 'FAILED'}")
     return "\n".join(lines) + "\n"
 
 
+def _failure_reason(outcome: Any, ns: argparse.Namespace, path: Path) -> str:
+    from ..isolation import ERROR
+
+    reason = outcome.error if outcome.status == ERROR else worker_failure(outcome, ns.timeout, task="checking this file",
+                                                                        process="checker")
+    return strip_path(reason or "failed", path.resolve())
+
+
 def run(ns: argparse.Namespace) -> int:
-    """``occsurf check``: validate the arguments, run the worker, write the page and the JSON."""
-    from ..isolation import ERROR, OK, run_jobs
+    """``occsurf check``: validate the arguments, run the worker per file, write the pages and the JSON."""
+    from ..isolation import OK
 
     try:
         faces = _parse_faces(ns.faces)
     except argparse.ArgumentTypeError as err:
         error(str(err))
         return EXIT_ERROR
-    path = Path(ns.file)
-    if not path.is_file():
-        error(f"{ns.file}: {'is a directory' if path.is_dir() else 'no such file'}")
+    single = len(ns.file) == 1 and not Path(ns.file[0]).is_dir()
+    if faces is not None and not single:
+        error("--faces: face numbers belong to one model; give a single FILE with --faces")
         return EXIT_ERROR
-    out = Path(ns.out) if ns.out else Path(f"{path.stem}_check")
+    entries = collect_files(ns.file)
+    if single:
+        shown, path, why, _ = entries[0]
+        if path is None or not path.is_file():
+            error(f"{shown}: {why or 'is not a regular file'}")
+            return EXIT_ERROR
+        default = Path(f"{path.stem}_check")
+    else:
+        first = Path(ns.file[0])
+        default = Path(f"{first.resolve().name or 'model'}_check" if len(ns.file) == 1 else "occsurf_check")
+    out = Path(ns.out) if ns.out else default
     why = _check_out(out)
     if why is not None:
         error(why)
         return EXIT_ERROR
     preset = ns.fail_on or "catia"
+    work = [(k, e) for k, e in enumerate(entries) if e[1] is not None]
+    folders = {k: out if single else out / e[3] for k, e in work}
+    for k, e in work:
+        why = _check_out(folders[k])
+        if why is not None:
+            error(why)
+            return EXIT_ERROR
     fd, progress_name = tempfile.mkstemp(prefix=".progress-", dir=out)
     os.close(fd)
-    progress_path = Path(progress_name)
-    item = {"path": str(path.resolve()), "out": str(out.resolve()), "faces": faces, "preset": preset,
-            "progress": progress_name, "pictures": not ns.no_pictures}
+    scratch = [Path(progress_name)]
+    items = []
+    for k, e in work:
+        fd, trace_name = tempfile.mkstemp(prefix=".trace-", dir=out)
+        os.close(fd)
+        scratch.append(Path(trace_name))
+        items.append({"path": str(e[1].resolve()), "out": str(folders[k].resolve()), "faces": faces, "preset": preset,
+                      "progress": progress_name, "trace": trace_name, "pictures": not ns.no_pictures, "skip": {}})
+    rows: dict[int, dict[str, Any]] = {}
+    code = EXIT_OK
+    failed = False
+
+    def finish(j: int, outcome: Any) -> None:
+        nonlocal code, failed
+        k, (shown, path, _, name) = work[j]
+        folder = folders[k]
+        if outcome.status != OK:
+            error(f"{shown}: {_failure_reason(outcome, ns, path)}")
+            rows[k] = file_summary(shown, None, error_text=_failure_reason(outcome, ns, path))
+            code = EXIT_ERROR
+            return
+        result = outcome.value
+        result["report"]["path"] = shown
+        try:
+            write_outputs(folder, result)
+        except Exception as err:  # noqa: BLE001 - one line, never a traceback
+            error(f"--out {folder}: {error_line(err)}")
+            rows[k] = file_summary(shown, None, error_text=f"report not written: {error_line(err)}")
+            code = EXIT_ERROR
+            return
+        doc = result["report"]
+        failed |= not doc.get("passed", True)
+        rows[k] = file_summary(shown, None if single else name, doc, crashed=items[j].get("skip"),
+                               thumbnail=(result.get("pictures") or {}).get("mean"))
+        if not ns.json:
+            sys.stdout.write(_summary(doc, folder, ns.fail_on))
+            sys.stdout.flush()
+        if single and ns.json:
+            sys.stdout.write(json.dumps(doc, indent=1, allow_nan=False) + "\n")
+
+    for k, (shown, path, why, _) in enumerate(entries):
+        if path is None:
+            error(f"{shown}: {why}")
+            rows[k] = file_summary(shown, None, error_text=why)
+            code = EXIT_ERROR
     try:
-        with _Progress(progress_path, enabled=sys.stderr.isatty() and not ns.json):
-            (outcome,) = run_jobs(CHECK_JOB, [item], timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD)
+        with _Progress(scratch[0], enabled=sys.stderr.isatty() and not ns.json):
+            _run_all(items, ns, finish)
     finally:
-        with contextlib.suppress(OSError):
-            progress_path.unlink()
-    if outcome.status != OK:
-        reason = outcome.error if outcome.status == ERROR else worker_failure(outcome, ns.timeout, task="checking this file",
-                                                                            process="checker")
-        error(f"{ns.file}: {strip_path(reason or 'failed', path.resolve())}")
-        return EXIT_ERROR
-    result = outcome.value
-    result["report"]["path"] = ns.file
-    try:
-        write_outputs(out, result)
-    except Exception as err:  # noqa: BLE001 - one line, never a traceback
-        error(f"--out {out}: {error_line(err)}")
-        return EXIT_ERROR
-    doc = result["report"]
-    if ns.json:
-        sys.stdout.write(json.dumps(doc, indent=1, allow_nan=False) + "\n")
-    else:
-        sys.stdout.write(_summary(doc, out, ns.fail_on))
+        for f in scratch:
+            with contextlib.suppress(OSError):
+                f.unlink()
+    if not single:
+        summary = _write_summary(out, [rows[k] for k in sorted(rows)], preset, ns.fail_on)
+        if ns.json:
+            sys.stdout.write(json.dumps(summary, indent=1, allow_nan=False) + "\n")
+        else:
+            n = summary["n_files"]
+            counts = ", ".join(f"{c} {k}" for k, c in summary["counts"].items())
+            gate = f"  --fail-on {ns.fail_on}: {'passed' if summary['passed'] else 'FAILED'}\n" if ns.fail_on else ""
+            sys.stdout.write(f"{n} file{'' if n == 1 else 's'}: {counts}\n  index:  {out / 'index.html'}\n"
+                             f"  data:   {out / 'report.json'}\n{gate}")
     sys.stdout.flush()
-    if ns.fail_on and not doc.get("passed", True):
+    if code != EXIT_OK:
+        return code
+    if ns.fail_on and failed:
         return EXIT_FAILED
     return EXIT_OK
+
+
+def _write_summary(out: Path, rows: list[dict[str, Any]], preset: str, fail_on: str | None) -> dict[str, Any]:
+    """The top-level ``report.json`` and ``index.html`` over all files (atomically); returns the JSON."""
+    from ..exchange.files import atomic_write
+    from ..quality.html import write_index_html
+
+    counts: dict[str, int] = {}
+    for r in rows:
+        counts[r["status"]] = counts.get(r["status"], 0) + 1
+    summary = {"n_files": len(rows), "counts": counts, "preset": preset, "fail_on": fail_on,
+               "passed": all(r["status"] == "ok" for r in rows), "files": rows}
+    atomic_write(out / "report.json", (json.dumps(summary, indent=1, allow_nan=False) + "\n").encode("utf-8"))
+    write_index_html(out / "index.html", summary)
+    return summary
 
 
 def add_parser(sub: Any) -> None:
@@ -271,14 +525,21 @@ def add_parser(sub: Any) -> None:
         "check",
         help="surface-quality report of a STEP/IGES model: curvature, zebra, sections, edge continuity",
         description=("Assess every face (curvature range, flags with suggested corrections) and every edge "
-                     "between two faces (G0 gap, G1 angle, G2 jump) of a STEP/IGES model; write DIR/index.html "
-                     "(an offline page with pictures and a 3-D view) and DIR/report.json. Exit 0 when read, 2 when "
-                     "unreadable or on bad arguments, 1 with --fail-on when an edge or face breaks the preset."),
+                     "between two faces (G0 gap, G1 angle, G2 jump) of STEP/IGES models (files, or folders searched "
+                     "recursively); write DIR/index.html (an offline page with pictures and a 3-D view) and "
+                     "DIR/report.json per file, and for several files an index.html and report.json over all. "
+                     "Each file is read in a worker process; a face that crashes it is left out and named. Exit 0 "
+                     "when all were read, 2 when one was unreadable or on bad arguments, 1 with --fail-on when an "
+                     "edge or face of any file breaks the preset."),
     )
-    p.add_argument("file", metavar="FILE", help="a STEP (.step, .stp) or IGES (.iges, .igs) file")
-    p.add_argument("--out", metavar="DIR", help="folder for index.html, report.json and the pictures "
-                                                "(default: FILE's stem + '_check' in the current folder)")
-    p.add_argument("--json", action="store_true", help="print report.json on stdout instead of the summary")
+    p.add_argument("file", nargs="+", metavar="FILE_OR_DIR",
+                   help="STEP (.step, .stp) or IGES (.iges, .igs) files, or folders searched recursively for them")
+    p.add_argument("--out", metavar="DIR", help="folder for index.html, report.json and the pictures (default: FILE's "
+                                                "stem + '_check', a folder's name + '_check', or occsurf_check for "
+                                                "several arguments, in the current folder); several files: one folder "
+                                                "per file below DIR plus DIR/index.html and DIR/report.json over all")
+    p.add_argument("--json", action="store_true", help="print report.json on stdout instead of the summary (several "
+                                                       "files: the summary report.json)")
     p.add_argument("--faces", nargs="+", metavar="N", help="only these faces (numbered as in 'occsurf inspect'; "
                                                           "ranges like 5-8 and commas allowed)")
     p.add_argument("--fail-on", choices=PRESET_NAMES, metavar="PRESET",

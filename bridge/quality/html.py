@@ -25,7 +25,8 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from .report import QualityReport
 
-__all__ = ["render_html", "viewer_payload", "write_html", "VIEWER_INDICATORS", "viewer_script"]
+__all__ = ["render_html", "viewer_payload", "write_html", "VIEWER_INDICATORS", "viewer_script", "render_index_html",
+           "write_index_html"]
 
 #: Indicators the 3-D view can switch between: (key, label, colour map, symmetric scale).
 VIEWER_INDICATORS: tuple[tuple[str, str, str, bool], ...] = (
@@ -386,4 +387,78 @@ def write_html(path: str | Path, doc: dict[str, Any], payload: dict[str, Any],
 
     path = Path(path)
     atomic_write(path, render_html(doc, payload, pictures).encode("utf-8"))
+    return path
+
+
+# ---------------------------------------------------------------------------------------- index
+def _index_row(f: dict[str, Any]) -> str:
+    status = f.get("status", "?")
+    link = f.get("report")
+    name = html.escape(str(f.get("path", "")))
+    name_cell = f'<a href="{html.escape(link)}">{name}</a>' if link else name
+    w = f.get("worst_g1_edge") or {}
+    worst = "-" if not w else (f'{_fmt(w.get("g1_max_deg"))} deg, faces {_fmt(w.get("faces"))} '
+                               f'({html.escape(str(w.get("classification")))})')
+    flags = ", ".join(f"{n} {html.escape(k)}" for k, n in (f.get("flags") or {}).items()) or "-"
+    crashed = f.get("crashed_faces") or []
+    notes = [html.escape(str(f["error"]))] if f.get("error") else []
+    if crashed:
+        notes.append(f"faces {', '.join(str(k) for k in crashed)} crashed the checker and were left out")
+    notes += [html.escape(str(x)) for x in f.get("skipped") or []]
+    thumb = f.get("thumbnail")
+    pic = f'<img src="{html.escape(thumb)}" alt="" loading="lazy">' if thumb else ""
+    cls = {"ok": "", "failed": "flagged"}.get(status, "error")
+    n_flags = sum((f.get("flags") or {}).values())
+    cells = [
+        (f.get("path"), name_cell), (status, f'<span class="{"passed" if status == "ok" else "failed"}">{status}</span>'),
+        (f.get("n_faces"), _fmt(f.get("n_faces"))), (f.get("n_edges"), _fmt(f.get("n_edges"))),
+        (w.get("g1_max_deg"), worst), (f.get("worst_g1_deg"), _fmt(f.get("worst_g1_deg"))), (n_flags, flags),
+        (f.get("n_violations"), _fmt(f.get("n_violations"))), (f.get("seconds"), _fmt(f.get("seconds"))),
+        (None, "<br>".join(notes) or "-"), (None, pic),
+    ]
+    return f'<tr class="{cls}">' + "".join(f'<td data-v="{_num_attr(v)}">{t}</td>' for v, t in cells) + "</tr>"
+
+
+def render_index_html(summary: dict[str, Any]) -> str:
+    """The page over several files' reports (``DIR/index.html`` of ``occsurf check`` on several
+    files or folders): one sortable row per file (status, faces, edges, its worst G1 edge among the
+    edges meant to be tangent-continuous, the worst G1 of all edges, flags by kind, violations of
+    the preset, seconds, crashed faces) linking to that file's own page. Offline, no script but the
+    table sorting."""
+    files = summary.get("files") or []
+    cols = ("file", "status", "faces", "edges", "worst G1 edge (smooth edges)", "worst G1 all (deg)", "flags",
+            "violations", "seconds", "notes", "")
+    counts = summary.get("counts") or {}
+    head = ", ".join(f"{n} {html.escape(k)}" for k, n in counts.items())
+    gate = summary.get("fail_on")
+    verdict = ("" if not gate else
+               f' <span class="{"passed" if summary.get("passed") else "failed"}">--fail-on {html.escape(gate)}: '
+               f'{"passed" if summary.get("passed") else "FAILED"}</span>')
+    parts = [
+        "<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        f"<title>occsurf check: {len(files)} files</title><style>{_CSS}"
+        "td img{max-width:180px;border:1px solid #dde}</style></head><body>",
+        f"<h1>occsurf check: {len(files)} files</h1>",
+        f'<p>{head}; preset {html.escape(str(summary.get("preset")))}{verdict}. Click a column to sort; '
+        "a file's name opens its own report.</p>",
+        '<table class="sortable" id="file-table"><thead><tr>',
+        "".join(f'<th data-col="{i}">{c}</th>' for i, c in enumerate(cols)),
+        "</tr></thead><tbody>",
+        *[_index_row(f) for f in files],
+        "</tbody></table>",
+        '<p class="note">Worst G1 edge: the largest normal angle over the edges classified gap, G0, G1 or G2 '
+        "(meant to be tangent-continuous; designed creases, seams and degenerate edges are in the all-edges "
+        "column).</p>",
+        f"<script>{_SORT_JS}</script>", "</body></html>",
+    ]
+    return "\n".join(parts)
+
+
+def write_index_html(path: str | Path, summary: dict[str, Any]) -> Path:
+    """Write :func:`render_index_html` atomically to ``path``."""
+    from ..exchange.files import atomic_write
+
+    path = Path(path)
+    atomic_write(path, render_index_html(summary).encode("utf-8"))
     return path

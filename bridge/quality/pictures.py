@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from .report import FaceField, QualityReport
 
 __all__ = ["render_report_pictures", "render_picture", "MODEL_PICTURES", "FACE_PICTURES", "PICTURE_KINDS",
-           "section_lines"]
+           "section_lines", "face_section_lines"]
 
 #: Every picture kind: (indicator, colour map, legend title).
 PICTURE_KINDS: dict[str, tuple[str | None, str, str, str]] = {
@@ -57,6 +57,12 @@ HEDGEHOG_CELLS = 30
 HEDGEHOG_LENGTH = 0.03
 #: Section planes per picture (normal to the longest side of the bounding box).
 N_SECTIONS = 9
+#: Section planes of a face's own picture, through the face's own extent: normal to the model's
+#: section direction when the face spans at least FACE_SECTION_MIN_EXTENT of its largest extent
+#: along it (sections read the same way on every face), else to the face's own longest side
+#: (a face flat across the model's direction would be missed or cut once).
+N_FACE_SECTIONS = 7
+FACE_SECTION_MIN_EXTENT = 0.2
 #: Comb teeth: longest tooth as a fraction of the shown extent.
 COMB_SCALE = 0.12
 
@@ -125,14 +131,36 @@ def section_lines(fields: Sequence[FaceField], size: float) -> tuple[Lines, dict
         teeth ``(2, 3)`` and comb outlines ``(k, 3)``; inflection points ``(j, 3)``.
         ``per_face``: the same per face index (``FaceMesh.index``).
     """
-    from occsurf.algorithms import quality
-
     pts = np.concatenate([f.mesh.points for f in fields])
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     axis = int(np.argmax(hi - lo))
-    normal = np.eye(3)[axis]
-    ext = float(hi[axis] - lo[axis])
-    offsets = np.linspace(0.04, 0.96, N_SECTIONS) * ext
+    return _cut(fields, lo, np.eye(3)[axis], np.linspace(0.04, 0.96, N_SECTIONS) * float(hi[axis] - lo[axis]))
+
+
+def face_section_lines(field_: FaceField, axis: int) -> Lines:
+    """Sections of one face through its own extent (:data:`N_FACE_SECTIONS` planes), normal to the
+    model's section ``axis`` (0, 1, 2) unless the face is thin along it
+    (:data:`FACE_SECTION_MIN_EXTENT`), then to the face's own longest side; see :func:`section_lines`."""
+    P = field_.mesh.points[np.all(np.isfinite(field_.mesh.points), axis=1)]
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    ext = hi - lo
+    if ext[axis] < FACE_SECTION_MIN_EXTENT * ext.max():
+        axis = int(np.argmax(ext))
+    whole, _ = _cut([field_], lo, np.eye(3)[axis], np.linspace(0.04, 0.96, N_FACE_SECTIONS) * float(ext[axis]))
+    return whole
+
+
+def model_section_axis(fields: Sequence[FaceField]) -> int:
+    """The coordinate axis the model's sections are normal to: its bounding box's longest side."""
+    pts = np.concatenate([f.mesh.points for f in fields])
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    return int(np.argmax(pts.max(axis=0) - pts.min(axis=0)))
+
+
+def _cut(fields: Sequence[FaceField], lo: np.ndarray, normal: np.ndarray,
+         offsets: np.ndarray) -> tuple[Lines, dict[int, Lines]]:
+    from occsurf.algorithms import quality
+
     from .report import uv_mask
 
     faces = [(f.surface, uv_mask(f.mesh)) for f in fields]
@@ -225,12 +253,15 @@ def _flag_points(report: QualityReport, faces: set[int] | None = None) -> np.nda
 
 def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_pictures: Sequence[str] = MODEL_PICTURES,
                            face_pictures: Sequence[str] = FACE_PICTURES,
-                           progress: Callable[[int, int], None] | None = None) -> dict[str, str]:
+                           progress: Callable[[int, int], None] | None = None,
+                           skip: dict[str, str] | None = None, trace: Callable[[str], None] | None = None) -> dict[str, str]:
     """Write the model's and every face's pictures into ``out_dir`` (created); paths relative to it.
 
     Model pictures are ``model_<kind>.png`` (returned); face pictures ``face_<index>_<kind>.png``
-    (recorded in each :attr:`FaceQuality.pictures`). A picture that fails is skipped and noted on
-    its face (or in the report's warnings), never fatal.
+    (recorded in each :attr:`FaceQuality.pictures`). Every face's sections are cut through its own
+    extent (:func:`face_section_lines`). A picture that fails is skipped and noted on its face (or
+    in the report's warnings), never fatal; so is every picture named in ``skip`` (file name ->
+    reason: one that crashed the process before). ``trace(f"picture {name}")`` is called before each.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -252,10 +283,18 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
                 cut["v"] = (([], [], np.zeros((0, 3))), {})
         return cut["v"]
 
+    skip = dict(skip or {})
+    note = trace if trace is not None else (lambda stage: None)
+    axis = model_section_axis(fields)
     done = 0
     for kind in model_pictures:
         name = f"model_{kind}.png"
         value = PICTURE_KINDS[kind][0]
+        if name in skip:
+            report.warnings.append(f"picture {kind} not drawn: {skip[name]}")
+            done += 1
+            continue
+        note(f"picture {name}")
         try:
             render_picture(fields, kind, out / name, size=MODEL_SIZE, model_size=report.size,
                            scale=scales.get(value or ""),
@@ -274,14 +313,22 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
         row = by_index[fld.mesh.index]
         for kind in face_pictures:
             name = f"face_{row.index}_{kind}.png"
-            if kind == "sections" and row.index not in cuts()[1]:
-                row.notes.append(f"no section plane of the model's family crosses this face ({N_SECTIONS} planes "
-                                 "normal to the longest side of the model's box)")
+            if name in skip:
+                row.notes.append(f"picture {kind} not drawn: {skip[name]}")
+                done += 1
+                continue
+            note(f"picture {name}")
             try:
+                own: list[Lines] = []
+                if kind == "sections":
+                    own.append(face_section_lines(fld, axis))
+                    if not own[0][0]:
+                        row.notes.append(f"no section through this face: {N_FACE_SECTIONS} planes through its own "
+                                         "extent found no intersection inside its trim")
                 render_picture([fld], kind, out / name, size=FACE_SIZE, model_size=report.size,
                                flags=_flag_points(report, {row.index}) if kind == "mean" else None,
                                title=f"face {row.index} ({row.type}): {kind}",
-                               sections=lambda k=row.index: cuts()[1].get(k, ([], [], np.zeros((0, 3)))))
+                               sections=(lambda: own[0]) if own else None)
                 row.pictures[kind] = name
             except Exception as err:  # noqa: BLE001
                 row.notes.append(f"picture {kind} not drawn: {error_line(err)}")

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -245,12 +245,18 @@ def _triangle_mask(uv: np.ndarray, tris: np.ndarray) -> Callable[[np.ndarray, np
 
 def _flags_of(face: ImportedFace, mesh: FaceMesh, samples: int) -> list[dict[str, Any]]:
     """:func:`occsurf.algorithms.quality.face_flags` of the face's surface on a ``samples`` grid,
-    masked to the trimmed face, as JSON dicts."""
+    masked to the trimmed face (its loops' classification, ``ImportedFace.trimmed``; else the
+    triangles of OCC's mesh), as JSON dicts."""
     from occsurf.algorithms import quality
 
     (u0, u1), (v0, v1) = face.surface.domain
     us, vs = np.linspace(u0, u1, samples), np.linspace(v0, v1, samples)
-    inside = uv_mask(mesh)(*np.meshgrid(us, vs, indexing="ij")) if mesh.source == "brepmesh" else None
+    grid = np.meshgrid(us, vs, indexing="ij")
+    trimmed = getattr(face, "trimmed", None)
+    if trimmed is not None:
+        inside = trimmed.contains(*grid)
+    else:
+        inside = uv_mask(mesh)(*grid) if mesh.source == "brepmesh" else None
     if inside is not None and not inside.any():
         return []
     return [_flag_json(f) for f in quality.face_flags(face.surface, mask=inside, us=us, vs=vs)]
@@ -311,14 +317,16 @@ def _thresholds_json(th: Any) -> dict[str, Any]:
 
 # ---------------------------------------------------------------------------------------- entry
 def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, samples: int = 41,
-                preset: str = DEFAULT_PRESET, thresholds: Any = None, edges: bool = True, flags: bool = True,
-                progress: Callable[[int, int], None] | None = None) -> QualityReport:
+                preset: str = DEFAULT_PRESET, thresholds: Any = None, edges: bool | str = True, flags: bool = True,
+                progress: Callable[[int, int], None] | None = None, skip: Mapping[int, str] | None = None,
+                trace: Callable[[str], None] | None = None, mesh_each: bool = False) -> QualityReport:
     """Assess a model's surfaces: per-face indicators and flags, the edge-continuity table.
 
     Parameters
     ----------
-    model : ImportedModel
-        From :func:`~occsurf.bridge.exchange.step_iges.read_step` or ``read_iges``.
+    model : ImportedModel, or a build123d / cadquery / OCC shape
+        From :func:`~occsurf.bridge.exchange.step_iges.read_step` or ``read_iges``; any other object
+        :func:`~occsurf.bridge.conversion.shapes.as_model` accepts (a Solid, Shell, Compound, Workplane...).
     faces : sequence of int, optional
         Face indices to report (as ``occsurf inspect`` numbers them); default all. Edges are
         reported when one of their faces is selected.
@@ -330,9 +338,21 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     thresholds : optional
         Explicit thresholds overriding the preset.
     edges, flags : bool
-        Compute the edge table / the face flags (both by default).
+        Compute the edge table / the face flags (both by default). ``edges`` may be a string
+        instead of ``False``: why the table is left out (kept in the report's warnings).
     progress : callable(done, total), optional
         Called after each face.
+    skip : mapping of int to str, optional
+        Faces not to evaluate, with the reason (their rows keep ``error`` set to it): how
+        ``occsurf check`` leaves out a face that crashed the checker process on an earlier attempt.
+    trace : callable(str), optional
+        Called before each step that runs OCC or heavy code on one piece of the model: ``"mesh"``
+        (or ``"mesh face K"`` with ``mesh_each``), ``"face K"``, ``"edges"``; the last one seen
+        names the piece at fault when the process dies (:mod:`occsurf.bridge.cli.check` writes it
+        to a file).
+    mesh_each : bool
+        Triangulate face by face (each with the model's deflection) instead of the whole shape
+        at once, so a face that crashes OCC's mesher can be named and skipped.
 
     Returns
     -------
@@ -345,21 +365,30 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     """
     from occsurf.algorithms.errors import InvalidGeometryError
 
+    from ..conversion.shapes import as_model
     from ..rendering import tessellation
 
+    model = as_model(model)  # a build123d / cadquery / OCC object: its faces with their labels and colours
     n = len(model.faces)
     chosen = None if faces is None else sorted({int(k) for k in faces})
     if chosen is not None and any(not 0 <= k < n for k in chosen):
         raise InvalidGeometryError(f"faces: expected indices from 0 to {n - 1}, got {chosen}")
+    skip = {int(k): str(v) for k, v in (skip or {}).items()}
+    note = trace if trace is not None else (lambda stage: None)
     t0 = time.perf_counter()
-    size = tessellation.mesh_model(model)
-    seconds = {"mesh": time.perf_counter() - t0}
     todo = [model.faces[k] for k in (chosen if chosen is not None else range(n))]
+    size = _mesh(model, [f for f in todo if f.index not in skip], mesh_each, note)
+    seconds = {"mesh": time.perf_counter() - t0}
     rows: list[FaceQuality] = []
     fields: dict[int, FaceField] = {}
     t1 = time.perf_counter()
     for k, face in enumerate(todo):
-        row, fld = _check_face(face, lambda f: tessellation.mesh_face(f, size), samples, size, flags)
+        if face.index in skip:
+            row, fld = FaceQuality(index=face.index, type=face.surface_type, name=face.name or None,
+                                   error=skip[face.index]), None
+        else:
+            note(f"face {face.index}")
+            row, fld = _check_face(face, lambda f: tessellation.mesh_face(f, size), samples, size, flags)
         rows.append(row)
         if fld is not None:
             fields[face.index] = fld
@@ -369,8 +398,12 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     report = QualityReport(path=str(model.path), format=model.format, size=size, faces=rows, edges=[],
                            preset=preset, thresholds={}, fields=fields,
                            warnings=[error_line(w) for w in model.warnings])
-    if edges:
+    if isinstance(edges, str):
+        report.warnings.append(f"edge continuity not computed: {edges}")
+        report.thresholds = _thresholds_json(_preset_thresholds(preset, thresholds))
+    elif edges:
         t2 = time.perf_counter()
+        note("edges")
         _add_edges(report, model, chosen, preset, thresholds)
         seconds["edges"] = time.perf_counter() - t2
     fail_kinds = FACE_FAIL_KINDS.get(preset, FACE_FAIL_KINDS[DEFAULT_PRESET])
@@ -381,6 +414,31 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     seconds["total"] = time.perf_counter() - t0
     report.seconds = seconds
     return report
+
+
+def _mesh(model: ImportedModel, faces: Sequence[ImportedFace], each: bool, note: Callable[[str], None]) -> float:
+    """Triangulate the model (:func:`~occsurf.bridge.rendering.tessellation.mesh_model`), or with
+    ``each`` only ``faces``, one ``BRepMesh_IncrementalMesh`` per face at the model's deflection
+    (``note`` names each face first); returns the model size."""
+    from ..rendering import tessellation
+
+    if not each:
+        note("mesh")
+        return tessellation.mesh_model(model)
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+
+    size = tessellation.model_size(model)
+    for face in faces:
+        note(f"mesh face {face.index}")
+        BRepMesh_IncrementalMesh(face.face, tessellation.LINEAR_DEFLECTION * size, False,
+                                 tessellation.ANGULAR_DEFLECTION, False).Perform()
+    return size
+
+
+def _preset_thresholds(preset: str, thresholds: Any) -> Any:
+    from . import continuity
+
+    return continuity._thresholds(preset if thresholds is None else thresholds)
 
 
 def _add_edges(report: QualityReport, model: ImportedModel, chosen: list[int] | None, preset: str,

@@ -508,6 +508,7 @@ class Scene:
         prop = actor.GetProperty()
         prop.SetColor(*color)
         prop.SetLineWidth(width)
+        prop.RenderLinesAsTubesOn()  # offscreen (EGL) wide lines are honoured only this way: else 1 px
         prop.SetOpacity(opacity)
         prop.LightingOff()
         self._renderer.AddActor(actor)

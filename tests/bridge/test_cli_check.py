@@ -188,3 +188,92 @@ def test_page_in_headless_chromium(loft_out) -> None:
         assert sorted(first, key=int) in (first, second) and second == first[::-1]
     finally:
         drv.quit()
+
+
+# ---------------------------------------------------------------------------------------- several files
+def test_folders_recursively_with_an_index(tmp_path, capsys) -> None:
+    """A folder (searched recursively, STEP and IGES) and a file: one report folder per file, a
+    top-level index.html and report.json over all (status, worst G1 edge, flags); an unreadable
+    file costs its row only (exit 2), the other files are still checked."""
+    src = tmp_path / "models"
+    (src / "sub").mkdir(parents=True)
+    shutil.copy(SAMPLES / "loft.step", src / "loft.step")
+    shutil.copy(SAMPLES / "nurbs_torus.step", src / "sub" / "nurbs_torus.step")
+    (src / "bad.step").write_text("ISO-10303-21;\nHEADER;\nthis is not a model\n")
+    (src / "notes.txt").write_text("not a model")
+    out = tmp_path / "o"
+    rc = main(["check", str(src), "--out", str(out), "--no-pictures", "--fail-on", "mechanical"])
+    captured = capsys.readouterr()
+    assert rc == 2
+    assert [ln for ln in captured.err.splitlines() if ln.strip()] == [
+        ln for ln in captured.err.splitlines() if ln.startswith("occsurf: ") and "bad.step" in ln]
+    doc = json.loads((out / "report.json").read_text())
+    # loft breaks even the mechanical preset (a G0 edge at 3.1 deg); the torus passes it
+    assert doc["n_files"] == 3 and doc["counts"] == {"failed": 1, "ok": 1, "unreadable": 1}
+    rows = {Path(r["path"]).name: r for r in doc["files"]}
+    assert rows["bad.step"]["status"] == "unreadable" and "truncated" in rows["bad.step"]["error"]
+    loft = rows["loft.step"]
+    assert loft["report"] == "loft_step/index.html" and (out / "loft_step" / "index.html").is_file()
+    per_file = json.loads((out / "loft_step" / "report.json").read_text())
+    assert loft["n_faces"] == per_file["n_faces"] == 11 and loft["n_edges"] == per_file["n_edges"]
+    assert sum(loft["flags"].values()) == per_file["n_flags"] and loft["status"] == "failed"
+    assert loft["n_violations"] == len(per_file["failures"]) > 0 and per_file["passed"] is False
+    w = loft["worst_g1_edge"]
+    smooth = [e for e in per_file["edges"] if e["classification"] in ("gap", "G0", "G1", "G2")]
+    assert (w is None) == (not smooth)
+    if w is not None:
+        assert w["g1_max_deg"] == max(e["g1_max_deg"] for e in smooth)
+    torus = rows["nurbs_torus.step"]
+    assert torus["status"] == "ok" and torus["passed"] is True
+    assert torus["report"] == "sub/nurbs_torus_step/index.html" and (out / "sub" / "nurbs_torus_step" / "report.json").is_file()
+    page = (out / "index.html").read_text()
+    assert 'href="loft_step/index.html"' in page and "unreadable" in page
+    assert "http://" not in page and "https://" not in page and "<script src" not in page  # offline
+    # the gate counts every file: loft breaks catia (wiggles, creases), so exit 1 when all are readable
+    (src / "bad.step").unlink()
+    rc = main(["check", str(src / "loft.step"), str(src / "sub"), "--out", str(tmp_path / "p"), "--no-pictures",
+               "--fail-on", "catia", "--json"])
+    summary = json.loads(capsys.readouterr().out)
+    assert rc == 1 and summary["passed"] is False and summary["n_files"] == 2
+    assert {r["status"] for r in summary["files"]} <= {"ok", "failed"} and summary["files"][0]["status"] == "failed"
+    # every file passes: exit 0
+    assert main(["check", str(src / "sub"), "--out", str(tmp_path / "q"), "--no-pictures", "--fail-on",
+                 "mechanical"]) == 0
+    assert "1 file: 1 ok" in capsys.readouterr().out
+    # --faces names faces of one model
+    assert main(["check", str(src), "--faces", "1"]) == 2
+    assert "--faces" in _one_error_line(capsys.readouterr().err)
+
+
+def test_a_crashing_face_is_left_out_and_named(tmp_path, capsys, monkeypatch) -> None:
+    """A face that kills the worker (SIGSEGV inside OCC) costs that face only: the file is checked
+    again without it, the report keeps every other face and names the crashed one."""
+    import occsurf.bridge.cli.check as check
+
+    monkeypatch.setattr(check, "CHECK_JOB", "tests.bridge.check_crash_jobs:crash_on_face")
+    monkeypatch.setenv("OCCSURF_TEST_CRASH_FACES", "3,7")
+    out = tmp_path / "o"
+    assert main(["check", str(SAMPLES / "loft.step"), "--out", str(out), "--no-pictures"]) == 0
+    text = capsys.readouterr().out
+    assert "faces 3, 7 crashed the checker" in text
+    doc = json.loads((out / "report.json").read_text())
+    by = {f["index"]: f for f in doc["faces"]}
+    assert sorted(by) == list(range(11))
+    for k in (3, 7):
+        assert "crashed the checker" in by[k]["error"] and "SIGSEGV" in by[k]["error"]
+    assert all(by[k]["error"] is None and by[k]["k_max"] is not None for k in by if k not in (3, 7))
+    assert doc["edges"]
+
+
+def test_a_crashing_picture_is_left_out(tmp_path, capsys, monkeypatch) -> None:
+    import occsurf.bridge.cli.check as check
+
+    monkeypatch.setattr(check, "CHECK_JOB", "tests.bridge.check_crash_jobs:crash_on_picture")
+    monkeypatch.setenv("OCCSURF_TEST_CRASH_PICTURE", "face_1_zebra.png")
+    out = tmp_path / "o"
+    assert main(["check", str(SAMPLES / "loft.step"), "--out", str(out), "--faces", "0-2", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    by = {f["index"]: f for f in doc["faces"]}
+    assert "zebra" not in by[1]["pictures"] and {"mean", "sections"} <= set(by[1]["pictures"])
+    assert any("zebra not drawn" in n and "crashed" in n for n in by[1]["notes"])
+    assert all({"mean", "zebra", "sections"} <= set(by[k]["pictures"]) for k in (0, 2))

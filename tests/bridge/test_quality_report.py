@@ -284,3 +284,69 @@ def test_summarize_model_is_the_audit_quality_hook() -> None:
     assert out["quality_status"] == "ok"
     assert out["quality"]["worst_g1_deg"] == pytest.approx(summary["worst_g1_deg"])
     assert out["quality"]["flags"] == summary["flags"]
+
+
+# ---------------------------------------------------------------------------------------- issue 11 follow-ups
+def test_plain_cone_passes_catia_and_a_real_spike_fails(tmp_path) -> None:
+    """A cone's apex (curvature growing as 1 / distance) is not a curvature spike: a plain cone
+    passes ``--fail-on catia``; the same cone with a pole pushed off it near the apex fails."""
+    from build123d import Cone
+
+    from occsurf.bridge import write_step
+
+    from ..algorithms.test_quality_flags import cone
+
+    model = read_step(_write(Cone(1.0, 0.0, 2.0), tmp_path, "cone.step"))
+    rep = check_model(model, preset="catia")
+    assert not [g for f in rep.faces for g in f.flags if g["kind"] == "curvature_spike"]
+    assert not [x for x in rep.failures if x.startswith("face")], rep.failures
+    write_step(tmp_path / "bumped.step", [cone(bump=0.2, pole=(1, 2))])
+    rep = check_model(read_step(tmp_path / "bumped.step"), preset="catia", edges=False)
+    assert any("curvature_spike" in x for x in rep.failures), rep.failures
+
+
+def test_every_face_gets_sections_through_its_own_extent(tmp_path) -> None:
+    """A long box: the model's section planes (normal to x) miss its two end faces; each face is cut
+    by planes through its own extent instead, so every face has section polylines."""
+    from build123d import Box
+
+    model = read_step(_write(Box(10.0, 1.0, 1.0), tmp_path, "box.step"))
+    rep = check_model(model, edges=False, flags=False)
+    fields = [rep.fields[k] for k in sorted(rep.fields)]
+    axis = P.model_section_axis(fields)
+    assert axis == 0
+    _, per_face = P.section_lines(fields, rep.size)
+    assert len(per_face) < len(fields)  # the model's family misses the end faces
+    for f in fields:
+        lines, _teeth, _infl = P.face_section_lines(f, axis)
+        assert len(lines) == P.N_FACE_SECTIONS, f.mesh.index
+        ext = np.ptp(f.mesh.points, axis=0)
+        for pl in lines:  # each a straight cut across the whole face (flat faces: no comb)
+            assert np.linalg.norm(pl[-1] - pl[0]) >= 0.999 * min(e for e in ext if e > 1e-9) - 1e-9
+
+
+@pytest.mark.skipif(not vtk_scene.render_available(), reason="VTK cannot open an offscreen window here")
+def test_lines_are_as_wide_as_asked_and_the_first_scene_draws() -> None:
+    """Edge and section lines keep their width offscreen (EGL), and the first scene of a process is
+    drawn (it used to come out black: its renderer was made before VTK's OpenGL factories loaded)."""
+    import subprocess
+    import sys
+
+    first = subprocess.run([sys.executable, "-c", (
+        "import numpy as np\nfrom occsurf.bridge.rendering.vtk_scene import Scene\ns = Scene()\n"
+        "s.add_mesh(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0.0]]), np.array([[0, 1, 2]]), cmap='grey')\n"
+        "print(s.render_array(size=(64, 48), camera='top').mean())")], capture_output=True, text=True, timeout=120)
+    assert first.returncode == 0 and float(first.stdout.split()[-1]) > 100, first.stdout + first.stderr
+    pts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.0]])
+    tri = np.array([[0, 1, 2], [0, 2, 3]])
+    for width in (3.0, 5.0):
+        s = vtk_scene.Scene()
+        s.add_mesh(pts, tri, cmap="grey")
+        s.add_lines([np.array([[0.5, 0.1, 0], [0.5, 0.9, 0]])], color=(0.9, 0.0, 0.0), width=width)
+        img = s.render_array(size=(400, 300), camera="iso").astype(int)
+        red = np.argwhere((img[..., 0] > 150) & (img[..., 1] < 80) & (img[..., 2] < 80)).astype(float)
+        # thickness across the line = red area / its length along the principal axis (the line runs
+        # diagonally in the iso view, where untubed wide lines came out 1 px thick in one direction)
+        axis = np.linalg.svd(red - red.mean(axis=0), full_matrices=False)[2][0]
+        length = np.ptp(red @ axis)
+        assert len(red) / length >= 0.8 * width, (width, len(red) / length)

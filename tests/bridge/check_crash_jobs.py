@@ -1,0 +1,47 @@
+"""Jobs for ``test_cli_check.py`` in place of ``occsurf check``'s worker job: the same job, but the
+worker dies (SIGSEGV, as a fault inside OCC would end it) on one face or one picture, named by an
+environment variable, every time it gets there."""
+
+from __future__ import annotations
+
+import os
+import signal
+from typing import Any
+
+
+def _segfault() -> None:
+    os.kill(os.getpid(), signal.SIGSEGV)
+
+
+def crash_on_face(item: dict[str, Any]) -> Any:
+    """Dies while checking face ``$OCCSURF_TEST_CRASH_FACES`` (comma-separated indices)."""
+    from occsurf.bridge.cli.check import check_job
+    from occsurf.bridge.quality import report
+
+    targets = {int(k) for k in os.environ["OCCSURF_TEST_CRASH_FACES"].split(",")}
+    original = report._check_face
+
+    def crashing(face: Any, *args: Any, **kwargs: Any) -> Any:
+        if face.index in targets:
+            _segfault()
+        return original(face, *args, **kwargs)
+
+    report._check_face = crashing
+    return check_job(item)
+
+
+def crash_on_picture(item: dict[str, Any]) -> Any:
+    """Dies while drawing the picture file ``$OCCSURF_TEST_CRASH_PICTURE``."""
+    from occsurf.bridge.cli.check import check_job
+    from occsurf.bridge.quality import pictures
+
+    target = os.environ["OCCSURF_TEST_CRASH_PICTURE"]
+    original = pictures.render_picture
+
+    def crashing(fields: Any, kind: str, path: Any, **kwargs: Any) -> Any:
+        if os.path.basename(str(path)) == target:
+            _segfault()
+        return original(fields, kind, path, **kwargs)
+
+    pictures.render_picture = crashing
+    return check_job(item)
