@@ -595,6 +595,14 @@ class _Parts:
         return key
 
 
+def is_assembly_object(obj: Any) -> bool:
+    """True for a build123d shape with ``children`` or a cadquery ``Assembly``: objects with a
+    structure (names, colours, placements) that ``write_step`` / ``write_iges`` write as such."""
+    if _package(obj) == "build123d":
+        return bool(getattr(obj, "children", None))
+    return _package(obj) == "cadquery" and callable(getattr(obj, "toCompound", None)) and hasattr(obj, "children")
+
+
 def _object_tree(obj: Any, leaves: list[_Leaf]) -> Any:
     """The AssemblyNode tree of a build123d tree or a cadquery assembly (filling ``leaves``), else
     ``None`` (``leaves`` then holds the object itself for a labelled build123d shape)."""

@@ -315,3 +315,22 @@ def test_cadquery_assembly_through_occsurfs_writer_keeps_face_colours(tmp_path):
     np.testing.assert_allclose(col.toTuple(), RED, atol=COLOUR_ATOL)
     assert list(block._subshape_names.values()) == ["lid"]
     _assert_same_faces(back.toCompound().Faces(), assy.toCompound().Faces(), rtol=1e-14)
+
+
+def test_write_step_and_iges_take_assemblies_with_their_structure(tmp_path):
+    """write_step / write_iges of a build123d tree or a cadquery Assembly keep names and colours."""
+    from occsurf.bridge import write_iges, write_step
+
+    plates = _two_plates()
+    ours = read_step(write_step(tmp_path / "p.step", plates), as_="build123d")
+    assert [c.label for c in ours.children] == ["plate_a", "plate_b"]
+    assert ours.children[0].wrapped.IsPartner(ours.children[1].wrapped)
+    np.testing.assert_allclose([tuple(c.color) for c in ours.children], [RED, BLUE], atol=COLOUR_ATOL)
+    model = read_iges(write_iges(tmp_path / "p.igs", plates))  # IGES: placed copies, names and colours kept
+    by_name = {}
+    for f in model.faces:
+        by_name.setdefault(f.name, set()).add(tuple(np.round(f.color, 6)))
+    assert by_name == {"plate_a": {RED}, "plate_b": {BLUE}}
+    _assert_same_faces([bd.Face(f.face) for f in model.faces], plates.faces(), rtol=1e-8)  # ~10 digits
+    unnamed = read_step(write_step(tmp_path / "n.step", plates, names="both"))
+    assert unnamed.assembly is None or not any(c.name == "plate_a" for c in unnamed.assembly.children)
