@@ -25,7 +25,7 @@ that takes faces or a model takes those objects: Faces, Shells, Solids, Compound
 
 ```python
 import build123d as bd
-from occsurf.bridge import fill_model, inspect_model, read_step
+from occsurf.bridge import fill_model, inspect_model, read_step, write_step
 
 plate = bd.Box(10, 20, 2) - bd.Cylinder(2, 2)            # a plate with a hole
 plate_a = plate.moved(bd.Location((0, 0, 0)))
@@ -38,6 +38,8 @@ plates = read_step("plates.step", as_="build123d")        # a Compound tree: lab
 print([(c.label, tuple(c.color)) for c in plates.children])
 plates_cq = read_step("plates.step", as_="cadquery")      # a cadquery Assembly: names, colours, locations
 print([(c.name, c.loc.toTuple()[0]) for c in plates_cq.children])
+write_step("plates_17.step", plates_cq)                   # written back: structure, names, colours, 17 digits
+print([n.name for n in read_step("plates_17.step").assembly.children])
 ```
 
 ```python
@@ -52,6 +54,9 @@ print(type(ball.shape).__name__, ball.holes[0].status, ball.shape.is_valid, f"{b
 
 Instances stay references to one part (`plates.children[0].wrapped.IsPartner(plates.children[1].wrapped)`),
 named after the instance (build123d 0.12's own `import_step` names both `plate_b`, after the part).
+`write_step` / `write_iges` take a build123d tree or a cadquery Assembly with its structure
+(`model_from_object(obj)` gives the `ImportedModel`; IGES has no instances: placed copies, names and
+colours kept).
 A build123d shape has one colour: a part whose faces have several keeps its largest face's colour in
 build123d, and each face's in cadquery (`addSubshape`). OCC's message printers keep the level you set:
 the bridge quiets OCC's banners during its own calls only (`occsurf.bridge.quiet_messages`);
@@ -73,7 +78,8 @@ def test_section_blocks_run(tmp_path, monkeypatch):
     lines = out.getvalue().splitlines()
     assert lines[0] == "[('plate_a', (1.0, 0.0, 0.0, 1.0)), ('plate_b', (0.0, 0.0, 1.0, 1.0))]"
     assert lines[1] == "[('plate_a', (0.0, 0.0, 0.0)), ('plate_b', (30.0, 0.0, 0.0))]"
-    assert lines[2] == "['Cylinder', 'Plane']"
-    kind, status, valid, g1 = lines[3].split()
+    assert lines[2] == "['plate_a', 'plate_b']"
+    assert lines[3] == "['Cylinder', 'Plane']"
+    kind, status, valid, g1 = lines[4].split()
     assert (kind, status, valid) == ("Solid", "filled", "True") and float(g1) < 1e-6
     assert (tmp_path / "plates.step").is_file()
