@@ -1,15 +1,15 @@
-"""Optional numba kernel of :func:`~occsurf.algorithms.lighting.shade`: Warn's model fused per point.
+"""Optional numba kernel of :func:`~occsurf.algorithms.lighting.shade`: Warn's model fused in chunks.
 
 The NumPy path of :mod:`.shading` is the reference. This kernel evaluates the same formulas
-(course ch. 10, module docstring of :mod:`.shading`) point by point, all lights in one pass, so
-none of the NumPy path's ``(3, m)`` temporaries is stored; it writes the same operations in the
-same order (unit normal by the reciprocal of its length, ``V``, ``N.V``, the two-sided flip, per
-light ``L``, the factor ``concentration x cone x flaps x fall-off``, Lambert and Phong terms,
-integer exponents by the same repeated squaring), so with integer exponents the two paths agree
-bit for bit, and to the last ulps of ``pow``/``acos`` otherwise. Three shortcuts skip work whose
-result is exactly zero in the reference: a light behind the surface (``N.L <= 0``), a point
-outside a hard flap or cone, and behind a concentrated light (factor 0). The cone's ``acos`` is
-taken only on its soft edge: inside ``angle - edge`` the smoothstep is 1, outside ``angle`` 0.
+(course ch. 10, module docstring of :mod:`.shading`) on chunks of 256 points that stay in the
+first-level cache, all lights per chunk, instead of the NumPy path's ``(3, block)`` temporaries
+per operation. It writes the same operations in the same order (unit normal by the reciprocal
+of its length, ``V``, ``N.V``, the two-sided flip, per light ``L``, the factor ``concentration x
+cone x flaps x fall-off``, Lambert and Phong terms, integer exponents by the same repeated
+squaring), so with integer exponents the two paths agree bit for bit, and to the last ulps of
+``pow``/``acos`` otherwise. The cone's ``acos`` is taken only on its soft edge: inside ``angle -
+edge`` the smoothstep is 1, outside ``angle`` 0 (what the reference computes there, to the
+rounding of a smoothstep whose slope is zero at both ends).
 
 ``tests/algorithms/test_lighting.py`` checks both paths against each other. Loaded lazily with
 the switches of :mod:`occsurf.algorithms._numba_kernels`: used from
@@ -74,35 +74,40 @@ def pack_lights(setup: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 # ---------------------------------------------------------------------------------------- kernel
 # The points are shaded in chunks of _CHUNK, stage by stage as the NumPy path does, each stage one
-# loop without branches on the data (selects only): LLVM turns those loops into SIMD code, and no
-# branch on a random normal stalls the pipeline (a scalar loop with per-point early exits ran no
-# faster than NumPy, measured: 21 M points/s with one light).
+# loop without branches on the data (selects only) over component-major inputs and one scratch
+# buffer (rows at fixed offsets): LLVM turns those loops into SIMD code, and no branch on a random
+# normal stalls the pipeline. Measured: a scalar loop with per-point early exits ran at NumPy's
+# speed; point-major (m, 3) inputs or one scratch array per quantity kept LLVM from vectorising.
 _CHUNK = 256
+(_S_NX, _S_NY, _S_NZ, _S_VX, _S_VY, _S_VZ, _S_NV, _S_R, _S_G, _S_B, _S_LX, _S_LY, _S_LZ, _S_D, _S_NL, _S_CG, _S_F,
+ _S_RV, _S_W, _S_W2, _S_BAD) = (k * _CHUNK for k in range(21))
+_S_ROWS = 21
 
 
-def _ipow_into(x, s, out, base, n):  # pragma: no cover - compiled
-    """``out[:n] = x[:n] ** s`` for ``x >= 0``: integer ``s`` up to 4096 by repeated squaring as
-    :func:`.shading._ipow` (the same products in the same order; ``1.0 * x`` is ``x``), else ``pow``."""
+def _ipow_into(S, x, s, o, b, n):  # pragma: no cover - compiled
+    """``S[o:o+n] = S[x:x+n] ** s`` for values >= 0: integer ``s`` up to 4096 by repeated squaring
+    as :func:`.shading._ipow` (the same products in the same order; ``1.0 * x`` is ``x``), else
+    ``pow``. ``b`` is a scratch row."""
     if s == 1.0:
         for i in range(n):
-            out[i] = x[i]
+            S[o + i] = S[x + i]
         return
     if s == math.floor(s) and 0.0 < s <= 4096.0:
         k = int(s)
         for i in range(n):
-            out[i] = 1.0
-            base[i] = x[i]
+            S[o + i] = 1.0
+            S[b + i] = S[x + i]
         while True:
             if k & 1:
                 for i in range(n):
-                    out[i] = out[i] * base[i]
+                    S[o + i] = S[o + i] * S[b + i]
             k >>= 1
             if k == 0:
                 return
             for i in range(n):
-                base[i] = base[i] * base[i]
+                S[b + i] = S[b + i] * S[b + i]
     for i in range(n):
-        out[i] = x[i] ** s
+        S[o + i] = S[x + i] ** s
 
 
 def _smooth(t):  # pragma: no cover - compiled
@@ -110,76 +115,87 @@ def _smooth(t):  # pragma: no cover - compiled
     return t * t * (3.0 - 2.0 * t)
 
 
-def _light_into(T, j, P, s, n, Nx, Ny, Nz, Vx, Vy, Vz, NV, specular, shininess, Lx, Ly, Lz, D, NL, CG, F, RV, W,
-                W2):  # pragma: no cover - compiled
-    """Light ``j`` on points ``s .. s+n``: ``NL`` (N.L), ``F`` (Warn's factor), ``RV`` (the Phong
-    term before the factor), as ``shading._toward_light`` and ``shading._shade_block``."""
+def _light_into(T, j, px, py, pz, s, n, S, specular, shininess):  # pragma: no cover - compiled
+    """Light ``j`` on points ``s .. s+n``: rows NL (N.L), F (Warn's factor), RV (the Phong term
+    before the factor), as ``shading._toward_light`` and ``shading._shade_block``."""
     directional = T[j, _DIRECTIONAL] != 0.0
     dx, dy, dz = T[j, _DIR], T[j, _DIR + 1], T[j, _DIR + 2]
     ox, oy, oz = T[j, _POS], T[j, _POS + 1], T[j, _POS + 2]
-    for i in range(n):
-        if directional:
-            lx, ly, lz, d = -dx, -dy, -dz, 1.0
-        else:
-            lx, ly, lz = ox - P[s + i, 0], oy - P[s + i, 1], oz - P[s + i, 2]
+    if directional:
+        for i in range(n):
+            S[_S_LX + i], S[_S_LY + i], S[_S_LZ + i], S[_S_D + i] = -dx, -dy, -dz, 1.0
+    else:
+        for i in range(n):
+            lx, ly, lz = ox - px[s + i], oy - py[s + i], oz - pz[s + i]
             d = math.sqrt(lx * lx + ly * ly + lz * lz)
             inv = 1.0 / d
             at = d == 0.0  # a point at the light gets no light
-            lx, ly, lz = (0.0 if at else lx * inv), (0.0 if at else ly * inv), (0.0 if at else lz * inv)
-        Lx[i], Ly[i], Lz[i], D[i] = lx, ly, lz, d
-        NL[i] = Nx[i] * lx + Ny[i] * ly + Nz[i] * lz
-        F[i] = 0.0 if d == 0.0 else 1.0
-        CG[i] = -(lx * dx + ly * dy + lz * dz)
+            S[_S_LX + i] = 0.0 if at else lx * inv
+            S[_S_LY + i] = 0.0 if at else ly * inv
+            S[_S_LZ + i] = 0.0 if at else lz * inv
+            S[_S_D + i] = d
+    for i in range(n):
+        lx, ly, lz = S[_S_LX + i], S[_S_LY + i], S[_S_LZ + i]
+        S[_S_NL + i] = S[_S_NX + i] * lx + S[_S_NY + i] * ly + S[_S_NZ + i] * lz
+        S[_S_F + i] = 0.0 if S[_S_D + i] == 0.0 else 1.0
+        S[_S_CG + i] = -(lx * dx + ly * dy + lz * dz)
     conc = T[j, _CONC]
     if not directional and conc > 0.0:
         for i in range(n):
-            W[i] = max(CG[i], 0.0)
-        _ipow_into(W, conc, W2, RV, n)
+            c = S[_S_CG + i]
+            S[_S_W + i] = c if c > 0.0 else 0.0
+        _ipow_into(S, _S_W, conc, _S_W2, _S_RV, n)
         for i in range(n):
-            F[i] = F[i] * W2[i]
+            S[_S_F + i] = S[_S_F + i] * S[_S_W2 + i]
     if not directional and T[j, _HAS_CONE] != 0.0:
-        delta = T[j, _DELTA]
-        cos_out, cos_in, theta = T[j, _COS_OUT], T[j, _COS_IN], T[j, _THETA]
-        if delta == 0.0:
-            for i in range(n):
-                F[i] = F[i] * (1.0 if CG[i] >= cos_out else 0.0)
-        else:
-            for i in range(n):  # the smoothstep is 1 inside angle - edge, 0 outside angle: acos on the edge only
-                c = CG[i]
-                W[i] = 1.0 if c >= cos_in else (0.0 if c <= cos_out else -1.0)
-            for i in range(n):
-                if W[i] < 0.0:
-                    W[i] = _smooth((theta - math.acos(min(max(CG[i], -1.0), 1.0))) / delta)
-            for i in range(n):
-                F[i] = F[i] * W[i]
+        _cone_into(T, j, S, n)
     if T[j, _HAS_FLAPS] != 0.0:
-        _flaps_into(T, j, P, s, n, ox, oy, oz, F, W)
+        _flaps_into(T, j, px, py, pz, s, n, ox, oy, oz, S)
     k = T[j, _FALL_K]
     if not directional and k != 0.0:
         d0 = T[j, _D0]
         for i in range(n):
-            ratio = d0 / max(D[i], d0)
-            F[i] = F[i] * (ratio if k == 1.0 else ratio * ratio)
+            ratio = d0 / max(S[_S_D + i], d0)
+            S[_S_F + i] = S[_S_F + i] * (ratio if k == 1.0 else ratio * ratio)
     if specular:
         for i in range(n):
-            rv = 2.0 * NL[i] * NV[i]
-            rv -= Lx[i] * Vx[i] + Ly[i] * Vy[i] + Lz[i] * Vz[i]
+            rv = 2.0 * S[_S_NL + i] * S[_S_NV + i]
+            rv -= S[_S_LX + i] * S[_S_VX + i] + S[_S_LY + i] * S[_S_VY + i] + S[_S_LZ + i] * S[_S_VZ + i]
             rv = rv if rv > 0.0 else 0.0
-            W[i] = rv if NL[i] > 0.0 else 0.0
+            S[_S_W + i] = rv if S[_S_NL + i] > 0.0 else 0.0
         if shininess != 0.0:
-            _ipow_into(W, shininess, RV, W2, n)
+            _ipow_into(S, _S_W, shininess, _S_RV, _S_W2, n)
         else:
             for i in range(n):
-                RV[i] = 1.0 if NL[i] > 0.0 else 0.0
+                S[_S_RV + i] = 1.0 if S[_S_NL + i] > 0.0 else 0.0
 
 
-def _flaps_into(T, j, P, s, n, ox, oy, oz, F, W):  # pragma: no cover - compiled
-    """``F *=`` the flaps of light ``j`` (as ``shading._flap_mask``, in its order: the mask of all
-    axes first, 1 inside, 0 outside, the smoothstep over a soft edge; a directional light's origin
-    is the model's). ``W`` is scratch."""
+def _cone_into(T, j, S, n):  # pragma: no cover - compiled
+    """Row F times the cone of light ``j`` (as ``shading._cone``): a step at the angle, or the
+    smoothstep over the soft edge, whose ``acos`` is taken on the edge only (1 inside, 0 outside)."""
+    delta = T[j, _DELTA]
+    cos_out, cos_in, theta = T[j, _COS_OUT], T[j, _COS_IN], T[j, _THETA]
+    if delta == 0.0:
+        for i in range(n):
+            S[_S_F + i] = S[_S_F + i] * (1.0 if S[_S_CG + i] >= cos_out else 0.0)
+        return
+    for i in range(n):
+        c = S[_S_CG + i]
+        S[_S_W + i] = 1.0 if c >= cos_in else (0.0 if c <= cos_out else -1.0)
+    for i in range(n):
+        if S[_S_W + i] < 0.0:
+            S[_S_W + i] = _smooth((theta - math.acos(min(max(S[_S_CG + i], -1.0), 1.0))) / delta)
+    for i in range(n):
+        S[_S_F + i] = S[_S_F + i] * S[_S_W + i]
+
+
+def _flaps_into(T, j, px, py, pz, s, n, ox, oy, oz, S):  # pragma: no cover - compiled
+    """Row F times the flaps of light ``j`` (as ``shading._flap_mask``, in its order: the mask of
+    all axes first, 1 inside, 0 outside, the smoothstep over a soft edge; a directional light's
+    origin is the model's)."""
     e = T[j, _EDGE]
     for i in range(n):
-        W[i] = 1.0
+        S[_S_W + i] = 1.0
     for k in range(3):
         lo, hi = T[j, _LO + k], T[j, _HI + k]
         lo_open, hi_open = math.isinf(lo), math.isinf(hi)
@@ -187,60 +203,78 @@ def _flaps_into(T, j, P, s, n, ox, oy, oz, F, W):  # pragma: no cover - compiled
             continue
         f0, f1, f2 = T[j, _FRAME + 3 * k], T[j, _FRAME + 3 * k + 1], T[j, _FRAME + 3 * k + 2]
         for i in range(n):
-            q = f0 * (P[s + i, 0] - ox) + f1 * (P[s + i, 1] - oy) + f2 * (P[s + i, 2] - oz)
+            q = f0 * (px[s + i] - ox) + f1 * (py[s + i] - oy) + f2 * (pz[s + i] - oz)
             if e == 0.0:
-                W[i] = W[i] if (q >= lo and q <= hi) else 0.0
+                S[_S_W + i] = S[_S_W + i] if (q >= lo and q <= hi) else 0.0
             else:
+                w = S[_S_W + i]
                 if not lo_open:
-                    W[i] = W[i] * _smooth((q - lo) / e)
+                    w = w * _smooth((q - lo) / e)
                 if not hi_open:
-                    W[i] = W[i] * _smooth((hi - q) / e)
+                    w = w * _smooth((hi - q) / e)
+                S[_S_W + i] = w
     for i in range(n):
-        F[i] = F[i] * W[i]
+        S[_S_F + i] = S[_S_F + i] * S[_S_W + i]
 
 
-def _shade(P, N, E, lights, ckd, cks, amb, two_sided, specular, shininess, normal_zero, out):  # pragma: no cover
-    """``out[i] = `` Warn's colour of point ``i`` (``E`` of shape ``(1, 3)``: one eye for all)."""
-    m = P.shape[0]
-    one_eye = E.shape[0] == 1
-    C = _CHUNK
-    Nx, Ny, Nz, Vx, Vy, Vz, NV = np.empty(C), np.empty(C), np.empty(C), np.empty(C), np.empty(C), np.empty(C), np.empty(C)
-    R, G, B, Lx, Ly, Lz, D = np.empty(C), np.empty(C), np.empty(C), np.empty(C), np.empty(C), np.empty(C), np.empty(C)
-    NL, CG, F, RV, W, W2 = np.empty(C), np.empty(C), np.empty(C), np.empty(C), np.empty(C), np.empty(C)
-    for s in range(0, m, C):
-        n = min(C, m - s)
+def _eye_into(P, N, E, one_eye, two_sided, normal_zero, amb, s, n, S):  # pragma: no cover - compiled
+    """Rows N (unit, turned to the eye when two-sided), V, N.V, the ambient colour and BAD (a
+    normal too short to be made unit), as the start of ``shading._shade_block``."""
+    px, py, pz, nx_, ny_, nz_ = P[0], P[1], P[2], N[0], N[1], N[2]
+    if one_eye:
+        e0, e1, e2 = E[0, 0], E[1, 0], E[2, 0]
         for i in range(n):
-            nx, ny, nz = N[s + i, 0], N[s + i, 1], N[s + i, 2]
-            inv = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
-            nx, ny, nz = nx * inv, ny * inv, nz * inv
-            e = 0 if one_eye else s + i
-            vx, vy, vz = E[e, 0] - P[s + i, 0], E[e, 1] - P[s + i, 1], E[e, 2] - P[s + i, 2]
-            inv = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
-            vx, vy, vz = vx * inv, vy * inv, vz * inv
-            nv = nx * vx + ny * vy + nz * vz
-            flip = -1.0 if (two_sided and nv < 0.0) else 1.0
-            Nx[i], Ny[i], Nz[i], NV[i] = nx * flip, ny * flip, nz * flip, nv * flip
-            Vx[i], Vy[i], Vz[i] = vx, vy, vz
-            R[i], G[i], B[i] = amb[0], amb[1], amb[2]
+            S[_S_VX + i], S[_S_VY + i], S[_S_VZ + i] = e0 - px[s + i], e1 - py[s + i], e2 - pz[s + i]
+    else:
+        ex, ey, ez = E[0], E[1], E[2]
+        for i in range(n):
+            S[_S_VX + i], S[_S_VY + i], S[_S_VZ + i] = ex[s + i] - px[s + i], ey[s + i] - py[s + i], ez[s + i] - pz[s + i]
+    a0, a1, a2 = amb[0], amb[1], amb[2]
+    for i in range(n):
+        nx, ny, nz = nx_[s + i], ny_[s + i], nz_[s + i]
+        n_len = math.sqrt(nx * nx + ny * ny + nz * nz)
+        S[_S_BAD + i] = 0.0 if n_len > normal_zero else 1.0
+        inv = 1.0 / n_len
+        nx, ny, nz = nx * inv, ny * inv, nz * inv
+        vx, vy, vz = S[_S_VX + i], S[_S_VY + i], S[_S_VZ + i]
+        inv = 1.0 / math.sqrt(vx * vx + vy * vy + vz * vz)
+        vx, vy, vz = vx * inv, vy * inv, vz * inv
+        nv = nx * vx + ny * vy + nz * vz
+        flip = -1.0 if (two_sided and nv < 0.0) else 1.0
+        S[_S_NX + i], S[_S_NY + i], S[_S_NZ + i], S[_S_NV + i] = nx * flip, ny * flip, nz * flip, nv * flip
+        S[_S_VX + i], S[_S_VY + i], S[_S_VZ + i] = vx, vy, vz
+        S[_S_R + i], S[_S_G + i], S[_S_B + i] = a0, a1, a2
+
+
+def _shade(P, N, E, one_eye, start, stop, lights, ckd, cks, amb, two_sided, specular, shininess, normal_zero,
+           out):  # pragma: no cover - compiled
+    """``out[:, i] = `` Warn's colour of point ``i`` for ``start <= i < stop``; ``P``, ``N``, ``out``
+    component-major ``(3, m)``, ``E`` ``(3, 1)`` (``one_eye``) or ``(3, m)``."""
+    S = np.empty(_S_ROWS * _CHUNK)
+    px, py, pz = P[0], P[1], P[2]
+    o0, o1, o2 = out[0], out[1], out[2]
+    for s in range(start, stop, _CHUNK):
+        n = min(_CHUNK, stop - s)
+        _eye_into(P, N, E, one_eye, two_sided, normal_zero, amb, s, n, S)
         for j in range(lights.shape[0]):
-            _light_into(lights, j, P, s, n, Nx, Ny, Nz, Vx, Vy, Vz, NV, specular, shininess, Lx, Ly, Lz, D, NL, CG, F,
-                        RV, W, W2)
+            _light_into(lights, j, px, py, pz, s, n, S, specular, shininess)
             k0, k1, k2, c0, c1, c2 = ckd[j, 0], ckd[j, 1], ckd[j, 2], cks[j, 0], cks[j, 1], cks[j, 2]
             for i in range(n):
-                diff = (NL[i] if NL[i] > 0.0 else 0.0) * F[i]
-                spec = RV[i] * F[i] if specular else 0.0
-                R[i] += diff * k0 + spec * c0
-                G[i] += diff * k1 + spec * c1
-                B[i] += diff * k2 + spec * c2
+                nl = S[_S_NL + i]
+                f = S[_S_F + i]
+                diff = (nl if nl > 0.0 else 0.0) * f
+                spec = S[_S_RV + i] * f if specular else 0.0
+                S[_S_R + i] += diff * k0 + spec * c0
+                S[_S_G + i] += diff * k1 + spec * c1
+                S[_S_B + i] += diff * k2 + spec * c2
         for i in range(n):
-            nx, ny, nz = N[s + i, 0], N[s + i, 1], N[s + i, 2]
-            bad = not (math.sqrt(nx * nx + ny * ny + nz * nz) > normal_zero)
-            out[s + i, 0] = np.nan if bad else R[i]
-            out[s + i, 1] = np.nan if bad else G[i]
-            out[s + i, 2] = np.nan if bad else B[i]
+            bad = S[_S_BAD + i] != 0.0
+            o0[s + i] = np.nan if bad else S[_S_R + i]
+            o1[s + i] = np.nan if bad else S[_S_G + i]
+            o2[s + i] = np.nan if bad else S[_S_B + i]
 
 
-_HELPERS = ("_ipow_into", "_smooth", "_light_into", "_flaps_into")
+_HELPERS = ("_ipow_into", "_smooth", "_cone_into", "_flaps_into", "_light_into", "_eye_into")
 
 
 def _load() -> Any:
@@ -269,13 +303,15 @@ def shade_points(n_points: int) -> Any:
     return _load()
 
 
-def run(kern: Any, P: np.ndarray, N: np.ndarray, E: np.ndarray, packed: tuple[np.ndarray, np.ndarray, np.ndarray],
-        amb: np.ndarray, two_sided: bool, specular: bool, shininess: float, out: np.ndarray) -> bool:
-    """Shade one block into ``out``; False if the kernel failed (it is then dropped, with a warning)."""
+def run(kern: Any, P: np.ndarray, N: np.ndarray, E: np.ndarray, one_eye: bool, start: int, stop: int,
+        packed: tuple[np.ndarray, np.ndarray, np.ndarray], amb: np.ndarray, two_sided: bool, specular: bool,
+        shininess: float, out: np.ndarray) -> bool:
+    """Shade points ``start .. stop`` into ``out``; False if the kernel failed (it is then dropped,
+    with a warning)."""
     table, ckd, cks = packed
     try:
-        kern(P, N, E, table, ckd, cks, amb, two_sided, specular, shininess, float(tolerances.LIGHT_DIRECTION_ZERO),
-             out)
+        kern(P, N, E, one_eye, start, stop, table, ckd, cks, amb, two_sided, specular, shininess,
+             float(tolerances.LIGHT_DIRECTION_ZERO), out)
     except Exception as err:  # noqa: BLE001 - an untested numba version: fall back, once
         import warnings
 

@@ -186,23 +186,23 @@ def _shade_compiled(kern: Any, P: np.ndarray, N: np.ndarray, E: np.ndarray, shap
                     single_eye: bool, setup: LightingSetup, dtype: type) -> np.ndarray | None:
     """``(m, 3)`` colours by the numba kernel of :mod:`._kernels` (float64 arithmetic, stored as
     ``dtype``), or None when the kernel fails (the caller then takes the NumPy path)."""
-    P, N = (_readonly(np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, 3), np.float64)) for a in (P, N))
-    E = _readonly(np.ascontiguousarray(E.reshape(1, 3) if single_eye else np.broadcast_to(E, shape).reshape(-1, 3),
+    # Component-major copies, as the NumPy path makes: the kernel's loops then vectorise.
+    P, N = (_readonly(np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, 3).T, np.float64)) for a in (P, N))
+    E = _readonly(np.ascontiguousarray(E.reshape(3, 1) if single_eye else np.broadcast_to(E, shape).reshape(-1, 3).T,
                                        np.float64))
-    m = P.shape[0]
-    out = np.empty((m, 3), dtype)
+    m = P.shape[1]
+    out = np.empty((3, m), dtype)
     mat = setup.material
     args = (_kernels.pack_lights(setup), _readonly(np.asarray(setup.ambient) * np.asarray(mat.color)),
             bool(setup.two_sided), bool(mat.specular > 0), float(mat.shininess))
     block = max(1, int(tolerances.LIGHT_BLOCK))
 
     def run(s: int) -> bool:
-        e = min(s + block, m)
-        return _kernels.run(kern, P[s:e], N[s:e], E if single_eye else E[s:e], *args, out[s:e])
+        return _kernels.run(kern, P, N, E, single_eye, s, min(s + block, m), *args, out)
 
     if not run(0):  # the first block on this thread: compiles (once per machine), or fails
         return None
-    return out if all(_on_threads(run, range(block, m, block))) else None
+    return out.T if all(_on_threads(run, range(block, m, block))) else None
 
 
 def _ipow(x: np.ndarray, s: float) -> np.ndarray:

@@ -249,3 +249,19 @@ def test_bspline_surface_matches_the_reference() -> None:
     _compare(img, setup, lambda W: nrm[tree.query(W)[1]], levels=4)
     with pytest.raises(ValueError, match="surfaces"):
         lighting.render_surfaces_lit([], setup)
+
+
+def test_concentration_ratio_renders_as_warns_exponent() -> None:
+    """A lights file counting concentration from 1 (concentration_ratio C = n + 1) gives the same
+    picture as Warn's exponent n; C = 1 the same as the plain light."""
+    from occsurf.algorithms.lighting import setup_from_dict
+
+    P, T, N = _plane()
+
+    def picture(**control):
+        light = {"position": [0.5, -1.0, 6.0], "direction": [0.0, 0.2, -1.0], **control}
+        return lighting.render_lit(P, T, setup_from_dict({"lights": [light]}), normals=N, size=SIZE, view="top").rgb
+
+    np.testing.assert_array_equal(picture(concentration_ratio=13), picture(concentration=12))
+    np.testing.assert_array_equal(picture(concentration_ratio=1), picture())
+    assert np.abs(picture(concentration_ratio=13).astype(int) - picture().astype(int)).max() > 50
