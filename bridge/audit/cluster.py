@@ -17,7 +17,11 @@ import signal
 from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["ClusterError", "open_client", "default_workers", "dashboard_available"]
+__all__ = ["ClusterError", "open_client", "default_workers", "dashboard_available", "dashboard_link"]
+
+#: Where a local cluster serves its dashboard: this machine only (loopback), on a free port. An
+#: existing cluster's scheduler serves its own (``dask scheduler --dashboard-address``).
+LOCAL_DASHBOARD = "127.0.0.1:0"
 
 
 class ClusterError(ConnectionError):
@@ -33,8 +37,36 @@ def default_workers() -> int:
 
 
 def dashboard_available() -> bool:
-    """The Dask dashboard needs ``bokeh``; without it there is no dashboard link."""
+    """A local cluster's Dask dashboard needs ``bokeh`` here (declared with ``occsurf[audit]``);
+    without it the local cluster runs without one."""
     return importlib.util.find_spec("bokeh") is not None
+
+
+def dashboard_link(client: Any, probe_timeout: float = 5.0) -> str | None:
+    """The dashboard's address (``http://host:port/status``) when the scheduler serves one, else None.
+
+    Asked of the scheduler, not of this machine: a scheduler started elsewhere may serve a
+    dashboard although bokeh is not installed here. Its HTTP service runs even without the
+    dashboard (``dask scheduler --no-dashboard`` keeps ``/health`` and ``/metrics``), so the page
+    itself is asked for: a 404 means no dashboard. A page that cannot be reached from here (a
+    firewall, a tunnel) is still reported: the scheduler says it serves one.
+    """
+    import urllib.error
+    import urllib.request
+
+    try:
+        if "dashboard" not in client.scheduler_info().get("services", {}):
+            return None
+        link = str(client.dashboard_link)
+    except Exception:  # noqa: BLE001 - no answer: no link (the audit itself reports the scheduler)
+        return None
+    try:
+        with urllib.request.urlopen(link, timeout=probe_timeout):
+            return link
+    except urllib.error.HTTPError:  # the HTTP service answers, but without a dashboard page
+        return None
+    except (OSError, ValueError):  # not reachable from here: report what the scheduler says
+        return link
 
 
 def open_client(scheduler: str | None = None, workers: int | None = None,
@@ -60,7 +92,7 @@ def open_client(scheduler: str | None = None, workers: int | None = None,
     try:
         with _sigint_ignored():  # inherited by the worker processes: see _sigint_ignored
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                   dashboard_address=":0" if dashboard_available() else None,
+                                   dashboard_address=LOCAL_DASHBOARD if dashboard_available() else None,
                                    silence_logs=logging.ERROR)
     except Exception as err:  # noqa: BLE001 - any start-up failure is one line for the user
         raise ClusterError(f"cannot start a local Dask cluster of {n} workers: {err}") from err

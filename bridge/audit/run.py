@@ -163,20 +163,19 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
     checks = _check_args(tuple(checks), timeout, workers)
     entries = expand_paths(paths)  # every refusal (corpus, --out, scheduler) before the long work
     store = ResultStore(out, resume=resume, flush_seconds=flush_seconds)
-    from .cluster import dashboard_available, open_client
+    from .cluster import dashboard_link, open_client
 
     client, cluster = open_client(scheduler, workers)
     t0 = time.monotonic()
     dashboard = None
     try:
+        dashboard = dashboard_link(client)  # first: the dashboard shows the cluster from the start
+        if dashboard is not None and on_dashboard is not None:
+            on_dashboard(dashboard)
         if progress is not None:
             print(f"audit: {len(entries)} files; hashing their contents", file=progress, flush=True)
         hash_entries(entries)
         bar = Progress(len(entries), progress)
-        if dashboard_available() and getattr(client, "dashboard_link", None):
-            dashboard = client.dashboard_link
-            if on_dashboard is not None:
-                on_dashboard(dashboard)
         skipped, interrupted = _drive(client, entries, store, bar, checks, samples, timeout)
     finally:
         store.flush()

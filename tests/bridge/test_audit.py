@@ -254,3 +254,43 @@ def test_a_task_dask_gave_up_on_is_recorded_crashed_not_dropped() -> None:
     assert row["status"] == "crashed" and "KilledWorker" in row["error"] and faces == []
     row, _ = _rows(entry, _failure(entry, RuntimeError("lost")), "run")
     assert row["status"] == "error" and "RuntimeError: lost" in row["error"]
+
+
+def test_dashboard_link_is_asked_of_the_scheduler() -> None:
+    """A link only when the scheduler serves a dashboard page (whatever is installed here): its HTTP
+    service without the page (--no-dashboard) gives none, a page that cannot be reached from here
+    is still reported, a scheduler that does not answer gives no link rather than an error."""
+    import http.server
+    import threading
+    from types import SimpleNamespace
+
+    from occsurf.bridge.audit.cluster import dashboard_link
+
+    class Page(http.server.BaseHTTPRequestHandler):
+        def do_GET(self):  # noqa: N802 - http.server's name
+            self.send_response(200 if self.path == "/status" else 404)
+            self.end_headers()
+
+        def log_message(self, *args):
+            pass
+
+    server = http.server.HTTPServer(("127.0.0.1", 0), Page)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    base = f"http://127.0.0.1:{server.server_address[1]}"
+
+    def client(services, link):
+        return SimpleNamespace(scheduler_info=lambda: {"services": services}, dashboard_link=link)
+
+    try:
+        assert dashboard_link(client({"dashboard": 1}, base + "/status")) == base + "/status"
+        assert dashboard_link(client({"dashboard": 1}, base + "/nothing")) is None  # HTTP service, no page
+        assert dashboard_link(client({}, base + "/status")) is None
+    finally:
+        server.shutdown()
+    far = f"http://127.0.0.1:{free_port()}/status"  # nothing listens there: reported as the scheduler says
+    assert dashboard_link(client({"dashboard": 1}, far), probe_timeout=2) == far
+
+    def no_answer():
+        raise OSError("connection closed")
+
+    assert dashboard_link(SimpleNamespace(scheduler_info=no_answer)) is None

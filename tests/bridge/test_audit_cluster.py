@@ -209,6 +209,7 @@ def test_separately_started_scheduler_and_worker(tmp_path: Path) -> None:
         assert (c["ok"], c["error"], c["crashed"]) == (len(good), len(bad), 1)
         assert next(r for r in rows if r["path"] == str(crash))["signal"] == "SIGSEGV"
         assert worker.poll() is None and sched.poll() is None  # the cluster outlives the audit
+        assert "dashboard" not in proc.stderr  # started with --no-dashboard: no link to a page that is not there
     finally:
         for p in (worker, sched):
             p.terminate()
@@ -217,3 +218,55 @@ def test_separately_started_scheduler_and_worker(tmp_path: Path) -> None:
                 p.wait(timeout=20)
             except subprocess.TimeoutExpired:
                 p.kill()
+
+
+def test_dashboard_link_answers_while_the_audit_runs(tmp_path: Path) -> None:
+    """The local cluster's Dask dashboard (bokeh, declared with occsurf[audit]): its link is printed
+    on stderr as the run starts, and the page answers HTTP 200 while files are still being read."""
+    pytest.importorskip("bokeh")
+    import queue
+    import re
+    import threading
+    import urllib.request
+
+    corpus = tmp_path / "corpus"
+    good_files(corpus, n_copies=2, prefix="slow-", iges=False)
+    env = hook_env(tmp_path, OCCSURF_TEST_SLOW="4")
+    out = tmp_path / "results"
+    cmd = [sys.executable, "-m", "occsurf.bridge.cli", "audit", str(corpus), "--out", str(out), "--workers", "1"]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    lines: queue.Queue[str] = queue.Queue()
+    reader = threading.Thread(target=lambda: [lines.put(line) for line in proc.stderr], daemon=True)
+    reader.start()
+    seen = []
+    try:
+        link = None
+        t0 = time.monotonic()
+        while link is None and time.monotonic() - t0 < 120:
+            try:
+                line = lines.get(timeout=1)
+            except queue.Empty:
+                assert proc.poll() is None, f"audit ended before printing a dashboard link: {seen}"
+                continue
+            seen.append(line)
+            m = re.match(r"audit: Dask dashboard at (http://\S+)$", line.strip())
+            link = m.group(1) if m else None
+        assert link is not None, f"no dashboard link on stderr: {seen}"
+        assert link.startswith("http://127.0.0.1:")  # a local cluster serves it on this machine only
+        with urllib.request.urlopen(link, timeout=30) as page:
+            body = page.read().decode("utf-8", "replace")
+            assert page.status == 200
+        assert "dask" in body.lower() and "bokeh" in body.lower()
+        with urllib.request.urlopen(link.rsplit("/", 1)[0] + "/json/counts.json", timeout=30) as counts:
+            assert counts.status == 200 and "workers" in json.loads(counts.read())
+        assert proc.poll() is None  # all this while the audit runs
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGINT)
+        try:
+            proc.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+    reader.join(timeout=10)
+    assert proc.returncode in (0, 130), seen
