@@ -30,6 +30,12 @@ exactly, NaN included); both are passed through JSON in-process too, so the two 
 same values. The worker imports the job's module by name, from the same place as this process
 (see :func:`worker_env`): a job must be a module-level function of an importable module.
 
+The worker is started by :func:`worker_command`: ``python -P -m occsurf.bridge.isolation``. ``-P``
+keeps the current directory off the worker's ``sys.path`` (``-m`` would put it first), so a folder
+named ``occsurf`` where the user stands cannot shadow the package; the folder this process imported
+``occsurf`` from comes first on the worker's ``PYTHONPATH`` instead. The rest of the environment
+(``PYTHONPATH``, site-packages, user site) is kept.
+
 Timing and start-up
 -------------------
 The worker imports the ``preload`` modules (OCC, say) before it announces its first item, so the
@@ -82,6 +88,7 @@ __all__ = [
     "run_jobs",
     "serve",
     "worker_env",
+    "worker_command",
     "quiet_native_stdout",
     "describe_exit",
     "OK",
@@ -101,7 +108,8 @@ FAILED = "failed"
 #: Prefix of the worker's protocol lines on its stdout (anything else there is ignored).
 MARK = "\x1eoccsurf-worker "
 
-#: How the worker is started: ``python -m occsurf.bridge.isolation``, the job spec on stdin.
+#: How the worker is started: ``python -P -m occsurf.bridge.isolation`` (:func:`worker_command`), the job
+#: spec on stdin.
 WORKER_MODULE = "occsurf.bridge.isolation"
 
 
@@ -314,14 +322,30 @@ def _worker_main() -> int:
 
 def worker_env() -> dict[str, str]:
     """The worker's environment: this one, with the folder ``occsurf`` was imported from first on
-    ``PYTHONPATH``, so the worker runs the same code as this process."""
+    ``PYTHONPATH``, so the worker runs the same code as this process.
+
+    Empty entries of ``PYTHONPATH`` (``"a::b"``, a trailing ``:``) stand for the current directory;
+    they are dropped, as :func:`worker_command` keeps the current directory off ``sys.path``.
+    """
     import occsurf
 
     env = dict(os.environ)
     root = str(Path(occsurf.__file__).resolve().parent.parent)
-    env["PYTHONPATH"] = os.pathsep.join(x for x in (root, env.get("PYTHONPATH")) if x)
+    rest = [x for x in env.get("PYTHONPATH", "").split(os.pathsep) if x and x != root]
+    env["PYTHONPATH"] = os.pathsep.join([root, *rest])
     env[PARENT_PID_ENV] = str(os.getpid())
     return env
+
+
+def worker_command(module: str = WORKER_MODULE, *args: str) -> list[str]:
+    """The command line of a worker process: ``[python, "-P", "-m", module, *args]``.
+
+    ``-P`` (Python 3.11) does not put the current directory first on ``sys.path``, as ``-m`` otherwise
+    does: a folder named ``occsurf`` (or ``numpy``...) in the user's current directory cannot shadow
+    the package the worker runs. Use it with :func:`worker_env`, which puts this process's ``occsurf``
+    first on ``PYTHONPATH``.
+    """
+    return [sys.executable, "-P", "-m", module, *args]
 
 
 # ---------------------------------------------------------------------------------------- parent
@@ -398,7 +422,7 @@ def _run_one_worker(job: str, items: list[Any], todo: list[int], preload: Sequen
     with tempfile.TemporaryFile() as err_log:
         try:
             proc = subprocess.Popen(
-                [sys.executable, "-m", WORKER_MODULE],
+                worker_command(WORKER_MODULE),
                 stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=err_log, env=worker_env(),
                 text=True, encoding="utf-8", errors="replace",
             )
@@ -531,7 +555,7 @@ def run_jobs(
     return sorted(outcomes, key=lambda o: o.index)
 
 
-if __name__ == "__main__":  # the worker: python -m occsurf.bridge.isolation
+if __name__ == "__main__":  # the worker: python -P -m occsurf.bridge.isolation
     from occsurf.bridge.isolation import _worker_main as _main
 
     sys.exit(_main())

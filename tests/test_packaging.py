@@ -223,3 +223,45 @@ def test_every_name_in_occsurf_all_resolves():
     assert set(occsurf.__all__) <= set(dir(occsurf))
     with pytest.raises(AttributeError, match="no attribute 'no_such_name'"):
         occsurf.no_such_name  # noqa: B018
+
+
+def test_wheel_ships_the_py_typed_marker(built):
+    """PEP 561: type checkers use the hints of an installed occsurf (one marker covers the subpackages)."""
+    assert (REPO / "occsurf" / "py.typed").is_file()
+    assert "occsurf/py.typed" in set(_names(built["wheel"]))
+    assert (built["site"] / "occsurf" / "py.typed").is_file()
+
+
+NO_NUMBA = r"""
+import json, sys
+sys.modules["numba"] = None  # as if numba were not installed: `import numba` raises ImportError
+import numpy as np
+from occsurf.algorithms import BSplineSurface, tolerances
+from occsurf.algorithms import _numba_kernels as nk
+rng = np.random.default_rng(3)
+s = BSplineSurface((3, 3), ([0.0] * 4 + [0.5] + [1.0] * 4,) * 2, rng.random((5, 5, 3)))
+u = rng.random(5000)
+with tolerances.override(NUMBA_MIN_POINTS=0):
+    values = s.evaluate(u, u[::-1])
+json.dump({"numba_loaded": nk._load() is not None, "values": values.tolist()}, sys.stdout)
+"""
+
+
+def test_numba_is_an_optional_extra_with_the_numpy_path_as_fallback():
+    deps = " ".join(PYPROJECT["project"]["dependencies"])
+    assert "numba" not in deps  # never required
+    extras = PYPROJECT["project"]["optional-dependencies"]
+    assert any(req.startswith("numba") for req in extras["fast"]), extras["fast"]
+    proc = _run([sys.executable, "-c", NO_NUMBA], cwd=REPO, timeout=300)
+    out = json.loads(proc.stdout)
+    assert out["numba_loaded"] is False
+    import numpy as np
+
+    from occsurf.algorithms import BSplineSurface, tolerances
+
+    rng = np.random.default_rng(3)
+    s = BSplineSurface((3, 3), ([0.0] * 4 + [0.5] + [1.0] * 4,) * 2, rng.random((5, 5, 3)))
+    u = rng.random(5000)
+    with tolerances.override(NUMBA_MIN_POINTS=0):  # numba's kernels here when it is installed
+        here = s.evaluate(u, u[::-1])
+    np.testing.assert_allclose(np.asarray(out["values"]), here, rtol=0, atol=1e-14)

@@ -20,7 +20,9 @@ Protocol: one JSON request per line on the reader's stdin (``{"job": "mod:func",
 one reply per line on a private duplicate of its stdout, each prefixed by
 :data:`occsurf.bridge.isolation.MARK` (fd 1 itself goes to ``/dev/null``: OCC's banners). The
 first reply is ``{"ready": pid}`` once the preload modules are imported, so the timeout never
-counts the reader's start-up. Only the standard library is imported here.
+counts the reader's start-up. The reader is started as the isolation worker is
+(:func:`occsurf.bridge.isolation.worker_command`: ``python -P -m ...``), so a folder named ``occsurf``
+in the current directory cannot shadow the package. Only the standard library is imported here.
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from ..isolation import MARK, describe_exit, quiet_native_stdout, worker_env
+from ..isolation import MARK, describe_exit, quiet_native_stdout, worker_command, worker_env
 from ..messages import error_line
 
 __all__ = ["Reader", "Reply", "reader_for_thread", "STARTUP_TIMEOUT"]
@@ -90,7 +92,7 @@ class Reader:
     # ------------------------------------------------------------------------------ lifecycle
     def _start(self) -> None:
         self._err = tempfile.TemporaryFile()
-        self.proc = subprocess.Popen([sys.executable, "-m", _MODULE, json.dumps(list(self.preload))],
+        self.proc = subprocess.Popen(worker_command(_MODULE, json.dumps(list(self.preload))),
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._err,
                                      env=worker_env(), bufsize=0)
         self._buf = b""

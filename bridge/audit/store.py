@@ -6,8 +6,10 @@
     RESULTS/faces/part-<run>-<seq>.parquet    one row per face (FACES_SCHEMA), keyed by sha256
 
 Rows are buffered for at most ``flush_seconds`` (or ``flush_rows`` files) and then written as a
-new part file: to a hidden temporary name in the same folder, flushed to disk, then renamed
-(:func:`os.replace`, atomic). Parquet readers skip names starting with ``.``, so
+new part file through occsurf's one atomic-write helper (:func:`occsurf.bridge.exchange.files.atomic_write`):
+to a hidden, locked temporary name in the same folder, synced, then renamed (:func:`os.replace`, atomic);
+the temporary file of a killed run is removed by the next write to that folder. Parquet readers skip
+names starting with ``.`` (and only ``part-*.parquet`` is read here), so
 ``pyarrow.dataset.dataset(RESULTS / "files")`` reads a consistent table at every moment, even
 while an audit runs or after it was killed. A batch's faces part is renamed before its files
 part: a file counts as audited once its files row exists, and ``--resume`` deletes a faces part
@@ -28,6 +30,10 @@ from typing import Any
 import pyarrow as pa
 import pyarrow.dataset as ds
 import pyarrow.parquet as pq
+
+from occsurf.algorithms.errors import ExchangeError
+
+from ..exchange import files as _files
 
 __all__ = ["FILES_SCHEMA", "FACES_SCHEMA", "ResultStore", "StoreError", "read_files", "read_faces"]
 
@@ -122,9 +128,11 @@ class ResultStore:
         if has_parts and not resume:
             raise StoreError(f"--out {self.out}: already holds audit results; add --resume to finish them, "
                              "or choose another folder")
-        for tmp in [*self.files_dir.glob(".*.tmp"), *self.faces_dir.glob(".*.tmp")]:
-            with contextlib.suppress(OSError):
-                tmp.unlink()  # a part that a killed run did not finish writing
+        for folder in (self.files_dir, self.faces_dir):
+            _files.clean_stale_temps(folder)  # a part that a killed run did not finish writing
+            for tmp in folder.glob(".part-*.tmp"):  # the same, left by a version before the shared helper
+                with contextlib.suppress(OSError):
+                    tmp.unlink()
         for part in self.faces_dir.glob("part-*.parquet"):
             if not (self.files_dir / part.name).exists():
                 with contextlib.suppress(OSError):
@@ -160,16 +168,9 @@ class ResultStore:
 
     @staticmethod
     def _write(target: Path, table: pa.Table) -> None:
-        tmp = target.with_name(f".{target.name}.{uuid.uuid4().hex[:6]}.tmp")
+        """One part file, atomically (:func:`occsurf.bridge.exchange.files.atomic_write`)."""
         try:
-            with open(tmp, "wb") as fh:
-                pq.write_table(table, fh, compression="zstd")
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, target)
-        except BaseException as err:
-            with contextlib.suppress(OSError):
-                tmp.unlink()
-            if isinstance(err, OSError):
-                raise StoreError(f"{target}: cannot write: {err.strerror or err}") from err
-            raise
+            _files.atomic_write(target, lambda fh: pq.write_table(table, fh, compression="zstd"))
+        except OSError as err:  # ExchangeError (an OSError) names the path and the reason
+            raise StoreError(str(err) if isinstance(err, ExchangeError) else
+                             f"{target}: cannot write: {err.strerror or err}") from err

@@ -47,6 +47,10 @@ __all__ = [
     "output_problem",
     "guarded",
     "EXIT_INTERRUPTED",
+    "write_out",
+    "interrupts_held",
+    "add_strict_option",
+    "strict_refusal",
 ]
 
 EXIT_OK = 0
@@ -105,11 +109,40 @@ def _quiet_stdout() -> None:
         os.close(null)
 
 
+@contextlib.contextmanager
+def interrupts_held() -> Any:
+    """Hold SIGINT (Ctrl-C) back for the block: it is delivered, as ``KeyboardInterrupt``, right after.
+
+    What a command writes inside the block (one JSON line, a final document) is written whole: Ctrl-C
+    never cuts a line of output in two. Only in the main thread on POSIX; elsewhere a no-op.
+    """
+    import signal
+    import threading
+
+    held = (hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread())
+    if held:
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        if held:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def write_out(text: str) -> None:
+    """Write ``text`` to stdout and flush it, whole (:func:`interrupts_held`): the unit of streamed output."""
+    with interrupts_held():
+        sys.stdout.write(text)
+        sys.stdout.flush()
+
+
 def guarded(func: Any, ns: argparse.Namespace) -> int:
     """Run a command's handler with the command line's promises: one line on stderr, never a traceback.
 
-    * Ctrl-C (``KeyboardInterrupt``): ``occsurf: interrupted``, exit :data:`EXIT_INTERRUPTED` (a worker
-      process is stopped by :func:`occsurf.bridge.isolation.run_jobs` on the way out);
+    * Ctrl-C (``KeyboardInterrupt``): what was written so far is flushed (a command prints what it had
+      done first: ``inspect`` its files so far), then ``occsurf: interrupted``, exit
+      :data:`EXIT_INTERRUPTED` (a worker process is stopped by :func:`occsurf.bridge.isolation.run_jobs`
+      on the way out);
     * stdout closed by its reader (``occsurf inspect DIR | head -1``): no message, exit 2;
     * stdout that cannot be written (a full disk, ``> /dev/full``, closed): ``occsurf: cannot write the
       output: REASON``, exit 2, so a truncated JSON document never passes for a complete one.
@@ -126,6 +159,9 @@ def guarded(func: Any, ns: argparse.Namespace) -> int:
         sys.stdout.flush()
         return code
     except KeyboardInterrupt:
+        with contextlib.suppress(OSError, ValueError, KeyboardInterrupt):
+            with interrupts_held():
+                sys.stdout.flush()  # what was done so far stays printed
         _quiet_stdout()
         error("interrupted")
         return EXIT_INTERRUPTED
@@ -277,15 +313,41 @@ def sniff_format(path: Path) -> str:
     raise ExchangeError(f"not a STEP or IGES file (suffix {suffix or 'none'!r}, unrecognised header)")
 
 
-def read_model(path: Path, fmt: str | None = None) -> ImportedModel:
+def read_model(path: Path, fmt: str | None = None, *, strict: bool = False) -> ImportedModel:
     """Read a STEP or IGES file (``fmt`` from :func:`sniff_format` unless given).
 
-    ``read_step``/``read_iges`` are looked up on their module at call time.
+    ``read_step``/``read_iges`` are looked up on their module at call time. With ``strict`` (a
+    command's ``--strict``) a file read around damage (``ImportedModel.warnings``) is refused.
+
+    Raises
+    ------
+    ExchangeError
+        The file cannot be read; with ``strict``, it has warnings (:func:`strict_refusal`).
     """
     from ..exchange import step_iges as exchange
 
     fmt = sniff_format(path) if fmt is None else fmt
-    return (exchange.read_step if fmt == "step" else exchange.read_iges)(path)
+    model = (exchange.read_step if fmt == "step" else exchange.read_iges)(path)
+    if strict and model.warnings:
+        from occsurf.algorithms.errors import ExchangeError
+
+        raise ExchangeError(f"{path}: {strict_refusal(model.warnings)}")
+    return model
+
+
+def strict_refusal(warnings: Sequence[str]) -> str:
+    """Why ``--strict`` refuses a file: its warning count and the first warning, one line."""
+    first = " ".join(str(warnings[0]).split())
+    more = f" (and {len(warnings) - 1} more)" if len(warnings) > 1 else ""
+    return f"refused by --strict: {len(warnings)} warning{'s' if len(warnings) > 1 else ''}: {first}{more}"
+
+
+def add_strict_option(parser: argparse.ArgumentParser, *, writes: bool = False) -> None:
+    """``--strict`` on a command that reads an untrusted model: warnings (damage read around, see
+    :mod:`occsurf.bridge.exchange.checks`) become exit status 2; ``writes``: and nothing is written."""
+    parser.add_argument("--strict", action="store_true",
+                        help="exit with status 2 when the input has warnings (damaged data read around)"
+                             + ("; nothing is written then" if writes else ""))
 
 
 # ---------------------------------------------------------------------------------------- tables

@@ -1,5 +1,5 @@
 """``occsurf fit DATA --tol T --out OUT.step [--json] [--ctrl NU NV] [--degree D] [--smooth S]
-[--fix-boundary] [--x X0 X1] [--y Y0 Y1] [--face N] [--levels L] [--in-process]``.
+[--fix-boundary] [--x X0 X1] [--y Y0 Y1] [--face N] [--levels L] [--timeout SECONDS] [--in-process]``.
 
 Fits data to a surface (course ch. 7) with :mod:`occsurf.bridge.modeling.fit`: adaptive
 hierarchical by default (§7-10: overlays only where the distance to the data exceeds ``T``),
@@ -12,7 +12,8 @@ plain least squares with ``--ctrl``. Writes ``OUT.step`` (the flat exact NURBS),
 The data file is read, fitted and written in a worker process
 (:func:`occsurf.bridge.isolation.run_jobs` with the job :func:`fit_job`), so a STEP/IGES file that
 crashes OCC costs a one-line error, not the command; the worker's progress lines reach stderr
-through a small file this process follows. Bad data (NaN-only rows, too few points for the
+through a small file this process follows; a worker that takes longer than ``--timeout`` seconds (reading,
+fitting and writing together) is stopped and reported. Bad data (NaN-only rows, too few points for the
 degree, ragged or non-numeric rows named by their line) give one line ``occsurf: DATA: reason``
 and exit status 2.
 """
@@ -30,12 +31,15 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ._common import EXIT_ERROR, EXIT_OK, error, format_rows, strip_path, worker_failure
+from ._common import EXIT_ERROR, EXIT_OK, error, format_rows, strip_path, timeout_arg, worker_failure
 
 __all__ = ["fit_job", "add_parser", "run"]
 
 FIT_JOB = "occsurf.bridge.cli.fit:fit_job"
 PRELOAD = ("occsurf.bridge.modeling.fit",)
+#: Seconds the worker may take to read, fit and write before it is stopped (``--timeout``): a file that
+#: hangs OCC's reader must not hang the command; real fits take seconds (see the README's fitting section).
+DEFAULT_TIMEOUT = 1800.0
 
 
 def fit_job(item: dict[str, Any]) -> dict[str, Any]:
@@ -196,14 +200,14 @@ def run(ns: argparse.Namespace) -> int:
     follow.start()
     t0 = time.perf_counter()
     try:
-        [outcome] = run_jobs(FIT_JOB, [item], isolate=not ns.in_process, preload=PRELOAD)
+        [outcome] = run_jobs(FIT_JOB, [item], timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD)
     finally:
         follow.done.set()
         follow.join()
         os.unlink(progress)
     if outcome.status != OK:
         why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
-               worker_failure(outcome, None, task="fitting this file", process="worker"))
+               worker_failure(outcome, ns.timeout, task="fitting this file", process="worker"))
         error(f"{src}: {why}")
         return EXIT_ERROR
     doc = outcome.value
@@ -246,5 +250,7 @@ def add_parser(sub: Any) -> None:
     f.add_argument("--y", nargs=2, type=_number, metavar=("Y0", "Y1"), help="y range of an (m, n) height grid")
     f.add_argument("--face", type=_count(0), metavar="N", help="the face of a STEP/IGES file to refit (default 0)")
     f.add_argument("--levels", type=_count(0), metavar="L", help="deepest overlay level (default 6)")
+    f.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
+                   help=f"stop the worker after this long and report it (default {DEFAULT_TIMEOUT:g})")
     f.add_argument("--in-process", action="store_true", help="fit in this process, not in a worker")
     f.set_defaults(func=run)

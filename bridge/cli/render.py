@@ -1,5 +1,5 @@
 """``occsurf render FILE (--lights LIGHTS.json | --preset NAME) --out IMAGE.png [--size W H] [--view NAME]
-[--camera X Y Z [--target X Y Z] [--up X Y Z]] [--samples N] [--timeout SECONDS] [--in-process]``.
+[--camera X Y Z [--target X Y Z] [--up X Y Z]] [--samples N] [--timeout SECONDS] [--strict] [--in-process]``.
 
 Renders a STEP or IGES model under Warn's studio lights (course ch. 10) to a PNG, per pixel
 (:func:`occsurf.bridge.rendering.lighting.render_model_lit`). The lights file is the JSON format
@@ -11,6 +11,8 @@ or an explicit ``--camera`` position looking at ``--target`` (default: the model
 The file is read, meshed and rendered in a worker process (:func:`occsurf.bridge.isolation.run_jobs`
 with the job :func:`render_job`): a crash inside OCC or VTK is one line ``occsurf: FILE: reason``.
 Bad JSON, an unknown view, an unwritable output: one line on stderr, exit status 2, nothing written.
+A model read around damage (see :mod:`occsurf.bridge.exchange.checks`) is rendered as read, with one line
+``occsurf: FILE: warning: ...`` per warning on stderr; ``--strict`` refuses it instead (exit 2, no picture).
 The PNG is written atomically (a reader never sees half a picture).
 """
 
@@ -23,7 +25,8 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-from ._common import EXIT_ERROR, EXIT_OK, error, output_problem, read_model, strip_path, timeout_arg, worker_failure
+from ._common import (EXIT_ERROR, EXIT_OK, add_strict_option, error, output_problem, read_model, strip_path, timeout_arg,
+                      worker_failure)
 
 __all__ = ["render_job", "add_parser", "run", "VIEW_NAMES"]
 
@@ -65,7 +68,7 @@ def render_job(item: dict[str, Any]) -> dict[str, Any]:
     check_target(item["output"])
     with warnings.catch_warnings(), np.errstate(all="ignore"), quiet_native_stdout():
         warnings.simplefilter("ignore")
-        model = read_model(Path(item["input"]))
+        model = read_model(Path(item["input"]), strict=bool(item.get("strict")))
         P, T, N = mesh_of_model(model)
     lo, hi = P.min(axis=0), P.max(axis=0)
     centre, diag = (lo + hi) / 2, float(np.linalg.norm(hi - lo)) or 1.0
@@ -81,7 +84,7 @@ def render_job(item: dict[str, Any]) -> dict[str, Any]:
     image = render_lit(P, T, setup, normals=N, size=(width, height), camera=camera, samples=item.get("samples", 4))
     write_png(item["output"], image)
     return {"faces": len(model.faces), "triangles": int(len(T)), "lights": len(setup.lights), "size": [width, height],
-            "render_seconds": round(image.seconds, 4)}
+            "render_seconds": round(image.seconds, 4), "warnings": list(model.warnings)}
 
 
 def _read_lights(path: Path) -> tuple[dict[str, Any] | None, str | None]:
@@ -125,7 +128,7 @@ def run(ns: argparse.Namespace) -> int:
         return EXIT_ERROR
     camera = None if ns.camera is None else {"position": ns.camera, "target": ns.target, "up": ns.up}
     item = {"input": str(src), "output": str(out), "lights": lights, "preset": ns.preset, "size": list(ns.size),
-            "view": ns.view, "camera": camera, "samples": ns.samples}
+            "view": ns.view, "camera": camera, "samples": ns.samples, "strict": ns.strict}
     [outcome] = run_jobs(RENDER_JOB, [item], timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD)
     if outcome.status != OK:
         why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
@@ -139,6 +142,8 @@ def run(ns: argparse.Namespace) -> int:
         error(f"{where}: {why}")
         return EXIT_ERROR
     r = outcome.value
+    for w in r.get("warnings", ()):
+        error(f"{src}: warning: {w}")
     sys.stdout.write(f"wrote {out} ({r['size'][0]} x {r['size'][1]}, {r['faces']} faces, {r['triangles']} triangles, "
                      f"{r['lights']} lights; render {r['render_seconds']:.2f} s)\n")
     sys.stdout.flush()
@@ -207,6 +212,7 @@ def add_parser(sub: Any) -> None:
                    help="multisampling of the edges, 0 (off, ~4x faster on a CPU renderer) to 16 (default 4)")
     r.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop the worker after this long and report it (default {DEFAULT_TIMEOUT:g})")
+    add_strict_option(r, writes=True)
     r.add_argument("--in-process", action="store_true",
                    help="read and render in this process, not in a worker (a crash inside OCC then ends it)")
     r.set_defaults(func=run)

@@ -8,6 +8,13 @@ and comments masked first) and
 * refuses, with :class:`ExchangeError` naming the entity, what crashes OCC's parser: parentheses nested
   deeper than :data:`MAX_NESTING` (100000 of them overflow its stack), unbalanced parentheses, and
   references that form a cycle (``#20 = ORIENTED_EDGE('',*,*,#20,.T.)``);
+* refuses what crashes OCC's transfer although every reference has an acceptable type (found by swapping
+  references of clean files, each case read in a child process): a ``PCURVE`` whose
+  ``DEFINITIONAL_REPRESENTATION`` holds something else than a curve first (an edge, a vertex, a point:
+  OCC casts it to a curve without checking), and a ``VERTEX_POINT`` on a ``CARTESIAN_POINT`` of fewer
+  than 3 coordinates (a point of a 2-D p-curve);
+* warns about B-spline curves and surfaces whose poles mix 2 and 3 coordinates (OCC reads them without a
+  word: a 3-D point among a p-curve's poles);
 * finds the references to instances the file does not define (a deleted line, a file cut at an entity
   boundary with its trailer put back). OCC would leave a null handle there and crash on transfer (or
   drop a face without a word), so the text OCC sees is *pruned*: a dangling reference inside a list is
@@ -25,7 +32,7 @@ After OCC has read the file (OCC imported lazily)
 :func:`occ_check_warnings` turns OCC's own check messages (``Interface_CheckTool``) into warnings: wrong
 arity, a text where a real is expected (read as 0), more than 3 coordinates (cut to 3), a reference of
 the wrong type. :func:`model_warnings` compares the model with the file: fewer faces than face instances,
-and shells the file calls closed that have free edges.
+and shells the file calls closed (STEP ``CLOSED_SHELL``, IGES shell 514 of form 1) that have free edges.
 
 Warnings are one line each, prefixed by what they concern (``#16 CLOSED_SHELL: ...``); at most
 :data:`MAX_WARNINGS_PER_KIND` of one kind are listed, then a count of the rest.
@@ -44,7 +51,7 @@ import numpy as np
 from occsurf.algorithms.errors import ExchangeError
 
 __all__ = ["StepScan", "IgesScan", "scan_step", "scan_iges", "occ_check_warnings", "model_warnings",
-           "MAX_NESTING", "MAX_WARNINGS_PER_KIND", "STEP_FACE_TYPES"]
+           "MAX_NESTING", "MAX_WARNINGS_PER_KIND", "STEP_FACE_TYPES", "STEP_CURVE_TYPES"]
 
 #: Deepest nesting of parentheses accepted in one STEP instance (real files nest 3 to 6 deep; OCC's
 #: parser recurses per level and dies of a stack overflow long before 100000).
@@ -55,6 +62,17 @@ MAX_WARNINGS_PER_KIND: int = 10
 STEP_FACE_TYPES: tuple[str, ...] = ("ADVANCED_FACE", "FACE_SURFACE")
 
 _MASK = re.compile(rb"'(?:[^']|'')*'|/\*.*?\*/", re.S)
+_COORDS = re.compile(rb"CARTESIAN_POINT\s*\(\s*'[^']*'\s*,\s*\(([^()]*)\)")
+
+#: STEP entity types that are curves (ISO 10303-42): what a p-curve's representation must hold.
+STEP_CURVE_TYPES: frozenset[str] = frozenset({
+    "CURVE", "LINE", "CONIC", "CIRCLE", "ELLIPSE", "PARABOLA", "HYPERBOLA", "BOUNDED_CURVE", "POLYLINE",
+    "B_SPLINE_CURVE", "B_SPLINE_CURVE_WITH_KNOTS", "BEZIER_CURVE", "UNIFORM_CURVE", "QUASI_UNIFORM_CURVE",
+    "RATIONAL_B_SPLINE_CURVE", "TRIMMED_CURVE", "COMPOSITE_CURVE", "COMPOSITE_CURVE_ON_SURFACE",
+    "OFFSET_CURVE_2D", "OFFSET_CURVE_3D", "CURVE_REPLICA", "PCURVE", "SURFACE_CURVE", "SEAM_CURVE",
+    "INTERSECTION_CURVE", "BOUNDED_PCURVE", "BOUNDED_SURFACE_CURVE",
+})
+_SPLINE_WORDS = (b"B_SPLINE_CURVE", b"B_SPLINE_SURFACE", b"BEZIER_CURVE", b"BEZIER_SURFACE")
 _DEF = re.compile(rb"\s*#(\d+)\s*=\s*")
 _REF = re.compile(rb"#(\d+)")
 _TYPE = re.compile(rb"([A-Za-z_][A-Za-z0-9_]*)\s*\(")
@@ -219,6 +237,7 @@ def scan_step(p: Path, data: bytes, broken: dict[int, str] | None = None) -> Ste
     found = (len(ids) > 0) & (sorted_ids[pos_c] == flat) if len(ids) else np.zeros(len(flat), bool)
     cols = order[pos_c[found]] if len(ids) else np.zeros(0, np.int64)
     _cycle_error(p, ids, rows[found], cols, types)
+    scan.warnings += _transfer_crashes(p, ids_list, types, [texts[k] for k in rec_of], refs_per)
     broken = {i: why for i, why in (broken or {}).items() if i in counts}
     if not found.all() or broken:
         scan.data, lines = _prune(data, starts, semis, rec_of, ids, types, refs_per,
@@ -233,6 +252,48 @@ def scan_step(p: Path, data: bytes, broken: dict[int, str] | None = None) -> Ste
         scan.closed_shells = [int(ids[j]) for j, t in enumerate(types) if t == "CLOSED_SHELL"]
         scan.ids = ids_list
     return scan
+
+
+def _transfer_crashes(p: Path, ids: list[int], types: list[str], texts: list[bytes],
+                      refs_per: list[list[int]]) -> list[str]:
+    """Refuse the structures that crash OCC's transfer (see the module docstring); return the warnings
+    about poles of mixed dimension. ``texts`` are the masked records, one per instance."""
+    at = {i: j for j, i in reversed(list(enumerate(ids)))}  # an id defined twice: its first record
+
+    def coords(j: int) -> int | None:
+        m = _COORDS.search(texts[j]) if types[j] == "CARTESIAN_POINT" else None
+        return None if m is None else len([x for x in m.group(1).split(b",") if x.strip()])
+
+    def is_curve(j: int) -> bool:
+        if types[j] == "complex instance":
+            return any(re.search(rb"\b" + t.encode() + rb"\s*\(", texts[j]) for t in STEP_CURVE_TYPES)
+        return types[j] in STEP_CURVE_TYPES
+
+    mixed: list[str] = []
+    for j, kind in enumerate(types):
+        refs = refs_per[j]
+        if kind == "PCURVE" and len(refs) >= 2 and (d := at.get(refs[1])) is not None \
+                and types[d] == "DEFINITIONAL_REPRESENTATION" and len(refs_per[d]) >= 2:
+            item = at.get(refs_per[d][0])
+            if item is not None and not is_curve(item):
+                raise ExchangeError(f"{p}: damaged STEP file (#{ids[j]} PCURVE: its representation #{ids[d]} holds "
+                                    f"#{ids[item]} {types[item]}, not a curve; refused: OCC's reader crashes on "
+                                    "such p-curves)")
+            dims = {coords(k) for r in refs_per[item] if (k := at.get(r)) is not None} - {None, 2} if item is not None else set()
+            if dims:
+                mixed.append(f"#{ids[j]} PCURVE: its curve #{ids[item]} {types[item]} has points of "
+                             f"{' and '.join(map(str, sorted(dims)))} coordinates, not 2 (OCC reads it without a word)")
+        elif kind == "VERTEX_POINT" and refs and (q := at.get(refs[0])) is not None:
+            n = coords(q)
+            if n is not None and n < 3:
+                raise ExchangeError(f"{p}: damaged STEP file (#{ids[j]} VERTEX_POINT: its point #{ids[q]} has {n} "
+                                    "coordinates, not 3; refused: OCC's reader crashes on such vertices)")
+        elif (word := next((w for w in _SPLINE_WORDS if w in texts[j]), None)) is not None:
+            dims = {coords(k) for r in refs if (k := at.get(r)) is not None} - {None}
+            if len(dims) > 1:
+                mixed.append(f"#{ids[j]} {word.decode()}: its poles mix points of {' and '.join(map(str, sorted(dims)))} "
+                             "coordinates (OCC reads them without a word)")
+    return _limited(mixed, "curves with points of the wrong dimension")
 
 
 class _TypeCount(Counter):  # type: ignore[type-arg]
@@ -377,15 +438,21 @@ def _prune(data: bytes, starts: list[int], semis: list[int], rec_of: list[int], 
 IGES_SURFACE_TYPES = frozenset({114, 118, 120, 122, 128, 140, 190, 192, 194, 196, 198})
 
 
+#: Form number of a closed shell entity (514); form 2 is an open shell (IGES 5.3, section 4.151).
+IGES_CLOSED_SHELL_FORM = 1
+
+
 @dataclass
 class IgesScan:
-    """What :func:`scan_iges` found: ``warnings``, the number of entities per type and the number of
+    """What :func:`scan_iges` found: ``warnings``, the number of entities per type, the number of
     faces the file describes (``face_instances``: faces 510, else trimmed or bounded surfaces 144/143
-    and stand-alone surfaces that are not physically dependent)."""
+    and stand-alone surfaces that are not physically dependent) and the closed shells (``closed_shells``:
+    the first directory line ``D<n>`` of every shell entity 514 of form 1)."""
 
     warnings: list[str] = field(default_factory=list)
     types: Counter = field(default_factory=Counter)  # type: ignore[type-arg]
     face_instances: int = 0
+    closed_shells: list[int] = field(default_factory=list)
 
 
 def _iges_numbers(text: str, delim: str, count: int) -> list[str]:
@@ -426,6 +493,8 @@ def scan_iges(p: Path, data: bytes) -> IgesScan:
             raise ExchangeError(f"{p}: damaged IGES file (directory entry D{seq}: unreadable type or parameter "
                                 "pointer)") from None
         scan.types[etype] += 1
+        if etype == 514 and b[32:40].strip() == str(IGES_CLOSED_SHELL_FORM):
+            scan.closed_shells.append(seq)
         dependent = a[66:68] in ("01", "03")  # physically dependent: part of another entity
         if etype in (143, 144) or (etype in IGES_SURFACE_TYPES and not dependent):
             loose += not dependent
@@ -543,20 +612,24 @@ def occ_check_warnings(reader: Any, fmt: str, scan: StepScan | None = None) -> l
 
 
 def model_warnings(shape: Any, reader: Any, scan: StepScan | IgesScan | None, n_faces: int) -> list[str]:
-    """The model against the file: face count, and closed shells with free edges (STEP)."""
+    """The model against the file: face count, and shells the file calls closed that have free edges
+    (STEP ``CLOSED_SHELL``, IGES shell entity 514 of form 1)."""
     lines: list[str] = []
     if scan is None:
         return lines
-    what = ", ".join(STEP_FACE_TYPES) if isinstance(scan, StepScan) else "entities 510, or 143/144 and surfaces"
+    step = isinstance(scan, StepScan)
+    what = ", ".join(STEP_FACE_TYPES) if step else "entities 510, or 143/144 and surfaces"
     if scan.face_instances and n_faces != scan.face_instances:
         lines.append(f"the file has {scan.face_instances} face instances ({what}); the model read has {n_faces} faces")
-    if isinstance(scan, StepScan) and scan.closed_shells:
-        lines += _open_closed_shells(shape, scan)
+    if scan.closed_shells:
+        labels = [f"#{i}" for i in scan.closed_shells] if step else [f"D{i}" for i in scan.closed_shells]
+        lines += _open_closed_shells(shape, labels, "CLOSED_SHELL" if step else "closed shells (entity 514, form 1)")
     return lines
 
 
-def _open_closed_shells(shape: Any, scan: StepScan) -> list[str]:
-    """The file's ``CLOSED_SHELL`` count against the shells of the model without free edges."""
+def _open_closed_shells(shape: Any, labels: list[str], what: str) -> list[str]:
+    """The file's closed shells (``labels``: ``#16`` or ``D41``) against the shells of the model without
+    free edges: a warning when fewer of the model's shells are closed than the file says."""
     from OCP.BRep import BRep_Tool
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL
     from OCP.TopExp import TopExp_Explorer
@@ -590,9 +663,9 @@ def _open_closed_shells(shape: Any, scan: StepScan) -> list[str]:
             free_counts.append(free)
         elif uses:
             n_closed += 1
-    n_file = len(scan.closed_shells)
+    n_file = len(labels)
     if n_closed >= n_file:
         return []
-    shown = ", ".join(f"#{i}" for i in scan.closed_shells[:6]) + (" ..." if n_file > 6 else "")
+    shown = ", ".join(labels[:6]) + (" ..." if n_file > 6 else "")
     opened = f"; {len(free_counts)} open, with {', '.join(map(str, free_counts[:6]))} free edges" if free_counts else ""
-    return [f"the file has {n_file} CLOSED_SHELL ({shown}); {n_closed} shells of the model are closed{opened}"]
+    return [f"the file has {n_file} {what} ({shown}); {n_closed} shells of the model are closed{opened}"]

@@ -104,7 +104,6 @@ def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: Hierarchica
     flat = hierarchy.flatten()
     # The STEP bytes exactly as occsurf.bridge.exchange.step_iges.write_step makes them, kept in memory so that the
     # pair is committed together: nothing on disk changes until both files are complete.
-    _xocc.silence_occ()
     step_data = _xocc.step_bytes(step, _xocc.normalise(flat, name), STEP_DIGITS)
     data = {
         "format": _SIDECAR_FORMAT,
@@ -153,30 +152,57 @@ def _samples(obj: Any, params: tuple[np.ndarray, ...]) -> np.ndarray:
     return obj.evaluate(params[0])
 
 
-def read_hierarchical_step(path: str | os.PathLike[str], *, sidecar: str | os.PathLike[str] | None = None
+def read_hierarchical_step(path: str | os.PathLike[str], *, sidecar: str | os.PathLike[str] | None = None,
+                           isolated: bool = False, timeout: float | None = None
                            ) -> HierarchicalSurface | HierarchicalCurve:
-    """Restore the editable hierarchy written by :func:`write_hierarchical_step` (``sidecar``: its
-    path when it was written elsewhere than :func:`sidecar_path`).
+    """Restore the editable hierarchy written by :func:`write_hierarchical_step`.
 
     The sidecar must name this STEP file, and the file must be the one written with it (its SHA-256
     is stored) or, if it was saved again, its first face (or free edge, for a curve) must equal the
     sidecar hierarchy's flat form within :data:`SIDECAR_MATCH_RTOL` at every distinct knot and at
     three points inside every knot span of the flat form.
 
+    Parameters
+    ----------
+    path : str or path-like
+        The STEP file.
+    sidecar : str or path-like, optional
+        The sidecar's path when it was written elsewhere than :func:`sidecar_path`.
+    isolated : bool, default False
+        Parse the STEP file (needed only when it is not byte for byte the one written with the sidecar)
+        in a worker process, as :func:`occsurf.bridge.exchange.step_iges.read_step` does: a crash or a
+        hang inside OCC becomes an :class:`ExchangeError` naming the file. Use it for files from
+        untrusted sources.
+    timeout : float, optional
+        With ``isolated``: seconds the worker may take (default no limit).
+
     Raises
     ------
     ExchangeError
         No sidecar, an unreadable or foreign sidecar, a sidecar of another STEP file (``model.stp``
         beside ``model.step``), or a STEP file whose geometry no longer matches it (edited after
-        writing). Messages name the path.
+        writing); with ``isolated``, a crash or time-out of the reader process. Messages name the path.
+    InvalidGeometryError
+        ``timeout`` not a positive number of seconds.
     """
     p = Path(os.fspath(path))
     side = sidecar_path(p) if sidecar is None else Path(os.fspath(sidecar))
+    _check_timeout(timeout)
     with _files.file_lock(_lock_path(side), shared=True):
-        return _read_pair(p, side)
+        return _read_pair(p, side, isolated, timeout)
 
 
-def _read_pair(p: Path, side: Path) -> HierarchicalSurface | HierarchicalCurve:
+def _check_timeout(timeout: Any) -> None:
+    """``timeout``: None or a positive, finite number of seconds (checked before any file is read)."""
+    if timeout is None:
+        return
+    number = isinstance(timeout, (int, float)) and not isinstance(timeout, bool)
+    if not (number and np.isfinite(timeout) and timeout > 0):
+        raise InvalidGeometryError(f"timeout: expected a positive number of seconds or None, got {timeout!r}")
+
+
+def _read_pair(p: Path, side: Path, isolated: bool = False,
+               timeout: float | None = None) -> HierarchicalSurface | HierarchicalCurve:
     if not side.is_file():
         raise ExchangeError(f"{side}: no hierarchy sidecar beside {p.name}; use import_step_base() to start a new "
                             "hierarchy from the STEP geometry")
@@ -207,7 +233,7 @@ def _read_pair(p: Path, side: Path) -> HierarchicalSurface | HierarchicalCurve:
         same = False  # read_step names the problem
     if same:
         return h  # the very file written with this sidecar: no need to parse it
-    model = read_step(p)
+    model = read_step(p, isolated=isolated, timeout=timeout)
     items = model.faces if cls is HierarchicalSurface else model.edges
     geo = items[0].surface if cls is HierarchicalSurface and items else (items[0].curve if items else None)
     if geo is None:
@@ -232,7 +258,8 @@ def _read_pair(p: Path, side: Path) -> HierarchicalSurface | HierarchicalCurve:
 
 
 def import_step_base(path: str | os.PathLike[str], face: int = 0,
-                     offsets: str | OffsetMapping = "frame") -> HierarchicalSurface:
+                     offsets: str | OffsetMapping = "frame", *, isolated: bool = False,
+                     timeout: float | None = None) -> HierarchicalSurface:
     """A new hierarchy whose base is a B-spline face of a STEP file (exact conversion).
 
     Parameters
@@ -241,13 +268,23 @@ def import_step_base(path: str | os.PathLike[str], face: int = 0,
     face : int
         Index into :attr:`occsurf.bridge.exchange.step_iges.ImportedModel.faces`.
     offsets : {"frame", "additive"} or OffsetMapping
+    isolated : bool, default False
+        Parse the file in a worker process (:func:`occsurf.bridge.exchange.step_iges.read_step`): a crash
+        or a hang inside OCC becomes an :class:`ExchangeError` naming the file. The face comes back
+        bit-exact. Use it for files from untrusted sources.
+    timeout : float, optional
+        With ``isolated``: seconds the worker may take (default no limit).
 
     Raises
     ------
     ExchangeError
-        Unreadable file, no such face, or a face that is not a B-spline surface (its type named).
+        Unreadable file, no such face, or a face that is not a B-spline surface (its type named); with
+        ``isolated``, a crash or time-out of the reader process.
+    InvalidGeometryError
+        ``timeout`` not a positive number of seconds.
     """
-    model = read_step(path)
+    _check_timeout(timeout)
+    model = read_step(path, isolated=isolated, timeout=timeout)
     if isinstance(face, bool) or not isinstance(face, int) or not 0 <= face < len(model.faces):
         raise ExchangeError(f"{model.path}: face index {face!r} is not in 0..{len(model.faces) - 1}")
     f = model.faces[face]

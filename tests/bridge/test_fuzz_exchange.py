@@ -5,10 +5,14 @@ cuts at an entity boundary with the trailer put back; :mod:`corrupt_files`) and 
 
 * ``occsurf inspect DIR --json`` (one worker for the batch; a crash costs one file),
 * ``occsurf fill FILE --out ...`` (its worker reads, fills and writes),
-* ``read_step`` / ``read_iges(..., isolated=True)`` in this very process (the caller).
+* ``read_step`` / ``read_iges(..., isolated=True)`` in this very process (the caller),
+* ``read_step`` / ``read_iges`` *in-process* on every file of the batch, inside a worker process
+  (:func:`occsurf.bridge.isolation.run_jobs` with the isolated reader's own job): the checks before
+  OCC parses must leave nothing that kills the reading process itself.
 
 and asserts: the caller is never killed by a signal, nothing prints a traceback, the exit status is
-0 or 2, and a file read with a face count other than the clean model's always carries a warning.
+0 or 2, no in-process read dies of a signal, and a file read with a face count other than the clean
+model's always carries a warning.
 
 ``OCCSURF_FUZZ_LOG=path`` appends one JSON line of counts per example (the counts the issue asks
 for: how many files were read cleanly, read with warnings, refused, crashed a worker, timed out).
@@ -28,7 +32,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from occsurf.algorithms.errors import ExchangeError
-from occsurf.bridge.exchange.step_iges import read_iges, read_step, write_iges, write_step
+from occsurf.bridge.exchange.step_iges import READ_JOB, READ_PRELOAD, read_iges, read_step, write_iges, write_step
+from occsurf.bridge.isolation import CRASHED, OK, run_jobs
 
 from ..algorithms.strategies import test_settings
 from . import corrupt_files as C
@@ -125,4 +130,15 @@ def test_mutated_files_through_every_reading_command(bases, tmp_path_factory, fm
         counts["api_warned" if model.warnings else "api_clean"] += 1
         if len(model.faces) != n_clean:
             assert model.warnings, (paths[1], len(model.faces), n_clean)
+
+    # in-process reads of the whole batch, each in a worker that may die (it must not)
+    items = [{"path": str(p), "format": fmt, "out": str(p) + ".brep"} for p in paths]
+    crashed = []
+    for p, o in zip(paths, run_jobs(READ_JOB, items, timeout=120, preload=READ_PRELOAD)):
+        counts[f"inprocess_{o.status}"] += 1
+        if o.status == CRASHED:
+            crashed.append((p.name, o.exit_reason))
+        elif o.status == OK and o.value["faces"] != n_clean:
+            assert o.value["warnings"], (p, o.value["faces"], n_clean)
     _log(counts)
+    assert not crashed, crashed
