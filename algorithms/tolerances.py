@@ -173,6 +173,9 @@ _DEFAULTS: dict[str, float] = {
     # FIT_PROJECTION_MAX_ITER steps.
     "FIT_PROJECTION_STEP": 1e-12,
     "FIT_PROJECTION_MAX_ITER": 30,
+    # Gridded distances are measured in blocks of about this many points (the starting partials of
+    # a block by tensor-product evaluation; memory O(block), not O(data)).
+    "FIT_MEASURE_BLOCK": 262144,
     # Adaptive hierarchical fitting: most overlay levels below the base; the flagged knot spans
     # are grown by FIT_ADAPTIVE_MARGIN spans on each side before overlays are placed (an
     # overlay's outer vertices taper to its border); each round refines where the distance

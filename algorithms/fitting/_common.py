@@ -55,16 +55,20 @@ def clamped_uniform_knots(lo: float, hi: float, n: int, degree: int) -> Array:
     return np.concatenate((np.full(degree + 1, lo), inner, np.full(degree + 1, hi)))
 
 
-def project_points(surface: Any, points: Array, u: Array, v: Array, *, max_iter: int | None = None
-                   ) -> tuple[Array, Array, Array]:
+def project_points(surface: Any, points: Array, u: Array, v: Array, *, max_iter: int | None = None,
+                   initial: Array | None = None) -> tuple[Array, Array, Array]:
     """Foot points of ``points`` on ``surface`` by damped Newton from ``(u, v)`` (vectorised).
 
     Minimises ``f(u, v) = |S(u, v) - X|^2 / 2`` with the exact Hessian
     ``[[S_u.S_u + r.S_uu, S_u.S_v + r.S_uv], [., S_v.S_v + r.S_vv]]`` (``r = S - X``), falling back
     to the Gauss-Newton matrix where that is not positive definite; each step is halved until
     ``f`` does not increase (a distance never gets worse than at the start), and parameters stay
-    in the domain (a foot point on the boundary is a boundary minimum). Stops when every step is
-    below :data:`~occsurf.algorithms.tolerances.FIT_PROJECTION_STEP` times the domain size.
+    in the domain (a foot point on the boundary is a boundary minimum). A point stops when its
+    proposed Newton step, or the move made, is below
+    :data:`~occsurf.algorithms.tolerances.FIT_PROJECTION_STEP` times the domain size. Each iteration
+    works on the points still moving only (compacted arrays), and tries the full step with the
+    partials there, which are the next iteration's when it is accepted (one evaluation per
+    iteration; halving, rare near a fit, costs point evaluations).
 
     Parameters
     ----------
@@ -75,6 +79,9 @@ def project_points(surface: Any, points: Array, u: Array, v: Array, *, max_iter:
         Starting parameters (e.g. the data parameters of a fit).
     max_iter : int, optional
         Default :data:`~occsurf.algorithms.tolerances.FIT_PROJECTION_MAX_ITER`.
+    initial : ndarray, shape (k, 3, 3, 3), optional
+        ``surface.derivatives(u, v, 2)`` when the caller has them cheaper (e.g. on a grid, by
+        :meth:`derivatives_grid`); ``u, v`` must then lie in the domain.
 
     Returns
     -------
@@ -90,51 +97,69 @@ def project_points(surface: Any, points: Array, u: Array, v: Array, *, max_iter:
     (u0, u1), (v0, v1) = surface.domain
     size = max(u1 - u0, v1 - v0)
     it = int(tolerances.FIT_PROJECTION_MAX_ITER) if max_iter is None else int(max_iter)
-    a = np.clip(np.asarray(u, float).copy(), u0, u1)
-    b = np.clip(np.asarray(v, float).copy(), v0, v1)
-    D = surface.derivatives(a, b, 2)
-    f = np.einsum("ij,ij->i", D[:, 0, 0] - X, D[:, 0, 0] - X)
-    active = np.arange(a.size)
+    a = np.clip(np.asarray(u, float), u0, u1)
+    b = np.clip(np.asarray(v, float), v0, v1)
+    Da = surface.derivatives(a, b, 2) if initial is None else initial
+    r = Da[:, 0, 0] - X
+    f = np.einsum("ij,ij->i", r, r)
+    act = np.arange(a.size)
+    Xa, fa = X, f.copy()
+    stop = tolerances.FIT_PROJECTION_STEP * size
     for _ in range(it):
-        if active.size == 0:
+        if act.size == 0:
             break
-        Da = D[active]
-        r = Da[:, 0, 0] - X[active]
-        Su, Sv = Da[:, 1, 0], Da[:, 0, 1]
-        g = np.stack([np.einsum("ij,ij->i", r, Su), np.einsum("ij,ij->i", r, Sv)], -1)
-        h11 = np.einsum("ij,ij->i", Su, Su)
-        h12 = np.einsum("ij,ij->i", Su, Sv)
-        h22 = np.einsum("ij,ij->i", Sv, Sv)
-        e11 = h11 + np.einsum("ij,ij->i", r, Da[:, 2, 0])
-        e12 = h12 + np.einsum("ij,ij->i", r, Da[:, 1, 1])
-        e22 = h22 + np.einsum("ij,ij->i", r, Da[:, 0, 2])
-        pd = (e11 > 0) & (e11 * e22 - e12 * e12 > 0)
-        h11, h12, h22 = np.where(pd, e11, h11), np.where(pd, e12, h12), np.where(pd, e22, h22)
-        det = h11 * h22 - h12 * h12
-        det = np.where(np.abs(det) > 1e-300, det, 1e-300)
-        du = -(h22 * g[:, 0] - h12 * g[:, 1]) / det
-        dv = -(h11 * g[:, 1] - h12 * g[:, 0]) / det
-        step = np.ones(active.size)
-        acc = np.zeros(active.size, bool)
-        na, nb = a[active], b[active]
-        for _half in range(8):  # halve until f does not increase
-            todo = ~acc
-            if not np.any(todo):
+        du, dv = _newton_step(Da, Xa)
+        aa, bb = a[act], b[act]
+        # a proposed step below the threshold: converged where it stands (the step would change
+        # the distance by O(step^2)), no evaluation
+        go = np.flatnonzero(np.maximum(np.abs(du), np.abs(dv)) > stop)
+        act, Xa, fa, aa, bb, du, dv = act[go], Xa[go], fa[go], aa[go], bb[go], du[go], dv[go]
+        if act.size == 0:
+            break
+        # the full step first, with the partials there (the next iteration's, when accepted)
+        ta, tb = np.clip(aa + du, u0, u1), np.clip(bb + dv, v0, v1)
+        Dt = surface.derivatives(ta, tb, 2)
+        e = Dt[:, 0, 0] - Xa
+        ft = np.einsum("ij,ij->i", e, e)
+        acc = ft <= fa
+        full = acc.copy()
+        na, nb = np.where(acc, ta, aa), np.where(acc, tb, bb)
+        fa = np.where(acc, ft, fa)
+        todo = np.flatnonzero(~acc)
+        step = np.full(todo.size, 0.5)
+        for _half in range(7):  # halve until f does not increase
+            if todo.size == 0:
                 break
-            ta = np.clip(a[active] + step * du, u0, u1)
-            tb = np.clip(b[active] + step * dv, v0, v1)
-            P = surface.evaluate(ta[todo], tb[todo])
-            ft = np.einsum("ij,ij->i", P - X[active][todo], P - X[active][todo])
-            ok = ft <= f[active][todo]
-            idx = np.flatnonzero(todo)[ok]
-            na[idx], nb[idx] = ta[todo][ok], tb[todo][ok]
-            acc[idx] = True
-            f[active[idx]] = ft[ok]
-            step[todo] *= 0.5
-        moved = np.maximum(np.abs(na - a[active]), np.abs(nb - b[active]))
-        a[active], b[active] = na, nb
-        keep = acc & (moved > tolerances.FIT_PROJECTION_STEP * size)
-        active = active[keep]
-        if active.size:
-            D[active] = surface.derivatives(a[active], b[active], 2)
+            ta = np.clip(aa[todo] + step * du[todo], u0, u1)
+            tb = np.clip(bb[todo] + step * dv[todo], v0, v1)
+            e = surface.evaluate(ta, tb) - Xa[todo]
+            ft = np.einsum("ij,ij->i", e, e)
+            ok = ft <= fa[todo]
+            idx = todo[ok]
+            na[idx], nb[idx], fa[idx], acc[idx] = ta[ok], tb[ok], ft[ok], True
+            todo, step = todo[~ok], step[~ok] * 0.5
+        moved = np.maximum(np.abs(na - aa), np.abs(nb - bb))
+        a[act], b[act], f[act] = na, nb, fa
+        keep = acc & (moved > stop)
+        act, Xa, fa = act[keep], Xa[keep], fa[keep]
+        if act.size:  # the partials at the new parameters: computed already unless a step was halved
+            Da = Dt[keep] if np.all(full[keep]) else surface.derivatives(a[act], b[act], 2)
     return a, b, np.sqrt(np.maximum(f, 0.0))
+
+
+def _newton_step(D: Array, X: Array) -> tuple[Array, Array]:
+    """The (damped-later) Newton step of ``|S - X|^2 / 2`` from partials ``D`` (k, 3, 3, 3)."""
+    r = D[:, 0, 0] - X
+    Su, Sv = D[:, 1, 0], D[:, 0, 1]
+    g1, g2 = np.einsum("ij,ij->i", r, Su), np.einsum("ij,ij->i", r, Sv)
+    h11 = np.einsum("ij,ij->i", Su, Su)
+    h12 = np.einsum("ij,ij->i", Su, Sv)
+    h22 = np.einsum("ij,ij->i", Sv, Sv)
+    e11 = h11 + np.einsum("ij,ij->i", r, D[:, 2, 0])
+    e12 = h12 + np.einsum("ij,ij->i", r, D[:, 1, 1])
+    e22 = h22 + np.einsum("ij,ij->i", r, D[:, 0, 2])
+    pd = (e11 > 0) & (e11 * e22 - e12 * e12 > 0)
+    h11, h12, h22 = np.where(pd, e11, h11), np.where(pd, e12, h12), np.where(pd, e22, h22)
+    det = h11 * h22 - h12 * h12
+    det = np.where(np.abs(det) > 1e-300, det, 1e-300)
+    return -(h22 * g1 - h12 * g2) / det, -(h11 * g2 - h12 * g1) / det

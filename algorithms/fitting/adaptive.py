@@ -57,7 +57,7 @@ from ..kernel.surface import BSplineSurface
 from ._common import project_points
 from .gridded import GridFit, _grid_data, _pair_of, _params, fit_grid
 
-__all__ = ["LevelReport", "AdaptiveFit", "fit_adaptive", "measure_grid", "boundary_error"]
+__all__ = ["LevelReport", "AdaptiveFit", "fit_adaptive", "measure_grid", "normal_deviation", "boundary_error"]
 
 Array = NDArray[np.float64]
 
@@ -133,16 +133,43 @@ class AdaptiveFit:
         return int(self.hierarchy.pole_counts()["stored"])
 
 
-def measure_grid(surface, points: Array, u: Array, v: Array) -> Array:
+def measure_grid(surface, points: Array, u: Array, v: Array, *, above: float | None = None) -> Array:
     """Distance of every grid point ``points[i, j]`` (shape (m, n, 3), NaN = missing) to ``surface``,
-    by projection from ``(u_i, v_j)`` (:func:`~._common.project_points`). Shape (m, n)."""
+    by projection from ``(u_i, v_j)`` (:func:`~._common.project_points`). Shape (m, n).
+
+    The grid is processed in blocks of rows (memory O(block), not O(data) x 27 partials), the
+    starting partials coming from ``derivatives_grid`` (tensor-product evaluation). With ``above``
+    only the points whose deviation at their parameters exceeds it are projected; the others
+    keep that deviation, an upper bound of their distance (at most ``above``): every comparison
+    against a threshold ``>= above`` is then the same as with all points projected.
+    """
     m, n = points.shape[:2]
-    U, W = np.meshgrid(u, v, indexing="ij")
-    ok = ~np.isnan(points).any(axis=-1)
     out = np.full((m, n), np.nan)
-    _, _, d = project_points(surface, points[ok], U[ok], W[ok])
-    out[ok] = d
+    rows = max(1, int(tolerances.FIT_MEASURE_BLOCK) // max(n, 1))
+    for i0 in range(0, m, rows):
+        sl = slice(i0, min(i0 + rows, m))
+        D = surface.derivatives_grid(u[sl], v, 2)  # (r, n, 3, 3, 3)
+        Q = points[sl]
+        r = np.linalg.norm(D[:, :, 0, 0] - Q, axis=-1)
+        ok = ~np.isnan(Q).any(axis=-1)
+        blk = np.where(ok, r, np.nan)
+        todo = ok if above is None else ok & (r > above)
+        if todo.any():
+            I, J = np.nonzero(todo)
+            _, _, d = project_points(surface, Q[I, J], u[sl][I], v[J], initial=D[I, J])
+            blk[I, J] = d
+        out[sl] = blk
     return out
+
+
+def normal_deviation(surface, points: Array, u: Array, v: Array) -> Array:
+    """``|(Q - S(u, v)) . N(u, v)|`` on the grid, shape (m, n) (NaN on missing cells): the
+    first-order distance of each point to the surface (the deviation along the normal; exact for
+    a plane). Cheap (tensor-product partials), used to compare candidate fits, never reported."""
+    D = surface.derivatives_grid(u, v, 1)
+    N = np.cross(D[:, :, 1, 0], D[:, :, 0, 1])
+    N /= np.maximum(np.linalg.norm(N, axis=-1, keepdims=True), 1e-300)
+    return np.abs(np.einsum("ijk,ijk->ij", points - D[:, :, 0, 0], N))
 
 
 def boundary_error(surface, points: Array, u: Array, v: Array, dist: Array) -> Array:
@@ -229,6 +256,11 @@ def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u:
     return [((float(ku[i0]), float(ku[i1])), (float(kv[j0]), float(kv[j1]))) for i0, i1, j0, j1 in _boxes(marks)]
 
 
+def _block(A: Array, D: Array, B: Array) -> Array:
+    """``A D_k B^T`` per coordinate k: an overlay's share on its sub-grid, (rows, cols, 3)."""
+    return np.stack([A @ D[..., k] @ B.T for k in range(D.shape[-1])], -1)
+
+
 class _Fitter:
     """The hierarchy under construction with every overlay's world displacements ``δ`` kept, so
     that coarser levels can be refitted (backfitting) without losing the finer ones."""
@@ -272,7 +304,7 @@ class _Fitter:
             return
         R = resid[np.ix_(ru, rv)]
         if old is not None:
-            R = R + np.einsum("ia,abk,jb->ijk", A, old, B)
+            R = R + _block(A, old, B)
         comps = [2] if self.heights else [0, 1, 2]
         delta = np.zeros((A.shape[1], B.shape[1], 3))
         missing = np.isnan(R).any(axis=-1)
@@ -288,7 +320,7 @@ class _Fitter:
             delta[..., comps] = sol.reshape(A.shape[1], B.shape[1], len(comps))
         self.delta[ov.id] = delta
         self._apply(ov)
-        resid[np.ix_(ru, rv)] = R - np.einsum("ia,abk,jb->ijk", A, delta, B)
+        resid[np.ix_(ru, rv)] = R - _block(A, delta, B)
 
     def backfit(self) -> Array:
         """One block Gauss-Seidel sweep: the base against the data minus every overlay's share,
@@ -333,21 +365,29 @@ def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, 
 
     Each step grows u, v or both, whichever lowers the error most per added pole (the largest
     ``-log(e_new / e) / log(n_new / n)``; both when none gains 0.1): data that vary along one
-    direction only (a ruled or extruded face) do not pay for poles along the other.
+    direction only (a ruled or extruded face) do not pay for poles along the other. The candidates
+    are compared by the first-order distance :func:`normal_deviation` (cheap); the base chosen is
+    measured by projection (:func:`measure_grid`, points within ``tol`` at their parameters
+    skipped), which decides whether to grow further.
     """
     m, n = Q.shape[:2]
     data = Q[..., 0] if heights else Q
 
-    def attempt(poles_):
+    def candidate(poles_):
         base_ = fit_grid(data, poles_, deg, **opts)
         u_, v_ = base_.u_params, base_.v_params
         P3_ = np.stack(np.broadcast_arrays(u_[:, None], v_[None, :], Q[..., 0]), -1) if heights else Q
-        dist_ = measure_grid(base_.surface, P3_, u_, v_)
-        return base_, P3_, dist_, float(np.nanmax(boundary_error(base_.surface, P3_, u_, v_, dist_)))
+        est = normal_deviation(base_.surface, P3_, u_, v_)
+        return base_, P3_, float(np.nanmax(boundary_error(base_.surface, P3_, u_, v_, est)))
 
-    cur = attempt(poles)
+    def measured(base_, P3_):
+        u_, v_ = base_.u_params, base_.v_params
+        dist_ = measure_grid(base_.surface, P3_, u_, v_, above=tol)
+        return dist_, float(np.nanmax(boundary_error(base_.surface, P3_, u_, v_, dist_)))
+
+    base, P3, estimate = candidate(poles)
     while True:
-        base, P3, dist, worst = cur
+        dist, worst = measured(base, P3)
         if progress is not None:
             progress(f"base {poles[0]}x{poles[1]}: max error {worst:.3g}")
         if worst <= tol:
@@ -364,13 +404,13 @@ def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, 
             return base, P3, dist
         best, score, tried = None, np.inf, {}
         for cand in sorted(options):
-            trial = tried[cand] = attempt(cand)
-            gain = np.log(max(trial[3], 1e-300) / worst) / np.log(np.prod(cand) / np.prod(poles))
+            trial = tried[cand] = candidate(cand)
+            gain = np.log(max(trial[2], 1e-300) / max(estimate, 1e-300)) / np.log(np.prod(cand) / np.prod(poles))
             if gain < score:
                 best, score = (cand, trial), gain
         if score > -0.1 and tuple(grown) in tried:  # no direction helps on its own yet: grow both
             best = (tuple(grown), tried[tuple(grown)])
-        poles, cur = best
+        poles, (base, P3, estimate) = best
 
 
 def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3, *,
@@ -465,7 +505,7 @@ def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3,
             break
         for _ in range(int(tolerances.FIT_ADAPTIVE_SWEEPS)):
             fitter.backfit()
-        dist = measure_grid(hs.flatten(), P3, u, v)
+        dist = measure_grid(hs.flatten(), P3, u, v, above=tol)
         if progress is not None:
             progress(f"round {rnd}: {len(new)} overlays added (depth {hs.depth}), "
                      f"{hs.pole_counts()['stored']} control points, max error {np.nanmax(dist):.3g}")

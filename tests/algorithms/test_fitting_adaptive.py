@@ -175,3 +175,36 @@ def test_franke_on_a_coarse_grid_reaches_the_tolerance():
     x = np.linspace(0, 1, 33)
     fit = fit_adaptive(franke(*np.meshgrid(x, x, indexing="ij")), 1e-3)
     assert fit.converged and fit.max_error <= 1e-3
+
+
+def test_measure_grid_by_blocks_and_partially_is_exact_where_it_counts():
+    from occsurf.algorithms.fitting.adaptive import normal_deviation
+
+    x = np.linspace(0, 1, 90)
+    Z = sharp(*np.meshgrid(x, x, indexing="ij"))
+    s = fit_grid(Z, 12, 3).surface
+    P3 = np.stack(np.broadcast_arrays(x[:, None], x[None, :], Z), -1)
+    full = measure_grid(s, P3, x, x)
+    with tolerances.override(FIT_MEASURE_BLOCK=100):  # one row per block: the same distances
+        np.testing.assert_allclose(measure_grid(s, P3, x, x), full, rtol=0, atol=EXACT)
+    U, W = np.meshgrid(x, x, indexing="ij")
+    start = project_points(s, P3.reshape(-1, 3), U.ravel(), W.ravel())[2].reshape(full.shape)
+    np.testing.assert_allclose(full, start, rtol=0, atol=EXACT)  # grid partials as the start: same result
+    tol = 1e-3
+    part = measure_grid(s, P3, x, x, above=tol)
+    resid = np.linalg.norm(s.evaluate_grid(x, x) - P3, axis=-1)
+    skipped = resid <= tol
+    assert skipped.any() and (~skipped).any()
+    np.testing.assert_array_equal(part[skipped], resid[skipped])
+    np.testing.assert_array_equal(part[~skipped], full[~skipped])
+    for t in (tol, 3 * tol, 0.1):  # every decision against a threshold >= above is the same
+        np.testing.assert_array_equal(part > t, full > t)
+    # the first-order (normal) deviation: exact on a plane, close to the distance where it is small
+    flat = fit_grid(np.zeros((20, 20)), 4, 3).surface
+    h = np.random.default_rng(3).standard_normal((20, 20)) * 1e-2
+    g = np.linspace(0, 1, 20)
+    Pf = np.stack(np.broadcast_arrays(g[:, None] + 0 * h, g[None, :] + 0 * h, h), -1)
+    np.testing.assert_allclose(normal_deviation(flat, Pf, g, g), np.abs(h), atol=EXACT)
+    nd = normal_deviation(s, P3, x, x)[1:-1, 1:-1]  # inside (a border point's foot may be clamped)
+    small = full[1:-1, 1:-1] < 1e-4
+    np.testing.assert_allclose(nd[small], full[1:-1, 1:-1][small], rtol=0.1, atol=1e-7)
