@@ -7,7 +7,8 @@
   :class:`~occsurf.algorithms.errors.InvalidGeometryError` with the line (or grid row) named.
 * :func:`fit_input` fits it: adaptive hierarchical by default (:func:`~occsurf.algorithms.fitting.fit_adaptive`,
   course §7-10), plain least squares with ``ctrl`` poles (:func:`~occsurf.algorithms.fitting.fit_grid`),
-  scattered data by :func:`~occsurf.algorithms.fitting.fit_scattered`. A refitted face's deviation
+  scattered data adaptively by :func:`~occsurf.algorithms.fitting.fit_adaptive_scattered` (or
+  :func:`~occsurf.algorithms.fitting.fit_scattered` with ``ctrl`` poles). A refitted face's deviation
   from the original is measured by OCC point projection (``GeomAPI_ProjectPointOnSurf``).
 * :func:`write_fit_outputs` writes ``OUT.step`` (the flat exact NURBS), ``OUT.json`` (the editable
   hierarchy, in the sidecar format of :mod:`occsurf.bridge.exchange.hierarchical_io`) and
@@ -27,18 +28,20 @@ import numpy as np
 
 from occsurf.algorithms import BSplineSurface
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError, ParameterError
-from occsurf.algorithms.fitting import fit_adaptive, fit_grid, fit_scattered
+from occsurf.algorithms.fitting import fit_adaptive, fit_adaptive_scattered, fit_grid, fit_scattered
 from occsurf.algorithms.fitting.adaptive import measure_grid
 from occsurf.algorithms.hierarchical import HierarchicalSurface
 
-__all__ = ["FitInput", "FitResult", "read_fit_input", "fit_input", "write_fit_outputs", "face_deviation",
+__all__ = ["FitInput", "FitResult", "read_fit_input", "face_inputs", "fit_input", "write_fit_outputs", "face_deviation",
            "GRID_SUFFIXES", "ROW_SUFFIXES"]
 
 GRID_SUFFIXES = (".npy",)
 ROW_SUFFIXES = (".csv", ".xyz", ".txt")
 CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
-#: Samples per direction of a refitted face: enough for its poles (4 per pole), within bounds.
-FACE_SAMPLES = (40, 400)
+#: Samples per direction of a refitted face: 4 per pole, within these bounds. At least 100: an
+#: analytic face converted to few rational poles (a cylinder's 7 x 2) needs many more cubic poles
+#: at 1e-4 of its size than 4 x 7 samples can determine (the adaptive fit could not refine further).
+FACE_SAMPLES = (100, 400)
 
 
 @dataclass
@@ -215,7 +218,14 @@ def _read_face(p: Path, face: int | None, samples: int | None) -> FitInput:
     k = 0 if face is None else int(face)
     if not 0 <= k < n:
         raise ExchangeError(f"{p}: face {k} is not in 0..{n - 1}")
+    return _face_input(model, p, k, samples)
+
+
+def _face_input(model: Any, p: Path, k: int, samples: int | None) -> FitInput:
+    """Face ``k`` of a read model sampled over its parameter bounds (4 samples per pole each way,
+    within FACE_SAMPLES), to refit."""
     f = model.faces[k]
+    n = len(model.faces)
     if f.surface is None:
         raise ExchangeError(f"{p}: face {k} ({f.surface_type}) could not be converted: {f.error}")
     from OCP.BRepTools import BRepTools
@@ -230,6 +240,25 @@ def _read_face(p: Path, face: int | None, samples: int | None) -> FitInput:
     Q = f.surface.evaluate_grid(np.linspace(u0, u1, mu), np.linspace(v0, v1, mv))
     return FitInput("grid", Q, description=f"{p.name}: face {k} of {n} ({f.surface_type}, {nu} x {nv} poles), "
                     f"sampled {mu} x {mv} over its parameter bounds", face=f.occ_surface)
+
+
+def face_inputs(path: str | os.PathLike[str], faces: list[int] | None = None, *, samples: int | None = None):
+    """Every face (or ``faces``) of a STEP/IGES file as :class:`FitInput`, the file read once.
+
+    Yields
+    ------
+    (int, FitInput or ExchangeError)
+        The face index and its input, or the reason it cannot be sampled.
+    """
+    from ..cli._common import read_model
+
+    p = Path(os.fspath(path))
+    model = read_model(p)
+    for k in range(len(model.faces)) if faces is None else faces:
+        try:
+            yield k, _face_input(model, p, k, samples)
+        except ExchangeError as err:
+            yield k, err
 
 
 def read_fit_input(path: str | os.PathLike[str], *, face: int | None = None, x_range=None, y_range=None,
@@ -295,7 +324,7 @@ def fit_input(inp: FitInput, tol: float, *, ctrl: tuple[int, int] | None = None,
     say = progress or (lambda s: None)
     ctrl = _pair(ctrl)
     if inp.kind == "scattered":
-        return _fit_scattered(inp, tol, ctrl, degree, smooth, say)
+        return _fit_scattered(inp, tol, ctrl, degree, smooth, say, max_levels)
     heights = inp.kind == "heights"
     kw = dict(x=inp.x, y=inp.y) if heights else {}
     if ctrl is not None:
@@ -327,26 +356,29 @@ def fit_input(inp: FitInput, tol: float, *, ctrl: tuple[int, int] | None = None,
     return res
 
 
-def _fit_scattered(inp: FitInput, tol: float, ctrl, degree: int, smooth, say) -> FitResult:
-    """Scattered rows: ``ctrl`` poles, or the pole count raised (spans x 1.5) until ``tol`` holds."""
+def _fit_scattered(inp: FitInput, tol: float, ctrl, degree: int, smooth, say, max_levels: int | None) -> FitResult:
+    """Scattered rows: adaptive hierarchical (:func:`~occsurf.algorithms.fitting.fit_adaptive_scattered`,
+    two parameter corrections on the base), or plain least squares with ``ctrl`` poles."""
     if smooth == "gcv":
         raise ParameterError("--smooth gcv: only for gridded data; give a number for scattered data")
     lam = None if float(smooth) == 0 else float(smooth)
-    k = inp.data.shape[0]
-    n = ctrl or (degree + 5, degree + 5)
-    cap = max(degree + 1, int(np.sqrt(k / 2)))
-    while True:
-        fit = fit_scattered(inp.data, n, degree, smoothing=lam, corrections=2)
-        say(f"scattered least squares {n[0]} x {n[1]} poles: max error {fit.max_error:.3g}")
-        nxt = tuple(min(degree + int(np.ceil(1.5 * (a - degree))), cap) for a in n)
-        if ctrl is not None or fit.max_error <= tol or nxt == n:
-            break
-        n = nxt
-    levels = [{"level": 0, "overlays": 0, "control_points": n[0] * n[1], "max_error": fit.max_error,
-               "rms_error": fit.rms_error}]
-    res = FitResult(HierarchicalSurface(fit.surface), levels, fit.max_error, fit.rms_error, float(tol),
-                    fit.max_error <= tol, "scattered least squares" + ("" if ctrl else " (pole count raised to tol)"))
-    res.panels = [_scatter_panel(fit)]
+    if ctrl is not None:
+        fit = fit_scattered(inp.data, ctrl, degree, smoothing=lam, corrections=2)
+        say(f"scattered least squares {ctrl[0]} x {ctrl[1]} poles: max error {fit.max_error:.3g}")
+        levels = [{"level": 0, "overlays": 0, "control_points": ctrl[0] * ctrl[1], "max_error": fit.max_error,
+                   "rms_error": fit.rms_error}]
+        res = FitResult(HierarchicalSurface(fit.surface), levels, fit.max_error, fit.rms_error, float(tol),
+                        fit.max_error <= tol, "scattered least squares")
+        res.panels = [_scatter_panel(fit.surface, fit.u, fit.v, fit.distance,
+                                     f"scattered least squares {ctrl[0]} x {ctrl[1]}")]
+        return res
+    af = fit_adaptive_scattered(inp.data, tol, degree, smoothing=lam, corrections=2, max_levels=max_levels,
+                                progress=say)
+    res = FitResult(af.hierarchy, [L.as_dict() for L in af.levels], af.max_error, af.rms_error, float(tol),
+                    af.converged, "adaptive hierarchical (scattered)")
+    res.panels = [_scatter_panel(s, af.u, af.v, d, f"level {L.level}: {L.overlays} overlays, max {L.max_error:.2g}",
+                                 [o for o in af.hierarchy.overlays if o.level == L.level])
+                  for L, s, d in zip(af.levels, af.level_surfaces, af.level_distances)]
     return res
 
 
@@ -393,37 +425,42 @@ def _pool(a: np.ndarray, k: int) -> np.ndarray:
     return m[::k, ::k]
 
 
+def _overlay_lines(surface: BSplineSurface, overlays) -> list[np.ndarray]:
+    """The borders of ``overlays`` on ``surface`` as polylines (40 points a side)."""
+    lines = []
+    t = np.linspace(0, 1, 40)
+    for o in overlays:
+        (a, b), (c, d) = o.region
+        for us, vs in ((a + (b - a) * t, np.full(40, c)), (a + (b - a) * t, np.full(40, d)),
+                       (np.full(40, a), c + (d - c) * t), (np.full(40, b), c + (d - c) * t)):
+            lines.append(surface.evaluate(us, vs))
+    return lines
+
+
 def _panel(surface: BSplineSurface, dist: np.ndarray, u: np.ndarray, v: np.ndarray, title: str, overlays) -> Any:
     from ..rendering.error_maps import ErrorPanel
 
     k = max(1, int(np.ceil(max(u.size, v.size) / 160)))
     uu, vv = u[::k], v[::k]
     P = surface.evaluate_grid(uu, vv)
-    lines = []
-    for o in overlays:
-        (a, b), (c, d) = o.region
-        t = np.linspace(0, 1, 40)
-        for us, vs in ((a + (b - a) * t, np.full(40, c)), (a + (b - a) * t, np.full(40, d)),
-                       (np.full(40, a), c + (d - c) * t), (np.full(40, b), c + (d - c) * t)):
-            lines.append(surface.evaluate(us, vs))
-    return ErrorPanel(P, _pool(dist, k)[: uu.size, : vv.size], title, lines)
+    return ErrorPanel(P, _pool(dist, k)[: uu.size, : vv.size], title, _overlay_lines(surface, overlays))
 
 
-def _scatter_panel(fit) -> Any:
-    """Scattered data: the surface on a grid coloured by the largest distance of the points whose
-    parameters fall in each cell (grey where no data)."""
+def _scatter_panel(surface: BSplineSurface, u: np.ndarray, v: np.ndarray, distance: np.ndarray, title: str,
+                   overlays=()) -> Any:
+    """Scattered data: the surface on an 80 x 80 grid coloured by the largest distance of the
+    points whose parameters fall in each cell (grey where no data), overlay borders drawn."""
     from ..rendering.error_maps import ErrorPanel
 
-    s = fit.surface
-    (u0, u1), (v0, v1) = s.domain
+    (u0, u1), (v0, v1) = surface.domain
     r = 80
     us, vs = np.linspace(u0, u1, r), np.linspace(v0, v1, r)
-    iu = np.clip(np.round((fit.u - u0) / (u1 - u0) * (r - 1)).astype(int), 0, r - 1)
-    iv = np.clip(np.round((fit.v - v0) / (v1 - v0) * (r - 1)).astype(int), 0, r - 1)
+    iu = np.clip(np.round((u - u0) / (u1 - u0) * (r - 1)).astype(int), 0, r - 1)
+    iv = np.clip(np.round((v - v0) / (v1 - v0) * (r - 1)).astype(int), 0, r - 1)
     E = np.full((r, r), -np.inf)
-    np.maximum.at(E, (iu, iv), fit.distance)
+    np.maximum.at(E, (iu, iv), distance)
     E[~np.isfinite(E)] = np.nan
-    return ErrorPanel(s.evaluate_grid(us, vs), E, f"scattered fit {s.n_poles[0]} x {s.n_poles[1]}")
+    return ErrorPanel(surface.evaluate_grid(us, vs), E, title, _overlay_lines(surface, overlays))
 
 
 def write_fit_outputs(result: FitResult, out_step: str | os.PathLike[str], *, name: str = "fit",

@@ -159,3 +159,33 @@ def test_bad_grids_and_arguments(capsys, tmp_path):
         assert code == 2 and message in err, err
     code, _, err = run(capsys, str(good), "--tol", "-1", "--out", str(tmp_path / "o.step"))
     assert code == 2 and "positive" in err
+
+
+def test_scattered_cloud_is_fitted_adaptively(capsys, tmp_path):
+    """A scattered .xyz cloud with a sharp feature: adaptive hierarchical by default (overlays, per
+    level statistics), the STEP surface read back is within tol of every point (re-measured), the
+    sidecar restores the hierarchy, and the error picture is written."""
+    rng = np.random.default_rng(8)
+    pts = rng.random((6000, 2))
+    pts[:4] = [[0, 0], [1, 0], [0, 1], [1, 1]]
+    P = np.c_[pts, sharp(pts[:, 0], pts[:, 1])]
+    cloud = tmp_path / "scan.xyz"
+    cloud.write_text("\n".join(f"{a:.17g} {b:.17g} {c:.17g}" for a, b, c in P))
+    out = tmp_path / "scan.step"
+    code, text, err = run(capsys, str(cloud), "--tol", "2e-3", "--out", str(out), "--json", "--in-process")
+    assert code == 0, err
+    doc = json.loads(text)
+    assert doc["kind"] == "scattered" and doc["method"] == "adaptive hierarchical (scattered)"
+    assert doc["converged"] and doc["max_error"] <= 2e-3 and len(doc["levels"]) >= 2
+    assert set(doc["levels"][0]) >= {"level", "overlays", "control_points", "max_error", "rms_error"}
+    assert doc["control_points_total"] == sum(L["control_points"] for L in doc["levels"])
+    assert Path(doc["outputs"]["png"]).stat().st_size > 10_000
+    flat = read_step(out).faces[0].surface
+    assert list(flat.n_poles) == doc["flat_poles"]
+    from occsurf.algorithms.fitting.scattered import base_parameters
+
+    u, v = base_parameters(flat, P)
+    d = project_points(flat, P, u, v)[2]
+    assert d.max() <= 2e-3 * (1 + 1e-6)
+    hs = read_hierarchical_step(out, sidecar=out.with_suffix(".json"))
+    assert len(hs.overlays) == sum(L["overlays"] for L in doc["levels"])
