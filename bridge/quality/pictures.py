@@ -161,9 +161,7 @@ def _cut(fields: Sequence[FaceField], lo: np.ndarray, normal: np.ndarray,
          offsets: np.ndarray) -> tuple[Lines, dict[int, Lines]]:
     from occsurf.algorithms import quality
 
-    from .report import uv_mask
-
-    faces = [(f.surface, uv_mask(f.mesh)) for f in fields]
+    faces = [(f.surface, f.mask()) for f in fields]
     index = np.array([f.mesh.index for f in fields])
     acc: dict[int, tuple[list, list, list]] = {}
 

@@ -82,6 +82,13 @@ class FaceField:
     values: dict[str, np.ndarray]
     degenerate: np.ndarray
     surface: Any = None
+    _mask: Any = field(default=None, repr=False)
+
+    def mask(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """:func:`uv_mask` of the mesh, built once (the model's and the face's sections share it)."""
+        if self._mask is None:
+            self._mask = uv_mask(self.mesh)
+        return self._mask
 
 
 @dataclass
