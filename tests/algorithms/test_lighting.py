@@ -462,6 +462,7 @@ def _points(seed: int, m: int = 20_000) -> tuple[np.ndarray, np.ndarray]:
 def test_compiled_kernel_matches_the_numpy_reference(seed, monkeypatch) -> None:
     """Both paths on every control, degenerate normals and a point at a light: the same numbers
     to 1e-13 (the kernel repeats the reference's operations; pow and acos may differ in an ulp)."""
+    monkeypatch.delenv("OCCSURF_NO_NUMBA", raising=False)  # the compiled path, whatever the environment
     setup = _every_control(seed)
     P, N = _points(seed)
     E = [1.0, -8.0, 12.0] if seed < 3 else P + [0.5, -3.0, 9.0]  # one eye, or one per point
@@ -479,6 +480,7 @@ def test_compiled_kernel_matches_the_numpy_reference(seed, monkeypatch) -> None:
 def test_compiled_kernel_is_bit_identical_on_integer_exponents(monkeypatch) -> None:
     """Integer exponents, hard cones and flaps use no transcendental function besides sqrt: the two
     paths give the same bits (the kernel repeats the reference's operations in its order)."""
+    monkeypatch.delenv("OCCSURF_NO_NUMBA", raising=False)  # the compiled path, whatever the environment
     light = WarnLight(position=(0.5, -1.0, 6.0), direction=(0.0, 0.2, -1.0), concentration=3.0, cone_angle_deg=32,
                       flaps={"x": [-2.5, 3.0]}, flap_edge=0.3, falloff="inverse", falloff_distance=3.0)
     setup = studio_three_point([0, 0, 0], 8.0).replace(lights=(light, *studio_three_point([0, 0, 0], 8.0).lights))
@@ -494,6 +496,7 @@ def test_compiled_kernel_is_bit_identical_on_integer_exponents(monkeypatch) -> N
 def test_compiled_kernel_threads_blocks_float32_and_threshold(monkeypatch) -> None:
     """Any block size and thread count give the same bits; float32 output is the float64 result
     rounded; below NUMBA_MIN_POINTS (read at call time) the NumPy path runs."""
+    monkeypatch.delenv("OCCSURF_NO_NUMBA", raising=False)  # the compiled path, whatever the environment
     from occsurf.algorithms.lighting import _kernels
 
     setup = _every_control(1)
