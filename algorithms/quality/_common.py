@@ -15,12 +15,13 @@ from .. import _validate as V
 from ..errors import InvalidGeometryError
 from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.surface import BSplineSurface
+from ..kernel.trimmed import TrimmedSurface
 from ..topology.generalized import GeneralizedSurface
 from ..topology.spatch import SPatch, domain_vertices
 
 Array = NDArray[np.float64]
 
-SURFACE_KINDS = "BSplineSurface, HierarchicalSurface, SPatch or GeneralizedSurface (with patch=)"
+SURFACE_KINDS = "BSplineSurface, TrimmedSurface, HierarchicalSurface, SPatch or GeneralizedSurface (with patch=)"
 
 
 def dot(a: Array, b: Array) -> Array:
@@ -83,7 +84,12 @@ class GridPartials:
 
 
 def surface_of(surface: Any, patch: int | None) -> Any:
-    """The evaluable surface: a :class:`GeneralizedSurface` needs ``patch``."""
+    """The evaluable surface: a :class:`GeneralizedSurface` needs ``patch``; a
+    :class:`TrimmedSurface` gives its surface (its trims go through :func:`trim_mask`)."""
+    if isinstance(surface, TrimmedSurface):
+        if patch is not None:
+            raise InvalidGeometryError("patch: only a GeneralizedSurface takes patch=, got a TrimmedSurface")
+        surface = surface.surface
     if isinstance(surface, GeneralizedSurface):
         if patch is None:
             raise InvalidGeometryError("patch: a GeneralizedSurface needs patch=<index of its S-patch>")
@@ -137,6 +143,16 @@ def grid_axes(surface: Any, us: ArrayLike | int, vs: ArrayLike | int) -> tuple[A
             out.append(a)
         return out[0], out[1]
     return grid_axis(us, u0, u1, "us"), grid_axis(vs, v0, v1, "vs")
+
+
+def trim_mask(surface: Any, us: Array, vs: Array, mask: NDArray[np.bool_] | None) -> NDArray[np.bool_] | None:
+    """``mask`` and, for a :class:`TrimmedSurface`, its classification of the grid ``us x vs``
+    (points on the face, boundary included: :meth:`TrimmedSurface.contains`); ``mask`` itself for
+    any other surface."""
+    if not isinstance(surface, TrimmedSurface):
+        return mask
+    inside = surface.contains(*np.meshgrid(us, vs, indexing="ij"))
+    return inside if mask is None else inside & mask
 
 
 def check_mask(mask: ArrayLike | None, shape: tuple[int, int]) -> NDArray[np.bool_] | None:

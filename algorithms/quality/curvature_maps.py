@@ -28,7 +28,7 @@ from ..geometry.differential import curvatures_from_derivatives
 from ..kernel.surface import BSplineSurface
 from ..topology.spatch import SPatch
 from . import _kernels
-from ._common import Array, GridPartials, check_mask, grid_axes, grid_partials, nudged_normals, surface_of
+from ._common import Array, GridPartials, check_mask, trim_mask, grid_axes, grid_partials, nudged_normals, surface_of
 
 __all__ = ["KINDS", "SCALE_MODES", "CurvatureMap", "ColorScale", "curvature_map", "curvature_values", "color_scale"]
 
@@ -173,8 +173,10 @@ def curvature_map(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, kind: 
 
     Parameters
     ----------
-    surface : BSplineSurface, HierarchicalSurface, SPatch or GeneralizedSurface
-        3-D; rational or not. Each kind is evaluated by its own exact derivatives.
+    surface : BSplineSurface, TrimmedSurface, HierarchicalSurface, SPatch or GeneralizedSurface
+        3-D; rational or not. Each kind is evaluated by its own exact derivatives. A
+        :class:`~occsurf.algorithms.TrimmedSurface` is mapped on its surface's grid, the grid points
+        off the face (:meth:`~occsurf.algorithms.TrimmedSurface.contains`) masked as by ``mask``.
     us, vs : array_like, shapes (m,), (n,), or int
         Grid parameters inside the domain (an integer: that many equally spaced values). For an
         S-patch they are domain coordinates ``x``, ``y`` and grid points outside its regular n-gon
@@ -207,7 +209,7 @@ def curvature_map(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, kind: 
     kind = _check_kind(kind)
     s = surface_of(surface, patch)
     a, b = grid_axes(s, us, vs)
-    m = check_mask(mask, (a.size, b.size))
+    m = trim_mask(surface, a, b, check_mask(mask, (a.size, b.size)))
     fused = _kernels.grid_curvatures(s, a, b) if isinstance(s, BSplineSurface) else None
     if fused is None:
         return map_from_partials(s, grid_partials(s, a, b, m), kind, m)

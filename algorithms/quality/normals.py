@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ._common import Array, check_mask, dot, grid_axes, grid_partials, nudged_normals, surface_of, unit_vectors, vectors
+from ._common import Array, check_mask, trim_mask, dot, grid_axes, grid_partials, nudged_normals, surface_of, unit_vectors, vectors
 
 __all__ = ["DRAFT_OK", "DRAFT_INSUFFICIENT", "DRAFT_UNDERCUT", "DRAFT_UNDEFINED", "draft_angle", "classify_draft",
            "normal_hedgehog", "normal_flips"]
@@ -94,7 +94,7 @@ def normal_hedgehog(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, leng
     """
     s = surface_of(surface, patch)
     a, b = grid_axes(s, us, vs)
-    m = check_mask(mask, (a.size, b.size))
+    m = trim_mask(surface, a, b, check_mask(mask, (a.size, b.size)))
     g = grid_partials(s, a, b, m)
     P = g.D[..., 0, 0, :]
     with np.errstate(invalid="ignore", divide="ignore"):

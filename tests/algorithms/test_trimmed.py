@@ -184,3 +184,29 @@ def test_tolerance_override_changes_the_boundary_band():
     with tolerances.override(TRIM_POLYLINE=1e-3):
         coarse = _plate().polylines()
     assert len(coarse[1]) < len(t.polylines()[1])
+
+
+def test_curvature_map_and_flags_respect_the_trims():
+    from occsurf.algorithms.quality import curvature_map, face_flags
+
+    t = TrimmedSurface(_dome(), _square(), [(_hole(),)])
+    cm = curvature_map(t, 21, 21, "mean")
+    g = np.linspace(0, 1, 21)
+    on_face = t.contains(*np.meshgrid(g, g, indexing="ij"))
+    assert not on_face.all() and on_face.any()
+    assert np.array_equal(cm.mask, on_face)
+    assert np.all(np.isnan(cm.values[~on_face]))
+    plain = curvature_map(t.surface, 21, 21, "mean")
+    assert_allclose(cm.values[on_face], plain.values[on_face], rtol=1e-14, atol=0)
+    extra = np.zeros((21, 21), bool)
+    extra[:10] = True
+    assert np.array_equal(curvature_map(t, 21, 21, mask=extra).mask, on_face & extra)
+    assert isinstance(face_flags(t, us=g, vs=g), list)
+
+
+def test_docstring_example_runs():
+    import doctest
+
+    from occsurf.algorithms.kernel import trimmed
+
+    assert doctest.testmod(trimmed, verbose=False).failed == 0
