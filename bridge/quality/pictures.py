@@ -63,8 +63,10 @@ N_SECTIONS = 9
 #: (a face flat across the model's direction would be missed or cut once).
 N_FACE_SECTIONS = 7
 FACE_SECTION_MIN_EXTENT = 0.2
-#: Comb teeth: longest tooth as a fraction of the shown extent.
+#: Comb teeth: longest tooth as a fraction of the shown extent (for the curvature at
+#: COMB_PERCENTILE of all the picture's cuts: one scale per picture).
 COMB_SCALE = 0.12
+COMB_PERCENTILE = 99.0
 
 
 #: Smallest half-range of a curvature colour scale, times the model size (1/unit; squared for
@@ -159,7 +161,7 @@ def model_section_axis(fields: Sequence[FaceField]) -> int:
 
 def _cut(fields: Sequence[FaceField], lo: np.ndarray, normal: np.ndarray,
          offsets: np.ndarray) -> tuple[Lines, dict[int, Lines]]:
-    from occsurf.algorithms import quality
+    from occsurf.algorithms import quality, tolerances
 
     faces = [(f.surface, f.mask()) for f in fields]
     index = np.array([f.mesh.index for f in fields])
@@ -176,17 +178,30 @@ def _cut(fields: Sequence[FaceField], lo: np.ndarray, normal: np.ndarray,
         if len(infl):
             inf.append(infl)
 
-    for sec in quality.plane_sections(faces, lo, normal, offsets):
-        for cur in sec.curves:
-            P = np.asarray(cur.points, float)
-            base, tips = np.asarray(cur.comb.points, float), np.asarray(cur.comb.tips, float)
-            infl = np.asarray(cur.inflection_points, float).reshape(-1, 3)
-            add(-1, P, base, tips, infl)
-            aligned = len(base) == len(P)
-            for fi in np.unique(cur.face):
-                sel = np.asarray(cur.face) == fi
-                add(int(index[fi]), P[sel], base[sel] if aligned else base[:0], tips[sel] if aligned else tips[:0],
-                    infl[:0])
+    sections = quality.plane_sections(faces, lo, normal, offsets)
+    # one comb scale for the whole picture (as a CAD curvature graph): the curvature of all cuts'
+    # COMB_PERCENTILE gets a spine COMB_SCALE of the extent, so a nearly straight cut shows a nearly
+    # flat comb beside a curved one (each cut's comb scaled to its own maximum made every cut look
+    # alike), and a cut grazing a face (its curvature tends to infinity there) does not flatten the rest
+    curves = [c for sec in sections for c in sec.curves]
+    ks = np.abs(np.concatenate([np.asarray(c.curvature, float) for c in curves])) if curves else np.zeros(0)
+    ks = ks[np.isfinite(ks)]
+    kref = float(np.percentile(ks, COMB_PERCENTILE)) if ks.size else 0.0
+    pts = np.concatenate([f.mesh.points for f in fields])
+    extent = float(np.linalg.norm(np.nanmax(pts, axis=0) - np.nanmin(pts, axis=0)))
+    common = COMB_SCALE * extent / kref if kref * extent > tolerances.QUALITY_FLAT_CURVATURE else 0.0
+    for cur in curves:
+        P = np.asarray(cur.points, float)
+        base, tips = np.asarray(cur.comb.points, float), np.asarray(cur.comb.tips, float)
+        own = float(cur.comb.scale)
+        tips = base + (tips - base) * (common / own) if own > 0 else base.copy()
+        infl = np.asarray(cur.inflection_points, float).reshape(-1, 3)
+        add(-1, P, base, tips, infl)
+        aligned = len(base) == len(P)
+        for fi in np.unique(cur.face):
+            sel = np.asarray(cur.face) == fi
+            add(int(index[fi]), P[sel], base[sel] if aligned else base[:0], tips[sel] if aligned else tips[:0],
+                infl[:0])
 
     def pack(t: tuple[list, list, list]) -> Lines:
         return t[0], t[1], (np.concatenate(t[2]) if t[2] else np.zeros((0, 3)))
