@@ -23,6 +23,8 @@ What is carried
   its largest coloured face (a build123d shape has one colour; build123d's importer uses the same
   rule). cadquery also keeps every face whose colour differs from its node's as a subshape colour,
   so per-face colours survive there.
+* **Layers**: cadquery subshape layers, per face (cadquery has no layer per node); build123d has no
+  layers.
 
 A flat file (no assembly) gives a root ``Compound`` / ``Assembly`` labelled with the file's stem,
 one child per top-level shape of the file (a solid, a shell, a face, a wire), labelled with its
@@ -426,13 +428,14 @@ def _cq_node(node: Any, path: str, faces: dict[str, list[ImportedFace]], used: s
     if key not in parts:  # a fresh handle: moving the cadquery shape must not move the model's prototype
         parts[key] = cq.Shape.cast(node.shape.Moved(TopLoc_Location()))
     assy = cq.Assembly(parts[key], name=name, loc=loc, color=_cq_color(color))
-    _cq_subshapes(assy, own, node.name, color, node.shape)
+    _cq_subshapes(assy, own, node.name, color, node.shape)  # cadquery has no node layer: every face's
     return assy
 
 
 def _cq_subshapes(assy: Any, faces: list[ImportedFace], label: str | None, color: RGBA | None,
-                  prototype: Any) -> None:
-    """Faces whose own name or colour differs from their node's become subshape names / colours.
+                  prototype: Any, layer: str | None = None) -> None:
+    """Faces whose own name, colour or layer differs from their node's become subshape names /
+    colours / layers.
 
     ``prototype``: the unlocated part shape whose faces the node's object holds (``None`` when the
     object is the located piece itself); an imported face is matched to it by its ``TShape``.
@@ -452,7 +455,9 @@ def _cq_subshapes(assy: Any, faces: list[ImportedFace], label: str | None, color
         name = f.name if f.name and f.name != label else None
         fcolor = getattr(f, "color", None)
         fcolor = fcolor if fcolor is not None and fcolor != color else None
-        if name is None and fcolor is None:
+        flayer = getattr(f, "layer", None)
+        flayer = flayer if flayer and flayer != layer else None
+        if name is None and fcolor is None and flayer is None:
             continue
         if proto is None:
             occ_face = f.face
@@ -461,7 +466,7 @@ def _cq_subshapes(assy: Any, faces: list[ImportedFace], label: str | None, color
             if k == 0:
                 continue
             occ_face = proto_faces[k - 1]
-        assy.addSubshape(cq.Face(occ_face), name=name, color=_cq_color(fcolor))
+        assy.addSubshape(cq.Face(occ_face), name=name, color=_cq_color(fcolor), layer=flayer)
 
 
 # ------------------------------------------------------------------------------- objects -> model

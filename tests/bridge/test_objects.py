@@ -334,3 +334,18 @@ def test_write_step_and_iges_take_assemblies_with_their_structure(tmp_path):
     _assert_same_faces([bd.Face(f.face) for f in model.faces], plates.faces(), rtol=1e-8)  # ~10 digits
     unnamed = read_step(write_step(tmp_path / "n.step", plates, names="both"))
     assert unnamed.assembly is None or not any(c.name == "plate_a" for c in unnamed.assembly.children)
+
+
+def test_face_layers_reach_cadquery_subshape_layers(tmp_path):
+    box = cq.Workplane().box(1, 2, 3)
+    assy = cq.Assembly(name="top").add(box, name="part")
+    assy["part"].addSubshape(box.faces("<X").val(), layer="datum")
+    path = tmp_path / "layers.step"
+    assy.export(str(path))
+    model = read_step(path)
+    assert [f.layer for f in model.faces].count("datum") == 1
+    part = next(a for _, a in read_step(path, as_="cadquery").traverse() if a.obj is not None)
+    (face, layer), = part._subshape_layers.items()
+    assert layer == "datum" and abs(face.Area() - 6.0) < 1e-12
+    back = model_from_object(part)
+    assert sorted(str(f.layer) for f in back.faces) == ["None"] * 5 + ["datum"]
