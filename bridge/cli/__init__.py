@@ -9,6 +9,7 @@
     occsurf demo [--out DIR] [--only NAME ...]
     occsurf check FILE [--out DIR] [--json] [--faces N ...] [--fail-on PRESET] [--timeout S] [--in-process]
     occsurf audit PATH... --out RESULTS [--scheduler ADDRESS] [--workers N] [--timeout S] [--resume] [--checks LIST]
+    occsurf convert IN OUT [--unit UNIT] [--digits N] [--timeout S] [--in-process]
 
 One module per command, each holding its parser and a thin handler that calls the library:
 
@@ -21,6 +22,7 @@ One module per command, each holding its parser and a thin handler that calls th
 :mod:`.demo`     the picture gallery (:func:`occsurf.examples.gallery.run_demos`)
 :mod:`.audit`    corpora on Dask, Parquet results (:func:`occsurf.bridge.audit.audit`)
 :mod:`.check`    surface-quality report, page and JSON (:func:`occsurf.bridge.quality.report.check_model`)
+:mod:`.convert`  STEP <-> IGES keeping structure, names, colours, units (:func:`occsurf.bridge.exchange.convert.convert`)
 :mod:`._common`  exit codes, file arguments, reading a model, tables, one-line errors
 ===============  ==================================================================================
 
@@ -41,7 +43,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from . import audit, check, demo, fill, fit, inspect, render
+from . import audit, check, convert, demo, fill, fit, inspect, render
 from ._common import EXIT_ERROR, guarded
 
 __all__ = ["main", "build_parser"]
@@ -61,6 +63,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_parser(sub)
     audit.add_parser(sub)
     check.add_parser(sub)
+    convert.add_parser(sub)
     inspect.add_worker_parser(sub)  # internal, no help= so it stays out of the listing
     return parser
 

@@ -85,6 +85,8 @@ class FileReport:
     faces: list[FaceReport] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     seconds: float = 0.0
+    #: The length unit the file declares (``ImportedModel.unit``: 'mm', 'm', 'inch'...); None if unread.
+    unit: str | None = None
 
     @property
     def n_free_form(self) -> int:
@@ -99,6 +101,7 @@ class FileReport:
         return {
             "path": self.path,
             "format": self.format,
+            "unit": self.unit,
             "error": self.error,
             "n_faces": len(self.faces),
             "n_free_form": self.n_free_form,
@@ -112,7 +115,8 @@ class FileReport:
     def from_json(cls, data: dict[str, Any]) -> FileReport:
         faces = [FaceReport.from_json(face) for face in data.get("faces", ())]
         return cls(path=data["path"], format=data.get("format"), error=data.get("error"), faces=faces,
-                   warnings=list(data.get("warnings", ())), seconds=float(data.get("seconds", 0.0)))
+                   warnings=list(data.get("warnings", ())), seconds=float(data.get("seconds", 0.0)),
+                   unit=data.get("unit"))
 
 
 # ---------------------------------------------------------------------------------------- reading
@@ -135,6 +139,7 @@ def _inspect_path(shown: str, path: Path, samples: int) -> FileReport:
             report.format = sniff_format(path)
             model = read_model(path, report.format)
             report.warnings = [error_line(w) for w in model.warnings]
+            report.unit = model.unit
             report.faces = inspect_model(model, samples)
     except Exception as err:  # noqa: BLE001 - report, never crash, never a traceback
         report.error = strip_path(error_line(err), path)

@@ -19,7 +19,7 @@ from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError, Kerne
 
 from ..messages import one_line
 
-__all__ = ["FACE_TOLERANCE", "silence_occ", "statics", "normalise", "step_bytes", "iges_bytes"]
+__all__ = ["FACE_TOLERANCE", "silence_occ", "statics", "normalise", "step_bytes", "print_step", "iges_bytes"]
 
 #: Tolerance (model units) of the faces and edges built from our surfaces and curves for export:
 #: OCC's ``Precision::Confusion()``.
@@ -27,16 +27,28 @@ FACE_TOLERANCE: float = 1e-7
 
 
 # ------------------------------------------------------------------------------- OCC session
-def silence_occ() -> None:
-    """Only failures reach OCC's message printers (no translator banners on stdout)."""
-    from .._occ import silence_messages
+def silence_occ() -> contextlib.AbstractContextManager[None]:
+    """``with silence_occ():`` only failures reach OCC's message printers in the block (no translator
+    banners on stdout); the caller's levels come back after it (:func:`occsurf.bridge._occ.quiet_messages`).
+    :func:`statics` does the same, so translator code inside a ``statics`` block needs nothing else."""
+    from .._occ import quiet_messages
 
-    silence_messages()
+    return quiet_messages()
 
 
 @contextlib.contextmanager
 def statics(values: dict[str, str | int | float]) -> Iterator[None]:
-    """Set ``Interface_Static`` parameters for the block, then restore the caller's values."""
+    """Set ``Interface_Static`` parameters for the block, then restore the caller's values.
+
+    The block is also a translator session: OCC's message printers print failures only inside it and
+    get the caller's trace levels back after it (:func:`occsurf.bridge._occ.quiet_messages`).
+    """
+    with silence_occ(), _static_values(values):
+        yield
+
+
+@contextlib.contextmanager
+def _static_values(values: dict[str, str | int | float]) -> Iterator[None]:
     from OCP.IGESControl import IGESControl_Controller
     from OCP.Interface import Interface_Static
     from OCP.STEPControl import STEPControl_Controller
@@ -84,8 +96,6 @@ def normalise(objects: Any, names: Any) -> list[tuple[Any, str | None]]:
 
 
 def _as_shape(obj: Any, label: str) -> Any:
-    from OCP.TopoDS import TopoDS_Shape
-
     if isinstance(obj, (BSplineSurface, BSplineCurve)):
         kind = "surface" if isinstance(obj, BSplineSurface) else "curve"
         if obj.dim != 3:
@@ -103,40 +113,18 @@ def _as_shape(obj: Any, label: str) -> Any:
         if not _is_clamped(obj.knots, obj.degree):
             obj = obj.clamp()
         return _curve_edge(obj, label)
-    if isinstance(obj, TopoDS_Shape):
-        shape = obj
-    elif isinstance(getattr(obj, "wrapped", None), TopoDS_Shape):  # build123d / cadquery Shape
-        shape = obj.wrapped
-    elif callable(getattr(obj, "vals", None)):  # cadquery Workplane
-        shape = _compound([v.wrapped for v in obj.vals() if isinstance(getattr(v, "wrapped", None), TopoDS_Shape)])
-        if shape is None:
-            raise InvalidGeometryError(f"{label}: the Workplane holds no shapes")
-    else:
+    from ..conversion.shapes import as_shape, is_shape_like
+
+    if not is_shape_like(obj):
         raise InvalidGeometryError(
             f"{label}: expected a BSplineSurface, BSplineCurve, TopoDS_Shape, build123d or cadquery shape, "
             f"got {type(obj).__name__}"
         )
-    if shape.IsNull():
-        raise InvalidGeometryError(f"{label}: the shape is null")
-    return shape
+    return as_shape(obj, label)  # TopoDS, build123d/cadquery shapes, Workplane, Assembly, builders
 
 
 def _is_clamped(knots: Any, degree: int) -> bool:
     return bool((knots[: degree + 1] == knots[0]).all() and (knots[-degree - 1 :] == knots[-1]).all())
-
-
-def _compound(shapes: list[Any]) -> Any:
-    if not shapes:
-        return None
-    from OCP.BRep import BRep_Builder
-    from OCP.TopoDS import TopoDS_Compound
-
-    comp = TopoDS_Compound()
-    builder = BRep_Builder()
-    builder.MakeCompound(comp)
-    for s in shapes:
-        builder.Add(comp, s)
-    return comp
 
 
 def _surface_face(surface: BSplineSurface, label: str) -> Any:
@@ -171,18 +159,16 @@ def _curve_edge(curve: BSplineCurve, label: str) -> Any:
     raise KernelError(f"{label}: OCC could not build an edge from the curve ({reason})")
 
 
-def step_bytes(p: Path, items: list[tuple[Any, str | None]], digits: int) -> bytes:
-    from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
+def step_bytes(p: Path, items: list[tuple[Any, str | None]], digits: int, unit: str = "mm") -> bytes:
     from OCP.IFSelect import IFSelect_ReturnStatus
     from OCP.StepBasic import StepBasic_Product
     from OCP.STEPConstruct import STEPConstruct
     from OCP.STEPControl import STEPControl_StepModelType, STEPControl_Writer
-    from OCP.StepData import StepData_StepWriter
     from OCP.StepShape import StepShape_Face
     from OCP.TCollection import TCollection_HAsciiString
     from OCP.TopLoc import TopLoc_Location
 
-    with statics({"write.step.unit": "MM"}):
+    with statics({"write.step.unit": unit.upper()}):
         writer = STEPControl_Writer()
         for i, (shape, name) in enumerate(items):
             model = writer.WS().Model()
@@ -217,25 +203,35 @@ def step_bytes(p: Path, items: list[tuple[Any, str | None]], digits: int) -> byt
                 item = STEPConstruct.FindEntity_s(finder, shape, TopLoc_Location())
                 if item is not None:
                     item.SetName(text)
-        model = writer.WS().Model()
-        try:
-            header = APIHeaderSection_MakeHeader(model)
-            header.SetName(TCollection_HAsciiString(p.name))
-            header.Apply(model)
-        except Exception:  # noqa: BLE001 - the header name is cosmetic
-            pass
-        # OCC's Write() prints through a StepData_StepWriter whose FloatWriter keeps 13 digits;
-        # print the same model ourselves with every real in %.{digits-1}E.
-        step_writer = StepData_StepWriter(model)
-        floats = step_writer.FloatWriter()
-        floats.SetFormat(f"%.{digits - 1}E", True)  # True: no special format near 1
-        floats.SetZeroSuppress(False)  # OCC's zero suppression mangles %E output (0.5 -> "5.")
-        buffer = io.BytesIO()
-        try:
-            step_writer.SendModel(writer.WS().Protocol())
-            ok = step_writer.Print(buffer)
-        except Exception as err:  # noqa: BLE001
-            raise ExchangeError(f"{p}: printing the STEP model failed: {one_line(err)}") from err
+        return print_step(p, writer.WS(), digits)
+
+
+def print_step(p: Path, ws: Any, digits: int) -> bytes:
+    """The STEP text of a translated work session's model, every real printed with ``digits``
+    significant digits (``%.{digits-1}E``), the header naming ``p``."""
+    from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
+    from OCP.StepData import StepData_StepWriter
+    from OCP.TCollection import TCollection_HAsciiString
+
+    model = ws.Model()
+    try:
+        header = APIHeaderSection_MakeHeader(model)
+        header.SetName(TCollection_HAsciiString(p.name))
+        header.Apply(model)
+    except Exception:  # noqa: BLE001 - the header name is cosmetic
+        pass
+    # OCC's Write() prints through a StepData_StepWriter whose FloatWriter keeps 13 digits;
+    # print the same model ourselves with every real in %.{digits-1}E.
+    step_writer = StepData_StepWriter(model)
+    floats = step_writer.FloatWriter()
+    floats.SetFormat(f"%.{digits - 1}E", True)  # True: no special format near 1
+    floats.SetZeroSuppress(False)  # OCC's zero suppression mangles %E output (0.5 -> "5.")
+    buffer = io.BytesIO()
+    try:
+        step_writer.SendModel(ws.Protocol())
+        ok = step_writer.Print(buffer)
+    except Exception as err:  # noqa: BLE001
+        raise ExchangeError(f"{p}: printing the STEP model failed: {one_line(err)}") from err
     data = buffer.getvalue()
     if not ok or not data.rstrip().endswith(b"END-ISO-10303-21;"):
         raise ExchangeError(f"{p}: printing the STEP model failed")
@@ -243,12 +239,19 @@ def step_bytes(p: Path, items: list[tuple[Any, str | None]], digits: int) -> byt
 
 
 def _count_faces(shape: Any) -> int:
+    """Distinct faces of ``shape`` whatever their placement: OCC writes a face that several placed
+    instances share once (the instances are references), so that is the count to expect."""
     from OCP.TopAbs import TopAbs_FACE
-    from OCP.TopExp import TopExp
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopLoc import TopLoc_Location
     from OCP.TopTools import TopTools_IndexedMapOfShape
 
+    identity = TopLoc_Location()
     faces = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(shape, TopAbs_FACE, faces)
+    ex = TopExp_Explorer(shape, TopAbs_FACE)
+    while ex.More():
+        faces.Add(ex.Current().Located(identity))
+        ex.Next()
     return faces.Extent()
 
 
@@ -256,13 +259,13 @@ def _iges_label(name: str) -> str:
     return "".join(c if 32 < ord(c) < 127 else "_" for c in name)[:8]
 
 
-def iges_bytes(p: Path, items: list[tuple[Any, str | None]]) -> bytes:
+def iges_bytes(p: Path, items: list[tuple[Any, str | None]], unit: str = "mm") -> bytes:
     from OCP.IGESBasic import IGESBasic_Name
     from OCP.IGESControl import IGESControl_Writer
     from OCP.TCollection import TCollection_HAsciiString
 
-    with statics({"write.iges.unit": "MM"}):
-        writer = IGESControl_Writer("MM", 0)  # 0: faces as trimmed surfaces (144), the usual form
+    with statics({"write.iges.unit": unit.upper()}):
+        writer = IGESControl_Writer(unit.upper(), 0)  # 0: faces as trimmed surfaces (144), the usual form
         model = writer.Model()
         ranges: list[tuple[int, int, str]] = []
         for i, (shape, name) in enumerate(items):

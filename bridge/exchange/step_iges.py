@@ -87,6 +87,7 @@ from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 from ..messages import one_line
 from . import files as _files
 from . import occ_io as _xocc
+from . import xcaf
 from .occ_io import FACE_TOLERANCE  # re-exported: part of the public constants
 
 __all__ = [
@@ -161,6 +162,9 @@ class ImportedFace:
     u_periodic: bool
     v_periodic: bool
     continuity: str
+    color: tuple[float, float, float, float] | None = None
+    layer: str | None = None
+    instance: str | None = None
 
 
 @dataclass(frozen=True)
@@ -221,6 +225,14 @@ class ImportedModel:
         transfer (their geometry is missing from ``shape``), references to undefined instances (the
         partial model is read), OCC's check messages, fewer faces than the file's face instances,
         closed shells that are open (see :mod:`occsurf.bridge.exchange.checks`).
+    unit : str
+        The length unit the file declares (``'mm'``, ``'cm'``, ``'m'``, ``'inch'``, ``'ft'``, ``'um'``...;
+        ``'mm'`` when it says nothing). The geometry is in millimetres whatever the unit.
+    unit_scale : float
+        Millimetres per file unit (1.0, 10.0, 1000.0, 25.4...).
+    assembly : AssemblyNode or None
+        The assembly tree (:class:`occsurf.bridge.exchange.xcaf.AssemblyNode`: instances as references
+        to shared parts, placements, names, colours, layers); ``None`` for a flat file.
     """
 
     path: str
@@ -229,6 +241,9 @@ class ImportedModel:
     faces: list[ImportedFace]
     edges: list[ImportedEdge]
     warnings: list[str] = field(default_factory=list)
+    unit: str = "mm"
+    unit_scale: float = 1.0
+    assembly: Any = field(default=None, repr=False)
 
 
 # ------------------------------------------------------------------------------------ reading
@@ -237,7 +252,8 @@ READ_JOB = "occsurf.bridge.exchange.step_iges:transfer_job"
 READ_PRELOAD = ("occsurf.bridge.exchange.step_iges",)
 
 
-def read_step(path: str | os.PathLike[str], *, isolated: bool = False, timeout: float | None = None) -> ImportedModel:
+def read_step(path: str | os.PathLike[str], *, isolated: bool = False, timeout: float | None = None,
+              as_: str | None = None) -> ImportedModel | Any:
     """Read a STEP file: every face and free edge, converted to our splines.
 
     Parameters
@@ -250,10 +266,17 @@ def read_step(path: str | os.PathLike[str], *, isolated: bool = False, timeout: 
         runs here. Use it for files from untrusted sources.
     timeout : float, optional
         With ``isolated``: seconds the worker may take before it is stopped (default no limit).
+    as_ : {None, 'build123d', 'cadquery'}
+        Return the model as the objects build123d or cadquery users hold instead
+        (:func:`occsurf.bridge.exchange.objects.to_build123d` / ``to_cadquery``): a build123d
+        ``Compound`` tree (``label`` and ``color`` on every node, instances sharing their part's
+        shape, each moved to its placement) or a cadquery ``Assembly`` (names, colours, locations,
+        per-face colours and names as subshapes); a flat file as a ``Compound`` / ``Assembly``
+        labelled with the file's stem, one child per top-level shape.
 
     Returns
     -------
-    ImportedModel
+    ImportedModel, or a build123d Compound / cadquery Assembly with ``as_``
         ``format == 'step'``. Values in millimetres. ``warnings`` lists what was wrong with the file
         but could be read around (see :mod:`occsurf.bridge.exchange.checks`): references to undefined
         instances (the partial model is read), OCC's check messages (wrong arity, a text for a number,
@@ -267,13 +290,17 @@ def read_step(path: str | os.PathLike[str], *, isolated: bool = False, timeout: 
         a valid file without any face or edge; with ``isolated``, a crash or a time-out of the reader
         process. The message names the path.
     """
+    from .objects import check_as, convert_model
+
+    check_as(as_)
     if isolated:
-        return _read_isolated(path, "step", timeout)
-    p, shape, names, warnings = _transfer(path, "step")
-    return _convert(p, "step", shape, names, warnings)
+        return convert_model(_read_isolated(path, "step", timeout), as_)
+    p, shape, names, warnings, xdata = _transfer(path, "step")
+    return convert_model(_convert(p, "step", shape, names, warnings, xdata), as_)
 
 
-def read_iges(path: str | os.PathLike[str], *, isolated: bool = False, timeout: float | None = None) -> ImportedModel:
+def read_iges(path: str | os.PathLike[str], *, isolated: bool = False, timeout: float | None = None,
+              as_: str | None = None) -> ImportedModel | Any:
     """Read an IGES file: every face and free edge, converted to our splines.
 
     B-spline curves are taken as the file gives them (``read.iges.bspline.continuity = 0``:
@@ -282,7 +309,7 @@ def read_iges(path: str | os.PathLike[str], *, isolated: bool = False, timeout: 
     Parameters
     ----------
     path : str or path-like
-    isolated, timeout
+    isolated, timeout, as_
         As :func:`read_step`.
 
     Returns
@@ -300,10 +327,13 @@ def read_iges(path: str | os.PathLike[str], *, isolated: bool = False, timeout: 
         valid file without any face or edge; with ``isolated``, a crash or time-out of the reader
         process. The message names the path.
     """
+    from .objects import check_as, convert_model
+
+    check_as(as_)
     if isolated:
-        return _read_isolated(path, "iges", timeout)
-    p, shape, names, warnings = _transfer(path, "iges")
-    return _convert(p, "iges", shape, names, warnings)
+        return convert_model(_read_isolated(path, "iges", timeout), as_)
+    p, shape, names, warnings, xdata = _transfer(path, "iges")
+    return convert_model(_convert(p, "iges", shape, names, warnings, xdata), as_)
 
 
 def _occ_name(p: Path) -> str:
@@ -312,8 +342,13 @@ def _occ_name(p: Path) -> str:
 
 
 def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[dict[int, str], dict[int, str]],
-                                                               list[str]]:
-    """Check, parse and transfer a file: ``(path, shape, (face names, edge names), warnings)``."""
+                                                               list[str], Any]:
+    """Check, parse and transfer a file: ``(path, shape, (face names, edge names), warnings, xcaf data)``.
+
+    The file is parsed by OCC's XCAF reader; the roots are transferred one by one (a root that fails
+    is a warning), then the same transfer fills an XCAF document (:func:`.xcaf.read_xcaf`): unit,
+    assembly tree, colours, layers, instances. In an assembly a face without a name of its own is
+    named after its instance."""
     from . import checks
 
     kind = fmt.upper()
@@ -327,37 +362,45 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
         iges_scan = checks.scan_iges(p, data)
         warnings = list(iges_scan.warnings)
         scan = None
-    _xocc.silence_occ()
     from OCP.IFSelect import IFSelect_ReturnStatus
 
-    settings: dict[str, str | int | float] = {"xstep.cascade.unit": "MM"}
+    settings: dict[str, str | int | float] = {"xstep.cascade.unit": "MM", "read.stepcaf.subshapes.name": 1}
     if fmt == "iges":
         settings["read.iges.bspline.continuity"] = 0
     with _xocc.statics(settings):
         try:
-            reader, status = _parse(p, fmt, scan.data if scan is not None else data)
+            reader, status, caf = _parse(p, fmt, scan.data if scan is not None else data)
         except Exception as err:  # noqa: BLE001 - any OCC failure is a bad file
             raise ExchangeError(f"{p}: {kind} parser failed: {one_line(err)}") from err
         # Checked BEFORE any transfer: TransferRoots after a failed read crashes the process.
         if status != IFSelect_ReturnStatus.IFSelect_RetDone:
             raise ExchangeError(f"{p}: not a readable {kind} file (OCC read status {status.name})")
         if scan is not None:
-            reader, scan, warnings = _without_broken(p, data, reader, scan, warnings)
+            reader, scan, warnings, caf = _without_broken(p, data, reader, scan, warnings, caf)
         warnings += checks.occ_check_warnings(reader, fmt, scan)
         if fmt == "step":
             reader.SetSystemLengthUnit(1.0)  # millimetres
+        unit, scale, unit_warnings = xcaf.step_unit(reader) if fmt == "step" else xcaf.iges_unit(reader)
         try:
-            shape, names, root_warnings = _transfer_roots(p, reader)
+            shape, names, root_warnings, own_face_names = _transfer_roots(p, reader)
         except ExchangeError as err:
             if not warnings:
                 raise
             raise ExchangeError(f"{err} ({warnings[0]})") from err
-        warnings += root_warnings
+        warnings += root_warnings + unit_warnings
         warnings += checks.model_warnings(shape, reader, scan if fmt == "step" else iges_scan, _count_bare_faces(shape))
-    return p, shape, names, warnings
+        faces_map, _ = _maps(shape)
+        xdata = xcaf.read_xcaf(caf, faces_map, _BareIndex(faces_map), p.stem)
+        xdata.unit, xdata.unit_scale = unit, scale
+        warnings += xdata.warnings
+        for i, instance_name in xdata.instance_names.items():  # own name, else the instance's
+            names[0][i] = own_face_names.get(i) or xdata.face_names.get(i) or instance_name
+    del caf
+    return p, shape, names, warnings, xdata
 
 
-def _without_broken(p: Path, data: bytes, reader: Any, scan: Any, warnings: list[str]) -> tuple[Any, Any, list[str]]:
+def _without_broken(p: Path, data: bytes, reader: Any, scan: Any, warnings: list[str],
+                    caf: Any) -> tuple[Any, Any, list[str], Any]:
     """Parse again without the instances OCC read with a null field (a reference of the wrong type:
     transferring them crashes the process), as long as it finds such instances (at most 3 rounds)."""
     from OCP.IFSelect import IFSelect_ReturnStatus
@@ -373,30 +416,33 @@ def _without_broken(p: Path, data: bytes, reader: Any, scan: Any, warnings: list
         scan = checks.scan_step(p, data, broken)
         warnings = list(scan.warnings)
         try:
-            reader, status = _parse(p, "step", scan.data)
+            reader, status, caf = _parse(p, "step", scan.data)
         except Exception as err:  # noqa: BLE001
             raise ExchangeError(f"{p}: STEP parser failed: {one_line(err)}") from err
         if status != IFSelect_ReturnStatus.IFSelect_RetDone:
             raise ExchangeError(f"{p}: not a readable STEP file (OCC read status {status.name})")
-    return reader, scan, warnings
+    return reader, scan, warnings, caf
 
 
-def _parse(p: Path, fmt: str, data: bytes) -> tuple[Any, Any]:
-    """OCC's reader on ``data`` (the checked bytes, not the file again): ``(reader, status)``."""
+def _parse(p: Path, fmt: str, data: bytes) -> tuple[Any, Any, Any]:
+    """OCC's XCAF reader on ``data`` (the checked bytes, not the file again): ``(reader, status, caf)``:
+    ``reader`` the ``STEPControl_Reader``/``IGESControl_Reader`` inside ``caf`` (keep ``caf`` alive
+    while ``reader`` is used)."""
     if fmt == "step":
-        from OCP.STEPControl import STEPControl_Reader
+        from OCP.STEPCAFControl import STEPCAFControl_Reader
 
-        reader = STEPControl_Reader()
-        return reader, reader.ReadStream(_occ_name(p), io.BytesIO(data))
+        caf = STEPCAFControl_Reader()
+        reader = caf.ChangeReader()
+        return reader, reader.ReadStream(_occ_name(p), io.BytesIO(data)), caf
     import tempfile
 
-    from OCP.IGESControl import IGESControl_Reader
+    from OCP.IGESCAFControl import IGESCAFControl_Reader
 
-    reader = IGESControl_Reader()  # reads files only: a private copy of the checked bytes
+    reader = IGESCAFControl_Reader()  # reads files only: a private copy of the checked bytes
     with tempfile.TemporaryDirectory(prefix="occsurf-iges-") as tmp:
         copy = Path(tmp) / "model.igs"
         copy.write_bytes(data)
-        return reader, reader.ReadFile(str(copy))
+        return reader, reader.ReadFile(str(copy)), reader
 
 
 def _count_bare_faces(shape: Any) -> int:
@@ -424,13 +470,16 @@ def transfer_job(item: dict[str, Any]) -> dict[str, Any]:
     """
     from OCP.BinTools import BinTools
 
-    p, shape, (face_names, edge_names), warnings = _transfer(item["path"], item["format"])
-    if not BinTools.Write_s(shape, item["out"]):
+    p, shape, (face_names, edge_names), warnings, xdata = _transfer(item["path"], item["format"])
+    xdoc, prototypes = xdata.to_json()
+    # one BRep holding the model and the assembly's prototypes: shared sub-shapes stay shared
+    if not BinTools.Write_s(xcaf.compound([shape, *prototypes]) if prototypes else shape, item["out"]):
         raise ExchangeError(f"{p}: cannot pass the model on ({item['out']} not written)")
     faces_map, edges_map = _maps(shape)
     return {"faces": faces_map.Extent(), "edges": edges_map.Extent(), "warnings": warnings,
             "face_names": {str(k): v for k, v in face_names.items()},
-            "edge_names": {str(k): v for k, v in edge_names.items()}}
+            "edge_names": {str(k): v for k, v in edge_names.items()},
+            "xcaf": xdoc, "n_prototypes": len(prototypes)}
 
 
 def _read_isolated(path: str | os.PathLike[str], fmt: str, timeout: float | None) -> ImportedModel:
@@ -463,7 +512,20 @@ def _read_isolated(path: str | os.PathLike[str], fmt: str, timeout: float | None
             raise ExchangeError(f"{p}: the reader process's model could not be loaded")
     info = outcome.value
     names = ({int(k): v for k, v in info["face_names"].items()}, {int(k): v for k, v in info["edge_names"].items()})
-    model = _convert(p, fmt, shape, names, list(info["warnings"]))
+    prototypes: list[Any] = []
+    if info["n_prototypes"]:
+        from OCP.TopoDS import TopoDS_Iterator
+
+        it = TopoDS_Iterator(shape)
+        parts = []
+        while it.More():
+            parts.append(it.Value())
+            it.Next()
+        if len(parts) != 1 + info["n_prototypes"]:
+            raise ExchangeError(f"{p}: the reader process's model could not be loaded (assembly parts missing)")
+        shape, prototypes = parts[0], parts[1:]
+    xdata = xcaf.XcafData.from_json(info["xcaf"], prototypes)
+    model = _convert(p, fmt, shape, names, list(info["warnings"]), xdata)
     if (len(model.faces), len(model.edges)) != (info["faces"], info["edges"]):
         raise ExchangeError(f"{p}: the model changed on its way from the reader process "
                             f"({info['faces']} faces, {info['edges']} edges; got {len(model.faces)}, {len(model.edges)})")
@@ -525,10 +587,10 @@ class _BareIndex:
 
 def _names(
     reader: Any, root_shapes: list[tuple[Any, str | None]], faces_map: Any, edges_map: Any
-) -> tuple[dict[int, str], dict[int, str]]:
+) -> tuple[tuple[dict[int, str], dict[int, str]], dict[int, str]]:
     """Names of faces and edges (1-based map indices), by priority: the entity the face or edge
     itself came from; an entity it is part of (shell, curve set, group...); the root it came from
-    (STEP product, IGES root entity).
+    (STEP product, IGES root entity). Also the faces' own names (the first priority alone).
 
     One pass over the transfer map: ``EntityFromShapeResult`` per face searches the whole map,
     which made naming the faces of a 600-face file take 4 s instead of 0.5 s.
@@ -575,11 +637,13 @@ def _names(
     for shape, name in root_shapes:
         if name is not None:
             spread(shape, name, roots)
-    return tuple({**r, **c, **o} for o, c, r in zip(own, part_of, roots))  # type: ignore[return-value]
+    merged = tuple({**r, **c, **o} for o, c, r in zip(own, part_of, roots))
+    return merged, own[0]  # type: ignore[return-value]
 
 
-def _transfer_roots(p: Path, reader: Any) -> tuple[Any, tuple[dict[int, str], dict[int, str]], list[str]]:
-    """Transfer every root: ``(shape, (face names, edge names) by 1-based map index, warnings)``."""
+def _transfer_roots(p: Path, reader: Any) -> tuple[Any, tuple[dict[int, str], dict[int, str]], list[str],
+                                                  dict[int, str]]:
+    """Transfer every root: ``(shape, (face names, edge names) by 1-based map index, warnings, own face names)``."""
     n_roots = reader.NbRootsForTransfer()
     if n_roots == 0:
         raise ExchangeError(f"{p}: no transferable entities in the file")
@@ -604,7 +668,8 @@ def _transfer_roots(p: Path, reader: Any) -> tuple[Any, tuple[dict[int, str], di
     faces_map, edges_map = _maps(shape)
     if faces_map.Extent() == 0 and edges_map.Extent() == 0:
         raise ExchangeError(f"{p}: the file holds no faces and no curves")
-    return shape, _names(reader, root_shapes, faces_map, edges_map), warnings
+    names, own_face_names = _names(reader, root_shapes, faces_map, edges_map)
+    return shape, names, warnings, own_face_names
 
 
 def _maps(shape: Any) -> tuple[Any, Any]:
@@ -627,13 +692,23 @@ def _maps(shape: Any) -> tuple[Any, Any]:
 
 
 def _convert(p: Path, fmt: str, shape: Any, names: tuple[dict[int, str], dict[int, str]],
-             warnings: list[str]) -> ImportedModel:
+             warnings: list[str], xdata: xcaf.XcafData | None = None) -> ImportedModel:
     """The :class:`ImportedModel` of a transferred shape: every face and free edge converted."""
+    from dataclasses import replace
+
     faces_map, edges_map = _maps(shape)
     face_names, edge_names = names
-    faces = [_import_face(i - 1, faces_map.FindKey(i), face_names.get(i)) for i in range(1, faces_map.Extent() + 1)]
+    x = xdata if xdata is not None else xcaf.XcafData()
+    faces = []
+    for i in range(1, faces_map.Extent() + 1):
+        face = _import_face(i - 1, faces_map.FindKey(i), face_names.get(i))
+        attributes = {"color": x.colors.get(i), "layer": x.layers.get(i), "instance": x.instances.get(i)}
+        if any(v is not None for v in attributes.values()):
+            face = replace(face, **attributes)
+        faces.append(face)
     edges = [_import_edge(i - 1, edges_map.FindKey(i), edge_names.get(i)) for i in range(1, edges_map.Extent() + 1)]
-    return ImportedModel(path=str(p), format=fmt, shape=shape, faces=faces, edges=edges, warnings=warnings)
+    return ImportedModel(path=str(p), format=fmt, shape=shape, faces=faces, edges=edges, warnings=warnings,
+                         unit=x.unit, unit_scale=x.unit_scale, assembly=x.assembly)
 
 
 def _geomabs_name(value: Any, prefix: str = "GeomAbs_") -> str:
@@ -732,8 +807,9 @@ def write_step(
     *,
     precision_digits: int = STEP_DIGITS,
     replace_readonly: bool = False,
+    unit: str | None = None,
 ) -> Path:
-    """Write surfaces, curves and shapes to a STEP file (AP214, millimetres), atomically.
+    """Write surfaces, curves and shapes, or a read model with its structure, to a STEP file (AP214), atomically.
 
     Parameters
     ----------
@@ -745,8 +821,13 @@ def write_step(
         Surfaces and curves must be 3-D. Each object is one STEP product. A spline with an
         unclamped knot vector is written as its ``clamp()`` (the same geometry): OCC's STEP writer
         silently drops some unclamped rational faces and its reader trims others.
+        Or an :class:`ImportedModel` (from :func:`read_step`/:func:`read_iges`) or an
+        :class:`~occsurf.bridge.exchange.xcaf.AssemblyNode` tree: written through OCC's XCAF writer
+        with its assembly structure (each part once, instances as references with their placements),
+        the names of parts, instances and faces, the colours and layers of instances and faces.
     names : str or sequence of (str or None), optional
         One name per object (a str for a single object); see the module notes for where they go.
+        Not with a model or a tree (they carry their names).
     precision_digits : int, default 17
         Significant digits of every real, 2 to 17. 17 makes the round trip bit-exact; OCC's own
         writer uses 13.
@@ -754,6 +835,10 @@ def write_step(
         Replace an existing read-only file (refused otherwise). A target that exists and is not a
         regular file (a device such as ``/dev/null``, a FIFO, a socket) is always refused; a symlink
         to a regular file is followed (the link stays, its target is replaced).
+    unit : str, optional
+        Length unit the file declares, a key of :data:`occsurf.bridge.exchange.xcaf.UNITS` (``'mm'``,
+        ``'m'``, ``'inch'``...): values are written divided by its size in millimetres and read back
+        unchanged. Default: the model's ``unit``, else ``'mm'``.
 
     Returns
     -------
@@ -762,7 +847,7 @@ def write_step(
     Raises
     ------
     InvalidGeometryError
-        An unsupported, null or non-3-D object; ``names`` or ``precision_digits`` invalid.
+        An unsupported, null or non-3-D object; ``names``, ``precision_digits`` or ``unit`` invalid.
     KernelError
         OCC could not build a face or edge from a surface or curve.
     ExchangeError
@@ -773,11 +858,25 @@ def write_step(
     p = _files.target(path, replace_readonly=replace_readonly)
     if isinstance(precision_digits, bool) or not isinstance(precision_digits, int) or not 2 <= precision_digits <= 17:
         raise InvalidGeometryError(f"precision_digits: expected an integer from 2 to 17, got {precision_digits!r}")
-    items = _xocc.normalise(objects, names)
-    _xocc.silence_occ()
-    data = _xocc.step_bytes(p, items, precision_digits)
+    file_unit = _write_unit(objects, names, unit)
+    if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)):
+        data = xcaf.step_document_bytes(p, objects, precision_digits, file_unit)
+    else:
+        items = _xocc.normalise(objects, names)
+        data = _xocc.step_bytes(p, items, precision_digits, file_unit)
     _files.atomic_write(p, data, replace_readonly=replace_readonly)
     return p
+
+
+def _write_unit(objects: Any, names: Any, unit: str | None) -> str:
+    """The unit to write (checked); a model or a tree takes no ``names``."""
+    if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)) and names is not None:
+        raise InvalidGeometryError("names: a model or an assembly tree carries its own names; got names as well")
+    if unit is None:
+        unit = objects.unit if isinstance(objects, ImportedModel) else "mm"
+    if unit not in xcaf.WRITE_UNITS:
+        raise InvalidGeometryError(f"unit: expected one of {', '.join(xcaf.WRITE_UNITS)}, got {unit!r}")
+    return unit
 
 
 def write_iges(
@@ -786,6 +885,7 @@ def write_iges(
     names: str | Sequence[str | None] | None = None,
     *,
     replace_readonly: bool = False,
+    unit: str | None = None,
 ) -> Path:
     """Write surfaces, curves and shapes to an IGES file (millimetres, faces as 144/128), atomically.
 
@@ -794,8 +894,10 @@ def write_iges(
 
     Parameters
     ----------
-    path, objects, names, replace_readonly
-        As :func:`write_step`.
+    path, objects, names, replace_readonly, unit
+        As :func:`write_step`. A model or tree keeps names, colours (without transparency: IGES has
+        none) and layers (IGES levels by name); IGES has no instances, so each part instance is
+        written as a placed copy of its part, named after the instance.
 
     Returns
     -------
@@ -807,8 +909,11 @@ def write_iges(
         As :func:`write_step`.
     """
     p = _files.target(path, replace_readonly=replace_readonly)
-    items = _xocc.normalise(objects, names)
-    _xocc.silence_occ()
-    data = _xocc.iges_bytes(p, items)
+    file_unit = _write_unit(objects, names, unit)
+    if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)):
+        data = xcaf.iges_document_bytes(p, objects, file_unit)
+    else:
+        items = _xocc.normalise(objects, names)
+        data = _xocc.iges_bytes(p, items, file_unit)
     _files.atomic_write(p, data, replace_readonly=replace_readonly)
     return p

@@ -1,0 +1,221 @@
+"""STEP ⇄ IGES ⇄ STEP conversion that says what it could not carry (``occsurf convert``).
+
+:func:`convert` reads the input (in a worker process by default: the input is untrusted), writes it
+with :func:`occsurf.bridge.exchange.step_iges.write_step` / ``write_iges`` (through XCAF: assembly
+structure, names, colours, layers, the input's unit unless another is asked for; STEP with 17
+significant digits, atomic), then reads the written file back and compares, face by face, what a
+user cares about: the face count, names, colours, layers, instance paths and the unit. What the
+target format cannot hold (IGES: instances, transparency, 17 digits) and whatever the comparison
+finds changed is returned as one line per property in :attr:`ConversionReport.not_carried`.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from occsurf.algorithms.errors import InvalidGeometryError
+
+__all__ = ["ConversionReport", "convert", "target_format", "source_format", "STEP_SUFFIXES", "IGES_SUFFIXES",
+           "COLOR_TOLERANCE"]
+
+STEP_SUFFIXES = (".step", ".stp", ".p21")
+IGES_SUFFIXES = (".iges", ".igs")
+
+#: Largest difference of a colour component (RGBA in [0, 1]) read back that still counts as the same
+#: colour: IGES stores colours as percentages printed with 10 significant digits.
+COLOR_TOLERANCE: float = 1e-6
+
+
+@dataclass
+class ConversionReport:
+    """What :func:`convert` did.
+
+    Attributes
+    ----------
+    source, target : str
+    source_format, target_format : str
+        ``'step'`` or ``'iges'``.
+    unit : str
+        The unit the target file declares.
+    n_faces, n_edges : int
+        Faces and free edges read from the source.
+    not_carried : list of str
+        One line per property that did not survive (empty when everything did).
+    warnings : list of str
+        What the reader found wrong with the source but read around.
+    seconds : float
+    """
+
+    source: str
+    target: str
+    source_format: str
+    target_format: str
+    unit: str
+    n_faces: int
+    n_edges: int
+    not_carried: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+
+def target_format(path: str | os.PathLike[str]) -> str:
+    """``'step'`` or ``'iges'`` from the target's suffix; :class:`InvalidGeometryError` otherwise."""
+    suffix = Path(os.fspath(path)).suffix.lower()
+    if suffix in STEP_SUFFIXES:
+        return "step"
+    if suffix in IGES_SUFFIXES:
+        return "iges"
+    raise InvalidGeometryError(f"target: expected a file name ending in {', '.join(STEP_SUFFIXES + IGES_SUFFIXES)}, "
+                               f"got {os.fspath(path)!r}")
+
+
+def source_format(path: str | os.PathLike[str]) -> str:
+    """``'step'`` or ``'iges'`` from the suffix, else from the file's first bytes (STEP starts with
+    ``ISO-10303-21``); anything else is read as IGES, whose reader names what is wrong."""
+    suffix = Path(os.fspath(path)).suffix.lower()
+    if suffix in STEP_SUFFIXES:
+        return "step"
+    if suffix in IGES_SUFFIXES:
+        return "iges"
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(256).lstrip(b"\xef\xbb\xbf \t\r\n")
+    except OSError:
+        return "step"  # the reader reports the missing or unreadable file
+    return "step" if head.startswith(b"ISO-10303-21") else "iges"
+
+
+def convert(
+    source: str | os.PathLike[str],
+    target: str | os.PathLike[str],
+    *,
+    unit: str | None = None,
+    digits: int | None = None,
+    isolated: bool = True,
+    timeout: float | None = None,
+    replace_readonly: bool = False,
+) -> ConversionReport:
+    """Convert a STEP or IGES file to STEP or IGES (by the target's suffix), keeping its structure.
+
+    Parameters
+    ----------
+    source : str or path-like
+        STEP or IGES file (format by suffix, else by content).
+    target : str or path-like
+        ``.step``/``.stp``/``.p21`` or ``.iges``/``.igs``; replaced atomically.
+    unit : str, optional
+        Length unit of the target (a key of :data:`occsurf.bridge.exchange.xcaf.WRITE_UNITS`); default
+        the unit the source declares.
+    digits : int, optional
+        Significant digits of STEP reals, 2 to 17 (default 17: lossless). IGES keeps 10 whatever is
+        asked (reported in ``not_carried`` when more is asked).
+    isolated : bool, default True
+        Read the source in a worker process (:func:`occsurf.bridge.isolation.run_jobs`).
+    timeout : float, optional
+        Seconds the worker may read before it is stopped.
+    replace_readonly : bool, default False
+        As :func:`occsurf.bridge.exchange.step_iges.write_step`.
+
+    Returns
+    -------
+    ConversionReport
+
+    Raises
+    ------
+    InvalidGeometryError
+        A bad target suffix, ``unit`` or ``digits``.
+    ExchangeError
+        The source cannot be read (missing, damaged, a crash or time-out of the reader) or the
+        target cannot be written; no target file is created or modified then.
+    """
+    from . import xcaf
+    from .step_iges import STEP_DIGITS, read_iges, read_step, write_iges, write_step
+
+    t0 = time.perf_counter()
+    out_fmt = target_format(target)
+    if unit is not None and unit not in xcaf.WRITE_UNITS:
+        raise InvalidGeometryError(f"unit: expected one of {', '.join(xcaf.WRITE_UNITS)}, got {unit!r}")
+    if digits is not None and (isinstance(digits, bool) or not isinstance(digits, int) or not 2 <= digits <= 17):
+        raise InvalidGeometryError(f"digits: expected an integer from 2 to 17, got {digits!r}")
+    in_fmt = source_format(source)
+    reader = read_step if in_fmt == "step" else read_iges
+    model = reader(source, isolated=isolated, timeout=timeout)
+    out_unit = unit if unit is not None else (model.unit if model.unit in xcaf.WRITE_UNITS else "mm")
+    if out_fmt == "step":
+        written = write_step(target, model, precision_digits=digits or STEP_DIGITS, unit=out_unit,
+                             replace_readonly=replace_readonly)
+        again = read_step(written)
+    else:
+        written = write_iges(target, model, unit=out_unit, replace_readonly=replace_readonly)
+        again = read_iges(written)
+    report = ConversionReport(source=os.fspath(source), target=os.fspath(target), source_format=in_fmt,
+                              target_format=out_fmt, unit=out_unit, n_faces=len(model.faces),
+                              n_edges=len(model.edges), warnings=list(model.warnings))
+    report.not_carried = format_losses(model, out_fmt, digits) + compare(model, again, out_fmt, out_unit)
+    report.seconds = time.perf_counter() - t0
+    return report
+
+
+def format_losses(model: Any, out_fmt: str, digits: int | None) -> list[str]:
+    """What the target format cannot hold, by construction (before any comparison)."""
+    from .xcaf import WRITE_UNITS, iter_nodes
+
+    lines: list[str] = []
+    if model.unit not in WRITE_UNITS:
+        lines.append(f"unit '{model.unit}' cannot be written: the values are written in millimetres")
+    if out_fmt != "iges":
+        return lines
+    lines.append("IGES keeps 10 significant digits: values move by up to 5e-9 of their size"
+                 + (f" (--digits {digits} not possible)" if digits is not None and digits > 10 else ""))
+    if model.assembly is not None:
+        counts: dict[str, int] = {}
+        n_leaves = 0
+        for _, node in iter_nodes(model.assembly):
+            if not node.children:
+                n_leaves += 1
+                counts[node.part or node.name] = counts.get(node.part or node.name, 0) + 1
+        for part, n in counts.items():
+            if n > 1:
+                lines.append(f"IGES has no assembly instances: {n} instances of '{part}' written as copies")
+        lines.append(f"IGES has no assembly structure: {n_leaves} part instances written as placed copies "
+                     "at the top level, named after the instance")
+    transparent = sum(1 for f in model.faces if f.color is not None and f.color[3] < 1.0)
+    if transparent:
+        lines.append(f"IGES has no transparency: the alpha of {transparent} faces is dropped (their colour is kept)")
+    return lines
+
+
+def compare(before: Any, after: Any, out_fmt: str, unit: str) -> list[str]:
+    """One line per property that differs between the model written and the file read back."""
+    lines: list[str] = []
+    if after.unit != unit:
+        lines.append(f"unit: written as '{unit}', read back as '{after.unit}'")
+    if len(after.faces) != len(before.faces):
+        lines.append(f"faces: {len(before.faces)} written, {len(after.faces)} read back")
+        return lines
+    if len(after.edges) != len(before.edges):
+        lines.append(f"free curves: {len(before.edges)} written, {len(after.edges)} read back")
+    checks = {
+        "names": lambda f: f.name,
+        "colours": lambda f: f.color if out_fmt == "step" or f.color is None else f.color[:3],
+        "layers": lambda f: f.layer,
+    }
+    if out_fmt == "step":
+        checks["instance paths"] = lambda f: f.instance
+    for what, key in checks.items():
+        changed = [(a, b) for a, b in zip(before.faces, after.faces) if not _same(key(a), key(b))]
+        if changed:
+            a, b = changed[0]
+            lines.append(f"{what} of {len(changed)} of {len(before.faces)} faces not carried "
+                         f"(face {a.index}: {key(a)!r} read back as {key(b)!r})")
+    return lines
+
+
+def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, tuple) and isinstance(b, tuple) and len(a) == len(b):
+        return all(abs(x - y) <= COLOR_TOLERANCE for x, y in zip(a, b))
+    return bool(a == b)

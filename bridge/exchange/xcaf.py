@@ -1,0 +1,920 @@
+"""XCAF (OCC's Extended Data Exchange) side of STEP/IGES: names, colours, layers, units, assemblies.
+
+:func:`occsurf.bridge.exchange.step_iges.read_step` and ``read_iges`` parse a file with
+``STEPCAFControl_Reader`` / ``IGESCAFControl_Reader``: the geometry is transferred root by root exactly
+as before (faces keep their order), then the same transfer is put into an XCAF document
+(``TDocStd_Document``) from which this module takes
+
+* the **length unit the file declares** (before OCC converts the values to millimetres): STEP's
+  ``LENGTH_UNIT`` of the representation contexts (``STEPControl_Reader.FileUnits``: SI prefixes and
+  conversion-based units such as ``INCH``), IGES's global-section unit flag;
+* the **assembly tree**: products and their instances (STEP ``NEXT_ASSEMBLY_USAGE_OCCURRENCE``), each
+  instance a *reference* to a shared prototype (two instances of one part have the same
+  :attr:`AssemblyNode.part` and the same :attr:`AssemblyNode.shape`), with its placement;
+* per face: the **colour** (face colour > solid/shell colour > instance colour > part colour, walking
+  up the tree), the **layer** (the same order; the first of several), and the **instance path**
+  from the root ('assembly/plate_a').
+
+Writing (:func:`step_document_bytes`, :func:`iges_document_bytes`) rebuilds an XCAF document from an
+:class:`~occsurf.bridge.exchange.step_iges.ImportedModel` or an :class:`AssemblyNode` tree
+(prototypes once, instances as references, colours, layers, names) and writes it with
+``STEPCAFControl_Writer`` (printed with 17 significant digits, as ``write_step``) or
+``IGESCAFControl_Writer`` (IGES has no instances: each instance becomes a placed copy).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
+
+from ..messages import one_line
+
+__all__ = ["AssemblyNode", "UNITS", "WRITE_UNITS", "unit_scale", "XcafData", "read_xcaf", "step_unit", "iges_unit",
+           "step_document_bytes", "iges_document_bytes", "iter_nodes"]
+
+#: Millimetres per unit of each length unit occsurf reports or writes (``ImportedModel.unit``,
+#: ``write_step(..., unit=)``, ``occsurf convert --unit``).
+UNITS: dict[str, float] = {
+    "mm": 1.0, "cm": 10.0, "m": 1000.0, "km": 1e6, "um": 1e-3, "nm": 1e-6, "dm": 100.0,
+    "inch": 25.4, "ft": 304.8, "mi": 1609344.0, "mil": 0.0254, "uin": 2.54e-5,
+}
+
+#: OCC's unit keyword (``write.step.unit`` / ``write.iges.unit``) of each unit occsurf writes.
+_OCC_UNIT = {"mm": "MM", "cm": "CM", "m": "M", "km": "KM", "um": "UM", "inch": "INCH", "ft": "FT",
+             "mi": "MI", "mil": "MIL", "uin": "UIN"}
+
+#: The units ``write_step``/``write_iges(..., unit=)`` and ``occsurf convert --unit`` accept.
+WRITE_UNITS: tuple[str, ...] = tuple(_OCC_UNIT)
+
+#: STEP unit names (``FileUnits``: SI prefix + 'metre', or a conversion-based unit's name).
+_STEP_NAMES = {
+    "millimetre": "mm", "millimeter": "mm", "centimetre": "cm", "centimeter": "cm", "metre": "m", "meter": "m",
+    "kilometre": "km", "kilometer": "km", "micrometre": "um", "micrometer": "um", "micron": "um",
+    "nanometre": "nm", "nanometer": "nm", "decimetre": "dm", "decimeter": "dm",
+    "inch": "inch", "in": "inch", "foot": "ft", "feet": "ft", "ft": "ft", "mile": "mi", "mil": "mil",
+    "thou": "mil", "microinch": "uin", "mm": "mm", "cm": "cm", "m": "m",
+}
+
+#: IGES global-section unit flags (IGES 5.3, §2.2.4.3, parameter 14).
+_IGES_FLAGS = {1: "inch", 2: "mm", 4: "ft", 5: "mi", 6: "m", 7: "km", 8: "mil", 9: "um", 10: "cm", 11: "uin"}
+_IGES_NAMES = {"IN": "inch", "INCH": "inch", "MM": "mm", "FT": "ft", "MI": "mi", "M": "m", "KM": "km",
+               "MIL": "mil", "UM": "um", "MICRON": "um", "CM": "cm", "UIN": "uin"}
+
+_NO_NAMES = frozenset({"", "NONE"})
+_IDENTITY = np.eye(4)
+_IDENTITY.setflags(write=False)
+
+
+# ---------------------------------------------------------------------------------------- the tree
+@dataclass(frozen=True, eq=False)
+class AssemblyNode:
+    """One node of an assembly: the root, a sub-assembly instance or a part instance.
+
+    Attributes
+    ----------
+    name : str
+        The instance's name (STEP: the ``NEXT_ASSEMBLY_USAGE_OCCURRENCE``'s name, else the product's);
+        the root's product name.
+    color : tuple of 4 floats or None
+        RGBA in [0, 1] the file gives this instance (else its part).
+    layer : str or None
+        The instance's (else its part's) layer.
+    location : ndarray, shape (4, 4)
+        Placement relative to the parent (the identity for the root), millimetres.
+    part : str or None
+        Key of the shared prototype: the part's (product's) name, made unique with ``'#2'``, ``'#3'``...
+        when two different parts share a name. Two instances of one part have equal ``part`` and the
+        same ``shape``.
+    shape : TopoDS_Shape
+        The prototype, unlocated (for an assembly, the compound of its placed children).
+    children : tuple of AssemblyNode
+        Empty for a part instance.
+    """
+
+    name: str
+    color: tuple[float, float, float, float] | None
+    layer: str | None
+    location: np.ndarray = field(repr=False)
+    part: str | None
+    shape: Any = field(repr=False)
+    children: tuple[AssemblyNode, ...] = ()
+
+    def __post_init__(self) -> None:
+        loc = np.array(self.location, dtype=float)
+        if loc.shape != (4, 4) or not np.isfinite(loc).all():
+            raise InvalidGeometryError(f"location: expected a finite (4, 4) matrix, got shape {loc.shape}")
+        loc.setflags(write=False)
+        object.__setattr__(self, "location", loc)
+        object.__setattr__(self, "children", tuple(self.children))
+
+
+def iter_nodes(node: AssemblyNode, path: str = "") -> Iterable[tuple[str, AssemblyNode]]:
+    """``(path, node)`` of ``node`` and every node below it, depth first, path names joined by '/'."""
+    here = f"{path}/{node.name}" if path else node.name
+    yield here, node
+    for child in node.children:
+        yield from iter_nodes(child, here)
+
+
+@dataclass
+class XcafData:
+    """What the XCAF document adds to the transferred shape (face keys: 1-based map indices)."""
+
+    unit: str = "mm"
+    unit_scale: float = 1.0
+    colors: dict[int, tuple[float, float, float, float]] = field(default_factory=dict)
+    layers: dict[int, str] = field(default_factory=dict)
+    instances: dict[int, str] = field(default_factory=dict)
+    instance_names: dict[int, str] = field(default_factory=dict)
+    face_names: dict[int, str] = field(default_factory=dict)
+    assembly: AssemblyNode | None = None
+    warnings: list[str] = field(default_factory=list)
+
+    # -- crossing the process boundary of read_step(..., isolated=True) --------------------------
+    def to_json(self) -> tuple[dict[str, Any], list[Any]]:
+        """A JSON-safe dict plus the prototype shapes it refers to by index (to write as one BRep)."""
+        shapes: list[Any] = []
+        ids: dict[Any, int] = {}
+
+        def node_json(n: AssemblyNode) -> dict[str, Any]:
+            key = n.part if n.part is not None else id(n)  # one prototype per part: shared once
+            if key not in ids:
+                ids[key] = len(shapes)
+                shapes.append(n.shape)
+            return {"name": n.name, "color": n.color, "layer": n.layer, "location": n.location.tolist(),
+                    "part": n.part, "shape": ids[key], "children": [node_json(c) for c in n.children]}
+
+        doc = {"unit": self.unit, "unit_scale": self.unit_scale,
+               "colors": {str(k): list(v) for k, v in self.colors.items()},
+               "layers": {str(k): v for k, v in self.layers.items()},
+               "instances": {str(k): v for k, v in self.instances.items()},
+               "instance_names": {str(k): v for k, v in self.instance_names.items()},
+               "face_names": {str(k): v for k, v in self.face_names.items()},
+               "warnings": list(self.warnings),
+               "assembly": node_json(self.assembly) if self.assembly is not None else None}
+        return doc, shapes
+
+    @classmethod
+    def from_json(cls, doc: dict[str, Any], shapes: Sequence[Any]) -> XcafData:
+        def node(d: dict[str, Any]) -> AssemblyNode:
+            color = tuple(d["color"]) if d["color"] is not None else None
+            return AssemblyNode(d["name"], color, d["layer"], np.array(d["location"]), d["part"],  # type: ignore[arg-type]
+                                shapes[d["shape"]], tuple(node(c) for c in d["children"]))
+
+        return cls(unit=doc["unit"], unit_scale=float(doc["unit_scale"]),
+                   colors={int(k): tuple(v) for k, v in doc["colors"].items()},  # type: ignore[misc]
+                   layers={int(k): v for k, v in doc["layers"].items()},
+                   instances={int(k): v for k, v in doc["instances"].items()},
+                   instance_names={int(k): v for k, v in doc["instance_names"].items()},
+                   face_names={int(k): v for k, v in doc["face_names"].items()},
+                   warnings=list(doc["warnings"]),
+                   assembly=node(doc["assembly"]) if doc["assembly"] is not None else None)
+
+
+def unit_scale(unit: str) -> float:
+    """Millimetres per ``unit`` (a key of :data:`UNITS`); raises :class:`InvalidGeometryError` otherwise."""
+    if unit not in UNITS:
+        raise InvalidGeometryError(f"unit: expected one of {', '.join(UNITS)}, got {unit!r}")
+    return UNITS[unit]
+
+
+# ---------------------------------------------------------------------------------------- units
+def step_unit(reader: Any) -> tuple[str, float, list[str]]:
+    """``(unit, millimetres per unit, warnings)`` the STEP file declares (read before any transfer).
+
+    Several representation contexts with different length units: the most frequent is reported, with
+    a warning (OCC converts each context's values with its own unit, so the geometry is right).
+    """
+    from OCP.TColStd import TColStd_SequenceOfAsciiString
+
+    lengths, angles, solid_angles = (TColStd_SequenceOfAsciiString() for _ in range(3))
+    try:
+        reader.FileUnits(lengths, angles, solid_angles)
+    except Exception as err:  # noqa: BLE001 - no unit is not fatal
+        return "mm", 1.0, [f"the file's length unit could not be read ({one_line(err)}); millimetres assumed"]
+    names = [lengths.Value(i).ToCString() for i in range(1, lengths.Length() + 1)]
+    if not names:
+        return "mm", 1.0, []
+    counts: dict[str, int] = {}
+    for n in names:
+        counts[n] = counts.get(n, 0) + 1
+    name = max(counts, key=lambda n: counts[n])
+    warnings = []
+    if len(counts) > 1:
+        warnings.append(f"the file declares several length units ({', '.join(sorted(counts))}); "
+                        f"'{name}' is reported, each part's values are converted with its own")
+    unit = _STEP_NAMES.get(name.strip().lower())
+    if unit is None:
+        factor = _conversion_factor(reader, name)
+        if factor is None:
+            return name.strip().lower(), 1.0, [*warnings, f"unknown length unit '{name}' (unit_scale 1.0 reported)"]
+        return name.strip().lower(), factor, warnings
+    return unit, UNITS[unit], warnings
+
+
+def _conversion_factor(reader: Any, name: str) -> float | None:
+    """Millimetres per unit of a STEP ``CONVERSION_BASED_UNIT`` called ``name`` (from the file)."""
+    try:
+        from OCP.StepBasic import StepBasic_ConversionBasedUnit, StepBasic_SiUnit
+
+        model = reader.WS().Model()
+        prefix = {"MILLI": 1.0, "CENTI": 10.0, "DECI": 100.0, "KILO": 1e6, "MICRO": 1e-3, "NANO": 1e-6}
+        for k in range(1, model.NbEntities() + 1):
+            ent = model.Value(k)
+            if isinstance(ent, StepBasic_ConversionBasedUnit) and ent.Name().ToCString() == name:
+                factor = ent.ConversionFactor()
+                value = float(factor.ValueComponent())
+                base = factor.UnitComponent().NamedUnit()
+                if isinstance(base, StepBasic_SiUnit):
+                    scale = prefix.get(base.Prefix().name.split("_")[-1].upper(), 1000.0) if base.HasPrefix() else 1000.0
+                    return value * scale
+                return None
+    except Exception:  # noqa: BLE001
+        return None
+    return None
+
+
+def iges_unit(reader: Any) -> tuple[str, float, list[str]]:
+    """``(unit, millimetres per unit, warnings)`` of the IGES global section (flag, else the name)."""
+    try:
+        header = reader.IGESModel().GlobalSection()
+        flag = int(header.UnitFlag())
+        name = header.UnitName().ToCString().strip() if header.UnitName() is not None else ""
+    except Exception as err:  # noqa: BLE001
+        return "mm", 1.0, [f"the file's length unit could not be read ({one_line(err)}); millimetres assumed"]
+    unit = _IGES_FLAGS.get(flag) or _IGES_NAMES.get(name.upper())
+    if unit is None:
+        return "mm", 1.0, [f"unknown IGES unit (flag {flag}, name '{name}'); millimetres assumed"]
+    return unit, UNITS[unit], []
+
+
+# ---------------------------------------------------------------------------------------- reading
+def _label_name(label: Any) -> str | None:
+    from OCP.TCollection import TCollection_AsciiString
+    from OCP.TDataStd import TDataStd_Name
+
+    # IsAttribute first: FindAttribute of an absent name crashed OCP on labels read from IGES
+    if label.IsNull() or not label.IsAttribute(TDataStd_Name.GetID_s()):
+        return None
+    attr = TDataStd_Name()
+    if not label.FindAttribute(TDataStd_Name.GetID_s(), attr):
+        return None
+    # AsciiString of an ExtendedString is its UTF-8 (ToExtString() crashed on names read from IGES)
+    text = TCollection_AsciiString(attr.Get()).ToCString().strip()
+    return None if text in _NO_NAMES or text.startswith("=>[") else text
+
+
+def _rgba(color: Any) -> tuple[float, float, float, float]:
+    from OCP.Quantity import Quantity_TypeOfColor
+
+    rgb = color.GetRGB()
+    r, g, b = rgb.Values(Quantity_TypeOfColor.Quantity_TOC_RGB)
+    return (float(r), float(g), float(b), float(color.Alpha()))
+
+
+def _label_color(label: Any, surface: bool = True) -> tuple[float, float, float, float] | None:
+    from OCP.Quantity import Quantity_ColorRGBA
+    from OCP.XCAFDoc import XCAFDoc_ColorTool, XCAFDoc_ColorType
+
+    kinds = (XCAFDoc_ColorType.XCAFDoc_ColorSurf, XCAFDoc_ColorType.XCAFDoc_ColorGen)
+    if not surface:
+        kinds = (XCAFDoc_ColorType.XCAFDoc_ColorCurv, XCAFDoc_ColorType.XCAFDoc_ColorGen)
+    color = Quantity_ColorRGBA()
+    for kind in kinds:
+        if XCAFDoc_ColorTool.GetColor_s(label, kind, color):
+            return _rgba(color)
+    return None
+
+
+def _label_layer(layer_tool: Any, label: Any) -> str | None:
+    from OCP.TCollection import TCollection_AsciiString
+
+    seq = layer_tool.GetLayers(label)
+    if seq is None or seq.Length() == 0:
+        return None
+    return TCollection_AsciiString(seq.Value(1)).ToCString()
+
+
+def _matrix(location: Any) -> np.ndarray:
+    """4x4 matrix of a ``TopLoc_Location``."""
+    trsf = location.Transformation()
+    m = np.eye(4)
+    for i in range(3):
+        for j in range(4):
+            m[i, j] = trsf.Value(i + 1, j + 1)
+    return m
+
+
+class _Reader:
+    """One pass over an XCAF document: the tree, then every leaf's faces matched to the model's faces."""
+
+    def __init__(self, doc: Any, faces_map: Any, bare: Any) -> None:
+        from OCP.XCAFDoc import XCAFDoc_DocumentTool
+
+        self.shape_tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+        self.layer_tool = XCAFDoc_DocumentTool.LayerTool_s(doc.Main())
+        self.faces_map = faces_map
+        self.bare = bare
+        self.data = XcafData()
+        self.parts: dict[str, str] = {}  # label entry -> part key
+        self._part_names: set[str] = set()
+        self._face_mats: dict[int, np.ndarray] = {}
+        self._assigned: set[int] = set()
+        self._sub_attributes: dict[str, tuple[dict[int, Any], dict[int, str], dict[int, str]]] = {}
+        self._n_unmatched = 0
+        #: whether the document holds an assembly (else faces get no instance path)
+        self.in_assembly = False
+
+    def part_key(self, label: Any) -> str:
+        from OCP.TCollection import TCollection_AsciiString
+        from OCP.TDF import TDF_Tool
+
+        entry = TCollection_AsciiString()
+        TDF_Tool.Entry_s(label, entry)
+        key = entry.ToCString()
+        if key not in self.parts:
+            base = _label_name(label) or f"part {key}"
+            name, k = base, 1
+            while name in self._part_names:
+                k += 1
+                name = f"{base}#{k}"
+            self._part_names.add(name)
+            self.parts[key] = name
+        return self.parts[key]
+
+    def node(self, label: Any, parent: np.ndarray, path: str, inherited: list[tuple[Any, Any]],
+             top: bool) -> AssemblyNode:
+        """The node of a free or component label; walks its components, matches its faces."""
+        from OCP.TDF import TDF_Label, TDF_LabelSequence
+        from OCP.XCAFDoc import XCAFDoc_ShapeTool
+
+        proto = label
+        local = _IDENTITY
+        if XCAFDoc_ShapeTool.IsReference_s(label):
+            proto = TDF_Label()
+            XCAFDoc_ShapeTool.GetReferredShape_s(label, proto)
+            local = _matrix(XCAFDoc_ShapeTool.GetLocation_s(label))
+        name = _label_name(label) or _label_name(proto) or self.part_key(proto)
+        here = f"{path}/{name}" if path else name
+        chain = [(label, proto), *inherited]  # the instance first, then its ancestors
+        color = _label_color(label) or _label_color(proto)
+        layer = _label_layer(self.layer_tool, label) or _label_layer(self.layer_tool, proto)
+        placed = parent @ local
+        children: list[AssemblyNode] = []
+        if XCAFDoc_ShapeTool.IsAssembly_s(proto):
+            comps = TDF_LabelSequence()
+            XCAFDoc_ShapeTool.GetComponents_s(proto, comps)
+            children = [self.node(comps.Value(i), placed, here, chain, False) for i in range(1, comps.Length() + 1)]
+        else:
+            self.leaf(proto, placed, here if not top or self.in_assembly else None, name, chain)
+        return AssemblyNode(name=name, color=color, layer=layer, location=local, part=self.part_key(proto),
+                            shape=XCAFDoc_ShapeTool.GetShape_s(proto), children=tuple(children))
+
+    def leaf(self, proto: Any, placed: np.ndarray, path: str | None, name: str,
+             chain: list[tuple[Any, Any]]) -> None:
+        """Colour, layer and instance of each face of a part instance placed at ``placed``."""
+        from OCP.TopAbs import TopAbs_FACE
+        from OCP.TopExp import TopExp_Explorer
+        from OCP.TopTools import TopTools_IndexedMapOfShape
+        from OCP.XCAFDoc import XCAFDoc_ShapeTool
+
+        key = self.part_key(proto)
+        if key not in self._sub_attributes:  # once per part, however many instances
+            self._sub_attributes[key] = self.sub_shape_attributes(proto)
+        own_color, own_layer, own_name = self._sub_attributes[key]
+        inherited_color = next((c for lab, pro in chain for c in (_label_color(lab), _label_color(pro)) if c), None)
+        inherited_layer = next((x for lab, pro in chain for x in (_label_layer(self.layer_tool, lab),
+                                                                 _label_layer(self.layer_tool, pro)) if x), None)
+        shape = XCAFDoc_ShapeTool.GetShape_s(proto)
+        ex = TopExp_Explorer(shape, TopAbs_FACE)
+        seen = TopTools_IndexedMapOfShape()  # k: position among the part's distinct faces
+        while ex.More():
+            face = ex.Current()
+            ex.Next()
+            n_before = seen.Extent()
+            k = seen.Add(face)
+            if k <= n_before:
+                continue
+            index = self.match(face, placed)
+            if index is None:
+                continue
+            self._assigned.add(index)
+            color = own_color.get(k) or inherited_color
+            layer = own_layer.get(k) or inherited_layer
+            if color is not None:
+                self.data.colors.setdefault(index, color)
+            if layer is not None:
+                self.data.layers.setdefault(index, layer)
+            if k in own_name:
+                self.data.face_names.setdefault(index, own_name[k])
+            if path is not None:
+                self.data.instances.setdefault(index, path)
+                self.data.instance_names.setdefault(index, name)
+
+    def sub_shape_attributes(self, proto: Any) -> tuple[dict[int, Any], dict[int, str], dict[int, str]]:
+        """Face colours and layers of a prototype's sub-shape labels (face level wins over solid/shell
+        level), and face names, keyed by the face's 1-based position in ``TopExp_Explorer`` order over
+        the prototype."""
+        from OCP.TDF import TDF_LabelSequence
+        from OCP.TopAbs import TopAbs_FACE
+        from OCP.TopExp import TopExp_Explorer
+        from OCP.TopTools import TopTools_IndexedMapOfShape
+        from OCP.XCAFDoc import XCAFDoc_ShapeTool
+
+        subs = TDF_LabelSequence()
+        XCAFDoc_ShapeTool.GetSubShapes_s(proto, subs)
+        colors: dict[int, Any] = {}
+        layers: dict[int, str] = {}
+        names: dict[int, str] = {}
+        if subs.Length() == 0:
+            return colors, layers, names
+        faces = TopTools_IndexedMapOfShape()
+        ex = TopExp_Explorer(XCAFDoc_ShapeTool.GetShape_s(proto), TopAbs_FACE)
+        order: dict[int, int] = {}
+        while ex.More():
+            j = faces.Add(ex.Current())
+            order.setdefault(j, len(order) + 1)
+            ex.Next()
+        face_level: tuple[dict[int, Any], dict[int, str]] = ({}, {})
+        other_level: tuple[dict[int, Any], dict[int, str]] = ({}, {})
+        for i in range(1, subs.Length() + 1):
+            sub = subs.Value(i)
+            color, layer = _label_color(sub), _label_layer(self.layer_tool, sub)
+            sub_shape = XCAFDoc_ShapeTool.GetShape_s(sub)
+            name = _label_name(sub) if sub_shape.ShapeType() == TopAbs_FACE else None
+            if name is not None and faces.FindIndex(sub_shape):
+                names.setdefault(order[faces.FindIndex(sub_shape)], name)
+            if color is None and layer is None:
+                continue
+            if sub_shape.ShapeType() == TopAbs_FACE:
+                targets, members = face_level, [faces.FindIndex(sub_shape)]
+            else:
+                targets, members = other_level, []
+                ex = TopExp_Explorer(sub_shape, TopAbs_FACE)
+                while ex.More():
+                    members.append(faces.FindIndex(ex.Current()))
+                    ex.Next()
+            for j in members:
+                if j and color is not None:
+                    targets[0].setdefault(order[j], color)
+                if j and layer is not None:
+                    targets[1].setdefault(order[j], layer)
+        return {**other_level[0], **face_level[0]}, {**other_level[1], **face_level[1]}, names
+
+    def match(self, face: Any, placed: np.ndarray) -> int | None:
+        """The model's face (1-based map index) that is ``face`` of a prototype placed at ``placed``."""
+        candidates = self.bare.find(face)
+        if not candidates:
+            self._n_unmatched += 1
+            return None
+        if len(candidates) == 1:
+            return candidates[0]
+        want = placed @ _matrix(face.Location())
+        scale = 1.0 + float(np.abs(want).max())
+        best, best_err = None, math.inf
+        for i in candidates:
+            m = self._face_mats.get(i)
+            if m is None:
+                m = self._face_mats[i] = _matrix(self.faces_map.FindKey(i).Location())
+            err = float(np.abs(m - want).max())
+            if err < best_err and i not in self._assigned:
+                best, best_err = i, err
+        if best is None or best_err > 1e-9 * scale:
+            self._n_unmatched += 1
+            return None
+        return best
+
+
+def read_xcaf(caf: Any, faces_map: Any, bare: Any, name: str) -> XcafData:
+    """Transfer the parsed (and already root-by-root transferred) file into an XCAF document and read it.
+
+    Parameters
+    ----------
+    caf : STEPCAFControl_Reader or IGESCAFControl_Reader
+        After ``ReadFile``/``ReadStream`` and the transfer of the roots (the document reuses it).
+    faces_map : TopTools_IndexedMapOfShape
+        The model's faces (``ImportedModel.faces`` order).
+    bare : object with ``find(shape) -> list[int]``
+        The faces of ``faces_map`` by shape without location.
+    name : str
+        Name of a synthetic root when the file holds several free shapes, one at least an assembly.
+
+    Returns
+    -------
+    XcafData
+        Without ``unit`` (see :func:`step_unit`, :func:`iges_unit`). A failure of the XCAF transfer
+        is a warning: the model is then flat, without colours and layers.
+    """
+    from OCP.TCollection import TCollection_ExtendedString
+    from OCP.TDF import TDF_LabelSequence
+    from OCP.TDocStd import TDocStd_Document
+    from OCP.XCAFDoc import XCAFDoc_ShapeTool
+
+    doc = TDocStd_Document(TCollection_ExtendedString("XCAF"))
+    for mode in ("SetNameMode", "SetColorMode", "SetLayerMode"):
+        getattr(caf, mode)(True)
+    data = XcafData()
+    try:
+        ok = caf.Transfer(doc)
+    except Exception as err:  # noqa: BLE001
+        data.warnings.append(f"names, colours, layers and assembly structure not read: {one_line(err)}")
+        return data
+    if not ok:
+        data.warnings.append("names, colours, layers and assembly structure not read (XCAF transfer failed)")
+        return data
+    reader = _Reader(doc, faces_map, bare)
+    free = TDF_LabelSequence()
+    reader.shape_tool.GetFreeShapes(free)
+    labels = [free.Value(i) for i in range(1, free.Length() + 1)]
+
+    def is_assembly(label: Any) -> bool:
+        return bool(XCAFDoc_ShapeTool.IsAssembly_s(label) or XCAFDoc_ShapeTool.IsReference_s(label))
+
+    reader.in_assembly = any(is_assembly(lab) for lab in labels)
+    nodes = [reader.node(lab, _IDENTITY, "", [], True) for lab in labels]
+    reader.data.warnings = data.warnings
+    if reader.in_assembly:
+        if len(nodes) == 1:
+            reader.data.assembly = nodes[0]
+        else:
+            comp = compound([n.shape.Moved(_location(n.location)) for n in nodes])
+            reader.data.assembly = AssemblyNode(name, None, None, _IDENTITY, None, comp, tuple(nodes))
+    if reader._n_unmatched:
+        reader.data.warnings.append(f"{reader._n_unmatched} faces of the assembly structure were not found in the "
+                                    "transferred shape: they have no instance, colour or layer")
+    return reader.data
+
+
+# ---------------------------------------------------------------------------------------- writing
+def _location(matrix: np.ndarray) -> Any:
+    """``TopLoc_Location`` of a rigid 4x4 placement (a uniform scale is kept as such)."""
+    from OCP.gp import gp_Trsf
+    from OCP.TopLoc import TopLoc_Location
+
+    m = np.asarray(matrix, dtype=float)
+    if np.array_equal(m, _IDENTITY):
+        return TopLoc_Location()
+    trsf = gp_Trsf()
+    try:
+        trsf.SetValues(*(float(x) for x in m[:3, :4].ravel()))
+    except Exception as err:  # noqa: BLE001 - a matrix that is not a similarity
+        raise InvalidGeometryError(f"location: expected a rigid placement (rotation, translation), "
+                                   f"OCC refused it: {one_line(err)}") from err
+    return TopLoc_Location(trsf)
+
+
+def _set_name(label: Any, name: str | None, names: set[str] | None = None) -> None:
+    from OCP.TCollection import TCollection_ExtendedString
+    from OCP.TDataStd import TDataStd_Name
+
+    # always a name, if empty: else OCC's writer names the product 'Open CASCADE STEP translator 7.9 n'
+    TDataStd_Name.Set_s(label, TCollection_ExtendedString(name or "", True))
+    if names is not None and name:
+        names.add(name)
+
+
+def _set_color(color_tool: Any, label: Any, rgba: Sequence[float] | None, *, curve: bool = False) -> None:
+    from OCP.Quantity import Quantity_Color, Quantity_ColorRGBA, Quantity_TypeOfColor
+    from OCP.XCAFDoc import XCAFDoc_ColorType
+
+    if rgba is None:
+        return
+    r, g, b, a = (float(x) for x in rgba)
+    color = Quantity_ColorRGBA(Quantity_Color(r, g, b, Quantity_TypeOfColor.Quantity_TOC_RGB), a)
+    kind = XCAFDoc_ColorType.XCAFDoc_ColorCurv if curve else XCAFDoc_ColorType.XCAFDoc_ColorSurf
+    color_tool.SetColor(label, color, kind)
+
+
+def _set_layer(layer_tool: Any, label: Any, layer: str | None) -> None:
+    from OCP.TCollection import TCollection_ExtendedString
+
+    if layer:
+        layer_tool.SetLayer(label, TCollection_ExtendedString(layer, True))
+
+
+class _Writer:
+    """An XCAF document built from a model (or a tree): prototypes once, instances as references."""
+
+    def __init__(self, explicit: bool = False) -> None:
+        from OCP.TCollection import TCollection_ExtendedString
+        from OCP.TDocStd import TDocStd_Document
+        from OCP.XCAFDoc import XCAFDoc_DocumentTool
+
+        self.doc = TDocStd_Document(TCollection_ExtendedString("XCAF"))
+        self.shape_tool = XCAFDoc_DocumentTool.ShapeTool_s(self.doc.Main())
+        self.color_tool = XCAFDoc_DocumentTool.ColorTool_s(self.doc.Main())
+        self.layer_tool = XCAFDoc_DocumentTool.LayerTool_s(self.doc.Main())
+        self.shape_tool.SetAutoNaming_s(False)
+        #: every face gets its resolved colour and layer on its own label (IGES: the writer does not
+        #: pass a part's colour on to all its faces)
+        self.explicit = explicit
+        self.protos: dict[str, Any] = {}
+        self.proto_shapes: dict[str, Any] = {}
+        #: face names to set on the written face entities: (prototype face, name)
+        self.face_names: list[tuple[Any, str]] = []
+        #: every name given to a label (the products OCC names itself are the others)
+        self.names: set[str] = set()
+
+    def proto(self, node: AssemblyNode) -> Any:
+        key = node.part if node.part is not None else f"\0{id(node)}"
+        if key in self.protos:
+            return self.protos[key]
+        if node.children:
+            label = self.shape_tool.NewShape()
+            for child in node.children:
+                comp = self.shape_tool.AddComponent(label, self.proto(child), _location(child.location))
+                _set_name(comp, child.name, self.names)
+                _set_color(self.color_tool, comp, child.color)
+        else:
+            label = self.shape_tool.AddShape(node.shape, False, False)
+        _set_name(label, node.part or node.name, self.names)
+        # OCC's STEP writer drops layers of instances (components): the part carries the layer of its
+        # first instance; an instance on another layer than its part's first instance loses it
+        _set_layer(self.layer_tool, label, node.layer)
+        self.protos[key] = label
+        self.proto_shapes[key] = node.shape
+        return label
+
+    def faces(self, key: str, node: AssemblyNode, faces: list[Any]) -> None:
+        """Face-level colours, layers and names of one part (``faces``: ImportedFace of one of its instances)."""
+        from OCP.TopAbs import TopAbs_FACE
+        from OCP.TopExp import TopExp_Explorer
+        from OCP.TopLoc import TopLoc_Location
+        from OCP.TopTools import TopTools_IndexedMapOfShape
+
+        label = self.protos[key]
+        bare = TopTools_IndexedMapOfShape()
+        proto_faces = []
+        ex = TopExp_Explorer(node.shape, TopAbs_FACE)
+        identity = TopLoc_Location()
+        while ex.More():
+            bare.Add(ex.Current().Located(identity))
+            proto_faces.append(ex.Current())
+            ex.Next()
+        for f in faces:
+            j = bare.FindIndex(f.face.Located(identity))
+            if not j:
+                continue
+            pf = proto_faces[j - 1]
+            own_name = f.name if f.name and f.name != node.name else None
+            if f.color is None and f.layer is None and own_name is None:
+                continue
+            if f.color != node.color or f.layer != node.layer or self.explicit:
+                sub = self.shape_tool.AddSubShape(label, pf)
+                if sub is not None and not sub.IsNull():
+                    if f.color != node.color or self.explicit:
+                        _set_color(self.color_tool, sub, f.color)
+                    if f.layer != node.layer or self.explicit:
+                        _set_layer(self.layer_tool, sub, f.layer)
+            if own_name is not None:
+                self.face_names.append((pf, own_name))
+
+    def copy_faces(self, label: Any, leaf: AssemblyNode, proto_faces: list[Any], copy_faces: list[Any],
+                   faces: list[Any]) -> None:
+        """Face colours and layers on a placed copy (faces in the same explorer order as the part's)."""
+        from OCP.TopLoc import TopLoc_Location
+        from OCP.TopTools import TopTools_IndexedMapOfShape
+
+        identity = TopLoc_Location()
+        bare = TopTools_IndexedMapOfShape()
+        for pf in proto_faces:
+            bare.Add(pf.Located(identity))
+        for f in faces:
+            j = bare.FindIndex(f.face.Located(identity))
+            if not j or (f.color is None and f.layer is None):
+                continue
+            sub = self.shape_tool.AddSubShape(label, copy_faces[j - 1])
+            if sub is not None and not sub.IsNull():
+                _set_color(self.color_tool, sub, f.color)
+                _set_layer(self.layer_tool, sub, f.layer)
+
+
+def _explore_faces(shape: Any) -> list[Any]:
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+
+    out = []
+    ex = TopExp_Explorer(shape, TopAbs_FACE)
+    while ex.More():
+        out.append(ex.Current())
+        ex.Next()
+    return out
+
+
+def _tree_faces(model: Any) -> dict[str, list[Any]]:
+    """ImportedFace of each leaf instance path."""
+    out: dict[str, list[Any]] = {}
+    for f in model.faces:
+        if f.instance is not None:
+            out.setdefault(f.instance, []).append(f)
+    return out
+
+
+def _flat_tree(model: Any, name: str) -> AssemblyNode:
+    """A flat model as a one-level tree: one part per top-level shape (the file's roots)."""
+    from OCP.TopAbs import TopAbs_COMPOUND
+    from OCP.TopoDS import TopoDS_Iterator
+
+    shape = model.shape
+    parts = []
+    if shape.ShapeType() == TopAbs_COMPOUND:
+        it = TopoDS_Iterator(shape)
+        while it.More():
+            parts.append(it.Value())
+            it.Next()
+    # a located root would become an assembly instance in XCAF: keep such a model as one shape
+    if len(parts) < 2 or any(not part.Location().IsIdentity() for part in parts):
+        parts = [shape]
+    return AssemblyNode(name, None, None, _IDENTITY, None, shape, tuple(
+        AssemblyNode("", None, None, _IDENTITY, None, part) for part in parts))
+
+
+def _flattened(root: AssemblyNode) -> list[tuple[str, AssemblyNode, AssemblyNode]]:
+    """The tree with every part instance as a placed copy of its part, directly below the root
+    (IGES has no instances: what its writer would do anyway, but with each copy keeping its name):
+    ``(path, original part instance, copy)`` per part instance."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+
+    leaves: list[tuple[str, AssemblyNode, AssemblyNode]] = []
+
+    def walk(node: AssemblyNode, placed: np.ndarray, path: str, color: Any, layer: Any) -> None:
+        here = f"{path}/{node.name}" if path else node.name
+        placed = placed @ node.location
+        color, layer = node.color or color, node.layer or layer
+        if node.children:
+            for child in node.children:
+                walk(child, placed, here, color, layer)
+            return
+        shape = node.shape
+        if not np.array_equal(placed, _IDENTITY):
+            shape = BRepBuilderAPI_Transform(node.shape, _location(placed).Transformation(), True).Shape()
+        leaves.append((here, node, AssemblyNode(node.name, color, layer, _IDENTITY, f"\0{here}", shape)))
+
+    walk(root, _IDENTITY, "", None, None)
+    return leaves
+
+
+def build_document(source: Any, name: str, *, flatten: bool = False) -> _Writer:
+    """The XCAF document of an ImportedModel (its tree, or its roots when flat) or an AssemblyNode;
+    ``flatten``: instances as placed copies, every face with its own colour and layer (for IGES)."""
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+
+    writer = _Writer(explicit=flatten)
+    if isinstance(source, AssemblyNode):
+        root, model = source, None
+    else:
+        model = source
+        root = model.assembly
+    if root is not None and flatten:
+        faces = _tree_faces(model) if model is not None else {}
+        for here, original, leaf in _flattened(root):
+            label = writer.shape_tool.AddShape(leaf.shape, False, False)
+            _set_name(label, leaf.name, writer.names)
+            _set_color(writer.color_tool, label, leaf.color)
+            _set_layer(writer.layer_tool, label, leaf.layer)
+            writer.protos[leaf.part] = label  # type: ignore[index]
+            copy_faces = _explore_faces(leaf.shape)
+            proto_faces = _explore_faces(original.shape)
+            if len(copy_faces) != len(proto_faces) or here not in faces:
+                continue
+            writer.copy_faces(label, leaf, proto_faces, copy_faces, faces[here])
+        return writer
+    if root is not None:
+        writer.proto(root)
+        if model is not None:
+            faces = _tree_faces(model)
+            for path, node in iter_nodes(root):
+                if not node.children and path in faces:
+                    key = node.part if node.part is not None else f"\0{id(node)}"
+                    writer.faces(key, node, faces[path])
+        writer.shape_tool.UpdateAssemblies()
+        return writer
+    # flat: one free shape per root, with the faces' common name/colour/layer on it
+    tree = _flat_tree(model, name)
+    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    index = TopTools_IndexedMapOfShape()
+    for f in model.faces:
+        index.Add(f.face)
+    for k, part in enumerate(tree.children):
+        members = []
+        ex = TopExp_Explorer(part.shape, TopAbs_FACE)
+        while ex.More():
+            j = index.FindIndex(ex.Current())
+            if j:
+                members.append(model.faces[j - 1])
+            ex.Next()
+        names = {f.name for f in members}
+        colors = {f.color for f in members}
+        layers = {f.layer for f in members}
+        common_name = next(iter(names)) if len(names) == 1 and None not in names else None
+        common_color = next(iter(colors)) if len(colors) == 1 else None
+        common_layer = next(iter(layers)) if len(layers) == 1 else None
+        node = replace(part, name=common_name or part.name, part=f"\0flat{k}", color=common_color,
+                       layer=common_layer)
+        label = writer.shape_tool.AddShape(node.shape, False, False)
+        _set_name(label, node.name, writer.names)
+        _set_color(writer.color_tool, label, node.color)
+        _set_layer(writer.layer_tool, label, node.layer)
+        writer.protos[node.part] = label  # type: ignore[index]
+        writer.faces(node.part, node, members)  # type: ignore[arg-type]
+    return writer
+
+
+def _unname_products(model: Any, names: set[str]) -> None:
+    """Products OCC named itself ('Open CASCADE STEP translator 7.9 n': the part had no name) get ''."""
+    from OCP.StepBasic import StepBasic_Product
+    from OCP.TCollection import TCollection_HAsciiString
+
+    empty = TCollection_HAsciiString("")
+    for k in range(1, model.NbEntities() + 1):
+        ent = model.Value(k)
+        if isinstance(ent, StepBasic_Product) and ent.Name() is not None:
+            if ent.Name().ToCString() not in names:
+                ent.SetName(empty)
+                ent.SetId(empty)
+
+
+def step_document_bytes(p: Path, source: Any, digits: int, unit: str) -> bytes:
+    """STEP (AP214) of an ImportedModel or AssemblyNode through ``STEPCAFControl_Writer``, reals
+    printed with ``digits`` significant digits, lengths in ``unit`` (values divided by its size in mm)."""
+    from OCP.STEPCAFControl import STEPCAFControl_Writer
+    from OCP.STEPConstruct import STEPConstruct
+    from OCP.STEPControl import STEPControl_StepModelType
+    from OCP.TCollection import TCollection_HAsciiString
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.XSControl import XSControl_WorkSession
+
+    from . import occ_io
+
+    with occ_io.statics({"write.step.unit": _OCC_UNIT[unit], "write.stepcaf.subshapes.name": 1}):
+        built = build_document(source, p.stem)
+        session = XSControl_WorkSession()
+        caf = STEPCAFControl_Writer(session, False)
+        for mode in ("SetNameMode", "SetColorMode", "SetLayerMode"):
+            getattr(caf, mode)(True)
+        try:
+            ok = caf.Transfer(built.doc, STEPControl_StepModelType.STEPControl_AsIs)
+        except Exception as err:  # noqa: BLE001
+            raise ExchangeError(f"{p}: STEP translation failed: {one_line(err)}") from err
+        if not ok:
+            raise ExchangeError(f"{p}: STEP translation failed")
+        ws = caf.ChangeWriter().WS()
+        _unname_products(ws.Model(), built.names)
+        finder = ws.TransferWriter().FinderProcess()
+        for face, name in built.face_names:
+            item = STEPConstruct.FindEntity_s(finder, face, TopLoc_Location())
+            if item is not None:
+                item.SetName(TCollection_HAsciiString(name))
+        return occ_io.print_step(p, ws, digits)
+
+
+def iges_document_bytes(p: Path, source: Any, unit: str) -> bytes:
+    """IGES of an ImportedModel or AssemblyNode through ``IGESCAFControl_Writer`` (instances become
+    placed copies), lengths in ``unit``."""
+    import io
+
+    from OCP.IGESCAFControl import IGESCAFControl_Writer
+    from OCP.TCollection import TCollection_HAsciiString
+
+    from . import occ_io
+
+    with occ_io.statics({"write.iges.unit": _OCC_UNIT[unit], "write.iges.brep.mode": 0}):
+        built = build_document(source, p.stem, flatten=True)
+        caf = IGESCAFControl_Writer()
+        for mode in ("SetNameMode", "SetColorMode", "SetLayerMode"):
+            getattr(caf, mode)(True)
+        try:
+            ok = caf.Transfer(built.doc)
+            header = caf.Model().GlobalSection()
+            header.SetFileName(TCollection_HAsciiString(p.name))
+            caf.Model().SetGlobalSection(header)
+            buffer = io.BytesIO()
+            ok = ok and caf.Write(buffer)
+        except Exception as err:  # noqa: BLE001
+            raise ExchangeError(f"{p}: IGES translation failed: {one_line(err)}") from err
+    data = buffer.getvalue()
+    if not ok or not data:
+        raise ExchangeError(f"{p}: writing the IGES model failed")
+    return data
+
+
+def compound(shapes: Sequence[Any]) -> Any:
+    """A ``TopoDS_Compound`` of ``shapes`` (in order)."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
+
+    comp = TopoDS_Compound()
+    builder = BRep_Builder()
+    builder.MakeCompound(comp)
+    for s in shapes:
+        builder.Add(comp, s)
+    return comp
