@@ -150,6 +150,14 @@ class ImportedFace:
     continuity : str
         OCC's continuity class of ``occ_surface``: ``'C0'``, ``'G1'``, ``'C1'``, ``'G2'``,
         ``'C2'``, ``'C3'`` or ``'CN'``.
+    color : (float, float, float, float) or None
+        RGBA in [0, 1] the file gives this face: its own colour, else its solid's or shell's, else its
+        instance's, else its part's (then up the assembly tree); ``None`` if the file gives none.
+    layer : str or None
+        The face's layer, resolved in the same order (the first, when an item is on several layers).
+    instance : str or None
+        For an assembly, the path of the part instance the face belongs to, from the root, names
+        joined by '/' (``'assembly/plate_a'``); ``None`` for a flat file.
     """
 
     index: int
