@@ -349,3 +349,20 @@ def test_face_layers_reach_cadquery_subshape_layers(tmp_path):
     assert layer == "datum" and abs(face.Area() - 6.0) < 1e-12
     back = model_from_object(part)
     assert sorted(str(f.layer) for f in back.faces) == ["None"] * 5 + ["datum"]
+
+
+def test_synthetic_root_paths_and_colours_from_faces(plates_step):
+    """A file with several free shapes gets a synthetic root (no part) whose faces' instance paths
+    start below it; nodes without a colour take their largest face's colour found by that path."""
+    import dataclasses
+
+    model = read_step(plates_step)
+    kids = tuple(dataclasses.replace(c, color=None) for c in model.assembly.children)
+    root = dataclasses.replace(model.assembly, part=None, name="file", children=kids)
+    faces = [dataclasses.replace(f, instance=f.instance.split("/", 1)[1]) for f in model.faces]
+    synthetic = dataclasses.replace(model, assembly=root, faces=faces)
+    ours = to_build123d(synthetic)
+    assert ours.label == "file" and [c.label for c in ours.children] == ["plate_a", "plate_b"]
+    np.testing.assert_allclose([tuple(c.color) for c in ours.children], [RED, BLUE], atol=COLOUR_ATOL)
+    assy = to_cadquery(synthetic)
+    np.testing.assert_allclose([c.color.toTuple() for c in assy.children], [RED, BLUE], atol=COLOUR_ATOL)
