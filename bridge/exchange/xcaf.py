@@ -688,12 +688,15 @@ class _Writer:
             bare.Add(pf.Located(identity))
         for f in faces:
             j = bare.FindIndex(f.face.Located(identity))
-            if not j or (f.color is None and f.layer is None):
+            own_name = f.name if f.name and f.name != leaf.name else None
+            if not j or (f.color is None and f.layer is None and own_name is None):
                 continue
             sub = self.shape_tool.AddSubShape(label, copy_faces[j - 1])
             if sub is not None and not sub.IsNull():
                 _set_color(self.color_tool, sub, f.color)
                 _set_layer(self.layer_tool, sub, f.layer)
+                if own_name is not None:
+                    _set_name(sub, own_name, self.names)
 
 
 def _explore_faces(shape: Any) -> list[Any]:
