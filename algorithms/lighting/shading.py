@@ -186,12 +186,13 @@ def _shade_compiled(kern: Any, P: np.ndarray, N: np.ndarray, E: np.ndarray, shap
                     single_eye: bool, setup: LightingSetup, dtype: type) -> np.ndarray | None:
     """``(m, 3)`` colours by the numba kernel of :mod:`._kernels` (float64 arithmetic, stored as
     ``dtype``), or None when the kernel fails (the caller then takes the NumPy path)."""
-    # Component-major copies, as the NumPy path makes: the kernel's loops then vectorise.
-    P, N = (_readonly(np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, 3).T, np.float64)) for a in (P, N))
-    E = _readonly(np.ascontiguousarray(E.reshape(3, 1) if single_eye else np.broadcast_to(E, shape).reshape(-1, 3).T,
+    # Point-major as given (no copy of a contiguous float64 input): the kernel copies each chunk
+    # into component-major rows itself, in cache, where its loops vectorise.
+    P, N = (_readonly(np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, 3), np.float64)) for a in (P, N))
+    E = _readonly(np.ascontiguousarray(E.reshape(1, 3) if single_eye else np.broadcast_to(E, shape).reshape(-1, 3),
                                        np.float64))
-    m = P.shape[1]
-    out = np.empty((3, m), dtype)
+    m = P.shape[0]
+    out = np.empty((m, 3), dtype)
     mat = setup.material
     args = (_kernels.pack_lights(setup), _readonly(np.asarray(setup.ambient) * np.asarray(mat.color)),
             bool(setup.two_sided), bool(mat.specular > 0), float(mat.shininess))
@@ -202,7 +203,7 @@ def _shade_compiled(kern: Any, P: np.ndarray, N: np.ndarray, E: np.ndarray, shap
 
     if not run(0):  # the first block on this thread: compiles (once per machine), or fails
         return None
-    return out.T if all(_on_threads(run, range(block, m, block))) else None
+    return out if all(_on_threads(run, range(block, m, block))) else None
 
 
 def _ipow(x: np.ndarray, s: float) -> np.ndarray:
