@@ -4,6 +4,9 @@
   curve/surface, ``TopoDS`` face/edge, build123d and cadquery objects), :func:`to_face`,
   :func:`to_edge`, :func:`to_cq_face`, :func:`to_cq_edge`, :func:`make_face`,
   :func:`make_edge`;
+* :mod:`.trimming` — trimmed faces both ways: ``from_occ(face)`` gives an
+  :class:`occsurf.algorithms.TrimmedSurface` (surface + loops of p-curves) for a face that is not
+  the natural rectangle of its surface, ``make_face`` / ``to_face`` rebuild the face from it;
 * :mod:`.spatch_export` — S-patches and generalized B-spline surfaces (course ch. 8) as sewn OCC
   shells and STEP files.
 """

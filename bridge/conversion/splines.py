@@ -42,6 +42,12 @@ from the distinct knots with OCC's convention (see ``_periodic_flat``).
 
 Faces and edges
 ---------------
+A face whose boundary is not the natural rectangle of its surface (a hole, a cut, a fillet's end)
+comes back as an :class:`~occsurf.algorithms.TrimmedSurface`: the surface below plus the face's
+loops of p-curves in its parameters and its orientation (:mod:`.trimming`); ``trims=False`` or
+``bounds`` give the surface alone, as every face did before. ``make_face`` / ``to_face`` of a
+TrimmedSurface rebuild the trimmed face.
+
 ``BRep_Tool.Surface_s(face)`` / ``BRep_Tool.Curve_s(edge)`` give the geometry with the shape's
 ``Location`` applied. A B-spline or Bézier surface (curve) is returned whole and exact; any other
 surface is trimmed to the face's UV bounds (``BRepTools.UVBounds_s``) — an edge's curve to the edge's
@@ -88,12 +94,15 @@ from OCP.Geom import (
 from OCP.GeomAbs import GeomAbs_Shape
 from OCP.GeomConvert import GeomConvert, GeomConvert_ApproxCurve, GeomConvert_ApproxSurface
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED
+from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape
+from OCP.TopTools import TopTools_IndexedMapOfShape
 
-from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms import BSplineCurve, BSplineSurface, TrimmedSurface
 from occsurf.algorithms.errors import InvalidGeometryError, KernelError, ToleranceError
 
 from .. import _occ
+from .shapes import as_shape, is_shape_like
 
 __all__ = [
     "FACE_TOLERANCE",
@@ -190,42 +199,56 @@ def _surface_to_occ(s: BSplineSurface) -> Geom_BSplineSurface:
 
 
 # ================================================================================= OCC -> ours
-def from_occ(obj: Any, bounds: tuple[float, ...] | None = None, *, tol: float | None = None) -> BSplineCurve | BSplineSurface:
+def from_occ(obj: Any, bounds: tuple[float, ...] | None = None, *, tol: float | None = None,
+             trims: bool = True) -> BSplineCurve | BSplineSurface | TrimmedSurface | list[Any]:
     """Our B-spline equivalent of an OCC curve, surface, edge or face.
 
     Parameters
     ----------
     obj : Geom_Curve, Geom_Surface, TopoDS_Edge, TopoDS_Face, or a build123d / cadquery Edge / Face
-        See the module docstring for what is exact.
+        See the module docstring for what is exact. A shape holding faces (``TopoDS_Shell``,
+        ``TopoDS_Solid``, ``TopoDS_Compound``, build123d / cadquery ``Shell``, ``Solid``,
+        ``Compound``, ``Part``, a cadquery ``Workplane`` or ``Assembly``...; see
+        :func:`occsurf.bridge.conversion.shapes.as_shape`) gives a list: each face converted, in
+        ``TopExp_Explorer`` order, each once; a shape without faces, its edges likewise.
     bounds : tuple of float, optional
         ``(t0, t1)`` for a curve or edge, ``(u0, u1, v0, v1)`` for a surface or face: trim to this
         parameter box first. Required for unbounded geometry (plane, cylinder, line, ...).
     tol : float, optional
         3-D tolerance for offsets that must be approximated; default :data:`APPROX_TOLERANCE`.
+    trims : bool, optional
+        For a face without ``bounds``: return a trimmed face as a :class:`TrimmedSurface` (the
+        surface plus its loops of p-curves, see :mod:`.trimming`) when its boundary is not the
+        natural rectangle of its surface (default). ``False`` gives the surface alone (on the
+        face's UV box for non-B-spline surfaces), as before trimmed faces existed. An untrimmed
+        face, or any face with ``bounds``, gives a BSplineSurface either way.
 
     Returns
     -------
-    BSplineCurve or BSplineSurface
-        3-D. Bit-exact for OCC B-splines (periodic ones as their unclamped equivalent).
+    BSplineCurve or BSplineSurface, or a list of them
+        3-D. Bit-exact for OCC B-splines (periodic ones as their unclamped equivalent). A list for a
+        shape that holds faces or edges (see ``obj``), even of one.
 
     Raises
     ------
     InvalidGeometryError
         Unsupported type (named), a null shape (``TopoDS_Face()``), 2-D geometry, missing or malformed
-        ``bounds``, degenerated edge, ``tol`` not a positive finite number.
+        ``bounds`` (or ``bounds`` with a shape of several faces), degenerated edge, ``tol`` not a
+        positive finite number.
     ToleranceError
         An offset could not be approximated within ``tol``.
     KernelError
         OCC failed (e.g. ``bounds`` outside a non-periodic spline's range).
     """
     tol = APPROX_TOLERANCE if tol is None else _positive(tol, "tol")
-    wrapped = getattr(obj, "wrapped", None)
-    if isinstance(wrapped, TopoDS_Shape):  # build123d / cadquery Shape
-        obj = wrapped
+    if not isinstance(obj, (TopoDS_Shape, Geom_Geometry)) and is_shape_like(obj):
+        obj = as_shape(obj, "from_occ: obj")  # build123d / cadquery objects, Workplane, Assembly...
     if isinstance(obj, TopoDS_Shape):
         if obj.IsNull():  # every query of a null shape dereferences nothing: a segfault
             raise InvalidGeometryError(f"from_occ: the {type(obj).__name__} is null (an empty shape)")
-        return _from_shape(obj, bounds, tol)
+        if obj.ShapeType() not in (TopAbs_FACE, TopAbs_EDGE):
+            return _from_container(obj, bounds, tol, trims)
+        return _from_shape(obj, bounds, tol, trims)
     if isinstance(obj, Geom_Curve):
         return _from_geom_curve(obj, _check_bounds(bounds, 2, "curve"), tol)
     if isinstance(obj, Geom_Surface):
@@ -239,16 +262,28 @@ def from_occ(obj: Any, bounds: tuple[float, ...] | None = None, *, tol: float | 
     )
 
 
+def _from_container(shape: TopoDS_Shape, bounds: Any, tol: float, trims: bool) -> list[Any]:
+    """Every face of a shell, solid or compound converted (its edges if it has no face)."""
+    if bounds is not None:
+        raise InvalidGeometryError("bounds: applies to one face or edge; got a shape holding several "
+                                   "(convert its faces one by one to trim each)")
+    kind = TopAbs_FACE if TopExp_Explorer(shape, TopAbs_FACE).More() else TopAbs_EDGE
+    items = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, kind, items)
+    if items.Extent() == 0:
+        raise InvalidGeometryError("from_occ: the shape holds no faces and no edges")
+    return [from_occ(items.FindKey(i), tol=tol, trims=trims) for i in range(1, items.Extent() + 1)]
+
+
 def is_reversed(shape: Any) -> bool:
     """True if a face or edge (OCC, build123d or cadquery) has ``TopAbs_REVERSED`` orientation.
 
     ``from_occ`` ignores orientation; for a reversed face the outward normal is ``-S_u x S_v``.
     """
-    wrapped = getattr(shape, "wrapped", None)
-    if isinstance(wrapped, TopoDS_Shape):
-        shape = wrapped
     if not isinstance(shape, TopoDS_Shape):
-        raise InvalidGeometryError(f"is_reversed: expected a TopoDS_Shape or a build123d/cadquery shape, got {type(shape).__name__}")
+        if not is_shape_like(shape):
+            raise InvalidGeometryError(f"is_reversed: expected a TopoDS_Shape or a build123d/cadquery shape, got {type(shape).__name__}")
+        shape = as_shape(shape, "is_reversed: shape")
     if shape.IsNull():
         raise InvalidGeometryError(f"is_reversed: the {type(shape).__name__} is null (an empty shape)")
     return shape.Orientation() == TopAbs_REVERSED
@@ -278,7 +313,7 @@ def _check_bounds(bounds: tuple[float, ...] | None, n: int, what: str) -> tuple[
     return b
 
 
-def _from_shape(shape: TopoDS_Shape, bounds, tol: float):
+def _from_shape(shape: TopoDS_Shape, bounds, tol: float, trims: bool = True):
     kind = shape.ShapeType()
     if kind == TopAbs_FACE:
         face = shape if isinstance(shape, TopoDS_Face) else TopoDS.Face_s(shape)
@@ -289,7 +324,14 @@ def _from_shape(shape: TopoDS_Shape, bounds, tol: float):
                 b = BRepTools.UVBounds_s(face)
         if occ_surface is None:
             raise InvalidGeometryError("from_occ: the face has no surface")
-        return _from_geom_surface(occ_surface, b, tol)
+        surface = _from_geom_surface(occ_surface, b, tol)
+        if bounds is not None or not trims:
+            return surface
+        from .trimming import face_from_occ
+
+        with _occ.kernel_errors("from_occ: reading the trimming loops of a face"):
+            box = BRepTools.UVBounds_s(face)
+        return face_from_occ(face, surface, occ_surface, box)
     if kind == TopAbs_EDGE:
         edge = shape if isinstance(shape, TopoDS_Edge) else TopoDS.Edge_s(shape)
         b = _check_bounds(bounds, 2, "edge")
@@ -532,8 +574,10 @@ def _surface_from_bspline(occ_surface: Geom_BSplineSurface) -> BSplineSurface:
 
 
 # ================================================================================= topology
-def make_face(surface: BSplineSurface | Geom_Surface, tol: float | None = None) -> TopoDS_Face:
-    """An OCC ``TopoDS_Face`` bounded by the whole parameter domain of ``surface``.
+def make_face(surface: BSplineSurface | TrimmedSurface | Geom_Surface, tol: float | None = None) -> TopoDS_Face:
+    """An OCC ``TopoDS_Face`` bounded by the whole parameter domain of ``surface``, or by the loops
+    of a :class:`TrimmedSurface` (rebuilt as :func:`.trimming.trimmed_to_occ_face` says: same
+    wires, same edges per wire, seams and degenerated edges restored, 3-D curves built).
 
     The face :func:`to_face` and :func:`to_cq_face` wrap; use it directly to hand faces to OCC
     algorithms (sewing, filling, STEP export).
@@ -557,6 +601,10 @@ def make_face(surface: BSplineSurface | Geom_Surface, tol: float | None = None) 
     KernelError
         ``BRepBuilderAPI_MakeFace`` failed.
     """
+    if isinstance(surface, TrimmedSurface):
+        from .trimming import trimmed_to_occ_face
+
+        return trimmed_to_occ_face(surface, to_occ(surface.surface), None if tol is None else _positive(tol, "tol"))
     occ_surface = surface if isinstance(surface, Geom_Surface) else _as_occ(surface, BSplineSurface, "surface")
     tol = FACE_TOLERANCE if tol is None else _positive(tol, "tol")
     with _occ.kernel_errors("building a face (BRepBuilderAPI_MakeFace)"):
@@ -600,8 +648,9 @@ def _as_occ(obj: Any, cls: type, name: str) -> Geom_Geometry:
     return to_occ(obj)
 
 
-def to_face(surface: BSplineSurface | Geom_Surface, *, tol: float = FACE_TOLERANCE):
-    """A build123d ``Face`` bounded by the whole parameter domain of ``surface``.
+def to_face(surface: BSplineSurface | TrimmedSurface | Geom_Surface, *, tol: float = FACE_TOLERANCE):
+    """A build123d ``Face`` bounded by the whole parameter domain of ``surface``, or the trimmed
+    face of a :class:`TrimmedSurface` (see :func:`make_face`).
 
     Parameters
     ----------
