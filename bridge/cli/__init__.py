@@ -2,10 +2,14 @@
 
 ::
 
-    occsurf inspect [FILE|DIR ...] [--json] [--samples N] [--timeout SECONDS] [--in-process]
-    occsurf fill IN --out OUT.step [--all-loops] [--no-occ] [--json] [--in-process]
+    occsurf --version
+    occsurf inspect [FILE|DIR ...] [--json | --jsonl] [--samples N] [--timeout SECONDS] [--strict] [--in-process]
+    occsurf fill IN --out OUT.step [--faces I ...] [--all-loops] [--no-occ] [--json] [--timeout SECONDS] [--strict]
+                 [--in-process]
     occsurf fit DATA --tol T --out OUT.step [--json] [--ctrl NU NV] [--degree D] [--smooth S] [--fix-boundary]
+                [--timeout SECONDS] [--in-process]
     occsurf render FILE (--lights LIGHTS.json | --preset NAME) --out IMAGE.png [--size W H] [--view NAME]
+                   [--timeout SECONDS] [--strict] [--in-process]
     occsurf demo [--out DIR] [--only NAME ...]
     occsurf check FILE [--out DIR] [--json] [--faces N ...] [--fail-on PRESET] [--timeout S] [--in-process]
     occsurf audit PATH... --out RESULTS [--scheduler ADDRESS] [--workers N] [--timeout S] [--resume] [--checks LIST]
@@ -55,6 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="occsurf",
         description="Spline surfaces of the SIGGRAPH '91 course C25, bridged to OpenCascade.",
     )
+    parser.add_argument("--version", action=_VersionAction, help="print occsurf's version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     inspect.add_parser(sub)
     demo.add_parser(sub)
@@ -66,6 +71,30 @@ def build_parser() -> argparse.ArgumentParser:
     convert.add_parser(sub)
     inspect.add_worker_parser(sub)  # internal, no help= so it stays out of the listing
     return parser
+
+
+class _VersionAction(argparse.Action):
+    """``--version``: the version is looked up only when asked for (``--help`` stays instant)."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, **kwargs: object) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)  # type: ignore[arg-type]
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: object, values: object,
+                 option_string: str | None = None) -> None:
+        print(f"occsurf {_version()}")
+        parser.exit()
+
+
+def _version() -> str:
+    """The installed distribution's version (its metadata), else the package's ``__version__``."""
+    from importlib import metadata
+
+    import occsurf
+
+    try:
+        return metadata.version("occsurf")
+    except metadata.PackageNotFoundError:  # a source checkout that is not installed
+        return occsurf.__version__
 
 
 def main(argv: Sequence[str] | None = None) -> int:

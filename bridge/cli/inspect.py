@@ -1,4 +1,4 @@
-"""``occsurf inspect [FILE|DIR ...] [--json] [--samples N] [--timeout SECONDS] [--strict] [--in-process]``.
+"""``occsurf inspect [FILE|DIR ...] [--json | --jsonl] [--samples N] [--timeout SECONDS] [--strict] [--in-process]``.
 
 Reads STEP and IGES files and prints, per face, what
 :func:`occsurf.bridge.validation.inspect.inspect_model` reports: the surface type, degrees,
@@ -16,6 +16,14 @@ OCC's check messages, fewer faces than the file's face instances, an open closed
 ``occsurf: PATH: warning: ...`` each on stderr; ``--strict`` makes them exit status 2 too. Links in a
 folder that lead nowhere (dangling, loops, devices) are reported as errors, not skipped.
 
+Output: a table per file as soon as it is read (in the order of the arguments), then a summary line;
+``--json``: one JSON document at the end (``{"samples", "seconds", "interrupted", "files": [...]}``);
+``--jsonl``: one JSON line per file as soon as it is read (the objects of ``--json``'s ``files``),
+for streaming into ``jq`` or a log. Ctrl-C stops the reading and keeps what was done: the tables and
+JSON lines already printed stay whole (no line is cut), ``--json`` prints the document of the files
+read so far with ``"interrupted": true``; then ``occsurf: interrupted`` on stderr, exit status 130.
+A closed pipe (``occsurf inspect DIR | head -1``) ends the command quietly (exit status 2).
+
 Each file is read in a worker process (:func:`occsurf.bridge.isolation.run_jobs` with the job
 :func:`inspect_job`): a file that crashes OCC, or takes longer than ``--timeout``, is reported as an
 error and the other files are still read. ``--in-process`` reads in the calling process instead (no
@@ -26,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import io
 import json
 import sys
 import time
@@ -46,6 +55,7 @@ from ._common import (
     STEP_SUFFIXES,
     error,
     expand,
+    interrupts_held,
     fmt_dev,
     fmt_pair,
     fmt_periodic,
@@ -56,6 +66,7 @@ from ._common import (
     strip_path,
     timeout_arg,
     worker_failure,
+    write_out,
 )
 
 if TYPE_CHECKING:
@@ -252,36 +263,53 @@ def run(ns: argparse.Namespace) -> int:
                 error(f"{r.path}: {r.error}")
             for w in r.warnings:
                 error(f"{r.path}: warning: {w}")
-            if not ns.json:
+            if ns.jsonl:
+                write_out(json.dumps(r.to_json(), allow_nan=False) + "\n")
+            elif not ns.json:
+                table = io.StringIO()
                 if printed:
-                    sys.stdout.write("\n")
-                _write_file_table(r, sys.stdout)
-                sys.stdout.flush()
+                    table.write("\n")
+                _write_file_table(r, table)
+                write_out(table.getvalue())
             printed += 1
 
     todo: list[tuple[int, str]] = []
     items: list[dict[str, Any]] = []
-    for k, (shown, path, err) in enumerate(entries):
-        if path is None:
-            emit(k, FileReport(path=shown, error=err))
-        else:
-            todo.append((k, shown))
-            items.append({"shown": shown, "path": str(path), "samples": ns.samples})
-    if items:
-        run_jobs(INSPECT_JOB, items, timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD,
-                 on_outcome=lambda o: emit(todo[o.index][0], _report_of(todo[o.index][1], o, ns.timeout)))
-    done = [r for r in reports if r is not None]
-    total = time.perf_counter() - t0
-    if ns.json:
-        doc = {"samples": ns.samples, "seconds": round(total, 4), "files": [r.to_json() for r in done]}
-        sys.stdout.write(json.dumps(doc, indent=1, allow_nan=False) + "\n")
-    elif len(done) > 1:
-        n_bad = sum(r.error is not None for r in done)
-        sys.stdout.write(f"\n{len(done)} files ({n_bad} unreadable), {sum(len(r.faces) for r in done)} faces, "
-                         f"{sum(r.n_free_form for r in done)} free-form, {total:.2f} s\n")
-    sys.stdout.flush()
+    try:
+        for k, (shown, path, err) in enumerate(entries):
+            if path is None:
+                emit(k, FileReport(path=shown, error=err))
+            else:
+                todo.append((k, shown))
+                items.append({"shown": shown, "path": str(path), "samples": ns.samples})
+        if items:
+            run_jobs(INSPECT_JOB, items, timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD,
+                     on_outcome=lambda o: emit(todo[o.index][0], _report_of(todo[o.index][1], o, ns.timeout)))
+    except KeyboardInterrupt:  # Ctrl-C: print what was done (the worker is stopped), then exit 130
+        with interrupts_held():
+            _finish(ns, reports[:printed], len(entries), time.perf_counter() - t0, interrupted=True)
+        raise
+    done = [r for r in reports[:printed] if r is not None]  # every report, in order
+    _finish(ns, done, len(entries), time.perf_counter() - t0, interrupted=False)
     failed = any(r.error is not None for r in done) or (ns.strict and any(r.warnings for r in done))
     return EXIT_ERROR if failed else EXIT_OK
+
+
+def _finish(ns: argparse.Namespace, done: Sequence[FileReport | None], n_files: int, total: float,
+            interrupted: bool) -> None:
+    """The end of the output: ``--json``'s document, or the tables' summary line (``--jsonl``: nothing)."""
+    reports = [r for r in done if r is not None]
+    if ns.jsonl:
+        return
+    if ns.json:
+        doc = {"samples": ns.samples, "seconds": round(total, 4), "interrupted": interrupted,
+               "files": [r.to_json() for r in reports]}
+        write_out(json.dumps(doc, indent=1, allow_nan=False) + "\n")
+    elif len(reports) > 1 or interrupted:
+        n_bad = sum(r.error is not None for r in reports)
+        what = f"{len(reports)} of {n_files} files read before the interruption" if interrupted else f"{len(reports)} files"
+        write_out(f"\n{what} ({n_bad} unreadable), {sum(len(r.faces) for r in reports)} faces, "
+                  f"{sum(r.n_free_form for r in reports)} free-form, {total:.2f} s\n")
 
 
 def _worker(ns: argparse.Namespace) -> int:
@@ -319,7 +347,10 @@ def add_parser(sub: Any) -> None:
     p.add_argument("paths", nargs="*", metavar="FILE|DIR",
                    help=f"STEP ({', '.join(STEP_SUFFIXES)}) or IGES ({', '.join(IGES_SUFFIXES)}) files, "
                         f"or folders holding them (default: {SAMPLES_DIR}/)")
-    p.add_argument("--json", action="store_true", help="print one JSON document instead of tables")
+    fmt = p.add_mutually_exclusive_group()
+    fmt.add_argument("--json", action="store_true", help="print one JSON document instead of tables")
+    fmt.add_argument("--jsonl", action="store_true",
+                     help="print one JSON line per file as soon as it is read (the objects of --json's 'files')")
     p.add_argument("--samples", type=_samples_arg, default=DEFAULT_SAMPLES, metavar="N",
                    help=f"grid size N of the deviation check (default {DEFAULT_SAMPLES})")
     p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",

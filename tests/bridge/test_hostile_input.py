@@ -616,3 +616,18 @@ def test_strict_on_every_reading_command_that_writes(clean, tmp_path):
     plain = _cli(*runs["render"], "--timeout", "300")
     err = plain.stderr.decode()
     assert plain.returncode == 0 and ": warning: " in err and (tmp_path / "r.png").is_file(), err
+
+
+@posix
+def test_reading_a_fifo_neither_blocks_nor_is_opened(tmp_path):
+    """A FIFO named like a model (the worker would wait forever for a writer) is refused from its stat."""
+    fifo = tmp_path / "pipe.step"
+    os.mkfifo(fifo)
+    t0 = time.perf_counter()
+    with pytest.raises(ExchangeError, match="is a FIFO, not a STEP file"):
+        read_step(fifo)
+    with pytest.raises(ExchangeError, match="is a FIFO"):
+        read_step(fifo, isolated=True, timeout=120)
+    proc = _cli("inspect", str(tmp_path), "--json", "--timeout", "120")
+    assert proc.returncode == 2 and "not a regular file" in json.loads(proc.stdout)["files"][0]["error"]
+    assert time.perf_counter() - t0 < 120
