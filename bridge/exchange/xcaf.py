@@ -19,24 +19,25 @@ Writing (:func:`step_document_bytes`, :func:`iges_document_bytes`) rebuilds an X
 :class:`~occsurf.bridge.exchange.step_iges.ImportedModel` or an :class:`AssemblyNode` tree
 (prototypes once, instances as references, colours, layers, names) and writes it with
 ``STEPCAFControl_Writer`` (printed with 17 significant digits, as ``write_step``) or
-``IGESCAFControl_Writer`` (IGES has no instances: each instance becomes a placed copy).
+``IGESCAFControl_Writer`` (IGES has no instances: each instance becomes a placed copy); the
+writing side is :mod:`occsurf.bridge.exchange.xcaf_write`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
+from occsurf.algorithms.errors import InvalidGeometryError
 
 from ..messages import one_line
 
-__all__ = ["AssemblyNode", "UNITS", "WRITE_UNITS", "unit_scale", "XcafData", "read_xcaf", "step_unit", "iges_unit",
+__all__ = ["AssemblyNode", "UNITS", "WRITE_UNITS", "unit_scale", "XcafData", "read_xcaf", "step_unit", "iges_unit", "compound",
            "step_document_bytes", "iges_document_bytes", "iter_nodes"]
 
 #: Millimetres per unit of each length unit occsurf reports or writes (``ImportedModel.unit``,
@@ -552,7 +553,6 @@ def read_xcaf(caf: Any, faces_map: Any, bare: Any, name: str) -> XcafData:
     return reader.data
 
 
-# ---------------------------------------------------------------------------------------- writing
 def _location(matrix: np.ndarray) -> Any:
     """``TopLoc_Location`` of a rigid 4x4 placement (a uniform scale is kept as such)."""
     from OCP.gp import gp_Trsf
@@ -570,346 +570,6 @@ def _location(matrix: np.ndarray) -> Any:
     return TopLoc_Location(trsf)
 
 
-def _set_name(label: Any, name: str | None, names: set[str] | None = None) -> None:
-    from OCP.TCollection import TCollection_ExtendedString
-    from OCP.TDataStd import TDataStd_Name
-
-    # always a name, if empty: else OCC's writer names the product 'Open CASCADE STEP translator 7.9 n'
-    TDataStd_Name.Set_s(label, TCollection_ExtendedString(name or "", True))
-    if names is not None and name:
-        names.add(name)
-
-
-def _set_color(color_tool: Any, label: Any, rgba: Sequence[float] | None, *, curve: bool = False) -> None:
-    from OCP.Quantity import Quantity_Color, Quantity_ColorRGBA, Quantity_TypeOfColor
-    from OCP.XCAFDoc import XCAFDoc_ColorType
-
-    if rgba is None:
-        return
-    r, g, b, a = (float(x) for x in rgba)
-    color = Quantity_ColorRGBA(Quantity_Color(r, g, b, Quantity_TypeOfColor.Quantity_TOC_RGB), a)
-    kind = XCAFDoc_ColorType.XCAFDoc_ColorCurv if curve else XCAFDoc_ColorType.XCAFDoc_ColorSurf
-    color_tool.SetColor(label, color, kind)
-
-
-def _set_layer(layer_tool: Any, label: Any, layer: str | None) -> None:
-    from OCP.TCollection import TCollection_ExtendedString
-
-    if layer:
-        layer_tool.SetLayer(label, TCollection_ExtendedString(layer, True))
-
-
-class _Writer:
-    """An XCAF document built from a model (or a tree): prototypes once, instances as references."""
-
-    def __init__(self, explicit: bool = False) -> None:
-        from OCP.TCollection import TCollection_ExtendedString
-        from OCP.TDocStd import TDocStd_Document
-        from OCP.XCAFDoc import XCAFDoc_DocumentTool
-
-        self.doc = TDocStd_Document(TCollection_ExtendedString("XCAF"))
-        self.shape_tool = XCAFDoc_DocumentTool.ShapeTool_s(self.doc.Main())
-        self.color_tool = XCAFDoc_DocumentTool.ColorTool_s(self.doc.Main())
-        self.layer_tool = XCAFDoc_DocumentTool.LayerTool_s(self.doc.Main())
-        self.shape_tool.SetAutoNaming_s(False)
-        #: every face gets its resolved colour and layer on its own label (IGES: the writer does not
-        #: pass a part's colour on to all its faces)
-        self.explicit = explicit
-        self.protos: dict[str, Any] = {}
-        self.proto_shapes: dict[str, Any] = {}
-        #: face names to set on the written face entities: (prototype face, name)
-        self.face_names: list[tuple[Any, str]] = []
-        #: every name given to a label (the products OCC names itself are the others)
-        self.names: set[str] = set()
-
-    def proto(self, node: AssemblyNode) -> Any:
-        key = node.part if node.part is not None else f"\0{id(node)}"
-        if key in self.protos:
-            return self.protos[key]
-        if node.children:
-            label = self.shape_tool.NewShape()
-            for child in node.children:
-                comp = self.shape_tool.AddComponent(label, self.proto(child), _location(child.location))
-                _set_name(comp, child.name, self.names)
-                _set_color(self.color_tool, comp, child.color)
-        else:
-            label = self.shape_tool.AddShape(node.shape, False, False)
-        _set_name(label, node.part or node.name, self.names)
-        # OCC's STEP writer drops layers of instances (components): the part carries the layer of its
-        # first instance; an instance on another layer than its part's first instance loses it
-        _set_layer(self.layer_tool, label, node.layer)
-        self.protos[key] = label
-        self.proto_shapes[key] = node.shape
-        return label
-
-    def faces(self, key: str, node: AssemblyNode, faces: list[Any]) -> None:
-        """Face-level colours, layers and names of one part (``faces``: ImportedFace of one of its instances)."""
-        from OCP.TopAbs import TopAbs_FACE
-        from OCP.TopExp import TopExp_Explorer
-        from OCP.TopLoc import TopLoc_Location
-        from OCP.TopTools import TopTools_IndexedMapOfShape
-
-        label = self.protos[key]
-        bare = TopTools_IndexedMapOfShape()
-        proto_faces = []
-        ex = TopExp_Explorer(node.shape, TopAbs_FACE)
-        identity = TopLoc_Location()
-        while ex.More():
-            bare.Add(ex.Current().Located(identity))
-            proto_faces.append(ex.Current())
-            ex.Next()
-        for f in faces:
-            j = bare.FindIndex(f.face.Located(identity))
-            if not j:
-                continue
-            pf = proto_faces[j - 1]
-            own_name = f.name if f.name and f.name != node.name else None
-            if f.color is None and f.layer is None and own_name is None:
-                continue
-            if f.color != node.color or f.layer != node.layer or self.explicit:
-                sub = self.shape_tool.AddSubShape(label, pf)
-                if sub is not None and not sub.IsNull():
-                    if f.color != node.color or self.explicit:
-                        _set_color(self.color_tool, sub, f.color)
-                    if f.layer != node.layer or self.explicit:
-                        _set_layer(self.layer_tool, sub, f.layer)
-            if own_name is not None:
-                self.face_names.append((pf, own_name))
-
-    def copy_faces(self, label: Any, leaf: AssemblyNode, proto_faces: list[Any], copy_faces: list[Any],
-                   faces: list[Any]) -> None:
-        """Face colours and layers on a placed copy (faces in the same explorer order as the part's)."""
-        from OCP.TopLoc import TopLoc_Location
-        from OCP.TopTools import TopTools_IndexedMapOfShape
-
-        identity = TopLoc_Location()
-        bare = TopTools_IndexedMapOfShape()
-        for pf in proto_faces:
-            bare.Add(pf.Located(identity))
-        for f in faces:
-            j = bare.FindIndex(f.face.Located(identity))
-            own_name = f.name if f.name and f.name != leaf.name else None
-            if not j or (f.color is None and f.layer is None and own_name is None):
-                continue
-            sub = self.shape_tool.AddSubShape(label, copy_faces[j - 1])
-            if sub is not None and not sub.IsNull():
-                _set_color(self.color_tool, sub, f.color)
-                _set_layer(self.layer_tool, sub, f.layer)
-                if own_name is not None:
-                    _set_name(sub, own_name, self.names)
-
-
-def _explore_faces(shape: Any) -> list[Any]:
-    from OCP.TopAbs import TopAbs_FACE
-    from OCP.TopExp import TopExp_Explorer
-
-    out = []
-    ex = TopExp_Explorer(shape, TopAbs_FACE)
-    while ex.More():
-        out.append(ex.Current())
-        ex.Next()
-    return out
-
-
-def _tree_faces(model: Any) -> dict[str, list[Any]]:
-    """ImportedFace of each leaf instance path."""
-    out: dict[str, list[Any]] = {}
-    for f in model.faces:
-        if f.instance is not None:
-            out.setdefault(f.instance, []).append(f)
-    return out
-
-
-def _flat_tree(model: Any, name: str) -> AssemblyNode:
-    """A flat model as a one-level tree: one part per top-level shape (the file's roots)."""
-    from OCP.TopAbs import TopAbs_COMPOUND
-    from OCP.TopoDS import TopoDS_Iterator
-
-    shape = model.shape
-    parts = []
-    if shape.ShapeType() == TopAbs_COMPOUND:
-        it = TopoDS_Iterator(shape)
-        while it.More():
-            parts.append(it.Value())
-            it.Next()
-    # a located root would become an assembly instance in XCAF: keep such a model as one shape
-    if len(parts) < 2 or any(not part.Location().IsIdentity() for part in parts):
-        parts = [shape]
-    return AssemblyNode(name, None, None, _IDENTITY, None, shape, tuple(
-        AssemblyNode("", None, None, _IDENTITY, None, part) for part in parts))
-
-
-def _flattened(root: AssemblyNode) -> list[tuple[str, AssemblyNode, AssemblyNode]]:
-    """The tree with every part instance as a placed copy of its part, directly below the root
-    (IGES has no instances: what its writer would do anyway, but with each copy keeping its name):
-    ``(path, original part instance, copy)`` per part instance."""
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
-
-    leaves: list[tuple[str, AssemblyNode, AssemblyNode]] = []
-
-    def walk(node: AssemblyNode, placed: np.ndarray, path: str, color: Any, layer: Any) -> None:
-        here = f"{path}/{node.name}" if path else node.name
-        placed = placed @ node.location
-        color, layer = node.color or color, node.layer or layer
-        if node.children:
-            for child in node.children:
-                walk(child, placed, here, color, layer)
-            return
-        shape = node.shape
-        if not np.array_equal(placed, _IDENTITY):
-            shape = BRepBuilderAPI_Transform(node.shape, _location(placed).Transformation(), True).Shape()
-        leaves.append((here, node, AssemblyNode(node.name, color, layer, _IDENTITY, f"\0{here}", shape)))
-
-    walk(root, _IDENTITY, "", None, None)
-    return leaves
-
-
-def build_document(source: Any, name: str, *, flatten: bool = False) -> _Writer:
-    """The XCAF document of an ImportedModel (its tree, or its roots when flat) or an AssemblyNode;
-    ``flatten``: instances as placed copies, every face with its own colour and layer (for IGES)."""
-    from OCP.TopAbs import TopAbs_FACE
-    from OCP.TopExp import TopExp_Explorer
-
-    writer = _Writer(explicit=flatten)
-    if isinstance(source, AssemblyNode):
-        root, model = source, None
-    else:
-        model = source
-        root = model.assembly
-    if root is not None and flatten:
-        faces = _tree_faces(model) if model is not None else {}
-        for here, original, leaf in _flattened(root):
-            label = writer.shape_tool.AddShape(leaf.shape, False, False)
-            _set_name(label, leaf.name, writer.names)
-            _set_color(writer.color_tool, label, leaf.color)
-            _set_layer(writer.layer_tool, label, leaf.layer)
-            writer.protos[leaf.part] = label  # type: ignore[index]
-            copy_faces = _explore_faces(leaf.shape)
-            proto_faces = _explore_faces(original.shape)
-            if len(copy_faces) != len(proto_faces) or here not in faces:
-                continue
-            writer.copy_faces(label, leaf, proto_faces, copy_faces, faces[here])
-        return writer
-    if root is not None:
-        writer.proto(root)
-        if model is not None:
-            faces = _tree_faces(model)
-            for path, node in iter_nodes(root):
-                if not node.children and path in faces:
-                    key = node.part if node.part is not None else f"\0{id(node)}"
-                    writer.faces(key, node, faces[path])
-        writer.shape_tool.UpdateAssemblies()
-        return writer
-    # flat: one free shape per root, with the faces' common name/colour/layer on it
-    tree = _flat_tree(model, name)
-    from OCP.TopTools import TopTools_IndexedMapOfShape
-
-    index = TopTools_IndexedMapOfShape()
-    for f in model.faces:
-        index.Add(f.face)
-    for k, part in enumerate(tree.children):
-        members = []
-        ex = TopExp_Explorer(part.shape, TopAbs_FACE)
-        while ex.More():
-            j = index.FindIndex(ex.Current())
-            if j:
-                members.append(model.faces[j - 1])
-            ex.Next()
-        names = {f.name for f in members}
-        colors = {f.color for f in members}
-        layers = {f.layer for f in members}
-        common_name = next(iter(names)) if len(names) == 1 and None not in names else None
-        common_color = next(iter(colors)) if len(colors) == 1 else None
-        common_layer = next(iter(layers)) if len(layers) == 1 else None
-        node = replace(part, name=common_name or part.name, part=f"\0flat{k}", color=common_color,
-                       layer=common_layer)
-        label = writer.shape_tool.AddShape(node.shape, False, False)
-        _set_name(label, node.name, writer.names)
-        _set_color(writer.color_tool, label, node.color)
-        _set_layer(writer.layer_tool, label, node.layer)
-        writer.protos[node.part] = label  # type: ignore[index]
-        writer.faces(node.part, node, members)  # type: ignore[arg-type]
-    return writer
-
-
-def _unname_products(model: Any, names: set[str]) -> None:
-    """Products OCC named itself ('Open CASCADE STEP translator 7.9 n': the part had no name) get ''."""
-    from OCP.StepBasic import StepBasic_Product
-    from OCP.TCollection import TCollection_HAsciiString
-
-    empty = TCollection_HAsciiString("")
-    for k in range(1, model.NbEntities() + 1):
-        ent = model.Value(k)
-        if isinstance(ent, StepBasic_Product) and ent.Name() is not None:
-            if ent.Name().ToCString() not in names:
-                ent.SetName(empty)
-                ent.SetId(empty)
-
-
-def step_document_bytes(p: Path, source: Any, digits: int, unit: str) -> bytes:
-    """STEP (AP214) of an ImportedModel or AssemblyNode through ``STEPCAFControl_Writer``, reals
-    printed with ``digits`` significant digits, lengths in ``unit`` (values divided by its size in mm)."""
-    from OCP.STEPCAFControl import STEPCAFControl_Writer
-    from OCP.STEPConstruct import STEPConstruct
-    from OCP.STEPControl import STEPControl_StepModelType
-    from OCP.TCollection import TCollection_HAsciiString
-    from OCP.TopLoc import TopLoc_Location
-    from OCP.XSControl import XSControl_WorkSession
-
-    from . import occ_io
-
-    with occ_io.statics({"write.step.unit": _OCC_UNIT[unit], "write.stepcaf.subshapes.name": 1}):
-        built = build_document(source, p.stem)
-        session = XSControl_WorkSession()
-        caf = STEPCAFControl_Writer(session, False)
-        for mode in ("SetNameMode", "SetColorMode", "SetLayerMode"):
-            getattr(caf, mode)(True)
-        try:
-            ok = caf.Transfer(built.doc, STEPControl_StepModelType.STEPControl_AsIs)
-        except Exception as err:  # noqa: BLE001
-            raise ExchangeError(f"{p}: STEP translation failed: {one_line(err)}") from err
-        if not ok:
-            raise ExchangeError(f"{p}: STEP translation failed")
-        ws = caf.ChangeWriter().WS()
-        _unname_products(ws.Model(), built.names)
-        finder = ws.TransferWriter().FinderProcess()
-        for face, name in built.face_names:
-            item = STEPConstruct.FindEntity_s(finder, face, TopLoc_Location())
-            if item is not None:
-                item.SetName(TCollection_HAsciiString(name))
-        return occ_io.print_step(p, ws, digits)
-
-
-def iges_document_bytes(p: Path, source: Any, unit: str) -> bytes:
-    """IGES of an ImportedModel or AssemblyNode through ``IGESCAFControl_Writer`` (instances become
-    placed copies), lengths in ``unit``."""
-    import io
-
-    from OCP.IGESCAFControl import IGESCAFControl_Writer
-    from OCP.TCollection import TCollection_HAsciiString
-
-    from . import occ_io
-
-    with occ_io.statics({"write.iges.unit": _OCC_UNIT[unit], "write.iges.brep.mode": 0}):
-        built = build_document(source, p.stem, flatten=True)
-        caf = IGESCAFControl_Writer()
-        for mode in ("SetNameMode", "SetColorMode", "SetLayerMode"):
-            getattr(caf, mode)(True)
-        try:
-            ok = caf.Transfer(built.doc)
-            header = caf.Model().GlobalSection()
-            header.SetFileName(TCollection_HAsciiString(p.name))
-            caf.Model().SetGlobalSection(header)
-            buffer = io.BytesIO()
-            ok = ok and caf.Write(buffer)
-        except Exception as err:  # noqa: BLE001
-            raise ExchangeError(f"{p}: IGES translation failed: {one_line(err)}") from err
-    data = buffer.getvalue()
-    if not ok or not data:
-        raise ExchangeError(f"{p}: writing the IGES model failed")
-    return data
-
-
 def compound(shapes: Sequence[Any]) -> Any:
     """A ``TopoDS_Compound`` of ``shapes`` (in order)."""
     from OCP.BRep import BRep_Builder
@@ -921,3 +581,18 @@ def compound(shapes: Sequence[Any]) -> Any:
     for s in shapes:
         builder.Add(comp, s)
     return comp
+
+
+# ---------------------------------------------------------------------------------------- writing
+def step_document_bytes(p: Path, source: Any, digits: int, unit: str) -> bytes:
+    """STEP bytes of an ImportedModel or AssemblyNode (:func:`.xcaf_write.step_document_bytes`)."""
+    from .xcaf_write import step_document_bytes as write
+
+    return write(p, source, digits, unit)
+
+
+def iges_document_bytes(p: Path, source: Any, unit: str) -> bytes:
+    """IGES bytes of an ImportedModel or AssemblyNode (:func:`.xcaf_write.iges_document_bytes`)."""
+    from .xcaf_write import iges_document_bytes as write
+
+    return write(p, source, unit)
