@@ -36,20 +36,23 @@ bd.export_step(bd.Compound(label="plates", children=[plate_a, plate_b]), "plates
 
 plates = read_step("plates.step", as_="build123d")        # a Compound tree: labels, colours, placements
 print([(c.label, tuple(c.color)) for c in plates.children])
+# [('plate_a', (1.0, 0.0, 0.0, 1.0)), ('plate_b', (0.0, 0.0, 1.0, 1.0))]
 plates_cq = read_step("plates.step", as_="cadquery")      # a cadquery Assembly: names, colours, locations
 print([(c.name, c.loc.toTuple()[0]) for c in plates_cq.children])
+# [('plate_a', (0.0, 0.0, 0.0)), ('plate_b', (30.0, 0.0, 0.0))]
 write_step("plates_17.step", plates_cq)                   # written back: structure, names, colours, 17 digits
-print([n.name for n in read_step("plates_17.step").assembly.children])
+print([n.name for n in read_step("plates_17.step").assembly.children])   # ['plate_a', 'plate_b']
 ```
 
 ```python
-print(sorted({r.surface_type for r in inspect_model(plate_a, samples=5)}))  # a build123d Solid, inspected
+print(sorted({r.surface_type for r in inspect_model(plate_a, samples=5)}))  # ['Cylinder', 'Plane']
 faces = [bd.Sphere(5).faces()[0]]
 for plane in (bd.Plane.XZ, bd.Plane.YZ, bd.Plane.XY.offset(3)):     # cut the sphere into 8 faces
     faces = [g for f in faces for half in f.split(plane, keep=bd.Keep.BOTH) for g in half.faces()]
 open_ball = bd.Shell([f for f in faces if f.center().Z < 3])       # the 4 faces above z = 3 removed
 ball = fill_model(open_ball, compare_occ=False, as_="build123d")   # the 4-sided hole filled, G1
 print(type(ball.shape).__name__, ball.holes[0].status, ball.shape.is_valid, f"{ball.holes[0].g1:.0e}")
+# Solid filled True 3e-10      (the largest G1 angle along the hole, degrees, measured by OCC)
 ```
 
 Instances stay references to one part (`plates.children[0].wrapped.IsPartner(plates.children[1].wrapped)`),
