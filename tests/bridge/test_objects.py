@@ -366,3 +366,37 @@ def test_synthetic_root_paths_and_colours_from_faces(plates_step):
     np.testing.assert_allclose([tuple(c.color) for c in ours.children], [RED, BLUE], atol=COLOUR_ATOL)
     assy = to_cadquery(synthetic)
     np.testing.assert_allclose([c.color.toTuple() for c in assy.children], [RED, BLUE], atol=COLOUR_ATOL)
+
+
+def test_nested_build123d_assembly_round_trip(tmp_path):
+    """Two levels: placements compose (a moved sub-assembly of two instances), as written by
+    build123d and by occsurf, read back with the same global positions, labels and shared part."""
+    from occsurf.bridge import write_step
+
+    plate = _plate()
+    a = plate.moved(bd.Location((0, 0, 0)))
+    a.label, a.color = "plate_a", bd.Color(*RED)
+    b = plate.moved(bd.Location((30, 0, 5), (0, 0, 90)))
+    b.label, b.color = "plate_b", bd.Color(*BLUE)
+    inner = bd.Compound(label="pair", children=[a, b])
+    inner.move(bd.Location((0, 50, 0), (90, 0, 0)))
+    lone = plate.moved(bd.Location((-40, 0, 0)))
+    lone.label, lone.color = "plate_c", bd.Color(*GREEN)
+    top = bd.Compound(label="top", children=[inner, lone])
+    for writer in ("build123d", "occsurf"):
+        path = tmp_path / f"{writer}.step"
+        if writer == "build123d":
+            assert bd.export_step(top, str(path))
+        else:
+            write_step(path, top)
+        ours = read_step(path, as_="build123d")
+        assert [c.label for c in ours.children] == ["pair", "plate_c"]
+        assert [c.label for c in ours.children[0].children] == ["plate_a", "plate_b"]
+        leaves = _leaves_b3d(ours)
+        assert len({id(x) for x in leaves}) == 3
+        assert leaves[0].wrapped.IsPartner(leaves[1].wrapped) and leaves[0].wrapped.IsPartner(leaves[2].wrapped)
+        for mine, theirs in zip(leaves, _leaves_b3d(top)):
+            np.testing.assert_allclose(_loc(mine.global_location), _loc(theirs.global_location), atol=1e-9)
+        _assert_same_faces(ours.faces(), top.faces(), rtol=1e-12)
+        colours = [tuple(np.round(tuple(x.color), 6)) for x in leaves]
+        assert colours == [RED, BLUE, GREEN]
