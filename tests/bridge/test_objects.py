@@ -400,3 +400,27 @@ def test_nested_build123d_assembly_round_trip(tmp_path):
         _assert_same_faces(ours.faces(), top.faces(), rtol=1e-12)
         colours = [tuple(np.round(tuple(x.color), 6)) for x in leaves]
         assert colours == [RED, BLUE, GREEN]
+
+
+def test_nested_cadquery_assembly_round_trip(tmp_path):
+    """cadquery: a sub-assembly that holds an object and children, placed twice over; through
+    cadquery's writer and occsurf's, back as an Assembly with the same placed faces and colours."""
+    from occsurf.bridge import write_step
+
+    box = cq.Workplane().box(2, 3, 4)
+    rod = cq.Workplane().cylinder(6, 0.5)
+    sub = cq.Assembly(box, name="base", color=cq.Color(*RED[:3], 1.0, False))
+    sub.add(rod, name="rod", loc=cq.Location((0, 0, 5)), color=cq.Color(*BLUE[:3], 1.0, False))
+    top = cq.Assembly(name="top")
+    top.add(sub, name="left", loc=cq.Location((-5, 0, 0)))
+    top.add(sub, name="right", loc=cq.Location((5, 0, 0), (0, 0, 1), 30))
+    for writer in ("cadquery", "occsurf"):
+        path = tmp_path / f"{writer}.step"
+        top.export(str(path)) if writer == "cadquery" else write_step(path, top)
+        back = read_step(path, as_="cadquery")
+        _assert_same_faces(back.toCompound().Faces(), top.toCompound().Faces(), rtol=1e-12)
+        coloured = sorted((round(a.toCompound().Area(), 9), tuple(np.round(a.color.toTuple(), 6)))
+                          for _, a in back.traverse() if a.obj is not None and a.color is not None)
+        box_area, rod_area = round(box.val().Area(), 9), round(rod.val().Area(), 9)
+        assert rod_area < box_area
+        assert coloured == [(rod_area, BLUE)] * 2 + [(box_area, RED)] * 2  # each instance of each part
