@@ -452,10 +452,18 @@ def test_degenerated_edge_and_non_face_shapes_are_refused():
     assert degenerated
     with pytest.raises(InvalidGeometryError, match="degenerated"):
         from_occ(degenerated[0])
-    with pytest.raises(InvalidGeometryError, match="solid"):
-        from_occ(solid)
-    with pytest.raises(InvalidGeometryError, match="solid"):
-        from_occ(bd.Solid.make_box(1, 1, 1))
+    # A solid is converted face by face (issue 16: every bridge function takes Solids, Shells,
+    # Compounds), bit-exactly as each face alone; trimming bounds apply to one face only.
+    box = bd.Solid.make_box(1, 2, 3)
+    surfaces = from_occ(box)
+    assert isinstance(surfaces, list) and len(surfaces) == 6
+    for s, f in zip(surfaces, box.faces()):
+        np.testing.assert_array_equal(s.control_points, from_occ(f).control_points)
+    assert len(from_occ(solid)) == 1
+    with pytest.raises(InvalidGeometryError, match="bounds"):
+        from_occ(box, (0.0, 1.0, 0.0, 1.0))
+    with pytest.raises(InvalidGeometryError, match="no faces and no edges"):
+        from_occ(bd.Vertex(0, 0, 0))
 
 
 # ============================================================================ error paths
