@@ -4,7 +4,7 @@ control meshes and subdivision, generalized biquadratic and bicubic B-splines (Â
 Public names: :class:`SPatch` and its helpers (:func:`spatch_indices`, :func:`domain_vertices`,
 :func:`wachspress` and derivatives), :func:`spatch_to_surfaces`, :func:`convert_spatch`,
 :class:`SPatchConversion`; :class:`HoleSide`, :func:`side_from_surface`, :func:`fill_hole`,
-:class:`HoleFill`, :func:`measure_fill`, :class:`FillQuality`; sides described by a curve and the
+:class:`HoleFill`, :func:`measure_fill`, :class:`FillQuality`, :func:`count_folds`; sides described by a curve and the
 neighbour's normals (trimmed neighbours): :func:`side_from_normals`, :class:`SideFit`, :func:`fit_boundary`; :class:`Mesh`, :func:`read_obj`,
 :func:`write_obj`, :func:`catmull_clark`, :func:`doo_sabin`; :class:`GeneralizedSurface`,
 :func:`generalized_biquadratic`, :func:`generalized_bicubic`, :func:`ribbon_patch`,
@@ -13,7 +13,7 @@ neighbour's normals (trimmed neighbours): :func:`side_from_normals`, :class:`Sid
 
 from .spatch import SPatch, domain_vertices, spatch_indices, wachspress, wachspress_derivatives, wachspress_gradient
 from .spatch_convert import SPatchConversion, convert_spatch, spatch_to_surfaces
-from .nsided import FillQuality, HoleFill, HoleSide, fill_hole, measure_fill, side_from_surface
+from .nsided import FillQuality, HoleFill, HoleSide, count_folds, fill_hole, measure_fill, side_from_surface
 from .nsided_sides import SideFit, fit_boundary, side_from_normals
 from .mesh import Mesh, catmull_clark, doo_sabin, read_obj, write_obj
 from .generalized import GeneralizedSurface, biquadratic_patch, generalized_biquadratic, ribbon_patch, spatch_curvatures
@@ -34,6 +34,7 @@ __all__ = [
     "HoleSide",
     "fill_hole",
     "measure_fill",
+    "count_folds",
     "side_from_surface",
     "SideFit",
     "fit_boundary",

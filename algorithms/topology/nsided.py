@@ -45,12 +45,22 @@ parametrisations satisfy the same relation exactly. ``L = b Z + l E'``, ``R = -a
 map of the domain, so the ``n`` twists there agree. The remaining interior poles minimise the
 thin-plate energy ``int |F_uu|^2 + 2|F_uv|^2 + |F_vv|^2``.
 
+Flat corners, round holes, slivers. A corner where the two sides are tangent (180 degrees, within
+``tolerances.FILL_MIN_CORNER_ANGLE``) gets a corner patch with a degenerate corner: the ribbon's
+cross-field coefficient is 0 there and grows linearly (the twist is solved for the rest), so the
+normal tends to the neighbour's and G1 holds up to that one point. This lets a loop of one side (a
+round hole) or two (a slot end) be cut at arc-length points into four sides (S-patch-style central
+split of a smooth loop). Where the midpoints' mean lies outside the hole (a crescent, a tapering
+sliver), the centre is moved to the point farthest from the boundary and internal edges that would
+leave the hole leave their side at 30 degrees instead; one central split may still fold on a long
+curved hole, and :func:`measure_fill` counts the folds (:attr:`FillQuality.folds`).
+
 Known limits (reported, never hidden): at a hole corner the twist is over-determined when the two
 neighbours are only G1 (not G2) to each other there (Gregory's twist incompatibility): its normal
 component is then averaged and G1 holds up to :attr:`HoleFill.twist_mismatch` near that corner.
-A side with a C0 knot (a kink, no tangent) is refused; split the side there. Hole corners must be
-convex (interior angle between ``tolerances.FILL_MIN_CORNER_ANGLE`` and 180 degrees): a reflex
-corner would fold the corner patch and is refused, as is a flat one (two tangent sides: merge them).
+A side with a C0 knot (a kink, no tangent) is refused; split the side there. A reflex corner
+(interior angle above 180 degrees) would fold the corner patch and is refused, as is a cusp and a
+loop that crosses or touches itself.
 
 References
 ----------
@@ -75,6 +85,7 @@ from ..kernel.basis import basis_matrix, greville
 from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError, ToleranceError
 from ..kernel.surface import BSplineSurface
+from .nsided_loops import arc_length_parameters, check_simple_loop, closest_parameters, inner_point, turns_inward
 
 __all__ = [
     "HoleSide",
@@ -84,6 +95,7 @@ __all__ = [
     "closest_parameters",
     "fill_hole",
     "measure_fill",
+    "count_folds",
 ]
 
 Array = NDArray[np.float64]
@@ -136,6 +148,14 @@ class HoleFill:
     twist_mismatch : ndarray, shape (n,)
         At each hole corner: relative size of the twist incompatibility (0 when the neighbours are
         G2-compatible there; see the module notes).
+    flat : ndarray of bool, shape (n,)
+        Hole corners where the two sides meet tangentially (within
+        ``tolerances.FILL_MIN_CORNER_ANGLE`` of 180 degrees): the corner patch has a degenerate
+        (180 degree) corner there, its normal defined by continuity (see :func:`fill_hole`).
+    source : ndarray, shape (n, 3)
+        Per side of the fill: ``(input side, t0, t1)``, the part ``[t0, t1]`` (on ``[0, 1]``) of the
+        input side it is. The identity unless the input had fewer than 3 sides and was split
+        (:func:`fill_hole`).
     """
 
     patches: list[BSplineSurface]
@@ -147,6 +167,19 @@ class HoleFill:
     size: float = field(default=1.0)
 
     method: str = field(default="quads")
+    flat: Array = field(default_factory=lambda: np.zeros(0, bool))
+    source: Array = field(default_factory=lambda: np.zeros((0, 3)))
+
+    def locate_input(self, side: int, points: Array) -> tuple[NDArray[np.intp], Array, Array, Array]:
+        """:meth:`locate` for points of *input* side ``side`` (the same unless the loop was split):
+        each point goes to the nearest of the fill sides that side was split into."""
+        rows = np.flatnonzero(self.source[:, 0] == side) if len(self.source) else np.array([side])
+        best = self.locate(int(rows[0]), points)
+        for r in rows[1:]:
+            cand = self.locate(int(r), points)
+            take = cand[3] < best[3]
+            best = tuple(np.where(take, c, b) for c, b in zip(cand, best))  # type: ignore[assignment]
+        return best[0].astype(np.intp), best[1], best[2], best[3]
 
     def locate(self, side: int, points: Array) -> tuple[NDArray[np.intp], Array, Array, Array]:
         """Which patch, at which ``(u, v)``, carries the points ``(m, 3)`` of side ``side``.
@@ -186,6 +219,10 @@ class FillQuality:
         The same between patches ``i`` and ``i+1`` along internal edge ``i``.
     center_angle : float
         Largest angle (degrees) between the patches' normals at the centre.
+    folds : ndarray of intp, shape (n,)
+        Per patch, the neighbouring pairs of a 41 x 41 parameter grid whose normals ``S_u x S_v``
+        point in opposite directions: a fold (the patch turning back over itself, as the central
+        split does on long curved holes such as a crescent or a helical strip). 0 for a sound fill.
     """
 
     boundary_gap: Array
@@ -193,13 +230,15 @@ class FillQuality:
     internal_gap: Array
     internal_angle: Array
     center_angle: float
+    folds: NDArray[np.intp] = field(default_factory=lambda: np.zeros(0, np.intp))
 
 
 # ====================================================================================== helpers
 def _mult_map(knots: Array, degree: int) -> dict[float, int]:
     """Interior knots (strictly inside the domain) -> multiplicity."""
     lo, hi = knots[degree], knots[-degree - 1]
-    vals, counts = np.unique(knots[(knots > lo) & (knots < hi)], return_counts=True)
+    eps = 1e-12 * (hi - lo)  # a knot within round-off of an end is that end (no sliver span)
+    vals, counts = np.unique(knots[(knots > lo + eps) & (knots < hi - eps)], return_counts=True)
     return {float(v): int(c) for v, c in zip(vals, counts)}
 
 
@@ -343,38 +382,6 @@ def _angle_deg(a: Array, b: Array) -> Array:
 
 
 # ======================================================================================= inputs
-def closest_parameters(curve: BSplineCurve, points: Array, samples: int = 401,
-                       iterations: int = 8) -> tuple[Array, Array]:
-    """Parameters of the points of ``curve`` closest to ``points`` (m, dim), vectorised.
-
-    The nearest of ``samples`` uniform parameters starts Newton's iteration on
-    ``(C(t) - p) . C'(t) = 0`` (clamped to the domain), all points at once.
-
-    Returns
-    -------
-    t : ndarray, shape (m,)
-    distance : ndarray, shape (m,)
-        ``|C(t) - p|``, for the caller to check.
-    """
-    P = np.atleast_2d(np.asarray(points, float))
-    lo, hi = curve.domain
-    grid = np.linspace(lo, hi, samples)
-    dense = curve.evaluate(grid)
-    d2 = np.einsum("mkd,mkd->mk", P[:, None] - dense[None], P[:, None] - dense[None])
-    t = grid[np.argmin(d2, axis=1)]
-    for _ in range(iterations):
-        D = curve.derivatives(t, 2)
-        r = D[:, 0] - P
-        g = np.einsum("md,md->m", r, D[:, 1])
-        h = np.einsum("md,md->m", D[:, 1], D[:, 1]) + np.einsum("md,md->m", r, D[:, 2])
-        t_new = np.clip(t - np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0), lo, hi)
-        done = np.abs(t_new - t).max() <= 1e-15 * (hi - lo)
-        t = t_new
-        if done:
-            break
-    return t, np.linalg.norm(curve.evaluate(t) - P, axis=1)
-
-
 def side_from_surface(surface: BSplineSurface, edge: str, reverse: bool = False) -> HoleSide:
     """The hole side along one iso-boundary of a neighbour surface, with its exact cross derivative.
 
@@ -440,15 +447,15 @@ def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Sid
     Raises
     ------
     InvalidGeometryError
-        Wrong types, dimensions or domains, fewer than 3 or more than ``tolerances.FILL_MAX_SIDES``
+        Wrong types, dimensions or domains, no side or more than ``tolerances.FILL_MAX_SIDES``
         sides, or a loop that is not closed (``tolerances.FILL_CLOSURE_TOL``).
     """
     if isinstance(sides, (str, bytes)) or not isinstance(sides, Sequence):
         raise InvalidGeometryError(f"sides: expected a sequence of HoleSide, got {type(sides).__name__}")
     n = len(sides)
     max_sides = tolerances.FILL_MAX_SIDES
-    if not 3 <= n <= max_sides:
-        raise InvalidGeometryError(f"sides: expected 3 to {max_sides} sides, got {n}")
+    if not 1 <= n <= max_sides:
+        raise InvalidGeometryError(f"sides: expected 1 to {max_sides} sides, got {n}")
     rational = False
     for k, sd in enumerate(sides):
         if not isinstance(sd, HoleSide):
@@ -480,6 +487,7 @@ def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Sid
             raise InvalidGeometryError(
                 f"sides: the boundary is not closed: side {k} ends {gap:.3g} away from the start of side "
                 f"{(k + 1) % n} (tolerance {closure_tol * size:.3g}); order and orient the sides along the loop")
+    check_simple_loop(unit, closure_tol * size)
     # The construction works about the hole's own centre: boundary derivatives and the exactness
     # checks of _represent then lose no digits to the model's distance from the origin (a hole
     # 1e6 away failed the representation check; at 1e4 the G1 angle grew from 4e-11 to 1e-7 deg).
@@ -506,6 +514,37 @@ def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Sid
             B, Xc = c, X
         work.append(_Side(B, Xc, rational))
     return unit, work, rational, size, origin
+
+
+def _split_short_loop(unit: list[HoleSide]) -> tuple[list[HoleSide], Array]:
+    """A loop of one or two sides (a round hole, a slot end) as four sides (course §8-3: the
+    central split needs ``n >= 3``): one side is cut at the quarters of its arc length, each of two
+    sides at its half. The cuts are flat corners (180 degrees) of the new loop, which
+    :func:`fill_hole` fills with a degenerate corner patch; the neighbour data are only cut, not
+    changed. ``unit``: sides on ``[0, 1]``.
+
+    Returns
+    -------
+    sides : list of HoleSide, length 4
+        On ``[0, 1]``.
+    source : ndarray, shape (4, 3)
+        :attr:`HoleFill.source`.
+    """
+    cuts = [0.25, 0.5, 0.75] if len(unit) == 1 else [0.5]
+    out, src = [], []
+    for k, sd in enumerate(unit):
+        t = arc_length_parameters(sd.curve, np.array(cuts))
+        # a cut that (nearly) meets a knot is moved onto it: a sliver span of 1e-16 left by the cut
+        # would make the fill's knot spaces singular
+        knots = np.unique(np.r_[sd.curve.knots, sd.cross.knots])
+        near = np.abs(knots[None, :] - t[:, None])
+        t = np.where(near.min(1) <= 1e-6, knots[near.argmin(1)], t)
+        b = np.r_[0.0, t, 1.0]
+        for t0, t1 in zip(b[:-1], b[1:]):
+            out.append(HoleSide(sd.curve.segment(t0, t1).reparametrize(0.0, 1.0),
+                                sd.cross.segment(t0, t1).reparametrize(0.0, 1.0)))
+            src.append((k, t0, t1))
+    return out, np.array(src, float)
 
 
 def _times_linear(c: BSplineCurve, lam: Callable[[Array], Array]) -> BSplineCurve:
@@ -584,9 +623,11 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
 
     Parameters
     ----------
-    sides : sequence of HoleSide, length n (3 to ``tolerances.FILL_MAX_SIDES``)
+    sides : sequence of HoleSide, length n (1 to ``tolerances.FILL_MAX_SIDES``)
         The hole's boundary in loop order, each with the neighbour's cross derivative
-        (:func:`side_from_surface` builds them from neighbour surfaces).
+        (:func:`side_from_surface` builds them from neighbour surfaces). One closed side (a round
+        hole) is cut at the quarters of its arc length, two sides (a slot end) at their halves
+        (:attr:`HoleFill.source` maps the fill's sides back).
 
     Returns
     -------
@@ -596,14 +637,21 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
     Raises
     ------
     InvalidGeometryError
-        Fewer than 3 sides, a loop that is not closed (``tolerances.FILL_CLOSURE_TOL``), a
-        degenerate corner or cross field (``tolerances.FILL_MIN_CORNER_ANGLE``; a neighbour's pole
-        at a corner), neighbours meeting at a sharp edge at a corner
+        No side, a loop that is not closed (``tolerances.FILL_CLOSURE_TOL``), a degenerate cross
+        field (``tolerances.FILL_MIN_CORNER_ANGLE``; a neighbour's pole at a corner), neighbours
+        meeting at a sharp edge at a corner
         (``tolerances.FILL_CORNER_PLANE_TOL``), a kink inside a side, or a fill that would turn back
         over the neighbour (cross field pointing into the hole).
 
     Notes
     -----
+    Flat corners (the sides tangent there, within ``tolerances.FILL_MIN_CORNER_ANGLE``: the cuts of
+    a round hole, or sides a caller did not merge) get a corner patch whose corner is degenerate
+    (its two boundary tangents opposite): the ribbon's cross-field coefficient is 0 there and grows
+    linearly into the side (its derivative is set to the midpoint's value, the twist solved for the
+    rest), so the patch's normal tends to the neighbour's as the corner is approached and G1 holds
+    along the whole side; OCC's LocalAnalysis reports no normal at that one point.
+
     Construction in the module docstring (course §8-3; central split with G1 ribbons). The steps:
     the sides in working coordinates (:func:`_working_sides`), where each is split
     (:func:`_choose_split`), the kite domain picture (:func:`_domain_picture`), the ribbon
@@ -613,18 +661,24 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
     corner (:func:`_corner_patch`).
     """
     unit, S, rational, size, origin = _working_sides(sides)
+    source = np.array([(k, 0.0, 1.0) for k in range(len(unit))])
+    if len(unit) < 3:  # a round hole or a slot end: four sides meeting at flat corners
+        split, source = _split_short_loop(unit)
+        unit, S, rational, size, origin = _working_sides(split)
     n = len(S)
     sig = np.array([_choose_split(sd) for sd in S])
     vdom, pdom = _domain_picture(sig)
-    corners = _corner_analysis(S, sig, rational)
     mid = _midpoints(S, sig, rational)
-    C, c1 = _centre(mid, rational)
+    loop = np.concatenate([_cart(sd.B.evaluate(np.linspace(0.0, 1.0, 49)[:-1]), rational) for sd in S])
+    C, c1 = _centre(mid, rational, loop)
+    corners = _corner_analysis(S, sig, rational, c1)
     _check_inward(corners, c1)
     Ch = np.r_[C, 1.0] if rational else C
     DPhi = _centre_map(C, mid.cart, pdom, rational)
     edges = [_internal_edge(i, vdom, pdom, sig[i], mid, c1[i], Ch, DPhi) for i in range(n)]
     patches = [_corner_patch(i, S, sig, corners, c1, edges, rational, origin) for i in range(n)]
-    return HoleFill(patches, unit, sig, C + origin, corners.residual, corners.twist, size)
+    return HoleFill(patches, unit, sig, C + origin, corners.residual, corners.twist, size, flat=corners.flat,
+                    source=source)
 
 
 # ---- step 1: the domain picture
@@ -669,6 +723,8 @@ class _CornerFit:
         :attr:`HoleFill.corner_residual`.
     twist : ndarray, shape (n,)
         :attr:`HoleFill.twist_mismatch`.
+    flat : ndarray of bool, shape (n,)
+        :attr:`HoleFill.flat`.
     """
 
     start: Array
@@ -677,9 +733,10 @@ class _CornerFit:
     end_d: Array
     residual: Array
     twist: Array
+    flat: Array
 
 
-def _corner_analysis(S: list[_Side], sig: Array, rational: bool) -> _CornerFit:
+def _corner_analysis(S: list[_Side], sig: Array, rational: bool, c1: Array | None = None) -> _CornerFit:
     """Fit the ribbons of the two sides at every hole corner to each other (step 2).
 
     At corner ``i`` each side's ribbon must be the other side's tangent (so that the patch's
@@ -693,6 +750,9 @@ def _corner_analysis(S: list[_Side], sig: Array, rational: bool) -> _CornerFit:
     sig : ndarray, shape (n,)
         Split parameters.
     rational : bool
+    c1 : ndarray, shape (n, nf), optional
+        Ribbon coefficients at the midpoints (:func:`_centre`): at a flat corner the cross-field
+        coefficient's derivative is set to its midpoint value (a linear ramp from 0).
 
     Returns
     -------
@@ -701,17 +761,19 @@ def _corner_analysis(S: list[_Side], sig: Array, rational: bool) -> _CornerFit:
     Raises
     ------
     InvalidGeometryError
-        A flat corner, a degenerate cross field at a corner, or neighbours meeting at a sharp edge.
+        A degenerate cross field at a corner, or neighbours meeting at a sharp edge.
     """
     n, nf = len(S), S[0].nf
-    out = [_corner(i, S, sig, rational) for i in range(n)]
+    c1 = np.zeros((n, nf)) if c1 is None else c1
+    out = [_corner(i, S, sig, rational, c1) for i in range(n)]
     start, end, start_d, end_d = (np.array([c[k] for c in out]).reshape(n, nf) for k in range(4))
     residual, twist = np.array([c[4] for c in out]), np.array([c[5] for c in out])
-    return _CornerFit(start, start_d, end, end_d, residual, twist)
+    return _CornerFit(start, start_d, end, end_d, residual, twist, np.array([c[6] for c in out], bool))
 
 
-def _corner(i: int, S: list[_Side], sig: Array, rational: bool) -> tuple[Array, Array, Array, Array, float, float]:
-    """Hole corner ``i`` for :func:`_corner_analysis`.
+def _corner(i: int, S: list[_Side], sig: Array, rational: bool,
+            c1: Array) -> tuple[Array, Array, Array, Array, float, float, bool]:
+    """Hole corner ``i`` for :func:`_corner_analysis` (``c1`` (n, nf): the midpoint coefficients).
 
     Returns
     -------
@@ -719,6 +781,8 @@ def _corner(i: int, S: list[_Side], sig: Array, rational: bool) -> tuple[Array, 
         Row ``i`` of the :class:`_CornerFit` arrays of the same names.
     residual, twist : float
         Corner residual and twist mismatch at corner ``i``.
+    flat : bool
+        The corner is flat.
     """
     nf = S[0].nf
     j = (i - 1) % len(S)
@@ -728,8 +792,8 @@ def _corner(i: int, S: list[_Side], sig: Array, rational: bool) -> tuple[Array, 
     ta = sig[i] * S[i].B.derivatives(0.0, 1)[1]  # a'(0)
     tb = -tau_j * S[j].B.derivatives(1.0, 1)[1]  # b'(0)
     h0 = S[i].B.evaluate(0.0)  # the corner (homogeneous, weight 1)
-    _check_corner_angles(i, j, h0, _cart_tangent(h0, ta, rational), _cart_tangent(h0, tb, rational), Fa, Fb,
-                         rational)
+    flat = _check_corner_angles(i, j, h0, _cart_tangent(h0, ta, rational), _cart_tangent(h0, tb, rational), Fa, Fb,
+                                rational)
     rcond = tolerances.FILL_RCOND
     xa, *_ = np.linalg.lstsq(Fa.T, tb, rcond=rcond)
     xb, *_ = np.linalg.lstsq(Fb.T, ta, rcond=rcond)
@@ -743,23 +807,35 @@ def _corner(i: int, S: list[_Side], sig: Array, rational: bool) -> tuple[Array, 
             f"{np.degrees(np.arcsin(plane_tol)):.3g}): no surface is G1 to both there")
     rhs = (-tau_j * xb @ dFb) - (sig[i] * xa @ dFa)
     M = np.c_[Fa.T, -Fb.T]
-    y, *_ = np.linalg.lstsq(M, rhs, rcond=rcond)
+    # At a flat corner the two sides' fields span one plane, so the twist fixes only the difference
+    # of their cross-field rates; the solution nearest to both ramping linearly to their midpoint
+    # values (y0) keeps both ribbons turning into the hole (a minimum-norm one would send one out).
+    # The two fields' planes agree only within the corner's flatness (and a fitted field's error), so
+    # directions of M resolved by less than the sine of FILL_MIN_CORNER_ANGLE are left at y0.
+    y0 = np.zeros(2 * nf)
+    if flat:
+        y0[0], y0[nf] = c1[i, 0], c1[j, 0]
+        rcond = max(rcond, float(np.sin(np.radians(tolerances.FILL_MIN_CORNER_ANGLE))))
+    y = y0 + np.linalg.lstsq(M, rhs - M @ y0, rcond=rcond)[0]
     twist = np.linalg.norm(M @ y - rhs) / max(np.linalg.norm(ta), np.linalg.norm(tb), 1e-300)
-    return xa, xb, y[:nf], y[nf:], residual, twist
+    return xa, xb, y[:nf], y[nf:], residual, twist, flat
 
 
 def _check_corner_angles(i: int, j: int, h0: Array, tca: Array, tcb: Array, Fa: Array, Fb: Array,
-                         rational: bool) -> None:
-    """Refuse a flat corner ``i`` or a cross field there that is (nearly) tangent to its side.
+                         rational: bool) -> bool:
+    """Whether corner ``i`` is flat (its sides tangent, within ``tolerances.FILL_MIN_CORNER_ANGLE``);
+    refuse a cross field there that is (nearly) tangent to its side, and a cusp (the two sides
+    leaving the corner in the same direction).
 
     ``h0`` (w,) is the corner, ``tca``, ``tcb`` (3,) the Cartesian tangents of sides ``i`` and
     ``j = i - 1`` into the corner's patch, ``Fa``, ``Fb`` (nf, w) their fields there.
     """
     min_angle = tolerances.FILL_MIN_CORNER_ANGLE
-    if _angle_deg(tca, tcb) < min_angle:
+    flat = bool(_angle_deg(tca, tcb) < min_angle)
+    if flat and float(tca @ tcb) > 0:
         raise InvalidGeometryError(
-            f"sides: corner {i} (start of side {i}) is flat: the sides meet at {_angle_deg(tca, tcb):.3g} deg "
-            f"from tangent (minimum {min_angle}); merge the two sides or split the hole differently")
+            f"sides: corner {i} (start of side {i}) is a cusp: sides {j} and {i} leave it in the same direction "
+            f"(within {min_angle} deg); the loop turns back on itself there")
     for k, at, F, t_side in ((i, "start", Fa, tca), (j, "end", Fb, tcb)):
         cross = _cart_tangent(h0, F[0], rational)
         ang = _angle_deg(t_side, cross)
@@ -768,6 +844,7 @@ def _check_corner_angles(i: int, j: int, h0: Array, tca: Array, tcb: Array, Fa: 
                 f"sides[{k}].cross: degenerate at the {at} of the side (its angle to the boundary is "
                 f"{ang:.3g} deg): the neighbour has a pole or a collapsed edge at hole corner {i} (a sphere "
                 "or a fillet corner), where no tangent plane across the boundary is defined")
+    return flat
 
 
 # ---- step 3: centre, midpoints and the coefficients there
@@ -819,11 +896,15 @@ def _midpoints(S: list[_Side], sig: Array, rational: bool) -> _Midpoints:
     return _Midpoints(Fm, mh, mder, mc, normals)
 
 
-def _centre(mid: _Midpoints, rational: bool) -> tuple[Array, Array]:
+def _centre(mid: _Midpoints, rational: bool, loop: Array | None = None) -> tuple[Array, Array]:
     """The centre ``C`` and the ribbon coefficients at the midpoints.
 
     ``C`` is the mean of the midpoints, each moved half-way towards that mean within its
     neighbour's tangent plane; the ribbon at ``m_i`` points along the projection of ``C - m_i``.
+    When that leaves the hole at some midpoint (a long curved hole, a crescent: the midpoints' mean
+    lies outside it), and ``loop`` (m, 3), points of the boundary, is given, ``C`` is instead the
+    point of the hole farthest from its boundary in the hole's mean plane (:func:`~occsurf.algorithms.topology.nsided_loops.inner_point`),
+    lifted to the mean of the midpoints' tangent planes above it.
 
     Returns
     -------
@@ -839,18 +920,55 @@ def _centre(mid: _Midpoints, rational: bool) -> tuple[Array, Array]:
 
     C0 = mc.mean(0)
     C = np.mean([mc[i] + 0.5 * proj(i, C0 - mc[i]) for i in range(n)], axis=0)
+    c1 = _midpoint_coefficients(mid, C, rational)
+    if loop is None or not np.any(c1[:, 0] >= 0) or not turns_inward(loop, normals):
+        return C, c1  # convex enough, or cross fields that point into the hole: _check_inward says so
+    inner = inner_point(loop, normals)
+    if inner is not None:
+        C0, nh = inner
+        C = C0 + nh * np.mean([nh @ (mc[i] + proj(i, C0 - mc[i]) - C0) for i in range(n)])
+        c1 = _midpoint_coefficients(mid, C, rational)
+    if np.any(c1[:, 0] >= 0):  # a sliver: the centre is along the side, not across it
+        c1 = _midpoint_coefficients(mid, C, rational, turn=True)
+    return C, c1
+
+
+#: Smallest angle (degrees) between an internal edge and its side at the side's midpoint: where the
+#: centre lies (nearly) along the side (a tapering sliver of a hole), the edge leaves the side at this
+#: angle and turns towards the centre on its way (its Hermite curve), instead of leaving the hole.
+_MIN_EDGE_ANGLE = 30.0
+
+
+def _midpoint_coefficients(mid: _Midpoints, C: Array, rational: bool, turn: bool = False) -> Array:
+    """Coefficients (n, nf) of the fields at the midpoints for ribbons along the projections of
+    ``C - m_i`` into the neighbours' tangent planes; with ``turn``, a projection that leaves the
+    side at less than :data:`_MIN_EDGE_ANGLE` into the hole is turned to that angle (same length)."""
+    n, mc, normals = len(mid.cart), mid.cart, mid.normals
     c1 = np.zeros((n, mid.fields[0][0].shape[1]))
     for i in range(n):
-        t = proj(i, C - mc[i])
+        d = C - mc[i]
+        t = d - normals[i] * (normals[i] @ d)
+        if turn:
+            tau = _unit(_cart_tangent(mid.point[i], mid.tangent[i], rational))
+            x = _cart_tangent(mid.point[i], mid.fields[i][0][0, 0], rational)
+            w = -_unit(x - tau * (x @ tau))  # in the tangent plane, across the side, into the hole
+            a, b, length = float(t @ tau), float(t @ w), float(np.linalg.norm(t))
+            lo = np.radians(_MIN_EDGE_ANGLE)
+            if b < np.sin(lo) * length:
+                t = length * (np.cos(lo) * (1.0 if a >= 0 else -1.0) * tau + np.sin(lo) * w)
         target = np.r_[mid.point[i, 3] * t, 0.0] if rational else t
         c1[i], *_ = np.linalg.lstsq(mid.fields[i][0][0].T, target, rcond=tolerances.FILL_RCOND)
-    return C, c1
+    return c1
 
 
 def _check_inward(corners: _CornerFit, c1: Array) -> None:
     """Refuse a fill that would leave over a neighbour: the coefficient of the cross field ``X``
-    (column 0 of ``corners.start``, ``corners.end`` and ``c1``, each (n, nf)) must be negative."""
-    for arr, where in ((corners.start, "corner"), (corners.end, "corner"), (c1, "midpoint")):
+    (column 0 of ``corners.start``, ``corners.end`` and ``c1``, each (n, nf)) must be negative; at a
+    flat corner, where it is 0, its derivative into the side (``start_d``, ``end_d``)."""
+    flat = corners.flat
+    start = np.where(flat[:, None], corners.start_d, corners.start)
+    end = np.where(flat[:, None], corners.end_d, corners.end)
+    for arr, where in ((start, "corner"), (end, "corner"), (c1, "midpoint")):
         if np.any(arr[:, 0] >= 0):
             k = int(np.argmax(arr[:, 0]))
             raise InvalidGeometryError(
@@ -1124,11 +1242,25 @@ def _fair_interior(H: Array, free: NDArray[np.bool_], degree: tuple[int, int], k
 
 # ================================================================================== measurement
 def _point_normal(surface: BSplineSurface, u: Array, v: Array) -> tuple[Array, Array]:
-    """Points and (unnormalised) normals ``S_u x S_v`` from one derivative evaluation; a degenerate
-    normal is NaN (as :meth:`BSplineSurface.normal`), so that it fails every angle check."""
+    """Points and (unnormalised) normals ``S_u x S_v`` from one derivative evaluation.
+
+    Where ``S_u`` and ``S_v`` are parallel (the degenerate corner of a flat hole corner) the normal
+    is the limit, taken ``1e-7`` into the patch (angle error ~1e-5 deg); a normal still degenerate
+    there is NaN (as :meth:`BSplineSurface.normal`), so that it fails every angle check."""
     D = surface.derivatives(u, v, 1)
     nrm = np.cross(D[:, 1, 0], D[:, 0, 1])
-    nrm[np.linalg.norm(nrm, axis=1) == 0] = np.nan
+    scale = np.linalg.norm(D[:, 1, 0], axis=1) * np.linalg.norm(D[:, 0, 1], axis=1)
+    bad = np.linalg.norm(nrm, axis=1) <= 1e-9 * scale
+    if bad.any():
+        (u0, u1), (v0, v1) = surface.domain
+        ub, vb = np.broadcast_to(u, bad.shape)[bad], np.broadcast_to(v, bad.shape)[bad]
+        ub = ub + np.where(ub < 0.5 * (u0 + u1), 1e-7, -1e-7) * (u1 - u0)
+        vb = vb + np.where(vb < 0.5 * (v0 + v1), 1e-7, -1e-7) * (v1 - v0)
+        Db = surface.derivatives(ub, vb, 1)
+        nb = np.cross(Db[:, 1, 0], Db[:, 0, 1])
+        sb = np.linalg.norm(Db[:, 1, 0], axis=1) * np.linalg.norm(Db[:, 0, 1], axis=1)
+        nb[~(np.linalg.norm(nb, axis=1) > 1e-9 * sb)] = np.nan
+        nrm[bad] = nb
     return D[:, 0, 0], nrm
 
 
@@ -1175,4 +1307,19 @@ def measure_fill(fill: HoleFill, samples: int = 201) -> FillQuality:
         ia[i] = _angle_deg(m1, m2).max()
     nc = np.array([p.normal(1.0, 1.0) for p in P])
     ca = float(max(_angle_deg(nc[0], nc[i]) for i in range(n)))
-    return FillQuality(bg, ba, ig, ia, ca)
+    return FillQuality(bg, ba, ig, ia, ca, np.array([count_folds(p) for p in P], np.intp))
+
+
+def count_folds(surface: BSplineSurface, grid: int = 41) -> int:
+    """Neighbouring pairs of a ``grid`` x ``grid`` parameter grid of ``surface`` whose normals
+    ``S_u x S_v`` point in opposite directions (:attr:`FillQuality.folds`); a degenerate normal (a
+    flat hole corner) counts as neither."""
+    (u0, u1), (v0, v1) = surface.domain
+    U, V = np.meshgrid(np.linspace(u0, u1, grid), np.linspace(v0, v1, grid), indexing="ij")
+    D = surface.derivatives(U.ravel(), V.ravel(), 1)
+    N = np.cross(D[:, 1, 0], D[:, 0, 1]).reshape(grid, grid, 3)
+    length = np.linalg.norm(N, axis=2)
+    N[length <= 1e-6 * np.median(length)] = 0.0  # a degenerate point (flat hole corner) has no side
+    du = np.einsum("ijk,ijk->ij", N[1:], N[:-1])
+    dv = np.einsum("ijk,ijk->ij", N[:, 1:], N[:, :-1])
+    return int((du < 0).sum() + (dv < 0).sum())

@@ -1,4 +1,5 @@
-"""``occsurf fill IN --out OUT.step [--faces I ...] [--all-loops] [--no-occ] [--json] [--timeout SECONDS] [--in-process]``.
+"""``occsurf fill IN --out OUT.step [--faces I ...] [--all-loops] [--no-occ] [--no-pictures] [--json]
+[--timeout SECONDS] [--strict] [--in-process]``.
 
 Reads a STEP or IGES model, fills every hole with :func:`occsurf.bridge.modeling.fill.fill_model`
 (n G1 patches per hole, course §8-3), writes the sewn result to ``OUT`` (STEP) and prints per hole
@@ -9,7 +10,12 @@ The untrusted file is read, filled and written in a worker process
 (:func:`occsurf.bridge.isolation.run_jobs` with the job :func:`fill_job`): a crash inside OCC is
 reported in one line ``occsurf: IN: reason`` with exit status 2, not a dead command; so is a worker
 that takes longer than ``--timeout`` seconds. Warnings about the input (damage read around, see
-:mod:`occsurf.bridge.exchange.checks`) are printed as ``occsurf: IN: warning: ...`` lines on stderr.
+:mod:`occsurf.bridge.exchange.checks`) are printed as ``occsurf: IN: warning: ...`` lines on stderr;
+``--strict`` refuses such an input instead (exit status 2, nothing written).
+Beside ``OUT`` goes one zebra picture per filled hole, ``OUT_STEM.holeK.png`` (the model around the
+hole before and after, :func:`occsurf.bridge.modeling.fill_pictures.zebra_before_after`) where VTK
+can render offscreen; ``--no-pictures`` skips them. A fill that turns back over itself (a fold,
+:attr:`occsurf.algorithms.topology.nsided.FillQuality.folds`) is written but warned about.
 ``--in-process`` does the work in the calling process instead (no isolation).
 """
 
@@ -26,6 +32,7 @@ from typing import Any
 from ._common import (
     EXIT_ERROR,
     EXIT_OK,
+    add_strict_option,
     error,
     output_problem,
     shown_path,
@@ -81,7 +88,7 @@ def fill_job(item: dict[str, Any]) -> dict[str, Any]:
         from ..exchange import step_iges as exchange
         from ..modeling.fill import fill_model
 
-        model = read_model(src)
+        model = read_model(src, strict=bool(item.get("strict")))
         if item.get("faces"):
             return _refill_job(item, model, exchange)
         result = fill_model(model.shape, all_loops=item["all_loops"], compare_occ=item["compare_occ"])
@@ -89,8 +96,28 @@ def fill_job(item: dict[str, Any]) -> dict[str, Any]:
         nothing_to_do = not any(h.status != "outer" for h in result.holes)
         if filled or nothing_to_do:  # a model without holes is written as it is (sewn)
             exchange.write_step(out, result.shape)
-    return {"holes": [asdict(h) for h in result.holes], "free_loops_after": result.free_loops_after,
+        holes = [asdict(h) for h in result.holes]
+        if item.get("pictures", True):
+            _pictures(out, result.holes, holes, lambda r: [])
+    return {"holes": holes, "free_loops_after": result.free_loops_after,
             "written": filled or nothing_to_do, "warnings": list(model.warnings)}
+
+
+def _pictures(out: Path, reports: list[Any], holes: list[dict[str, Any]], removed: Any) -> None:
+    """Write ``OUT_STEM.holeK.png`` per filled hole (zebra before/after); the path (or why not) goes
+    into the hole's dict as ``picture`` / ``picture_error``."""
+    from ..modeling.fill_pictures import zebra_before_after
+    from ..messages import one_line
+
+    for k, (r, h) in enumerate(zip(reports, holes)):
+        if r.status != "filled" or not hasattr(r, "_fill_faces"):
+            continue
+        try:
+            path = zebra_before_after(out.with_name(f"{out.stem}.hole{k}.png"), removed(r), r._neighbours, r._fill_faces,
+                                      label=f"before (hole {k})", after_label=f"after: occsurf fill, {len(r._fill_faces)} patches")
+            h["picture"] = str(path)
+        except Exception as err:  # noqa: BLE001 - a picture must not cost the fill
+            h["picture"], h["picture_error"] = None, one_line(err)
 
 
 def _refill_job(item: dict[str, Any], model: Any, exchange: Any) -> dict[str, Any]:
@@ -100,7 +127,7 @@ def _refill_job(item: dict[str, Any], model: Any, exchange: Any) -> dict[str, An
     reports, shape = refill_model(model.shape, item["faces"], compare_occ=item["compare_occ"])
     if shape is not None:
         exchange.write_step(Path(item["output"]), shape)
-    holes = []
+    holes: list[dict[str, Any]] = []
     for k, r in enumerate(reports):
         d, t = r.occ.get("default", {}), r.occ.get("tuned", {})
         holes.append({"index": k, "faces": r.faces, "sides": r.sides, "g1_edges": r.g1_edges,
@@ -108,7 +135,9 @@ def _refill_job(item: dict[str, Any], model: Any, exchange: Any) -> dict[str, An
                       "seconds": r.seconds, "g0": r.g0, "g1": r.g1, "side_g0": r.side_g0, "side_g1": r.side_g1,
                       "valid": r.valid, "step_round_trip": r.step_round_trip,
                       "occ_status": d.get("status"), "occ_reason": d.get("reason"), "occ_seconds": d.get("seconds"),
-                      "occ_g0": d.get("g0"), "occ_g1": d.get("g1"), "occ_tuned": t or None})
+                      "occ_g0": d.get("g0"), "occ_g1": d.get("g1"), "occ_tuned": t or None, "folds": r.folds})
+    if shape is not None and item.get("pictures", True):
+        _pictures(Path(item["output"]), reports, holes, lambda r: r._removed)
     return {"holes": holes, "free_loops_after": None, "written": shape is not None, "warnings": list(model.warnings)}
 
 
@@ -137,6 +166,9 @@ def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
         sys.stdout.write(f"wrote {out} ({n_filled} fills sewn in; {result['free_loops_after']} free loops left)\n")
     elif result["written"]:
         sys.stdout.write(f"no holes to fill; wrote {out} unchanged\n")
+    pictures = [h["picture"] for h in all_holes if h.get("picture")]
+    if pictures:
+        sys.stdout.write(f"zebra before/after: {', '.join(pictures)}\n")
 
 
 def run(ns: argparse.Namespace) -> int:
@@ -149,7 +181,7 @@ def run(ns: argparse.Namespace) -> int:
         error(f"{shown_path(out)}: cannot write the filled model there ({why})")
         return EXIT_ERROR
     item = {"input": str(src), "output": str(out), "all_loops": ns.all_loops, "compare_occ": not ns.no_occ,
-            "faces": list(ns.faces or [])}
+            "faces": list(ns.faces or []), "strict": ns.strict, "pictures": not ns.no_pictures}
     [outcome] = run_jobs(FILL_JOB, [item], timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD)
     if outcome.status != OK:
         why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
@@ -162,6 +194,12 @@ def run(ns: argparse.Namespace) -> int:
     failed = [h for h in result["holes"] if h["status"] == "failed"]
     for h in failed:
         error(f"{src}: hole {h['index']} ({h['sides']} sides) not filled: {h['reason']}")
+    for h in result["holes"]:
+        if h.get("folds"):
+            error(f"{src}: hole {h['index']}: warning: the fill turns back over itself ({h['folds']} folded grid "
+                  "pairs): the hole is too long and curved for one central split")
+        if h.get("picture_error"):
+            error(f"{src}: hole {h['index']}: warning: no picture ({h['picture_error']})")
     if ns.json:
         doc = {"input": str(src), "output": str(out) if result["written"] else None, "holes": result["holes"],
                "free_loops_after": result["free_loops_after"]}
@@ -190,9 +228,12 @@ def add_parser(sub: Any) -> None:
                    help="remove these faces (numbered as in inspect's table) and refill the hole(s) they leave: "
                         "adjacent faces make one hole; G1 is asked where the original was tangent-continuous")
     f.add_argument("--no-occ", action="store_true", help="do not run OCC's filler for comparison")
+    f.add_argument("--no-pictures", action="store_true",
+                   help="do not write the zebra before/after picture of each hole (OUT_STEM.holeK.png)")
     f.add_argument("--json", action="store_true", help="print one JSON document instead of the table")
     f.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop the worker after this long and report it (default {DEFAULT_TIMEOUT:g})")
+    add_strict_option(f, writes=True)
     f.add_argument("--in-process", action="store_true",
                    help="read and fill in this process, not in a worker (a crash inside OCC then ends it)")
     f.set_defaults(func=run)

@@ -6,7 +6,10 @@
 1. extracts each edge's neighbour face (an edge -> face map, ``TopExp.MapShapesAndAncestors_s``), its
    surface through :func:`occsurf.bridge.conversion.splines.from_occ` (exact for B-spline faces) and the iso-boundary
    the edge lies on, giving :class:`occsurf.algorithms.topology.nsided.HoleSide` data with the exact cross
-   derivative (:func:`occsurf.algorithms.topology.nsided.side_from_surface`);
+   derivative (:func:`occsurf.algorithms.topology.nsided.side_from_surface`); where an edge is a
+   trimming curve (not an iso-line), or the exact sides cannot be filled, the sides are fitted to the
+   neighbours' normals along the edges' p-curves instead (:func:`occsurf.bridge.modeling.refill.fitted_fill`,
+   G1 to ``tolerances.FILL_FIT_ANGLE``; :attr:`HoleReport.construction` says which);
 2. fills it with :func:`occsurf.algorithms.topology.nsided.fill_hole` (n patches, G1 by construction);
 3. measures every boundary with OCC's ``LocalAnalysis_SurfaceContinuity`` (order G1: ``C0Value`` gap
    and ``G1Angle``) at :data:`ASSESS_SAMPLES` points per edge, the neighbour's parameters taken from
@@ -94,6 +97,9 @@ class HoleReport:
     internal_g1: float | None = None
     side_g0: list[float] = field(default_factory=list)
     side_g1: list[float] = field(default_factory=list)
+    construction: str | None = None  # 'iso' (exact cross derivatives) or 'fitted' (trimming-curve edges)
+    fit_g1: list[float] = field(default_factory=list)  # fitted sides: the fields' angle to the neighbours
+    folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; FillQuality.folds)
     occ_status: str | None = None  # 'ok', 'failed', None (not run)
     occ_reason: str | None = None
     occ_seconds: float | None = None
@@ -353,29 +359,87 @@ def neighbour_face(m: TopTools_IndexedDataMapOfShapeListOfShape, edge: Any) -> A
 
 def _locator(fill: HoleFill, side: int) -> Any:
     def locate(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        idx, u, v, _ = fill.locate(side, points)  # the distance is judged by OCC's C0Value
+        idx, u, v, _ = fill.locate_input(side, points)  # the distance is judged by OCC's C0Value
         return idx, u, v
     return locate
 
 
+def _unique(faces: list[Any]) -> list[Any]:
+    out: list[Any] = []
+    for f in faces:
+        if f is not None and not any(f.IsSame(g) for g in out):
+            out.append(f)
+    return out
+
+
+def _model_size(shape: Any) -> float:
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+
+    box = Bnd_Box()
+    BRepBndLib.Add_s(shape, box)
+    return math.sqrt(box.SquareExtent()) if not box.IsVoid() else 1.0
+
+
+def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int,
+               rep: HoleReport) -> tuple[HoleFill, list[Any]]:
+    """Fill one loop: exactly from the neighbours' iso-boundaries when every edge is one, else with
+    sides fitted to the neighbours along the edges' p-curves (trimming curves; G1 to 0.01 deg,
+    :func:`occsurf.bridge.modeling.refill.fitted_fill`). Records the per-edge OCC measurements and
+    the construction (``'iso'``, ``'fitted'``) on ``rep``; returns the fill and its OCC faces."""
+    try:
+        fill = fill_hole(hole_sides(edges, nb))
+    except InvalidGeometryError as exact_err:
+        if any(f is None for f in nb):
+            raise
+        from .refill import fitted_fill
+
+        try:
+            occ_faces, _, fit, s0, s1, fill, _ = fitted_fill(edges, nb, [None] * len(edges), size, samples)
+        except InvalidGeometryError as err:
+            raise InvalidGeometryError(f"{err} (exact sides: {exact_err})") from err
+        rep.construction, rep.fit_g1 = "fitted", [float(a) for a in fit]
+        rep.side_g0, rep.side_g1 = [float(a) for a in s0], [float(a) for a in s1]
+        return fill, occ_faces
+    occ_faces = [make_face(p, 1e-7) for p in fill.patches]
+    occ_surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
+    per = [assess_joint(e, f, occ_surfs, samples, locate=_locator(fill, i)) for i, (e, f) in enumerate(zip(edges, nb))]
+    rep.side_g0, rep.side_g1 = [p[0] for p in per], [p[1] for p in per]
+    rep.construction = "iso"
+    return fill, occ_faces
+
+
+@_occ.quiet_messages()  # OCC's printers at the caller's levels again afterwards
 def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
-               samples: int = ASSESS_SAMPLES) -> FillResult:
-    """Fill every hole of ``shape`` (a TopoDS_Shape or anything with ``.wrapped``); see the module.
+               samples: int = ASSESS_SAMPLES, as_: str | None = None) -> FillResult:
+    """Fill every hole of ``shape``; see the module.
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape, or a build123d / cadquery object
+        Faces, a Shell, Solid or Compound, a Workplane, an Assembly...
+        (:func:`occsurf.bridge.conversion.shapes.as_shape`).
+    as_ : {None, 'build123d', 'cadquery'}
+        The type of ``FillResult.shape``: OCC's ``TopoDS_Shape`` (default), or a build123d / cadquery
+        object, a ``Solid`` when the filled shell is closed, else a ``Shell`` (a ``Compound`` when the
+        faces sew into several shells); :func:`occsurf.bridge.exchange.objects.shape_object`.
 
     Returns
     -------
     FillResult
-        ``shape`` is the sewn shell with the fills; one :class:`HoleReport` per free loop.
+        ``shape`` is the sewn shell with the fills (as ``as_`` asks); one :class:`HoleReport` per free loop.
     """
-    shape = getattr(shape, "wrapped", shape)
-    if not isinstance(shape, TopoDS_Shape) or shape.IsNull():
-        raise InvalidGeometryError(f"shape: expected a non-null TopoDS_Shape, got {type(shape).__name__}")
-    _occ.silence_messages()
+    from ..conversion.shapes import as_shape
+    from ..exchange.objects import check_as, shape_object
+
+    check_as(as_)
+    shape = as_shape(shape, "shape")
     faces = _faces(shape)
     if not faces:
         raise InvalidGeometryError("shape: the model has no faces")
     sewn = sew_faces(faces)
     e2f = edge_face_map(sewn)
+    size = _model_size(sewn)
     reports: list[HoleReport] = []
     fills: list[HoleFill | None] = []
     new_faces: list[Any] = []
@@ -389,17 +453,15 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
         nb = [neighbour_face(e2f, e) for e in edges]
         try:
             t0 = time.perf_counter()
-            fill = fill_hole(hole_sides(edges, nb))
+            fill, occ_faces = _fill_loop(edges, nb, size, samples, rep)
             rep.seconds = time.perf_counter() - t0
-            occ_faces = [make_face(p, 1e-7) for p in fill.patches]
-            occ_surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
             q = measure_fill(fill)
             rep.own_g0, rep.own_g1 = float(q.boundary_gap.max()), float(q.boundary_angle.max())
             rep.internal_g1 = float(max(q.internal_angle.max(), q.center_angle))
-            per = [assess_joint(e, f, occ_surfs, samples, locate=_locator(fill, i)) for i, (e, f) in enumerate(zip(edges, nb))]
-            rep.side_g0, rep.side_g1 = [p[0] for p in per], [p[1] for p in per]
+            rep.folds = int(q.folds.sum())
             rep.g0, rep.g1 = max(rep.side_g0), max(rep.side_g1)
             rep.status = "filled"
+            rep._fill_faces, rep._neighbours = occ_faces, _unique(nb)  # for pictures (not serialised)
             fills[-1] = fill
             new_faces += occ_faces
         except Exception as err:  # noqa: BLE001 - one hole's failure must not stop the others
@@ -419,4 +481,4 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
                     rep.occ_seconds = time.perf_counter() - t0
     result = sew_faces([sewn] + new_faces) if new_faces else sewn
     after = sum(1 for _ in find_loops(result, all_loops=True))
-    return FillResult(result, reports, fills, after)
+    return FillResult(result if as_ is None else shape_object(result, as_), reports, fills, after)

@@ -46,7 +46,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Shell
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
-from occsurf.algorithms.topology.nsided import HoleFill, closest_parameters, fill_hole
+from occsurf.algorithms.topology.nsided import HoleFill, closest_parameters, count_folds, fill_hole
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.topology.nsided_sides import blend_normals, corner_normals, fit_boundary, side_from_normals
 
@@ -55,7 +55,8 @@ from ..conversion.splines import from_occ, make_face
 from ..messages import one_line
 from .fill import ASSESS_SAMPLES, SEW_TOLERANCE, assess_joint, edge_face_map
 
-__all__ = ["RefillReport", "refill_faces", "refill_model", "face_components", "model_faces", "G1_EDGE_DEG", "OCC_TUNED", "OCC_DEFAULT"]
+__all__ = ["RefillReport", "refill_faces", "refill_model", "face_components", "model_faces", "fitted_fill", "G1_EDGE_DEG",
+           "OCC_TUNED", "OCC_DEFAULT"]
 
 #: An edge counts as tangent-continuous in the original model (and the fill is asked to be G1 to
 #: the neighbour there) when the removed face and the neighbour meet within this angle (degrees).
@@ -91,6 +92,7 @@ class RefillReport:
     fit_g1: list[float] = field(default_factory=list)
     valid: bool | None = None
     step_round_trip: bool | None = None
+    folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; see FillQuality.folds)
     occ: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
@@ -105,8 +107,8 @@ def model_faces(shape: Any) -> list[Any]:
 class SewnModel:
     """The model's faces sewn once; original face ``i`` -> sewn face; the edge -> faces map."""
 
+    @_occ.quiet_messages()
     def __init__(self, shape: Any) -> None:
-        _occ.silence_messages()
         self.original = model_faces(shape)
         sew = BRepBuilderAPI_Sewing(SEW_TOLERANCE)
         for f in self.original:
@@ -283,8 +285,11 @@ def _joint_angle(edge: Any, f1: Any, f2: Any) -> float:
 
 
 def _edge_normals(e: Any, nb: Any, own: Any, curve: Any) -> tuple[np.ndarray, np.ndarray, bool]:
-    """Points and oriented normals along edge ``e`` (G1 edge: the neighbour's; sharp: the owner's)."""
-    tangent = own is not None and _joint_angle(e, own, nb) <= G1_EDGE_DEG
+    """Points and oriented normals along edge ``e`` (G1 edge: the neighbour's; sharp: the owner's).
+
+    Without an owner (a hole of the model itself, no removed face) the neighbour's plane is all
+    there is: G1 to it is asked."""
+    tangent = own is None or _joint_angle(e, own, nb) <= G1_EDGE_DEG
     src = nb if tangent or own is None else own
     P, N, uvs = _normals_on(e, src, _edge_params(e, src, FIT_SAMPLES))
     s, _ = closest_parameters(curve, P)
@@ -337,7 +342,7 @@ def _trace(edge: Any, nb: Any, curve: Any) -> tuple[np.ndarray, np.ndarray, np.n
     their distances from it."""
     P, _, _ = _normals_on(edge, nb, _edge_params(edge, nb, FIT_SAMPLES))
     s, d = closest_parameters(curve, P)
-    return P, s, d
+    return P, _unwrap_seam(curve, s, [len(P)]), d
 
 
 def _fit_traces(traces: list[tuple[np.ndarray, np.ndarray, np.ndarray]], tol: float) -> Any:
@@ -351,6 +356,30 @@ def _fit_traces(traces: list[tuple[np.ndarray, np.ndarray, np.ndarray]], tol: fl
     P = P[keep]
     arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
     return fit_boundary(arc / arc[-1], P, tol)[0]
+
+
+def _unwrap_seam(curve: Any, s: np.ndarray, counts: list[int]) -> np.ndarray:
+    """On a closed side (a round hole: the curve starts where it ends) a sample at the seam is as close
+    to the curve's start as to its end; put each on the end its neighbours along the edge say
+    (samples come ordered along each edge, ``counts`` per edge), so the fitted field sees the normals
+    at the seam at both ends of the side, not swapped."""
+    lo, hi = curve.domain
+    if len(counts) != 1 or np.linalg.norm(curve.evaluate(lo) - curve.evaluate(hi)) > 1e-9 * max(1.0, float(
+            np.abs(curve.control_points).max())):
+        return s
+    m = len(s)
+    mid = s[m // 4: 3 * m // 4]
+    rising = float(np.median(np.diff(mid))) >= 0
+    span = hi - lo
+    head, tail = np.arange(m) < m // 2, np.arange(m) >= m // 2
+    s = s.copy()
+    if rising:  # the first samples belong near lo, the last near hi
+        s[head & (s > lo + 0.75 * span)] = lo
+        s[tail & (s < lo + 0.25 * span)] = hi
+    else:
+        s[head & (s < lo + 0.25 * span)] = hi
+        s[tail & (s > lo + 0.75 * span)] = lo
+    return s
 
 
 def _corner_treatment(curves: list[Any], fields: list[tuple[np.ndarray, np.ndarray]]
@@ -402,10 +431,7 @@ def refill_sides(edges: list[Any], nbs: list[Any], owners: list[Any], size: floa
         Per side: the fitted field's angle to the neighbours' planes (degrees).
     """
     curves = _oriented_curves(edges)
-    groups = _groups(curves)
-    if len(groups) < 3:
-        raise InvalidGeometryError(f"the hole has {len(groups)} side(s) once tangent edges are merged "
-                                   "(n = 1 and n = 2 holes are not supported yet)")
+    groups = _groups(curves)  # one or two groups (a round hole, a slot end): fill_hole splits them
     side_of_edge = [gi for gi, group in enumerate(groups) for _ in group]
     order = [k for group in groups for k in group]
     side_of_edge = [side_of_edge[order.index(k)] for k in range(len(edges))]
@@ -427,6 +453,7 @@ def refill_sides(edges: list[Any], nbs: list[Any], owners: list[Any], size: floa
             P_all.append(P), N_all.append(N)
         P, N = np.concatenate(P_all), np.concatenate(N_all)
         s, _ = closest_parameters(c, P)
+        s = _unwrap_seam(c, s, [len(p) for p in P_all])
         order = np.argsort(s, kind="stable")
         fields.append((s[order], N[order]))
     fields = _corner_treatment(bounds, fields)
@@ -500,7 +527,9 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         The shape is ``None`` unless our fill succeeded and ``check`` is set.
     """
     if not isinstance(model, SewnModel):
-        model = SewnModel(getattr(model, "wrapped", model))
+        from ..conversion.shapes import as_shape
+
+        model = SewnModel(as_shape(model, "model"))
     n = len(model.faces)
     bad = [i for i in faces if not (isinstance(i, (int, np.integer)) and 0 <= i < n)]
     if bad or not faces:
@@ -516,25 +545,16 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
     g1 = [False] * len(edges)
     try:
         t0 = time.perf_counter()
-        best, last_err = None, None
-        etol = max(BRep_Tool.Tolerance_s(e) for e in edges)
-        for follow in (True, False):  # the neighbours' traces (G0 to them), and the model's edge curves
-            try:
-                cand = _our_fill(edges, nbs, owners, model.size, follow)
-            except InvalidGeometryError as err:
-                last_err = err
-                continue
-            if best is None or _score(cand, model.size, etol) < _score(best, model.size, etol):
-                best = cand
-        if best is None:
-            raise last_err
-        occ_faces, g1, rep.fit_g1, rep.side_g0, rep.side_g1 = best
+        occ_faces, g1, rep.fit_g1, rep.side_g0, rep.side_g1, fill, _ = fitted_fill(edges, nbs, owners, model.size)
+        rep.folds = sum(count_folds(p) for p in fill.patches)
         rep.seconds = time.perf_counter() - t0
         rep.g1_edges = sum(g1)
         rep.g0 = max(rep.side_g0)
         rep.g1 = max([a for a in rep.side_g1 if a is not None], default=0.0)
         rep.status = "filled"
-        rep._fill_faces = occ_faces  # for refill_model (not a field: not serialised)
+        rep._fill_faces = occ_faces  # for refill_model and the pictures (not fields: not serialised)
+        rep._removed = [model.faces[i] for i in rep.faces]
+        rep._neighbours = [f for k, f in enumerate(nbs) if not any(f.IsSame(g) for g in nbs[:k])]
         if check:
             shape = _sew_in(model, rep.faces, occ_faces)
             rep.valid = bool(BRepCheck_Analyzer(shape).IsValid())
@@ -551,25 +571,56 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
     return rep, shape
 
 
-def _our_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, follow: bool) -> tuple:
-    """Our fill of the hole, as OCC faces, measured: (faces, g1 flags, fit angles, side G0, side G1)."""
+def _our_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, follow: bool,
+              samples: int = ASSESS_SAMPLES) -> tuple:
+    """Our fill of the hole, as OCC faces, measured: (faces, g1 flags, fit angles, side G0, side G1,
+    the HoleFill, the side of each edge)."""
     sides, side_of_edge, g1, fit = refill_sides(edges, nbs, owners, size, follow)
     fill = fill_hole(sides)
     occ_faces = [make_face(p, 1e-7) for p in fill.patches]
     surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
 
     def locate(i: int) -> Any:
-        return lambda pts: fill.locate(side_of_edge[i], pts)[:3]
-    s0, s1 = _measure(edges, nbs, g1, surfs, locate)
-    return occ_faces, g1, fit, s0, s1
+        return lambda pts: fill.locate_input(side_of_edge[i], pts)[:3]
+    s0, s1 = _measure(edges, nbs, g1, surfs, locate, samples)
+    return occ_faces, g1, fit, s0, s1, fill, side_of_edge
 
 
-def _score(cand: tuple, size: float, edge_tol: float = 0.0) -> float:
-    """The worse of G0 and G1 in units of the targets: 0.01 deg, and for G0 1e-7 of the model size
-    or the hole edges' own tolerance if larger (a gap the model itself declares is not a defect)."""
+def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float,
+                samples: int = ASSESS_SAMPLES) -> tuple:
+    """The hole filled with fitted sides (trimming-curve edges), both boundary variants tried (the
+    neighbours' traces, the model's edge curves) and the better kept (:func:`_score`).
+
+    Returns the tuple of :func:`_our_fill`.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Neither variant can be filled (the last reason).
+    """
+    best, last_err = None, None
+    etol = max(BRep_Tool.Tolerance_s(e) for e in edges)
+    for follow in (True, False):  # the neighbours' traces (G0 to them), and the model's edge curves
+        try:
+            cand = _our_fill(edges, nbs, owners, size, follow, samples)
+        except InvalidGeometryError as err:
+            last_err = err
+            continue
+        if best is None or _score(cand, size, etol) < _score(best, size, etol):
+            best = cand
+    if best is None:
+        raise last_err
+    return best
+
+
+def _score(cand: tuple, size: float, edge_tol: float = 0.0) -> tuple[bool, float]:
+    """``(folds, worse of G0 and G1)``, smaller is better: a fill that folds (:func:`count_folds`)
+    comes after every one that does not; then G0 and G1 in units of the targets: 0.01 deg, and for
+    G0 1e-7 of the model size or the hole edges' own tolerance if larger (a gap the model itself
+    declares is not a defect)."""
     g0 = max(cand[3]) / max(tolerances.FILL_FIT_G0 * size, edge_tol)
     g1 = max([a for a in cand[4] if a is not None], default=0.0) / tolerances.FILL_FIT_ANGLE
-    return max(g0, g1)
+    return any(count_folds(p) for p in cand[5].patches), max(g0, g1)
 
 
 def _safe_joint(e: Any, own: Any, nb: Any) -> bool:
@@ -635,11 +686,9 @@ def refill_model(shape: Any, faces: list[int], *, compare_occ: bool = True) -> t
     InvalidGeometryError
         ``faces`` empty or out of range, or ``shape`` not a non-null shape.
     """
-    from OCP.TopoDS import TopoDS_Shape
+    from ..conversion.shapes import as_shape
 
-    shape = getattr(shape, "wrapped", shape)
-    if not isinstance(shape, TopoDS_Shape) or shape.IsNull():
-        raise InvalidGeometryError(f"shape: expected a non-null TopoDS_Shape, got {type(shape).__name__}")
+    shape = as_shape(shape, "shape")
     model = SewnModel(shape)
     n = len(model.faces)
     bad = [i for i in faces if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < n]

@@ -16,6 +16,7 @@ from occsurf.bridge import cli
 from occsurf.bridge.conversion.splines import make_face
 from occsurf.bridge.exchange.step_iges import read_step, write_step
 from occsurf.bridge.modeling.fill import sew_faces
+from occsurf.bridge.rendering.vtk_scene import render_available
 from occsurf.examples.hole_models import ring_model
 
 REPO = Path(__file__).resolve().parents[2]
@@ -41,6 +42,9 @@ def test_fill_sample_prints_table_and_writes_step(capsys, tmp_path: Path) -> Non
         assert float(r[4]) <= 1e-6  # G1 angle, degrees
     model = read_step(out_file)
     assert len(model.faces) == 18 + 18  # 3+4+5+6 ring faces and as many fill patches
+    if render_available():  # one zebra before/after per filled hole, listed on stdout
+        pictures = sorted(tmp_path.glob("filled.hole*.png"))
+        assert len(pictures) == 4 and all(str(p) in out for p in pictures)
 
 
 def test_fill_json_and_rational_sample(capsys, tmp_path: Path) -> None:
@@ -59,14 +63,14 @@ def test_fill_json_and_rational_sample(capsys, tmp_path: Path) -> None:
 
 def test_unfillable_hole_reported_others_filled(capsys, tmp_path: Path) -> None:
     good = ring_model(4, center=(0.3, 0.5), radius=0.1, width=0.08)
-    sq = np.array([[0.6, 0.4], [0.8, 0.4], [0.8, 0.5], [0.8, 0.6], [0.6, 0.6]])
-    flat = ring_model(5, polygon=sq, bump=0.0, radius=0.1, width=0.08)
-    src = write_step(tmp_path / "two.step", sew_faces([make_face(f, 1e-7) for m in (good, flat) for f in m.faces]))
+    reflex = np.array([[0.6, 0.4], [0.8, 0.4], [0.73, 0.5], [0.8, 0.6], [0.6, 0.6]])
+    bad = ring_model(5, polygon=reflex, bump=0.0, radius=0.1, width=0.08)
+    src = write_step(tmp_path / "two.step", sew_faces([make_face(f, 1e-7) for m in (good, bad) for f in m.faces]))
     out_file = tmp_path / "out.step"
     code, out, err = run_main(capsys, "fill", str(src), "--out", str(out_file), "--no-occ")
     assert code == 2
     lines = err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"occsurf: {src}: hole ") and "flat" in lines[0]
+    assert len(lines) == 1 and lines[0].startswith(f"occsurf: {src}: hole ") and "reflex" in lines[0]
     assert out_file.exists() and len(read_step(out_file).faces) == 4 + 5 + 4
 
 
@@ -159,15 +163,19 @@ def test_reader_crash_is_one_line_exit_2(capsys, tmp_path: Path, monkeypatch) ->
 
 
 def test_in_process_gives_the_same_document(capsys, tmp_path: Path) -> None:
-    """``--in-process`` skips the worker; the JSON is the same but for the times."""
+    """``--in-process`` skips the worker; the JSON is the same but for the times (and the pictures'
+    names, which follow OUT's)."""
     docs = []
     for flags in ((), ("--in-process",)):
+        out_file = tmp_path / f"r{len(docs)}.step"
         code, out, err = run_main(capsys, "fill", str(HOLES / "rational_holes.step"), "--out",
-                                  str(tmp_path / f"r{len(docs)}.step"), "--json", "--no-occ", *flags)
+                                  str(out_file), "--json", "--no-occ", *flags)
         assert code == 0 and err == "", err
         doc = json.loads(out)
         for h in doc["holes"]:
             h.pop("seconds")
+            if h.get("picture"):
+                assert h.pop("picture") == str(out_file.with_name(f"{out_file.stem}.hole{h['index']}.png"))
         doc.pop("output")
         docs.append(doc)
     assert docs[0] == docs[1]
@@ -187,6 +195,36 @@ def test_fill_faces_replaces_a_trimmed_face_and_reports_ours_beside_occ(capsys, 
     assert h["faces"] == [1] and h["status"] == "filled" and h["valid"] and h["step_round_trip"]
     assert h["g0"] <= h["occ_g0"] and h["g1"] <= h["occ_g1"] and h["occ_tuned"]["status"] == "ok"
     assert len(read_step(out).faces) == 12
+    _check_zebra_picture(h, tmp_path / "lens.hole0.png")
+
+
+def _check_zebra_picture(hole: dict, path: Path) -> None:
+    """The before/after zebra PNG: two halves side by side, each showing stripes (dark and light
+    pixels in its middle), and different from each other (the fill is not the removed face)."""
+    from occsurf.bridge.modeling.fill_pictures import PICTURE_SIZE
+    from occsurf.bridge.rendering.vtk_scene import render_available
+
+    if not render_available():
+        assert hole["picture"] is None and hole["picture_error"]
+        return
+    from PIL import Image
+
+    assert hole["picture"] == str(path) and path.is_file()
+    img = np.asarray(Image.open(path).convert("L"), float)
+    w, h = PICTURE_SIZE
+    assert img.shape == (h, 2 * w + 6)
+    left, right = img[h // 4: 3 * h // 4, w // 4: 3 * w // 4], img[h // 4: 3 * h // 4, w + 6 + w // 4: w + 6 + 3 * w // 4]
+    for half in (left, right):
+        assert (half < 60).mean() > 0.05 and (half > 200).mean() > 0.05
+    assert np.abs(left - right).mean() > 1.0
+
+
+def test_no_pictures_writes_none(capsys, tmp_path: Path) -> None:
+    out_file = tmp_path / "filled.step"
+    code, out, err = run_main(capsys, "fill", str(HOLES / "dome_holes.step"), "--out", str(out_file), "--no-pictures",
+                              "--no-occ", "--in-process")
+    assert code == 0, err
+    assert out_file.is_file() and not list(tmp_path.glob("*.png")) and "zebra" not in out
 
 
 @pytest.mark.skipif(not _LENS.is_file(), reason=f"{_LENS} is absent (public real models)")

@@ -81,13 +81,28 @@ def test_missing_neighbour_face_is_a_clear_error() -> None:
 
 
 def test_unfillable_hole_is_reported_and_others_still_filled() -> None:
+    """A reflex corner (interior angle above 180 deg) is refused by both constructions (the exact
+    iso-line sides and the fitted ones); the other hole is filled."""
     good = ring_model(3, center=(0.3, 0.5), radius=0.1, width=0.08)
+    reflex = np.array([[0.6, 0.4], [0.8, 0.4], [0.73, 0.5], [0.8, 0.6], [0.6, 0.6]])
+    bad = ring_model(5, polygon=reflex, bump=0.0, radius=0.1, width=0.08)
+    res = fill_model(_shell(good, bad), compare_occ=False)
+    holes = {h.sides: h for h in res.holes if h.status != "outer"}
+    assert holes[3].status == "filled" and holes[3].construction == "iso"
+    assert holes[5].status == "failed" and "reflex" in holes[5].reason and "exact sides" in holes[5].reason
+
+
+def test_flat_corner_hole_is_filled_g1_by_occ_measure() -> None:
+    """Two sides of a hole meeting tangentially (a flat corner, once refused): filled from the exact
+    iso-line sides; OCC's LocalAnalysis finds no normal at the degenerate patch corner itself (it
+    is skipped there, as at a pole) and G1 to round-off elsewhere (1e-6 deg as above)."""
     sq = np.array([[0.6, 0.4], [0.8, 0.4], [0.8, 0.5], [0.8, 0.6], [0.6, 0.6]])
     flat = ring_model(5, polygon=sq, bump=0.0, radius=0.1, width=0.08)
-    res = fill_model(_shell(good, flat), compare_occ=False)
-    holes = {h.sides: h for h in res.holes if h.status != "outer"}
-    assert holes[3].status == "filled"
-    assert holes[5].status == "failed" and "flat" in holes[5].reason
+    res = fill_model(_shell(flat), compare_occ=False)
+    [hole] = [h for h in res.holes if h.status != "outer"]
+    assert hole.status == "filled" and hole.construction == "iso", hole.reason
+    assert hole.g0 <= 1e-9 * SIZE and hole.g1 <= 1e-6
+    assert res.fills[hole.index].flat.tolist() == [False, False, True, False, False]
 
 
 def _trimmed_ring(ext: float):
@@ -142,3 +157,71 @@ def test_a_face_outside_any_shell_has_its_loops_found() -> None:
     b.Add(comp, lone)
     assert len(find_loops(comp)) == len(find_loops(shell)) + 1
     assert len(find_loops(lone)) == 1
+
+
+def _face_with_round_hole(radius: float, bump: float):
+    """A bicubic B-spline face over [-2, 2]^2 (z = bump (x^2 + y^2) / 8, exact in the cubic space:
+    a polynomial of degree 2 in x and y) with a circular hole of ``radius`` about the origin, cut by
+    a wire whose edge is the circle's projection onto the surface (a trimming curve: no iso-line)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeWire
+    from OCP.Geom2d import Geom2d_Circle
+    from OCP.gp import gp_Ax2d, gp_Dir2d, gp_Pnt2d
+    from OCP.ShapeFix import ShapeFix_Face
+
+    from occsurf.algorithms.kernel.surface import BSplineSurface
+    from occsurf.bridge.conversion.splines import to_occ
+
+    K = np.r_[[0.0] * 4, [1.0] * 4]
+    t = np.linspace(-2, 2, 4)  # the Bézier poles of x, y (linear) and of x^2 (1/3 rule)
+    q = np.array([4.0, -4.0 / 3.0 * 1, -4.0 / 3.0 * 1, 4.0])  # poles of x^2 on [-2, 2]: 4, -4/3, -4/3, 4
+    X, Y = np.meshgrid(t, t, indexing="ij")
+    Z = bump * (q[:, None] + q[None, :]) / 8.0
+    srf = BSplineSurface((3, 3), (K, K), np.stack([X, Y, Z], -1))
+    occ = to_occ(srf)
+    circle = Geom2d_Circle(gp_Ax2d(gp_Pnt2d(0.5, 0.5), gp_Dir2d(1.0, 0.0)), radius / 4.0)
+    edge = BRepBuilderAPI_MakeEdge(circle, occ).Edge()
+    hole = BRepBuilderAPI_MakeWire(edge).Wire()
+    mk = BRepBuilderAPI_MakeFace(occ, 1e-9)
+    mk.Add(TopoDS_reversed(hole))
+    fix = ShapeFix_Face(mk.Face())
+    fix.Perform()
+    from OCP.BRepLib import BRepLib
+    from OCP.GeomAbs import GeomAbs_Shape
+
+    face = fix.Face()
+    BRepLib.BuildCurves3d_s(face, 1e-10, GeomAbs_Shape.GeomAbs_C2, 14, 64)
+    return face
+
+
+def TopoDS_reversed(shape):
+    from OCP.TopoDS import TopoDS
+
+    return TopoDS.Wire_s(shape.Reversed())
+
+
+@pytest.mark.parametrize("bump", [0.0, 1.0])
+def test_round_hole_with_a_trimming_edge_is_capped(bump: float) -> None:
+    """A plain ``fill`` of a one-sided hole whose edge is a trimming curve (course §8-3): the exact
+    iso-line construction refuses, the fitted sides fill it (the circle cut into four at its
+    quarters, four flat corners). G0: the edge's 3-D curve (OCC's approximation of the p-curve on
+    the surface) is off the surface by 4.4e-6 measured, and the fill follows the edge; bound 1e-5.
+    G1 (OCC LocalAnalysis): 0 on the plane, 2.7e-4 deg measured on the paraboloid, bound
+    FILL_FIT_ANGLE. The cap lies on the surface it replaces: on the plane to round-off (bound 1e-12),
+    within 1.6e-3 of the paraboloid z = (x^2 + y^2) / 8 measured at radius 0.5 (another G1 surface
+    with the same boundary data), bound 2.4e-3; inside the circle; no fold."""
+    from occsurf.algorithms import tolerances
+
+    face = _face_with_round_hole(0.5, bump)
+    res = fill_model(face, compare_occ=True)
+    holes = [h for h in res.holes if h.status != "outer"]
+    assert len(holes) == 1
+    [h] = holes
+    assert h.sides == 1 and h.status == "filled" and h.construction == "fitted", h.reason
+    assert h.g0 <= 1e-5 and h.g1 <= tolerances.FILL_FIT_ANGLE and h.folds == 0
+    fill = res.fills[h.index]
+    assert len(fill.patches) == 4 and fill.flat.all()
+    uv = np.linspace(0, 1, 21)
+    P = np.concatenate([p.evaluate(uv[:, None], uv[None, :]).reshape(-1, 3) for p in fill.patches])
+    dev = np.abs(P[:, 2] - bump * (P[:, 0] ** 2 + P[:, 1] ** 2) / 8.0).max()
+    assert dev <= (1e-12 if bump == 0 else 2.4e-3)
+    assert np.hypot(P[:, 0], P[:, 1]).max() <= 0.5 + 1e-5

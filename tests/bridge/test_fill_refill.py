@@ -67,3 +67,4 @@ def test_bad_face_indices_are_refused(lens) -> None:
             refill_model(lens, bad)
     with pytest.raises(InvalidGeometryError, match="shape"):
         refill_model(None, [1])
+

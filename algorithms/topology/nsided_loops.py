@@ -1,0 +1,190 @@
+"""Loop geometry of a hole (course §8-3): closest points, arc length, self-intersection, mean plane.
+
+Helpers of :func:`occsurf.algorithms.topology.nsided.fill_hole` that look at the hole's boundary as
+a whole rather than at one side: :func:`closest_parameters` (vectorised point inversion on a curve),
+:func:`arc_length_parameters` (where a round hole is cut), :func:`check_simple_loop` (a boundary that
+crosses or touches itself is refused before any construction), :func:`mean_plane`,
+:func:`turns_inward` (the global orientation check that guards the centre's fallback) and
+:func:`inner_point` (the point of a hole farthest from its boundary: the centre of a crescent).
+
+References
+----------
+C. Ericson, Real-Time Collision Detection (2005), 5.1.9 (closest points of two segments).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InvalidGeometryError
+from ..kernel.curve import BSplineCurve
+
+__all__ = ["closest_parameters", "arc_length_parameters", "check_simple_loop", "mean_plane", "turns_inward",
+           "inner_point"]
+
+Array = NDArray[np.float64]
+
+
+def _unit(v: Array) -> Array:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-300)
+
+
+def closest_parameters(curve: BSplineCurve, points: Array, samples: int = 401,
+                       iterations: int = 8) -> tuple[Array, Array]:
+    """Parameters of the points of ``curve`` closest to ``points`` (m, dim), vectorised.
+
+    The nearest of ``samples`` uniform parameters starts Newton's iteration on
+    ``(C(t) - p) . C'(t) = 0`` (clamped to the domain), all points at once.
+
+    Returns
+    -------
+    t : ndarray, shape (m,)
+    distance : ndarray, shape (m,)
+        ``|C(t) - p|``, for the caller to check.
+    """
+    P = np.atleast_2d(np.asarray(points, float))
+    lo, hi = curve.domain
+    grid = np.linspace(lo, hi, samples)
+    dense = curve.evaluate(grid)
+    d2 = np.einsum("mkd,mkd->mk", P[:, None] - dense[None], P[:, None] - dense[None])
+    t = grid[np.argmin(d2, axis=1)]
+    for _ in range(iterations):
+        D = curve.derivatives(t, 2)
+        r = D[:, 0] - P
+        g = np.einsum("md,md->m", r, D[:, 1])
+        h = np.einsum("md,md->m", D[:, 1], D[:, 1]) + np.einsum("md,md->m", r, D[:, 2])
+        t_new = np.clip(t - np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0), lo, hi)
+        done = np.abs(t_new - t).max() <= 1e-15 * (hi - lo)
+        t = t_new
+        if done:
+            break
+    return t, np.linalg.norm(curve.evaluate(t) - P, axis=1)
+
+
+
+def _segment_distances(a0: Array, a1: Array, b0: Array, b1: Array) -> tuple[Array, Array, Array]:
+    """Distances between segments ``[a0, a1]`` and ``[b0, b1]`` (each (m, 3)) and the parameters
+    ``s, t`` in [0, 1] of the closest points (Ericson, Real-Time Collision Detection, 5.1.9), vectorised."""
+    d1, d2, r = a1 - a0, b1 - b0, a0 - b0
+    a, e = np.einsum("ij,ij->i", d1, d1), np.einsum("ij,ij->i", d2, d2)
+    f, c, b = np.einsum("ij,ij->i", d2, r), np.einsum("ij,ij->i", d1, r), np.einsum("ij,ij->i", d1, d2)
+    den = a * e - b * b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(den > 1e-300, np.clip((b * f - c * e) / den, 0, 1), 0.0)
+        t = np.where(e > 1e-300, (b * s + f) / e, 0.0)
+        s = np.where(t < 0, np.clip(-c / np.where(a > 0, a, 1), 0, 1), np.where(t > 1, np.clip((b - c) / np.where(a > 0, a, 1), 0, 1), s))
+    t = np.clip(t, 0, 1)
+    return np.linalg.norm(a0 + s[:, None] * d1 - b0 - t[:, None] * d2, axis=1), s, t
+
+
+def check_simple_loop(unit: list, tol: float, samples: int = 65) -> None:
+    """Refuse a loop that touches or crosses itself (bad input: no surface bounded by it is a disk).
+
+    Each side is sampled at ``samples`` parameters (a polyline); pairs of segments that are not
+    neighbours along the loop and come within ``tol`` plus the polylines' chord error of each other
+    are candidates (a k-d tree over segment midpoints), confirmed on the curves themselves
+    (alternating closest points, :func:`closest_parameters`): a distance within ``tol`` is a
+    self-intersection.
+
+    Raises
+    ------
+    InvalidGeometryError
+        Naming the two sides, the parameters and the distance.
+    """
+    from scipy.spatial import cKDTree
+
+    t = np.linspace(0.0, 1.0, samples)
+    pts = [sd.curve.evaluate(t) for sd in unit]
+    mids = [sd.curve.evaluate(0.5 * (t[1:] + t[:-1])) for sd in unit]
+    chord = max(float(np.linalg.norm(m - 0.5 * (p[1:] + p[:-1]), axis=1).max()) for m, p in zip(mids, pts))
+    A0 = np.concatenate([p[:-1] for p in pts])
+    A1 = np.concatenate([p[1:] for p in pts])
+    side = np.repeat(np.arange(len(unit)), samples - 1)
+    seg = np.tile(np.arange(samples - 1), len(unit))
+    m = len(A0)
+    reach = float(np.linalg.norm(A1 - A0, axis=1).max()) + 2 * chord + tol
+    pairs = cKDTree(0.5 * (A0 + A1)).query_pairs(reach, output_type="ndarray")
+    if len(pairs) == 0:
+        return
+    i, j = pairs[:, 0], pairs[:, 1]
+    gap = np.abs(i - j)
+    keep = np.minimum(gap, m - gap) > 2  # not neighbours along the loop
+    i, j = i[keep], j[keep]
+    d, si, sj = _segment_distances(A0[i], A1[i], A0[j], A1[j])
+    cand = d <= tol + 2 * chord
+    step = t[1] - t[0]
+    for a, b, sa, sb in zip(i[cand], j[cand], si[cand], sj[cand]):
+        ca, cb = unit[side[a]].curve, unit[side[b]].curve
+        ta, tb = (seg[a] + sa) * step, (seg[b] + sb) * step
+        for _ in range(4):  # alternating closest points converge to the curves' nearest pair
+            tb = float(closest_parameters(cb, ca.evaluate(np.array([ta])))[0][0])
+            ta = float(closest_parameters(ca, cb.evaluate(np.array([tb])))[0][0])
+        dist = float(np.linalg.norm(ca.evaluate(ta) - cb.evaluate(tb)))
+        at_corner = (side[a] != side[b]) and min(abs(ta - 1) + tb, ta + abs(tb - 1)) < 1e-9
+        if dist <= tol and not at_corner:
+            raise InvalidGeometryError(
+                f"sides: the loop crosses itself: side {side[a]} at parameter {ta:.4g} comes within {dist:.3g} of "
+                f"side {side[b]} at {tb:.4g} (tolerance {tol:.3g}); a hole's boundary must be a simple loop")
+
+
+def arc_length_parameters(curve: BSplineCurve, fractions: Array, samples: int = 1025) -> Array:
+    """Parameters (on the curve's domain) at the given fractions (m,) of its arc length (chords of
+    ``samples`` points; accurate to ~1e-6 of the length, plenty for choosing split points)."""
+    t = np.linspace(*curve.domain, samples)
+    cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(curve.evaluate(t), axis=0), axis=1))]
+    return np.interp(np.asarray(fractions, float) * cum[-1], cum, t)
+
+
+
+def mean_plane(loop: Array, normals: Array) -> tuple[Array, Array, Array, Array]:
+    """Origin, unit normal and in-plane axes of a hole's mean plane: through the mean of ``loop``
+    (m, 3), normal to the mean of the neighbours' unit ``normals`` (n, 3), or to the loop's
+    smallest principal axis when those nearly cancel (a hole wrapping around)."""
+    o = loop.mean(0)
+    nh = normals.mean(0)
+    if np.linalg.norm(nh) < 0.3:
+        nh = np.linalg.svd(loop - o, full_matrices=False)[2][-1]
+    nh = _unit(nh)
+    e1 = _unit(np.cross(nh, np.eye(3)[int(np.argmin(np.abs(nh)))]))
+    return o, nh, e1, np.cross(nh, e1)
+
+
+def turns_inward(loop: Array, normals: Array) -> bool:
+    """Whether the cross fields point out of the hole, judged globally: the neighbours' normals
+    ``B' x X`` (n, 3) and the loop (m, 3) projected into the mean plane must turn the other way
+    (negative signed area about the mean normal). Only then may :func:`occsurf.algorithms.topology.nsided._centre` move the centre or
+    turn the internal edges; a flipped field is left for :func:`occsurf.algorithms.topology.nsided._check_inward` to refuse."""
+    o, nh, e1, e2 = mean_plane(loop, normals)
+    if np.linalg.norm(normals.mean(0)) < 0.3:
+        return False  # no trustworthy mean plane: no fallback
+    xy = (loop - o) @ np.stack([e1, e2], 1)
+    area = 0.5 * float(np.sum(xy[:, 0] * np.roll(xy[:, 1], -1) - np.roll(xy[:, 0], -1) * xy[:, 1]))
+    return area < 0
+
+
+def inner_point(loop: Array, normals: Array, grid: int = 61) -> tuple[Array, Array] | None:
+    """The point of a hole farthest from its boundary, in the hole's mean plane.
+
+    The plane: through the mean of ``loop`` (m, 3), normal to the mean of the neighbours' unit
+    ``normals`` (n, 3) (their smallest principal axis when those nearly cancel). The loop is
+    projected into it, a ``grid`` x ``grid`` lattice over its box is tested for inside (even-odd
+    rule), and the inside point farthest from the projected boundary is returned with the plane's
+    unit normal, or ``None`` when no lattice point is inside (a degenerate projection). Vectorised:
+    ``grid**2 * m`` pairs (a few million at most).
+    """
+    o, nh, e1, e2 = mean_plane(loop, normals)
+    xy = (loop - o) @ np.stack([e1, e2], 1)
+    gx, gy = (np.linspace(lo, hi, grid)[1:-1] for lo, hi in zip(xy.min(0), xy.max(0)))
+    G = np.stack(np.meshgrid(gx, gy, indexing="ij"), -1).reshape(-1, 2)
+    a, b = xy, np.roll(xy, -1, axis=0)
+    px, py = G[:, :1], G[:, 1:]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cross_x = a[:, 0] + (b[:, 0] - a[:, 0]) * (py - a[:, 1]) / (b[:, 1] - a[:, 1])
+    crossing = ((a[:, 1] > py) != (b[:, 1] > py)) & (px < cross_x)
+    inside = crossing.sum(1) % 2 == 1
+    if not inside.any():
+        return None
+    dist = np.sqrt(((G[inside][:, None] - xy[None]) ** 2).sum(-1)).min(1)
+    x, y = G[inside][int(np.argmax(dist))]
+    return o + x * e1 + y * e2, nh
