@@ -55,7 +55,7 @@ from .adaptive import LevelReport, _boxes, _stats
 from .gridded import _pair_of
 from .scattered import _local, base_parameters, fit_scattered, plane_parameters, scattered_collocation
 
-__all__ = ["ScatteredAdaptiveFit", "fit_adaptive_scattered", "measure_points"]
+__all__ = ["ScatteredAdaptiveFit", "fit_adaptive_scattered", "measure_points", "normal_deviation", "block_collocation"]
 
 Array = NDArray[np.float64]
 
@@ -108,10 +108,28 @@ class ScatteredAdaptiveFit:
         return int(self.hierarchy.pole_counts()["stored"])
 
 
-def measure_points(surface, X: Array, u: Array, v: Array) -> Array:
+def measure_points(surface, X: Array, u: Array, v: Array, *, above: float | None = None) -> Array:
     """Distance of every point ``X[k]`` to ``surface`` by projection from ``(u_k, v_k)``
-    (:func:`~._common.project_points`), shape (k,)."""
-    return project_points(surface, X, u, v)[2]
+    (:func:`~._common.project_points`), shape (k,). With ``above`` only the points whose deviation
+    at their parameters exceeds it are projected; the others keep that deviation, an upper bound
+    of their distance (at most ``above``), so every comparison against a threshold ``>= above``
+    is the same as with all points projected."""
+    if above is None:
+        return project_points(surface, X, u, v)[2]
+    out = np.linalg.norm(surface.evaluate(u, v) - X, axis=-1)
+    far = np.flatnonzero(out > above)
+    if far.size:
+        out[far] = project_points(surface, X[far], u[far], v[far])[2]
+    return out
+
+
+def normal_deviation(surface, X: Array, u: Array, v: Array) -> Array:
+    """``|(X_k - S(u_k, v_k)) . N(u_k, v_k)|``, shape (k,): the first-order distance (exact for a
+    plane), cheap; used to compare candidate base fits, never reported."""
+    D = surface.derivatives(u, v, 1)
+    N = np.cross(D[:, 1, 0], D[:, 0, 1])
+    N /= np.maximum(np.linalg.norm(N, axis=-1, keepdims=True), 1e-300)
+    return np.abs(np.einsum("ij,ij->i", X - D[:, 0, 0], N))
 
 
 def block_collocation(knots: tuple[Array, Array], degree: tuple[int, int], vertices: tuple[tuple[int, int], ...],
@@ -256,17 +274,18 @@ def _grow_base(X: Array, u: Array, v: Array, poles: tuple[int, int], deg: tuple[
                progress) -> tuple[BSplineSurface, Array]:
     """The base fit, its spans multiplied by 1.5 while the regions to refine cover more than
     FIT_ADAPTIVE_MAX_COVER of the domain; each step grows u, v or both, whichever lowers the
-    error most per added pole (as :func:`.adaptive._grow_base`)."""
+    error most per added pole (as :func:`.adaptive._grow_base`: candidates compared by the
+    first-order :func:`normal_deviation`, the chosen base measured)."""
     cap = max(deg[0] + 1, deg[1] + 1, int(np.sqrt(X.shape[0] / 2)))
 
-    def attempt(poles_):
+    def candidate(poles_):
         f = fit_scattered(X, poles_, deg, params=np.c_[u, v], smoothing=lam, measure=False)
-        dist_ = measure_points(f.surface, X, u, v)
-        return f.surface, dist_, float(dist_.max())
+        return f.surface, float(normal_deviation(f.surface, X, u, v).max())
 
-    cur = attempt(poles)
+    surf, estimate = candidate(poles)
     while True:
-        surf, dist, worst = cur
+        dist = measure_points(surf, X, u, v, above=tol)
+        worst = float(dist.max())
         if progress is not None:
             progress(f"base {poles[0]}x{poles[1]}: max error {worst:.3g}")
         if worst <= tol:
@@ -282,13 +301,13 @@ def _grow_base(X: Array, u: Array, v: Array, poles: tuple[int, int], deg: tuple[
             return surf, dist
         best, score, tried = None, np.inf, {}
         for cand in sorted(options):
-            trial = tried[cand] = attempt(cand)
-            gain = np.log(max(trial[2], 1e-300) / worst) / np.log(np.prod(cand) / np.prod(poles))
+            trial = tried[cand] = candidate(cand)
+            gain = np.log(max(trial[1], 1e-300) / max(estimate, 1e-300)) / np.log(np.prod(cand) / np.prod(poles))
             if gain < score:
                 best, score = (cand, trial), gain
         if score > -0.1 and tuple(grown) in tried:  # no direction helps on its own yet: grow both
             best = (tuple(grown), tried[tuple(grown)])
-        poles, cur = best
+        poles, (surf, estimate) = best
 
 
 def _level_reports(hs: HierarchicalSurface, X: Array, u: Array, v: Array
@@ -434,7 +453,7 @@ def fit_adaptive_scattered(points: ArrayLike, tol: float, degree: int | tuple[in
         u, v = np.clip(u, tu[pu], tu[-pu - 1]), np.clip(v, tv[pv], tv[-pv - 1])
         surf = fit_scattered(X, (tu.size - pu - 1, tv.size - pv - 1), (pu, pv), params=np.c_[u, v], knots=(tu, tv),
                              smoothing=lam, measure=False).surface
-        dist = measure_points(surf, X, u, v)
+        dist = measure_points(surf, X, u, v, above=tol)
     hs = HierarchicalSurface(surf, "frame")
     fitter = _ScatteredFitter(hs, X, u, v, _BaseSolver(surf, u, v, lam))
     for rnd in range(1, int(tolerances.FIT_ADAPTIVE_MAX_ROUNDS) + 1):
@@ -456,7 +475,7 @@ def fit_adaptive_scattered(points: ArrayLike, tol: float, degree: int | tuple[in
             break
         for _ in range(int(tolerances.FIT_ADAPTIVE_SWEEPS)):
             fitter.backfit()
-        dist = measure_points(hs, X, u, v)
+        dist = measure_points(hs, X, u, v, above=tol)
         if progress is not None:
             progress(f"round {rnd}: {len(new)} overlays added (depth {hs.depth}), "
                      f"{hs.pole_counts()['stored']} control points, max error {dist.max():.3g}")

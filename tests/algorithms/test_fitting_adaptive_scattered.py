@@ -196,3 +196,19 @@ def test_bad_input():
         fit_adaptive_scattered(P, 1e-3, params=np.zeros((200, 2)))
     with pytest.raises(ParameterError, match="smoothing"):
         fit_adaptive_scattered(P, 1e-3, smoothing=-1.0)
+
+
+def test_partial_measure_is_exact_against_every_threshold_above_it():
+    from occsurf.algorithms.fitting.adaptive_scattered import measure_points
+
+    x, y, P = _cloud(4000, seed=9)
+    s = fit_scattered(P, 10, 3, params=np.c_[x, y]).surface
+    full = measure_points(s, P, x, y)
+    part = measure_points(s, P, x, y, above=1e-3)
+    resid = np.linalg.norm(s.evaluate(x, y) - P, axis=-1)
+    skipped = resid <= 1e-3
+    assert skipped.any() and (~skipped).any()
+    np.testing.assert_array_equal(part[skipped], resid[skipped])
+    np.testing.assert_array_equal(part[~skipped], full[~skipped])
+    for t in (1e-3, 1e-2, 0.1):
+        np.testing.assert_array_equal(part > t, full > t)
