@@ -137,7 +137,8 @@ class TrimmedSurface:
                 raise InvalidGeometryError(f"{name}[{j}]: expected a 2-D BSplineCurve (u, v), got {got}")
         diag = self._diag()
         gap_tol = tolerances.TRIM_LOOP_GAP * diag
-        ends = np.array([[c.evaluate(c.domain[0]), c.evaluate(c.domain[1])] for c in loop])  # (k, 2, 2)
+        samples = [c.evaluate(_span_samples(c, 4)) for c in loop]  # one evaluation per p-curve
+        ends = np.array([[pts[0], pts[-1]] for pts in samples])  # (k, 2, 2)
         gaps = np.linalg.norm(ends[:, 1] - np.roll(ends[:, 0], -1, axis=0), axis=1)
         if np.any(gaps > gap_tol):
             j = int(np.argmax(gaps))
@@ -153,7 +154,7 @@ class TrimmedSurface:
                     raise InvalidGeometryError(
                         f"{name}[{j}]: the p-curve leaves the surface's domain [{u0!r}, {u1!r}] x [{v0!r}, {v1!r}]")
         loop = tuple(loop)
-        if sign * _signed_area(_coarse_polygon(loop)) < 0:
+        if sign * _signed_area(np.concatenate(samples)) < 0:
             loop = tuple(c.reverse() for c in loop[::-1])
         return loop
 
@@ -457,12 +458,6 @@ def _signed_area(P: Array) -> float:
     """Shoelace area of a closed polygon ``(k, 2)`` (last point may repeat the first)."""
     x, y = P[:, 0], P[:, 1]
     return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
-
-
-def _coarse_polygon(loop: Loop) -> Array:
-    """A few points per knot span of every p-curve: enough for the orientation of a loop."""
-    pts = [c.evaluate(_span_samples(c, 4)) for c in loop]
-    return np.concatenate(pts)
 
 
 def _span_samples(c: BSplineCurve, per_span: int) -> Array:

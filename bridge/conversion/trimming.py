@@ -240,8 +240,13 @@ def _map_xy(P: np.ndarray, maps: tuple[bool, bool], surface: BSplineSurface) -> 
 
 
 def _refit(c: BSplineCurve, maps: tuple[bool, bool], surface: BSplineSurface, tol: float) -> BSplineCurve:
-    """The mapped p-curve, interpolated span by span of ``c`` (quintic, C0 at ``c``'s knots so a
-    kink stays a kink), points doubled until the midpoints are within ``tol`` of the exact map."""
+    """The mapped p-curve, interpolated span by span of ``c`` and between the points where it
+    crosses a knot of a re-parametrised direction (quintic, C0 at those breaks so a kink stays a
+    kink), the points of a span doubled until its midpoints are within ``tol`` of the exact map.
+
+    With ``n`` equally spaced points per span, the interpolation matrix is the same for every span
+    (averaged knots on the normalised span): it is inverted once per ``n`` and applied to all the
+    spans at once."""
     p = _FIT_DEGREE
     breaks = np.union1d(np.unique(c.knots[c.degree:c.n_poles + 1]), _knot_crossings(c, maps, surface))
     keep = np.r_[True, np.diff(breaks) > 1e-9 * (breaks[-1] - breaks[0])]
@@ -249,14 +254,41 @@ def _refit(c: BSplineCurve, maps: tuple[bool, bool], surface: BSplineSurface, to
     breaks = breaks[keep] if keep.sum() >= 2 else breaks[[0, -1]]
     if breaks.size > 2 and breaks[-1] - breaks[-2] <= 1e-9 * (breaks[-1] - breaks[0]):
         breaks = np.delete(breaks, -2)
-    knots, poles = [np.full(p + 1, breaks[0])], []
-    for a, b in zip(breaks[:-1], breaks[1:]):
-        piece = _refit_span(c, maps, surface, float(a), float(b), tol)
-        inner = piece.knots[p + 1:piece.n_poles]
-        knots += [inner, np.full(p, b)]
-        poles.append(piece.control_points if not poles else piece.control_points[1:])
+    a, b = breaks[:-1], breaks[1:]
+    pieces: list[tuple[np.ndarray, np.ndarray] | None] = [None] * a.size
+    todo = np.arange(a.size)
+    n = 2 * p
+    while todo.size:
+        unit, mid_basis = _unit_interpolant(n, p)
+        t = a[todo, None] + (b - a)[todo, None] * np.linspace(0.0, 1.0, n)[None, :]
+        Q = _map_xy(c.evaluate(t.ravel()), maps, surface).reshape(todo.size, n, 2)
+        poles = np.einsum("ij,sjd->sid", unit.control_points, Q)  # (spans, n, 2)
+        tm = 0.5 * (t[:, :-1] + t[:, 1:])
+        exact = _map_xy(c.evaluate(tm.ravel()), maps, surface).reshape(todo.size, n - 1, 2)
+        err = np.abs(np.einsum("ij,sjd->sid", mid_basis, Q) - exact).max(axis=(1, 2))
+        for k, ok in zip(todo, err <= tol):
+            if ok:
+                pieces[k] = (a[k] + (b[k] - a[k]) * unit.knots, poles[np.searchsorted(todo, k)])
+        todo = todo[err > tol]
+        if todo.size and n >= _FIT_MAX_POINTS:
+            raise KernelError(f"from_occ: a p-curve could not be mapped onto the converted surface within {tol:.3g} "
+                              f"(reached {float(err.max()):.3g} with {n} points on one span)")
+        n *= 2
+    knots, P = [np.full(p + 1, breaks[0])], []
+    for k, (kn, poles) in enumerate(pieces):  # type: ignore[misc]
+        knots += [kn[p + 1:kn.size - p - 1], np.full(p, b[k])]
+        P.append(poles if k == 0 else poles[1:])
     knots[-1] = np.full(p + 1, breaks[-1])
-    return BSplineCurve(p, np.concatenate(knots), np.concatenate(poles))
+    return BSplineCurve(p, np.concatenate(knots), np.concatenate(P))
+
+
+def _unit_interpolant(n: int, p: int) -> tuple[BSplineCurve, np.ndarray]:
+    """Interpolation of ``n`` equally spaced points on [0, 1] (degree ``p``, averaged knots): the
+    curve whose poles are the inverse collocation matrix (interpolating the identity), and the
+    matrix taking data to the interpolant's values at the midpoints."""
+    unit = interpolate_curve(np.eye(n), p, params=np.linspace(0.0, 1.0, n))
+    mids = 0.5 * (np.linspace(0.0, 1.0, n)[:-1] + np.linspace(0.0, 1.0, n)[1:])
+    return unit, unit.evaluate(mids)
 
 
 def _knot_crossings(c: BSplineCurve, maps: tuple[bool, bool], surface: BSplineSurface) -> np.ndarray:
@@ -287,22 +319,6 @@ def _knot_crossings(c: BSplineCurve, maps: tuple[bool, bool], surface: BSplineSu
         out.append(0.5 * (lo + hi))
     r = np.concatenate(out) if out else np.zeros(0)
     return r[(r > t0) & (r < t1)]
-
-
-def _refit_span(c: BSplineCurve, maps: tuple[bool, bool], surface: BSplineSurface, a: float, b: float,
-                tol: float) -> BSplineCurve:
-    n = 2 * _FIT_DEGREE
-    while True:
-        s = np.linspace(a, b, n)
-        fit = interpolate_curve(_map_xy(c.evaluate(s), maps, surface), _FIT_DEGREE, params=s)
-        mid = 0.5 * (s[:-1] + s[1:])
-        err = float(np.abs(fit.evaluate(mid) - _map_xy(c.evaluate(mid), maps, surface)).max())
-        if err <= tol:
-            return fit
-        if n >= _FIT_MAX_POINTS:
-            raise KernelError(f"from_occ: a p-curve could not be mapped onto the converted surface within {tol:.3g} "
-                              f"(reached {err:.3g} with {n} points on one span)")
-        n *= 2
 
 
 # ============================================================================ ours -> OCC
