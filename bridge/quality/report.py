@@ -82,12 +82,16 @@ class FaceField:
     values: dict[str, np.ndarray]
     degenerate: np.ndarray
     surface: Any = None
+    trim: Any = None
     _mask: Any = field(default=None, repr=False)
 
     def mask(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        """:func:`uv_mask` of the mesh, built once (the model's and the face's sections share it)."""
+        """``mask(u, v) -> bool``: inside the trimmed face. The face's exact trim
+        (:attr:`trim`, a ``TrimmedSurface``: its loops of p-curves) where the reader gave one, else
+        :func:`uv_mask` of the mesh (OCC's triangulation: its boundary within the mesh's deflection
+        of the trim); built once (the model's and the face's sections share it)."""
         if self._mask is None:
-            self._mask = uv_mask(self.mesh)
+            self._mask = self.trim.contains if self.trim is not None else uv_mask(self.mesh)
         return self._mask
 
 
@@ -191,7 +195,10 @@ def face_fields(face: ImportedFace, mesh: FaceMesh, *, view_dir: Sequence[float]
     values["zebra"] = np.asarray(zebra(mesh.points, N, vd, width=ZEBRA_WIDTH * distance, distance=distance).phase, float)
     values["isophote"] = np.asarray(isophotes(N, -vd, ISOPHOTE_LEVELS).intensity, float)
     values["draft"] = np.asarray(draft_angle(N, np.asarray(pull, float)), float)
-    return FaceField(mesh=mesh, values=values, degenerate=degenerate, surface=surf)
+    trim = getattr(face, "trimmed", None)
+    if trim is not None and getattr(trim, "surface", None) is not surf:
+        trim = None  # loops in another surface's parameters: the mesh's mask instead
+    return FaceField(mesh=mesh, values=values, degenerate=degenerate, surface=surf, trim=trim)
 
 
 def _ranges(field_: FaceField) -> dict[str, Any]:

@@ -350,3 +350,37 @@ def test_lines_are_as_wide_as_asked_and_the_first_scene_draws() -> None:
         axis = np.linalg.svd(red - red.mean(axis=0), full_matrices=False)[2][0]
         length = np.ptp(red @ axis)
         assert len(red) / length >= 0.8 * width, (width, len(red) / length)
+
+
+def test_sections_end_on_the_trim(tmp_path) -> None:
+    """A plate with a round hole: every cut of its top face ends on the hole's circle or on the
+    plate's outline. With the reader's exact trim (the face's loops of p-curves) within the trim's
+    boundary band (TRIM_ON); with OCC's triangulation as the mask, within the mesh's deflection
+    (it was up to one seed cell short: 1/48 of the face)."""
+    from build123d import Box, Cylinder
+
+    from occsurf.bridge.rendering.tessellation import LINEAR_DEFLECTION
+
+    model = read_step(_write(Box(4.0, 4.0, 1.0) - Cylinder(1.0, 2.0), tmp_path, "plate.step"))
+    rep = check_model(model, edges=False, flags=False)
+    top = [f for f in rep.fields.values() if np.allclose(f.mesh.points[:, 2], 0.5)]
+    assert len(top) == 1
+    fld = top[0]
+    lines, _, _ = P.face_section_lines(fld, P.model_section_axis(list(rep.fields.values())))
+    assert len(lines) > P.N_FACE_SECTIONS  # the planes through the hole give two pieces each
+    ends = np.concatenate([pl[[0, -1], :2] for pl in lines])
+    on_hole = np.abs(np.linalg.norm(ends, axis=1) - 1.0)
+    on_outline = np.abs(np.max(np.abs(ends), axis=1) - 2.0)
+    off = np.minimum(on_hole, on_outline)
+    if fld.trim is not None:  # the trim's own boundary band (TRIM_ON of its parameter box; a plane's
+        from occsurf.algorithms import tolerances  # parameters are lengths), then the section tolerance
+
+        (u0, u1), (v0, v1) = fld.trim.domain
+        band = (tolerances.TRIM_ON + tolerances.TRIM_POLYLINE) * np.hypot(u1 - u0, v1 - v0)  # + its polyline
+        tol = 1.01 * band + tolerances.QUALITY_SECTION_TOL * rep.size
+    else:
+        tol = 2 * LINEAR_DEFLECTION * rep.size
+    assert off.max() <= tol, (fld.trim is not None, off.max())
+    assert (on_hole < tol).sum() >= 2  # cuts through the hole end on its circle
+    if fld.trim is None:
+        pytest.skip("the reader gave no exact trim for this face: checked against the mesh's mask only")
