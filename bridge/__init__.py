@@ -58,6 +58,7 @@ _EXPORTS = {
     "HoleReport": "modeling.fill",
     "as_shape": "conversion.shapes",
     "quiet_messages": "_occ",
+    "silence_messages": "_occ",
     "edge_continuity": "quality.continuity",
     "check_edges": "quality.continuity",
     "EdgeReport": "quality.continuity",

@@ -120,6 +120,8 @@ def test_fresh_process_keeps_default_level_and_prints_no_banner():
 
 
 def test_silence_messages_is_the_explicit_process_wide_option(printer):
+    from occsurf.bridge import silence_messages
+
     printer.SetTraceLevel(Message_Gravity.Message_Info)
-    _occ.silence_messages()
+    silence_messages()
     assert printer.GetTraceLevel() == Message_Gravity.Message_Fail

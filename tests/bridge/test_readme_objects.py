@@ -63,7 +63,7 @@ colours kept).
 A build123d shape has one colour: a part whose faces have several keeps its largest face's colour in
 build123d, and each face's in cadquery (`addSubshape`). OCC's message printers keep the level you set:
 the bridge quiets OCC's banners during its own calls only (`occsurf.bridge.quiet_messages`);
-`occsurf.bridge._occ.silence_messages()` quiets them for the whole process.
+`occsurf.bridge.silence_messages()` quiets them for the whole process.
 '''
 
 BLOCK = re.compile(r"^```python\n(.*?)^```", re.S | re.M)
