@@ -179,7 +179,7 @@ class _ScatteredFitter:
         self.ops: dict[int, tuple[Array, sp.csr_matrix, object]] = {}
 
     def residual(self) -> Array:
-        return self.X - self.hs.evaluate(self.u, self.v)
+        return self.X - self.hs.flatten().evaluate(self.u, self.v)  # one spline: the compiled kernel
 
     def operators(self, ov: Overlay) -> tuple[Array, sp.csr_matrix, object]:
         if ov.id not in self.ops:
@@ -219,7 +219,7 @@ class _ScatteredFitter:
         the displacements re-applied in the new frames, then each overlay against what is left."""
         hs = self.hs
         if self.refit_base is not None:
-            share = hs.evaluate(self.u, self.v) - hs.base.evaluate(self.u, self.v)
+            share = hs.flatten().evaluate(self.u, self.v) - hs.base.evaluate(self.u, self.v)
             hs.set_base(self.refit_base(self.X - share))
             for ov in hs.overlays:  # parents first: each sees its parent's new frames
                 self._apply(ov)
@@ -475,7 +475,7 @@ def fit_adaptive_scattered(points: ArrayLike, tol: float, degree: int | tuple[in
             break
         for _ in range(int(tolerances.FIT_ADAPTIVE_SWEEPS)):
             fitter.backfit()
-        dist = measure_points(hs, X, u, v, above=tol)
+        dist = measure_points(hs.flatten(), X, u, v, above=tol)
         if progress is not None:
             progress(f"round {rnd}: {len(new)} overlays added (depth {hs.depth}), "
                      f"{hs.pole_counts()['stored']} control points, max error {dist.max():.3g}")
