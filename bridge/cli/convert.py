@@ -1,4 +1,4 @@
-"""``occsurf convert IN OUT [--unit UNIT] [--digits N] [--timeout SECONDS] [--in-process]``.
+"""``occsurf convert IN OUT [--unit UNIT] [--digits N] [--timeout SECONDS] [--strict] [--in-process]``.
 
 Converts a STEP or IGES file to STEP or IGES (the format of ``OUT`` by its suffix) with
 :func:`occsurf.bridge.exchange.convert.convert`: assembly structure, names, colours, layers and the
@@ -20,7 +20,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ._common import EXIT_ERROR, EXIT_OK, error, output_problem, shown_path, timeout_arg
+from ._common import EXIT_ERROR, EXIT_OK, add_strict_option, error, output_problem, shown_path, timeout_arg
 
 __all__ = ["add_parser", "run", "DEFAULT_TIMEOUT", "UNITS"]
 
@@ -49,7 +49,7 @@ def run(ns: argparse.Namespace) -> int:
 
     try:
         report = convert(ns.input, ns.output, unit=ns.unit, digits=ns.digits, isolated=not ns.in_process,
-                         timeout=ns.timeout)
+                         timeout=ns.timeout, strict=ns.strict)
     except (OccsurfError, OSError) as err:
         message = error_line(err)
         shown = shown_path(ns.input)
@@ -93,6 +93,7 @@ def add_parser(sub: Any) -> None:
                    help="significant digits of STEP reals, 2 to 17 (default 17: lossless; IGES keeps 10)")
     p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop reading IN after this long (default {DEFAULT_TIMEOUT:g})")
+    add_strict_option(p, writes=True)
     p.add_argument("--in-process", action="store_true",
                    help="read IN in this process, not in a worker (a crash inside OCC then ends it)")
     p.set_defaults(func=run)

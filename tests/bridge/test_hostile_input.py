@@ -601,21 +601,24 @@ def test_reference_swaps_that_crashed_occs_transfer_are_refused(clean, tmp_path)
 
 
 def test_strict_on_every_reading_command_that_writes(clean, tmp_path):
-    """fill and render print the input's warnings; with --strict they refuse it and write nothing."""
+    """fill, render and convert print the input's warnings; with --strict they refuse it and write nothing."""
     st = C.StepText.parse(clean["step"].read_bytes())
     face = next(i for i, r in enumerate(st.records) if b"ADVANCED_FACE" in r)
     bad = C.write(tmp_path, "noface.step", C.step_delete(st, face))
-    runs = {"fill": ("fill", str(bad), "--out", str(tmp_path / "filled.step"), "--no-occ"),
-            "render": ("render", str(bad), "--preset", "studio", "--out", str(tmp_path / "r.png"), "--size", "64", "48",
-                       "--samples", "0")}
-    for name, args in runs.items():
+    filled, png, igs = tmp_path / "filled.step", tmp_path / "r.png", tmp_path / "converted.igs"
+    runs = {"fill": (("fill", str(bad), "--out", str(filled), "--no-occ"), filled),
+            "render": (("render", str(bad), "--preset", "studio", "--out", str(png), "--size", "64", "48",
+                        "--samples", "0"), png),
+            "convert": (("convert", str(bad), str(igs)), igs)}
+    for name, (args, target) in runs.items():
         strict = _cli(*args, "--strict", "--timeout", "300")
         err = strict.stderr.decode()
         assert strict.returncode == 2 and "refused by --strict" in err and "Traceback" not in err, (name, err)
-        assert not Path(args[args.index("--out") + 1]).exists(), name
-    plain = _cli(*runs["render"], "--timeout", "300")
+        assert not target.exists(), name
+    args, target = runs["render"]
+    plain = _cli(*args, "--timeout", "300")
     err = plain.stderr.decode()
-    assert plain.returncode == 0 and ": warning: " in err and (tmp_path / "r.png").is_file(), err
+    assert plain.returncode == 0 and ": warning: " in err and target.is_file(), err
 
 
 @posix
