@@ -158,6 +158,11 @@ class ImportedFace:
     instance : str or None
         For an assembly, the path of the part instance the face belongs to, from the root, names
         joined by '/' (``'assembly/plate_a'``); ``None`` for a flat file.
+    trimmed : TrimmedSurface or None
+        The face as an :class:`occsurf.algorithms.TrimmedSurface` (``surface`` plus the face's loops
+        of p-curves in its parameters, and its orientation; see
+        :mod:`occsurf.bridge.conversion.trimming`) when its boundary is not the natural rectangle of
+        ``surface``; ``None`` for an untrimmed face or when the loops could not be converted.
     """
 
     index: int
@@ -173,6 +178,7 @@ class ImportedFace:
     color: tuple[float, float, float, float] | None = None
     layer: str | None = None
     instance: str | None = None
+    trimmed: Any = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -738,13 +744,15 @@ def _import_face(index: int, shape: Any, name: str | None) -> ImportedFace:
     surface_type = _geomabs_name(GeomAdaptor_Surface(occ_surface).GetType())
     if surface_type == "OtherSurface":
         surface_type = "Other"
-    surface, error = None, None
+    surface, error, trimmed = None, None, None
     try:
-        surface = from_occ(face, _conversion_bounds(face, occ_surface))
+        surface = from_occ(face, _conversion_bounds(face, occ_surface), trims=False)
         if not isinstance(surface, BSplineSurface):
             surface, error = None, f"from_occ returned {type(surface).__name__}, not a BSplineSurface"
     except Exception as err:  # noqa: BLE001 - one bad face must not fail the file
         error = one_line(err)
+    if surface is not None:
+        trimmed = _trimmed(face, surface, occ_surface)
     return ImportedFace(
         index=index,
         name=name,
@@ -756,7 +764,22 @@ def _import_face(index: int, shape: Any, name: str | None) -> ImportedFace:
         u_periodic=bool(occ_surface.IsUPeriodic()),
         v_periodic=bool(occ_surface.IsVPeriodic()),
         continuity=_geomabs_name(occ_surface.Continuity()),
+        trimmed=trimmed,
     )
+
+
+def _trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> Any:
+    """:attr:`ImportedFace.trimmed`: the face's loops on ``surface``, ``None`` when it is untrimmed
+    or its loops do not convert (the face still has its ``surface``)."""
+    from OCP.BRepTools import BRepTools
+
+    from ..conversion.trimming import face_from_occ
+
+    try:
+        t = face_from_occ(face, surface, occ_surface, BRepTools.UVBounds_s(face))
+    except Exception:  # noqa: BLE001 - a face whose loops fail keeps its surface
+        return None
+    return None if isinstance(t, BSplineSurface) else t
 
 
 def _conversion_bounds(face: Any, occ_surface: Any) -> tuple[float, float, float, float] | None:
