@@ -856,6 +856,9 @@ def write_step(
         :class:`~occsurf.bridge.exchange.xcaf.AssemblyNode` tree: written through OCC's XCAF writer
         with its assembly structure (each part once, instances as references with their placements),
         the names of parts, instances and faces, the colours and layers of instances and faces.
+        A build123d ``Compound`` with ``children`` or a cadquery ``Assembly`` (without ``names``) is
+        written the same way, as :func:`occsurf.bridge.exchange.objects.model_from_object` reads it
+        (labels / names, colours, placements, shared parts, cadquery subshape colours and names).
     names : str or sequence of (str or None), optional
         One name per object (a str for a single object); see the module notes for where they go.
         Not with a model or a tree (they carry their names).
@@ -889,6 +892,7 @@ def write_step(
     p = _files.target(path, replace_readonly=replace_readonly)
     if isinstance(precision_digits, bool) or not isinstance(precision_digits, int) or not 2 <= precision_digits <= 17:
         raise InvalidGeometryError(f"precision_digits: expected an integer from 2 to 17, got {precision_digits!r}")
+    objects = _assembly_as_model(objects, names)
     file_unit = _write_unit(objects, names, unit)
     if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)):
         data = xcaf.step_document_bytes(p, objects, precision_digits, file_unit)
@@ -897,6 +901,14 @@ def write_step(
         data = _xocc.step_bytes(p, items, precision_digits, file_unit)
     _files.atomic_write(p, data, replace_readonly=replace_readonly)
     return p
+
+
+def _assembly_as_model(objects: Any, names: Any) -> Any:
+    """A build123d Compound tree or a cadquery Assembly (without ``names``) as the model of its
+    structure, names and colours (:func:`occsurf.bridge.exchange.objects.model_from_object`)."""
+    from .objects import is_assembly_object, model_from_object
+
+    return model_from_object(objects, "objects") if names is None and is_assembly_object(objects) else objects
 
 
 def _write_unit(objects: Any, names: Any, unit: str | None) -> str:
@@ -940,6 +952,7 @@ def write_iges(
         As :func:`write_step`.
     """
     p = _files.target(path, replace_readonly=replace_readonly)
+    objects = _assembly_as_model(objects, names)
     file_unit = _write_unit(objects, names, unit)
     if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)):
         data = xcaf.iges_document_bytes(p, objects, file_unit)
