@@ -1,0 +1,291 @@
+"""Trimmed faces through the bridge: from_occ(face) keeps the loops, make_face / to_face rebuild
+the same face (area, wires, edges per wire, validity, orientation), checked against OCC's own
+area (BRepGProp) and point classification (BRepClass_FaceClassifier)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+bd = pytest.importorskip("build123d")
+
+from OCP.BRep import BRep_Tool  # noqa: E402
+from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
+from OCP.BRepClass import BRepClass_FaceClassifier  # noqa: E402
+from OCP.BRepGProp import BRepGProp  # noqa: E402
+from OCP.BRepTools import BRepTools  # noqa: E402
+from OCP.GProp import GProp_GProps  # noqa: E402
+from OCP.gp import gp_Pnt2d  # noqa: E402
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FORWARD, TopAbs_IN, TopAbs_ON, TopAbs_OUT, TopAbs_WIRE  # noqa: E402
+from OCP.TopExp import TopExp_Explorer  # noqa: E402
+from OCP.TopoDS import TopoDS  # noqa: E402
+
+from occsurf.algorithms import BSplineSurface, TrimmedSurface  # noqa: E402
+from occsurf.algorithms.errors import ToleranceError  # noqa: E402
+from occsurf.algorithms.kernel.trimmed import INSIDE, ON, OUTSIDE  # noqa: E402
+from occsurf.bridge import from_occ, to_face  # noqa: E402
+from occsurf.bridge.conversion.splines import make_face  # noqa: E402
+from occsurf.bridge.conversion.trimming import angle_to_parameter, parameter_maps  # noqa: E402
+from tests.algorithms.strategies import test_settings  # noqa: E402
+
+REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
+
+#: Area agreement demanded of a rebuilt face (the issue's bound), relative.
+AREA_RTOL = 1e-9
+
+#: OCC's BRepGProp on a face whose analytic surface (cylinder, sphere, ...) is now the rational
+#: B-spline GeomConvert makes of it, with p-curves that are not iso-lines: OCC's quadrature is biased
+#: by ~1.0e-9 there (measured 1.02e-9 and 1.15e-9 below; OCC's own BRepBuilderAPI_NurbsConvert of the
+#: same face measures 1.0e-9 and 6e-9) while our quadrature of the rebuilt face agrees with OCC's
+#: area of the analytic original to 4e-13. See test_occ_area_of_rational_cylinder_face_is_biased.
+OCC_RATIONAL_AREA_RTOL = 3e-9
+
+
+def occ_area(face) -> float:
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(getattr(face, "wrapped", face), props, 1e-13)
+    return props.Mass()
+
+
+def edges_per_wire(face) -> list[int]:
+    out = []
+    wires = TopExp_Explorer(getattr(face, "wrapped", face), TopAbs_WIRE)
+    while wires.More():
+        n, edges = 0, TopExp_Explorer(wires.Current(), TopAbs_EDGE)
+        while edges.More():
+            n, _ = n + 1, edges.Next()
+        out.append(n)
+        wires.Next()
+    return sorted(out)
+
+
+def nurbs_converted(face):
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+    from OCP.TopAbs import TopAbs_FACE
+
+    shape = BRepBuilderAPI_NurbsConvert(face, True).Shape()
+    return TopoDS.Face_s(TopExp_Explorer(shape, TopAbs_FACE).Current())
+
+
+def max_edge_tolerance(face) -> float:
+    tol, edges = 0.0, TopExp_Explorer(face, TopAbs_EDGE)
+    while edges.More():
+        tol = max(tol, BRep_Tool.Tolerance_s(TopoDS.Edge_s(edges.Current())))
+        edges.Next()
+    return tol
+
+
+def check_round_trip(face, rtol: float = AREA_RTOL, stats: dict | None = None,
+                     ours_rtol: float | None = AREA_RTOL) -> TrimmedSurface | BSplineSurface:
+    """from_occ then make_face: the same face, or the untrimmed surface of an untrimmed face."""
+    ours = from_occ(face)
+    if isinstance(ours, BSplineSurface):
+        assert edges_per_wire(face)[:1] == edges_per_wire(face) and len(edges_per_wire(face)) == 1
+        return ours
+    occ = getattr(face, "wrapped", face)
+    rebuilt = make_face(ours)
+    a0, a1 = occ_area(occ), occ_area(rebuilt)
+    back = from_occ(rebuilt)  # the same surface (bit for bit) and the same loops came back
+    assert back.surface == ours.surface and sorted(back.n_edges) == sorted(ours.n_edges)
+    (u0, u1), (v0, v1) = ours.domain
+    grid = np.meshgrid(np.linspace(u0, u1, 37), np.linspace(v0, v1, 41), indexing="ij")
+    a, b = ours.classify(*grid), back.classify(*grid)
+    assert np.array_equal(a[(a != 0) & (b != 0)], b[(a != 0) & (b != 0)])
+    try:
+        area = ours.area()
+    except ToleranceError:
+        area = ours.area(rtol=1e-7)  # reported below as not converged to 1e-12
+        if stats is not None:
+            stats["unconverged"] = True
+    if ours_rtol is not None:
+        assert abs(area - a0) <= ours_rtol * a0, (a0, area)
+    mapped = any(parameter_maps(ours.surface, BRep_Tool.Surface_s(occ), BRepTools.UVBounds_s(occ)))
+    assert abs(a1 - a0) <= (OCC_RATIONAL_AREA_RTOL if mapped else rtol) * a0, (a0, a1)
+    if stats is not None:
+        stats.update(ours=abs(area - a0) / a0, occ=abs(a1 - a0) / a0, mapped=mapped)
+    assert edges_per_wire(rebuilt) == edges_per_wire(occ)
+    assert len(ours.loops) == len(edges_per_wire(occ))
+    assert BRepCheck_Analyzer(rebuilt).IsValid()
+    assert rebuilt.Orientation() == occ.Orientation()
+    assert max_edge_tolerance(rebuilt) <= 1e-5 * max(1.0, np.sqrt(a0))
+    return ours
+
+
+@pytest.fixture(scope="module")
+def machined():
+    """Holes through a box, a spherical pocket (poles, seams, intersection p-curves on analytic
+    surfaces), a boss: planes, cylinders and a sphere, FORWARD and REVERSED faces."""
+    part = bd.Box(10, 8, 6) - bd.Cylinder(2, 20) - bd.Pos(3, 0, 0) * bd.Sphere(2.5)
+    return part + bd.Pos(0, 0, 3) * bd.Cylinder(3, 3)
+
+
+def test_every_face_of_a_machined_part_round_trips(machined):
+    kinds = {"trimmed": 0, "untrimmed": 0}
+    for face in machined.faces():
+        ours = check_round_trip(face)
+        kinds["trimmed" if isinstance(ours, TrimmedSurface) else "untrimmed"] += 1
+    assert kinds["trimmed"] >= 8 and kinds["untrimmed"] >= 3, kinds
+
+
+def test_reversed_faces_keep_their_orientation(machined):
+    reversed_faces = [f for f in machined.faces() if f.wrapped.Orientation().name == "TopAbs_REVERSED"]
+    assert reversed_faces
+    for face in reversed_faces:
+        ours = from_occ(face)
+        if isinstance(ours, TrimmedSurface):
+            assert ours.reversed
+            assert to_face(ours).wrapped.Orientation() == face.wrapped.Orientation()
+
+
+def test_sphere_pocket_keeps_poles_and_seam(machined):
+    sphere = next(f for f in machined.faces() if f.geom_type.name == "SPHERE")
+    ours = check_round_trip(sphere)
+    rebuilt = make_face(ours)
+    degenerated, edges = 0, TopExp_Explorer(rebuilt, TopAbs_EDGE)
+    while edges.More():
+        degenerated += BRep_Tool.Degenerated_s(TopoDS.Edge_s(edges.Current()))
+        edges.Next()
+    original, edges = 0, TopExp_Explorer(sphere.wrapped, TopAbs_EDGE)
+    while edges.More():
+        original += BRep_Tool.Degenerated_s(TopoDS.Edge_s(edges.Current()))
+        edges.Next()
+    assert degenerated == original >= 2
+
+
+def test_issue_example_face_with_one_hole_survives():
+    """The issue: a face with one hole came back untrimmed (area of the whole patch)."""
+    pts = [[bd.Vector(x, y, 0.3 * np.sin(x) * np.cos(y)) for y in np.linspace(0, 4.4, 5)] for x in np.linspace(0, 4.3, 5)]
+    patch = bd.Face.make_surface_from_array_of_points(pts)
+    holed = patch - bd.Pos(2.2, 2.1, 0) * bd.Cylinder(0.86, 4)
+    face = holed.faces()[0] if hasattr(holed, "faces") else holed
+    untrimmed = occ_area(patch.wrapped)
+    ours = check_round_trip(face)
+    assert isinstance(ours, TrimmedSurface) and len(ours.inner) == 1
+    assert occ_area(to_face(ours).wrapped) < untrimmed - 2.0  # the hole (pi 0.86^2 = 2.3) is there
+    plain = from_occ(face, trims=False)
+    assert isinstance(plain, BSplineSurface) and plain == ours.surface
+
+
+def test_untrimmed_faces_still_give_the_surface():
+    box = bd.Box(2, 3, 4)
+    for face in box.faces():
+        assert isinstance(from_occ(face), BSplineSurface)
+    cyl = bd.Cylinder(1, 2)
+    side = [f for f in cyl.faces() if f.geom_type.name == "CYLINDER"]
+    caps = [f for f in cyl.faces() if f.geom_type.name == "PLANE"]
+    assert isinstance(from_occ(side[0]), BSplineSurface)  # seam + two circles: the whole UV box
+    for cap in caps:  # a disc is a plane trimmed by a circle
+        disc = check_round_trip(cap)
+        assert isinstance(disc, TrimmedSurface) and disc.n_edges == (1,)
+        assert disc.area() == pytest.approx(np.pi, rel=1e-13)
+    assert all(isinstance(from_occ(f), BSplineSurface) for f in bd.Sphere(1).faces())
+
+
+def test_step_round_trip_of_a_rebuilt_face(tmp_path, machined):
+    from occsurf.bridge import read_step
+
+    face = max(machined.faces(), key=lambda f: len(edges_per_wire(f)))
+    rebuilt = to_face(from_occ(face))
+    path = tmp_path / "rebuilt.step"
+    bd.export_step(rebuilt, str(path))
+    model = read_step(str(path))
+    assert len(model.faces) == 1
+    back = model.faces[0].face
+    assert abs(occ_area(back) - occ_area(face.wrapped)) <= AREA_RTOL * occ_area(face.wrapped)
+    assert edges_per_wire(back) == edges_per_wire(face)
+    assert isinstance(from_occ(back), TrimmedSurface)
+
+
+def _occ_state(face, u: float, v: float, tol: float):
+    return BRepClass_FaceClassifier(face, gp_Pnt2d(u, v), tol).State()
+
+
+@given(st.lists(st.tuples(st.floats(0, 1), st.floats(0, 1)), min_size=5, max_size=40), st.integers(0, 11))
+@test_settings(30)
+def test_classification_agrees_with_occ(machined_faces, pts, which):
+    face, ours = machined_faces[which % len(machined_faces)]
+    occ = face.wrapped
+    u0, u1, v0, v1 = BRepTools.UVBounds_s(occ)
+    P = np.array(pts)
+    uu, vv = u0 + P[:, 0] * (u1 - u0), v0 + P[:, 1] * (v1 - v0)
+    mu, mv = parameter_maps(ours.surface, BRep_Tool.Surface_s(occ), (u0, u1, v0, v1))
+    s = ours.surface
+    a = angle_to_parameter(uu, s.knots[0], s.degree[0], s.n_poles[0]) if mu else uu
+    b = angle_to_parameter(vv, s.knots[1], s.degree[1], s.n_poles[1]) if mv else vv
+    diag = float(np.hypot(u1 - u0, v1 - v0))
+    state = ours.classify(a, b, tol=1e-6 * diag)  # a wide band: OCC's own tolerance is coarser
+    fwd = TopoDS.Face_s(occ.Oriented(TopAbs_FORWARD))
+    for x, y, s_ in zip(uu, vv, state):
+        occ_s = _occ_state(fwd, float(x), float(y), 1e-9)
+        if s_ == ON or occ_s == TopAbs_ON:
+            continue
+        assert (s_ == INSIDE) == (occ_s == TopAbs_IN), (x, y, s_, occ_s)
+        assert (s_ == OUTSIDE) == (occ_s == TopAbs_OUT)
+
+
+@pytest.fixture(scope="module")
+def machined_faces(machined):
+    pairs = [(f, from_occ(f)) for f in machined.faces()]
+    return [(f, t) for f, t in pairs if isinstance(t, TrimmedSurface)]
+
+
+def _realdata_files():
+    if not REALDATA.is_dir():
+        return []
+    return sorted(p for p in REALDATA.iterdir() if p.suffix.lower() in (".step", ".stp", ".iges", ".igs"))
+
+
+@pytest.mark.skipif(not _realdata_files(), reason=f"no real data at {REALDATA}")
+@pytest.mark.parametrize("path", _realdata_files(), ids=lambda p: p.name)
+def test_every_real_face_round_trips(path):
+    """Every face of the public models: from_occ, make_face, the same face (see check_round_trip);
+    the numbers are printed (pytest -s) for the README."""
+    from occsurf.bridge import read_iges, read_step
+
+    model = (read_step if path.suffix.lower() in (".step", ".stp") else read_iges)(str(path))
+    n_trimmed, n_wires, ours_err, occ_err, failures = 0, 0, 0.0, {False: 0.0, True: 0.0}, []
+    off, unconverged = [], 0
+    for f in model.faces:
+        stats: dict = {}
+        try:
+            ours = check_round_trip(f.face, stats=stats, ours_rtol=None)
+        except Exception as err:  # noqa: BLE001 - collected and reported together
+            failures.append(f"face {f.index} ({f.surface_type}): {type(err).__name__}: {err}")
+            continue
+        if isinstance(ours, BSplineSurface):
+            n_wires += 1
+            assert f.trimmed is None
+            continue
+        n_trimmed += 1
+        n_wires += len(ours.loops)
+        ours_err = max(ours_err, stats["ours"])
+        unconverged += stats.get("unconverged", False)
+        if stats["ours"] > AREA_RTOL:
+            off.append(f"{f.index}: {stats['ours']:.1e}")
+        occ_err[stats["mapped"]] = max(occ_err[stats["mapped"]], stats["occ"])
+        assert f.trimmed is not None and f.trimmed.n_edges == ours.n_edges  # ImportedFace.trimmed
+    print(f"\n{path.name}: {len(model.faces)} faces, {n_trimmed} trimmed, {n_wires} wires; area error max: "
+          f"ours {ours_err:.1e}, OCC's of the rebuilt face {occ_err[False]:.1e} (same parameters), "
+          f"{occ_err[True]:.1e} (converted circular directions); {len(failures)} failures; our area beyond "
+          f"1e-9 of OCC's on {len(off)} faces ({', '.join(off)}), not converged to 1e-12 on {unconverged}")
+    assert not failures, "\n".join(failures[:20])
+    # Our area against OCC's BRepGProp of the original: on linkrods' blend faces (B-splines of degree
+    # 6 x 10 with 81 poles) the two part by up to 4e-6, and OCC's is the unconverged one there: on face
+    # 13 OCC gives 0.0400099398 / 0.0400098648 / 0.0400106913 for eps = 1e-6 / 1e-9 / 1e-12 (2e-5 apart),
+    # ours 0.0400106767 agrees with itself to 1e-15 from 1 to 128 Gauss pieces per span. Elsewhere
+    # (the screw, the bearing but one tiny face) the two agree to 1e-12.
+    assert ours_err <= 1e-5
+
+
+@pytest.mark.xfail(strict=True, reason="OCC defect: BRepGProp on a rational B-spline cylinder face with "
+                   "intersection p-curves is biased by ~1e-9 (NurbsConvert of the analytic face shows it too)")
+def test_occ_area_of_rational_cylinder_face_is_biased(machined):
+    face = next(f for f in machined.faces() if f.geom_type.name == "CYLINDER"
+                and isinstance(from_occ(f), TrimmedSurface) and len(edges_per_wire(f)) == 1
+                and edges_per_wire(f)[0] == 6)
+    a0 = occ_area(face.wrapped)
+    assert abs(occ_area(nurbs_converted(face.wrapped)) - a0) <= AREA_RTOL * a0
