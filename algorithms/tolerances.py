@@ -296,6 +296,10 @@ _DEFAULTS: dict[str, float] = {
     # FILL_CORNER_SPAN (the G1 error left near the corner is proportional to it).
     "FILL_TWIST_TOL": 1e-8,
     "FILL_CORNER_SPAN": 0.02,
+    # Largest corner-twist coefficient (the ribbon coefficients' derivatives at a hole corner) relative
+    # to the coefficients themselves; beyond it (a wiggly fitted cross field) the coefficients ramp
+    # linearly to the side's midpoint instead and the unmet twist is reported as a mismatch.
+    "FILL_MAX_TWIST_RATIO": 20.0,
     # Most sides of a hole (the construction works for any n: 48 sides measured G1 to 5e-10 deg in
     # 6 s; this bounds the output size, n patches, and the time).
     "FILL_MAX_SIDES": 96,

@@ -817,6 +817,13 @@ def _corner(i: int, S: list[_Side], sig: Array, rational: bool,
         y0[0], y0[nf] = c1[i, 0], c1[j, 0]
         rcond = max(rcond, float(np.sin(np.radians(tolerances.FILL_MIN_CORNER_ANGLE))))
     y = y0 + np.linalg.lstsq(M, rhs - M @ y0, rcond=rcond)[0]
+    # A twist far beyond the ribbons' own scale (the derivative of a wiggly fitted cross field at the
+    # corner, 1e6 measured on a bearing face) would throw the corner patch out of the hole: the
+    # coefficients then ramp linearly to their midpoint values instead, and the unmet twist is
+    # reported (and confined to the corner span) like any incompatible one.
+    scale = max(float(np.abs(np.r_[xa, xb, c1[i], c1[j]]).max()), 1e-300)
+    if np.abs(y).max() > tolerances.FILL_MAX_TWIST_RATIO * scale:
+        y = np.r_[c1[i] - xa, c1[j] - xb]
     twist = np.linalg.norm(M @ y - rhs) / max(np.linalg.norm(ta), np.linalg.norm(tb), 1e-300)
     return xa, xb, y[:nf], y[nf:], residual, twist, flat
 

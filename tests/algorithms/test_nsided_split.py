@@ -221,3 +221,17 @@ def test_loop_touching_itself_is_refused_but_a_narrow_one_is_not() -> None:
     from occsurf.algorithms.topology import nsided
 
     assert len(nsided._working_sides(hole(1e-3))[0]) == 4  # the loop check lets a narrow hole through
+
+
+def test_max_twist_ratio_is_read_at_call_time() -> None:
+    """FILL_MAX_TWIST_RATIO = 0 declines every corner twist: the coefficients ramp linearly, the
+    twists of these G2-compatible corners (mismatch ~1e-15 when taken) are then unmet and reported,
+    and the fill is still G0 exact and sound."""
+    m = ring_model(5)
+    taken = fill_hole(m.sides)
+    assert taken.twist_mismatch.max() < 1e-9
+    with tolerances.override(FILL_MAX_TWIST_RATIO=0.0):
+        declined = fill_hole(m.sides)
+    assert declined.twist_mismatch.min() > 1e-6
+    q = measure_fill(declined)
+    assert q.boundary_gap.max() <= GAP_REL * declined.size and q.folds.sum() == 0

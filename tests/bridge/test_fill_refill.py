@@ -7,8 +7,9 @@ the whole hole set is benchmarks/bench_fill_realdata.py. Skipped with the reason
 
 Tolerances: our fill is judged against OCC's BRepOffsetAPI_MakeFilling on the same hole, measured the
 same way (LocalAnalysis_SurfaceContinuity at 73 points per edge): it must be no worse in G0 and in
-G1 (measured on face 1: ours 5.9e-10 / 0.0061 deg, OCC 2.1e-4 / 0.13 deg). G1 is also held to the
-fit target: FILL_FIT_ANGLE (0.01 deg), which the cross-field fit reaches on this face.
+G1 (measured on face 1: ours 8.3e-11 / 0.019 deg, OCC 2.1e-4 / 0.13 deg), and the fill must not fold.
+G1 is also held to twice the fit target FILL_FIT_ANGLE (0.01 deg): the fields meet it, the corner
+twists that a sound (unfolded) fill can take leave 0.019 deg.
 """
 
 from __future__ import annotations
@@ -45,7 +46,11 @@ def test_trimmed_face_is_replaced_no_worse_than_occ_and_the_model_stays_valid(le
     occ = rep.occ["default"]
     assert occ["status"] == "ok"
     assert rep.g0 <= occ["g0"] and rep.g1 <= occ["g1"]
-    assert rep.g1 <= tolerances.FILL_FIT_ANGLE and rep.g0 <= 1e-7 * 100  # lens ~ 100 units across
+    assert rep.folds == 0  # the fill does not turn back over itself anywhere (41 x 41 normals per patch)
+    # G1 0.019 deg measured: the fitted fields' derivatives at two corners gave twists 1e3 times the
+    # ribbons' scale, which the fill now declines (FILL_MAX_TWIST_RATIO; the unmet twist is reported);
+    # taking them had given 0.0061 deg on the boundary but a fill folded over 329 grid pairs.
+    assert rep.g1 <= 2 * tolerances.FILL_FIT_ANGLE and rep.g0 <= 1e-7 * 100  # lens ~ 100 units across
     assert max(rep.fit_g1) <= tolerances.FILL_FIT_ANGLE
     assert rep.valid and rep.step_round_trip
     assert len(model_faces(shape)) == 9 - 1 + 4  # face 1 replaced by 4 patches
