@@ -291,13 +291,15 @@ def realdata(limit: int | None) -> None:
                 continue
             done += 1
             conv += r.converged
+            if not r.converged:
+                failed.append(f"face {k} not within tol: max {r.max_error / size:.2e} x size")
             stored += r.hierarchy.pole_counts()["stored"]
             flat += int(np.prod(r.hierarchy.flatten().n_poles))
             if r.face_deviation / size > worst:
                 worst, worst_at = r.face_deviation / size, k
         print(f"  {f.name}: {done} faces refitted, {conv} within tol, worst OCC-projected deviation "
               f"{worst:.2e} x size (face {worst_at}), {stored} control points stored ({flat} flat), "
-              f"{time.perf_counter() - t0:.0f} s" + (f"; {len(failed)} failed: {failed[:3]}" if failed else ""))
+              f"{time.perf_counter() - t0:.0f} s" + (f"; {len(failed)} problems: {failed[:3]}" if failed else ""))
 
 
 def main() -> None:

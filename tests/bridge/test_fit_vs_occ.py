@@ -138,4 +138,6 @@ def test_realdata_faces_of_every_type_refit_at_1e_4_of_their_size(name):
         size = float(np.ptp(inp.data.reshape(-1, 3), axis=0).max())
         res = fit_input(inp, 1e-4 * size)
         assert res.converged, (name, k, res.max_error / size)
-        assert res.face_deviation <= 1e-3 * size, (name, k, res.face_deviation / size)
+        # within tol at the samples; between them the benchmark measured at most 8.3e-5 x size over
+        # every face of these files, so 3 x tol is a bound with room, not a guess
+        assert res.face_deviation <= 3e-4 * size, (name, k, res.face_deviation / size)
