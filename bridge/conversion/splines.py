@@ -604,7 +604,8 @@ def make_face(surface: BSplineSurface | TrimmedSurface | Geom_Surface, tol: floa
     if isinstance(surface, TrimmedSurface):
         from .trimming import trimmed_to_occ_face
 
-        return trimmed_to_occ_face(surface, to_occ(surface.surface), None if tol is None else _positive(tol, "tol"))
+        edge_tol = None if tol is None else _positive(tol, "tol")
+        return trimmed_to_occ_face(surface, to_occ(surface.surface), edge_tol)
     occ_surface = surface if isinstance(surface, Geom_Surface) else _as_occ(surface, BSplineSurface, "surface")
     tol = FACE_TOLERANCE if tol is None else _positive(tol, "tol")
     with _occ.kernel_errors("building a face (BRepBuilderAPI_MakeFace)"):

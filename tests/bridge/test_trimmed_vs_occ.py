@@ -289,3 +289,19 @@ def test_occ_area_of_rational_cylinder_face_is_biased(machined):
                 and edges_per_wire(f)[0] == 6)
     a0 = occ_area(face.wrapped)
     assert abs(occ_area(nurbs_converted(face.wrapped)) - a0) <= AREA_RTOL * a0
+
+
+def test_bad_input_is_refused_by_the_bridge():
+    from occsurf.algorithms import BSplineCurve
+    from occsurf.algorithms.errors import InvalidGeometryError
+
+    P = np.zeros((2, 2, 2))
+    P[1, :, 0] = 1
+    P[:, 1, 1] = 1
+    flat = BSplineSurface((1, 1), ([0, 0, 1, 1], [0, 0, 1, 1]), P)  # 2-D: no OCC face
+    corners = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    loop = [BSplineCurve(1, [0, 0, 1, 1], [corners[i], corners[(i + 1) % 4]]) for i in range(4)]
+    with pytest.raises(InvalidGeometryError, match="3-D"):
+        make_face(TrimmedSurface(flat, loop))
+    with pytest.raises(InvalidGeometryError, match="tol"):
+        make_face(TrimmedSurface(flat, loop), tol=-1.0)
