@@ -24,7 +24,8 @@ and comments masked first) and
   which :func:`model_warnings` compares with what OCC built.
 
 :func:`scan_iges` checks the Directory and Parameter sections of an IGES file: every entity's parameter
-lines exist, and the B-spline curves (126) and surfaces (128) have non-negative upper indices, positive
+lines exist and start with the entity type of its directory entry (swapped type fields made OCC's reader
+hang until the time-out), and the B-spline curves (126) and surfaces (128) have non-negative upper indices, positive
 degrees and as many parameters as their counts imply (a negative upper index crashes OCC's reader).
 
 After OCC has read the file (OCC imported lazily)
@@ -501,9 +502,13 @@ def scan_iges(p: Path, data: bytes) -> IgesScan:
         if ptr < 1 or nlines < 1 or ptr - 1 + nlines > len(par):
             raise ExchangeError(f"{p}: damaged IGES file (directory entry D{seq}, type {etype}: parameter lines "
                                 f"{ptr}..{ptr + nlines - 1} not in the {len(par)} of the P section)")
+        text = "".join(x[:64] for x in par[ptr - 1:ptr - 1 + nlines]).split(rec_end)[0]
+        head = text.split(delim, 1)[0].strip()
+        if head != str(etype):  # OCC parses the data as the directory's type: it hung on such files
+            raise ExchangeError(f"{p}: damaged IGES file (directory entry D{seq} is of type {etype}, its parameter "
+                                f"data P{ptr} of type {head or '(none)'!s})")
         if etype not in (126, 128):
             continue
-        text = "".join(x[:64] for x in par[ptr - 1:ptr - 1 + nlines]).split(rec_end)[0]
         fields = _iges_numbers(text, delim, 10**9)
         _check_bspline(p, seq, etype, fields)
     scan.face_instances = scan.types[510] if scan.types[510] else loose

@@ -634,3 +634,29 @@ def test_reading_a_fifo_neither_blocks_nor_is_opened(tmp_path):
     proc = _cli("inspect", str(tmp_path), "--json", "--timeout", "120")
     assert proc.returncode == 2 and "not a regular file" in json.loads(proc.stdout)["files"][0]["error"]
     assert time.perf_counter() - t0 < 120
+
+
+def test_iges_parameter_data_of_another_type_is_refused(clean, tmp_path):
+    """Two entities whose type fields in the P section were swapped (the directory unchanged) made OCC's
+    IGES reader hang until the time-out (2 of 300 mutated files); refused before OCC parses now."""
+    from occsurf.bridge.exchange.step_iges import READ_JOB, READ_PRELOAD
+    from occsurf.bridge.isolation import ERROR, run_jobs
+
+    text = C.IgesText.parse(clean["iges"].read_bytes())
+    lines = list(text.lines)
+    d = text.section(b"D")
+    starts = {}  # type -> the first P line of the first entity of that type
+    for k in range(0, len(d), 2):
+        etype = int(lines[d[k]][0:8])
+        starts.setdefault(etype, text.section(b"P")[int(lines[d[k]][8:16]) - 1])
+    (ta, ia), (tb, ib) = [(t, i) for t, i in starts.items() if len(str(t)) == 3][:2]
+    for i, old, new in ((ia, ta, tb), (ib, tb, ta)):
+        assert lines[i].startswith(b"%d," % old)
+        lines[i] = b"%d," % new + lines[i][len(b"%d," % old):]
+    bad = C.write(tmp_path, "types.igs", text.join(lines))
+    with pytest.raises(ExchangeError, match=r"types\.igs: damaged IGES file \(directory entry D\d+ is of type "
+                                            rf"{ta}, its parameter data P\d+ of type {tb}\)"):
+        read_iges(bad)
+    [o] = run_jobs(READ_JOB, [{"path": str(bad), "format": "iges", "out": str(tmp_path / "o.brep")}], timeout=120,
+                   preload=READ_PRELOAD)
+    assert o.status == ERROR and "its parameter data" in o.error, (o.status, o.error)
