@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms import BSplineCurve, BSplineSurface, TrimmedSurface
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError, KernelError
 
 from ..messages import one_line
@@ -96,6 +96,15 @@ def normalise(objects: Any, names: Any) -> list[tuple[Any, str | None]]:
 
 
 def _as_shape(obj: Any, label: str) -> Any:
+    if isinstance(obj, TrimmedSurface):  # a trimmed face: its loops rebuilt (conversion.trimming)
+        from ..conversion.splines import make_face
+
+        if obj.dim != 3:
+            raise InvalidGeometryError(f"{label}: expected a 3-D trimmed surface, got dimension {obj.dim}")
+        s = obj.surface
+        if not (_is_clamped(s.knots[0], s.degree[0]) and _is_clamped(s.knots[1], s.degree[1])):
+            obj = TrimmedSurface(s.clamp(), obj.outer, obj.inner, obj.reversed)  # same parameters
+        return make_face(obj)
     if isinstance(obj, (BSplineSurface, BSplineCurve)):
         kind = "surface" if isinstance(obj, BSplineSurface) else "curve"
         if obj.dim != 3:

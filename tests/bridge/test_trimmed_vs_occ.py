@@ -305,3 +305,38 @@ def test_bad_input_is_refused_by_the_bridge():
         make_face(TrimmedSurface(flat, loop))
     with pytest.raises(InvalidGeometryError, match="tol"):
         make_face(TrimmedSurface(flat, loop), tol=-1.0)
+
+
+def test_write_step_and_iges_of_trimmed_surfaces(tmp_path, machined):
+    """write_step / write_iges take TrimmedSurface objects; read back, each face has the area and
+    wires it had (the sphere pocket is left out of the STEP check: OCC's STEP round trip of the
+    *original* analytic face loses 45 % of it too, see test_occ_step_round_trip_of_sphere_pocket)."""
+    from occsurf.bridge import read_iges, read_step, write_iges, write_step
+
+    faces = [f for f in machined.faces() if isinstance(from_occ(f), TrimmedSurface)]
+    ours = [from_occ(f) for f in faces]
+    for writer, reader, name, rtol in ((write_step, read_step, "t.step", OCC_RATIONAL_AREA_RTOL),
+                                       (write_iges, read_iges, "t.igs", 1e-8)):  # IGES: ~10 digits
+        path = tmp_path / name
+        writer(str(path), ours)
+        model = reader(str(path))
+        assert len(model.faces) == len(ours)
+        for f, t, back in zip(faces, ours, model.faces):
+            if writer is write_step and f.geom_type.name == "SPHERE":
+                continue
+            a0 = occ_area(f.wrapped)
+            assert abs(occ_area(back.face) - a0) <= rtol * a0, (name, f.geom_type, a0, occ_area(back.face))
+            assert edges_per_wire(back.face) == edges_per_wire(f.wrapped)
+            assert back.trimmed is not None and sorted(back.trimmed.n_edges) == sorted(t.n_edges)
+
+
+@pytest.mark.xfail(strict=True, reason="OCC defect: the sphere pocket (poles, seam, intersection edges) "
+                   "loses 45 % of its area through STEP write + read, for the analytic original too")
+def test_occ_step_round_trip_of_sphere_pocket(tmp_path, machined):
+    from occsurf.bridge import read_step
+
+    sphere = next(f for f in machined.faces() if f.geom_type.name == "SPHERE")
+    path = tmp_path / "sphere.step"
+    bd.export_step(sphere, str(path))
+    back = read_step(str(path)).faces[0].face
+    assert abs(occ_area(back) - occ_area(sphere.wrapped)) <= AREA_RTOL * occ_area(sphere.wrapped)
