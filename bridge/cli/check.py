@@ -1,4 +1,5 @@
-"""``occsurf check FILE_OR_DIR ... [--out DIR] [--json] [--faces ...] [--fail-on PRESET] [--no-pictures]``: the surface-quality report.
+"""``occsurf check FILE_OR_DIR ... [--out DIR] [--json] [--faces ...] [--fail-on PRESET] [--no-pictures] [--timeout S]
+[--strict] [--in-process]``: the surface-quality report.
 
 Reads each STEP or IGES model in a worker process (:func:`occsurf.bridge.isolation.run_jobs`, as
 ``occsurf inspect`` does: a crash or a hang inside OCC costs that file, not the terminal, and the
@@ -24,6 +25,9 @@ OCC), the file is checked again without the piece at fault (a face is reported w
 naming the crash, the edges or a picture are left out with a warning), up to
 :data:`MAX_RETRIES` times; the report keeps every other face.
 
+A model read around damage (see :mod:`occsurf.bridge.exchange.checks`) is checked as read, its warnings in
+the report; ``--strict`` refuses it instead (that file is unreadable: exit status 2, no report for it).
+
 Exit status: 0 when every model was read and reported; 2 when one could not be read, an argument is
 wrong or ``--out`` cannot be written (one line on stderr per problem); else, with ``--fail-on
 PRESET``, 1 when an edge or a face of any file breaks that preset's thresholds (a CI gate).
@@ -43,7 +47,7 @@ from pathlib import Path
 from typing import Any
 
 from ..messages import error_line
-from ._common import EXIT_ERROR, EXIT_OK, error, strip_path, timeout_arg, worker_failure
+from ._common import EXIT_ERROR, EXIT_OK, add_strict_option, error, strip_path, timeout_arg, worker_failure
 
 __all__ = ["add_parser", "run", "check_job", "check_file", "collect_files", "file_summary", "PRESET_NAMES", "EXIT_FAILED",
            "DEFAULT_TIMEOUT", "MAX_RETRIES"]
@@ -65,7 +69,7 @@ PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.quality.report",
 # ---------------------------------------------------------------------------------------- worker
 def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, faces: list[int] | None = None,
                preset: str = "catia", pictures: bool = True, progress: Any = None,
-               skip: dict[str, Any] | None = None, trace: Any = None) -> dict[str, Any]:
+               skip: dict[str, Any] | None = None, trace: Any = None, strict: bool = False) -> dict[str, Any]:
     """Read, assess and draw one model; the library side of ``occsurf check`` (in this process).
 
     Writes the pictures and ``.viewer.json`` (the 3-D view's data) into ``out``; returns
@@ -87,7 +91,7 @@ def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, fac
     note = trace if trace is not None else (lambda stage: None)
     t0 = time.perf_counter()
     note("read")
-    model = read_model(p, sniff_format(p))
+    model = read_model(p, sniff_format(p), strict=strict)  # strict: warnings refuse the file
     t_read = time.perf_counter() - t0
     report = check_model(model, faces=faces, preset=preset,
                          progress=None if progress is None else (lambda k, n: progress("faces", k, n)),
@@ -132,7 +136,7 @@ def check_job(item: dict[str, Any]) -> dict[str, Any]:
     with np.errstate(all="ignore"), quiet_native_stdout():
         return check_file(item["path"], item["out"], faces=item.get("faces"), preset=item.get("preset", "catia"),
                           pictures=bool(item.get("pictures", True)), progress=progress, skip=item.get("skip"),
-                          trace=trace)
+                          trace=trace, strict=bool(item.get("strict")))
 
 
 def write_outputs(out: Path, result: dict[str, Any]) -> None:
@@ -441,7 +445,8 @@ def run(ns: argparse.Namespace) -> int:
         os.close(fd)
         scratch.append(Path(trace_name))
         items.append({"path": str(e[1].resolve()), "out": str(folders[k].resolve()), "faces": faces, "preset": preset,
-                      "progress": progress_name, "trace": trace_name, "pictures": not ns.no_pictures, "skip": {}})
+                      "progress": progress_name, "trace": trace_name, "pictures": not ns.no_pictures, "skip": {},
+                      "strict": ns.strict})
     rows: dict[int, dict[str, Any]] = {}
     code = EXIT_OK
     failed = False
@@ -549,6 +554,7 @@ def add_parser(sub: Any) -> None:
                    help="skip the PNG pictures (the page keeps its tables and 3-D view): a faster CI gate")
     p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop the checker after this long (default {DEFAULT_TIMEOUT:g})")
+    add_strict_option(p, writes=True)
     p.add_argument("--in-process", action="store_true",
                    help="check in this process, not in a worker (a crash inside OCC then ends it)")
     p.set_defaults(func=run)

@@ -601,7 +601,8 @@ def test_reference_swaps_that_crashed_occs_transfer_are_refused(clean, tmp_path)
 
 
 def test_strict_on_every_reading_command_that_writes(clean, tmp_path):
-    """fill, render and convert print the input's warnings; with --strict they refuse it and write nothing."""
+    """fill, render, convert and check read a damaged input around its damage (with warnings); with --strict
+    they refuse it and write nothing."""
     st = C.StepText.parse(clean["step"].read_bytes())
     face = next(i for i, r in enumerate(st.records) if b"ADVANCED_FACE" in r)
     bad = C.write(tmp_path, "noface.step", C.step_delete(st, face))
@@ -609,7 +610,9 @@ def test_strict_on_every_reading_command_that_writes(clean, tmp_path):
     runs = {"fill": (("fill", str(bad), "--out", str(filled), "--no-occ"), filled),
             "render": (("render", str(bad), "--preset", "studio", "--out", str(png), "--size", "64", "48",
                         "--samples", "0"), png),
-            "convert": (("convert", str(bad), str(igs)), igs)}
+            "convert": (("convert", str(bad), str(igs)), igs),
+            "check": (("check", str(bad), "--out", str(tmp_path / "checked"), "--no-pictures"), tmp_path / "checked"
+                      / "report.json")}
     for name, (args, target) in runs.items():
         strict = _cli(*args, "--strict", "--timeout", "300")
         err = strict.stderr.decode()
