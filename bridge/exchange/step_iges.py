@@ -409,6 +409,8 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
         warnings += xdata.warnings
         for i, instance_name in xdata.instance_names.items():  # own name, else the instance's
             names[0][i] = own_face_names.get(i) or xdata.face_names.get(i) or instance_name
+        for i, face_name in xdata.face_names.items():  # flat models too: a face's own name wins
+            names[0][i] = own_face_names.get(i) or face_name
     del caf
     return p, shape, names, warnings, xdata
 
@@ -651,6 +653,8 @@ def _names(
     for shape, name in root_shapes:
         if name is not None:
             spread(shape, name, roots)
+    # IGES: faces inside a group are not found from their named surface entity; search from the face
+    own[0].update(xcaf.iges_face_names(transfer, faces_map, own[0]))
     merged = tuple({**r, **c, **o} for o, c, r in zip(own, part_of, roots))
     return merged, own[0]  # type: ignore[return-value]
 

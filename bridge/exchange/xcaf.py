@@ -256,6 +256,81 @@ def iges_unit(reader: Any) -> tuple[str, float, list[str]]:
     return unit, UNITS[unit], []
 
 
+#: IGES entity types a face is transferred from (IGES 5.3 §4: analytic and spline surfaces 108-140,
+#: bounded/trimmed surfaces 143/144, CSG-free B-rep surfaces 190-198, the B-rep face 510).
+_IGES_FACE_TYPES = frozenset({108, 114, 118, 120, 122, 128, 140, 143, 144, 190, 192, 194, 196, 198, 510})
+
+
+def _iges_own_name(entity: Any) -> str | None:
+    """The name an IGES entity carries (406 form 15 name property, else its entity label)."""
+    try:
+        value = entity.NameValue() if entity.HasName() else None
+    except Exception:  # noqa: BLE001 - a name is optional
+        return None
+    text = value.ToCString().strip() if value is not None else ""
+    return None if text in _NO_NAMES else text
+
+
+def iges_face_names(transfer: Any, faces_map: Any, named: dict[int, str]) -> dict[int, str]:
+    """Own names of faces whose IGES surface entity OCC does not report (faces inside a 402 group).
+
+    OCC binds such an entity to its face in the transient process, but ``ShapeResult`` only knows the
+    recorded (root) results, so the name property the writer put on the 144 entity is not found from
+    the entity side. Here the face side is searched (``EntityFromShapeResult(face, -1)``: a scan of
+    the process per face), only when named face entities are left unresolved, only for faces without
+    a name, and until every such entity has been found.
+
+    Parameters
+    ----------
+    transfer : XSControl_TransferReader
+        The IGES reader's, after the roots were transferred.
+    faces_map : TopTools_IndexedMapOfShape
+        The model's faces.
+    named : dict of int to str
+        Faces (1-based map index) that already have their own name.
+
+    Returns
+    -------
+    dict of int to str
+        Further own face names, by 1-based map index.
+    """
+    process = transfer.TransientProcess()
+    # keyed by the Python object: OCP's MapIndex/Number of these entities answer 0 (measured), while
+    # the same C++ entity always comes back as the same (kept alive) Python object
+    unresolved: dict[int, tuple[Any, str]] = {}
+    for k in range(1, process.NbMapped() + 1):
+        entity = process.Mapped(k)
+        if not hasattr(entity, "TypeNumber") or entity.TypeNumber() not in _IGES_FACE_TYPES:
+            continue
+        name = _iges_own_name(entity)
+        if name is None:
+            continue
+        try:
+            shape = transfer.ShapeResult(entity)
+        except Exception:  # noqa: BLE001
+            shape = None
+        if shape is None or shape.IsNull():
+            unresolved[id(entity)] = (entity, name)
+    found: dict[int, str] = {}
+    if not unresolved:
+        return found
+    candidates = dict(unresolved)
+    for i in range(1, faces_map.Extent() + 1):
+        if i in named:
+            continue
+        try:
+            entity = transfer.EntityFromShapeResult(faces_map.FindKey(i), -1)
+        except Exception:  # noqa: BLE001 - not found
+            continue
+        hit = candidates.get(id(entity)) if entity is not None else None
+        if hit is not None:
+            found[i] = hit[1]
+            unresolved.pop(id(entity), None)
+            if not unresolved:  # (a further face split from the last entity stays unnamed)
+                break
+    return found
+
+
 # ---------------------------------------------------------------------------------------- reading
 def _label_name(label: Any) -> str | None:
     from OCP.TCollection import TCollection_AsciiString

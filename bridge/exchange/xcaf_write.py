@@ -17,6 +17,7 @@ n', so it gets an empty product name; IGES has no transparency and its layers ar
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -277,10 +278,13 @@ def build_document(source: Any, name: str, *, flatten: bool = False) -> _Writer:
             if j:
                 members.append(model.faces[j - 1])
             ex.Next()
-        names = {f.name for f in members}
         colors = {f.color for f in members}
         layers = {f.layer for f in members}
-        common_name = next(iter(names)) if len(names) == 1 and None not in names else None
+        # the part is named after most of its faces (an IGES group read back: its faces carry the
+        # group's name but for those with their own, which stay face names); a face without a name
+        # would inherit it, so then the part has none
+        counted = Counter(f.name for f in members)
+        common_name = counted.most_common(1)[0][0] if counted and None not in counted else None
         common_color = next(iter(colors)) if len(colors) == 1 else None
         common_layer = next(iter(layers)) if len(layers) == 1 else None
         node = replace(part, name=common_name or part.name, part=f"\0flat{k}", color=common_color,
