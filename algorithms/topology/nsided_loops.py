@@ -115,8 +115,13 @@ def check_simple_loop(unit: list, tol: float, samples: int = 65) -> None:
     cand = d <= tol + 2 * chord
     step = t[1] - t[0]
     for a, b, sa, sb in zip(i[cand], j[cand], si[cand], sj[cand]):
-        ca, cb = unit[side[a]].curve, unit[side[b]].curve
         ta, tb = (seg[a] + sa) * step, (seg[b] + sb) * step
+        # each point refined on its own stretch of curve (two stretches of one side must not slide
+        # into each other: projecting a side's point onto the whole side finds the point itself)
+        ca = unit[side[a]].curve.segment(max(0.0, ta - 2 * step), min(1.0, ta + 2 * step))
+        cb = unit[side[b]].curve.segment(max(0.0, tb - 2 * step), min(1.0, tb + 2 * step))
+        if side[a] == side[b] and abs(ta - tb) <= 4 * step:
+            continue
         for _ in range(4):  # alternating closest points converge to the curves' nearest pair
             tb = float(closest_parameters(cb, ca.evaluate(np.array([ta])))[0][0])
             ta = float(closest_parameters(ca, cb.evaluate(np.array([tb])))[0][0])
