@@ -163,6 +163,9 @@ class ImportedFace:
         of p-curves in its parameters, and its orientation; see
         :mod:`occsurf.bridge.conversion.trimming`) when its boundary is not the natural rectangle of
         ``surface``; ``None`` for an untrimmed face or when the loops could not be converted.
+        Built on first access and cached (reading does not pay for faces nobody asks about); a
+        face made with ``dataclasses.replace`` shares the cache. To give a value when building an
+        ``ImportedFace`` by hand, pass ``_trimmed=`` (a :class:`TrimmedSurface` or ``None``).
     """
 
     index: int
@@ -178,7 +181,38 @@ class ImportedFace:
     color: tuple[float, float, float, float] | None = None
     layer: str | None = None
     instance: str | None = None
-    trimmed: Any = field(default=None, repr=False)
+    _trimmed: Any = field(default=None, repr=False, compare=False)  # the value, or a _LazyTrimmed
+
+    @property
+    def trimmed(self) -> Any:
+        t = self._trimmed
+        return t.value() if isinstance(t, _LazyTrimmed) else t
+
+
+class _LazyTrimmed:
+    """The cached, on-demand :attr:`ImportedFace.trimmed` of one face (its loops converted by
+    :func:`_build_trimmed` on the first call of :meth:`value`). Pickles as its value, so an
+    ``ImportedFace`` whose OCC objects are dropped or replaced still carries its loops."""
+
+    __slots__ = ("_args", "_value")
+    _PENDING = object()
+
+    def __init__(self, face: Any, surface: BSplineSurface, occ_surface: Any) -> None:
+        self._args: tuple[Any, ...] | None = (face, surface, occ_surface)
+        self._value: Any = self._PENDING
+
+    def value(self) -> Any:
+        if self._value is self._PENDING:
+            self._value = _build_trimmed(*self._args)
+            self._args = None  # the OCC objects are no longer needed here
+        return self._value
+
+    def __reduce__(self) -> tuple[Any, tuple[Any]]:
+        return _identity, (self.value(),)
+
+
+def _identity(value: Any) -> Any:
+    return value
 
 
 @dataclass(frozen=True)
@@ -406,6 +440,14 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
         faces_map, _ = _maps(shape)
         xdata = xcaf.read_xcaf(caf, faces_map, _BareIndex(faces_map), p.stem)
         xdata.unit, xdata.unit_scale = unit, scale
+        if fmt == "iges":  # names and levels of uncoloured faces in groups; level names (406 form 3)
+            own_names, levels = xcaf.iges_face_attributes(reader.WS().TransferReader(), faces_map,
+                                                          {**xdata.face_names, **own_face_names}, xdata.layers)
+            own_face_names.update(own_names)
+            names[0].update(own_names)
+            for i, level in levels.items():
+                xdata.layers.setdefault(i, level)
+            xcaf.name_levels(xdata, xcaf.iges_level_names(data))
         warnings += xdata.warnings
         for i, instance_name in xdata.instance_names.items():  # own name, else the instance's
             names[0][i] = own_face_names.get(i) or xdata.face_names.get(i) or instance_name
@@ -653,8 +695,6 @@ def _names(
     for shape, name in root_shapes:
         if name is not None:
             spread(shape, name, roots)
-    # IGES: faces inside a group are not found from their named surface entity; search from the face
-    own[0].update(xcaf.iges_face_names(transfer, faces_map, own[0]))
     merged = tuple({**r, **c, **o} for o, c, r in zip(own, part_of, roots))
     return merged, own[0]  # type: ignore[return-value]
 
@@ -748,15 +788,13 @@ def _import_face(index: int, shape: Any, name: str | None) -> ImportedFace:
     surface_type = _geomabs_name(GeomAdaptor_Surface(occ_surface).GetType())
     if surface_type == "OtherSurface":
         surface_type = "Other"
-    surface, error, trimmed = None, None, None
+    surface, error = None, None
     try:
         surface = from_occ(face, _conversion_bounds(face, occ_surface), trims=False)
         if not isinstance(surface, BSplineSurface):
             surface, error = None, f"from_occ returned {type(surface).__name__}, not a BSplineSurface"
     except Exception as err:  # noqa: BLE001 - one bad face must not fail the file
         error = one_line(err)
-    if surface is not None:
-        trimmed = _trimmed(face, surface, occ_surface)
     return ImportedFace(
         index=index,
         name=name,
@@ -768,11 +806,11 @@ def _import_face(index: int, shape: Any, name: str | None) -> ImportedFace:
         u_periodic=bool(occ_surface.IsUPeriodic()),
         v_periodic=bool(occ_surface.IsVPeriodic()),
         continuity=_geomabs_name(occ_surface.Continuity()),
-        trimmed=trimmed,
+        _trimmed=None if surface is None else _LazyTrimmed(face, surface, occ_surface),
     )
 
 
-def _trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> Any:
+def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> Any:
     """:attr:`ImportedFace.trimmed`: the face's loops on ``surface``, ``None`` when it is untrimmed
     or its loops do not convert (the face still has its ``surface``)."""
     from OCP.BRepTools import BRepTools

@@ -340,3 +340,43 @@ def test_occ_step_round_trip_of_sphere_pocket(tmp_path, machined):
     bd.export_step(sphere, str(path))
     back = read_step(str(path)).faces[0].face
     assert abs(occ_area(back) - occ_area(sphere.wrapped)) <= AREA_RTOL * occ_area(sphere.wrapped)
+
+
+def test_imported_face_trimmed_is_lazy_cached_and_right(tmp_path, machined, monkeypatch):
+    """ImportedFace.trimmed is built on first access (reading converts no loops), once per face,
+    shared by dataclasses.replace copies, pickles as its value, and equals the eager conversion; the
+    same through read_step(isolated=True), which rebuilds the faces from the worker's BRep."""
+    import dataclasses
+    import pickle
+
+    from occsurf.bridge import read_step
+    from occsurf.bridge.exchange import step_iges
+
+    path = tmp_path / "machined.step"
+    bd.export_step(machined, str(path))
+    calls = []
+    build = step_iges._build_trimmed
+    monkeypatch.setattr(step_iges, "_build_trimmed", lambda *a: calls.append(1) or build(*a))
+    for isolated in (False, True):
+        calls.clear()
+        model = read_step(str(path), isolated=isolated)
+        assert calls == [] and len(model.faces) == len(machined.faces())
+        copies = [dataclasses.replace(f, color=(1.0, 0.0, 0.0, 1.0)) for f in model.faces]
+        n_trimmed = 0
+        for f, copy in zip(model.faces, copies):
+            t = f.trimmed
+            assert copy.trimmed is t and f.trimmed is t  # cached, shared with the copy
+            assert t == build(f.face, f.surface, f.occ_surface)  # what reading used to build eagerly
+            assert isinstance(from_occ(f.face), TrimmedSurface) == (t is not None)
+            if t is not None:
+                n_trimmed += 1
+                a0 = occ_area(f.face)
+                assert abs(t.area() - a0) <= OCC_RATIONAL_AREA_RTOL * a0, (f.index, t.area(), a0)
+                assert pickle.loads(pickle.dumps(f._trimmed)) == t
+        assert len(calls) == len(model.faces) - sum(f.surface is None for f in model.faces)
+        assert n_trimmed >= 5
+    fresh = read_step(str(path)).faces  # pickled before any access: converted then
+    k = next(i for i, f in enumerate(fresh) if isinstance(from_occ(f.face), TrimmedSurface))
+    assert pickle.loads(pickle.dumps(fresh[k]._trimmed)) == fresh[k].trimmed
+    manual = dataclasses.replace(fresh[k], _trimmed=None)  # a value given by hand is kept as is
+    assert manual.trimmed is None and fresh[k].trimmed is not None
