@@ -136,6 +136,8 @@ class _Writer:
                         _set_color(self.color_tool, sub, f.color)
                     if f.layer != node.layer or self.explicit:
                         _set_layer(self.layer_tool, sub, f.layer)
+                    if own_name is not None and self.explicit:  # IGES: the face entity's name
+                        _set_name(sub, own_name, self.names)
             if own_name is not None:
                 self.face_names.append((pf, own_name))
 
@@ -346,6 +348,57 @@ def step_document_bytes(p: Path, source: Any, digits: int, unit: str) -> bytes:
         return occ_io.print_step(p, ws, digits)
 
 
+def _level_numbers(layer_tool: Any) -> dict[str, int]:
+    """The level number OCC's ``IGESCAFControl_Writer`` gives each layer that holds shapes (its
+    ``WriteLayers``, OCC 7.9): a layer named by an integer is that level; the others get the next
+    numbers above the largest such integer, in the document's layer order."""
+    from OCP.TCollection import TCollection_AsciiString, TCollection_ExtendedString
+    from OCP.TDF import TDF_LabelSequence
+
+    labels = TDF_LabelSequence()
+    layer_tool.GetLayerLabels(labels)
+    named: list[str] = []
+    numbers: dict[str, int] = {}
+    for i in range(1, labels.Length() + 1):
+        text = TCollection_ExtendedString()
+        shapes = TDF_LabelSequence()
+        layer_tool.GetShapesOfLayer_s(labels.Value(i), shapes)
+        if not layer_tool.GetLayer(labels.Value(i), text) or shapes.Length() == 0:
+            continue
+        ascii_name = TCollection_AsciiString(text, "?")
+        if ascii_name.IsIntegerValue():
+            numbers[TCollection_AsciiString(text).ToCString()] = ascii_name.IntegerValue()
+        else:
+            named.append(TCollection_AsciiString(text).ToCString())
+    top = max(numbers.values(), default=0)
+    for k, name in enumerate(named, start=1):
+        numbers.setdefault(name, top + k)
+    return numbers
+
+
+def _add_level_names(model: Any, layer_tool: Any) -> None:
+    """A Level Function property (IGES 5.3 §4.98, entity 406 form 3: "the meaning or intended use of a
+    level") on each level OCC numbered for a named layer, with the layer's name as its description:
+    IGES levels are numbers, so without it the layer 'cap' reads back as '1'. OCC's reader ignores
+    these entities (:func:`.xcaf.iges_level_names` reads them); characters outside ASCII become '_'
+    (as in OCC's own IGES names)."""
+    from OCP.IGESData import IGESData_FreeFormatEntity
+    from OCP.Interface import Interface_ParamType
+
+    for name, level in _level_numbers(layer_tool).items():
+        if name == str(level):
+            continue
+        text = "".join(c if 32 <= ord(c) < 127 else "_" for c in name)
+        entity = IGESData_FreeFormatEntity()
+        entity.SetTypeNumber(406)
+        entity.SetFormNumber(3)
+        entity.AddLiteral(Interface_ParamType.Interface_ParamInteger, "2")  # number of property values
+        entity.AddLiteral(Interface_ParamType.Interface_ParamInteger, "0")  # function code: none
+        entity.AddLiteral(Interface_ParamType.Interface_ParamText, f"{len(text)}H{text}")
+        entity.InitLevel(None, level)  # the property describes the level it is on
+        model.AddEntity(entity)
+
+
 def iges_document_bytes(p: Path, source: Any, unit: str) -> bytes:
     """IGES of an ImportedModel or AssemblyNode through ``IGESCAFControl_Writer`` (instances become
     placed copies), lengths in ``unit``."""
@@ -363,6 +416,7 @@ def iges_document_bytes(p: Path, source: Any, unit: str) -> bytes:
             getattr(caf, mode)(True)
         try:
             ok = caf.Transfer(built.doc)
+            _add_level_names(caf.Model(), built.layer_tool)
             header = caf.Model().GlobalSection()
             header.SetFileName(TCollection_HAsciiString(p.name))
             caf.Model().SetGlobalSection(header)

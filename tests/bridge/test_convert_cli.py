@@ -99,7 +99,7 @@ def test_unit_and_digits(tmp_path, assembly):
 
 
 def test_library_call_and_lost_layer_names(tmp_path, assembly):
-    """The command's work is a library call; a layer name IGES cannot keep is measured and reported."""
+    """The command's work is a library call; layer names survive IGES (named levels)."""
     import dataclasses
 
     model = read_step(assembly)
@@ -110,10 +110,33 @@ def test_library_call_and_lost_layer_names(tmp_path, assembly):
     src = write_step(tmp_path / "layers.step", named)
     report = convert(src, tmp_path / "layers.igs", isolated=False)
     assert report.n_faces == 19 and report.target_format == "iges"
-    assert any(line.startswith("layers of 19 of 19 faces not carried (face 0: 'parts' read back as") for line in
-               report.not_carried), report.not_carried
+    # IGES levels are numbers; occsurf names the level 'parts' with a 406-3 property and reads it back
+    assert not any(line.startswith("layers") for line in report.not_carried), report.not_carried
+    assert {f.layer for f in read_iges(tmp_path / "layers.igs").faces} == {"parts"}
     report = convert(src, tmp_path / "layers2.step", isolated=False)
     assert report.not_carried == []
+
+
+def test_face_names_and_layers_through_iges(tmp_path, assembly):
+    """Faces named and layered on their own: STEP -> IGES -> STEP reports nothing lost but digits."""
+    import dataclasses
+
+    from occsurf.bridge.exchange.step_iges import write_step
+
+    model = read_step(assembly)
+    faces = list(model.faces)
+    for i, name, layer in ((0, "bottom", "7"), (5, "bore", "holes"), (18, "top cap", "holes")):
+        faces[i] = dataclasses.replace(faces[i], name=name, layer=layer)
+    src = write_step(tmp_path / "named.step", dataclasses.replace(model, faces=faces))
+    report = convert(src, tmp_path / "named.igs", isolated=False)
+    assert [line for line in report.not_carried if not line.startswith("IGES ")] == [], report.not_carried
+    # a face of a part is named in the part: both plate instances carry 'bottom' and layer '7'
+    want = [(f.name, f.layer) for f in read_step(src).faces]
+    assert want[0] == want[8] == ("bottom", "7") and want[18] == ("top cap", "holes")
+    assert [(f.name, f.layer) for f in read_iges(tmp_path / "named.igs").faces] == want
+    report = convert(tmp_path / "named.igs", tmp_path / "named_back.step", isolated=False)
+    assert report.not_carried == []
+    assert [(f.name, f.layer) for f in read_step(tmp_path / "named_back.step").faces] == want
 
 
 @pytest.mark.parametrize("case", ["missing", "truncated", "garbage", "directory"])

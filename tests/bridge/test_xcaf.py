@@ -232,9 +232,44 @@ def test_face_colour_and_layer_round_trip(tmp_path, assembly_step):
     assert [f.name for f in iges.faces if f.index != k] == [f.name for f in model.faces if f.index != k]
     back = read_step(write_step(tmp_path / "face_back.step", iges))  # STEP -> IGES -> STEP
     assert back.faces[k].name == "top cap"
-    # IGES levels are numbers: OCC writes the layer 'cap' as level 1; the face alone is on it
-    assert iges.faces[k].layer == "1"
+    # IGES levels are numbers: OCC writes the layer 'cap' as level 1, occsurf names the level (406-3)
+    assert iges.faces[k].layer == back.faces[k].layer == "cap"
     assert {f.layer for f in iges.faces if f.index != k} == {None}
+
+
+def test_iges_level_names(tmp_path, assembly_step):
+    """Layer names through IGES: a numeric layer is that level; a named one is the level OCC numbers
+    it with, named by a Level Function property (406 form 3) on it, which OCC's reader ignores."""
+    model = read_step(assembly_step)
+    faces = list(model.faces)
+    layers = {0: "7", 1: "cap", 2: "cap", 9: "Top, side; 5H"}  # delimiters and a Hollerith look-alike
+    for i, layer in layers.items():
+        faces[i] = dataclasses.replace(faces[i], layer=layer)
+    edited = dataclasses.replace(model, faces=faces)
+    path = write_iges(tmp_path / "levels.igs", edited)
+    iges = read_iges(path)
+    assert [f.layer for f in iges.faces] == [layers.get(i) for i in range(len(faces))]
+    text = path.read_text()
+    assert text.count("406,2,0,3Hcap;") == 1 and "13HTop, side; 5H;" in text
+    assert xcaf.iges_level_names(path.read_bytes()) == {8: "cap", 9: "Top, side; 5H"}  # above the largest, 7
+    back = read_step(write_step(tmp_path / "levels.step", iges))
+    assert [f.layer for f in back.faces] == [f.layer for f in iges.faces]
+    # a damaged property (Hollerith count past the record) leaves the bare level number, nothing else
+    broken = tmp_path / "broken.igs"
+    broken.write_text(text.replace("3Hcap;", "9Hcap;"))
+    assert [f.layer for f in read_iges(broken).faces][:3] == ["7", "8", "8"]
+
+
+def test_iges_uncoloured_face_names_and_layers(tmp_path):
+    """Faces without a colour: OCC's XCAF reader does not find their labels, so their names (406-15 /
+    label of the 144 entity) and levels are read from the face side; the others keep the part's."""
+    model = read_step(write_step(tmp_path / "box.step", bd.Box(1, 2, 3), names="box"))
+    assert {f.color for f in model.faces} == {None}
+    faces = [dataclasses.replace(f, name=f"side {f.index}", layer="odd") if f.index % 2 else f for f in model.faces]
+    iges = read_iges(write_iges(tmp_path / "box.igs", dataclasses.replace(model, faces=faces)))
+    assert [(f.name, f.layer) for f in iges.faces] == [(f.name, f.layer) for f in faces]
+    again = read_step(write_step(tmp_path / "box_back.step", iges))
+    assert [(f.name, f.layer) for f in again.faces] == [(f.name, f.layer) for f in faces]
 
 
 def test_step_iges_step(tmp_path, assembly_step):
