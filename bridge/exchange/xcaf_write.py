@@ -12,7 +12,8 @@ placed copy named after the instance, every face with its own colour and layer) 
 
 What OCC's writers drop, measured: a layer on an instance (component) is not written, so a part carries
 the layer of its first instance; a part without a name would be named 'Open CASCADE STEP translator 7.9
-n', so it gets an empty product name; IGES has no transparency and its layers are level numbers.
+n', so it gets an empty product name; IGES has no transparency and its layers are level numbers
+(occsurf names each level with a 406 form 3 property, :func:`_add_level_names`).
 """
 
 from __future__ import annotations
