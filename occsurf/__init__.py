@@ -34,7 +34,7 @@ if not (_here / "algorithms").is_dir() and (_here.parent / "algorithms" / "__ini
     __path__.append(str(_here.parent))  # source checkout: occsurf.algorithms is ../algorithms
 
 _ALGORITHMS = (
-    "BSplineCurve", "BSplineSurface", "circle", "arc", "ellipse", "make_compatible",
+    "BSplineCurve", "BSplineSurface", "TrimmedSurface", "circle", "arc", "ellipse", "make_compatible",
     "Point", "Vector", "Normal", "Frame", "AffineMap", "surface_curvatures", "curve_frenet",
     "extrude", "ruled", "revolve", "sweep", "coons", "coons_bicubic", "gordon",
     "interpolate_curve", "interpolate_surface", "fit_curve", "fit_surface", "loft",

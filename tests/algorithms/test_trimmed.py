@@ -210,3 +210,20 @@ def test_docstring_example_runs():
     from occsurf.algorithms.kernel import trimmed
 
     assert doctest.testmod(trimmed, verbose=False).failed == 0
+
+
+def test_trimmed_surface_is_a_lazy_top_level_name():
+    """``occsurf.TrimmedSurface`` like the other top-level names: in ``__all__``, the algorithms'
+    class, and resolving it loads neither OCC nor the bridge."""
+    import json
+    import subprocess
+    import sys
+
+    import occsurf
+    from occsurf.algorithms import TrimmedSurface
+
+    assert "TrimmedSurface" in occsurf.__all__ and occsurf.TrimmedSurface is TrimmedSurface
+    code = ("import json, sys, occsurf; before = 'occsurf.algorithms' in sys.modules; occsurf.TrimmedSurface; "
+            "print(json.dumps([before] + [m in sys.modules for m in ('occsurf.algorithms', 'OCP', 'occsurf.bridge')]))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
+    assert json.loads(out.stdout) == [False, True, False, False]
