@@ -68,6 +68,9 @@ _DEFAULTS: dict[str, float] = {
     # two successive values agree to TRIM_AREA_RTOL, at most TRIM_AREA_LEVELS times.
     "TRIM_AREA_RTOL": 1e-12,
     "TRIM_AREA_LEVELS": 6,
+    # When the area does not converge, |S_u x S_v| below TRIM_AREA_SINGULAR times its largest value
+    # inside the face is reported as the cause (a near-singular parametrisation).
+    "TRIM_AREA_SINGULAR": 1e-3,
     # ---- geometry (course ch. 1, §6-0..6-14) ---------------------------------------------------
     # Tolerance on weights that must sum to one (affine combinations).
     "WEIGHT_SUM": 1e-12,
