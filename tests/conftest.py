@@ -51,3 +51,19 @@ _scale = os.environ.get("OCCSURF_HYPOTHESIS_SCALE")
 if _scale:  # the selected profile (settings() inherits it) with another scale
     settings.register_profile("scaled", settings(), max_examples=max(1, round(BASE_EXAMPLES * float(_scale))))
     settings.load_profile("scaled")
+
+
+# A suite started in the background by a shell without job control (``nohup ... &``, some CI
+# runners) inherits SIGINT *ignored*, and every process it starts inherits that too (an ignored
+# signal stays ignored across exec; Python then installs no KeyboardInterrupt handler). The tests
+# that press Ctrl-C on an ``occsurf`` process would then see it ignored, which is right for such a
+# process but not what they test. The suite's own process takes Python's handler back, so its
+# children start with SIGINT at its default, as from a terminal.
+def _restore_sigint() -> None:
+    import signal
+
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+_restore_sigint()

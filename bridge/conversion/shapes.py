@@ -40,7 +40,7 @@ from occsurf.algorithms.errors import InvalidGeometryError
 if TYPE_CHECKING:
     from ..exchange.step_iges import ImportedModel
 
-__all__ = ["as_shape", "as_faces", "as_model", "is_shape_like", "compound"]
+__all__ = ["as_shape", "as_faces", "is_shape_like", "compound"]
 
 #: Attributes of build123d builders that hold the object built (BuildPart, BuildSketch, BuildLine).
 _BUILDER_RESULTS = ("part", "sketch", "line")
@@ -91,25 +91,6 @@ def as_faces(obj: Any, name: str = "shape") -> list[Any]:
     faces = TopTools_IndexedMapOfShape()
     TopExp.MapShapes_s(as_shape(obj, name), TopAbs_FACE, faces)
     return [TopoDS.Face_s(faces.FindKey(i)) for i in range(1, faces.Extent() + 1)]
-
-
-def as_model(obj: Any, name: str = "model") -> ImportedModel:
-    """``obj`` as an :class:`~occsurf.bridge.ImportedModel`: itself if it is one, else the model of
-    its faces and free edges (converted as ``read_step`` converts them) with the names and colours
-    the objects carry; see :func:`occsurf.bridge.exchange.objects.model_from_object`.
-
-    Raises
-    ------
-    InvalidGeometryError
-        As :func:`as_shape`; or the object holds no face and no edge.
-    """
-    from ..exchange.step_iges import ImportedModel
-
-    if isinstance(obj, ImportedModel):
-        return obj
-    from ..exchange.objects import model_from_object
-
-    return model_from_object(obj, name)
 
 
 def compound(shapes: list[TopoDS_Shape]) -> TopoDS_Compound:

@@ -6,7 +6,7 @@ names and colours, the assembly tree); ``read_step(path, as_="build123d")`` / ``
 (and ``read_iges``) call them. :func:`model_from_object` goes the other way: any build123d /
 cadquery object (labels and colours included) becomes an ``ImportedModel``, which is how every
 bridge function that reports per face accepts those objects
-(:func:`occsurf.bridge.conversion.shapes.as_model`).
+(:func:`as_model`).
 
 What is carried
 ---------------
@@ -47,7 +47,7 @@ from occsurf.algorithms.errors import InvalidGeometryError
 if TYPE_CHECKING:
     from .step_iges import ImportedFace, ImportedModel
 
-__all__ = ["to_build123d", "to_cadquery", "model_from_object", "convert_model", "shape_object", "AS_CHOICES"]
+__all__ = ["to_build123d", "to_cadquery", "model_from_object", "as_model", "convert_model", "shape_object", "AS_CHOICES"]
 
 #: The values of ``read_step(..., as_=...)`` / ``fill_model(..., as_=...)`` besides ``None``.
 AS_CHOICES: tuple[str, ...] = ("build123d", "cadquery")
@@ -717,3 +717,20 @@ def _bidict_get(mapping: Any, face: Any) -> Any:
         if shape.wrapped.IsPartner(face):
             return value
     return None
+
+
+def as_model(obj: Any, name: str = "model") -> ImportedModel:
+    """``obj`` as an :class:`~occsurf.bridge.ImportedModel`: itself if it is one, else the model of
+    its faces and free edges (converted as ``read_step`` converts them) with the names and colours
+    the objects carry; see :func:`occsurf.bridge.exchange.objects.model_from_object`.
+
+    Raises
+    ------
+    InvalidGeometryError
+        As :func:`as_shape`; or the object holds no face and no edge.
+    """
+    from .step_iges import ImportedModel
+
+    if isinstance(obj, ImportedModel):
+        return obj
+    return model_from_object(obj, name)

@@ -87,7 +87,7 @@ from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 from ..messages import one_line
 from . import files as _files
 from . import occ_io as _xocc
-from . import xcaf
+from . import xcaf, xcaf_write
 from .occ_io import FACE_TOLERANCE  # re-exported: part of the public constants
 
 __all__ = [
@@ -937,7 +937,7 @@ def write_step(
     objects = _assembly_as_model(objects, names)
     file_unit = _write_unit(objects, names, unit)
     if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)):
-        data = xcaf.step_document_bytes(p, objects, precision_digits, file_unit)
+        data = xcaf_write.step_document_bytes(p, objects, precision_digits, file_unit)
     else:
         items = _xocc.normalise(objects, names)
         data = _xocc.step_bytes(p, items, precision_digits, file_unit)
@@ -997,7 +997,7 @@ def write_iges(
     objects = _assembly_as_model(objects, names)
     file_unit = _write_unit(objects, names, unit)
     if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)):
-        data = xcaf.iges_document_bytes(p, objects, file_unit)
+        data = xcaf_write.iges_document_bytes(p, objects, file_unit)
     else:
         items = _xocc.normalise(objects, names)
         data = _xocc.iges_bytes(p, items, file_unit)

@@ -15,7 +15,7 @@ as before (faces keep their order), then the same transfer is put into an XCAF d
   up the tree), the **layer** (the same order; the first of several), and the **instance path**
   from the root ('assembly/plate_a').
 
-Writing (:func:`step_document_bytes`, :func:`iges_document_bytes`) rebuilds an XCAF document from an
+Writing (:func:`.xcaf_write.step_document_bytes`, :func:`.xcaf_write.iges_document_bytes`) rebuilds an XCAF document from an
 :class:`~occsurf.bridge.exchange.step_iges.ImportedModel` or an :class:`AssemblyNode` tree
 (prototypes once, instances as references, colours, layers, names) and writes it with
 ``STEPCAFControl_Writer`` (printed with 17 significant digits, as ``write_step``) or
@@ -38,7 +38,7 @@ from occsurf.algorithms.errors import InvalidGeometryError
 from ..messages import one_line
 
 __all__ = ["AssemblyNode", "UNITS", "WRITE_UNITS", "unit_scale", "XcafData", "read_xcaf", "step_unit", "iges_unit", "compound",
-           "step_document_bytes", "iges_document_bytes", "iter_nodes"]
+           "iter_nodes"]
 
 #: Millimetres per unit of each length unit occsurf reports or writes (``ImportedModel.unit``,
 #: ``write_step(..., unit=)``, ``occsurf convert --unit``).
@@ -728,15 +728,3 @@ def compound(shapes: Sequence[Any]) -> Any:
 
 
 # ---------------------------------------------------------------------------------------- writing
-def step_document_bytes(p: Path, source: Any, digits: int, unit: str) -> bytes:
-    """STEP bytes of an ImportedModel or AssemblyNode (:func:`.xcaf_write.step_document_bytes`)."""
-    from .xcaf_write import step_document_bytes as write
-
-    return write(p, source, digits, unit)
-
-
-def iges_document_bytes(p: Path, source: Any, unit: str) -> bytes:
-    """IGES bytes of an ImportedModel or AssemblyNode (:func:`.xcaf_write.iges_document_bytes`)."""
-    from .xcaf_write import iges_document_bytes as write
-
-    return write(p, source, unit)

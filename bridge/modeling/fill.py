@@ -60,20 +60,12 @@ from occsurf.algorithms.kernel.surface import BSplineSurface
 from .. import _occ
 from ..conversion.splines import from_occ, make_face
 from ..messages import one_line
+from .joints import ASSESS_END_SAMPLES, ASSESS_SAMPLES, SEW_TOLERANCE, _edge_samples, _local_analysis, assess_joint, edge_face_map  # noqa: F401 - re-exported
 
 __all__ = ["HoleReport", "FillResult", "fill_model", "find_loops", "hole_sides", "assess_joint",
            "occ_fill", "sew_faces", "edge_face_map", "neighbour_face", "SEW_TOLERANCE", "ASSESS_SAMPLES",
            "ASSESS_END_SAMPLES", "ISO_TOLERANCE"]
 
-#: Tolerance of ``BRepBuilderAPI_Sewing`` (model units), for finding free edges and for the result.
-SEW_TOLERANCE: float = 1e-5
-#: Points per boundary edge at which OCC's ``LocalAnalysis_SurfaceContinuity`` is evaluated: this
-#: many evenly spaced, plus :data:`ASSESS_END_SAMPLES` clustered towards each end.
-ASSESS_SAMPLES: int = 41
-#: Extra samples at each end of an edge, at 1e-5 .. 5e-2 of its length (geometric): the corners of a
-#: hole are where fills go wrong (a confined twist span, a neighbour's pole), and evenly spaced
-#: samples step over them (41 of them reported 1.6e-9 deg where 401 found 1.8e-2 deg).
-ASSESS_END_SAMPLES: int = 16
 #: How close (relative to the edge's length) an edge must lie to an iso-boundary of its face.
 ISO_TOLERANCE: float = 1e-7
 #: cadquery's ``makeNSidedSurface`` defaults for ``BRepOffsetAPI_MakeFilling``.
@@ -261,64 +253,6 @@ def hole_sides(edges: list[Any], faces: list[Any | None]) -> list[HoleSide]:
 
 
 # ---------------------------------------------------------------------------------------- assessment
-def _edge_samples(edge: Any, face: Any, samples: int) -> tuple[Any, list[Any], np.ndarray]:
-    """The neighbour's surface, its (u, v) at ``samples`` points of ``edge`` (from the p-curve) and
-    the points themselves, shape (samples, 3)."""
-    s_n = BRep_Tool.Surface_s(face)
-    pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
-    a, b = BRep_Tool.Range_s(edge, face)
-    ends = np.geomspace(1e-5, 5e-2, ASSESS_END_SAMPLES)
-    fractions = np.unique(np.concatenate((np.linspace(0.0, 1.0, samples), ends, 1.0 - ends)))
-    uvs = [pc.Value(a + t * (b - a)) for t in fractions]
-    pts = np.array([s_n.Value(uv.X(), uv.Y()).Coord() for uv in uvs])
-    return s_n, uvs, pts
-
-
-def _local_analysis(s_n: Any, uv: Any, s_f: Any, u: float, v: float) -> tuple[float, float]:
-    la = LocalAnalysis_SurfaceContinuity(s_n, uv.X(), uv.Y(), s_f, u, v, GeomAbs_Shape.GeomAbs_G1)
-    if not la.IsDone():
-        if "NormalNotDefined" in str(la.StatusError()):  # a pole (fillet corner): no tangent plane to compare
-            return s_n.Value(uv.X(), uv.Y()).Distance(s_f.Value(u, v)), 0.0
-        raise KernelError(f"LocalAnalysis_SurfaceContinuity failed ({la.StatusError()})")
-    ang = la.G1Angle()
-    return la.C0Value(), math.degrees(min(ang, math.pi - ang))
-
-
-def assess_joint(edge: Any, face: Any, fill_surfaces: list[Any], samples: int = ASSESS_SAMPLES,
-                 locate: Any = None) -> tuple[float, float]:
-    """Max ``C0Value`` gap and ``G1Angle`` (degrees) of OCC's LocalAnalysis (order G1) along ``edge``
-    between its neighbour ``face`` and the fill (Geom surfaces ``fill_surfaces``).
-
-    ``locate(points) -> (surface index, u, v)`` gives the fill's parameters of the boundary points
-    when the fill knows them (ours: from its construction, :meth:`HoleFill.locate`); OCC then
-    evaluates the fill there, so a wrong parameter shows up as a gap. Without it (OCC's filler)
-    each point is projected onto every surface (``GeomAPI_ProjectPointOnSurf``), the nearest kept.
-    """
-    s_n, uvs, pts = _edge_samples(edge, face, samples)
-    g0 = g1 = 0.0
-    if locate is not None:
-        idx, us, vs = locate(pts)
-        for uv, k, u, v in zip(uvs, idx, us, vs):
-            gap, ang = _local_analysis(s_n, uv, fill_surfaces[int(k)], float(u), float(v))
-            g0, g1 = max(g0, gap), max(g1, ang)
-        return g0, g1
-    projs = [GeomAPI_ProjectPointOnSurf() for _ in fill_surfaces]
-    for uv, p in zip(uvs, pts):
-        best = None
-        for s_f, pr in zip(fill_surfaces, projs):
-            pr.Init(gp_Pnt(*p), s_f)
-            if pr.NbPoints() == 0:
-                continue
-            d = pr.LowerDistance()
-            if best is None or d < best[0]:
-                best = (d, s_f, *pr.LowerDistanceParameters())
-        if best is None:
-            raise KernelError("cannot project a boundary point onto the fill")
-        gap, ang = _local_analysis(s_n, uv, best[1], best[2], best[3])
-        g0, g1 = max(g0, gap), max(g1, ang)
-    return g0, g1
-
-
 def occ_fill(edges: list[Any], faces: list[Any]) -> Any:
     """OCC's ``BRepOffsetAPI_MakeFilling`` on the hole (G1 to the faces), cadquery's defaults."""
     o = OCC_FILL_DEFAULTS
@@ -331,17 +265,6 @@ def occ_fill(edges: list[Any], faces: list[Any]) -> Any:
         if not mk.IsDone():
             raise KernelError("BRepOffsetAPI_MakeFilling: not done")
         return TopoDS.Face_s(mk.Shape())
-
-
-def edge_face_map(shape: TopoDS_Shape) -> TopTools_IndexedDataMapOfShapeListOfShape:
-    """Every edge of ``shape`` mapped to the faces it bounds (``TopExp.MapShapesAndAncestors_s``).
-
-    Look an edge's faces up with :func:`neighbour_face`; a free edge has one face, an edge
-    shared by two sewn faces two.
-    """
-    m = TopTools_IndexedDataMapOfShapeListOfShape()
-    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, m)
-    return m
 
 
 def neighbour_face(m: TopTools_IndexedDataMapOfShapeListOfShape, edge: Any) -> Any | None:

@@ -53,7 +53,7 @@ from occsurf.algorithms.topology.nsided_sides import blend_normals, corner_norma
 from .. import _occ
 from ..conversion.splines import from_occ, make_face
 from ..messages import one_line
-from .fill import ASSESS_SAMPLES, SEW_TOLERANCE, assess_joint, edge_face_map
+from .joints import ASSESS_SAMPLES, SEW_TOLERANCE, assess_joint, edge_face_map
 
 __all__ = ["RefillReport", "refill_faces", "refill_model", "face_components", "model_faces", "fitted_fill", "G1_EDGE_DEG",
            "OCC_TUNED", "OCC_DEFAULT"]
