@@ -45,7 +45,7 @@ import numpy as np
 from occsurf.algorithms.errors import InvalidGeometryError
 
 if TYPE_CHECKING:
-    from .step_iges import ImportedFace, ImportedModel
+    from .model import ImportedFace, ImportedModel
 
 __all__ = ["to_build123d", "to_cadquery", "model_from_object", "as_model", "convert_model", "shape_object", "AS_CHOICES"]
 
@@ -501,7 +501,7 @@ def model_from_object(obj: Any, name: str = "model") -> ImportedModel:
         ``obj`` is not accepted (see ``as_shape``), or holds no face and no edge.
     """
     from ..conversion.shapes import as_shape, compound
-    from . import step_iges as si
+    from . import model as si
 
     leaves: list[_Leaf] = []
     tree = _object_tree(obj, leaves)
@@ -729,7 +729,7 @@ def as_model(obj: Any, name: str = "model") -> ImportedModel:
     InvalidGeometryError
         As :func:`as_shape`; or the object holds no face and no edge.
     """
-    from .step_iges import ImportedModel
+    from .model import ImportedModel
 
     if isinstance(obj, ImportedModel):
         return obj

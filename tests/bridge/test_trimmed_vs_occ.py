@@ -350,13 +350,13 @@ def test_imported_face_trimmed_is_lazy_cached_and_right(tmp_path, machined, monk
     import pickle
 
     from occsurf.bridge import read_step
-    from occsurf.bridge.exchange import step_iges
+    from occsurf.bridge.exchange import model as imported  # where ImportedFace builds its trims
 
     path = tmp_path / "machined.step"
     bd.export_step(machined, str(path))
     calls = []
-    build = step_iges._build_trimmed
-    monkeypatch.setattr(step_iges, "_build_trimmed", lambda *a: calls.append(1) or build(*a))
+    build = imported._build_trimmed
+    monkeypatch.setattr(imported, "_build_trimmed", lambda *a: calls.append(1) or build(*a))
     for isolated in (False, True):
         calls.clear()
         model = read_step(str(path), isolated=isolated)
