@@ -45,17 +45,18 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.ndimage as ndi
 from numpy.typing import ArrayLike, NDArray
 
 from .. import tolerances
-from ..errors import InvalidGeometryError, ParameterError
+from ..errors import InvalidGeometryError
 from ..hierarchical.core import Overlay
 from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.basis import basis_matrix
 from ..kernel.surface import BSplineSurface
 from ._common import project_points
-from .gridded import GridFit, _grid_data, _pair_of, _params, fit_grid
+from ._refine import (FitSummary, LevelReport, OverlayFitter, check_tol_levels, grow_base, level_reports, owner,
+                      rectangles, refine, span_index, support)
+from .gridded import GridFit, _grid_data, _pair_of, fit_grid
 
 __all__ = ["LevelReport", "AdaptiveFit", "fit_adaptive", "measure_grid", "normal_deviation", "boundary_error"]
 
@@ -63,33 +64,7 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class LevelReport:
-    """Statistics after fitting one level (level 0 is the base).
-
-    Attributes
-    ----------
-    level : int
-    overlays : int
-        Overlays added at this level (0 for the base).
-    control_points : int
-        Degrees of freedom stored at this level: base poles, or the overlays' offsets.
-    max_error, rms_error : float
-        Distance from the data points to the surface up to this level, measured by projection.
-    """
-
-    level: int
-    overlays: int
-    control_points: int
-    max_error: float
-    rms_error: float
-
-    def as_dict(self) -> dict:
-        return {"level": self.level, "overlays": self.overlays, "control_points": self.control_points,
-                "max_error": self.max_error, "rms_error": self.rms_error}
-
-
-@dataclass(frozen=True)
-class AdaptiveFit:
+class AdaptiveFit(FitSummary):
     """Result of :func:`fit_adaptive`.
 
     Attributes
@@ -118,19 +93,6 @@ class AdaptiveFit:
     converged: bool
     level_surfaces: tuple = ()
     level_distances: tuple = ()
-
-    @property
-    def max_error(self) -> float:
-        return self.levels[-1].max_error
-
-    @property
-    def rms_error(self) -> float:
-        return self.levels[-1].rms_error
-
-    @property
-    def control_points_total(self) -> int:
-        """Base poles plus stored offsets (course §5-17)."""
-        return int(self.hierarchy.pole_counts()["stored"])
 
 
 def measure_grid(surface, points: Array, u: Array, v: Array, *, above: float | None = None) -> Array:
@@ -185,39 +147,10 @@ def boundary_error(surface, points: Array, u: Array, v: Array, dist: Array) -> A
     return e
 
 
-def _stats(dist: Array) -> tuple[float, float]:
-    e = dist[np.isfinite(dist)]
-    return float(e.max()), float(np.sqrt(np.mean(e ** 2)))
-
-
-def _boxes(marks: Array) -> list[tuple[int, int, int, int]]:
-    """Bounding boxes (i0, i1, j0, j1), end-exclusive, of the connected groups of ``marks``, merged
-    until no two overlap."""
-    lab, _ = ndi.label(marks, structure=np.ones((3, 3)))
-    boxes = [(s[0].start, s[0].stop, s[1].start, s[1].stop) for s in ndi.find_objects(lab) if s is not None]
-    merged = True
-    while merged:
-        merged = False
-        for a in range(len(boxes)):
-            for b in range(a + 1, len(boxes)):
-                p, q = boxes[a], boxes[b]
-                if p[0] < q[1] and q[0] < p[1] and p[2] < q[3] and q[2] < p[3]:
-                    boxes[a] = (min(p[0], q[0]), max(p[1], q[1]), min(p[2], q[2]), max(p[3], q[3]))
-                    del boxes[b]
-                    merged = True
-                    break
-            if merged:
-                break
-    return boxes
-
-
 def _cells(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, Array, Array]:
     """Distinct knots ``k`` of ``[lo, hi]``, the span index of each parameter (-1 outside) and
     the number of data parameters per span."""
-    k = np.unique(knots[(knots >= lo) & (knots <= hi)])
-    idx = np.searchsorted(k, x, side="right") - 1
-    idx = np.where(x == k[-1], k.size - 2, idx)
-    idx = np.where((x < k[0]) | (x > k[-1]), -1, idx)
+    k, idx = span_index(knots, lo, hi, x)
     counts = np.bincount(idx[idx >= 0], minlength=k.size - 1)
     return k, idx, counts
 
@@ -225,12 +158,8 @@ def _cells(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, Array, 
 def _owner(hs: HierarchicalSurface, u: Array, v: Array) -> tuple[list[Overlay | None], Array, Array]:
     """Per data row/column pair, the deepest node whose region holds it: returns the nodes and
     an (m, n) index into them (0 = the base)."""
-    nodes: list[Overlay | None] = [None] + sorted(hs.overlays, key=lambda o: o.level)
-    own = np.zeros((u.size, v.size), int)
-    for k, ov in enumerate(nodes[1:], 1):
-        (a, b), (c, d) = ov.region
-        own[np.ix_((u >= a) & (u <= b), (v >= c) & (v <= d))] = k
-    return nodes, own, np.array([0] + [o.level for o in nodes[1:]])
+    return owner(hs, (u.size, v.size), lambda r: np.ix_((u >= r[0][0]) & (u <= r[0][1]),
+                                                         (v >= r[1][0]) & (v <= r[1][1])))
 
 
 def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u: Array, v: Array
@@ -248,12 +177,7 @@ def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u:
     I, J = np.nonzero(flagged[np.ix_(su, sv)])
     marks[iu[su][I], iv[sv][J]] = True
     marks &= (cu >= 2)[:, None] & (cv >= 2)[None, :]  # the halves of a span must still hold data rows
-    if not marks.any():
-        return []
-    margin = int(tolerances.FIT_ADAPTIVE_MARGIN)
-    if margin > 0:
-        marks = ndi.binary_dilation(marks, structure=np.ones((3, 3)), iterations=margin)
-    return [((float(ku[i0]), float(ku[i1])), (float(kv[j0]), float(kv[j1]))) for i0, i1, j0, j1 in _boxes(marks)]
+    return rectangles(marks, ku, kv)
 
 
 def _block(A: Array, D: Array, B: Array) -> Array:
@@ -261,38 +185,29 @@ def _block(A: Array, D: Array, B: Array) -> Array:
     return np.stack([A @ D[..., k] @ B.T for k in range(D.shape[-1])], -1)
 
 
-class _Fitter:
-    """The hierarchy under construction with every overlay's world displacements ``δ`` kept, so
-    that coarser levels can be refitted (backfitting) without losing the finer ones."""
+class _Fitter(OverlayFitter):
+    """The hierarchy under construction (:class:`~._refine.OverlayFitter`) on a grid of data
+    ``P3`` (m, n, 3): per overlay, the data rows/columns in its support and its B-spline blocks."""
 
     def __init__(self, hs: HierarchicalSurface, P3: Array, u: Array, v: Array, heights: bool, refit_base) -> None:
-        self.hs, self.P3, self.u, self.v, self.heights = hs, P3, u, v, heights
-        self.refit_base = refit_base
-        self.delta: dict[int, Array] = {}
-        self.ops: dict[int, tuple[Array, Array, Array, Array]] = {}
+        super().__init__(hs, P3, u, v, refit_base)
+        self.heights = heights
 
-    def residual(self) -> Array:
-        return self.P3 - self.hs.flatten().evaluate_grid(self.u, self.v)
+    def evaluate(self, surface: BSplineSurface) -> Array:
+        return surface.evaluate_grid(self.u, self.v)
 
     def _operators(self, ov: Overlay) -> tuple[Array, Array, Array, Array]:
         if ov.id not in self.ops:
             p, q = self.hs.degree
-            (i0, i1), (j0, j1) = ov.vertices
             ku, kv = ov.knots
-            su = (ku[i0], ku[min(i1 + p + 1, ku.shape[0] - 1)])
-            sv = (kv[j0], kv[min(j1 + q + 1, kv.shape[0] - 1)])
+            (i0, i1), (j0, j1) = ov.vertices
+            su, sv = support(ov, (p, q))
             ru = np.flatnonzero((self.u >= su[0]) & (self.u <= su[1]))
             rv = np.flatnonzero((self.v >= sv[0]) & (self.v <= sv[1]))
             A = basis_matrix(ku, p, ku.shape[0] - p - 1, self.u[ru])[0][:, i0:i1 + 1]
             B = basis_matrix(kv, q, kv.shape[0] - q - 1, self.v[rv])[0][:, j0:j1 + 1]
             self.ops[ov.id] = (ru, rv, A, B)
         return self.ops[ov.id]
-
-    def _apply(self, ov: Overlay) -> None:
-        frames = self.hs.reference_frames(ov)
-        d = self.delta[ov.id]
-        off = self.hs.offset_mapping.inverse(d.reshape(-1, 3), None if frames is None else frames.reshape(-1, 3, 3))
-        self.hs.set_offsets(ov, np.asarray(off, float).reshape(d.shape))
 
     def fit_overlay(self, ov: Overlay, resid: Array) -> None:
         """Least-squares ``δ`` of ``ov`` against ``resid`` plus its own current share; updates ``resid``."""
@@ -322,39 +237,12 @@ class _Fitter:
         self._apply(ov)
         resid[np.ix_(ru, rv)] = R - _block(A, delta, B)
 
-    def backfit(self) -> Array:
-        """One block Gauss-Seidel sweep: the base against the data minus every overlay's share,
-        the displacements re-applied in the new frames, then each overlay against what is left."""
-        hs = self.hs
-        share = hs.flatten().evaluate_grid(self.u, self.v) - hs.base.evaluate_grid(self.u, self.v)
-        hs.set_base(self.refit_base(self.P3 - share))
-        for ov in hs.overlays:  # parents first: each sees its parent's new frames
-            self._apply(ov)
-        resid = self.residual()
-        for ov in hs.overlays:
-            self.fit_overlay(ov, resid)
-        return self.residual()
-
 
 def _level_reports(hs: HierarchicalSurface, P3: Array, u: Array, v: Array
                    ) -> tuple[list[LevelReport], list[BSplineSurface], list[Array]]:
     """Per level L, the surface truncated below L (finer offsets zeroed) measured against the data:
     the reports, the truncated flat surfaces and their distance arrays."""
-    out, surfs, dists = [], [], []
-    depth = hs.depth
-    for L in range(depth + 1):
-        h = hs.copy()
-        for ov in sorted(h.overlays, key=lambda o: -o.level):
-            if ov.level > L:
-                h.set_offsets(ov, np.zeros(ov.shape + (3,)))
-        flat = h.flatten()
-        dist = measure_grid(flat, P3, u, v)
-        ovs = [o for o in hs.overlays if o.level == L]
-        cps = int(np.prod(hs.base.n_poles)) if L == 0 else sum(int(np.prod(o.shape)) for o in ovs)
-        out.append(LevelReport(L, len(ovs), cps, *_stats(dist)))
-        surfs.append(flat)
-        dists.append(dist)
-    return out, surfs, dists
+    return level_reports(hs, lambda flat: measure_grid(flat, P3, u, v))
 
 
 def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, int], tol: float, opts: dict,
@@ -378,39 +266,19 @@ def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, 
         u_, v_ = base_.u_params, base_.v_params
         P3_ = np.stack(np.broadcast_arrays(u_[:, None], v_[None, :], Q[..., 0]), -1) if heights else Q
         est = normal_deviation(base_.surface, P3_, u_, v_)
-        return base_, P3_, float(np.nanmax(boundary_error(base_.surface, P3_, u_, v_, est)))
+        return (base_, P3_), float(np.nanmax(boundary_error(base_.surface, P3_, u_, v_, est)))
 
-    def measured(base_, P3_):
-        u_, v_ = base_.u_params, base_.v_params
+    def measured(fit):
+        (base_, P3_), u_, v_ = fit, fit[0].u_params, fit[0].v_params
         dist_ = measure_grid(base_.surface, P3_, u_, v_, above=tol)
-        return dist_, float(np.nanmax(boundary_error(base_.surface, P3_, u_, v_, dist_)))
+        return dist_, boundary_error(base_.surface, P3_, u_, v_, dist_)
 
-    base, P3, estimate = candidate(poles)
-    while True:
-        dist, worst = measured(base, P3)
-        if progress is not None:
-            progress(f"base {poles[0]}x{poles[1]}: max error {worst:.3g}")
-        if worst <= tol:
-            return base, P3, dist
-        flagged = boundary_error(base.surface, P3, base.u_params, base.v_params, dist) > \
-            max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
-        hs = HierarchicalSurface(base.surface, "frame")
-        boxes = _regions(hs, None, flagged, base.u_params, base.v_params)
-        (u0, u1), (v0, v1) = hs.domain
-        cover = sum((b - a) * (d - c) for (a, b), (c, d) in boxes) / ((u1 - u0) * (v1 - v0))
-        grown = [min(p + int(np.ceil(1.5 * (k - p))), cnt) for k, p, cnt in zip(poles, deg, (m, n))]
-        options = {tuple(grown), (grown[0], poles[1]), (poles[0], grown[1])} - {tuple(poles)}
-        if cover <= float(tolerances.FIT_ADAPTIVE_MAX_COVER) or not options:
-            return base, P3, dist
-        best, score, tried = None, np.inf, {}
-        for cand in sorted(options):
-            trial = tried[cand] = candidate(cand)
-            gain = np.log(max(trial[2], 1e-300) / max(estimate, 1e-300)) / np.log(np.prod(cand) / np.prod(poles))
-            if gain < score:
-                best, score = (cand, trial), gain
-        if score > -0.1 and tuple(grown) in tried:  # no direction helps on its own yet: grow both
-            best = (tuple(grown), tried[tuple(grown)])
-        poles, (base, P3, estimate) = best
+    def regions(fit, flagged):
+        hs = HierarchicalSurface(fit[0].surface, "frame")
+        return hs, _regions(hs, None, flagged, fit[0].u_params, fit[0].v_params)
+
+    (base, P3), dist = grow_base(poles, deg, (m, n), tol, candidate, measured, regions, progress)
+    return base, P3, dist
 
 
 def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3, *,
@@ -453,15 +321,7 @@ def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3,
     AdaptiveFit
         Per-level reports measure the hierarchy truncated below each level.
     """
-    try:
-        tol = float(tol)
-    except (TypeError, ValueError) as err:
-        raise ParameterError(f"tol: expected a positive number, got {tol!r}") from err
-    if not (np.isfinite(tol) and tol > 0):
-        raise ParameterError(f"tol: expected a positive number, got {tol!r}")
-    depth_max = int(tolerances.FIT_ADAPTIVE_MAX_LEVELS) if max_levels is None else int(max_levels)
-    if depth_max < 0:
-        raise ParameterError(f"max_levels: expected an integer >= 0, got {max_levels!r}")
+    tol, depth_max = check_tol_levels(tol, max_levels)
     Q, heights, xs, ys = _grid_data(data, x, y)
     m, n = Q.shape[:2]
     if not heights and Q.shape[2] != 3:
@@ -482,33 +342,9 @@ def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3,
 
     hs = HierarchicalSurface(base.surface, "frame")
     fitter = _Fitter(hs, P3, u, v, heights, refit_base)
-    for rnd in range(1, int(tolerances.FIT_ADAPTIVE_MAX_ROUNDS) + 1):
-        err = boundary_error(hs.flatten(), P3, u, v, dist)
-        worst = float(np.nanmax(err))
-        if worst <= tol:
-            break
-        flagged = err > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
-        nodes, own, lv = _owner(hs, u, v)
-        resid = fitter.residual()
-        new = []
-        for k, node in enumerate(nodes):
-            if lv[k] >= depth_max:
-                continue
-            mine = flagged & (own == k)
-            if not mine.any():
-                continue
-            for ur, vr in _regions(hs, node, mine, u, v):
-                ov = hs.add_overlay(ur, vr, node)
-                fitter.fit_overlay(ov, resid)
-                new.append(ov)
-        if not new:
-            break
-        for _ in range(int(tolerances.FIT_ADAPTIVE_SWEEPS)):
-            fitter.backfit()
-        dist = measure_grid(hs.flatten(), P3, u, v, above=tol)
-        if progress is not None:
-            progress(f"round {rnd}: {len(new)} overlays added (depth {hs.depth}), "
-                     f"{hs.pole_counts()['stored']} control points, max error {np.nanmax(dist):.3g}")
+    dist = refine(hs, fitter, dist, tol, depth_max, error=lambda d: boundary_error(hs.flatten(), P3, u, v, d),
+                  owners=lambda h: _owner(h, u, v), regions=lambda node, mine: _regions(hs, node, mine, u, v),
+                  measure=lambda flat: measure_grid(flat, P3, u, v, above=tol), progress=progress)
     reports, surfs, dists = _level_reports(hs, P3, u, v)
     border = float(np.nanmax(boundary_error(surfs[-1], P3, u, v, dists[-1])))
     return AdaptiveFit(hs, tuple(reports), dists[-1], u, v, tol, border <= tol, tuple(surfs), tuple(dists))

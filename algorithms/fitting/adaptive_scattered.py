@@ -39,7 +39,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.ndimage as ndi
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
@@ -51,7 +50,8 @@ from ..hierarchical.core import Overlay
 from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.surface import BSplineSurface
 from ._common import difference_penalty, project_points
-from .adaptive import LevelReport, _boxes, _stats
+from ._refine import FitSummary, LevelReport, OverlayFitter, grow_base, level_reports, owner, rectangles, refine
+from ._refine import check_tol_levels, span_index, support
 from .gridded import _pair_of
 from .scattered import _local, base_parameters, fit_scattered, plane_parameters, scattered_collocation
 
@@ -61,7 +61,7 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class ScatteredAdaptiveFit:
+class ScatteredAdaptiveFit(FitSummary):
     """Result of :func:`fit_adaptive_scattered`.
 
     Attributes
@@ -93,19 +93,6 @@ class ScatteredAdaptiveFit:
     converged: bool
     level_surfaces: tuple = ()
     level_distances: tuple = ()
-
-    @property
-    def max_error(self) -> float:
-        return self.levels[-1].max_error
-
-    @property
-    def rms_error(self) -> float:
-        return self.levels[-1].rms_error
-
-    @property
-    def control_points_total(self) -> int:
-        """Base poles plus stored offsets (course §5-17)."""
-        return int(self.hierarchy.pole_counts()["stored"])
 
 
 def measure_points(surface, X: Array, u: Array, v: Array, *, above: float | None = None) -> Array:
@@ -167,40 +154,23 @@ class _BaseSolver:
         return BSplineSurface(self.deg, self.knots, P.reshape(self.n + (target.shape[1],)))
 
 
-class _ScatteredFitter:
-    """The hierarchy under construction with every overlay's world displacements ``δ`` kept (so
-    that coarser levels can be refitted without losing the finer ones), and per overlay its
-    points, collocation block and factorised normal matrix."""
+class _ScatteredFitter(OverlayFitter):
+    """The hierarchy under construction (:class:`~._refine.OverlayFitter`) on a cloud ``X`` (k, 3):
+    per overlay its points, collocation block and factorised normal matrix."""
 
-    def __init__(self, hs: HierarchicalSurface, X: Array, u: Array, v: Array, refit_base: _BaseSolver | None) -> None:
-        self.hs, self.X, self.u, self.v = hs, X, u, v
-        self.refit_base = refit_base
-        self.delta: dict[int, Array] = {}
-        self.ops: dict[int, tuple[Array, sp.csr_matrix, object]] = {}
-
-    def residual(self) -> Array:
-        return self.X - self.hs.flatten().evaluate(self.u, self.v)  # one spline: the compiled kernel
+    def evaluate(self, surface: BSplineSurface) -> Array:
+        return surface.evaluate(self.u, self.v)  # one spline: the compiled kernel
 
     def operators(self, ov: Overlay) -> tuple[Array, sp.csr_matrix, object]:
         if ov.id not in self.ops:
-            p, q = self.hs.degree
-            (i0, i1), (j0, j1) = ov.vertices
-            ku, kv = ov.knots
-            su = (ku[i0], ku[min(i1 + p + 1, ku.shape[0] - 1)])
-            sv = (kv[j0], kv[min(j1 + q + 1, kv.shape[0] - 1)])
+            su, sv = support(ov, self.hs.degree)
             idx = np.flatnonzero((self.u >= su[0]) & (self.u <= su[1]) & (self.v >= sv[0]) & (self.v <= sv[1]))
-            A = block_collocation(ov.knots, (p, q), ov.vertices, self.u[idx], self.v[idx])
+            A = block_collocation(ov.knots, self.hs.degree, ov.vertices, self.u[idx], self.v[idx])
             G = (A.T @ A).tocsc()
             ridge = float(tolerances.FIT_OVERLAY_RCOND) ** 2 * max(float(G.diagonal().max(initial=0.0)), 1e-300)
             lu = spla.splu((G + ridge * sp.identity(G.shape[0], format="csc")).tocsc())
             self.ops[ov.id] = (idx, A, lu)
         return self.ops[ov.id]
-
-    def _apply(self, ov: Overlay) -> None:
-        frames = self.hs.reference_frames(ov)
-        d = self.delta[ov.id]
-        off = self.hs.offset_mapping.inverse(d.reshape(-1, 3), None if frames is None else frames.reshape(-1, 3, 3))
-        self.hs.set_offsets(ov, np.asarray(off, float).reshape(d.shape))
 
     def fit_overlay(self, ov: Overlay, resid: Array) -> None:
         """Least-squares ``δ`` of ``ov`` against ``resid`` plus its own current share; updates ``resid``."""
@@ -214,37 +184,12 @@ class _ScatteredFitter:
         self._apply(ov)
         resid[idx] = R - A @ delta
 
-    def backfit(self) -> None:
-        """One block Gauss-Seidel sweep: the base against the data minus every overlay's share,
-        the displacements re-applied in the new frames, then each overlay against what is left."""
-        hs = self.hs
-        if self.refit_base is not None:
-            share = hs.flatten().evaluate(self.u, self.v) - hs.base.evaluate(self.u, self.v)
-            hs.set_base(self.refit_base(self.X - share))
-            for ov in hs.overlays:  # parents first: each sees its parent's new frames
-                self._apply(ov)
-        resid = self.residual()
-        for ov in hs.overlays:
-            self.fit_overlay(ov, resid)
-
 
 def _owner(hs: HierarchicalSurface, u: Array, v: Array) -> tuple[list[Overlay | None], Array, Array]:
     """Per point, the deepest node whose region holds it: the nodes, a (k,) index into them
     (0 = the base) and the nodes' levels."""
-    nodes: list[Overlay | None] = [None] + sorted(hs.overlays, key=lambda o: o.level)
-    own = np.zeros(u.size, int)
-    for k, ov in enumerate(nodes[1:], 1):
-        (a, b), (c, d) = ov.region
-        own[(u >= a) & (u <= b) & (v >= c) & (v <= d)] = k
-    return nodes, own, np.array([0] + [o.level for o in nodes[1:]])
+    return owner(hs, u.shape, lambda r: (u >= r[0][0]) & (u <= r[0][1]) & (v >= r[1][0]) & (v <= r[1][1]))
 
-
-def _span_index(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, Array]:
-    k = np.unique(knots[(knots >= lo) & (knots <= hi)])
-    idx = np.searchsorted(k, x, side="right") - 1
-    idx = np.where(x == k[-1], k.size - 2, idx)
-    idx = np.where((x < k[0]) | (x > k[-1]), -1, idx)
-    return k, idx
 
 
 def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u: Array, v: Array
@@ -253,8 +198,8 @@ def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u:
     point and at least FIT_ADAPTIVE_SPAN_POINTS points, grown by the margin, grouped and merged."""
     lvl = hs.level_surface(parent)
     (ua, ub), (va, vb) = hs.domain if parent is None else parent.region
-    ku, iu = _span_index(lvl.knots[0], ua, ub, u)
-    kv, iv = _span_index(lvl.knots[1], va, vb, v)
+    ku, iu = span_index(lvl.knots[0], ua, ub, u)
+    kv, iv = span_index(lvl.knots[1], va, vb, v)
     inside = (iu >= 0) & (iv >= 0)
     nu, nv = ku.size - 1, kv.size - 1
     cell = iu * nv + iv
@@ -262,19 +207,14 @@ def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u:
     marks = np.zeros(nu * nv, bool)
     marks[cell[inside & flagged]] = True
     marks = marks.reshape(nu, nv) & (counts >= int(tolerances.FIT_ADAPTIVE_SPAN_POINTS))
-    if not marks.any():
-        return []
-    margin = int(tolerances.FIT_ADAPTIVE_MARGIN)
-    if margin > 0:
-        marks = ndi.binary_dilation(marks, structure=np.ones((3, 3)), iterations=margin)
-    return [((float(ku[i0]), float(ku[i1])), (float(kv[j0]), float(kv[j1]))) for i0, i1, j0, j1 in _boxes(marks)]
+    return rectangles(marks, ku, kv)
 
 
 def _grow_base(X: Array, u: Array, v: Array, poles: tuple[int, int], deg: tuple[int, int], tol: float, lam: float,
                progress) -> tuple[BSplineSurface, Array]:
     """The base fit, its spans multiplied by 1.5 while the regions to refine cover more than
     FIT_ADAPTIVE_MAX_COVER of the domain; each step grows u, v or both, whichever lowers the
-    error most per added pole (as :func:`.adaptive._grow_base`: candidates compared by the
+    error most per added pole (:func:`~._refine.grow_base`: candidates compared by the
     first-order :func:`normal_deviation`, the chosen base measured)."""
     cap = max(deg[0] + 1, deg[1] + 1, int(np.sqrt(X.shape[0] / 2)))
 
@@ -282,51 +222,21 @@ def _grow_base(X: Array, u: Array, v: Array, poles: tuple[int, int], deg: tuple[
         f = fit_scattered(X, poles_, deg, params=np.c_[u, v], smoothing=lam, measure=False)
         return f.surface, float(normal_deviation(f.surface, X, u, v).max())
 
-    surf, estimate = candidate(poles)
-    while True:
+    def measured(surf):
         dist = measure_points(surf, X, u, v, above=tol)
-        worst = float(dist.max())
-        if progress is not None:
-            progress(f"base {poles[0]}x{poles[1]}: max error {worst:.3g}")
-        if worst <= tol:
-            return surf, dist
-        flagged = dist > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
+        return dist, dist
+
+    def regions(surf, flagged):
         hs = HierarchicalSurface(surf, "frame")
-        boxes = _regions(hs, None, flagged, u, v)
-        (u0, u1), (v0, v1) = hs.domain
-        cover = sum((b - a) * (d - c) for (a, b), (c, d) in boxes) / ((u1 - u0) * (v1 - v0))
-        grown = [min(p + int(np.ceil(1.5 * (k - p))), cap) for k, p in zip(poles, deg)]
-        options = {tuple(grown), (grown[0], poles[1]), (poles[0], grown[1])} - {tuple(poles)}
-        if cover <= float(tolerances.FIT_ADAPTIVE_MAX_COVER) or not options:
-            return surf, dist
-        best, score, tried = None, np.inf, {}
-        for cand in sorted(options):
-            trial = tried[cand] = candidate(cand)
-            gain = np.log(max(trial[1], 1e-300) / max(estimate, 1e-300)) / np.log(np.prod(cand) / np.prod(poles))
-            if gain < score:
-                best, score = (cand, trial), gain
-        if score > -0.1 and tuple(grown) in tried:  # no direction helps on its own yet: grow both
-            best = (tuple(grown), tried[tuple(grown)])
-        poles, (surf, estimate) = best
+        return hs, _regions(hs, None, flagged, u, v)
+
+    return grow_base(poles, deg, (cap, cap), tol, candidate, measured, regions, progress)
 
 
 def _level_reports(hs: HierarchicalSurface, X: Array, u: Array, v: Array
                    ) -> tuple[list[LevelReport], list[BSplineSurface], list[Array]]:
     """Per level L, the hierarchy truncated below L (finer offsets zeroed), measured."""
-    out, surfs, dists = [], [], []
-    for L in range(hs.depth + 1):
-        h = hs.copy()
-        for ov in sorted(h.overlays, key=lambda o: -o.level):
-            if ov.level > L:
-                h.set_offsets(ov, np.zeros(ov.shape + (3,)))
-        flat = h.flatten()
-        dist = measure_points(flat, X, u, v)
-        ovs = [o for o in hs.overlays if o.level == L]
-        cps = int(np.prod(hs.base.n_poles)) if L == 0 else sum(int(np.prod(o.shape)) for o in ovs)
-        out.append(LevelReport(L, len(ovs), cps, *_stats(dist)))
-        surfs.append(flat)
-        dists.append(dist)
-    return out, surfs, dists
+    return level_reports(hs, lambda flat: measure_points(flat, X, u, v))
 
 
 def _corrected(X: Array, u: Array, v: Array, poles: tuple[int, int], deg: tuple[int, int], lam: float
@@ -418,15 +328,7 @@ def fit_adaptive_scattered(points: ArrayLike, tol: float, degree: int | tuple[in
     InvalidGeometryError
         Bad shapes, too few points for the degree, parameters spanning no area.
     """
-    try:
-        tol = float(tol)
-    except (TypeError, ValueError) as err:
-        raise ParameterError(f"tol: expected a positive number, got {tol!r}") from err
-    if not (np.isfinite(tol) and tol > 0):
-        raise ParameterError(f"tol: expected a positive number, got {tol!r}")
-    depth_max = int(tolerances.FIT_ADAPTIVE_MAX_LEVELS) if max_levels is None else int(max_levels)
-    if depth_max < 0:
-        raise ParameterError(f"max_levels: expected an integer >= 0, got {max_levels!r}")
+    tol, depth_max = check_tol_levels(tol, max_levels)
     if int(corrections) < 0:
         raise ParameterError(f"corrections: expected an integer >= 0, got {corrections!r}")
     X = V.as_finite_array(points, "points")
@@ -456,29 +358,9 @@ def fit_adaptive_scattered(points: ArrayLike, tol: float, degree: int | tuple[in
         dist = measure_points(surf, X, u, v, above=tol)
     hs = HierarchicalSurface(surf, "frame")
     fitter = _ScatteredFitter(hs, X, u, v, _BaseSolver(surf, u, v, lam))
-    for rnd in range(1, int(tolerances.FIT_ADAPTIVE_MAX_ROUNDS) + 1):
-        worst = float(dist.max())
-        if worst <= tol:
-            break
-        flagged = dist > max(tol, float(tolerances.FIT_ADAPTIVE_GREED) * worst)
-        nodes, own, lv = _owner(hs, u, v)
-        resid = fitter.residual()
-        new = []
-        for k, node in enumerate(nodes):
-            if lv[k] >= depth_max or not np.any(flagged & (own == k)):
-                continue
-            for ur, vr in _regions(hs, node, flagged & (own == k), u, v):
-                ov = hs.add_overlay(ur, vr, node)
-                fitter.fit_overlay(ov, resid)
-                new.append(ov)
-        if not new:
-            break
-        for _ in range(int(tolerances.FIT_ADAPTIVE_SWEEPS)):
-            fitter.backfit()
-        dist = measure_points(hs.flatten(), X, u, v, above=tol)
-        if progress is not None:
-            progress(f"round {rnd}: {len(new)} overlays added (depth {hs.depth}), "
-                     f"{hs.pole_counts()['stored']} control points, max error {dist.max():.3g}")
+    dist = refine(hs, fitter, dist, tol, depth_max, error=lambda d: d, owners=lambda h: _owner(h, u, v),
+                  regions=lambda node, mine: _regions(hs, node, mine, u, v),
+                  measure=lambda flat: measure_points(flat, X, u, v, above=tol), progress=progress)
     reports, surfs, dists = _level_reports(hs, X, u, v)
     return ScatteredAdaptiveFit(hs, tuple(reports), dists[-1], u, v, tol, reports[-1].max_error <= tol,
                                 tuple(surfs), tuple(dists))
