@@ -317,6 +317,15 @@ _DEFAULTS: dict[str, float] = {
     # Fraction of a side over which the neighbour's normal is turned into the fill's corner plane
     # where the two neighbours of a corner do not share a tangent plane (G1 is lost only there).
     "FILL_CORNER_BLEND": 0.1,
+    # Plate fill (topology/plate_fill.py): largest angle (degrees) between a G1 side's neighbour
+    # normal and the reference plane's normal; beyond it the height field's slope is too steep to fit
+    # (at 90 the neighbour stands vertical, beyond it turns back over the hole).
+    "FILL_PLATE_MAX_TILT": 80.0,
+    # ... weight of the thin-plate energy relative to the data term's trace (the data rows are in
+    # units of the targets): small, so it decides only what no boundary sample reaches (the inside).
+    "FILL_PLATE_SMOOTHING": 1e-9,
+    # ... most knot spans per direction of the plate (bisected where samples miss the targets).
+    "FILL_PLATE_MAX_SPANS": 128,
     # ---- quality (course ch. 9, 11-2) ----------------------------------------------------------
     # A point is flat (curvature_map kind "radius" is inf) when max(|k1|, |k2|) * size is at most
     # this; size is the diagonal of the sampled points' bounding box (scale-free).

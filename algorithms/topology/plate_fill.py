@@ -1,0 +1,515 @@
+"""A hole filled by one trimmed surface: a thin-plate height field over the hole's mean plane
+(course §8-3, the alternative to the central split; the construction of OCC's GeomPlate).
+
+The central split (:func:`.nsided.fill_hole`) builds ``n`` four-sided patches meeting at a centre;
+it needs every corner convex and a hole round enough that the patches do not fold. A plate needs
+neither: when the hole's boundary projects one-to-one onto a plane and no neighbour's tangent
+plane stands vertical over it, the fill is a *height field*
+
+.. math::
+
+    S(u, v) = o + u\\, e_1 + v\\, e_2 + h(u, v)\\, N
+
+over the projected loop's bounding box, ``(e_1, e_2, N)`` an orthonormal frame of the plane. The
+surface is a tensor-product B-spline whose ``u`` and ``v`` coordinates are the Greville abscissae
+(linear precision: they are reproduced *exactly*), so only the scalar ``h`` is fitted. Its
+coefficients minimise
+
+.. math::
+
+    \\sum_i w_0 (h(p_i) - z_i)^2 + \\sum_{i \\in G1} w_1 |\\nabla h(p_i) - g_i|^2
+    + \\varepsilon \\iint h_{uu}^2 + 2 h_{uv}^2 + h_{vv}^2 \\, du\\, dv
+
+(G0 at boundary samples ``p_i`` of height ``z_i``; G1, linear in ``h``, where the neighbour's
+tangent plane has gradient ``g_i = -(m_1, m_2) / m_3`` for its normal ``m``; the thin-plate
+energy of Duchon's thin-plate splines, "Splines minimizing rotation-invariant semi-norms in
+Sobolev spaces", 1977, which OCC's ``GeomPlate_BuildPlateSurface`` also minimises), with the Gram
+matrices of the energy exact (Gauss quadrature per knot span) and the sparse normal equations
+solved by ``scipy.sparse``. The data rows are weighted by the targets (``g0_tol``, ``angle_tol``),
+so a residual of 1 is "just met", and the energy weight ``tolerances.FILL_PLATE_SMOOTHING`` (of
+the data term's trace) only decides the coefficients that no sample reaches: the plate's inside.
+Every knot span (in ``u`` and in ``v``) holding a sample that misses a target is bisected and the
+fit repeated, until both targets are met or ``max_spans`` is reached; what was achieved is
+reported per side (:class:`PlateFill`).
+
+Why a height field: it cannot fold (``S_u x S_v = N - h_u e_1 - h_v e_2`` has a positive ``N``
+component everywhere), its trimming curves are exact (the p-curve of a (rational) B-spline side
+is the side with its poles projected onto the plane, weights unchanged, since affine maps commute
+with B-splines), and points of the boundary are located by projection, exactly. Which plane: the
+loop's vector-area (Newell) normal, the mean neighbour normal and the principal-axes (PCA)
+normal are tried; the first on which the loop projects to a simple (non-self-intersecting)
+polygon and every G1 side's neighbour normal leans less than ``tolerances.FILL_PLATE_MAX_TILT``
+from the plane normal (with the orientation the loop gives) is kept; the one with the largest
+least lean among those. Holes that are not graphs over any of them (a thread strip, a hole whose
+neighbour turns vertical) are refused with the reason: a plate fill of them would miss the
+boundary (OCC's ``MakeFilling`` on a ten-turn thread strip of an M6 screw misses it by 0.8 mm).
+
+References: course §8-3 (filling n-sided holes); Duchon 1977; OCC's GeomPlate (Plate_Plate,
+"thin plate" energy with G0/G1 point constraints).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import ArrayLike, NDArray
+
+from .. import tolerances
+from ..errors import InvalidGeometryError
+from ..kernel.basis import basis_derivatives, find_span
+from ..kernel.curve import BSplineCurve
+from ..kernel.surface import BSplineSurface
+from ..kernel.trimmed import TrimmedSurface
+from .nsided import HoleSide
+
+__all__ = ["PlateFill", "fill_plate", "plate_plane"]
+
+Array = NDArray[np.float64]
+
+_DEGREE = 3
+_CHECK_POINTS = 2048  # polyline points of the loop for the one-to-one (simple projection) test
+
+
+@dataclass(frozen=True, eq=False)
+class PlateFill:
+    """The result of :func:`fill_plate`.
+
+    Attributes
+    ----------
+    surface : BSplineSurface
+        The height field over the projected loop's bounding box (polynomial, degree 3 x 3); its
+        parameters are lengths along ``e1`` and ``e2`` from ``origin``.
+    trimmed : TrimmedSurface
+        ``surface`` trimmed by the sides' p-curves (the outer loop; one p-curve per side).
+    sides : list of HoleSide
+        The input.
+    g1 : ndarray of bool, shape (n,)
+        Sides on which G1 was asked.
+    side_g0 : ndarray, shape (n,)
+        Largest distance (model units) between each side and the fill, at the check samples.
+    side_g1 : ndarray, shape (n,)
+        Largest angle (degrees) between the fill's and the neighbour's tangent planes on each G1
+        side (``nan`` on G0-only sides).
+    origin, e1, e2, normal : ndarray, shape (3,)
+        The reference plane's frame (``normal = e1 x e2``; the loop runs counter-clockwise about it).
+    spans : tuple of int
+        Knot spans of ``surface`` in ``u`` and ``v``.
+    met : bool
+        Both targets met on every side.
+    g0_tol, angle_tol : float
+        The targets.
+    lean : float
+        Largest angle (degrees) between a G1 side's neighbour normal and ``normal``.
+    """
+
+    surface: BSplineSurface
+    trimmed: TrimmedSurface
+    sides: list[HoleSide]
+    g1: NDArray[np.bool_]
+    side_g0: Array
+    side_g1: Array
+    origin: Array
+    e1: Array
+    e2: Array
+    normal: Array
+    spans: tuple[int, int]
+    met: bool
+    g0_tol: float
+    angle_tol: float
+    lean: float = 0.0
+    method: str = field(default="plate")
+
+    @property
+    def patches(self) -> list[BSplineSurface]:
+        """``[surface]`` (so that code counting folds over a fill's patches takes a plate as well)."""
+        return [self.surface]
+
+    def locate(self, side: int, points: ArrayLike) -> tuple[Array, Array]:
+        """Parameters ``(u, v)`` on :attr:`surface` of points on (or near) side ``side``: their
+        projection onto the plane (exact for points of the boundary: the surface reproduces ``u``
+        and ``v``). ``side`` is accepted for symmetry with :meth:`.nsided.HoleFill.locate`."""
+        if not 0 <= int(side) < len(self.sides):
+            raise InvalidGeometryError(f"side: expected 0..{len(self.sides) - 1}, got {side}")
+        P = np.asarray(points, float).reshape(-1, 3) - self.origin
+        return P @ self.e1, P @ self.e2
+
+    def locate_input(self, side: int, points: ArrayLike) -> tuple[NDArray[np.intp], Array, Array]:
+        """``(patch index, u, v)`` as :meth:`.nsided.HoleFill.locate_input` returns them (one patch: 0)."""
+        u, v = self.locate(side, points)
+        return np.zeros(u.shape, np.intp), u, v
+
+
+# ===================================================================================== sides
+def _side_samples(side: HoleSide, t: Array) -> tuple[Array, Array, Array]:
+    """Points, Cartesian tangents and Cartesian cross derivatives of a side at parameters ``t``."""
+    c = side.curve
+    D = c.derivatives(t, 1)
+    P, T = D[:, 0], D[:, 1]
+    X = side.cross.evaluate(t)
+    if c.is_rational:
+        hc = BSplineCurve._trusted(c.degree, c.knots, c.homogeneous_points)
+        h = hc.evaluate(t)
+        X = (X[:, :3] - X[:, 3:4] * (h[:, :3] / h[:, 3:4])) / h[:, 3:4]
+    return P, T, X
+
+
+def _params(curve: BSplineCurve, count: int) -> Array:
+    """About ``count`` parameters on ``curve``, evenly spread in every knot span (ends included)."""
+    k = np.unique(curve.knots[curve.degree:curve.n_poles + 1])
+    per = max(2, int(np.ceil(count / max(k.size - 1, 1))))
+    f = np.linspace(0.0, 1.0, per + 1)[:-1]
+    t = (k[:-1, None] + f[None, :] * np.diff(k)[:, None]).ravel()
+    return np.r_[t, k[-1]]
+
+
+def _validate(sides: Sequence[HoleSide], g1: Sequence[bool] | None) -> tuple[list[HoleSide], NDArray[np.bool_]]:
+    sides = list(sides)
+    if len(sides) < 1:
+        raise InvalidGeometryError("sides: expected at least one HoleSide, got none")
+    for i, s in enumerate(sides):
+        if not isinstance(s, HoleSide):
+            raise InvalidGeometryError(f"sides[{i}]: expected a HoleSide, got {type(s).__name__}")
+        if s.curve.dim != 3:
+            raise InvalidGeometryError(f"sides[{i}].curve: expected a 3-D curve, got {s.curve.dim}-D")
+        want = 4 if s.curve.is_rational else 3
+        if s.cross.dim != want:
+            raise InvalidGeometryError(f"sides[{i}].cross: expected a {want}-D field for a "
+                                       f"{'rational' if want == 4 else 'polynomial'} side, got {s.cross.dim}-D")
+    flags = np.ones(len(sides), bool) if g1 is None else np.asarray(g1, bool).ravel()
+    if flags.shape != (len(sides),):
+        raise InvalidGeometryError(f"g1: expected {len(sides)} flags (one per side), got {flags.shape[0]}")
+    ends = np.array([[s.curve.evaluate(s.curve.domain[0]), s.curve.evaluate(s.curve.domain[1])] for s in sides])
+    size = float(np.ptp(ends.reshape(-1, 3), axis=0).max()) or 1.0
+    gaps = np.linalg.norm(ends[:, 1] - np.roll(ends[:, 0], -1, axis=0), axis=1)
+    if np.any(gaps > tolerances.FILL_CLOSURE_TOL * size):
+        j = int(np.argmax(gaps))
+        raise InvalidGeometryError(f"sides: the loop is open: side {j} ends {gaps[j]:.3g} from the start of side "
+                                   f"{(j + 1) % len(sides)} (allowed {tolerances.FILL_CLOSURE_TOL:g} of the loop's size)")
+    return sides, flags
+
+
+# ===================================================================================== the plane
+def _crossings(Q: Array) -> tuple[int, int] | None:
+    """A pair of non-adjacent segments of the closed polyline ``Q`` (shape (m, 2)) that cross, or None."""
+    A, B = Q, np.roll(Q, -1, axis=0)
+    m = len(Q)
+    lo, hi = np.minimum(A, B), np.maximum(A, B)
+    idx = np.arange(m)
+
+    def orient(p: Array, q: Array, r: Array) -> Array:
+        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0])
+
+    block = 256
+    for s in range(0, m, block):  # blocks of segments against all (memory bound, vectorised inside)
+        i = idx[s:s + block]
+        box = np.all((lo[i, None] <= hi[None]) & (lo[None] <= hi[i, None]), axis=2)
+        gap = np.abs(i[:, None] - idx[None])
+        box &= (gap > 1) & (gap < m - 1) & (i[:, None] < idx[None])
+        ii, jj = np.nonzero(box)
+        if ii.size == 0:
+            continue
+        a, b = A[i[ii]], B[i[ii]]
+        c, d = A[jj], B[jj]
+        o1, o2 = orient(a, b, c), orient(a, b, d)
+        o3, o4 = orient(c, d, a), orient(c, d, b)
+        hit = (o1 * o2 < 0) & (o3 * o4 < 0)
+        if hit.any():
+            k = int(np.argmax(hit))
+            return int(i[ii[k]]), int(jj[k])
+    return None
+
+
+def plate_plane(points: Array, normals: Array, g1: NDArray[np.bool_] | None = None
+                ) -> tuple[Array, Array, Array, Array, float]:
+    """The reference plane of a hole over which its fill is a height field.
+
+    Parameters
+    ----------
+    points : ndarray, shape (m, 3)
+        The loop, densely sampled, in order (closed implicitly).
+    normals : ndarray, shape (m, 3)
+        Neighbour normals ``cross x tangent`` at the samples (any length; the orientation the
+        loop gives: for a loop running counter-clockwise about the fill's normal they point to
+        the fill's side).
+    g1 : ndarray of bool, shape (m,), optional
+        Samples whose neighbour normal must lean less than ``tolerances.FILL_PLATE_MAX_TILT``
+        from the plane normal (default: all).
+
+    Returns
+    -------
+    (origin, e1, e2, normal, lean)
+        The frame and the largest lean (degrees) of a G1 normal from ``normal``.
+
+    Raises
+    ------
+    InvalidGeometryError
+        No candidate plane (Newell, mean neighbour normal, principal axes) has the loop project
+        one-to-one with every G1 normal leaning less than the limit; the message says why for the
+        best candidate.
+    """
+    P = np.asarray(points, float)
+    M = np.asarray(normals, float)
+    M = M / np.maximum(np.linalg.norm(M, axis=1, keepdims=True), 1e-300)
+    g1 = np.ones(len(P), bool) if g1 is None else np.asarray(g1, bool)
+    o = P.mean(axis=0)
+    Q = P - o
+    newell = 0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
+    mean_n = M.sum(axis=0)
+    _, _, Vt = np.linalg.svd(Q, full_matrices=False)
+    cands = [newell, mean_n, Vt[2]]
+    max_tilt = tolerances.FILL_PLATE_MAX_TILT
+    best, why = None, ""
+    for N in cands:
+        length = float(np.linalg.norm(N))
+        if not np.isfinite(length) or length == 0:
+            continue
+        N = N / length
+        if float(newell @ N) < 0:
+            N = -N  # the loop runs counter-clockwise about the normal
+        e1, e2 = _in_plane_axes(Q, N)
+        uv = np.c_[Q @ e1, Q @ e2]
+        area = 0.5 * float(np.sum(uv[:, 0] * np.roll(uv[:, 1], -1) - np.roll(uv[:, 0], -1) * uv[:, 1]))
+        scale = float(np.ptp(uv, axis=0).max()) or 1.0
+        if area <= 1e-9 * scale * scale:
+            why = why or "the loop encloses no area in projection (it winds back over itself)"
+            continue
+        cosines = M[g1] @ N if g1.any() else np.ones(1)
+        lean = float(np.degrees(np.arccos(np.clip(cosines.min(), -1.0, 1.0))))
+        if lean >= max_tilt:
+            k = int(np.flatnonzero(g1)[np.argmin(cosines)])
+            why = (f"a neighbour's tangent plane stands at {lean:.1f} deg to the hole's mean plane (at "
+                   f"{np.array2string(P[k], precision=4)}; at most {max_tilt:g} deg, "
+                   "tolerances.FILL_PLATE_MAX_TILT; beyond 90 it turns back over the hole)")
+            continue
+        hit = _crossings(uv)
+        if hit is not None:
+            why = (f"the hole does not project one-to-one onto its mean plane: the loop crosses itself in "
+                   f"projection (samples {hit[0]} and {hit[1]} of {len(P)}, near "
+                   f"{np.array2string(P[hit[0]], precision=4)})")
+            continue
+        if best is None or lean < best[4]:
+            best = (o, e1, e2, N, lean)
+    if best is None:
+        raise InvalidGeometryError(f"plate fill: not a height field over any plane tried: {why}")
+    return best
+
+
+# ===================================================================================== the fit
+def _knots(lo: float, hi: float, spans: int, degree: int) -> Array:
+    inner = np.linspace(lo, hi, spans + 1)[1:-1]
+    return np.r_[np.full(degree + 1, lo), inner, np.full(degree + 1, hi)]
+
+
+def _rows(ku: Array, kv: Array, p: int, u: Array, v: Array) -> tuple[Array, Array, Array, Array]:
+    """Per point: values, d/du and d/dv of the (p+1)^2 non-zero tensor basis functions, and their columns."""
+    nu, nv = ku.size - p - 1, kv.size - p - 1
+    su, sv = find_span(ku, p, nu, u), find_span(kv, p, nv, v)
+    Du, Dv = basis_derivatives(ku, p, su, u, 1), basis_derivatives(kv, p, sv, v, 1)  # (m, 2, p+1)
+    val = (Du[:, 0, :, None] * Dv[:, 0, None, :]).reshape(u.size, -1)
+    du = (Du[:, 1, :, None] * Dv[:, 0, None, :]).reshape(u.size, -1)
+    dv = (Du[:, 0, :, None] * Dv[:, 1, None, :]).reshape(u.size, -1)
+    cols = ((su[:, None] - p + np.arange(p + 1))[:, :, None] * nv
+            + (sv[:, None] - p + np.arange(p + 1))[:, None, :]).reshape(u.size, -1)
+    return val, du, dv, cols
+
+
+def _gram(knots: Array, p: int) -> list[sp.csr_matrix]:
+    """``G_k[i, j] = integral N_i^(k) N_j^(k)`` for k = 0, 1, 2 (exact: p+1 Gauss points per span)."""
+    n = knots.size - p - 1
+    brk = np.unique(knots)
+    x, w = np.polynomial.legendre.leggauss(p + 1)
+    a, b = brk[:-1, None], brk[1:, None]
+    t = (0.5 * (a + b) + 0.5 * (b - a) * x).ravel()
+    wt = (0.5 * (b - a) * w).ravel()
+    span = find_span(knots, p, n, t)
+    D = basis_derivatives(knots, p, span, t, 2)  # (m, 3, p+1)
+    cols = span[:, None] - p + np.arange(p + 1)
+    out = []
+    for k in range(3):
+        B = sp.csr_matrix((D[:, k].ravel(), cols.ravel(), np.arange(0, t.size * (p + 1) + 1, p + 1)), shape=(t.size, n))
+        out.append((B.T @ sp.diags(wt) @ B).tocsr())
+    return out
+
+
+def _bisect(knots: Array, p: int, x: Array, limit: int) -> Array:
+    """``knots`` with every span holding one of ``x`` bisected (at most ``limit`` spans in all)."""
+    brk = np.unique(knots)
+    if brk.size - 1 >= limit:
+        return knots
+    idx = np.unique(np.clip(np.searchsorted(brk, x, side="right") - 1, 0, brk.size - 2))
+    room = limit - (brk.size - 1)
+    if idx.size > room:  # the spans with the most offending points first
+        counts = np.bincount(np.clip(np.searchsorted(brk, x, side="right") - 1, 0, brk.size - 2), minlength=brk.size - 1)
+        idx = np.sort(idx[np.argsort(-counts[idx], kind="stable")][:room])
+    new = 0.5 * (brk[idx] + brk[idx + 1])
+    return np.sort(np.r_[knots, new])
+
+
+def _angle(gu: Array, gv: Array, m: Array) -> Array:
+    """Angle (degrees, sign-free) between the normal ``(-gu, -gv, 1)`` and ``m`` (local frame)."""
+    n = np.c_[-gu, -gv, np.ones_like(gu)]
+    c = np.abs(np.einsum("ij,ij->i", n, m))
+    s = np.linalg.norm(np.cross(n, m), axis=1)
+    return np.degrees(np.arctan2(s, c))
+
+
+def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g0_tol: float | None = None,
+               angle_tol: float | None = None, max_spans: int | None = None, size: float | None = None) -> PlateFill:
+    """Fill a hole with one trimmed thin-plate height field (see the module; course §8-3, GeomPlate).
+
+    Parameters
+    ----------
+    sides : sequence of HoleSide
+        As for :func:`.nsided.fill_hole`: the boundary curves around the loop, each with the
+        neighbour's cross derivative pointing into the neighbour (4-D homogeneous for rational sides).
+    g1 : sequence of bool, shape (n,), optional
+        Per side, whether the fill must be G1 to the neighbour there (default all); G0-only sides
+        contribute positions only.
+    g0_tol : float, optional
+        Target distance from the boundary (model units); default ``tolerances.FILL_FIT_G0 * size``.
+    angle_tol : float, optional
+        Target angle (degrees) to the neighbours' tangent planes; default ``tolerances.FILL_FIT_ANGLE``.
+    max_spans : int, optional
+        Most knot spans per direction; default ``tolerances.FILL_PLATE_MAX_SPANS``.
+    size : float, optional
+        Model size for the default ``g0_tol``; default the loop's diameter about its centroid
+        (twice the largest distance of a boundary point from it: invariant under rigid motions).
+
+    Returns
+    -------
+    PlateFill
+        The surface, the trimmed face and what was achieved per side (``met`` says whether both
+        targets were; the fill is returned either way).
+
+    Raises
+    ------
+    InvalidGeometryError
+        The input is not a closed loop of sides, or the hole is not a height field over any plane
+        tried (:func:`plate_plane`: the reason is named).
+    """
+    sides, flags = _validate(sides, g1)
+    max_spans = int(tolerances.FILL_PLATE_MAX_SPANS if max_spans is None else max_spans)
+    if max_spans < 1:
+        raise InvalidGeometryError(f"max_spans: expected a positive integer, got {max_spans}")
+    angle_tol = float(tolerances.FILL_FIT_ANGLE if angle_tol is None else angle_tol)
+    # ---- the plane, from a dense polyline of the loop
+    per = _CHECK_POINTS // len(sides) + 2
+    dense = [_side_samples(s, np.linspace(*s.curve.domain, per)[:-1]) for s in sides]
+    P = np.concatenate([d[0] for d in dense])
+    M = np.concatenate([np.cross(d[2], d[1]) for d in dense])
+    Gm = np.concatenate([np.full(len(d[0]), f) for d, f in zip(dense, flags)])
+    diag = 2.0 * float(np.linalg.norm(P - P.mean(axis=0), axis=1).max()) or 1.0  # rotation-invariant size
+    size = diag if size is None else float(size)
+    g0_tol = float(tolerances.FILL_FIT_G0 * size if g0_tol is None else g0_tol)
+    if not (g0_tol > 0 and angle_tol > 0):
+        raise InvalidGeometryError(f"g0_tol, angle_tol: expected positive targets, got {g0_tol}, {angle_tol}")
+    o, e1, e2, N, lean = plate_plane(P, M, Gm)
+    R = np.c_[e1, e2, N]  # world = o + R @ local
+    L = diag  # internal unit: the fit runs on coordinates / L (scale-free)
+    loc = (P - o) @ R / L
+    lo, hi = loc[:, :2].min(axis=0), loc[:, :2].max(axis=0)
+    margin = 0.02 * float(np.max(hi - lo))
+    lo, hi = lo - margin, hi + margin
+    ext = hi - lo
+    p = _DEGREE
+    start = [max(2, int(round(8 * e / ext.max()))) for e in ext]
+    ku, kv = _knots(lo[0], hi[0], min(start[0], max_spans), p), _knots(lo[1], hi[1], min(start[1], max_spans), p)
+    lengths = np.array([np.linalg.norm(np.diff(d[0], axis=0), axis=1).sum() for d in dense]) / L
+    tol0 = g0_tol / L
+    tol1 = np.radians(angle_tol)
+    while True:
+        nu, nv = ku.size - p - 1, kv.size - p - 1
+        spans = max(nu, nv) - p
+        fit_t, chk_t = [], []
+        for s, ln in zip(sides, lengths):
+            t = _params(s.curve, max(24, int(np.ceil(6 * spans * ln / ext.max()))))
+            fit_t.append(t)
+            chk_t.append(0.5 * (t[1:] + t[:-1]))
+        data = [_local_data(s, t, o, R, L) for s, t in zip(sides, fit_t)]
+        sid = np.concatenate([np.full(len(t), i) for i, t in enumerate(fit_t)])
+        X = np.concatenate([d[0] for d in data])
+        Mn = np.concatenate([d[1] for d in data])
+        val, du, dv, cols = _rows(ku, kv, p, X[:, 0], X[:, 1])
+        n = nu * nv
+        gsel = flags[sid] & (np.abs(Mn[:, 2]) > 0)
+        gx, gy = -Mn[gsel, 0] / Mn[gsel, 2], -Mn[gsel, 1] / Mn[gsel, 2]
+        w1 = 1.0 / (tol1 * (1.0 + gx ** 2 + gy ** 2))  # a gradient error of 1/w1 tilts the normal ~1 target angle
+        rows_v = np.vstack([val / tol0, du[gsel] * w1[:, None], dv[gsel] * w1[:, None]])
+        cols_all = np.vstack([cols, cols[gsel], cols[gsel]])
+        rhs = np.r_[X[:, 2] / tol0, gx * w1, gy * w1]
+        k = rows_v.shape[1]
+        A = sp.csr_matrix((rows_v.ravel(), cols_all.ravel(), np.arange(0, rows_v.shape[0] * k + 1, k)),
+                          shape=(rows_v.shape[0], n))
+        Gu, Gv = _gram(ku, p), _gram(kv, p)
+        E = sp.kron(Gu[2], Gv[0]) + 2.0 * sp.kron(Gu[1], Gv[1]) + sp.kron(Gu[0], Gv[2])
+        AtA = (A.T @ A).tocsc()
+        eps = tolerances.FILL_PLATE_SMOOTHING * AtA.diagonal().sum() / max(E.diagonal().sum(), 1e-300)
+        K = (AtA + eps * E).tocsc()
+        c = spla.spsolve(K, A.T @ rhs)
+        r = rhs - A @ c  # one step of iterative refinement (the system is stiff: data vs energy)
+        c = c + spla.spsolve(K, A.T @ r - eps * (E @ c))
+        # ---- what was achieved, at the fit samples and between them
+        g0_side, g1_side, bad_u, bad_v = np.zeros(len(sides)), np.full(len(sides), np.nan), [], []
+        for i, s in enumerate(sides):
+            t = np.r_[fit_t[i], chk_t[i]]
+            Xl, Ml = _local_data(s, t, o, R, L)
+            vv, uu, ww, cc = _rows(ku, kv, p, Xl[:, 0], Xl[:, 1])
+            h = np.einsum("ij,ij->i", vv, c[cc])
+            e0 = np.abs(h - Xl[:, 2]) * L
+            g0_side[i] = e0.max()
+            miss = e0 > g0_tol
+            if flags[i]:
+                ang = _angle(np.einsum("ij,ij->i", uu, c[cc]), np.einsum("ij,ij->i", ww, c[cc]), Ml)
+                g1_side[i] = ang.max()
+                miss |= ang > angle_tol
+            bad_u.append(Xl[miss, 0]), bad_v.append(Xl[miss, 1])
+        bu, bv = np.concatenate(bad_u), np.concatenate(bad_v)
+        met = bu.size == 0
+        if met:
+            break
+        ku2, kv2 = _bisect(ku, p, bu, max_spans), _bisect(kv, p, bv, max_spans)
+        if ku2.size == ku.size and kv2.size == kv.size:
+            break
+        ku, kv = ku2, kv2
+    # ---- the surface in model units: u, v are lengths along e1, e2 from o
+    gu, gv = _greville(ku, p), _greville(kv, p)
+    U, V = np.meshgrid(gu, gv, indexing="ij")
+    H = c.reshape(nu, nv)
+    poles = o + L * (U[..., None] * e1 + V[..., None] * e2 + H[..., None] * N)
+    surf = BSplineSurface((p, p), (ku * L, kv * L), poles)
+    pcurves = []
+    for s in sides:
+        cp = (s.curve.control_points - o) @ np.c_[e1, e2]
+        pcurves.append(BSplineCurve(s.curve.degree, s.curve.knots, cp, s.curve.weights))
+    trimmed = TrimmedSurface(surf, pcurves)
+    return PlateFill(surf, trimmed, sides, flags, g0_side, g1_side, o, e1, e2, N,
+                     (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean)
+
+
+def _local_data(side: HoleSide, t: Array, o: Array, R: Array, L: float) -> tuple[Array, Array]:
+    """Boundary points (local frame, units of ``L``) and neighbour normals (local frame) at ``t``."""
+    P, T, X = _side_samples(side, t)
+    m = np.cross(X, T)
+    m /= np.maximum(np.linalg.norm(m, axis=1, keepdims=True), 1e-300)
+    return (P - o) @ R / L, m @ R
+
+
+def _in_plane_axes(Q: Array, N: Array) -> tuple[Array, Array]:
+    """``e1``: the principal axis of the points ``Q`` projected onto the plane of normal ``N`` (the
+    bounding box then hugs the loop, and the frame turns with the data: rigid motions commute with
+    the fill); ``e2 = N x e1``."""
+    F = Q - np.outer(Q @ N, N)
+    _, _, Vt = np.linalg.svd(F, full_matrices=False)
+    e1 = Vt[0] - (Vt[0] @ N) * N
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(N, e1)
+
+
+def _greville(knots: Array, p: int) -> Array:
+    n = knots.size - p - 1
+    idx = np.arange(n)[:, None] + 1 + np.arange(p)[None, :]
+    return knots[idx].mean(axis=1)
