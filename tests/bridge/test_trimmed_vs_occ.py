@@ -37,17 +37,30 @@ REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 #: Area agreement demanded of a rebuilt face (the issue's bound), relative.
 AREA_RTOL = 1e-9
 
-#: OCC's BRepGProp on a face whose analytic surface (cylinder, sphere, ...) is now the rational
-#: B-spline GeomConvert makes of it, with p-curves that are not iso-lines: OCC's quadrature is biased
-#: by ~1.0e-9 there (measured 1.02e-9 and 1.15e-9 below; OCC's own BRepBuilderAPI_NurbsConvert of the
-#: same face measures 1.0e-9 and 6e-9) while our quadrature of the rebuilt face agrees with OCC's
-#: area of the analytic original to 4e-13. See test_occ_area_of_rational_cylinder_face_is_biased.
+#: ``BRepGProp.SurfaceProperties_s(face, props, eps)`` (OCC's adaptive area integration) as the tests
+#: call it by default: exact to ~1e-15 on analytic faces and on B-spline faces whose parameters are kept.
+OCC_AREA_EPS = 1e-13
+
+#: ... and where it must be precise: on a face whose analytic surface (cylinder, cone, sphere) is now the
+#: rational B-spline GeomConvert makes of it, with p-curves that are not iso-lines, OCC's adaptive
+#: quadrature stops early, and by steps: measured against closed forms (test_rebuilt_rational_faces_
+#: have_the_exact_area), eps = 1e-13 leaves it 0.7-1.2e-9 off, 1e-14 5e-11, 1e-17 3e-12, 1e-19 2-3e-13
+#: (the error it returns claims 1e-16 at every step), at ~10x the time (2 -> 20 ms per face).
+OCC_PRECISE_EPS = 1e-19
+
+#: OCC's STEP reader rebuilds a rational face it reads back (17 digits written); measured with
+#: OCC_AREA_EPS, as OCC's own BRepBuilderAPI_NurbsConvert of the analytic face is (1.0e-9 there).
 OCC_RATIONAL_AREA_RTOL = 3e-9
 
 
-def occ_area(face) -> float:
+def occ_area(face, eps: float | None = OCC_AREA_EPS) -> float:
+    """OCC's area of a face: ``BRepGProp.SurfaceProperties_s`` adaptive with ``eps``, its default
+    (non-adaptive Gauss) quadrature with ``eps=None``."""
     props = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(getattr(face, "wrapped", face), props, 1e-13)
+    if eps is None:
+        BRepGProp.SurfaceProperties_s(getattr(face, "wrapped", face), props)
+    else:
+        BRepGProp.SurfaceProperties_s(getattr(face, "wrapped", face), props, eps)
     return props.Mass()
 
 
@@ -61,14 +74,6 @@ def edges_per_wire(face) -> list[int]:
         out.append(n)
         wires.Next()
     return sorted(out)
-
-
-def nurbs_converted(face):
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
-    from OCP.TopAbs import TopAbs_FACE
-
-    shape = BRepBuilderAPI_NurbsConvert(face, True).Shape()
-    return TopoDS.Face_s(TopExp_Explorer(shape, TopAbs_FACE).Current())
 
 
 def max_edge_tolerance(face) -> float:
@@ -104,7 +109,9 @@ def check_round_trip(face, rtol: float = AREA_RTOL, stats: dict | None = None,
     if ours_rtol is not None:
         assert abs(area - a0) <= ours_rtol * a0, (a0, area)
     mapped = any(parameter_maps(ours.surface, BRep_Tool.Surface_s(occ), BRepTools.UVBounds_s(occ)))
-    assert abs(a1 - a0) <= (OCC_RATIONAL_AREA_RTOL if mapped else rtol) * a0, (a0, a1)
+    if mapped:  # a rational surface now: OCC's quadrature must be pushed (OCC_PRECISE_EPS)
+        a1 = occ_area(rebuilt, OCC_PRECISE_EPS)
+    assert abs(a1 - a0) <= rtol * a0, (a0, a1)
     if stats is not None:
         stats.update(ours=abs(area - a0) / a0, occ=abs(a1 - a0) / a0, mapped=mapped)
     assert edges_per_wire(rebuilt) == edges_per_wire(occ)
@@ -281,14 +288,107 @@ def test_every_real_face_round_trips(path):
     assert ours_err <= 1e-5
 
 
-@pytest.mark.xfail(strict=True, reason="OCC defect: BRepGProp on a rational B-spline cylinder face with "
-                   "intersection p-curves is biased by ~1e-9 (NurbsConvert of the analytic face shows it too)")
-def test_occ_area_of_rational_cylinder_face_is_biased(machined):
-    face = next(f for f in machined.faces() if f.geom_type.name == "CYLINDER"
-                and isinstance(from_occ(f), TrimmedSurface) and len(edges_per_wire(f)) == 1
-                and edges_per_wire(f)[0] == 6)
-    a0 = occ_area(face.wrapped)
-    assert abs(occ_area(nurbs_converted(face.wrapped)) - a0) <= AREA_RTOL * a0
+def _straight_trim_face(surface, corners):
+    """A face of ``surface`` bounded by straight p-curves through the ``(u, v)`` corners (exact edges:
+    no boolean, no approximated intersection), so that its area has a closed form."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeWire
+    from OCP.BRepLib import BRepLib
+    from OCP.GCE2d import GCE2d_MakeSegment
+
+    wire = BRepBuilderAPI_MakeWire()
+    for a, b in zip(corners, corners[1:] + corners[:1]):
+        seg = GCE2d_MakeSegment(gp_Pnt2d(*a), gp_Pnt2d(*b)).Value()
+        wire.Add(BRepBuilderAPI_MakeEdge(seg, surface, seg.FirstParameter(), seg.LastParameter()).Edge())
+    face = BRepBuilderAPI_MakeFace(surface, wire.Wire(), True).Face()
+    BRepLib.BuildCurves3d_s(face)
+    assert BRepCheck_Analyzer(face).IsValid()
+    return face
+
+
+def _closed_form_faces():
+    """``{name: (face, area)}``: a cylinder, a sphere and a cone (tilted frame) each trimmed by a
+    p-curve that is a slanted line in (u, v) -- resampled by the conversion, as intersection curves
+    are -- with the area integrated by hand. Cylinder ``dA = r du dv``, sphere ``R^2 cos v du dv``,
+    cone ``(R + v sin a) du dv`` (OCC's parametrisations); ``u`` in ``[0, D]``, ``v`` from the
+    straight bottom side to ``h0 + s u``."""
+    import math
+
+    from OCP.Geom import Geom_ConicalSurface, Geom_CylindricalSurface, Geom_SphericalSurface
+    from OCP.gp import gp_Ax3, gp_Dir, gp_Pnt
+
+    ax = gp_Ax3(gp_Pnt(0.3, -0.2, 0.1), gp_Dir(0.2, 0.1, 1.0))
+    D, h0, s = 2.0, 1.5, 0.8
+    r = 2.0
+    cyl = _straight_trim_face(Geom_CylindricalSurface(ax, r), [(0, 0), (D, 0), (D, h0 + s * D), (0, h0)])
+    R, v0, ss = 2.5, -0.6, 0.5
+    sph = _straight_trim_face(Geom_SphericalSurface(ax, R), [(0, v0), (D, v0), (D, v0 + ss * D)])
+    Rc, half = 1.2, 0.35
+    cone = _straight_trim_face(Geom_ConicalSurface(ax, half, Rc), [(0, 0), (D, 0), (D, h0 + s * D), (0, h0)])
+    H0, H1 = h0, h0 + s * D
+    return {
+        "cylinder": (cyl, r * (h0 * D + s * D * D / 2)),
+        "sphere": (sph, R * R * ((math.cos(v0) - math.cos(v0 + ss * D)) / ss - D * math.sin(v0))),
+        "cone": (cone, (Rc * (H1**2 - H0**2) / 2 + math.sin(half) * (H1**3 - H0**3) / 6) / s),
+    }
+
+
+@pytest.mark.parametrize("name", ["cylinder", "sphere", "cone"])
+def test_rebuilt_rational_faces_have_the_exact_area(name):
+    """The issue's 1e-9 area criterion on faces converted from cylinders, spheres and cones holds to
+    1e-12 when the area is measured precisely: against the closed form, our Green + Gauss-Legendre
+    area of the converted face (which make_face rebuilds bit for bit) is within 3e-14, and OCC's
+    adaptive BRepGProp of the rebuilt face with OCC_PRECISE_EPS within 3e-13 (at OCC_AREA_EPS it is
+    0.7-1.0e-9 off: its quadrature, test_occ_area_quadrature_of_rational_faces_is_biased). Bound:
+    1e-12, the criterion asked of a precise measurement; OCC's area of the analytic original is exact
+    (~1e-16: 1e-13 bound)."""
+    face, exact = _closed_form_faces()[name]
+    ours = from_occ(face)
+    assert isinstance(ours, TrimmedSurface)
+    assert any(parameter_maps(ours.surface, BRep_Tool.Surface_s(face), BRepTools.UVBounds_s(face)))  # resampled
+    rebuilt = make_face(ours)
+    assert abs(occ_area(face) - exact) <= 1e-13 * exact
+    assert abs(ours.area() - exact) <= 1e-12 * exact
+    assert abs(occ_area(rebuilt, OCC_PRECISE_EPS) - exact) <= 1e-12 * exact
+
+
+def test_rebuilt_machined_faces_keep_their_area_to_1e12(machined):
+    """The machined part's faces on converted cylinders and the sphere (intersection p-curves, no
+    closed form): our area and OCC's precise area of the rebuilt face both equal OCC's area of the
+    analytic original to 1e-12 (measured 3.6e-13 and 7.4e-13 at worst), where OCC's default
+    adaptive measure of the rebuilt face was 1.0-1.2e-9 off."""
+    n = 0
+    for f in machined.faces():
+        ours = from_occ(f)
+        occ = f.wrapped
+        if not (isinstance(ours, TrimmedSurface)
+                and any(parameter_maps(ours.surface, BRep_Tool.Surface_s(occ), BRepTools.UVBounds_s(occ)))):
+            continue
+        n += 1
+        a0 = occ_area(occ)
+        assert abs(occ_area(occ, OCC_PRECISE_EPS) - a0) <= 1e-14 * a0  # the analytic original: converged
+        assert abs(ours.area() - a0) <= 1e-12 * a0, (f.geom_type, ours.area(), a0)
+        assert abs(occ_area(make_face(ours), OCC_PRECISE_EPS) - a0) <= 1e-12 * a0, f.geom_type
+    assert n >= 3
+
+
+@pytest.mark.parametrize("eps", [None, OCC_AREA_EPS], ids=["default", "eps=1e-13"])
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason="OCC's area quadrature (BRepGProp.SurfaceProperties_s: its default Gauss "
+                   "scheme, and the adaptive one at eps=1e-13) under-integrates rational B-spline faces whose "
+                   "p-curves are not iso-lines: 1.0-1.2e-9 (eps=1e-13) and up to 1.9e-3 (default) off the same "
+                   "face measured with eps=1e-19, while the error estimate it returns says 1e-16")
+def test_occ_area_quadrature_of_rational_faces_is_biased(machined, eps):
+    """The rebuilt faces of the machined part and the closed-form faces, OCC's area at its default
+    settings against its precise one: within the issue's 1e-9 if OCC's quadrature were converged."""
+    faces = [v[0] for v in _closed_form_faces().values()] + [f.wrapped for f in machined.faces()]
+    worst = 0.0
+    for face in faces:
+        ours = from_occ(face)
+        if not isinstance(ours, TrimmedSurface):
+            continue
+        rebuilt = make_face(ours)
+        precise = occ_area(rebuilt, OCC_PRECISE_EPS)
+        worst = max(worst, abs(occ_area(rebuilt, eps) - precise) / precise)
+    assert worst <= AREA_RTOL, worst
 
 
 def test_bad_input_is_refused_by_the_bridge():
