@@ -71,9 +71,34 @@ def _scale(coords: Array, s: Array, name: str) -> Array:
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class _Linear(Element):
-    """Scaling, division by a scalar and negation, shared by the two vector spaces (vectors and
-    normals); each result keeps the operand's type."""
+class _Kind(Element):
+    """Addition and subtraction by a table of what each kind allows (course §1-5..1-30).
+
+    ``_ADD`` and ``_SUB`` hold ``(other kind, result kind)`` pairs (filled in below the classes);
+    any other operand is refused with :meth:`Element._forbid`.
+    """
+
+    _ADD: ClassVar[tuple] = ()
+    _SUB: ClassVar[tuple] = ()
+
+    def _combine(self, other: object, op: str, rules: tuple, fn: Any, reflected: bool = False) -> Any:
+        for kind, result in rules:
+            if isinstance(other, kind):
+                check_broadcast(self.coords, other.coords, "other")
+                return result._trusted(fn(self.coords, other.coords))
+        return self._forbid(op, other, reflected)
+
+    def __add__(self, other: object) -> Any:
+        return self._combine(other, "+", self._ADD, np.add)
+
+    def __sub__(self, other: object) -> Any:
+        return self._combine(other, "-", self._SUB, np.subtract)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class _Linear(_Kind):
+    """Scaling, division by a scalar, negation, length, normalisation and the pairing ``dot``,
+    shared by the two vector spaces (vectors and normals); each result keeps the operand's type."""
 
     def __mul__(self, other: object) -> Any:
         s = as_scalar(other)
@@ -101,9 +126,23 @@ class _Linear(Element):
     def __pos__(self) -> Any:
         return self
 
+    def _pairing(self, other: object, kinds: tuple, hint: str) -> Array:
+        if not isinstance(other, kinds):
+            raise TypeError(f"{self._kind} . {kind_of(other)} is not defined; {hint}")
+        check_broadcast(self.coords, other.coords, "other")
+        return np.einsum("...i,...i->...", self.coords, other.coords)
+
+    def norm(self) -> Array:
+        """Euclidean length, shape ``(...)``."""
+        return np.linalg.norm(self.coords, axis=-1)
+
+    def normalized(self) -> Any:
+        """Unit elements of the same kind; raises :class:`InvalidGeometryError` if any is zero."""
+        return type(self)._trusted(unit(self.coords, self._kind))
+
 
 @dataclass(frozen=True, eq=False, repr=False)
-class Point(Element):
+class Point(_Kind):
     """Points of an affine space, shape ``(..., d)`` (course §1-5..1-30).
 
     Parameters
@@ -126,26 +165,8 @@ class Point(Element):
 
     _kind: ClassVar[str] = "point"
 
-    def __add__(self, other: object) -> Point:
-        if isinstance(other, Vector):
-            check_broadcast(self.coords, other.coords, "other")
-            return Point._trusted(self.coords + other.coords)
-        return self._forbid("+", other)
-
     def __radd__(self, other: object) -> Point:
-        if isinstance(other, Vector):
-            check_broadcast(self.coords, other.coords, "other")
-            return Point._trusted(self.coords + other.coords)
-        return self._forbid("+", other, True)
-
-    def __sub__(self, other: object) -> Any:
-        if isinstance(other, Point):
-            check_broadcast(self.coords, other.coords, "other")
-            return Vector._trusted(self.coords - other.coords)
-        if isinstance(other, Vector):
-            check_broadcast(self.coords, other.coords, "other")
-            return Point._trusted(self.coords - other.coords)
-        return self._forbid("-", other)
+        return self._combine(other, "+", self._ADD, np.add, True)
 
     def distance(self, other: Point) -> Array:
         """Euclidean distance ``|self - other|``, shape of the broadcast leading shapes."""
@@ -169,27 +190,9 @@ class Vector(_Linear):
 
     _kind: ClassVar[str] = "vector"
 
-    def __add__(self, other: object) -> Any:
-        if isinstance(other, Vector):
-            check_broadcast(self.coords, other.coords, "other")
-            return Vector._trusted(self.coords + other.coords)
-        if isinstance(other, Point):
-            check_broadcast(self.coords, other.coords, "other")
-            return Point._trusted(self.coords + other.coords)
-        return self._forbid("+", other)
-
-    def __sub__(self, other: object) -> Vector:
-        if isinstance(other, Vector):
-            check_broadcast(self.coords, other.coords, "other")
-            return Vector._trusted(self.coords - other.coords)
-        return self._forbid("-", other)
-
     def dot(self, other: Vector | Normal) -> Array:
         """Euclidean inner product (or the pairing with a :class:`Normal`), shape ``(...)``."""
-        if not isinstance(other, (Vector, Normal)):
-            raise TypeError(f"vector . {kind_of(other)} is not defined; dot takes a vector or a normal")
-        check_broadcast(self.coords, other.coords, "other")
-        return np.einsum("...i,...i->...", self.coords, other.coords)
+        return self._pairing(other, (Vector, Normal), "dot takes a vector or a normal")
 
     def cross(self, other: Vector) -> Vector:
         """Cross product of 3-D vectors, shape ``(..., 3)``."""
@@ -199,14 +202,6 @@ class Vector(_Linear):
             raise InvalidGeometryError(f"cross: defined for 3-D vectors, got dimension {self.dim}")
         check_broadcast(self.coords, other.coords, "other")
         return Vector._trusted(np.cross(self.coords, other.coords))
-
-    def norm(self) -> Array:
-        """Euclidean length, shape ``(...)``."""
-        return np.linalg.norm(self.coords, axis=-1)
-
-    def normalized(self) -> Vector:
-        """Unit vectors; raises :class:`InvalidGeometryError` if any vector is zero."""
-        return Vector._trusted(unit(self.coords, "vector"))
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -240,32 +235,17 @@ class Normal(_Linear):
             raise TypeError("from_tangents: expected two Vectors")
         return cls._trusted(a.cross(b).coords)
 
-    def __add__(self, other: object) -> Normal:
-        if isinstance(other, Normal):
-            check_broadcast(self.coords, other.coords, "other")
-            return Normal._trusted(self.coords + other.coords)
-        return self._forbid("+", other)
-
-    def __sub__(self, other: object) -> Normal:
-        if isinstance(other, Normal):
-            check_broadcast(self.coords, other.coords, "other")
-            return Normal._trusted(self.coords - other.coords)
-        return self._forbid("-", other)
-
     def dot(self, other: Vector) -> Array:
         """The pairing ``n · v`` with vectors, shape ``(...)``."""
-        if not isinstance(other, Vector):
-            raise TypeError(f"normal . {kind_of(other)} is not defined; a normal pairs with a vector")
-        check_broadcast(self.coords, other.coords, "other")
-        return np.einsum("...i,...i->...", self.coords, other.coords)
+        return self._pairing(other, (Vector,), "a normal pairs with a vector")
 
-    def norm(self) -> Array:
-        """Euclidean length, shape ``(...)``."""
-        return np.linalg.norm(self.coords, axis=-1)
 
-    def normalized(self) -> Normal:
-        """Unit normals; raises :class:`InvalidGeometryError` if any normal is zero."""
-        return Normal._trusted(unit(self.coords, "normal"))
+# What each kind adds and subtracts: (other kind, result kind); anything else is refused.
+Point._ADD = ((Vector, Point),)
+Point._SUB = ((Point, Vector), (Vector, Point))
+Vector._ADD = ((Vector, Vector), (Point, Point))
+Vector._SUB = ((Vector, Vector),)
+Normal._ADD = Normal._SUB = ((Normal, Normal),)
 
 
 # ---------------------------------------------------------------------------------------- combinations
