@@ -39,7 +39,7 @@ Comput. 33 (2011).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import scipy.linalg as sla
@@ -140,6 +140,37 @@ def _positive(w: ArrayLike | None, size: int, name: str) -> Array | None:
     return v
 
 
+def _per_row(x: Array, s: Array) -> Array:
+    """``s`` (m,) shaped to scale the rows of ``x`` (shape (m,) or (m, k)): ``x * _per_row(x, s)``."""
+    return s if x.ndim == 1 else s[:, None]
+
+
+def _weighted_rows(A: Any, b: Array, w: Array | None) -> tuple[Any, Array]:
+    """``W^(1/2) A`` and ``W^(1/2) b`` for row weights ``w`` (``A`` dense or sparse; unchanged if
+    ``w`` is None)."""
+    if w is None:
+        return A, b
+    s = np.sqrt(w)
+    A = sp.diags(s) @ A if sp.issparse(A) else A * s[:, None]
+    return A, b * _per_row(b, s)
+
+
+def _constrained_system(A: Any, b: ArrayLike, C: Any, d: ArrayLike, weights: ArrayLike | None,
+                        as_matrix: Any) -> tuple[Any, Array, Any, Array, Array | None]:
+    """Validated inputs of a constrained least-squares problem (dense or sparse by ``as_matrix``):
+    ``A`` and ``C`` with as many columns, ``b`` and ``d`` with as many right-hand sides, row weights."""
+    A = as_matrix(A, "A")
+    C = as_matrix(C, "C")
+    if A.shape[1] != C.shape[1]:
+        raise InvalidGeometryError(f"A, C: expected the same number of columns, got {A.shape[1]} and {C.shape[1]}")
+    b = _rhs(b, A.shape[0], "b")
+    d = _rhs(d, C.shape[0], "d")
+    w = _positive(weights, A.shape[0], "weights")
+    if b.ndim != d.ndim or (b.ndim == 2 and b.shape[1] != d.shape[1]):
+        raise InvalidGeometryError(f"b, d: expected the same number of right-hand sides, got shapes {b.shape} and {d.shape}")
+    return A, b, C, d, w
+
+
 def _labels(labels: Sequence[str] | None, m: int) -> list[str]:
     if labels is None:
         return [f"row {i}" for i in range(m)]
@@ -179,11 +210,7 @@ def lstsq(A: ArrayLike, b: ArrayLike, weights: ArrayLike | None = None, *, rcond
     """
     A = _matrix(A, "A")
     b = _rhs(b, A.shape[0], "b")
-    w = _positive(weights, A.shape[0], "weights")
-    if w is not None:
-        s = np.sqrt(w)
-        A = A * s[:, None]
-        b = b * (s if b.ndim == 1 else s[:, None])
+    A, b = _weighted_rows(A, b, _positive(weights, A.shape[0], "weights"))
     if A.shape[1] == 0:
         x = np.zeros((0,) + b.shape[1:])
         return LstsqResult(x, np.linalg.norm(b, axis=0), 0)
@@ -280,7 +307,7 @@ class ConstraintFactor:
         """Per redundant row, how far its (equilibrated) target is from the combination of the
         independent rows' targets, shape ``(m - rank,)`` (max over right-hand sides)."""
         de = np.asarray(d, float)
-        de = de / (self.row_scale if de.ndim == 1 else self.row_scale[:, None])
+        de = de / _per_row(de, self.row_scale)
         if not self.redundant.size:
             return np.zeros(0)
         r = de[self.redundant] - self.coefficients @ de[self.independent]
@@ -300,7 +327,7 @@ class ConstraintFactor:
         if not self.redundant.size:
             return
         de = np.asarray(d, float)
-        de = de / (self.row_scale if de.ndim == 1 else self.row_scale[:, None])
+        de = de / _per_row(de, self.row_scale)
         res = self.inconsistency(d)
         if tol is None:
             scale = float(np.abs(de).max()) if de.size else 0.0
@@ -357,7 +384,7 @@ class ConstraintFactor:
         n = self.shape[1]
         if self.rank == 0:
             return np.zeros((n,) + d.shape[1:])
-        de = d / (self.row_scale if d.ndim == 1 else self.row_scale[:, None])
+        de = d / _per_row(d, self.row_scale)
         y = sla.solve_triangular(self._R11.T, de[self.independent], lower=True, check_finite=False)
         return self._Q1 @ y
 
@@ -396,7 +423,7 @@ def min_norm_solve(C: ArrayLike, d: ArrayLike, weights: ArrayLike | None = None,
         return ConstraintFactor(C, labels).solve(d, tol=tol)
     s = 1.0 / np.sqrt(w)
     y = ConstraintFactor(C * s, labels).solve(d, tol=tol)
-    return y * (s if y.ndim == 1 else s[:, None])
+    return y * _per_row(y, s)
 
 
 def constrained_lstsq(A: ArrayLike, b: ArrayLike, C: ArrayLike, d: ArrayLike, weights: ArrayLike | None = None, *,
@@ -441,15 +468,7 @@ def constrained_lstsq(A: ArrayLike, b: ArrayLike, C: ArrayLike, d: ArrayLike, we
     InvalidGeometryError
         Shapes or values that do not fit.
     """
-    A = _matrix(A, "A")
-    C = _matrix(C, "C")
-    if A.shape[1] != C.shape[1]:
-        raise InvalidGeometryError(f"A, C: expected the same number of columns, got {A.shape[1]} and {C.shape[1]}")
-    b = _rhs(b, A.shape[0], "b")
-    d = _rhs(d, C.shape[0], "d")
-    w = _positive(weights, A.shape[0], "weights")
-    if b.ndim != d.ndim or (b.ndim == 2 and b.shape[1] != d.shape[1]):
-        raise InvalidGeometryError(f"b, d: expected the same number of right-hand sides, got shapes {b.shape} and {d.shape}")
+    A, b, C, d, w = _constrained_system(A, b, C, d, weights, _matrix)
     F = ConstraintFactor(C, labels, full=True)
     xc = F.solve(d, tol=tol)
     Z = F.null_basis
@@ -501,11 +520,7 @@ def sparse_lstsq(A: object, b: ArrayLike, weights: ArrayLike | None = None, *, t
     """
     A = _sparse(A, "A")
     b = _rhs(b, A.shape[0], "b")
-    w = _positive(weights, A.shape[0], "weights")
-    if w is not None:
-        s = np.sqrt(w)
-        A = sp.diags(s) @ A
-        b = b * (s if b.ndim == 1 else s[:, None])
+    A, b = _weighted_rows(A, b, _positive(weights, A.shape[0], "weights"))
     t = tolerances.SPARSE_TOL if tol is None else float(tol)
     it = 10 * A.shape[1] if maxiter is None else int(maxiter)
     B = b.reshape(b.shape[0], -1)
@@ -653,17 +668,8 @@ def sparse_constrained_lstsq(A: object, b: ArrayLike, C: object, d: ArrayLike, w
     ConstraintError
         Dependent or conflicting constraints (named), or a solution that is not unique.
     """
-    A = _sparse(A, "A")
-    C = _sparse(C, "C")
-    if A.shape[1] != C.shape[1]:
-        raise InvalidGeometryError(f"A, C: expected the same number of columns, got {A.shape[1]} and {C.shape[1]}")
-    p, n = A.shape
-    m = C.shape[0]
-    b = _rhs(b, p, "b")
-    d = _rhs(d, m, "d")
-    if b.ndim != d.ndim or (b.ndim == 2 and b.shape[1] != d.shape[1]):
-        raise InvalidGeometryError(f"b, d: expected the same number of right-hand sides, got shapes {b.shape} and {d.shape}")
-    w = _positive(weights, p, "weights")
+    A, b, C, d, w = _constrained_system(A, b, C, d, weights, _sparse)
+    (p, n), m = A.shape, C.shape[0]
     Winv = sp.identity(p, format="csr") if w is None else sp.diags(1.0 / w, format="csr")
     K = sp.bmat([
         [Winv, None, A],
