@@ -36,23 +36,6 @@ from occsurf.bridge.exchange.step_iges import READ_JOB, READ_PRELOAD, read_iges,
 from occsurf.bridge.isolation import run_jobs  # noqa: E402
 
 
-def _mutate(fmt: str, clean: bytes, kind: str, a: int, b: int) -> bytes:
-    if fmt == "step":
-        text = C.StepText.parse(clean)
-        n, refs = len(text.records), len(text.references())
-        if kind == "delete":
-            return C.step_delete(text, a % n)
-        if kind == "swap":
-            return C.step_swap(text, a % refs, b % refs)
-        return C.step_cut(text, 1 + a % (n - 1))
-    text = C.IgesText.parse(clean)
-    if kind == "delete":
-        return C.iges_delete_line(text, a)
-    if kind == "swap":
-        return C.iges_swap(text, a, b)
-    return C.iges_cut(text, 1 + a % (text.n_entities() - 1))
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=300, help="mutated files per format (default 300)")
@@ -78,7 +61,7 @@ def main() -> int:
         data = clean.read_bytes()
         kinds = rng.choice(["delete", "swap", "cut"], size=args.n)
         ab = rng.integers(0, 10**6, size=(args.n, 2))
-        paths = [C.write(folder, f"{k:04d}_{kind}{suffix}", _mutate(fmt, data, kind, int(a), int(b)))
+        paths = [C.write(folder, f"{k:04d}_{kind}{suffix}", C.mutate(fmt, data, kind, int(a), int(b)))
                  for k, (kind, (a, b)) in enumerate(zip(kinds, ab))]
         counts: Counter = Counter(files=len(paths))
         t0 = time.perf_counter()

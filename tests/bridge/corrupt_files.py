@@ -148,6 +148,27 @@ def iges_swap(text: IgesText, a: int, b: int) -> bytes:
     return text.join(lines)
 
 
+def mutate(fmt: str, clean: bytes, kind: str, a: int, b: int) -> bytes:
+    """One damaged copy of ``clean`` (``fmt`` "step" or "iges"): ``kind`` "delete" (a record/line),
+    "swap" (two references) or "cut" (at an entity boundary, trailer put back); the integers ``a``,
+    ``b`` choose where (any size: taken modulo the file's counts). The mutation fuzz's generator
+    (tests/bridge/test_fuzz_exchange.py, benchmarks/bench_fuzz_exchange.py)."""
+    if fmt == "step":
+        text = StepText.parse(clean)
+        n, refs = len(text.records), len(text.references())
+        if kind == "delete":
+            return step_delete(text, a % n)
+        if kind == "swap":
+            return step_swap(text, a % refs, b % refs)
+        return step_cut(text, 1 + a % (n - 1))
+    itext = IgesText.parse(clean)
+    if kind == "delete":
+        return iges_delete_line(itext, a)
+    if kind == "swap":
+        return iges_swap(itext, a, b)
+    return iges_cut(itext, 1 + a % (itext.n_entities() - 1))
+
+
 def write(folder: Path, name: str, data: bytes) -> Path:
     path = folder / name
     path.write_bytes(data)

@@ -59,23 +59,6 @@ def bases(tmp_path_factory) -> dict[str, tuple[Path, int]]:
 mutation = st.tuples(st.sampled_from(["delete", "swap", "cut"]), st.integers(0, 10**6), st.integers(0, 10**6))
 
 
-def _mutate(fmt: str, clean: bytes, kind: str, a: int, b: int) -> bytes:
-    if fmt == "step":
-        text = C.StepText.parse(clean)
-        n, refs = len(text.records), len(text.references())
-        if kind == "delete":
-            return C.step_delete(text, a % n)
-        if kind == "swap":
-            return C.step_swap(text, a % refs, b % refs)
-        return C.step_cut(text, 1 + a % (n - 1))
-    text = C.IgesText.parse(clean)
-    if kind == "delete":
-        return C.iges_delete_line(text, a)
-    if kind == "swap":
-        return C.iges_swap(text, a, b)
-    return C.iges_cut(text, 1 + a % (text.n_entities() - 1))
-
-
 def _no_traceback(proc: subprocess.CompletedProcess) -> None:
     assert b"Traceback" not in proc.stderr and b"Traceback" not in proc.stdout, proc.stderr[-2000:]
     assert proc.returncode in (0, 2), (proc.returncode, proc.stderr[-2000:])
@@ -94,7 +77,7 @@ def test_mutated_files_through_every_reading_command(bases, tmp_path_factory, fm
     clean, n_clean = bases[fmt]
     folder = tmp_path_factory.mktemp("fuzz")
     suffix = clean.suffix
-    paths = [C.write(folder, f"{k}_{kind}{suffix}", _mutate(fmt, clean.read_bytes(), kind, a, b))
+    paths = [C.write(folder, f"{k}_{kind}{suffix}", C.mutate(fmt, clean.read_bytes(), kind, a, b))
              for k, (kind, a, b) in enumerate(mutations)]
     counts: Counter = Counter(files=len(paths), format=fmt)
 
