@@ -15,6 +15,12 @@ cadquery ``Assembly``                       ``toCompound()`` (every part placed)
 a list or tuple of the above                a compound of them
 ==========================================  ==========================================================
 
+Edges and curves alike (:func:`as_edges`, :func:`as_edge`, :func:`as_curve`), for the functions that
+take an edge or a curve (``curve_deviation``, ``make_edge``/``to_edge``/``to_cq_edge``, the fill's
+``assess_joint``, ``hole_sides``, ``occ_fill``, ``neighbour_face``): a ``TopoDS_Edge``, a build123d or
+cadquery ``Edge`` or ``Wire`` (any object of the table above: its edges), or a bounded ``Geom_Curve``
+(an edge over its whole parameter range).
+
 :func:`as_model` goes further for the functions that report per face (``inspect_model``,
 ``check_model``, ``render_model_lit``...): an :class:`~occsurf.bridge.ImportedModel` passes
 through, anything else becomes one whose faces carry the names and colours the objects hold
@@ -29,10 +35,11 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from OCP.BRep import BRep_Builder
-from OCP.TopAbs import TopAbs_FACE
+from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.Geom import Geom_Curve
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopExp import TopExp
-from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shape
+from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Edge, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from occsurf.algorithms.errors import InvalidGeometryError
@@ -40,7 +47,8 @@ from occsurf.algorithms.errors import InvalidGeometryError
 if TYPE_CHECKING:
     from ..exchange.step_iges import ImportedModel
 
-__all__ = ["as_shape", "as_faces", "is_shape_like", "compound"]
+__all__ = ["as_shape", "as_faces", "as_face", "as_edges", "as_edge", "as_curve", "is_shape_like", "is_edge_like",
+           "compound"]
 
 #: Attributes of build123d builders that hold the object built (BuildPart, BuildSketch, BuildLine).
 _BUILDER_RESULTS = ("part", "sketch", "line")
@@ -91,6 +99,114 @@ def as_faces(obj: Any, name: str = "shape") -> list[Any]:
     faces = TopTools_IndexedMapOfShape()
     TopExp.MapShapes_s(as_shape(obj, name), TopAbs_FACE, faces)
     return [TopoDS.Face_s(faces.FindKey(i)) for i in range(1, faces.Extent() + 1)]
+
+
+def as_face(obj: Any, name: str = "face") -> Any:
+    """The one face of ``obj`` (any object :func:`as_shape` accepts) as a ``TopoDS_Face``.
+
+    Raises
+    ------
+    InvalidGeometryError
+        As :func:`as_shape`, or ``obj`` holds no face or more than one.
+    """
+    shape = as_shape(obj, name)
+    if shape.ShapeType() == TopAbs_FACE:
+        return TopoDS.Face_s(shape)  # itself, orientation and location kept
+    faces = as_faces(shape, name)
+    if len(faces) != 1:
+        raise InvalidGeometryError(f"{name}: expected one face, got a {type(obj).__name__} with {len(faces)} faces")
+    return faces[0]
+
+
+def is_edge_like(obj: Any) -> bool:
+    """True if :func:`as_edges` would accept ``obj``'s type: a ``Geom_Curve`` or a shape-like object."""
+    return isinstance(obj, Geom_Curve) or is_shape_like(obj)
+
+
+def as_edges(obj: Any, name: str = "edges") -> list[TopoDS_Edge]:
+    """The edges of ``obj`` as ``TopoDS_Edge``: the edge equivalent of :func:`as_faces`.
+
+    Parameters
+    ----------
+    obj : TopoDS_Edge, build123d/cadquery Edge or Wire, Geom_Curve, or anything :func:`as_shape` takes
+        A ``Geom_Curve`` becomes one edge over its whole parameter range (``BRepBuilderAPI_MakeEdge``;
+        the curve is shared, not copied); a shape gives its edges.
+    name : str
+        The argument's name, for messages.
+
+    Returns
+    -------
+    list of TopoDS_Edge
+        ``TopExp.MapShapes`` order, each edge once, with the locations of the shapes that hold them
+        (a ``TopoDS_Edge`` or a build123d/cadquery ``Edge`` gives itself, orientation kept).
+
+    Raises
+    ------
+    InvalidGeometryError
+        Not an accepted object, a null shape, a shape without edges, or an unbounded curve.
+    """
+    if isinstance(obj, Geom_Curve):
+        return [_edge_of_curve(obj, name)]
+    shape = as_shape(obj, name)
+    if isinstance(shape, TopoDS_Edge) or shape.ShapeType() == TopAbs_EDGE:
+        return [TopoDS.Edge_s(shape)]
+    edges = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, TopAbs_EDGE, edges)
+    if edges.Extent() == 0:
+        raise InvalidGeometryError(f"{name}: the {type(obj).__name__} holds no edges")
+    return [TopoDS.Edge_s(edges.FindKey(i)) for i in range(1, edges.Extent() + 1)]
+
+
+def as_edge(obj: Any, name: str = "edge") -> TopoDS_Edge:
+    """The one edge of ``obj`` (see :func:`as_edges`): an edge, a curve, or a wire or shape of one edge.
+
+    Raises
+    ------
+    InvalidGeometryError
+        As :func:`as_edges`, or ``obj`` holds more than one edge.
+    """
+    edges = as_edges(obj, name)
+    if len(edges) != 1:
+        raise InvalidGeometryError(f"{name}: expected one edge (an Edge, a curve, or a Wire of one edge), got a "
+                                   f"{type(obj).__name__} with {len(edges)} edges")
+    return edges[0]
+
+
+def as_curve(obj: Any, name: str = "curve") -> Geom_Curve:
+    """The OCC curve of ``obj``: a ``Geom_Curve`` as it is, else the 3-D curve of :func:`as_edge`'s edge.
+
+    The edge's location is applied (``BRep_Tool.Curve_s``: a transformed copy when the edge is
+    placed); its orientation and range are not (as ``BRep_Tool.Surface_s`` for faces): the
+    curve keeps its own parametrisation.
+
+    Raises
+    ------
+    InvalidGeometryError
+        As :func:`as_edge`, or the edge has no 3-D curve (a degenerated edge, e.g. at a sphere's pole).
+    """
+    if isinstance(obj, Geom_Curve):
+        return obj
+    edge = as_edge(obj, name)
+    curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
+    if curve is None:
+        raise InvalidGeometryError(f"{name}: the edge has no 3-D curve (a degenerated edge, e.g. at a sphere's pole)")
+    return curve
+
+
+def _edge_of_curve(curve: Geom_Curve, name: str) -> TopoDS_Edge:
+    """An edge over the whole range of a bounded curve."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+    from OCP.Precision import Precision
+
+    t0, t1 = curve.FirstParameter(), curve.LastParameter()
+    if Precision.IsInfinite_s(t0) or Precision.IsInfinite_s(t1):
+        raise InvalidGeometryError(f"{name}: the {type(curve).__name__} is unbounded (trim it first, e.g. "
+                                   "Geom_TrimmedCurve)")
+    maker = BRepBuilderAPI_MakeEdge(curve)
+    if not maker.IsDone():
+        raise InvalidGeometryError(f"{name}: no edge can be made of this {type(curve).__name__} "
+                                   f"(BRepBuilderAPI_MakeEdge status {maker.Error()})")
+    return maker.Edge()
 
 
 def compound(shapes: list[TopoDS_Shape]) -> TopoDS_Compound:

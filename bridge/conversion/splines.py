@@ -102,7 +102,7 @@ from occsurf.algorithms import BSplineCurve, BSplineSurface, TrimmedSurface
 from occsurf.algorithms.errors import InvalidGeometryError, KernelError, ToleranceError
 
 from .. import _occ
-from .shapes import as_shape, is_shape_like
+from .shapes import as_edge, as_shape, is_shape_like
 
 __all__ = [
     "FACE_TOLERANCE",
@@ -621,8 +621,10 @@ def make_edge(curve: BSplineCurve | Geom_Curve) -> TopoDS_Edge:
 
     Parameters
     ----------
-    curve : BSplineCurve or Geom_Curve
-        Ours is converted with :func:`to_occ` (bit-exact); an OCC curve is used as it is.
+    curve : BSplineCurve, Geom_Curve, or an edge
+        Ours is converted with :func:`to_occ` (bit-exact); an OCC curve is used as it is; an edge
+        (``TopoDS_Edge``, build123d / cadquery ``Edge``, a ``Wire`` of one edge) is returned as it is
+        (:func:`occsurf.bridge.conversion.shapes.as_edge`), so ``to_edge(cq_edge)`` is the same edge.
 
     Returns
     -------
@@ -635,6 +637,8 @@ def make_edge(curve: BSplineCurve | Geom_Curve) -> TopoDS_Edge:
     KernelError
         ``BRepBuilderAPI_MakeEdge`` failed.
     """
+    if not isinstance(curve, (Geom_Curve, BSplineCurve)) and is_shape_like(curve):
+        return as_edge(curve, "curve")
     occ_curve = curve if isinstance(curve, Geom_Curve) else _as_occ(curve, BSplineCurve, "curve")
     with _occ.kernel_errors("building an edge (BRepBuilderAPI_MakeEdge)"):
         me = BRepBuilderAPI_MakeEdge(occ_curve)

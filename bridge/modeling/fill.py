@@ -58,6 +58,7 @@ from occsurf.algorithms.topology.nsided import HoleFill, HoleSide, closest_param
 from occsurf.algorithms.kernel.surface import BSplineSurface
 
 from .. import _occ
+from ..conversion.shapes import as_edge, as_face, as_shape
 from ..conversion.splines import from_occ, make_face
 from ..messages import one_line
 from .joints import ASSESS_END_SAMPLES, ASSESS_SAMPLES, SEW_TOLERANCE, _edge_samples, _local_analysis, assess_joint, edge_face_map  # noqa: F401 - re-exported
@@ -159,7 +160,9 @@ def _edge_points(edge: Any, k: int = 9) -> np.ndarray:
 
 def find_loops(shape: TopoDS_Shape, all_loops: bool = False) -> list[tuple[list[Any], bool]]:
     """Closed loops of free edges, each ``(ordered edges, is_outer)``, shell by shell (a face that
-    belongs to no shell counts as a shell of its own)."""
+    belongs to no shell counts as a shell of its own). ``shape``: anything
+    :func:`~occsurf.bridge.conversion.shapes.as_shape` takes (build123d / cadquery Shells, Solids...)."""
+    shape = as_shape(shape, "shape")
     loops: list[tuple[list[Any], bool]] = []
     shells = []
     ex = TopExp_Explorer(shape, TopAbs_SHELL)
@@ -236,6 +239,7 @@ def hole_sides(edges: list[Any], faces: list[Any | None]) -> list[HoleSide]:
     for k, (e, f) in enumerate(zip(edges, faces)):
         if f is None:
             raise InvalidGeometryError(f"edge {k} of the hole has no neighbour face: its tangent plane is unknown")
+        e, f = as_edge(e, f"edges[{k}]"), as_face(f, f"faces[{k}]")  # build123d / cadquery objects too
         surf = from_occ(f, BRepTools.UVBounds_s(f))  # the part of the surface the face uses
         sides.append(_iso_side(surf, _edge_points(e)))
     n = len(sides)
@@ -259,8 +263,8 @@ def occ_fill(edges: list[Any], faces: list[Any]) -> Any:
     mk = BRepOffsetAPI_MakeFilling(o["degree"], o["nb_pts_on_cur"], o["nb_iter"], o["anisotropy"], o["tol2d"],
                                    o["tol3d"], o["tol_ang"], o["tol_curv"], o["max_deg"], o["max_segments"])
     with _occ.kernel_errors("BRepOffsetAPI_MakeFilling"):
-        for e, f in zip(edges, faces):
-            mk.Add(e, f, GeomAbs_Shape.GeomAbs_G1, True)
+        for k, (e, f) in enumerate(zip(edges, faces)):
+            mk.Add(as_edge(e, f"edges[{k}]"), as_face(f, f"faces[{k}]"), GeomAbs_Shape.GeomAbs_G1, True)
         mk.Build()
         if not mk.IsDone():
             raise KernelError("BRepOffsetAPI_MakeFilling: not done")
@@ -273,7 +277,7 @@ def neighbour_face(m: TopTools_IndexedDataMapOfShapeListOfShape, edge: Any) -> A
     For a free edge of a hole this is its neighbour face; ``None`` if the edge is not in the map or
     bounds no face.
     """
-    idx = m.FindIndex(edge)
+    idx = m.FindIndex(as_edge(edge, "edge"))
     if idx == 0:
         return None
     lst = m.FindFromIndex(idx)

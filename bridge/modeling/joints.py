@@ -67,7 +67,11 @@ def assess_joint(edge: Any, face: Any, fill_surfaces: list[Any], samples: int = 
     when the fill knows them (ours: from its construction, :meth:`HoleFill.locate`); OCC then
     evaluates the fill there, so a wrong parameter shows up as a gap. Without it (OCC's filler)
     each point is projected onto every surface (``GeomAPI_ProjectPointOnSurf``), the nearest kept.
+    ``edge`` and ``face`` may be build123d / cadquery objects (:mod:`occsurf.bridge.conversion.shapes`).
     """
+    from ..conversion.shapes import as_edge, as_face
+
+    edge, face = as_edge(edge, "edge"), as_face(face, "face")
     s_n, uvs, pts = _edge_samples(edge, face, samples)
     g0 = g1 = 0.0
     if locate is not None:
@@ -97,8 +101,11 @@ def edge_face_map(shape: TopoDS_Shape) -> TopTools_IndexedDataMapOfShapeListOfSh
     """Every edge of ``shape`` mapped to the faces it bounds (``TopExp.MapShapesAndAncestors_s``).
 
     Look an edge's faces up with :func:`neighbour_face`; a free edge has one face, an edge
-    shared by two sewn faces two.
+    shared by two sewn faces two. ``shape``: anything :func:`~occsurf.bridge.conversion.shapes.as_shape` takes.
     """
+    from ..conversion.shapes import as_shape
+
+    shape = as_shape(shape, "shape")
     m = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, m)
     return m

@@ -234,6 +234,16 @@ def _occ_surface_of(obj: Any) -> Any:
     return surface
 
 
+def _occ_curve_of(obj: Any) -> Any:
+    """A ``Geom_Curve`` as it is; the 3-D curve of an edge-like object with exactly one edge."""
+    from ..conversion.shapes import as_curve, is_edge_like
+
+    if not is_edge_like(obj):
+        raise InvalidGeometryError(f"occ_curve: expected a Geom_Curve or an edge (TopoDS_Edge, build123d/cadquery "
+                                   f"Edge, a Wire of one edge), got {type(obj).__name__}")
+    return as_curve(obj, "occ_curve")
+
+
 def _check_samples(samples: Any, minimum: int = 2) -> int:
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < minimum:
         raise InvalidGeometryError(f"samples: expected an integer >= {minimum}, got {samples!r}")
@@ -330,8 +340,11 @@ def curve_deviation(ours: BSplineCurve, occ_curve: Any = None, samples: int = 10
     ----------
     ours : BSplineCurve
         3-D.
-    occ_curve : Geom_Curve, optional
-        Evaluated at the same parameters; default ``to_occ(ours)``.
+    occ_curve : Geom_Curve, or an edge, optional
+        Evaluated at the same parameters; default ``to_occ(ours)``. An edge (``TopoDS_Edge``,
+        build123d / cadquery ``Edge``, or a ``Wire`` or other shape holding exactly one edge) stands
+        for its 3-D curve (``BRep_Tool.Curve_s``: the edge's location applied, its own
+        parametrisation kept), see :func:`occsurf.bridge.conversion.shapes.as_curve`.
     samples : int
         Uniform parameters over ``ours.domain``, ends included (snapped onto knots within 4 ulps).
 
@@ -341,7 +354,7 @@ def curve_deviation(ours: BSplineCurve, occ_curve: Any = None, samples: int = 10
     """
     _check(ours, BSplineCurve, "ours")
     m = _check_samples(samples)
-    occ_c = to_occ(ours) if occ_curve is None else occ_curve
+    occ_c = to_occ(ours) if occ_curve is None else _occ_curve_of(occ_curve)
     t0, t1 = ours.domain
     ts = _snap_to_knots(np.linspace(t0, t1, m), ours.knots)
     D = ours.derivatives(ts, 3)  # (m, 4, 3)
