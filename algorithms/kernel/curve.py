@@ -17,6 +17,7 @@ from .. import _numba_kernels as _nk
 from .. import _validate as V
 from .. import tolerances
 from ._common import ARRAY, SCALAR, ControlPointValue
+from ._poles import HomogeneousPoles
 from .basis import basis_derivatives, basis_functions, find_span, greville
 from .blossom import blossom_poles
 from .degree import elevate_poles
@@ -35,7 +36,7 @@ from .knots import (
     snap_knots,
     split_poles,
 )
-from .rational import pole_deviation, curve_quotient_rule, from_homogeneous, to_homogeneous
+from .rational import pole_deviation, curve_quotient_rule
 
 __all__ = ["BSplineCurve"]
 
@@ -43,7 +44,7 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
-class BSplineCurve(ControlPointValue):
+class BSplineCurve(HomogeneousPoles, ControlPointValue):
     """A B-spline (or NURBS) curve of any dimension.
 
     Parameters
@@ -101,10 +102,7 @@ class BSplineCurve(ControlPointValue):
     def _set(self, p: int, t: Array, P: Array, w: Array | None) -> None:
         object.__setattr__(self, "degree", p)
         object.__setattr__(self, "knots", V.readonly(t))
-        object.__setattr__(self, "control_points", V.readonly(P))
-        object.__setattr__(self, "weights", None if w is None else V.readonly(w))
-        H = P if w is None else to_homogeneous(P, w)
-        object.__setattr__(self, "_hpoles", V.readonly(H))
+        self._set_poles(P, w)
 
     @classmethod
     def _trusted(cls, degree: int, knots: Array, control_points: Array, weights: Array | None = None) -> BSplineCurve:
@@ -114,13 +112,6 @@ class BSplineCurve(ControlPointValue):
                  None if weights is None else np.asarray(weights, float))
         return obj
 
-    @classmethod
-    def _from_homogeneous(cls, degree: int, knots: Array, hpoles: Array, rational: bool) -> BSplineCurve:
-        if rational:
-            P, w = from_homogeneous(hpoles)
-            return cls._trusted(degree, knots, P, w)
-        return cls._trusted(degree, knots, hpoles)
-
     # ------------------------------------------------------------------ properties
     @property
     def n_poles(self) -> int:
@@ -129,10 +120,6 @@ class BSplineCurve(ControlPointValue):
     @property
     def dim(self) -> int:
         return self.control_points.shape[1]
-
-    @property
-    def is_rational(self) -> bool:
-        return self.weights is not None
 
     @property
     def domain(self) -> tuple[float, float]:

@@ -19,6 +19,7 @@ from .. import _validate as V
 from .. import tolerances
 from .. import _numba_kernels as _nk
 from ._common import ARRAY_PAIR, PAIR, ControlPointValue
+from ._poles import HomogeneousPoles
 from .basis import band_product, basis_derivatives, basis_functions, find_span, greville, span_groups
 from .blossom import blossom_basis
 from .degree import elevate_poles
@@ -37,7 +38,7 @@ from .knots import (
     snap_knots,
     split_poles,
 )
-from .rational import pole_deviation, from_homogeneous, surface_quotient_rule, to_homogeneous
+from .rational import pole_deviation, surface_quotient_rule
 
 __all__ = ["BSplineSurface"]
 
@@ -53,7 +54,7 @@ def _axis(direction: Direction) -> int:
 
 
 @dataclass(frozen=True, eq=False)
-class BSplineSurface(ControlPointValue):
+class BSplineSurface(HomogeneousPoles, ControlPointValue):
     """A tensor-product B-spline (or NURBS) surface.
 
     Parameters
@@ -131,10 +132,7 @@ class BSplineSurface(ControlPointValue):
     def _set(self, deg: tuple[int, int], kn: tuple[Array, Array], P: Array, w: Array | None) -> None:
         object.__setattr__(self, "degree", (int(deg[0]), int(deg[1])))
         object.__setattr__(self, "knots", (V.readonly(kn[0]), V.readonly(kn[1])))
-        object.__setattr__(self, "control_points", V.readonly(P))
-        object.__setattr__(self, "weights", None if w is None else V.readonly(w))
-        H = P if w is None else to_homogeneous(P, w)
-        object.__setattr__(self, "_hpoles", V.readonly(H))
+        self._set_poles(P, w)
 
     @classmethod
     def _trusted(cls, degree, knots, control_points, weights=None) -> BSplineSurface:
@@ -145,10 +143,7 @@ class BSplineSurface(ControlPointValue):
         return obj
 
     def _rebuild(self, degree, knots, hpoles: Array) -> BSplineSurface:
-        if self.is_rational:
-            P, w = from_homogeneous(hpoles)
-            return BSplineSurface._trusted(degree, knots, P, w)
-        return BSplineSurface._trusted(degree, knots, hpoles)
+        return BSplineSurface._from_homogeneous(degree, knots, hpoles, self.is_rational)
 
     # ------------------------------------------------------------------ properties
     @property
@@ -158,10 +153,6 @@ class BSplineSurface(ControlPointValue):
     @property
     def dim(self) -> int:
         return self.control_points.shape[2]
-
-    @property
-    def is_rational(self) -> bool:
-        return self.weights is not None
 
     @property
     def domain(self) -> tuple[tuple[float, float], tuple[float, float]]:
