@@ -7,7 +7,7 @@
     occsurf fill IN --out OUT.step [--faces I ...] [--all-loops] [--no-occ] [--json] [--timeout SECONDS] [--strict]
                  [--in-process]
     occsurf fit DATA --tol T --out OUT.step [--json] [--ctrl NU NV] [--degree D] [--smooth S] [--fix-boundary]
-                [--timeout SECONDS] [--in-process]
+                [--timeout SECONDS] [--strict] [--in-process]
     occsurf render FILE (--lights LIGHTS.json | --preset NAME) --out IMAGE.png [--size W H] [--view NAME]
                    [--timeout SECONDS] [--strict] [--in-process]
     occsurf demo [--out DIR] [--only NAME ...]

@@ -1,5 +1,5 @@
 """``occsurf fit DATA --tol T --out OUT.step [--json] [--ctrl NU NV] [--degree D] [--smooth S]
-[--fix-boundary] [--x X0 X1] [--y Y0 Y1] [--face N] [--levels L] [--timeout SECONDS] [--in-process]``.
+[--fix-boundary] [--x X0 X1] [--y Y0 Y1] [--face N] [--levels L] [--timeout SECONDS] [--strict] [--in-process]``.
 
 Fits data to a surface (course ch. 7) with :mod:`occsurf.bridge.modeling.fit`: adaptive
 hierarchical by default (§7-10: overlays only where the distance to the data exceeds ``T``),
@@ -15,7 +15,9 @@ crashes OCC costs a one-line error, not the command; the worker's progress lines
 through a small file this process follows; a worker that takes longer than ``--timeout`` seconds (reading,
 fitting and writing together) is stopped and reported. Bad data (NaN-only rows, too few points for the
 degree, ragged or non-numeric rows named by their line) give one line ``occsurf: DATA: reason``
-and exit status 2.
+and exit status 2. A STEP/IGES file read around damage (see :mod:`occsurf.bridge.exchange.checks`) is
+fitted as read, with one line ``occsurf: DATA: warning: ...`` per warning on stderr (and ``warnings`` in
+the JSON); ``--strict`` refuses it instead (exit status 2, nothing written), as every reading command does.
 """
 
 from __future__ import annotations
@@ -31,7 +33,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ._common import EXIT_ERROR, EXIT_OK, error, format_rows, strip_path, timeout_arg, worker_failure
+from ._common import (EXIT_ERROR, EXIT_OK, add_strict_option, error, format_rows, strip_path, timeout_arg,
+                      worker_failure)
 
 __all__ = ["fit_job", "add_parser", "run"]
 
@@ -65,7 +68,8 @@ def fit_job(item: dict[str, Any]) -> dict[str, Any]:
             warnings.simplefilter("ignore")
             from ..modeling.fit import fit_input, read_fit_input, write_fit_outputs
 
-            inp = read_fit_input(item["input"], face=item.get("face"), x_range=item.get("x"), y_range=item.get("y"))
+            inp = read_fit_input(item["input"], face=item.get("face"), x_range=item.get("x"), y_range=item.get("y"),
+                                 strict=bool(item.get("strict")))
             say(inp.description)
             res = fit_input(inp, item["tol"], ctrl=item.get("ctrl"), degree=item["degree"], smooth=item["smooth"],
                             fix_boundary=item["fix_boundary"], max_levels=item.get("levels"), progress=say)
@@ -74,7 +78,7 @@ def fit_job(item: dict[str, Any]) -> dict[str, Any]:
     finally:
         if log is not None:
             log.close()
-    doc = {"input": item["input"], "detected": inp.description, "kind": inp.kind}
+    doc = {"input": item["input"], "detected": inp.description, "kind": inp.kind, "warnings": list(inp.warnings)}
     doc.update(res.report())
     doc["outputs"] = outputs
     return doc
@@ -195,7 +199,7 @@ def run(ns: argparse.Namespace) -> int:
     os.close(fd)
     item = {"input": str(src), "output": str(out), "tol": ns.tol, "ctrl": ns.ctrl, "degree": ns.degree,
             "smooth": ns.smooth, "fix_boundary": ns.fix_boundary, "x": ns.x, "y": ns.y, "face": ns.face,
-            "levels": ns.levels, "progress": progress}
+            "levels": ns.levels, "progress": progress, "strict": ns.strict}
     follow = _Follow(progress)
     follow.start()
     t0 = time.perf_counter()
@@ -212,6 +216,8 @@ def run(ns: argparse.Namespace) -> int:
         return EXIT_ERROR
     doc = outcome.value
     doc["seconds"] = round(time.perf_counter() - t0, 3)
+    for w in doc.get("warnings", ()):
+        error(f"{src}: warning: {w}")
     if not doc["converged"]:
         error(f"{src}: the tolerance {ns.tol:g} is not reached (max distance {doc['max_error']:.3g}); the data "
               "need more levels (--levels) or poles (--ctrl)")
@@ -252,5 +258,6 @@ def add_parser(sub: Any) -> None:
     f.add_argument("--levels", type=_count(0), metavar="L", help="deepest overlay level (default 6)")
     f.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop the worker after this long and report it (default {DEFAULT_TIMEOUT:g})")
+    add_strict_option(f, writes=True)
     f.add_argument("--in-process", action="store_true", help="fit in this process, not in a worker")
     f.set_defaults(func=run)

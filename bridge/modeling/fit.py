@@ -59,6 +59,8 @@ class FitInput:
         What was read and detected, one line (printed by the command).
     face : object or None
         The OCC surface of a refitted face (for the deviation by OCC projection).
+    warnings : list of str
+        A STEP/IGES file read around damage: its ``ImportedModel.warnings`` (empty otherwise).
     """
 
     kind: str
@@ -67,6 +69,7 @@ class FitInput:
     y: np.ndarray | None = None
     description: str = ""
     face: Any = None
+    warnings: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -210,15 +213,17 @@ def _read_rows(p: Path) -> FitInput:
                     "x-y grid)")
 
 
-def _read_face(p: Path, face: int | None, samples: int | None) -> FitInput:
+def _read_face(p: Path, face: int | None, samples: int | None, strict: bool = False) -> FitInput:
     from ..cli._common import read_model
 
-    model = read_model(p)
+    model = read_model(p, strict=strict)  # strict: a file read around damage is refused
     n = len(model.faces)
     k = 0 if face is None else int(face)
     if not 0 <= k < n:
         raise ExchangeError(f"{p}: face {k} is not in 0..{n - 1}")
-    return _face_input(model, p, k, samples)
+    inp = _face_input(model, p, k, samples)
+    inp.warnings = list(model.warnings)
+    return inp
 
 
 def _face_input(model: Any, p: Path, k: int, samples: int | None) -> FitInput:
@@ -262,8 +267,12 @@ def face_inputs(path: str | os.PathLike[str], faces: list[int] | None = None, *,
 
 
 def read_fit_input(path: str | os.PathLike[str], *, face: int | None = None, x_range=None, y_range=None,
-                   samples: int | None = None) -> FitInput:
+                   samples: int | None = None, strict: bool = False) -> FitInput:
     """Read a data file for fitting (see the module notes for the formats).
+
+    A STEP/IGES file read around damage keeps its warnings (``FitInput.warnings``); with ``strict``
+    (``occsurf fit --strict``) it is refused instead (ExchangeError, the message of
+    :func:`occsurf.bridge.cli._common.strict_refusal`).
 
     Raises
     ------
@@ -287,7 +296,7 @@ def read_fit_input(path: str | os.PathLike[str], *, face: int | None = None, x_r
     if suffix in ROW_SUFFIXES:
         return _read_rows(p)
     if suffix in CAD_SUFFIXES:
-        return _read_face(p, face, samples)
+        return _read_face(p, face, samples, strict)
     raise ExchangeError(f"{p}: unknown data format {suffix or '(no suffix)'}; expected .npy, .csv, .xyz, "
                         ".step/.stp or .iges/.igs")
 

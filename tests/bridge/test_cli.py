@@ -361,9 +361,8 @@ def test_help_is_fast_and_does_not_load_occ() -> None:
 
 #: Commands that read an untrusted STEP/IGES file (in a worker): each offers --timeout in its usage line.
 READING_COMMANDS = ("inspect", "fill", "fit", "render", "check", "convert")
-#: ... and --strict (warnings, i.e. damage read around, become exit status 2; nothing written). Not yet:
-#: fit (it reads a face through occsurf.bridge.modeling.fit, which does not pass its warnings on).
-STRICT_COMMANDS = ("inspect", "fill", "render", "convert", "check")
+#: ... and --strict (warnings, i.e. damage read around, become exit status 2; nothing written).
+STRICT_COMMANDS = ("inspect", "fill", "fit", "render", "convert", "check")
 
 
 def _usage(command: str) -> str | None:
