@@ -135,6 +135,12 @@ class ImportedEdge:
         OCC's continuity class of ``occ_curve`` (``'C0'`` ... ``'CN'``).
     parameter_range : (float, float)
         The edge's range on ``occ_curve``.
+    color : (float, float, float, float) or None
+        RGBA in [0, 1] the file gives this curve: its own curve colour, else its wire's or curve
+        set's, else its instance's or part's (curve or generic colours; a surface colour does not
+        colour curves); ``None`` if the file gives none.
+    layer : str or None
+        The curve's layer, resolved in the same order.
     """
 
     index: int
@@ -147,6 +153,8 @@ class ImportedEdge:
     periodic: bool
     continuity: str
     parameter_range: tuple[float, float]
+    color: tuple[float, float, float, float] | None = None
+    layer: str | None = None
 
 
 @dataclass(frozen=True)
@@ -213,6 +221,24 @@ def _geomabs_name(value: Any, prefix: str = "GeomAbs_") -> str:
     return name[len(prefix):] if name.startswith(prefix) else name
 
 
+def _kind_name(value: Any, other: str) -> str:
+    """The ``GeomAbs`` type name of a surface or curve without its prefix; ``other`` becomes 'Other'."""
+    name = _geomabs_name(value)
+    return "Other" if name == other else name
+
+
+def _spline(convert: Any, expected: type) -> tuple[Any, str | None]:
+    """``(spline, None)`` from ``convert()``, or ``(None, why)`` when it fails or gives another type
+    than ``expected`` (one bad face or curve must not fail the file)."""
+    try:
+        spline = convert()
+    except Exception as err:  # noqa: BLE001
+        return None, one_line(err)
+    if not isinstance(spline, expected):
+        return None, f"from_occ returned {type(spline).__name__}, not a {expected.__name__}"
+    return spline, None
+
+
 def _import_face(index: int, shape: Any, name: str | None) -> ImportedFace:
     from OCP.BRep import BRep_Tool
     from OCP.GeomAdaptor import GeomAdaptor_Surface
@@ -224,16 +250,9 @@ def _import_face(index: int, shape: Any, name: str | None) -> ImportedFace:
     occ_surface = BRep_Tool.Surface_s(face)
     if occ_surface is None:
         return ImportedFace(index, name, "Other", None, "the face has no surface", face, None, False, False, "C0")
-    surface_type = _geomabs_name(GeomAdaptor_Surface(occ_surface).GetType())
-    if surface_type == "OtherSurface":
-        surface_type = "Other"
-    surface, error = None, None
-    try:
-        surface = from_occ(face, _conversion_bounds(face, occ_surface), trims=False)
-        if not isinstance(surface, BSplineSurface):
-            surface, error = None, f"from_occ returned {type(surface).__name__}, not a BSplineSurface"
-    except Exception as err:  # noqa: BLE001 - one bad face must not fail the file
-        error = one_line(err)
+    surface_type = _kind_name(GeomAdaptor_Surface(occ_surface).GetType(), "OtherSurface")
+    surface, error = _spline(lambda: from_occ(face, _conversion_bounds(face, occ_surface), trims=False),
+                             BSplineSurface)
     return ImportedFace(
         index=index,
         name=name,
@@ -287,16 +306,8 @@ def _import_edge(index: int, shape: Any, name: str | None) -> ImportedEdge:
     if occ_curve is None:
         return ImportedEdge(index, name, "Other", None, "the edge has no 3-D curve", edge, None, False, "C0",
                             (float(first), float(last)))
-    curve_type = _geomabs_name(GeomAdaptor_Curve(occ_curve).GetType())
-    if curve_type == "OtherCurve":
-        curve_type = "Other"
-    curve, error = None, None
-    try:
-        curve = from_occ(edge)
-        if not isinstance(curve, BSplineCurve):
-            curve, error = None, f"from_occ returned {type(curve).__name__}, not a BSplineCurve"
-    except Exception as err:  # noqa: BLE001
-        error = one_line(err)
+    curve_type = _kind_name(GeomAdaptor_Curve(occ_curve).GetType(), "OtherCurve")
+    curve, error = _spline(lambda: from_occ(edge), BSplineCurve)
     return ImportedEdge(
         index=index,
         name=name,

@@ -267,8 +267,8 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
             raise ExchangeError(f"{err} ({warnings[0]})") from err
         warnings += root_warnings + unit_warnings
         warnings += checks.model_warnings(shape, reader, scan if fmt == "step" else iges_scan, _count_bare_faces(shape))
-        faces_map, _ = _maps(shape)
-        xdata = xcaf.read_xcaf(caf, faces_map, _BareIndex(faces_map), p.stem)
+        faces_map, edges_map = _maps(shape)
+        xdata = xcaf.read_xcaf(caf, faces_map, _BareIndex(faces_map), p.stem, (edges_map, _BareIndex(edges_map)))
         xdata.unit, xdata.unit_scale = unit, scale
         if fmt == "iges":  # names and levels of uncoloured faces in groups; level names (406 form 3)
             own_names, levels = xcaf.iges_face_attributes(reader.WS().TransferReader(), faces_map,
@@ -576,6 +576,8 @@ def _convert(p: Path, fmt: str, shape: Any, names: tuple[dict[int, str], dict[in
             face = replace(face, **attributes)
         faces.append(face)
     edges = [_import_edge(i - 1, edges_map.FindKey(i), edge_names.get(i)) for i in range(1, edges_map.Extent() + 1)]
+    edges = [replace(e, color=x.edge_colors.get(i), layer=x.edge_layers.get(i))
+             if i in x.edge_colors or i in x.edge_layers else e for i, e in enumerate(edges, start=1)]
     return ImportedModel(path=str(p), format=fmt, shape=shape, faces=faces, edges=edges, warnings=warnings,
                          unit=x.unit, unit_scale=x.unit_scale, assembly=x.assembly)
 

@@ -11,9 +11,16 @@ as before (faces keep their order), then the same transfer is put into an XCAF d
 * the **assembly tree**: products and their instances (STEP ``NEXT_ASSEMBLY_USAGE_OCCURRENCE``), each
   instance a *reference* to a shared prototype (two instances of one part have the same
   :attr:`AssemblyNode.part` and the same :attr:`AssemblyNode.shape`), with its placement;
-* per face: the **colour** (face colour > solid/shell colour > instance colour > part colour, walking
-  up the tree), the **layer** (the same order; the first of several), and the **instance path**
-  from the root ('assembly/plate_a').
+* **per-instance colour overrides** of nested instances (STEP's ``SPECIFIED_HIGHER_USAGE_OCCURRENCE``
+  styled through an ``OVER_RIDING_STYLED_ITEM``, what CATIA, NX or SolidWorks write when one
+  occurrence of a part inside a sub-assembly is coloured differently; OCC's SHUO,
+  ``XCAFDoc_ColorTool::SetInstanceColor``): the :attr:`AssemblyNode.color` of that occurrence, and so
+  the colour of the faces of its placed copy;
+* per face: the **colour** (face colour > solid/shell colour > instance colour (an override of the
+  occurrence first) > part colour, walking up the tree), the **layer** (the same order; the first of
+  several), and the **instance path** from the root ('assembly/plate_a');
+* per free edge (a curve bounding no face): its **curve colour** (edge > wire/compound > instance >
+  part, curve or generic colours only) and **layer**.
 
 Writing (:func:`.xcaf_write.step_document_bytes`, :func:`.xcaf_write.iges_document_bytes`) rebuilds an XCAF document from an
 :class:`~occsurf.bridge.exchange.step_iges.ImportedModel` or an :class:`AssemblyNode` tree
@@ -28,7 +35,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -38,7 +44,7 @@ from occsurf.algorithms.errors import InvalidGeometryError
 from ..messages import one_line
 
 __all__ = ["AssemblyNode", "UNITS", "WRITE_UNITS", "unit_scale", "XcafData", "read_xcaf", "step_unit", "iges_unit", "compound",
-           "iter_nodes"]
+           "iter_nodes", "instance_overrides", "instance_layer_losses"]
 
 #: Millimetres per unit of each length unit occsurf reports or writes (``ImportedModel.unit``,
 #: ``write_step(..., unit=)``, ``occsurf convert --unit``).
@@ -84,7 +90,10 @@ class AssemblyNode:
         The instance's name (STEP: the ``NEXT_ASSEMBLY_USAGE_OCCURRENCE``'s name, else the product's);
         the root's product name.
     color : tuple of 4 floats or None
-        RGBA in [0, 1] the file gives this instance (else its part).
+        RGBA in [0, 1] the file gives this occurrence: an override for this very occurrence (STEP
+        SHUO: one of two instances of a sub-assembly's part recoloured; then the two nodes' colours
+        differ although they are the same component of the same sub-assembly), else the instance's
+        (component's) colour, else its part's.
     layer : str or None
         The instance's (else its part's) layer.
     location : ndarray, shape (4, 4)
@@ -124,6 +133,49 @@ def iter_nodes(node: AssemblyNode, path: str = "") -> Iterable[tuple[str, Assemb
         yield from iter_nodes(child, here)
 
 
+def node_key(node: AssemblyNode) -> str:
+    """The prototype key of a node: its part, else (a node built without one) its identity."""
+    return node.part if node.part is not None else f"\0{id(node)}"
+
+
+def instance_overrides(root: AssemblyNode) -> list[tuple[str, tuple[int, ...], tuple[float, float, float, float]]]:
+    """The occurrences whose colour differs from the one their component has in the first
+    occurrence of its assembly: ``(path, child indices from the root, colour)``.
+
+    A part or sub-assembly is written once, from its first occurrence; such an occurrence needs a
+    per-occurrence override (STEP: a ``SPECIFIED_HIGHER_USAGE_OCCURRENCE`` styled by an
+    ``OVER_RIDING_STYLED_ITEM``; OCC: an SHUO), or, in IGES, a placed copy of its own colour.
+    Occurrences directly below the root are their own components: never listed."""
+    first: dict[str, tuple[AssemblyNode, ...]] = {}
+    out: list[tuple[str, tuple[int, ...], tuple[float, float, float, float]]] = []
+
+    def walk(node: AssemblyNode, path: str, indices: tuple[int, ...]) -> None:
+        given = first.setdefault(node_key(node), node.children)
+        for i, (child, written) in enumerate(zip(node.children, given)):
+            here, below = f"{path}/{child.name}", (*indices, i)
+            if indices and child.color is not None and child.color != written.color:
+                out.append((here, below, child.color))
+            walk(child, here, below)
+
+    walk(root, root.name, ())
+    return out
+
+
+def instance_layer_losses(root: AssemblyNode) -> list[tuple[str, str | None, str | None]]:
+    """``(path, layer, written layer)`` of each occurrence whose layer differs from its part's
+    first occurrence's: OCC's ``STEPCAFControl_Writer`` writes no layer on an instance
+    (``WriteLayers`` skips component and assembly labels: "there is no way to assign layer to
+    instance in STEP", OCC 7.9), so a part is written on its first occurrence's layer and every
+    occurrence reads back on it."""
+    first: dict[str, AssemblyNode] = {}
+    out = []
+    for path, node in iter_nodes(root):
+        written = first.setdefault(node_key(node), node)
+        if written is not node and node.layer != written.layer:
+            out.append((path, node.layer, written.layer))
+    return out
+
+
 @dataclass
 class XcafData:
     """What the XCAF document adds to the transferred shape (face keys: 1-based map indices)."""
@@ -132,6 +184,8 @@ class XcafData:
     unit_scale: float = 1.0
     colors: dict[int, tuple[float, float, float, float]] = field(default_factory=dict)
     layers: dict[int, str] = field(default_factory=dict)
+    edge_colors: dict[int, tuple[float, float, float, float]] = field(default_factory=dict)
+    edge_layers: dict[int, str] = field(default_factory=dict)
     instances: dict[int, str] = field(default_factory=dict)
     instance_names: dict[int, str] = field(default_factory=dict)
     face_names: dict[int, str] = field(default_factory=dict)
@@ -155,6 +209,8 @@ class XcafData:
         doc = {"unit": self.unit, "unit_scale": self.unit_scale,
                "colors": {str(k): list(v) for k, v in self.colors.items()},
                "layers": {str(k): v for k, v in self.layers.items()},
+               "edge_colors": {str(k): list(v) for k, v in self.edge_colors.items()},
+               "edge_layers": {str(k): v for k, v in self.edge_layers.items()},
                "instances": {str(k): v for k, v in self.instances.items()},
                "instance_names": {str(k): v for k, v in self.instance_names.items()},
                "face_names": {str(k): v for k, v in self.face_names.items()},
@@ -172,6 +228,8 @@ class XcafData:
         return cls(unit=doc["unit"], unit_scale=float(doc["unit_scale"]),
                    colors={int(k): tuple(v) for k, v in doc["colors"].items()},  # type: ignore[misc]
                    layers={int(k): v for k, v in doc["layers"].items()},
+                   edge_colors={int(k): tuple(v) for k, v in doc["edge_colors"].items()},  # type: ignore[misc]
+                   edge_layers={int(k): v for k, v in doc["edge_layers"].items()},
                    instances={int(k): v for k, v in doc["instances"].items()},
                    instance_names={int(k): v for k, v in doc["instance_names"].items()},
                    face_names={int(k): v for k, v in doc["face_names"].items()},
@@ -394,10 +452,11 @@ def _level_function_text(params: str, delim: str) -> str | None:
 
 
 def name_levels(data: XcafData, names: dict[int, str]) -> None:
-    """Layers read as level numbers ('1') take the name the file gives the level (in place)."""
+    """Layers of faces and free edges read as level numbers ('1') take the name the file gives the
+    level (in place)."""
     if names:
-        data.layers = {i: names.get(int(v), v) if v.isascii() and v.isdigit() else v
-                       for i, v in data.layers.items()}
+        data.layers, data.edge_layers = ({i: names.get(int(v), v) if v.isascii() and v.isdigit() else v
+                                          for i, v in layers.items()} for layers in (data.layers, data.edge_layers))
 
 
 # ---------------------------------------------------------------------------------------- reading
@@ -457,33 +516,85 @@ def _matrix(location: Any) -> np.ndarray:
     return m
 
 
-class _Reader:
-    """One pass over an XCAF document: the tree, then every leaf's faces matched to the model's faces."""
+def label_entry(label: Any) -> str:
+    """The label's entry ('0:1:1:2:1'): its identity within the document."""
+    from OCP.TCollection import TCollection_AsciiString
+    from OCP.TDF import TDF_Tool
 
-    def __init__(self, doc: Any, faces_map: Any, bare: Any) -> None:
+    entry = TCollection_AsciiString()
+    TDF_Tool.Entry_s(label, entry)
+    return entry.ToCString()
+
+
+def shuo_chain(shuo: Any) -> tuple[str, ...]:
+    """The component path a main SHUO label (``XCAFDoc_GraphNode``) styles: the entries of the
+    components it and its next usages are attached to, upper first (OCC keeps each SHUO node as a
+    child label of its component)."""
+    from OCP.TDF import TDF_LabelSequence
+    from OCP.XCAFDoc import XCAFDoc_ShapeTool
+
+    chain = [label_entry(shuo.Father())]
+    current = shuo
+    while len(chain) < 64:  # an assembly deeper than that, or a cycle, is not a chain OCC writes
+        nxt = TDF_LabelSequence()
+        if not XCAFDoc_ShapeTool.GetSHUONextUsage_s(current, nxt) or nxt.Length() == 0:
+            break
+        current = nxt.Value(1)
+        chain.append(label_entry(current.Father()))
+    return tuple(chain)
+
+
+def main_shuos(component: Any) -> list[Any]:
+    """The SHUO labels whose chain starts at ``component`` (the ones the writer styles)."""
+    from OCP.TDF import TDF_AttributeSequence, TDF_LabelSequence
+    from OCP.XCAFDoc import XCAFDoc_ShapeTool
+
+    attrs = TDF_AttributeSequence()
+    if not XCAFDoc_ShapeTool.GetAllComponentSHUO_s(component, attrs):
+        return []
+    out = []
+    for i in range(1, attrs.Length() + 1):
+        label = attrs.Value(i).Label()
+        upper = TDF_LabelSequence()
+        XCAFDoc_ShapeTool.GetSHUOUpperUsage_s(label, upper)
+        if upper.Length() == 0 and label.Father().IsEqual(component):
+            out.append(label)
+    return out
+
+
+class _Index:
+    """Faces or free edges of the model: the map, the sub-shapes by bare shape, which are taken."""
+
+    def __init__(self, index_map: Any, bare: Any) -> None:
+        self.map = index_map
+        self.bare = bare
+        self.mats: dict[int, np.ndarray] = {}
+        self.assigned: set[int] = set()
+
+
+class _Reader:
+    """One pass over an XCAF document: the tree, then every leaf's faces and free edges matched to
+    the model's."""
+
+    def __init__(self, doc: Any, faces_map: Any, bare: Any, edges: tuple[Any, Any] | None = None) -> None:
         from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
         self.shape_tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
         self.layer_tool = XCAFDoc_DocumentTool.LayerTool_s(doc.Main())
-        self.faces_map = faces_map
-        self.bare = bare
+        self.faces = _Index(faces_map, bare)
+        self.edges = _Index(*edges) if edges is not None else None
         self.data = XcafData()
         self.parts: dict[str, str] = {}  # label entry -> part key
         self._part_names: set[str] = set()
-        self._face_mats: dict[int, np.ndarray] = {}
-        self._assigned: set[int] = set()
-        self._sub_attributes: dict[str, tuple[dict[int, Any], dict[int, str], dict[int, str]]] = {}
+        self._sub_attributes: dict[str, tuple[_SubAttributes, _SubAttributes]] = {}
+        #: colour of each SHUO met so far, by the component path it styles (label entries, upper first)
+        self._shuos: dict[tuple[str, ...], tuple[float, float, float, float]] = {}
         self._n_unmatched = 0
         #: whether the document holds an assembly (else faces get no instance path)
         self.in_assembly = False
 
     def part_key(self, label: Any) -> str:
-        from OCP.TCollection import TCollection_AsciiString
-        from OCP.TDF import TDF_Tool
-
-        entry = TCollection_AsciiString()
-        TDF_Tool.Entry_s(label, entry)
-        key = entry.ToCString()
+        key = label_entry(label)
         if key not in self.parts:
             base = _label_name(label) or f"part {key}"
             name, k = base, 1
@@ -494,9 +605,20 @@ class _Reader:
             self.parts[key] = name
         return self.parts[key]
 
-    def node(self, label: Any, parent: np.ndarray, path: str, inherited: list[tuple[Any, Any]],
-             top: bool) -> AssemblyNode:
-        """The node of a free or component label; walks its components, matches its faces."""
+    def override(self, components: tuple[str, ...]) -> tuple[float, float, float, float] | None:
+        """The SHUO colour of the occurrence at the end of ``components`` (the upper-most wins)."""
+        for start in range(len(components) - 1):
+            color = self._shuos.get(components[start:])
+            if color is not None:
+                return color
+        return None
+
+    def node(self, label: Any, parent: np.ndarray, path: str, inherited: list[tuple[Any, Any, Any]],
+             top: bool, components: tuple[str, ...] = ()) -> AssemblyNode:
+        """The node of a free or component label; walks its components, matches its faces and edges.
+
+        ``inherited``: ``(surface colour, curve colour, layer)`` of the ancestors, nearest first;
+        ``components``: the entries of the component labels from the root down to the parent."""
         from OCP.TDF import TDF_Label, TDF_LabelSequence
         from OCP.XCAFDoc import XCAFDoc_ShapeTool
 
@@ -506,70 +628,75 @@ class _Reader:
             proto = TDF_Label()
             XCAFDoc_ShapeTool.GetReferredShape_s(label, proto)
             local = _matrix(XCAFDoc_ShapeTool.GetLocation_s(label))
+            components = (*components, label_entry(label))
+            for shuo in main_shuos(label):  # registered before the occurrences below it are met
+                color = _label_color(shuo)
+                if color is not None:
+                    self._shuos.setdefault(shuo_chain(shuo), color)
         name = _label_name(label) or _label_name(proto) or self.part_key(proto)
         here = f"{path}/{name}" if path else name
-        chain = [(label, proto), *inherited]  # the instance first, then its ancestors
-        color = _label_color(label) or _label_color(proto)
+        color = self.override(components) or _label_color(label) or _label_color(proto)
+        curve = self.override(components) or _label_color(label, False) or _label_color(proto, False)
         layer = _label_layer(self.layer_tool, label) or _label_layer(self.layer_tool, proto)
+        chain = [(color, curve, layer), *inherited]  # the occurrence first, then its ancestors
         placed = parent @ local
         children: list[AssemblyNode] = []
         if XCAFDoc_ShapeTool.IsAssembly_s(proto):
             comps = TDF_LabelSequence()
             XCAFDoc_ShapeTool.GetComponents_s(proto, comps)
-            children = [self.node(comps.Value(i), placed, here, chain, False) for i in range(1, comps.Length() + 1)]
+            children = [self.node(comps.Value(i), placed, here, chain, False, components)
+                        for i in range(1, comps.Length() + 1)]
         else:
             self.leaf(proto, placed, here if not top or self.in_assembly else None, name, chain)
         return AssemblyNode(name=name, color=color, layer=layer, location=local, part=self.part_key(proto),
                             shape=XCAFDoc_ShapeTool.GetShape_s(proto), children=tuple(children))
 
     def leaf(self, proto: Any, placed: np.ndarray, path: str | None, name: str,
-             chain: list[tuple[Any, Any]]) -> None:
-        """Colour, layer and instance of each face of a part instance placed at ``placed``."""
-        from OCP.TopAbs import TopAbs_FACE
-        from OCP.TopExp import TopExp_Explorer
-        from OCP.TopTools import TopTools_IndexedMapOfShape
+             chain: list[tuple[Any, Any, Any]]) -> None:
+        """Colour, layer and instance of each face, colour and layer of each free edge, of a part
+        instance placed at ``placed``."""
+        from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
         from OCP.XCAFDoc import XCAFDoc_ShapeTool
 
         key = self.part_key(proto)
         if key not in self._sub_attributes:  # once per part, however many instances
-            self._sub_attributes[key] = self.sub_shape_attributes(proto)
-        own_color, own_layer, own_name = self._sub_attributes[key]
-        inherited_color = next((c for lab, pro in chain for c in (_label_color(lab), _label_color(pro)) if c), None)
-        inherited_layer = next((x for lab, pro in chain for x in (_label_layer(self.layer_tool, lab),
-                                                                 _label_layer(self.layer_tool, pro)) if x), None)
+            self._sub_attributes[key] = (self.sub_shape_attributes(proto, TopAbs_FACE),
+                                         self.sub_shape_attributes(proto, TopAbs_EDGE))
+        face_attributes, edge_attributes = self._sub_attributes[key]
+        inherited_color = next((c for c, _, _ in chain if c), None)
+        inherited_curve = next((c for _, c, _ in chain if c), None)
+        inherited_layer = next((x for _, _, x in chain if x), None)
         shape = XCAFDoc_ShapeTool.GetShape_s(proto)
-        ex = TopExp_Explorer(shape, TopAbs_FACE)
-        seen = TopTools_IndexedMapOfShape()  # k: position among the part's distinct faces
-        while ex.More():
-            face = ex.Current()
-            ex.Next()
-            n_before = seen.Extent()
-            k = seen.Add(face)
-            if k <= n_before:
-                continue
-            index = self.match(face, placed)
-            if index is None:
-                continue
-            self._assigned.add(index)
-            color = own_color.get(k) or inherited_color
-            layer = own_layer.get(k) or inherited_layer
-            if color is not None:
-                self.data.colors.setdefault(index, color)
-            if layer is not None:
-                self.data.layers.setdefault(index, layer)
-            if k in own_name:
-                self.data.face_names.setdefault(index, own_name[k])
-            if path is not None:
-                self.data.instances.setdefault(index, path)
-                self.data.instance_names.setdefault(index, name)
+        # k: the position sub_shape_attributes keys by
+        kinds = [(self.faces, _distinct(shape, TopAbs_FACE), face_attributes, inherited_color,
+                  self.data.colors, self.data.layers)]
+        if self.edges is not None:
+            kinds.append((self.edges, _distinct(shape, TopAbs_EDGE, TopAbs_FACE), edge_attributes, inherited_curve,
+                          self.data.edge_colors, self.data.edge_layers))
+        for index, members, (own_color, own_layer, own_name), inherited, colors, layers in kinds:
+            for k, member in enumerate(members, start=1):
+                i = self.match(index, member, placed)
+                if i is None:
+                    continue
+                color = own_color.get(k) or inherited
+                layer = own_layer.get(k) or inherited_layer
+                if color is not None:
+                    colors.setdefault(i, color)
+                if layer is not None:
+                    layers.setdefault(i, layer)
+                if k in own_name:
+                    self.data.face_names.setdefault(i, own_name[k])
+                if path is not None and index is self.faces:
+                    self.data.instances.setdefault(i, path)
+                    self.data.instance_names.setdefault(i, name)
 
-    def sub_shape_attributes(self, proto: Any) -> tuple[dict[int, Any], dict[int, str], dict[int, str]]:
-        """Face colours and layers of a prototype's sub-shape labels (face level wins over solid/shell
-        level), and face names, keyed by the face's 1-based position in ``TopExp_Explorer`` order over
-        the prototype."""
+    def sub_shape_attributes(self, proto: Any, kind: Any) -> _SubAttributes:
+        """Colours and layers of a prototype's sub-shape labels for its faces (``kind`` TopAbs_FACE) or
+        free edges (TopAbs_EDGE: curve colours), the sub-shape's own level winning over a containing
+        sub-shape's (solid, shell, wire, compound), and face names; keyed by the sub-shape's 1-based
+        position in ``TopExp_Explorer`` order over the prototype (each once)."""
         from OCP.TDF import TDF_LabelSequence
         from OCP.TopAbs import TopAbs_FACE
-        from OCP.TopExp import TopExp_Explorer
         from OCP.TopTools import TopTools_IndexedMapOfShape
         from OCP.XCAFDoc import XCAFDoc_ShapeTool
 
@@ -580,64 +707,83 @@ class _Reader:
         names: dict[int, str] = {}
         if subs.Length() == 0:
             return colors, layers, names
-        faces = TopTools_IndexedMapOfShape()
-        ex = TopExp_Explorer(XCAFDoc_ShapeTool.GetShape_s(proto), TopAbs_FACE)
-        order: dict[int, int] = {}
-        while ex.More():
-            j = faces.Add(ex.Current())
-            order.setdefault(j, len(order) + 1)
-            ex.Next()
-        face_level: tuple[dict[int, Any], dict[int, str]] = ({}, {})
+        avoid = TopAbs_FACE if kind != TopAbs_FACE else None
+        members_map = TopTools_IndexedMapOfShape()  # position k of each member = its map index
+        for member in _distinct(XCAFDoc_ShapeTool.GetShape_s(proto), kind, avoid):
+            members_map.Add(member)
+        surface = kind == TopAbs_FACE
+        own_level: tuple[dict[int, Any], dict[int, str]] = ({}, {})
         other_level: tuple[dict[int, Any], dict[int, str]] = ({}, {})
         for i in range(1, subs.Length() + 1):
             sub = subs.Value(i)
-            color, layer = _label_color(sub), _label_layer(self.layer_tool, sub)
+            color, layer = _label_color(sub, surface), _label_layer(self.layer_tool, sub)
             sub_shape = XCAFDoc_ShapeTool.GetShape_s(sub)
-            name = _label_name(sub) if sub_shape.ShapeType() == TopAbs_FACE else None
-            if name is not None and faces.FindIndex(sub_shape):
-                names.setdefault(order[faces.FindIndex(sub_shape)], name)
+            own = sub_shape.ShapeType() == kind
+            name = _label_name(sub) if own and surface else None
+            if name is not None and members_map.FindIndex(sub_shape):
+                names.setdefault(members_map.FindIndex(sub_shape), name)
             if color is None and layer is None:
                 continue
-            if sub_shape.ShapeType() == TopAbs_FACE:
-                targets, members = face_level, [faces.FindIndex(sub_shape)]
+            if own:
+                targets, members = own_level, [members_map.FindIndex(sub_shape)]
             else:
-                targets, members = other_level, []
-                ex = TopExp_Explorer(sub_shape, TopAbs_FACE)
-                while ex.More():
-                    members.append(faces.FindIndex(ex.Current()))
-                    ex.Next()
+                targets = other_level
+                members = [members_map.FindIndex(s) for s in _distinct(sub_shape, kind, avoid)]
             for j in members:
                 if j and color is not None:
-                    targets[0].setdefault(order[j], color)
+                    targets[0].setdefault(j, color)
                 if j and layer is not None:
-                    targets[1].setdefault(order[j], layer)
-        return {**other_level[0], **face_level[0]}, {**other_level[1], **face_level[1]}, names
+                    targets[1].setdefault(j, layer)
+        return {**other_level[0], **own_level[0]}, {**other_level[1], **own_level[1]}, names
 
-    def match(self, face: Any, placed: np.ndarray) -> int | None:
-        """The model's face (1-based map index) that is ``face`` of a prototype placed at ``placed``."""
-        candidates = self.bare.find(face)
+    def match(self, index: _Index, shape: Any, placed: np.ndarray) -> int | None:
+        """The model's face or edge (1-based map index) that is ``shape`` of a prototype placed at ``placed``."""
+        candidates = index.bare.find(shape)
         if not candidates:
             self._n_unmatched += 1
             return None
         if len(candidates) == 1:
+            index.assigned.add(candidates[0])
             return candidates[0]
-        want = placed @ _matrix(face.Location())
+        want = placed @ _matrix(shape.Location())
         scale = 1.0 + float(np.abs(want).max())
         best, best_err = None, math.inf
         for i in candidates:
-            m = self._face_mats.get(i)
+            m = index.mats.get(i)
             if m is None:
-                m = self._face_mats[i] = _matrix(self.faces_map.FindKey(i).Location())
+                m = index.mats[i] = _matrix(index.map.FindKey(i).Location())
             err = float(np.abs(m - want).max())
-            if err < best_err and i not in self._assigned:
+            if err < best_err and i not in index.assigned:
                 best, best_err = i, err
         if best is None or best_err > 1e-9 * scale:
             self._n_unmatched += 1
             return None
+        index.assigned.add(best)
         return best
 
 
-def read_xcaf(caf: Any, faces_map: Any, bare: Any, name: str) -> XcafData:
+#: What :meth:`_Reader.sub_shape_attributes` gives: colours, layers and names by sub-shape position.
+_SubAttributes = tuple[dict[int, Any], dict[int, str], dict[int, str]]
+
+
+def _distinct(shape: Any, kind: Any, avoid: Any = None) -> list[Any]:
+    """The sub-shapes of ``kind`` of ``shape`` (outside sub-shapes of ``avoid``), each once, in
+    ``TopExp_Explorer`` order."""
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    seen = TopTools_IndexedMapOfShape()
+    out = []
+    ex = TopExp_Explorer(shape, kind, avoid) if avoid is not None else TopExp_Explorer(shape, kind)
+    while ex.More():
+        n_before = seen.Extent()
+        if seen.Add(ex.Current()) > n_before:
+            out.append(ex.Current())
+        ex.Next()
+    return out
+
+
+def read_xcaf(caf: Any, faces_map: Any, bare: Any, name: str, edges: tuple[Any, Any] | None = None) -> XcafData:
     """Transfer the parsed (and already root-by-root transferred) file into an XCAF document and read it.
 
     Parameters
@@ -650,6 +796,9 @@ def read_xcaf(caf: Any, faces_map: Any, bare: Any, name: str) -> XcafData:
         The faces of ``faces_map`` by shape without location.
     name : str
         Name of a synthetic root when the file holds several free shapes, one at least an assembly.
+    edges : (TopTools_IndexedMapOfShape, object with find), optional
+        The model's free edges (``ImportedModel.edges`` order) and their index by bare shape: their
+        colours and layers are read too.
 
     Returns
     -------
@@ -663,8 +812,10 @@ def read_xcaf(caf: Any, faces_map: Any, bare: Any, name: str) -> XcafData:
     from OCP.XCAFDoc import XCAFDoc_ShapeTool
 
     doc = TDocStd_Document(TCollection_ExtendedString("XCAF"))
-    for mode in ("SetNameMode", "SetColorMode", "SetLayerMode"):
-        getattr(caf, mode)(True)
+    # SHUOs (per-occurrence styles) are off by default in OCC's STEP reader
+    for mode in ("SetNameMode", "SetColorMode", "SetLayerMode", "SetSHUOMode"):
+        if hasattr(caf, mode):
+            getattr(caf, mode)(True)
     data = XcafData()
     try:
         ok = caf.Transfer(doc)
@@ -674,7 +825,7 @@ def read_xcaf(caf: Any, faces_map: Any, bare: Any, name: str) -> XcafData:
     if not ok:
         data.warnings.append("names, colours, layers and assembly structure not read (XCAF transfer failed)")
         return data
-    reader = _Reader(doc, faces_map, bare)
+    reader = _Reader(doc, faces_map, bare, edges)
     free = TDF_LabelSequence()
     reader.shape_tool.GetFreeShapes(free)
     labels = [free.Value(i) for i in range(1, free.Length() + 1)]
@@ -692,8 +843,8 @@ def read_xcaf(caf: Any, faces_map: Any, bare: Any, name: str) -> XcafData:
             comp = compound([n.shape.Moved(_location(n.location)) for n in nodes])
             reader.data.assembly = AssemblyNode(name, None, None, _IDENTITY, None, comp, tuple(nodes))
     if reader._n_unmatched:
-        reader.data.warnings.append(f"{reader._n_unmatched} faces of the assembly structure were not found in the "
-                                    "transferred shape: they have no instance, colour or layer")
+        reader.data.warnings.append(f"{reader._n_unmatched} faces or curves of the assembly structure were not "
+                                    "found in the transferred shape: they have no instance, colour or layer")
     return reader.data
 
 
@@ -715,16 +866,11 @@ def _location(matrix: np.ndarray) -> Any:
 
 
 def compound(shapes: Sequence[Any]) -> Any:
-    """A ``TopoDS_Compound`` of ``shapes`` (in order)."""
-    from OCP.BRep import BRep_Builder
-    from OCP.TopoDS import TopoDS_Compound
+    """A ``TopoDS_Compound`` of ``shapes`` (in order): :func:`occsurf.bridge.conversion.shapes.compound`
+    (imported on call: this module loads OCP only when it reads or writes)."""
+    from ..conversion.shapes import compound as make_compound
 
-    comp = TopoDS_Compound()
-    builder = BRep_Builder()
-    builder.MakeCompound(comp)
-    for s in shapes:
-        builder.Add(comp, s)
-    return comp
+    return make_compound(list(shapes))
 
 
 # ---------------------------------------------------------------------------------------- writing

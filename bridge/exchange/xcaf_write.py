@@ -29,7 +29,8 @@ import numpy as np
 from occsurf.algorithms.errors import ExchangeError
 
 from ..messages import one_line
-from .xcaf import _IDENTITY, _OCC_UNIT, AssemblyNode, _location, iter_nodes
+from .xcaf import (_IDENTITY, _OCC_UNIT, AssemblyNode, _distinct, _location, instance_overrides, iter_nodes, label_entry,
+                   main_shuos, node_key, shuo_chain)
 
 __all__ = ["build_document", "step_document_bytes", "iges_document_bytes"]
 
@@ -81,21 +82,25 @@ class _Writer:
         self.explicit = explicit
         self.protos: dict[str, Any] = {}
         self.proto_shapes: dict[str, Any] = {}
+        #: an assembly prototype's component labels
+        self.components: dict[str, list[Any]] = {}
         #: face names to set on the written face entities: (prototype face, name)
         self.face_names: list[tuple[Any, str]] = []
         #: every name given to a label (the products OCC names itself are the others)
         self.names: set[str] = set()
 
     def proto(self, node: AssemblyNode) -> Any:
-        key = node.part if node.part is not None else f"\0{id(node)}"
+        key = node_key(node)
         if key in self.protos:
             return self.protos[key]
         if node.children:
             label = self.shape_tool.NewShape()
+            comps = self.components[key] = []
             for child in node.children:
                 comp = self.shape_tool.AddComponent(label, self.proto(child), _location(child.location))
                 _set_name(comp, child.name, self.names)
                 _set_color(self.color_tool, comp, child.color)
+                comps.append(comp)
         else:
             label = self.shape_tool.AddShape(node.shape, False, False)
         _set_name(label, node.part or node.name, self.names)
@@ -105,6 +110,71 @@ class _Writer:
         self.protos[key] = label
         self.proto_shapes[key] = node.shape
         return label
+
+    def overrides(self, root: AssemblyNode) -> int:
+        """Per-occurrence colours (SHUO) of the tree written from ``root``
+        (:func:`.xcaf.instance_overrides`: a sub-assembly is written once, from its first
+        occurrence): ``XCAFDoc_ShapeTool::SetSHUO`` on the occurrence's component path, coloured;
+        OCC's STEP writer makes it a ``SPECIFIED_HIGHER_USAGE_OCCURRENCE`` whose representation is the
+        context of a ``STYLED_ITEM``'s ``PRESENTATION_STYLE_BY_CONTEXT`` (an ``OVER_RIDING_STYLED_ITEM``
+        when the part has a style of its own). Returns how many were set."""
+        n = 0
+        for _, indices, rgba in instance_overrides(root):
+            labels, node = [], root
+            for i in indices:
+                labels.append(self.components[node_key(node)][i])
+                node = node.children[i]
+            n += self.set_shuo(tuple(labels), rgba)
+        return n
+
+    def set_shuo(self, path: tuple[Any, ...], rgba: Sequence[float]) -> int:
+        """Colour the occurrence reached through the component labels ``path`` (upper first)."""
+        from OCP.TDF import TDF_LabelSequence
+        from OCP.XCAFDoc import XCAFDoc_GraphNode
+
+        seq = TDF_LabelSequence()
+        for comp in path:
+            seq.Append(comp)
+        want = tuple(label_entry(comp) for comp in path)
+        if not any(shuo_chain(s) == want for s in main_shuos(path[0])):
+            # (OCP does not hand the new attribute back through the out-argument: found below)
+            self.shape_tool.SetSHUO(seq, XCAFDoc_GraphNode())
+        for shuo in main_shuos(path[0]):
+            if shuo_chain(shuo) == want:
+                _set_color(self.color_tool, shuo, rgba)
+                return 1
+        return 0
+
+    def edges(self, label: Any, proto_shape: Any, target_shape: Any, edges: Sequence[Any]) -> None:
+        """Curve colours and layers of the free edges of a part (``label``, written as ``target_shape``:
+        the part itself, or a placed copy with its sub-shapes in the same explorer order), from the
+        model's ``edges`` that are edges of ``proto_shape`` (the first one of a part edge wins)."""
+        from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+        from OCP.TopLoc import TopLoc_Location
+        from OCP.TopTools import TopTools_IndexedMapOfShape
+
+        attributed = [e for e in edges if e.color is not None or e.layer is not None]
+        if not attributed:
+            return
+        identity = TopLoc_Location()
+        bare = TopTools_IndexedMapOfShape()
+        for e in _distinct(proto_shape, TopAbs_EDGE, TopAbs_FACE):
+            bare.Add(e.Located(identity))
+        targets = _distinct(target_shape, TopAbs_EDGE, TopAbs_FACE)
+        if len(targets) != bare.Extent():
+            return
+        done: set[int] = set()
+        for e in attributed:
+            j = bare.FindIndex(e.edge.Located(identity))
+            if not j or j in done:
+                continue
+            done.add(j)
+            # a part that is one free edge (an IGES root curve) carries its colour itself
+            same = targets[j - 1].IsSame(target_shape)
+            sub = label if same else self.shape_tool.AddSubShape(label, targets[j - 1])
+            if sub is not None and not sub.IsNull():
+                _set_color(self.color_tool, sub, e.color, curve=True)
+                _set_layer(self.layer_tool, sub, e.layer)
 
     def faces(self, key: str, node: AssemblyNode, faces: list[Any]) -> None:
         """Face-level colours, layers and names of one part (``faces``: ImportedFace of one of its instances)."""
@@ -250,6 +320,8 @@ def build_document(source: Any, name: str, *, flatten: bool = False) -> _Writer:
             _set_color(writer.color_tool, label, leaf.color)
             _set_layer(writer.layer_tool, label, leaf.layer)
             writer.protos[leaf.part] = label  # type: ignore[index]
+            if model is not None:
+                writer.edges(label, original.shape, leaf.shape, model.edges)
             copy_faces = _explore_faces(leaf.shape)
             proto_faces = _explore_faces(original.shape)
             if len(copy_faces) != len(proto_faces) or here not in faces:
@@ -258,12 +330,20 @@ def build_document(source: Any, name: str, *, flatten: bool = False) -> _Writer:
         return writer
     if root is not None:
         writer.proto(root)
+        writer.overrides(root)
         if model is not None:
             faces = _tree_faces(model)
+            done: set[str] = set()
             for path, node in iter_nodes(root):
-                if not node.children and path in faces:
-                    key = node.part if node.part is not None else f"\0{id(node)}"
+                key = node_key(node)
+                if not node.children and path in faces and key not in done:
+                    # a part's faces once, as its first instance has them: OCC's XCAF has no face
+                    # colours per instance, and another instance's must not recolour the first's
+                    done.add(key)
                     writer.faces(key, node, faces[path])
+            for key, label in writer.protos.items():
+                if key not in writer.components:
+                    writer.edges(label, writer.proto_shapes[key], writer.proto_shapes[key], model.edges)
         writer.shape_tool.UpdateAssemblies()
         return writer
     # flat: one free shape per root, with the faces' common name/colour/layer on it
@@ -298,6 +378,7 @@ def build_document(source: Any, name: str, *, flatten: bool = False) -> _Writer:
         _set_layer(writer.layer_tool, label, node.layer)
         writer.protos[node.part] = label  # type: ignore[index]
         writer.faces(node.part, node, members)  # type: ignore[arg-type]
+        writer.edges(label, node.shape, node.shape, model.edges)
     return writer
 
 

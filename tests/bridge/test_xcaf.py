@@ -19,6 +19,9 @@ import pytest
 
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 from occsurf.bridge.exchange import xcaf
+from occsurf.bridge.exchange.convert import face_area as _area
+from occsurf.bridge.exchange.convert import trim_band as _trim_band
+from occsurf.bridge.exchange.convert import wire_count as _n_wires
 from occsurf.bridge.exchange.step_iges import ImportedModel, read_iges, read_step, write_iges, write_step
 
 bd = pytest.importorskip("build123d")
@@ -48,49 +51,6 @@ def assembly_step(tmp_path_factory) -> Path:
     path = tmp_path_factory.mktemp("xcaf") / "assembly.step"
     bd.export_step(bd.Compound(label="assembly", children=[a, b, post]), path)
     return path
-
-
-def _area(face) -> float:
-    from OCP.BRepGProp import BRepGProp
-    from OCP.GProp import GProp_GProps
-
-    props = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(face, props, 1e-9)
-    return props.Mass()
-
-
-def _n_wires(face) -> int:
-    from OCP.TopAbs import TopAbs_WIRE
-    from OCP.TopExp import TopExp_Explorer
-
-    ex, n = TopExp_Explorer(face, TopAbs_WIRE), 0
-    while ex.More():
-        n, _ = n + 1, ex.Next()
-    return n
-
-
-def _trim_band(face) -> float:
-    """Sum over the face's edges of length x tolerance: how much area the trimming is uncertain by.
-
-    A face's boundary is only defined to within its edges' tolerances; a reader that recomputes the
-    p-curves from the 3-D edges may trim anywhere in that band (measured: the bearing's 8e-6 mm2 face 0,
-    edge tolerance 1.9e-6, comes back 1.6e-4 larger through OCC's own STEPControl_Writer too).
-    """
-    from OCP.BRep import BRep_Tool
-    from OCP.BRepGProp import BRepGProp
-    from OCP.GProp import GProp_GProps
-    from OCP.TopAbs import TopAbs_EDGE
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS
-
-    band, ex = 0.0, TopExp_Explorer(face, TopAbs_EDGE)
-    while ex.More():
-        edge = TopoDS.Edge_s(ex.Current())
-        props = GProp_GProps()
-        BRepGProp.LinearProperties_s(edge, props)
-        band += props.Mass() * BRep_Tool.Tolerance_s(edge)
-        ex.Next()
-    return band
 
 
 def _assert_same_faces(before: ImportedModel, after: ImportedModel, *, rtol: float, instances: bool = True,
