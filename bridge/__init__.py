@@ -24,8 +24,7 @@ Names are imported lazily: ``import occsurf.bridge`` does not load OCC until a f
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from occsurf._lazy import lazy_exports
 
 _EXPORTS = {
     "to_occ": "conversion.splines",
@@ -72,15 +71,4 @@ _EXPORTS = {
 
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'occsurf.bridge' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(list(globals()) + __all__)
+__getattr__, __dir__ = lazy_exports(__name__, {k: f".{m}" for k, m in _EXPORTS.items()}, globals())

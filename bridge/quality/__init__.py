@@ -21,8 +21,7 @@ Names are imported lazily: importing this package does not load OCC.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from occsurf._lazy import lazy_exports
 
 _EXPORTS = {
     name: "continuity"
@@ -33,15 +32,4 @@ _EXPORTS.update({name: "report" for name in ("check_model", "summarize_model", "
 
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'occsurf.bridge.quality' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(list(globals()) + __all__)
+__getattr__, __dir__ = lazy_exports(__name__, {k: f".{m}" for k, m in _EXPORTS.items()}, globals())
