@@ -8,7 +8,9 @@ command); ``OUT`` is replaced atomically.
 
 Output: one line ``IN (FORMAT, UNIT) -> OUT (FORMAT, UNIT): N faces, M free curves``, then one line per
 property that could not be carried (``IGES has no assembly instances: 2 instances of 'plate' written
-as copies``), measured by reading ``OUT`` back. Exit status 0 when ``OUT`` was written, 2 with one
+as copies``; ``IGES has no per-instance colour overrides: ...``; ``layers of 1 instances not carried:
+OCC's STEP writer writes no layer on an instance, ...``), measured by reading ``OUT`` back (faces'
+names, colours, layers, instances, areas and wires; free curves' colours and layers). Exit status 0 when ``OUT`` was written, 2 with one
 line ``occsurf: PATH: reason`` on stderr when ``IN`` cannot be read, ``OUT`` cannot be written or an
 argument is wrong.
 """

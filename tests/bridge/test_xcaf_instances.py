@@ -305,6 +305,9 @@ def layered(tmp_path_factory):
                                        "'there is no way to assign layer to instance in STEP' (OCC 7.9); a part "
                                        "is written on its first instance's layer")
 def test_instance_layers_through_step(tmp_path, layered):
+    """Measured, every XCAF route: a layer on the component (reference) label and on an SHUO label is
+    not written at all; ``XCAFDoc_LayerTool::SetLayer`` on the placed shape of one instance lands on
+    the part's solid, so both instances read it back. occsurf sets it on the part (first instance)."""
     again = read_step(write_step(tmp_path / "layers.step", layered))
     assert [n.layer for _, n in xcaf.iter_nodes(again.assembly)][1:] == ["L1", "L2"]
 
@@ -327,3 +330,33 @@ def test_instance_layer_loss_is_reported_and_iges_keeps_them(tmp_path, layered):
     assert [f.layer for f in iges.faces] == [f.layer for f in edited.faces]
     assert not any("layer" in line for line in format_losses(edited, "iges", None))
     np.testing.assert_array_equal(sorted({f.layer for f in iges.faces}), ["L1", "L2"])
+
+
+def test_convert_command_prints_the_instance_layer_loss(tmp_path, layered, monkeypatch, capsys):
+    """No file OCC reads gives two instances of a part different layers (its writer cannot make one;
+    a layer set on a placed shape lands on the part: measured), so the command is run in-process on
+    a model whose reader is replaced by the user-edited model; the line reaches stdout."""
+    from occsurf.bridge import cli
+    from occsurf.bridge.exchange import step_iges
+
+    src = write_step(tmp_path / "src.step", layered)
+    model = read_step(src)
+    faces = [dataclasses.replace(f, layer="L2") if f.instance == "assembly/plate_b" else f for f in model.faces]
+    edited = dataclasses.replace(model, faces=faces, assembly=layered)
+    real = step_iges.read_step
+    monkeypatch.setattr(step_iges, "read_step", lambda path, **kw: edited if Path(path) == src else real(path, **kw))
+    ns = cli.build_parser().parse_args(["convert", str(src), str(tmp_path / "out.step"), "--in-process"])
+    assert ns.func(ns) == 0
+    lines = capsys.readouterr().out.splitlines()[1:]
+    assert lines[0].startswith("layers of 1 instances not carried: OCC's STEP writer writes no layer on an instance")
+    assert lines[1] == "layers of 8 of 16 faces not carried (face 8: 'L2' read back as 'L1')"
+
+
+def test_overrides_in_build123d_and_cadquery_objects(nested_step):
+    b3d = read_step(nested_step, as_="build123d")
+    assert [[(p.label, p.color is not None and tuple(p.color)) for p in s.children] for s in b3d.children] == [
+        [("plate", RED), ("post", False)], [("plate", BLUE), ("post", False)]]
+    assy = read_step(nested_step, as_="cadquery")
+    colours = [[c.color.toTuple() if c.color else None for c in s.children] for s in assy.children]
+    np.testing.assert_allclose(colours[0][0], RED, atol=1e-15)  # cadquery's linear RGB round trip
+    np.testing.assert_allclose(colours[1][0], BLUE, atol=1e-15)
