@@ -25,12 +25,16 @@ tangent plane has gradient ``g_i = -(m_1, m_2) / m_3`` for its normal ``m``; the
 energy of Duchon's thin-plate splines, "Splines minimizing rotation-invariant semi-norms in
 Sobolev spaces", 1977, which OCC's ``GeomPlate_BuildPlateSurface`` also minimises), with the Gram
 matrices of the energy exact (Gauss quadrature per knot span) and the sparse normal equations
-solved by ``scipy.sparse``. The data rows are weighted by the targets (``g0_tol``, ``angle_tol``),
-so a residual of 1 is "just met", and the energy weight ``tolerances.FILL_PLATE_SMOOTHING`` (of
-the data term's trace) only decides the coefficients that no sample reaches: the plate's inside.
-Every knot span (in ``u`` and in ``v``) holding a sample that misses a target is bisected and the
-fit repeated, until both targets are met or ``max_spans`` is reached; what was achieved is
-reported per side (:class:`PlateFill`).
+solved by ``scipy.sparse`` (one sparse LU per knot vector). The data rows are weighted by the
+targets (``g0_tol``, ``angle_tol``), so a residual of 1 is "just met"; the energy weight
+``tolerances.FILL_PLATE_SMOOTHING`` (of the data term's trace) decides the coefficients no sample
+reaches (the plate's inside), and its bias on the data is taken off by iterated Tikhonov
+regularisation (``c += K^{-1} A^T (b - A c)``, at most ``tolerances.FILL_PLATE_ITERATIONS``
+steps, the best iterate kept as judged on samples *between* the fit's, so that a basis function
+grazing the loop is not blown up to fit round-off). Every knot span (in ``u`` and in ``v``)
+holding a sample that misses a target is bisected and the fit repeated, until both targets are
+met or ``max_spans`` is reached; the best stage is returned and what it achieved is reported per
+side (:class:`PlateFill`).
 
 Why a height field: it cannot fold (``S_u x S_v = N - h_u e_1 - h_v e_2`` has a positive ``N``
 component everywhere), its trimming curves are exact (the p-curve of a (rational) B-spline side
@@ -421,6 +425,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g
     lengths = np.array([np.linalg.norm(np.diff(d[0], axis=0), axis=1).sum() for d in dense]) / L
     tol0 = g0_tol / L
     tol1 = np.radians(angle_tol)
+    best = None  # (score, c, knots, g0 per side, g1 per side): the best stage is returned
     while True:
         nu, nv = ku.size - p - 1, kv.size - p - 1
         spans = max(nu, nv) - p
@@ -448,33 +453,34 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g
         E = sp.kron(Gu[2], Gv[0]) + 2.0 * sp.kron(Gu[1], Gv[1]) + sp.kron(Gu[0], Gv[2])
         AtA = (A.T @ A).tocsc()
         eps = tolerances.FILL_PLATE_SMOOTHING * AtA.diagonal().sum() / max(E.diagonal().sum(), 1e-300)
-        K = (AtA + eps * E).tocsc()
-        c = spla.spsolve(K, A.T @ rhs)
-        r = rhs - A @ c  # one step of iterative refinement (the system is stiff: data vs energy)
-        c = c + spla.spsolve(K, A.T @ r - eps * (E @ c))
-        # ---- what was achieved, at the fit samples and between them
-        g0_side, g1_side, bad_u, bad_v = np.zeros(len(sides)), np.full(len(sides), np.nan), [], []
-        for i, s in enumerate(sides):
-            t = np.r_[fit_t[i], chk_t[i]]
-            Xl, Ml = _local_data(s, t, o, R, L)
-            vv, uu, ww, cc = _rows(ku, kv, p, Xl[:, 0], Xl[:, 1])
-            h = np.einsum("ij,ij->i", vv, c[cc])
-            e0 = np.abs(h - Xl[:, 2]) * L
-            g0_side[i] = e0.max()
-            miss = e0 > g0_tol
-            if flags[i]:
-                ang = _angle(np.einsum("ij,ij->i", uu, c[cc]), np.einsum("ij,ij->i", ww, c[cc]), Ml)
-                g1_side[i] = ang.max()
-                miss |= ang > angle_tol
-            bad_u.append(Xl[miss, 0]), bad_v.append(Xl[miss, 1])
-        bu, bv = np.concatenate(bad_u), np.concatenate(bad_v)
-        met = bu.size == 0
-        if met:
+        lu = spla.splu((AtA + eps * E).tocsc())
+        ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L)
+        c = lu.solve(A.T @ rhs)
+        stage = (ev.score(c, g0_tol, angle_tol), c)
+        for _ in range(int(tolerances.FILL_PLATE_ITERATIONS)):
+            # iterated Tikhonov (the energy's bias leaves the data, not what no sample pins: a basis
+            # function grazing the loop), stopped by the samples between the fit's (validation)
+            if stage[0] <= 1.0:
+                break
+            c = c + lu.solve(A.T @ (rhs - A @ c))
+            sc = ev.score(c, g0_tol, angle_tol)
+            if sc < stage[0]:
+                stage = (sc, c)
+            elif sc > 2.0 * stage[0]:
+                break
+        c = stage[1]
+        g0_side, g1_side, bu, bv = ev.measure(c, g0_tol, angle_tol)
+        if best is None or stage[0] < best[0]:
+            best = (stage[0], c, ku, kv, g0_side, g1_side)
+        if stage[0] <= 1.0:
             break
         ku2, kv2 = _bisect(ku, p, bu, max_spans), _bisect(kv, p, bv, max_spans)
         if ku2.size == ku.size and kv2.size == kv.size:
             break
         ku, kv = ku2, kv2
+    score, c, ku, kv, g0_side, g1_side = best
+    met = score <= 1.0
+    nu, nv = ku.size - p - 1, kv.size - p - 1
     # ---- the surface in model units: u, v are lengths along e1, e2 from o
     gu, gv = _greville(ku, p), _greville(kv, p)
     U, V = np.meshgrid(gu, gv, indexing="ij")
@@ -488,6 +494,49 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g
     trimmed = TrimmedSurface(surf, pcurves)
     return PlateFill(surf, trimmed, sides, flags, g0_side, g1_side, o, e1, e2, N,
                      (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean)
+
+
+class _Evaluation:
+    """Boundary samples (the fit's and those between them) with their basis rows: what a coefficient
+    vector achieves there (vectorised over all samples)."""
+
+    def __init__(self, sides: list[HoleSide], flags: NDArray[np.bool_], ts: list[Array], ku: Array, kv: Array,
+                 p: int, o: Array, R: Array, L: float) -> None:
+        data = [_local_data(s, t, o, R, L) for s, t in zip(sides, ts)]
+        self.sid = np.concatenate([np.full(len(t), i) for i, t in enumerate(ts)])
+        self.X = np.concatenate([d[0] for d in data])
+        self.M = np.concatenate([d[1] for d in data])
+        self.g1 = flags[self.sid]
+        self.val, self.du, self.dv, self.cols = _rows(ku, kv, p, self.X[:, 0], self.X[:, 1])
+        self.L, self.n = L, len(sides)
+
+    def errors(self, c: Array) -> tuple[Array, Array]:
+        """Per sample: distance (model units) and angle (degrees; nan on G0-only sides)."""
+        cc = c[self.cols]
+        e0 = np.abs(np.einsum("ij,ij->i", self.val, cc) - self.X[:, 2]) * self.L
+        ang = np.full(e0.shape, np.nan)
+        g = self.g1
+        ang[g] = _angle(np.einsum("ij,ij->i", self.du[g], cc[g]), np.einsum("ij,ij->i", self.dv[g], cc[g]), self.M[g])
+        return e0, ang
+
+    def score(self, c: Array, g0_tol: float, angle_tol: float) -> float:
+        """The worst sample in units of the targets (<= 1: both met everywhere)."""
+        e0, ang = self.errors(c)
+        worst = float(e0.max()) / g0_tol
+        if self.g1.any():
+            worst = max(worst, float(np.nanmax(ang)) / angle_tol)
+        return worst if np.isfinite(worst) else np.inf
+
+    def measure(self, c: Array, g0_tol: float, angle_tol: float) -> tuple[Array, Array, Array, Array]:
+        """Per side the largest distance and angle; the (u, v) of the samples that miss a target."""
+        e0, ang = self.errors(c)
+        g0 = np.zeros(self.n)
+        np.maximum.at(g0, self.sid, e0)
+        g1 = np.full(self.n, -np.inf)
+        np.maximum.at(g1, self.sid[self.g1], ang[self.g1])
+        g1[~np.isfinite(g1)] = np.nan
+        miss = (e0 > g0_tol) | (self.g1 & (np.nan_to_num(ang, nan=0.0) > angle_tol))
+        return g0, g1, self.X[miss, 0], self.X[miss, 1]
 
 
 def _local_data(side: HoleSide, t: Array, o: Array, R: Array, L: float) -> tuple[Array, Array]:

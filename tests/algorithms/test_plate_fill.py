@@ -3,13 +3,14 @@ holes the central split refuses (reflex corners) or folds on (long curved holes)
 
 Closed forms. A hole cut from a plane (an L with a reflex corner, a 120 deg annular sector bounded by
 exact rational arcs) is refilled by that plane: the height field is h = 0 to round-off (measured
-|h| <= 2.5e-13 of the size, the plane's frame being computed from ~2000 boundary samples; bound
+|h| <= 1e-13 of the size, the plane's frame being computed from ~2000 boundary samples; bound
 1e-12), and the p-curves are exact (the sides projected, mapped back through the surface: measured
 4e-16 of the size, bound 1e-12). A hole with a reflex corner cut from
 a sphere (R = 2, an L of width 2h rad, sides great-circle arcs) and from a torus (3/1, an L of
 width h rad in (theta, phi), sides fitted to 1e-8) is refilled by a different G1 surface with the
 same boundary data; its distance from the original inside the hole shrinks with the hole. Measured
-sphere h = 0.4, 0.2, 0.1: 2.9e-4, 9.3e-6, 1.2e-6; torus h = 0.8, 0.4, 0.2: 8.2e-3, 9.5e-4, 4.3e-5.
+sphere h = 0.4, 0.2, 0.1: 6.2e-4, 1.4e-4, 4.2e-5; torus h = 0.8, 0.4, 0.2: 5.2e-3, 6.9e-4, 1.2e-4
+(the fit stops as soon as both targets are met, so these are set by the targets, not round-off).
 Bounds 1.5x those and a decrease >= 2.5x per halving (a wrong normal or orientation gives O(1)
 deviations and no convergence).
 
@@ -201,7 +202,7 @@ def test_reflex_hole_in_a_sphere_converges_to_the_sphere() -> None:
         _check_boundary(fill, lambda P: P / np.linalg.norm(P, axis=1, keepdims=True), tolerances.FILL_FIT_ANGLE)
         _graph_check(fill)
         devs.append(float(np.abs(np.linalg.norm(_inside_points(fill), axis=1) - R).max()))
-    assert devs[0] <= 4.4e-4 and devs[1] <= 1.4e-5 and devs[2] <= 1.8e-6, devs
+    assert devs[0] <= 9.3e-4 and devs[1] <= 2.1e-4 and devs[2] <= 6.4e-5, devs
     assert devs[0] / devs[1] >= 2.5 and devs[1] / devs[2] >= 2.5, devs
 
 
@@ -214,7 +215,7 @@ def test_reflex_hole_in_a_torus_converges_to_the_torus() -> None:
         _graph_check(fill)
         P = _inside_points(fill)
         devs.append(float(np.abs(np.hypot(np.hypot(P[:, 0], P[:, 1]) - RT, P[:, 2]) - RR).max()))
-    assert devs[0] <= 1.23e-2 and devs[1] <= 1.43e-3 and devs[2] <= 6.4e-5, devs
+    assert devs[0] <= 7.9e-3 and devs[1] <= 1.05e-3 and devs[2] <= 1.8e-4, devs
     assert devs[0] / devs[1] >= 2.5 and devs[1] / devs[2] >= 2.5, devs
 
 
