@@ -16,6 +16,7 @@ from occsurf.algorithms.construction import coons, coons_bicubic, gordon
 
 from occsurf.bridge.exchange.step_iges import write_step
 from occsurf.bridge.rendering.surfaces import render_surfaces
+from ._common import output_folder
 
 __all__ = ["render_curvenet_demo", "demo_boundaries", "demo_network"]
 
@@ -74,8 +75,7 @@ def _cross_derivatives(bottom, right, top, left, amount: float = 1.5):
 
 def render_curvenet_demo(out_dir: Path) -> list[Path]:
     """Bilinear Coons, bicubic Coons and a 4 x 5 Gordon surface: PNGs with the input curves, and STEP."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out_dir)
     files: list[Path] = []
     views = ((30.0, -60.0), (55.0, 30.0))
 

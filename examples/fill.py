@@ -17,6 +17,7 @@ from occsurf.bridge.exchange.files import write_figure, write_text
 from occsurf.bridge.exchange.step_iges import write_step
 from occsurf.bridge.modeling.fill import fill_model, sew_faces
 from occsurf.bridge.rendering.surfaces import render_surfaces
+from ._common import output_folder
 
 __all__ = ["render_fill_demo"]
 
@@ -48,8 +49,7 @@ def render_fill_demo(out_dir: Path) -> list[Path]:
     ``filled_model.step`` into ``out_dir``; returns the paths."""
     from .hole_models import ring_model
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out_dir)
     files: list[Path] = []
     model = ring_model(5, bump=0.6)
     shell = sew_faces([make_face(f, 1e-7) for f in model.faces])

@@ -16,6 +16,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from ._common import output_folder
 
 __all__ = ["render_fitting_demo", "sharp_feature", "franke"]
 
@@ -64,8 +65,7 @@ def render_fitting_demo(out_dir: Path) -> list[Path]:
     from occsurf.bridge.modeling.fit import _panel
     from occsurf.bridge.rendering.error_maps import render_error_maps
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out_dir)
     files: list[Path] = []
     lines = [f"Adaptive hierarchical fitting (course 7-10) at tol {TOL:g}, bicubic, distances measured by projection", ""]
     for name, f, m in (("sharp", sharp_feature, 161), ("franke", franke, 101)):

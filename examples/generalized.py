@@ -23,6 +23,7 @@ from occsurf.algorithms.topology.generalized import GeneralizedSurface, generali
 from occsurf.algorithms.topology.generalized_bicubic import generalized_bicubic
 from occsurf.algorithms.topology.mesh import Mesh
 from occsurf.algorithms.topology.spatch_convert import piece_domain_points
+from ._common import output_folder
 
 __all__ = ["render_generalized_demo", "demo_dome", "demo_frame", "render_generalized"]
 
@@ -146,8 +147,7 @@ def render_generalized_demo(out_dir: Path) -> list[Path]:
     """Write the generalized-B-spline pictures and STEP files into ``out_dir``; return their paths."""
     from occsurf.bridge.conversion.spatch_export import write_spatches_step
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out_dir)
     files: list[Path] = []
     schemes = (("biquadratic", "", generalized_biquadratic), ("bicubic", "bicubic_", generalized_bicubic))
     for scheme, prefix, build in schemes:

@@ -18,6 +18,7 @@ from occsurf.algorithms import BSplineCurve, circle, ellipse
 from occsurf.algorithms.fitting.interpolation import interpolate_curve
 from occsurf.algorithms.construction.generation import extrude, revolve, rotational_sweep, ruled, translational_sweep
 from occsurf.algorithms.construction.sweeping import sweep
+from ._common import output_folder, script
 
 __all__ = ["render_generation_demo", "demo_surfaces"]
 
@@ -89,8 +90,7 @@ def render_generation_demo(out_dir: Path) -> list[Path]:
     from occsurf.bridge.exchange.step_iges import write_step
     from occsurf.bridge.rendering.surfaces import render_surfaces
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out_dir)
     files: list[Path] = []
     # Second panels look down steeply enough to show the plan shape, but not from straight above:
     # near elevation 90 matplotlib piles the z tick labels on top of each other.
@@ -107,7 +107,4 @@ def render_generation_demo(out_dir: Path) -> list[Path]:
 
 
 if __name__ == "__main__":  # pragma: no cover - manual use
-    import sys
-
-    for p in render_generation_demo(Path(sys.argv[1] if len(sys.argv) > 1 else "demo_out")):
-        print(p)
+    script(render_generation_demo)

@@ -20,6 +20,7 @@ import numpy as np
 from occsurf.bridge.exchange.files import write_figure
 from occsurf.algorithms import BSplineSurface
 from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
+from ._common import label_axes, output_folder, script
 
 __all__ = ["render_hierarchical_demo", "demo_hierarchy"]
 
@@ -121,11 +122,7 @@ def _panel(fig, pos, data, norm, title, limits, view=(30, -62)):
     ax.set_ylim(c[1] - half, c[1] + half)
     ax.set_zlim(c[2] - half * 0.6, c[2] + half * 0.6)
     ax.set_box_aspect((1, 1, 0.6))
-    ax.view_init(elev=view[0], azim=view[1])
-    ax.set_title(title, fontsize=11)
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
-    ax.set_zlabel("z")
+    label_axes(ax, title, view)
     return ax
 
 
@@ -164,8 +161,7 @@ def render_hierarchical_demo(out_dir: Path) -> list[Path]:
     """
     from occsurf.bridge.exchange.hierarchical_io import write_hierarchical_step
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out_dir)
     hs = demo_hierarchy("frame")
     o1, o2, o3 = hs.overlays
     # 1. The levels: each picture adds one level of detail.
@@ -235,7 +231,4 @@ def _render_profiles(path: Path, before: HierarchicalSurface, after: Hierarchica
 
 
 if __name__ == "__main__":  # pragma: no cover - manual use
-    import sys
-
-    for p in render_hierarchical_demo(Path(sys.argv[1] if len(sys.argv) > 1 else "demo_out")):
-        print(p)
+    script(render_hierarchical_demo)

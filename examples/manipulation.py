@@ -27,6 +27,7 @@ from occsurf.algorithms import (
     drag_point,
     drag_surface_point,
 )
+from ._common import label_axes, output_folder, script
 
 __all__ = ["render_manipulation_demo", "demo_curve", "demo_surface"]
 
@@ -187,11 +188,7 @@ def _render_surface(path: Path) -> BSplineSurface:
         ax.scatter(*p0, s=70, color="w", edgecolors="k", marker="s", label=f"S({u}, {v}) before", depthshade=False)
         ax.scatter(*target, s=120, color=TARGET, marker="*", label="target", depthshade=False)
         ax.set_zlim(*zlim)
-        ax.set_title(f"Surface {title}", fontsize=11)
-        ax.set_xlabel("x")
-        ax.set_ylabel("y")
-        ax.set_zlabel("z")
-        ax.view_init(elev=28, azim=-60)
+        label_axes(ax, f"Surface {title}", (28, -60))
         ax.legend(loc="upper left", fontsize=8)
     fig.suptitle("drag_surface_point: minimum-norm change of the poles in the window (1..5) x (1..5) "
                  "(course ch. 4 applied to a tensor-product surface)", fontsize=12)
@@ -215,8 +212,7 @@ def render_manipulation_demo(out_dir: Path) -> list[Path]:
         ``manipulation_surface.png`` (shaded before/after of a surface point drag with its tangent
         plane) and ``manipulation.step`` (the edited curve and surface, named).
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out_dir)
     curve_png = out / "manipulation_curve.png"
     surface_png = out / "manipulation_surface.png"
     step = out / "manipulation.step"
@@ -230,7 +226,4 @@ def render_manipulation_demo(out_dir: Path) -> list[Path]:
 
 
 if __name__ == "__main__":  # pragma: no cover - manual use
-    import sys
-
-    for p in render_manipulation_demo(Path(sys.argv[1] if len(sys.argv) > 1 else "demo_out")):
-        print(p)
+    script(render_manipulation_demo)
