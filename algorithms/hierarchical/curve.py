@@ -133,13 +133,8 @@ class HierarchicalCurve(Hierarchy):
             moved = _drag_curve_point(lvl, uu, lvl.evaluate(uu) + r, first, last)
             if node.handle is None:
                 self._set_base(moved)
-            else:
-                dP = (moved.control_points - lvl.control_points)[node.blk]
-                d = self._dim
-                cur = self._displacements(node, node.offsets, node.frames)
-                F = None if node.frames is None else node.frames.reshape(-1, d, d)
-                node.offsets = np.asarray(self._mapping.inverse((cur + dP).reshape(-1, d), F), float).reshape(cur.shape)
-                self._update(node, reference=False)
+            else:  # every vertex of the overlay, as world displacements
+                self._move_world(node, (...,), (moved.control_points - lvl.control_points)[node.blk])
         res = float(np.linalg.norm(tgt - self.evaluate(uu)))
         if res > tol:
             self._restore(node, saved)

@@ -302,23 +302,14 @@ class HierarchicalSurface(Hierarchy):
             dP = moved.control_points - lvl.control_points
             if node.handle is None:
                 self._set_base(moved)
-            else:
-                blk = node.blk
-                self._move_block(node, dP[blk])
+            else:  # every vertex of the overlay, as world displacements
+                self._move_world(node, (...,), dP[node.blk])
             r = tgt - self.evaluate(uu, vv)
         res = float(np.linalg.norm(r))
         if res > tol:
             self._restore(node, saved)
             raise ConvergenceError(f"drag_point: |S(u, v) - target| = {res:.3g} > tol = {tol:.3g} after "
                                    f"{max_iter} solves; the surface is left as it was")
-
-    def _move_block(self, node: Node, disp: Array) -> None:
-        d = self._dim
-        F = node.frames
-        cur = self._displacements(node, node.offsets, F)
-        Fm = None if F is None else F.reshape(-1, d, d)
-        node.offsets = np.asarray(self._mapping.inverse((cur + disp).reshape(-1, d), Fm), float).reshape(cur.shape)
-        self._update(node, reference=False)
 
     # ------------------------------------------------------------------ evaluation
     def _base_h(self) -> BSplineSurface:
