@@ -53,6 +53,18 @@ def find_span(knots: NDArray[np.float64], degree: int, n_poles: int, u: NDArray[
     return np.clip(s, first, last)
 
 
+def _left_right(knots: NDArray[np.float64], p: int, span: NDArray[np.intp], u: NDArray[np.float64]
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The knot differences of A2.2/A2.3, shape (p + 1, m) each (row 0 unused):
+    ``left[j] = u - t[span + 1 - j]``, ``right[j] = t[span + j] - u`` for ``j = 1..p``."""
+    j = np.arange(1, p + 1)[:, None]
+    left = np.empty((p + 1, u.shape[0]))
+    right = np.empty((p + 1, u.shape[0]))
+    left[1:] = u - knots[span + 1 - j]
+    right[1:] = knots[span + j] - u
+    return left, right
+
+
 def basis_functions(
     knots: NDArray[np.float64], degree: int, span: NDArray[np.intp], u: NDArray[np.float64]
 ) -> NDArray[np.float64]:
@@ -67,11 +79,8 @@ def basis_functions(
     p = degree
     N = np.zeros((p + 1, m))
     N[0] = 1.0
-    left = np.empty((p + 1, m))
-    right = np.empty((p + 1, m))
+    left, right = _left_right(knots, p, span, u)
     for j in range(1, p + 1):
-        left[j] = u - knots[span + 1 - j]
-        right[j] = knots[span + j] - u
         saved = np.zeros(m)
         for r in range(j):
             temp = N[r] / (right[r + 1] + left[j - r])
@@ -96,11 +105,8 @@ def basis_derivatives(
     n = min(order, p)
     ndu = np.empty((p + 1, p + 1, m))
     ndu[0, 0] = 1.0
-    left = np.empty((p + 1, m))
-    right = np.empty((p + 1, m))
+    left, right = _left_right(knots, p, span, u)
     for j in range(1, p + 1):
-        left[j] = u - knots[span + 1 - j]
-        right[j] = knots[span + j] - u
         saved = np.zeros(m)
         for r in range(j):
             ndu[j, r] = right[r + 1] + left[j - r]
