@@ -624,6 +624,20 @@ def _sections(faces: object, O: Array, Nm: Array, offsets: Array, half: Array | 
     return out
 
 
+def _cut_family(point: ArrayLike, point_name: str, direction: ArrayLike, direction_name: str, values: ArrayLike,
+                values_name: str, unit: str) -> tuple[Array, Array, Array]:
+    """A point, a unit direction (one 3-vector each) and a non-empty 1-D array of finite values:
+    the validated inputs of a family of cutting planes."""
+    o = vectors(point, point_name)
+    d = unit_vectors(direction, direction_name)
+    if o.shape != (3,) or d.shape != (3,):
+        raise InvalidGeometryError(f"{point_name}, {direction_name}: expected one 3-vector each")
+    v = np.atleast_1d(np.asarray(values, dtype=float))
+    if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)):
+        raise InvalidGeometryError(f"{values_name}: expected a non-empty 1-D array of finite {unit}, got {values!r}")
+    return o, d, v
+
+
 def plane_sections(faces: Sequence[Any], origin: ArrayLike, normal: ArrayLike, offsets: ArrayLike, *,
                    tol: float | None = None, fit: bool = False, scale: float | None = None) -> list[Section]:
     """Cut faces with the parallel planes ``(x - origin - offset * normal) . normal = 0``.
@@ -651,13 +665,7 @@ def plane_sections(faces: Sequence[Any], origin: ArrayLike, normal: ArrayLike, o
     list of Section
         One per offset, in the given order.
     """
-    o = vectors(origin, "origin")
-    n = unit_vectors(normal, "normal")
-    if o.shape != (3,) or n.shape != (3,):
-        raise InvalidGeometryError("origin, normal: expected one 3-vector each")
-    off = np.atleast_1d(np.asarray(offsets, dtype=float))
-    if off.ndim != 1 or off.size == 0 or not np.all(np.isfinite(off)):
-        raise InvalidGeometryError(f"offsets: expected a non-empty 1-D array of finite numbers, got {offsets!r}")
+    o, n, off = _cut_family(origin, "origin", normal, "normal", offsets, "offsets", "numbers")
     O = o + off[:, None] * n
     return _sections(faces, O, np.broadcast_to(n, O.shape).copy(), off, None, tol, fit, scale)
 
@@ -672,13 +680,8 @@ def axial_sections(faces: Sequence[Any], axis_origin: ArrayLike, axis_direction:
     ``axis x (cos(angle) e1 + sin(angle) e2)``. Only the half on the radial side is kept. Other
     arguments as :func:`plane_sections`; :attr:`Section.offset` holds the angle.
     """
-    o = vectors(axis_origin, "axis_origin")
-    a = unit_vectors(axis_direction, "axis_direction")
-    if o.shape != (3,) or a.shape != (3,):
-        raise InvalidGeometryError("axis_origin, axis_direction: expected one 3-vector each")
-    ang = np.atleast_1d(np.asarray(angles, dtype=float))
-    if ang.ndim != 1 or ang.size == 0 or not np.all(np.isfinite(ang)):
-        raise InvalidGeometryError(f"angles: expected a non-empty 1-D array of finite radians, got {angles!r}")
+    o, a, ang = _cut_family(axis_origin, "axis_origin", axis_direction, "axis_direction", angles, "angles",
+                            "radians")
     e1 = np.eye(3)[np.argmin(np.abs(a))]
     e1 = e1 - np.dot(e1, a) * a
     e1 /= np.linalg.norm(e1)
