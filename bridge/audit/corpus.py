@@ -5,7 +5,8 @@ file listing paths (one per line; blank lines and lines starting with ``#`` igno
 paths are taken from the list file's folder). A file is STEP or IGES by its suffix, else by its
 first bytes (:func:`occsurf.bridge.cli._common.sniff_format`'s rule); any other file given
 directly is read as a list. The content hash keys the results: a renamed file is recognised, a
-changed one is new. Only the standard library is imported here.
+changed one is new. Only the standard library is imported here (sniffing a file loads the
+exception classes of :mod:`occsurf.algorithms.errors`, as :func:`sniff_format` does).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..cli._common import IGES_SUFFIXES, STEP_SUFFIXES, SUFFIXES
+from ..cli._common import SUFFIXES, sniff_format
 
 __all__ = ["CorpusError", "Entry", "expand_paths", "sniff_cad", "sha256_of", "hash_entries"]
 
@@ -41,22 +42,12 @@ class Entry:
 
 
 def sniff_cad(path: Path) -> str | None:
-    """``'step'``, ``'iges'`` or ``None``: by suffix, else by the file's first 200 bytes."""
-    suffix = path.suffix.lower()
-    if suffix in STEP_SUFFIXES:
-        return "step"
-    if suffix in IGES_SUFFIXES:
-        return "iges"
+    """``'step'``, ``'iges'`` or ``None``: by suffix, else by the file's first 200 bytes
+    (:func:`~occsurf.bridge.cli._common.sniff_format`, with ``None`` for unreadable or other files)."""
     try:
-        with open(path, "rb") as fh:
-            head = fh.read(200)
-    except OSError:
+        return sniff_format(path)
+    except OSError:  # ExchangeError: unreadable, or neither STEP nor IGES
         return None
-    if head.lstrip(b"\xef\xbb\xbf \t\r\n").upper().startswith(b"ISO-10303-21"):
-        return "step"
-    if head.split(b"\n", 1)[0][72:73] == b"S":
-        return "iges"
-    return None
 
 
 def _walk(folder: Path) -> Iterable[Path]:
