@@ -5,8 +5,8 @@ file listing paths (one per line; blank lines and lines starting with ``#`` igno
 paths are taken from the list file's folder). A file is STEP or IGES by its suffix, else by its
 first bytes (:func:`occsurf.bridge.cli._common.sniff_format`'s rule); any other file given
 directly is read as a list. The content hash keys the results: a renamed file is recognised, a
-changed one is new. Only the standard library is imported here (sniffing a file loads the
-exception classes of :mod:`occsurf.algorithms.errors`, as :func:`sniff_format` does).
+changed one is new. Only the standard library is imported here; sniffing a file imports
+:mod:`occsurf.algorithms` (NumPy, SciPy) for its exception classes, as :func:`sniff_format` does.
 """
 
 from __future__ import annotations
