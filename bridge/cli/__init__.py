@@ -11,7 +11,8 @@
     occsurf render FILE (--lights LIGHTS.json | --preset NAME) --out IMAGE.png [--size W H] [--view NAME]
                    [--timeout SECONDS] [--strict] [--in-process]
     occsurf demo [--out DIR] [--only NAME ...]
-    occsurf check FILE [--out DIR] [--json] [--faces N ...] [--fail-on PRESET] [--timeout S] [--in-process]
+    occsurf check FILE_OR_DIR ... [--out DIR] [--json | --jsonl] [--faces N ...] [--fail-on PRESET] [--no-pictures]
+                  [--timeout S] [--strict] [--in-process]
     occsurf audit PATH... --out RESULTS [--scheduler ADDRESS] [--workers N] [--timeout S] [--resume] [--checks LIST]
     occsurf convert IN OUT [--unit UNIT] [--digits N] [--timeout S] [--in-process]
 

@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import math
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -48,6 +49,8 @@ __all__ = [
     "guarded",
     "EXIT_INTERRUPTED",
     "write_out",
+    "write_json_line",
+    "InOrder",
     "interrupts_held",
     "add_strict_option",
     "strict_refusal",
@@ -134,6 +137,41 @@ def write_out(text: str) -> None:
     with interrupts_held():
         sys.stdout.write(text)
         sys.stdout.flush()
+
+
+def write_json_line(obj: Any) -> None:
+    """One JSON line (``--jsonl``), written whole (:func:`write_out`); NaN refused (not JSON)."""
+    write_out(json.dumps(obj, allow_nan=False) + "\n")
+
+
+class InOrder:
+    """Results that arrive in any order, handed on in the order of their indices: each as soon as it and
+    every earlier one have arrived. How ``inspect`` and ``check`` print a file's table or ``--jsonl`` line
+    the moment it is done while keeping the order of the arguments (``check`` re-runs a crashed file
+    later; a worker pool would finish files out of order).
+
+    ``emit(k, item)`` is called once per index, in order; when it raises (a closed pipe, Ctrl-C), that
+    item counts as not emitted. :attr:`emitted` is what was handed on, in order (what Ctrl-C keeps).
+    """
+
+    def __init__(self, n: int, emit: Callable[[int, Any], None]) -> None:
+        self._items: list[Any] = [None] * n
+        self._arrived = [False] * n
+        self._emit = emit
+        #: How many items have been handed on (indices ``0 .. count - 1``).
+        self.count = 0
+
+    def put(self, k: int, item: Any) -> None:
+        """Store item ``k``; hand on every item that is next in order."""
+        self._items[k], self._arrived[k] = item, True
+        while self.count < len(self._items) and self._arrived[self.count]:
+            self._emit(self.count, self._items[self.count])
+            self.count += 1
+
+    @property
+    def emitted(self) -> list[Any]:
+        """The items handed on so far, in order."""
+        return self._items[: self.count]
 
 
 def guarded(func: Any, ns: argparse.Namespace) -> int:

@@ -1,5 +1,5 @@
-"""``occsurf check FILE_OR_DIR ... [--out DIR] [--json] [--faces ...] [--fail-on PRESET] [--no-pictures] [--timeout S]
-[--strict] [--in-process]``: the surface-quality report.
+"""``occsurf check FILE_OR_DIR ... [--out DIR] [--json | --jsonl] [--faces ...] [--fail-on PRESET] [--no-pictures]
+[--timeout S] [--strict] [--in-process]``: the surface-quality report.
 
 Reads each STEP or IGES model in a worker process (:func:`occsurf.bridge.isolation.run_jobs`, as
 ``occsurf inspect`` does: a crash or a hang inside OCC costs that file, not the terminal, and the
@@ -28,6 +28,15 @@ naming the crash, the edges or a picture are left out with a warning), up to
 A model read around damage (see :mod:`occsurf.bridge.exchange.checks`) is checked as read, its warnings in
 the report; ``--strict`` refuses it instead (that file is unreadable: exit status 2, no report for it).
 
+Output: a few lines per file as soon as it is checked (in the order of the arguments), then for several files
+a summary; ``--json``: ``report.json`` (one file) or the summary ``report.json`` (several) at the end;
+``--jsonl``: one JSON line per file as soon as it is checked, the file's object of the summary
+``report.json``'s ``files`` (status, faces, edges, worst G1 edge, flags, violations, seconds; ``report`` and
+``data`` relative to ``DIR``, ``./index.html`` for one file), for streaming into ``jq`` or a log. Ctrl-C
+stops the checking: the lines printed stay whole, ``occsurf: interrupted`` on stderr, exit status 130; a
+closed pipe (``occsurf check DIR --jsonl | head -1``) ends the command quietly (exit status 2). The
+streaming is :class:`~occsurf.bridge.cli._common.InOrder`'s, shared with ``occsurf inspect``.
+
 Exit status: 0 when every model was read and reported; 2 when one could not be read, an argument is
 wrong or ``--out`` cannot be written (one line on stderr per problem); else, with ``--fail-on
 PRESET``, 1 when an edge or a face of any file breaks that preset's thresholds (a CI gate).
@@ -47,7 +56,8 @@ from pathlib import Path
 from typing import Any
 
 from ..messages import error_line
-from ._common import EXIT_ERROR, EXIT_OK, add_strict_option, error, strip_path, timeout_arg, worker_failure
+from ._common import (EXIT_ERROR, EXIT_OK, InOrder, add_strict_option, error, strip_path, timeout_arg, worker_failure,
+                      write_json_line, write_out)
 
 __all__ = ["add_parser", "run", "check_job", "check_file", "collect_files", "file_summary", "PRESET_NAMES", "EXIT_FAILED",
            "DEFAULT_TIMEOUT", "MAX_RETRIES"]
@@ -450,6 +460,8 @@ def run(ns: argparse.Namespace) -> int:
     rows: dict[int, dict[str, Any]] = {}
     code = EXIT_OK
     failed = False
+    # --jsonl: each file's row as soon as it and the files before it are done (a crashed file is re-run later)
+    stream = InOrder(len(entries), lambda k, row: write_json_line(row) if ns.jsonl else None)
 
     def finish(j: int, outcome: Any) -> None:
         nonlocal code, failed
@@ -459,6 +471,7 @@ def run(ns: argparse.Namespace) -> int:
             error(f"{shown}: {_failure_reason(outcome, ns, path)}")
             rows[k] = file_summary(shown, None, error_text=_failure_reason(outcome, ns, path))
             code = EXIT_ERROR
+            stream.put(k, rows[k])
             return
         result = outcome.value
         result["report"]["path"] = shown
@@ -468,24 +481,26 @@ def run(ns: argparse.Namespace) -> int:
             error(f"--out {folder}: {error_line(err)}")
             rows[k] = file_summary(shown, None, error_text=f"report not written: {error_line(err)}")
             code = EXIT_ERROR
+            stream.put(k, rows[k])
             return
         doc = result["report"]
         failed |= not doc.get("passed", True)
-        rows[k] = file_summary(shown, None if single else name, doc, crashed=items[j].get("skip"),
+        rows[k] = file_summary(shown, "." if single else name, doc, crashed=items[j].get("skip"),
                                thumbnail=(result.get("pictures") or {}).get("mean"))
-        if not ns.json:
-            sys.stdout.write(_summary(doc, folder, ns.fail_on))
-            sys.stdout.flush()
+        if not (ns.json or ns.jsonl):
+            write_out(_summary(doc, folder, ns.fail_on))
         if single and ns.json:
-            sys.stdout.write(json.dumps(doc, indent=1, allow_nan=False) + "\n")
+            write_out(json.dumps(doc, indent=1, allow_nan=False) + "\n")
+        stream.put(k, rows[k])
 
     for k, (shown, path, why, _) in enumerate(entries):
         if path is None:
             error(f"{shown}: {why}")
             rows[k] = file_summary(shown, None, error_text=why)
             code = EXIT_ERROR
+            stream.put(k, rows[k])
     try:
-        with _Progress(scratch[0], enabled=sys.stderr.isatty() and not ns.json):
+        with _Progress(scratch[0], enabled=sys.stderr.isatty() and not (ns.json or ns.jsonl)):
             _run_all(items, ns, finish)
     finally:
         for f in scratch:
@@ -495,7 +510,7 @@ def run(ns: argparse.Namespace) -> int:
         summary = _write_summary(out, [rows[k] for k in sorted(rows)], preset, ns.fail_on)
         if ns.json:
             sys.stdout.write(json.dumps(summary, indent=1, allow_nan=False) + "\n")
-        else:
+        elif not ns.jsonl:
             n = summary["n_files"]
             counts = ", ".join(f"{c} {k}" for k, c in summary["counts"].items())
             gate = f"  --fail-on {ns.fail_on}: {'passed' if summary['passed'] else 'FAILED'}\n" if ns.fail_on else ""
@@ -543,8 +558,12 @@ def add_parser(sub: Any) -> None:
                                                 "stem + '_check', a folder's name + '_check', or occsurf_check for "
                                                 "several arguments, in the current folder); several files: one folder "
                                                 "per file below DIR plus DIR/index.html and DIR/report.json over all")
-    p.add_argument("--json", action="store_true", help="print report.json on stdout instead of the summary (several "
-                                                       "files: the summary report.json)")
+    fmt = p.add_mutually_exclusive_group()
+    fmt.add_argument("--json", action="store_true", help="print report.json on stdout instead of the summary (several "
+                                                         "files: the summary report.json)")
+    fmt.add_argument("--jsonl", action="store_true",
+                     help="print one JSON line per file as soon as it is checked (the objects of the summary "
+                          "report.json's 'files')")
     p.add_argument("--faces", nargs="+", metavar="N", help="only these faces (numbered as in 'occsurf inspect'; "
                                                           "ranges like 5-8 and commas allowed)")
     p.add_argument("--fail-on", choices=PRESET_NAMES, metavar="PRESET",

@@ -51,6 +51,7 @@ from ._common import (
     EXIT_ERROR,
     EXIT_OK,
     IGES_SUFFIXES,
+    InOrder,
     SAMPLES_DIR,
     STEP_SUFFIXES,
     error,
@@ -66,6 +67,7 @@ from ._common import (
     strip_path,
     timeout_arg,
     worker_failure,
+    write_json_line,
     write_out,
 )
 
@@ -249,29 +251,24 @@ def run(ns: argparse.Namespace) -> int:
         paths = [str(folder)]
     t0 = time.perf_counter()
     entries = expand(paths)
-    reports: list[FileReport | None] = [None] * len(entries)
-    printed = 0
 
-    def emit(k: int, rep: FileReport) -> None:
-        """Store a report; print (stderr line, table) every report that is next in order."""
-        nonlocal printed
-        reports[k] = rep
-        while printed < len(reports) and reports[printed] is not None:
-            r = reports[printed]
-            assert r is not None
-            if r.error is not None:
-                error(f"{r.path}: {r.error}")
-            for w in r.warnings:
-                error(f"{r.path}: warning: {w}")
-            if ns.jsonl:
-                write_out(json.dumps(r.to_json(), allow_nan=False) + "\n")
-            elif not ns.json:
-                table = io.StringIO()
-                if printed:
-                    table.write("\n")
-                _write_file_table(r, table)
-                write_out(table.getvalue())
-            printed += 1
+    def show(k: int, r: FileReport) -> None:
+        """A report's stderr lines and its table or JSON line (called in the order of the arguments)."""
+        if r.error is not None:
+            error(f"{r.path}: {r.error}")
+        for w in r.warnings:
+            error(f"{r.path}: warning: {w}")
+        if ns.jsonl:
+            write_json_line(r.to_json())
+        elif not ns.json:
+            table = io.StringIO()
+            if k:
+                table.write("\n")
+            _write_file_table(r, table)
+            write_out(table.getvalue())
+
+    stream = InOrder(len(entries), show)
+    emit = stream.put
 
     todo: list[tuple[int, str]] = []
     items: list[dict[str, Any]] = []
@@ -287,9 +284,9 @@ def run(ns: argparse.Namespace) -> int:
                      on_outcome=lambda o: emit(todo[o.index][0], _report_of(todo[o.index][1], o, ns.timeout)))
     except KeyboardInterrupt:  # Ctrl-C: print what was done (the worker is stopped), then exit 130
         with interrupts_held():
-            _finish(ns, reports[:printed], len(entries), time.perf_counter() - t0, interrupted=True)
+            _finish(ns, stream.emitted, len(entries), time.perf_counter() - t0, interrupted=True)
         raise
-    done = [r for r in reports[:printed] if r is not None]  # every report, in order
+    done = [r for r in stream.emitted if r is not None]  # every report, in order
     _finish(ns, done, len(entries), time.perf_counter() - t0, interrupted=False)
     failed = any(r.error is not None for r in done) or (ns.strict and any(r.warnings for r in done))
     return EXIT_ERROR if failed else EXIT_OK
