@@ -62,6 +62,36 @@ def ngon_with_skirt(n: int, rng: np.random.Generator) -> Mesh:
     return Mesh(P, F)
 
 
+def jittered_prism(seed: int) -> Mesh:
+    """The pentagonal prism fixture with every vertex moved by 0.3 N(0, 1): an irregular mesh."""
+    rng = np.random.default_rng(seed)
+    m = read_obj(FIXTURES / "pentagonal_prism.obj")
+    return m.with_vertices(m.vertices + 0.3 * rng.standard_normal(m.vertices.shape))
+
+
+def assert_c1_joins(g, n_pairs: int) -> None:
+    """``g`` has ``n_pairs`` shared sides and along each the two patches' cross-boundary
+    derivatives are opposite (C1; both domains are the same regular polygon, so scales match)."""
+    t = np.linspace(0, 1, SAMPLES)
+    pairs = g.shared_sides()
+    assert len(pairs) == n_pairs
+    for i, k, j, l_ in pairs:
+        da = g.patches[i].cross_boundary_derivative(k, t)
+        db = g.patches[j].cross_boundary_derivative(l_, 1 - t)
+        assert_allclose(da, -db, atol=EXACT_TOL * 10)
+
+
+def assert_affine_invariant(build, seed: int) -> None:
+    """``build(A m + b)`` has the poles ``A (build m) + b`` (every rule is an affine combination)."""
+    rng = np.random.default_rng(seed)
+    m = read_obj(FIXTURES / "pentagonal_prism.obj")
+    A, b = rng.standard_normal((3, 3)) + 2 * np.eye(3), rng.standard_normal(3)
+    g1 = build(m.with_vertices(m.vertices @ A.T + b))
+    g2 = build(m)
+    for p1, p2 in zip(g1.patches, g2.patches):
+        assert_allclose(p1.control_points, p2.control_points @ A.T + b, atol=1e-12)
+
+
 def grid_domain_map(m: Mesh, nv: int, v: int, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Domain points of the patch of grid vertex v at bilinear (s, t), and the matching B-spline
     parameters: corner k of the patch is the centroid of fan face k, whose lower-left grid vertex
@@ -110,14 +140,7 @@ def test_regular_neighbours_are_c1():
     """Between two valence-4 patches the join is C1: the cross-boundary derivatives along the
     shared side are opposite (both domains are the same diamond, so the scales match)."""
     m, _ = grid(6, 5, np.random.default_rng(3))
-    g = generalized_biquadratic(m)
-    t = np.linspace(0, 1, SAMPLES)
-    pairs = g.shared_sides()
-    assert len(pairs) == 2 * 4 * 3 - 4 - 3  # interior-vertex grid 4 x 3: edges between them
-    for i, k, j, l_ in pairs:
-        da = g.patches[i].cross_boundary_derivative(k, t)
-        db = g.patches[j].cross_boundary_derivative(l_, 1 - t)
-        assert_allclose(da, -db, atol=EXACT_TOL * 10)
+    assert_c1_joins(generalized_biquadratic(m), 2 * 4 * 3 - 4 - 3)  # interior-vertex grid 4 x 3: edges between them
 
 
 # ---------------------------------------------------------------------------- irregular meshes
@@ -170,10 +193,7 @@ def test_valence_n_vertex(n):
 @given(seed=st.integers(0, 2**31 - 1))
 def test_g1_on_random_irregular_meshes(seed):
     """G1 holds for any vertex positions (not a property of symmetric input)."""
-    rng = np.random.default_rng(seed)
-    m = read_obj(FIXTURES / "pentagonal_prism.obj")
-    m = m.with_vertices(m.vertices + 0.3 * rng.standard_normal(m.vertices.shape))
-    _assert_g1(generalized_biquadratic(m))
+    _assert_g1(generalized_biquadratic(jittered_prism(seed)))
 
 
 # ---------------------------------------------------------------------------- closed forms
@@ -203,13 +223,7 @@ def test_boundaries_corners_and_corner_planes():
 @given(seed=st.integers(0, 2**31 - 1))
 def test_affine_invariance(seed):
     """Every rule is an affine combination of mesh points: building from A m + b equals A (build m) + b."""
-    rng = np.random.default_rng(seed)
-    m = read_obj(FIXTURES / "pentagonal_prism.obj")
-    A, b = rng.standard_normal((3, 3)) + 2 * np.eye(3), rng.standard_normal(3)
-    g1 = generalized_biquadratic(m.with_vertices(m.vertices @ A.T + b))
-    g2 = generalized_biquadratic(m)
-    for p1, p2 in zip(g1.patches, g2.patches):
-        assert_allclose(p1.control_points, p2.control_points @ A.T + b, atol=1e-12)
+    assert_affine_invariant(generalized_biquadratic, seed)
 
 
 def test_open_mesh_has_patches_only_at_interior_vertices():

@@ -27,20 +27,13 @@ from occsurf.algorithms.topology.mesh import Mesh, doo_sabin, read_obj
 from occsurf.algorithms.topology.spatch import domain_vertices
 from occsurf.algorithms.kernel.surface import BSplineSurface
 from tests.algorithms.strategies import test_settings
-from tests.algorithms.test_generalized import grid, ngon_with_skirt
+from tests.algorithms.test_generalized import (_assert_g1, assert_affine_invariant, assert_c1_joins, grid, jittered_prism,
+                                              ngon_with_skirt)
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "meshes"
-SAMPLES = 101
-G0_TOL = 1e-12   # absolute, meshes of size ~1..3
-G1_TOL = 1e-11   # radians
 EXACT_TOL = 1e-12
-
-
-def _assert_g1(g) -> None:
-    gap, ang = g.continuity(SAMPLES)
-    assert gap < G0_TOL, gap
-    assert ang < G1_TOL, ang
-    assert g.consistency < EXACT_TOL
+# G1 is measured by test_generalized._assert_g1: 101 samples per shared side, G0 < 1e-12 absolute
+# (meshes of size ~1..3), normal angles < 1e-11 rad, twist consistency < 1e-12.
 
 
 # ---------------------------------------------------------------------------- Doo-Sabin
@@ -93,14 +86,7 @@ def test_regular_grid_equals_tensor_product_bicubic(nu, nv, seed):
 
 def test_quad_patches_join_c1():
     m, _ = grid(7, 6, np.random.default_rng(3))
-    g = generalized_bicubic(m)
-    t = np.linspace(0, 1, SAMPLES)
-    pairs = g.shared_sides()
-    assert len(pairs) == 2 * 4 * 3 - 4 - 3  # 4 x 3 interior faces: edges between them
-    for i, k, j, l_ in pairs:
-        da = g.patches[i].cross_boundary_derivative(k, t)
-        db = g.patches[j].cross_boundary_derivative(l_, 1 - t)
-        assert_allclose(da, -db, atol=EXACT_TOL * 10)
+    assert_c1_joins(generalized_bicubic(m), 2 * 4 * 3 - 4 - 3)  # 4 x 3 interior faces: edges between them
 
 
 # ---------------------------------------------------------------------------- irregular meshes
@@ -149,9 +135,7 @@ def test_valence_4_mesh_with_ngon_faces_needs_no_refinement():
 @test_settings(max_examples=8)
 @given(seed=st.integers(0, 2**31 - 1))
 def test_g1_on_random_irregular_meshes(seed):
-    rng = np.random.default_rng(seed)
-    m = read_obj(FIXTURES / "pentagonal_prism.obj")
-    _assert_g1(generalized_bicubic(m.with_vertices(m.vertices + 0.3 * rng.standard_normal(m.vertices.shape))))
+    _assert_g1(generalized_bicubic(jittered_prism(seed)))
 
 
 def test_corner_is_the_bicubic_limit_point():
@@ -177,13 +161,7 @@ def test_corner_is_the_bicubic_limit_point():
 @test_settings(max_examples=6)
 @given(seed=st.integers(0, 2**31 - 1))
 def test_affine_invariance(seed):
-    rng = np.random.default_rng(seed)
-    m = read_obj(FIXTURES / "pentagonal_prism.obj")
-    A, b = rng.standard_normal((3, 3)) + 2 * np.eye(3), rng.standard_normal(3)
-    g1 = generalized_bicubic(m.with_vertices(m.vertices @ A.T + b))
-    g2 = generalized_bicubic(m)
-    for p1, p2 in zip(g1.patches, g2.patches):
-        assert_allclose(p1.control_points, p2.control_points @ A.T + b, atol=1e-12)
+    assert_affine_invariant(generalized_bicubic, seed)
 
 
 def test_open_mesh_has_patches_only_at_interior_faces():
