@@ -389,6 +389,16 @@ def _rel_scale(*arrays_: np.ndarray) -> float:
     return max(1.0, *(float(np.max(np.abs(a))) for a in arrays_))
 
 
+def _assert_image(A: AffineMap, spline, kind: type, params: tuple) -> object:
+    """``A.apply_to(spline)`` is a ``kind`` as rational as ``spline`` whose values at ``params`` are
+    ``A`` of the spline's values (affine invariance); returns it."""
+    img = A.apply_to(spline)
+    assert isinstance(img, kind) and img.is_rational == spline.is_rational
+    rhs = A(Point(spline.evaluate(*params))).coords
+    _close(img.evaluate(*params), rhs, scale=_rel_scale(rhs, spline.control_points))
+    return img
+
+
 class TestAffineInvariance:
     def test_rational_circle_to_ellipse(self):
         """Closed form: diag(a, b) maps the rational unit quarter circle onto x²/a² + y²/b² = 1."""
@@ -407,11 +417,7 @@ class TestAffineInvariance:
         M, b = data.draw(maps(c.dim))
         A = AffineMap(M, b)
         u = data.draw(parameters(c.domain, knots=c.knots))
-        img = A.apply_to(c)
-        assert isinstance(img, BSplineCurve) and img.is_rational == c.is_rational
-        lhs = img.evaluate(u)
-        rhs = A(Point(c.evaluate(u))).coords
-        _close(lhs, rhs, scale=_rel_scale(rhs, c.control_points))
+        img = _assert_image(A, c, BSplineCurve, (u,))
         _close(A(c).control_points, img.control_points, scale=1)
 
     @given(st.data())
@@ -423,10 +429,7 @@ class TestAffineInvariance:
         (u0, u1), (v0, v1) = s.domain
         f = np.array(data.draw(st.lists(st.tuples(st.floats(0, 1), st.floats(0, 1)), min_size=1, max_size=6)))
         u, v = u0 + f[:, 0] * (u1 - u0), v0 + f[:, 1] * (v1 - v0)
-        img = A.apply_to(s)
-        assert isinstance(img, BSplineSurface) and img.is_rational == s.is_rational
-        rhs = A(Point(s.evaluate(u, v))).coords
-        _close(img.evaluate(u, v), rhs, scale=_rel_scale(rhs, s.control_points))
+        _assert_image(A, s, BSplineSurface, (u, v))
 
 
 def _projective_maps(dim: int) -> st.SearchStrategy[np.ndarray]:

@@ -145,30 +145,17 @@ def assert_same_surface_data(a: BSplineSurface, b: BSplineSurface, scale: float)
 
 
 # ------------------------------------------------------------------------------------- oracles
+@pytest.mark.parametrize("rational", [False, True], ids=["polynomial", "rational"])
 @SETTINGS
 @given(data=st.data())
-def test_values_and_partials_match_ndbspline(data):
-    s = data.draw(surfaces(rational=False, degrees=st.integers(1, 6)))
+def test_values_and_partials_match_ndbspline(rational, data):
+    """Against scipy's NdBSpline (rational: on the homogeneous net, then the quotient rule), all
+    partials up to the largest degree (rational: one more, they do not vanish above it)."""
+    s = data.draw(surfaces(rational=rational, degrees=st.integers(1, 4 if rational else 6)))
     u, v = data.draw(surface_points(s))
-    p, q = s.degree
-    r = max(p, q)
+    r = max(s.degree) + (1 if rational else 0)
     D = s.derivatives(u, v, r)
     assert D.shape == (u.size, r + 1, r + 1, s.dim)
-    ref = oracle_partials(s, u, v, r)
-    assert_allclose(s.evaluate(u, v), ref[:, 0, 0], rtol=0, atol=ORACLE * pole_scale(s))
-    for k in range(r + 1):
-        for l in range(r + 1):
-            assert_allclose(D[:, k, l], ref[:, k, l], rtol=0, atol=ORACLE * deriv_scale(s, k, l),
-                            err_msg=f"partial ({k}, {l})")
-
-
-@SETTINGS
-@given(data=st.data())
-def test_rational_partials_match_homogeneous_ndbspline_and_quotient_rule(data):
-    s = data.draw(surfaces(rational=True, degrees=st.integers(1, 4)))
-    u, v = data.draw(surface_points(s))
-    r = max(s.degree) + 1  # rational partials do not vanish above the degree
-    D = s.derivatives(u, v, r)
     ref = oracle_partials(s, u, v, r)
     assert_allclose(s.evaluate(u, v), ref[:, 0, 0], rtol=0, atol=ORACLE * pole_scale(s))
     for k in range(r + 1):
@@ -251,12 +238,19 @@ def test_sphere_normal_at_the_pole_is_nan():
 
 
 # ---------------------------------------------------------------------- geometry-preserving ops
-@SETTINGS
-@given(s=surfaces(**SMALL), f=fractions, times=st.integers(1, 2), direction=st.sampled_from("uv"))
-def test_insert_knot_keeps_geometry(s, f, times, direction):
+def _insertion_site(s, f: float, times: int, direction: str) -> tuple[int, float]:
+    """Axis and interior knot (fraction ``f`` of the domain) of an insertion ``times`` times that keeps
+    the multiplicity <= the degree; other draws are rejected (``assume``)."""
     ax = "uv".index(direction)
     x = interior(*s.domain[ax], f)
     assume(int(np.count_nonzero(s.knots[ax] == x)) + times <= s.degree[ax])
+    return ax, x
+
+
+@SETTINGS
+@given(s=surfaces(**SMALL), f=fractions, times=st.integers(1, 2), direction=st.sampled_from("uv"))
+def test_insert_knot_keeps_geometry(s, f, times, direction):
+    ax, x = _insertion_site(s, f, times, direction)
     s2 = s.insert_knot(x, times, direction=direction)
     assert s2.n_poles[ax] == s.n_poles[ax] + times and s2.n_poles[1 - ax] == s.n_poles[1 - ax]
     assert_array_equal(s2.knots[1 - ax], s.knots[1 - ax])
@@ -331,9 +325,7 @@ def test_to_bezier_patches_reproduce_the_surface(s):
 @SETTINGS
 @given(s=surfaces(**SMALL), f=fractions, times=st.integers(1, 2), direction=st.sampled_from("uv"))
 def test_insert_then_remove_returns_the_original(s, f, times, direction):
-    ax = "uv".index(direction)
-    x = interior(*s.domain[ax], f)
-    assume(int(np.count_nonzero(s.knots[ax] == x)) + times <= s.degree[ax])
+    ax, x = _insertion_site(s, f, times, direction)
     back = s.insert_knot(x, times, direction=direction).remove_knot(x, times, direction=direction)
     assert_same_surface_data(back, s, pole_scale(s))
 
