@@ -466,6 +466,18 @@ def _pole_atol(*objs) -> float:
     return 1e-12 * max(1.0, max(pole_radius(o) for o in objs))
 
 
+def _assert_same_spline(back, ours, atol: float, *, weights: bool) -> None:
+    """OCC's result ``back`` against ``ours``: the same knot vectors (values are copied, never
+    computed), poles within ``atol``, and with ``weights`` the weights to 1e-12 relative."""
+    knots_b, knots_o = (k if isinstance(k, tuple) else (k,) for k in (back.knots, ours.knots))
+    assert len(knots_b) == len(knots_o)
+    for a, b in zip(knots_b, knots_o):
+        assert_array_equal(a, b)
+    assert_allclose(back.control_points, ours.control_points, rtol=0, atol=atol)
+    if weights:
+        assert_allclose(back.weights, ours.weights, rtol=1e-12, atol=0)
+
+
 @SETTINGS
 @given(c=curves(), f=fractions01, times=st.integers(1, 9), existing=st.booleans())
 def test_curve_insert_knot_matches_occ(c, f, times, existing):
@@ -483,10 +495,7 @@ def test_curve_insert_knot_matches_occ(c, f, times, existing):
     occ = to_occ(c)
     occ.InsertKnot(u, times, 0.0, True)  # Add=True: raise the multiplicity BY `times`
     back = from_occ(occ)
-    assert_array_equal(back.knots, ours.knots)  # knot values are copied, never computed
-    assert_allclose(back.control_points, ours.control_points, rtol=0, atol=_pole_atol(c))
-    if c.is_rational:
-        assert_allclose(back.weights, ours.weights, rtol=1e-12, atol=0)
+    _assert_same_spline(back, ours, _pole_atol(c), weights=c.is_rational)
 
 
 @SETTINGS
@@ -501,8 +510,7 @@ def test_curve_refine_matches_occ_insert_knots(c, fracs):
     # *raise to* the multiplicity; pass Add=True to add one copy of each.
     occ.InsertKnots(_occ.real_array(new), _occ.int_array(np.ones(new.size, int)), 0.0, True)
     back = from_occ(occ)
-    assert_array_equal(back.knots, ours.knots)
-    assert_allclose(back.control_points, ours.control_points, rtol=0, atol=_pole_atol(c))
+    _assert_same_spline(back, ours, _pole_atol(c), weights=False)
 
 
 @SETTINGS
@@ -522,11 +530,7 @@ def test_surface_insert_knots_matches_occ(s, fu, fv, tu, tv):
     occ.InsertUKnot(u, tu, 0.0, True)  # the surface methods need the tolerance argument
     occ.InsertVKnot(v, tv, 0.0, True)
     back = from_occ(occ)
-    for a, b in zip(back.knots, ours.knots):
-        assert_array_equal(a, b)
-    assert_allclose(back.control_points, ours.control_points, rtol=0, atol=_pole_atol(s))
-    if s.is_rational:
-        assert_allclose(back.weights, ours.weights, rtol=1e-12, atol=0)
+    _assert_same_spline(back, ours, _pole_atol(s), weights=s.is_rational)
 
 
 @SETTINGS
@@ -537,11 +541,8 @@ def test_curve_elevate_degree_matches_occ(c, times):
     occ.IncreaseDegree(c.degree + times)
     back = from_occ(occ)
     assert back.degree == ours.degree
-    assert_array_equal(back.knots, ours.knots)
     # Degree raising is a well-conditioned linear map of the poles; tolerance as for insertion.
-    assert_allclose(back.control_points, ours.control_points, rtol=0, atol=_pole_atol(c))
-    if c.is_rational:
-        assert_allclose(back.weights, ours.weights, rtol=1e-12, atol=0)
+    _assert_same_spline(back, ours, _pole_atol(c), weights=c.is_rational)
 
 
 @SETTINGS
@@ -553,8 +554,7 @@ def test_unclamped_curve_elevate_degree_matches_occ_on_the_clamped_form(c, times
     occ = to_occ(c.clamp())
     occ.IncreaseDegree(c.degree + times)
     back = from_occ(occ)
-    assert_array_equal(back.knots, ours.knots)
-    assert_allclose(back.control_points, ours.control_points, rtol=0, atol=_pole_atol(c))
+    _assert_same_spline(back, ours, _pole_atol(c), weights=False)
 
 
 @SETTINGS
@@ -570,9 +570,7 @@ def test_surface_elevate_degree_matches_occ(s, tu, tv):
     occ.IncreaseDegree(s.degree[0] + tu, s.degree[1] + tv)
     back = from_occ(occ)
     assert back.degree == ours.degree
-    for a, b in zip(back.knots, ours.knots):
-        assert_array_equal(a, b)
-    assert_allclose(back.control_points, ours.control_points, rtol=0, atol=_pole_atol(s))
+    _assert_same_spline(back, ours, _pole_atol(s), weights=False)
 
 
 def test_max_degree_is_occ_max_degree():
