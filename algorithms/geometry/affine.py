@@ -100,17 +100,17 @@ class _Linear(_Kind):
     """Scaling, division by a scalar, negation, length, normalisation and the pairing ``dot``,
     shared by the two vector spaces (vectors and normals); each result keeps the operand's type."""
 
-    def __mul__(self, other: object) -> Any:
+    def _times(self, other: object, reflected: bool) -> Any:
         s = as_scalar(other)
         if s is None:
-            return self._forbid("*", other)
+            return self._forbid("*", other, reflected)
         return type(self)._trusted(_scale(self.coords, s, "scalar"))
 
+    def __mul__(self, other: object) -> Any:
+        return self._times(other, False)
+
     def __rmul__(self, other: object) -> Any:
-        s = as_scalar(other)
-        if s is None:
-            return self._forbid("*", other, True)
-        return type(self)._trusted(_scale(self.coords, s, "scalar"))
+        return self._times(other, True)
 
     def __truediv__(self, other: object) -> Any:
         s = as_scalar(other)
