@@ -141,6 +141,8 @@ class ImportedEdge:
         colour curves); ``None`` if the file gives none.
     layer : str or None
         The curve's layer, resolved in the same order.
+    instance : str or None
+        As :attr:`ImportedFace.instance`: the part instance the curve belongs to (``None`` in a flat file).
     """
 
     index: int
@@ -155,6 +157,7 @@ class ImportedEdge:
     parameter_range: tuple[float, float]
     color: tuple[float, float, float, float] | None = None
     layer: str | None = None
+    instance: str | None = None
 
 
 @dataclass(frozen=True)

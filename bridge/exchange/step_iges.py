@@ -576,8 +576,9 @@ def _convert(p: Path, fmt: str, shape: Any, names: tuple[dict[int, str], dict[in
             face = replace(face, **attributes)
         faces.append(face)
     edges = [_import_edge(i - 1, edges_map.FindKey(i), edge_names.get(i)) for i in range(1, edges_map.Extent() + 1)]
-    edges = [replace(e, color=x.edge_colors.get(i), layer=x.edge_layers.get(i))
-             if i in x.edge_colors or i in x.edge_layers else e for i, e in enumerate(edges, start=1)]
+    edges = [replace(e, color=x.edge_colors.get(i), layer=x.edge_layers.get(i), instance=x.edge_instances.get(i))
+             if i in x.edge_colors or i in x.edge_layers or i in x.edge_instances else e
+             for i, e in enumerate(edges, start=1)]
     return ImportedModel(path=str(p), format=fmt, shape=shape, faces=faces, edges=edges, warnings=warnings,
                          unit=x.unit, unit_scale=x.unit_scale, assembly=x.assembly)
 

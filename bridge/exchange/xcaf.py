@@ -186,6 +186,7 @@ class XcafData:
     layers: dict[int, str] = field(default_factory=dict)
     edge_colors: dict[int, tuple[float, float, float, float]] = field(default_factory=dict)
     edge_layers: dict[int, str] = field(default_factory=dict)
+    edge_instances: dict[int, str] = field(default_factory=dict)
     instances: dict[int, str] = field(default_factory=dict)
     instance_names: dict[int, str] = field(default_factory=dict)
     face_names: dict[int, str] = field(default_factory=dict)
@@ -211,6 +212,7 @@ class XcafData:
                "layers": {str(k): v for k, v in self.layers.items()},
                "edge_colors": {str(k): list(v) for k, v in self.edge_colors.items()},
                "edge_layers": {str(k): v for k, v in self.edge_layers.items()},
+               "edge_instances": {str(k): v for k, v in self.edge_instances.items()},
                "instances": {str(k): v for k, v in self.instances.items()},
                "instance_names": {str(k): v for k, v in self.instance_names.items()},
                "face_names": {str(k): v for k, v in self.face_names.items()},
@@ -230,6 +232,7 @@ class XcafData:
                    layers={int(k): v for k, v in doc["layers"].items()},
                    edge_colors={int(k): tuple(v) for k, v in doc["edge_colors"].items()},  # type: ignore[misc]
                    edge_layers={int(k): v for k, v in doc["edge_layers"].items()},
+                   edge_instances={int(k): v for k, v in doc["edge_instances"].items()},
                    instances={int(k): v for k, v in doc["instances"].items()},
                    instance_names={int(k): v for k, v in doc["instance_names"].items()},
                    face_names={int(k): v for k, v in doc["face_names"].items()},
@@ -669,11 +672,11 @@ class _Reader:
         shape = XCAFDoc_ShapeTool.GetShape_s(proto)
         # k: the position sub_shape_attributes keys by
         kinds = [(self.faces, _distinct(shape, TopAbs_FACE), face_attributes, inherited_color,
-                  self.data.colors, self.data.layers)]
+                  self.data.colors, self.data.layers, self.data.instances)]
         if self.edges is not None:
             kinds.append((self.edges, _distinct(shape, TopAbs_EDGE, TopAbs_FACE), edge_attributes, inherited_curve,
-                          self.data.edge_colors, self.data.edge_layers))
-        for index, members, (own_color, own_layer, own_name), inherited, colors, layers in kinds:
+                          self.data.edge_colors, self.data.edge_layers, self.data.edge_instances))
+        for index, members, (own_color, own_layer, own_name), inherited, colors, layers, instances in kinds:
             for k, member in enumerate(members, start=1):
                 i = self.match(index, member, placed)
                 if i is None:
@@ -686,9 +689,10 @@ class _Reader:
                     layers.setdefault(i, layer)
                 if k in own_name:
                     self.data.face_names.setdefault(i, own_name[k])
-                if path is not None and index is self.faces:
-                    self.data.instances.setdefault(i, path)
-                    self.data.instance_names.setdefault(i, name)
+                if path is not None:
+                    instances.setdefault(i, path)
+                    if index is self.faces:
+                        self.data.instance_names.setdefault(i, name)
 
     def sub_shape_attributes(self, proto: Any, kind: Any) -> _SubAttributes:
         """Colours and layers of a prototype's sub-shape labels for its faces (``kind`` TopAbs_FACE) or

@@ -45,7 +45,8 @@ def _set_name(label: Any, name: str | None, names: set[str] | None = None) -> No
         names.add(name)
 
 
-def _set_color(color_tool: Any, label: Any, rgba: Sequence[float] | None, *, curve: bool = False) -> None:
+def _set_color(color_tool: Any, label: Any, rgba: Sequence[float] | None, *, curve: bool = False,
+               generic: bool = False) -> None:
     from OCP.Quantity import Quantity_Color, Quantity_ColorRGBA, Quantity_TypeOfColor
     from OCP.XCAFDoc import XCAFDoc_ColorType
 
@@ -54,6 +55,8 @@ def _set_color(color_tool: Any, label: Any, rgba: Sequence[float] | None, *, cur
     r, g, b, a = (float(x) for x in rgba)
     color = Quantity_ColorRGBA(Quantity_Color(r, g, b, Quantity_TypeOfColor.Quantity_TOC_RGB), a)
     kind = XCAFDoc_ColorType.XCAFDoc_ColorCurv if curve else XCAFDoc_ColorType.XCAFDoc_ColorSurf
+    if generic:  # an instance's colour: its faces' and its free curves'
+        kind = XCAFDoc_ColorType.XCAFDoc_ColorGen
     color_tool.SetColor(label, color, kind)
 
 
@@ -99,7 +102,7 @@ class _Writer:
             for child in node.children:
                 comp = self.shape_tool.AddComponent(label, self.proto(child), _location(child.location))
                 _set_name(comp, child.name, self.names)
-                _set_color(self.color_tool, comp, child.color)
+                _set_color(self.color_tool, comp, child.color, generic=True)
                 comps.append(comp)
         else:
             label = self.shape_tool.AddShape(node.shape, False, False)
@@ -141,7 +144,7 @@ class _Writer:
             self.shape_tool.SetSHUO(seq, XCAFDoc_GraphNode())
         for shuo in main_shuos(path[0]):
             if shuo_chain(shuo) == want:
-                _set_color(self.color_tool, shuo, rgba)
+                _set_color(self.color_tool, shuo, rgba, generic=True)
                 return 1
         return 0
 
@@ -247,12 +250,12 @@ def _explore_faces(shape: Any) -> list[Any]:
     return out
 
 
-def _tree_faces(model: Any) -> dict[str, list[Any]]:
-    """ImportedFace of each leaf instance path."""
+def _by_instance(items: Sequence[Any]) -> dict[str, list[Any]]:
+    """ImportedFace or ImportedEdge of each leaf instance path."""
     out: dict[str, list[Any]] = {}
-    for f in model.faces:
-        if f.instance is not None:
-            out.setdefault(f.instance, []).append(f)
+    for item in items:
+        if item.instance is not None:
+            out.setdefault(item.instance, []).append(item)
     return out
 
 
@@ -313,15 +316,15 @@ def build_document(source: Any, name: str, *, flatten: bool = False) -> _Writer:
         model = source
         root = model.assembly
     if root is not None and flatten:
-        faces = _tree_faces(model) if model is not None else {}
+        faces = _by_instance(model.faces) if model is not None else {}
+        edges = _by_instance(model.edges) if model is not None else {}
         for here, original, leaf in _flattened(root):
             label = writer.shape_tool.AddShape(leaf.shape, False, False)
             _set_name(label, leaf.name, writer.names)
             _set_color(writer.color_tool, label, leaf.color)
             _set_layer(writer.layer_tool, label, leaf.layer)
             writer.protos[leaf.part] = label  # type: ignore[index]
-            if model is not None:
-                writer.edges(label, original.shape, leaf.shape, model.edges)
+            writer.edges(label, original.shape, leaf.shape, edges.get(here, []))
             copy_faces = _explore_faces(leaf.shape)
             proto_faces = _explore_faces(original.shape)
             if len(copy_faces) != len(proto_faces) or here not in faces:
@@ -332,18 +335,16 @@ def build_document(source: Any, name: str, *, flatten: bool = False) -> _Writer:
         writer.proto(root)
         writer.overrides(root)
         if model is not None:
-            faces = _tree_faces(model)
+            faces, edges = _by_instance(model.faces), _by_instance(model.edges)
             done: set[str] = set()
             for path, node in iter_nodes(root):
                 key = node_key(node)
-                if not node.children and path in faces and key not in done:
-                    # a part's faces once, as its first instance has them: OCC's XCAF has no face
-                    # colours per instance, and another instance's must not recolour the first's
+                if not node.children and key not in done and (path in faces or path in edges):
+                    # a part's faces and curves once, as its first instance has them: OCC's XCAF has no
+                    # sub-shape colours per instance, and another instance's must not recolour the first's
                     done.add(key)
-                    writer.faces(key, node, faces[path])
-            for key, label in writer.protos.items():
-                if key not in writer.components:
-                    writer.edges(label, writer.proto_shapes[key], writer.proto_shapes[key], model.edges)
+                    writer.faces(key, node, faces.get(path, []))
+                    writer.edges(writer.protos[key], node.shape, node.shape, edges.get(path, []))
         writer.shape_tool.UpdateAssemblies()
         return writer
     # flat: one free shape per root, with the faces' common name/colour/layer on it

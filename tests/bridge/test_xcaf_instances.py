@@ -360,3 +360,27 @@ def test_overrides_in_build123d_and_cadquery_objects(nested_step):
     colours = [[c.color.toTuple() if c.color else None for c in s.children] for s in assy.children]
     np.testing.assert_allclose(colours[0][0], RED, atol=1e-15)  # cadquery's linear RGB round trip
     np.testing.assert_allclose(colours[1][0], BLUE, atol=1e-15)
+
+
+def test_free_curves_in_an_instanced_part(tmp_path):
+    """A part with a box and two free lines (one with its own red curve colour), instanced twice; the
+    second instance coloured blue (a generic colour: faces and curves). Each instance's copy of a curve
+    is resolved on its own: own colour first, then the instance's."""
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.XCAFDoc import XCAFDoc_ColorType
+
+    d = _Doc()
+    red_line, plain_line = bd.Edge.make_line((0, 0, 0), (10, 0, 0)).wrapped, bd.Edge.make_line((0, 5, 0), (9, 5, 0)).wrapped
+    part = d.name(d.shapes.AddShape(xcaf.compound([bd.Box(1, 2, 3).wrapped, red_line, plain_line]), False, False),
+                  "bracket")
+    d.colors.SetColor(d.shapes.AddSubShape(part, red_line), _rgba(RED), XCAFDoc_ColorType.XCAFDoc_ColorCurv)
+    top = d.name(d.shapes.NewShape(), "top")
+    d.name(d.shapes.AddComponent(top, part, TopLoc_Location()), "b1")
+    d.colors.SetColor(d.name(d.shapes.AddComponent(top, part, _shift(10)), "b2"), _rgba(BLUE),
+                      XCAFDoc_ColorType.XCAFDoc_ColorGen)
+    model = read_step(d.write(tmp_path / "brackets.step"))
+    expected = [RED, None, RED, BLUE]  # b1's two lines, then b2's
+    assert [e.color for e in model.edges] == expected
+    assert [e.color for e in read_step(write_step(tmp_path / "again.step", model)).edges] == expected
+    iges = read_iges(write_iges(tmp_path / "again.igs", model))  # placed copies, each curve its colour
+    assert [e.color for e in iges.edges] == expected
