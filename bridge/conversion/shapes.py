@@ -39,7 +39,7 @@ from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.Geom import Geom_Curve
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopExp import TopExp
-from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Edge, TopoDS_Shape
+from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Edge, TopoDS_Face, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from occsurf.algorithms.errors import InvalidGeometryError
@@ -101,7 +101,7 @@ def as_faces(obj: Any, name: str = "shape") -> list[Any]:
     return [TopoDS.Face_s(faces.FindKey(i)) for i in range(1, faces.Extent() + 1)]
 
 
-def as_face(obj: Any, name: str = "face") -> Any:
+def as_face(obj: Any, name: str = "face") -> TopoDS_Face:
     """The one face of ``obj`` (any object :func:`as_shape` accepts) as a ``TopoDS_Face``.
 
     Raises

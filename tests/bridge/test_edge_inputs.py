@@ -137,6 +137,22 @@ def test_make_edge_to_edge_to_cq_edge_take_edges():
         bridge.to_edge(bd.Box(1, 1, 1))
 
 
+def test_is_reversed_and_writers_take_build123d_and_cadquery_edges(tmp_path):
+    """is_reversed and write_step already took edges through as_shape: the wrappers give what the
+    TopoDS_Edge gives (the curve written and read back: the same B-spline to STEP's digits)."""
+    edge = make_edge(CURVE)
+    flipped = edge.Reversed()
+    for wrap in (bd.Edge, cq.Edge):
+        assert bridge.is_reversed(wrap(flipped)) and not bridge.is_reversed(wrap(edge))
+    path = tmp_path / "edge.step"
+    bridge.write_step(path, [bd.Edge(edge), cq.Wire.assembleEdges([cq.Edge(edge)])])
+    back = bridge.read_step(path)
+    curves = [bridge.from_occ(e.edge) for e in back.edges]
+    assert len(curves) == 2
+    for c in curves:
+        assert np.allclose(c.control_points, CURVE.control_points, rtol=0, atol=1e-12)
+
+
 # ------------------------------------------------------------------------------------ the fill's helpers
 @pytest.fixture(scope="module")
 def open_ball():
