@@ -233,8 +233,10 @@ def compare(before: Any, after: Any, out_fmt: str, unit: str) -> list[str]:
     if len(after.edges) != len(before.edges):
         lines.append(f"free curves: {len(before.edges)} written, {len(after.edges)} read back")
     else:
-        lines += _changed(before.edges, after.edges, "free curves", "curve",
-                          {"colours": color, "layers": lambda e: e.layer})
+        edge_checks: dict[str, Any] = {"colours": color, "layers": lambda e: e.layer}
+        if out_fmt == "step":
+            edge_checks["instance paths"] = lambda e: e.instance
+        lines += _changed(before.edges, after.edges, "free curves", "curve", edge_checks)
     return lines + _geometry_changes(before, after, AREA_RTOL[out_fmt])
 
 

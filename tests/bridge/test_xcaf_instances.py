@@ -237,6 +237,8 @@ def test_face_colour_of_one_instance_is_reported_lost(tmp_path):
     assert [f.color for f in again.faces] == [f.color for f in model.faces]  # plate_a's faces untouched
     lines = compare(edited, again, "step", "mm")
     assert lines == [f"colours of 1 of 16 faces not carried (face {k}: {GREEN!r} read back as {BLUE!r})"]
+    iges = read_iges(write_iges(tmp_path / "edited.igs", edited))  # placed copies: each its own face colours
+    assert [f.color for f in iges.faces] == [f.color for f in edited.faces]
 
 
 # ------------------------------------------------------------------------------------ free curves
@@ -263,6 +265,35 @@ def _curves(model) -> list[tuple]:
     return [(e.curve_type, e.color, e.layer) for e in model.edges]
 
 
+def _occ_curve_colors(path: Path) -> list[tuple[float, float, float]]:
+    """The curve colours OCC's own XCAF reader gives the file (what its viewer shows:
+    ``XCAFPrs::CollectStyleSettings`` over the free shapes), sorted."""
+    from OCP.Quantity import Quantity_TypeOfColor
+    from OCP.STEPCAFControl import STEPCAFControl_Reader
+    from OCP.TCollection import TCollection_ExtendedString
+    from OCP.TDF import TDF_LabelSequence
+    from OCP.TDocStd import TDocStd_Document
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.XCAFDoc import XCAFDoc_DocumentTool
+    from OCP.XCAFPrs import XCAFPrs, XCAFPrs_IndexedDataMapOfShapeStyle
+
+    reader = STEPCAFControl_Reader()
+    reader.ReadFile(str(path))
+    doc = TDocStd_Document(TCollection_ExtendedString("XCAF"))
+    assert reader.Transfer(doc)
+    free = TDF_LabelSequence()
+    XCAFDoc_DocumentTool.ShapeTool_s(doc.Main()).GetFreeShapes(free)
+    out = []
+    for i in range(1, free.Length() + 1):
+        styles = XCAFPrs_IndexedDataMapOfShapeStyle()
+        XCAFPrs.CollectStyleSettings_s(free.Value(i), TopLoc_Location(), styles)
+        for k in range(1, styles.Extent() + 1):
+            style = styles.FindFromIndex(k)
+            if style.IsSetColorCurv():
+                out.append(style.GetColorCurv().Values(Quantity_TypeOfColor.Quantity_TOC_RGB))
+    return sorted(out)
+
+
 def test_free_curve_colours_and_layers(tmp_path, curves_step):
     model = read_step(curves_step)
     expected = [("Line", RED, "construction"), ("Circle", GREEN, None)]
@@ -271,6 +302,7 @@ def test_free_curve_colours_and_layers(tmp_path, curves_step):
     assert _curves(read_step(curves_step, isolated=True)) == expected
     step = read_step(write_step(tmp_path / "again.step", model))
     assert _curves(step) == expected
+    assert _occ_curve_colors(tmp_path / "again.step") == _occ_curve_colors(curves_step) == [(0, 1, 0), (1, 0, 0)]
     iges = read_iges(write_iges(tmp_path / "again.igs", model))  # 406-3 names the line's level
     assert _curves(iges) == expected
     assert _curves(read_step(write_step(tmp_path / "back.step", iges))) == expected
