@@ -416,3 +416,38 @@ def test_free_curves_in_an_instanced_part(tmp_path):
     assert [e.color for e in read_step(write_step(tmp_path / "again.step", model)).edges] == expected
     iges = read_iges(write_iges(tmp_path / "again.igs", model))  # placed copies, each curve its colour
     assert [e.color for e in iges.edges] == expected
+
+
+def test_override_three_levels_deep(tmp_path):
+    """top -> mid_1, mid_2 (y = 100) -> sub_1, sub_2 (z = 10) -> box: only the box of mid_2/sub_1 is
+    overridden (an SHUO chain of three components); occsurf reads it on that occurrence alone, writes
+    it back as a three-component SHUO, and reads the same colours again."""
+    from OCP.gp import gp_Trsf, gp_Vec
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.XCAFDoc import XCAFDoc_ColorType, XCAFDoc_ShapeTool
+
+    d = _Doc()
+    box = d.name(d.shapes.AddShape(bd.Box(1, 1, 1).wrapped, False, False), "box")
+    d.colors.SetColor(box, _rgba(RED), XCAFDoc_ColorType.XCAFDoc_ColorSurf)
+    sub = d.name(d.shapes.NewShape(), "sub")
+    d.name(d.shapes.AddComponent(sub, box, TopLoc_Location()), "box")
+    mid = d.name(d.shapes.NewShape(), "mid")
+    d.name(d.shapes.AddComponent(mid, sub, TopLoc_Location()), "sub_1")
+    d.name(d.shapes.AddComponent(mid, sub, _shift(10)), "sub_2")
+    top = d.name(d.shapes.NewShape(), "top")
+    trsf = gp_Trsf()
+    trsf.SetTranslation(gp_Vec(0, 100, 0))
+    d.name(d.shapes.AddComponent(top, mid, TopLoc_Location()), "mid_1")
+    d.name(d.shapes.AddComponent(top, mid, TopLoc_Location(trsf)), "mid_2")
+    d.shapes.UpdateAssemblies()
+    placed = XCAFDoc_ShapeTool.GetShape_s(box).Located(TopLoc_Location(trsf))  # mid_2/sub_1/box
+    assert d.colors.SetInstanceColor(placed, XCAFDoc_ColorType.XCAFDoc_ColorSurf, _rgba(BLUE), True)
+    model = read_step(d.write(tmp_path / "deep.step"))
+    leaves = [(p, n.color) for p, n in xcaf.iter_nodes(model.assembly) if not n.children]
+    assert leaves == [("top/mid_1/sub_1/box", RED), ("top/mid_1/sub_2/box", RED),
+                      ("top/mid_2/sub_1/box", BLUE), ("top/mid_2/sub_2/box", RED)]
+    assert xcaf.instance_overrides(model.assembly) == [("top/mid_2/sub_1/box", (1, 0, 0), BLUE)]
+    out = write_step(tmp_path / "again.step", model)
+    again = read_step(out)
+    assert [(p, n.color) for p, n in xcaf.iter_nodes(again.assembly) if not n.children] == leaves
+    assert [(f.instance, f.color) for f in again.faces] == [(f.instance, f.color) for f in model.faces]
