@@ -8,7 +8,10 @@ tangent-continuous, G0 on its sharp edges) and by OCC's MakeFilling with the sam
 (cadquery's defaults, and tuned: NbPtsOnCur 30, NbIter 4, Tol3d 1e-6, TolAng 1e-3). Both are
 measured by OCC's LocalAnalysis_SurfaceContinuity (order G1) along every hole edge
 (41 + 32 points per edge): G0 = max C0Value (model units), G1 = max G1Angle (degrees) over the
-tangent edges. Our filled model is sewn and checked (BRepCheck_Analyzer, STEP round trip).
+tangent edges. Our filled model is sewn and checked (BRepCheck_Analyzer, STEP round trip). Each
+filled hole says which construction was kept (``method``: 'central', the n-patch central split, or
+'plate', the trimmed thin-plate fill tried where the central split refuses, folds or misses a
+target); the table has a row per method.
 
 A fill counts as usable when it does not fold (occsurf: FillQuality.folds == 0) and, for either
 filler, its G0 is at most 1e-3 of the model size (a gap of a thousandth of the part is no fill, even
@@ -65,7 +68,7 @@ def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only
         row.update(file=path.name, wall=time.perf_counter() - t0, size=model.size)
         rows.append(row)
         o, t = rep.occ.get("default", {}), rep.occ.get("tuned", {})
-        print(f"{path.name} {faces}: {rep.status} n={rep.sides} G0 {rep.g0} G1 {rep.g1} folds {rep.folds} valid {rep.valid} "
+        print(f"{path.name} {faces}: {rep.status} {rep.method or '-'} n={rep.sides} G0 {rep.g0} G1 {rep.g1} folds {rep.folds} valid {rep.valid} "
               f"step {rep.step_round_trip} | OCC {o.get('status')} {o.get('g0')} {o.get('g1')} | tuned "
               f"{t.get('status')} {t.get('g0')} {t.get('g1')} | {rep.reason or ''}", file=sys.stderr, flush=True)
     return rows
@@ -84,6 +87,11 @@ def summary(rows: list[dict]) -> str:
     out.append(f"| occsurf | {len(ours)} / {len(closed)} | {_stats([r['g0'] for r in ours])} | "
                f"{_stats([r['g1'] for r in ours])} | {statistics.median([r['seconds'] for r in ours]) if ours else 0:.2f} s | "
                f"{_no_worse(closed)} |")
+    for method in ("central", "plate"):  # which construction each filled hole kept (refill.fitted_fill)
+        mine = [r for r in ours if r.get("method", "central") == method]
+        out.append(f"| occsurf, {method} | {len(mine)} / {len(closed)} | {_stats([r['g0'] for r in mine])} | "
+                   f"{_stats([r['g1'] for r in mine])} | {statistics.median([r['seconds'] for r in mine]) if mine else 0:.2f} s | "
+                   f"{_no_worse(mine)} |")
     for name in ("default", "tuned"):
         ok = [r["occ"][name] for r in closed if r["occ"].get(name, {}).get("status") == "ok"]
         out.append(f"| OCC MakeFilling {name} | {len(ok)} / {len(closed)} | {_stats([o['g0'] for o in ok])} | "
@@ -93,7 +101,9 @@ def summary(rows: list[dict]) -> str:
     out += ["", f"occsurf filled models: {valid} / {len(ours)} valid (BRepCheck_Analyzer), {step} / {len(ours)} "
             "round-trip through STEP"]
     usable = [r for r in ours if not r.get("folds") and r["g0"] <= 1e-3 * r.get("size", float("inf"))]
-    out.append(f"usable fills (no fold, G0 <= 1e-3 of the model size): occsurf {len(usable)} / {len(closed)}, "
+    per_method = Counter(r.get("method", "central") for r in usable)
+    out.append(f"usable fills (no fold, G0 <= 1e-3 of the model size): occsurf {len(usable)} / {len(closed)} "
+               f"({', '.join(f'{m} {k}' for m, k in sorted(per_method.items()))}), "
                + ", ".join(f"OCC {name} {sum(1 for r in closed if _occ_usable(r, name))} / {len(closed)}"
                            for name in ("default", "tuned")))
     folded = [r for r in ours if r.get("folds")]

@@ -33,7 +33,7 @@ regularisation (``c += K^{-1} A^T (b - A c)``, at most ``tolerances.FILL_PLATE_I
 steps, the best iterate kept as judged on samples *between* the fit's, so that a basis function
 grazing the loop is not blown up to fit round-off). Every knot span (in ``u`` and in ``v``)
 holding a sample that misses a target is bisected and the fit repeated, until both targets are
-met or ``max_spans`` is reached; the best stage is returned and what it achieved is reported per
+met, ``max_spans`` is reached or four refinements in a row gain less than 10 %; the best stage is returned and what it achieved is reported per
 side (:class:`PlateFill`).
 
 Why a height field: it cannot fold (``S_u x S_v = N - h_u e_1 - h_v e_2`` has a positive ``N``
@@ -141,10 +141,12 @@ class PlateFill:
         P = np.asarray(points, float).reshape(-1, 3) - self.origin
         return P @ self.e1, P @ self.e2
 
-    def locate_input(self, side: int, points: ArrayLike) -> tuple[NDArray[np.intp], Array, Array]:
-        """``(patch index, u, v)`` as :meth:`.nsided.HoleFill.locate_input` returns them (one patch: 0)."""
-        u, v = self.locate(side, points)
-        return np.zeros(u.shape, np.intp), u, v
+    def locate_input(self, side: int, points: ArrayLike) -> tuple[NDArray[np.intp], Array, Array, Array]:
+        """``(patch index, u, v, distance)`` as :meth:`.nsided.HoleFill.locate_input` returns them (one
+        patch: index 0; ``distance`` from each point to the surface point at its ``(u, v)``)."""
+        P = np.asarray(points, float).reshape(-1, 3)
+        u, v = self.locate(side, P)
+        return np.zeros(u.shape, np.intp), u, v, np.linalg.norm(self.surface.evaluate(u, v) - P, axis=1)
 
 
 # ===================================================================================== sides
@@ -426,6 +428,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g
     tol0 = g0_tol / L
     tol1 = np.radians(angle_tol)
     best = None  # (score, c, knots, g0 per side, g1 per side): the best stage is returned
+    stalled = 0
     while True:
         nu, nv = ku.size - p - 1, kv.size - p - 1
         spans = max(nu, nv) - p
@@ -470,10 +473,11 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g
                 break
         c = stage[1]
         g0_side, g1_side, bu, bv = ev.measure(c, g0_tol, angle_tol)
+        stalled = stalled + 1 if best is not None and stage[0] > 0.9 * best[0] else 0
         if best is None or stage[0] < best[0]:
             best = (stage[0], c, ku, kv, g0_side, g1_side)
-        if stage[0] <= 1.0:
-            break
+        if stage[0] <= 1.0 or stalled >= 4:  # met, or four refinements gained < 10 % (a target the
+            break  # data cannot meet, e.g. neighbours without a common tangent plane at a corner)
         ku2, kv2 = _bisect(ku, p, bu, max_spans), _bisect(kv, p, bv, max_spans)
         if ku2.size == ku.size and kv2.size == kv.size:
             break

@@ -91,6 +91,7 @@ class HoleReport:
     side_g0: list[float] = field(default_factory=list)
     side_g1: list[float] = field(default_factory=list)
     construction: str | None = None  # 'iso' (exact cross derivatives) or 'fitted' (trimming-curve edges)
+    method: str | None = None  # 'central' (fill_hole's n patches) or 'plate' (one trimmed plate, fill_plate)
     fit_g1: list[float] = field(default_factory=list)  # fitted sides: the fields' angle to the neighbours
     folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; FillQuality.folds)
     occ_status: str | None = None  # 'ok', 'failed', None (not run)
@@ -319,20 +320,21 @@ def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int
     except InvalidGeometryError as exact_err:
         if any(f is None for f in nb):
             raise
-        from .refill import fitted_fill
+        from .refill import fill_method, fitted_fill
 
         try:
             occ_faces, _, fit, s0, s1, fill, _ = fitted_fill(edges, nb, [None] * len(edges), size, samples)
         except InvalidGeometryError as err:
             raise InvalidGeometryError(f"{err} (exact sides: {exact_err})") from err
         rep.construction, rep.fit_g1 = "fitted", [float(a) for a in fit]
+        rep.method = fill_method(fill)  # fitted_fill falls back to the plate where the central split fails
         rep.side_g0, rep.side_g1 = [float(a) for a in s0], [float(a) for a in s1]
         return fill, occ_faces
     occ_faces = [make_face(p, 1e-7) for p in fill.patches]
     occ_surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
     per = [assess_joint(e, f, occ_surfs, samples, locate=_locator(fill, i)) for i, (e, f) in enumerate(zip(edges, nb))]
     rep.side_g0, rep.side_g1 = [p[0] for p in per], [p[1] for p in per]
-    rep.construction = "iso"
+    rep.construction, rep.method = "iso", "central"
     return fill, occ_faces
 
 
@@ -382,10 +384,15 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
             t0 = time.perf_counter()
             fill, occ_faces = _fill_loop(edges, nb, size, samples, rep)
             rep.seconds = time.perf_counter() - t0
-            q = measure_fill(fill)
-            rep.own_g0, rep.own_g1 = float(q.boundary_gap.max()), float(q.boundary_angle.max())
-            rep.internal_g1 = float(max(q.internal_angle.max(), q.center_angle))
-            rep.folds = int(q.folds.sum())
+            if rep.method == "plate":
+                from .plate import plate_quality
+
+                rep.own_g0, rep.own_g1, rep.internal_g1, rep.folds = plate_quality(fill)
+            else:
+                q = measure_fill(fill)
+                rep.own_g0, rep.own_g1 = float(q.boundary_gap.max()), float(q.boundary_angle.max())
+                rep.internal_g1 = float(max(q.internal_angle.max(), q.center_angle))
+                rep.folds = int(q.folds.sum())
             rep.g0, rep.g1 = max(rep.side_g0), max(rep.side_g1)
             rep.status = "filled"
             rep._fill_faces, rep._neighbours = occ_faces, _unique(nb)  # for pictures (not serialised)

@@ -4,7 +4,10 @@ The "replace this face" workflow: :func:`refill_faces` removes faces (numbered a
 ``TopExp.MapShapes_s`` order, each face once) from the model sewn into shells, finds the hole's
 loop of edges and fills it with :func:`occsurf.algorithms.topology.nsided.fill_hole`, the sides
 described by curves and fitted cross fields (:func:`occsurf.algorithms.topology.nsided_sides.side_from_normals`):
-the hole edges are trimming curves of their neighbours, not iso-lines.
+the hole edges are trimming curves of their neighbours, not iso-lines. Where the central split
+refuses (a reflex corner), folds (a long curved hole) or misses a target, one trimmed thin-plate
+surface (:func:`occsurf.algorithms.topology.plate_fill.fill_plate`, OCC face by :mod:`.plate`)
+is tried on the same sides and the better kept; :attr:`RefillReport.method` says which.
 
 Per edge the continuity asked for is the original model's: an edge where the removed face met its
 neighbour tangent-continuously (within :data:`G1_EDGE_DEG`) gets G1 to the neighbour (its normals
@@ -49,20 +52,26 @@ from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.topology.nsided import HoleFill, closest_parameters, count_folds, fill_hole
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.topology.nsided_sides import blend_normals, corner_normals, fit_boundary, side_from_normals
+from occsurf.algorithms.topology.plate_fill import PlateFill
 
 from .. import _occ
 from ..conversion.splines import from_occ, make_face
 from ..messages import one_line
 from .joints import ASSESS_SAMPLES, SEW_TOLERANCE, assess_joint, edge_face_map
+from .plate import plate_fill_faces
 
 __all__ = ["RefillReport", "refill_faces", "refill_model", "face_components", "model_faces", "fitted_fill", "G1_EDGE_DEG",
-           "OCC_TUNED", "OCC_DEFAULT"]
+           "OCC_TUNED", "OCC_DEFAULT", "fill_method"]
 
 #: An edge counts as tangent-continuous in the original model (and the fill is asked to be G1 to
 #: the neighbour there) when the removed face and the neighbour meet within this angle (degrees).
 G1_EDGE_DEG: float = 1.0
 #: Samples of the neighbour's normal per edge for the cross-field fit (plus clustered end samples).
 FIT_SAMPLES: int = 81
+#: The plate (tried where the central split refuses, folds or misses a target) replaces a central
+#: fill that does not fold only when its worst number, in target units, is below this fraction of
+#: the central fill's (:func:`_plate_wins`).
+PLATE_MARGIN: float = 0.9
 #: ``BRepOffsetAPI_MakeFilling`` parameters: cadquery's ``makeNSidedSurface`` defaults, and the
 #: tuned ones of OCP_NOTES §6 (more points on each constraint, more iterations).
 OCC_DEFAULT = dict(degree=3, nb_pts_on_cur=15, nb_iter=2, anisotropy=False, tol2d=1e-5, tol3d=1e-4,
@@ -93,6 +102,7 @@ class RefillReport:
     valid: bool | None = None
     step_round_trip: bool | None = None
     folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; see FillQuality.folds)
+    method: str | None = None  # 'central' (fill_hole's n patches) or 'plate' (one trimmed plate, fill_plate)
     occ: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
@@ -546,7 +556,8 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
     try:
         t0 = time.perf_counter()
         occ_faces, g1, rep.fit_g1, rep.side_g0, rep.side_g1, fill, _ = fitted_fill(edges, nbs, owners, model.size)
-        rep.folds = sum(count_folds(p) for p in fill.patches)
+        rep.folds = sum(count_folds(p) for p in fill.patches)  # measured for a plate too (a graph: 0)
+        rep.method = fill_method(fill)
         rep.seconds = time.perf_counter() - t0
         rep.g1_edges = sum(g1)
         rep.g0 = max(rep.side_g0)
@@ -571,13 +582,24 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
     return rep, shape
 
 
+def fill_method(fill: Any) -> str:
+    """``'plate'`` for a :class:`PlateFill`, ``'central'`` for the central split's :class:`HoleFill`."""
+    return "plate" if isinstance(fill, PlateFill) else "central"
+
+
 def _our_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, follow: bool,
-              samples: int = ASSESS_SAMPLES) -> tuple:
+              samples: int = ASSESS_SAMPLES, method: str = "central", prepared: tuple | None = None) -> tuple:
     """Our fill of the hole, as OCC faces, measured: (faces, g1 flags, fit angles, side G0, side G1,
-    the HoleFill, the side of each edge)."""
-    sides, side_of_edge, g1, fit = refill_sides(edges, nbs, owners, size, follow)
-    fill = fill_hole(sides)
-    occ_faces = [make_face(p, 1e-7) for p in fill.patches]
+    the HoleFill or PlateFill, the side of each edge). ``method``: ``'central'`` (:func:`fill_hole`)
+    or ``'plate'`` (:func:`fill_plate`: G1 asked on a side when any of its edges asks it, G0 to
+    ``FILL_FIT_G0 * size``); ``prepared``: :func:`refill_sides`' result for these arguments."""
+    sides, side_of_edge, g1, fit = prepared or refill_sides(edges, nbs, owners, size, follow)
+    if method == "plate":
+        flags = [any(g1[k] for k in range(len(edges)) if side_of_edge[k] == j) for j in range(len(sides))]
+        fill, occ_faces = plate_fill_faces(sides, flags, tolerances.FILL_FIT_G0 * size)
+    else:
+        fill = fill_hole(sides)
+        occ_faces = [make_face(p, 1e-7) for p in fill.patches]
     surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
 
     def locate(i: int) -> Any:
@@ -591,26 +613,56 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
     """The hole filled with fitted sides (trimming-curve edges), both boundary variants tried (the
     neighbours' traces, the model's edge curves) and the better kept (:func:`_score`).
 
-    Returns the tuple of :func:`_our_fill`.
+    The central split (:func:`fill_hole`) first; when it refuses both variants, or its best fill
+    folds or misses a target (score above 1), the plate (:func:`fill_plate`, one trimmed surface:
+    reflex corners, long curved holes) is tried on both and the best of all kept.
+
+    Returns the tuple of :func:`_our_fill` (its fill's type says which construction won:
+    :func:`fill_method`).
 
     Raises
     ------
     InvalidGeometryError
-        Neither variant can be filled (the last reason).
+        No variant can be filled by either construction (both last reasons).
     """
-    best, last_err = None, None
+    best, last_err, plate_err = None, None, None
     etol = max(BRep_Tool.Tolerance_s(e) for e in edges)
+    prepared = {}
     for follow in (True, False):  # the neighbours' traces (G0 to them), and the model's edge curves
         try:
-            cand = _our_fill(edges, nbs, owners, size, follow, samples)
+            prepared[follow] = refill_sides(edges, nbs, owners, size, follow)
+            cand = _our_fill(edges, nbs, owners, size, follow, samples, prepared=prepared[follow])
         except InvalidGeometryError as err:
             last_err = err
             continue
         if best is None or _score(cand, size, etol) < _score(best, size, etol):
             best = cand
+    if best is None or _score(best, size, etol) > (False, 1.0):  # refused, folded or a target missed
+        for follow, prep in prepared.items():
+            try:
+                cand = _our_fill(edges, nbs, owners, size, follow, samples, method="plate", prepared=prep)
+            except OccsurfError as err:
+                plate_err = err
+                continue
+            if best is None or _plate_wins(_score(cand, size, etol), _score(best, size, etol)):
+                best = cand
     if best is None:
-        raise last_err
+        if plate_err is None or last_err is None:
+            raise last_err or plate_err
+        raise InvalidGeometryError(f"central split: {one_line(last_err, expected=(OccsurfError,))}; "
+                                   f"plate: {one_line(plate_err, expected=(OccsurfError,))}") from plate_err
     return best
+
+
+def _plate_wins(plate: tuple[bool, float], central: tuple[bool, float]) -> bool:
+    """The plate replaces the central split's fill when that folds and the plate does not, or when
+    both fold alike and the plate's worst (G0 or G1, in target units) is below ``PLATE_MARGIN`` of the
+    central split's: a tie in the worst number (the lens' face 1: both 0.0193 deg, set by the fitted
+    fields at a corner) keeps the central split, whose G0 there is round-off (the plate's is its
+    1e-7-of-the-size target)."""
+    if plate[0] != central[0]:
+        return not plate[0]
+    return plate[1] < PLATE_MARGIN * central[1]
 
 
 def _score(cand: tuple, size: float, edge_tol: float = 0.0) -> tuple[bool, float]:

@@ -7,9 +7,11 @@ the whole hole set is benchmarks/bench_fill_realdata.py. Skipped with the reason
 
 Tolerances: our fill is judged against OCC's BRepOffsetAPI_MakeFilling on the same hole, measured the
 same way (LocalAnalysis_SurfaceContinuity at 73 points per edge): it must be no worse in G0 and in
-G1 (measured on face 1: ours 8.3e-11 / 0.019 deg, OCC 2.1e-4 / 0.13 deg), and the fill must not fold.
-G1 is also held to twice the fit target FILL_FIT_ANGLE (0.01 deg): the fields meet it, the corner
-twists that a sound (unfolded) fill can take leave 0.019 deg.
+G1 (measured on face 1: central split 8.3e-11 / 0.019 deg, the plate 1.5e-6 / 0.019 deg, OCC 2.1e-4
+/ 0.13 deg), and the fill must not fold. G1 is also held to twice the fit target FILL_FIT_ANGLE
+(0.01 deg): the fields meet it, the corner twists that a sound (unfolded) fill can take leave
+0.019 deg. The central split misses the 0.01 deg target there, so the plate is tried too and kept
+only if clearly better (refill.PLATE_MARGIN); either construction is accepted, with its face count.
 """
 
 from __future__ import annotations
@@ -53,7 +55,9 @@ def test_trimmed_face_is_replaced_no_worse_than_occ_and_the_model_stays_valid(le
     assert rep.g1 <= 2 * tolerances.FILL_FIT_ANGLE and rep.g0 <= 1e-7 * 100  # lens ~ 100 units across
     assert max(rep.fit_g1) <= tolerances.FILL_FIT_ANGLE
     assert rep.valid and rep.step_round_trip
-    assert len(model_faces(shape)) == 9 - 1 + 4  # face 1 replaced by 4 patches
+    assert rep.method in ("central", "plate")
+    # face 1 replaced by 4 patches (central split) or one trimmed plate
+    assert len(model_faces(shape)) == 9 - 1 + (4 if rep.method == "central" else 1)
 
 
 def test_a_face_on_the_free_boundary_leaves_no_closed_hole(lens) -> None:

@@ -1,0 +1,62 @@
+"""The plate fill as an OCC face (course §8-3; :func:`occsurf.algorithms.topology.plate_fill.fill_plate`).
+
+The plate is one trimmed surface: its face is the B-spline height field bounded by the hole sides'
+p-curves (exact: the sides' poles projected onto the plate's plane), built by
+:func:`occsurf.bridge.conversion.trimming.trimmed_to_occ_face` through
+:func:`occsurf.bridge.conversion.splines.make_face`. The face's edges are the p-curves' images on
+the plate, which lie within the fill's achieved G0 of the hole's edges, so the face sews to the
+neighbours with the model's ``SEW_TOLERANCE`` (:mod:`.joints`) whenever that G0 is below it
+(:func:`plate_face` checks it and says so otherwise).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.algorithms.topology.nsided import HoleSide, count_folds
+from occsurf.algorithms.topology.plate_fill import PlateFill, fill_plate
+
+from ..conversion.splines import make_face
+from .joints import SEW_TOLERANCE
+
+__all__ = ["plate_face", "plate_fill_faces", "plate_quality"]
+
+
+def plate_face(fill: PlateFill, tol: float | None = None) -> Any:
+    """The OCC ``TopoDS_Face`` of a plate fill (its trimmed surface).
+
+    Parameters
+    ----------
+    fill : PlateFill
+    tol : float, optional
+        Edge/vertex tolerance of the face; default the larger of 1e-7 and the fill's achieved G0
+        (the p-curve images lie that close to the hole's edges).
+
+    Raises
+    ------
+    InvalidGeometryError
+        The fill misses its boundary by more than ``SEW_TOLERANCE`` (it would not sew in).
+    """
+    g0 = float(np.max(fill.side_g0))
+    if g0 > SEW_TOLERANCE:
+        raise InvalidGeometryError(f"plate fill: it misses the hole's boundary by {g0:.3g}, more than the sewing "
+                                   f"tolerance {SEW_TOLERANCE:g} (raise max_spans or check the sides)")
+    return make_face(fill.trimmed, max(1e-7, g0) if tol is None else tol)
+
+
+def plate_fill_faces(sides: Sequence[HoleSide], g1: Sequence[bool], g0_tol: float, **kw: Any) -> tuple[PlateFill, list[Any]]:
+    """:func:`fill_plate` and its face: ``(fill, [face])``."""
+    fill = fill_plate(sides, g1=g1, g0_tol=g0_tol, **kw)
+    return fill, [plate_face(fill)]
+
+
+def plate_quality(fill: PlateFill) -> tuple[float, float, float, int]:
+    """Our own numbers for a plate, as :class:`.fill.HoleReport` records them for the central split:
+    ``(own_g0, own_g1, internal_g1, folds)``: the fit's largest distance and angle over the sides
+    (angle 0 where only G0 was asked), no internal edges (0.0), and the folds *measured* on the
+    surface (:func:`count_folds`; a height field has none)."""
+    g1 = fill.side_g1[np.isfinite(fill.side_g1)]
+    return float(np.max(fill.side_g0)), float(g1.max()) if g1.size else 0.0, 0.0, int(count_folds(fill.surface))
