@@ -10,10 +10,21 @@ where a face differs from its instance). :func:`step_document_bytes` writes it w
 placed copy named after the instance, every face with its own colour and layer) and writes it with
 ``IGESCAFControl_Writer``.
 
-What OCC's writers drop, measured: a layer on an instance (component) is not written, so a part carries
-the layer of its first instance; a part without a name would be named 'Open CASCADE STEP translator 7.9
-n', so it gets an empty product name; IGES has no transparency and its layers are level numbers
-(occsurf names each level with a 406 form 3 property, :func:`_add_level_names`).
+Per-occurrence colours: a part or sub-assembly is written once, from its first occurrence; an
+occurrence of a nested component whose colour differs gets an SHUO (:meth:`_Writer.overrides`),
+which OCC's STEP writer makes a ``SPECIFIED_HIGHER_USAGE_OCCURRENCE`` styled in its context, and
+IGES (no instances) a placed copy of its own colour. Free curves carry their curve colour and layer
+on their part's sub-shape labels (IGES: on the placed copies).
+
+What OCC cannot carry, measured: a layer on an instance (component or SHUO label) is not written
+(``STEPCAFControl_Writer::WriteLayers`` skips reference labels; a layer set on a placed shape lands
+on the part), so a part carries the layer of its first instance
+(:func:`.xcaf.instance_layer_losses`); a face coloured in one instance only has no XCAF form (no
+sub-shape labels under a component; OCC's reader turns a face style in the context of an instance
+into the whole instance's colour), so a part's face colours are those of its first instance and
+the rest is reported by ``occsurf convert``; a part without a name would be named 'Open CASCADE
+STEP translator 7.9 n', so it gets an empty product name; IGES has no transparency and its layers
+are level numbers (occsurf names each level with a 406 form 3 property, :func:`_add_level_names`).
 """
 
 from __future__ import annotations
