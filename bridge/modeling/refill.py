@@ -592,11 +592,13 @@ def _our_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, 
     """Our fill of the hole, as OCC faces, measured: (faces, g1 flags, fit angles, side G0, side G1,
     the HoleFill or PlateFill, the side of each edge). ``method``: ``'central'`` (:func:`fill_hole`)
     or ``'plate'`` (:func:`fill_plate`: G1 asked on a side when any of its edges asks it, G0 to
-    ``FILL_FIT_G0 * size``); ``prepared``: :func:`refill_sides`' result for these arguments."""
+    ``FILL_FIT_G0 * size``, at most half ``SEW_TOLERANCE``); ``prepared``: :func:`refill_sides`' result for these arguments."""
     sides, side_of_edge, g1, fit = prepared or refill_sides(edges, nbs, owners, size, follow)
     if method == "plate":
         flags = [any(g1[k] for k in range(len(edges)) if side_of_edge[k] == j) for j in range(len(sides))]
-        fill, occ_faces = plate_fill_faces(sides, flags, tolerances.FILL_FIT_G0 * size)
+        # G0 target: the issue's 1e-7 of the model size, but at most half the sewing tolerance (the
+        # face must sew in; plate_face refuses beyond SEW_TOLERANCE)
+        fill, occ_faces = plate_fill_faces(sides, flags, min(tolerances.FILL_FIT_G0 * size, 0.5 * SEW_TOLERANCE))
     else:
         fill = fill_hole(sides)
         occ_faces = [make_face(p, 1e-7) for p in fill.patches]
