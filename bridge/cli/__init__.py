@@ -49,14 +49,14 @@ import sys
 from collections.abc import Sequence
 
 from . import audit, check, convert, demo, fill, fit, inspect, render
-from ._common import EXIT_ERROR, guarded
+from ._common import EXIT_ERROR, OneLineParser, guarded
 
 __all__ = ["main", "build_parser"]
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``occsurf`` parser: one sub-command per module, plus the hidden reader command."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="occsurf",
         description="Spline surfaces of the SIGGRAPH '91 course C25, bridged to OpenCascade.",
     )

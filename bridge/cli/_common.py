@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from ..isolation import Outcome
 
 __all__ = [
+    "OneLineParser",
     "EXIT_OK",
     "EXIT_ERROR",
     "STEP_SUFFIXES",
@@ -72,6 +73,18 @@ SAMPLES_DIR = "step_samples"
 def error(message: str) -> None:
     """Print ``occsurf: MESSAGE`` on stderr: the one-line form of every error a command reports."""
     print(f"occsurf: {message}", file=sys.stderr, flush=True)
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """The ``occsurf`` parser (and, through ``add_subparsers``, every command's): a usage error is one
+    line on stderr, ``occsurf: convert: argument --unit: invalid choice: 'furlong' (choose from ...)``,
+    exit :data:`EXIT_ERROR`, like every other error of the command line (argparse's own prints the
+    usage block first)."""
+
+    def error(self, message: str) -> Any:  # type: ignore[override]
+        command = self.prog.split(" ", 1)[1] if " " in self.prog else ""
+        error(f"{command}: {message}" if command else message)
+        self.exit(EXIT_ERROR)
 
 
 def strip_path(message: str, path: Path) -> str:
@@ -192,10 +205,18 @@ def guarded(func: Any, ns: argparse.Namespace) -> int:
         return EXIT_ERROR
     with contextlib.suppress(AttributeError, ValueError):  # a non-UTF-8 file name must not stop a table
         sys.stdout.reconfigure(errors="backslashreplace")  # type: ignore[union-attr]
+    interrupted = _note_interrupts()
     try:
-        code = int(func(ns))
-        sys.stdout.flush()
-        return code
+        try:
+            code = int(func(ns))
+            sys.stdout.flush()
+            return code
+        except Exception:
+            # Ctrl-C inside a compiled module's import (OCP's initialisation turns the KeyboardInterrupt
+            # into ``ImportError: initialization failed``) is still Ctrl-C, not a traceback.
+            if interrupted():
+                raise KeyboardInterrupt from None
+            raise
     except KeyboardInterrupt:
         with contextlib.suppress(OSError, ValueError, KeyboardInterrupt):
             with interrupts_held():
@@ -212,6 +233,44 @@ def guarded(func: Any, ns: argparse.Namespace) -> int:
         _quiet_stdout()
         error(f"cannot write the output: {err.strerror or err}")
         return EXIT_ERROR
+    finally:
+        interrupted.restore()
+
+
+class _SigintSeen:
+    """Whether SIGINT arrived since :func:`_note_interrupts` (callable), and ``restore()`` of the handler."""
+
+    def __init__(self) -> None:
+        import signal
+        import threading
+
+        self.seen = False
+        self._old: Any = None
+        if threading.current_thread() is threading.main_thread() \
+                and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            self._old = signal.signal(signal.SIGINT, self._handle)
+
+    def _handle(self, signum: int, frame: Any) -> None:
+        import signal
+
+        self.seen = True
+        signal.default_int_handler(signum, frame)
+
+    def __call__(self) -> bool:
+        return self.seen
+
+    def restore(self) -> None:
+        import signal
+
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+            self._old = None
+
+
+def _note_interrupts() -> _SigintSeen:
+    """Note Ctrl-C while a command runs (Python's own handler still raises ``KeyboardInterrupt``); an
+    ignored SIGINT (a job started in the background) stays ignored."""
+    return _SigintSeen()
 
 
 def shown_path(path: str | os.PathLike[str]) -> str:

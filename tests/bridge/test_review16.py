@@ -1,0 +1,70 @@
+"""Regressions found by reviewing issue 16 as a user: the command line's one-line errors and Ctrl-C.
+
+* A usage error (``occsurf convert IN OUT --unit furlong``, ``--digits 40``, a missing argument, an
+  unknown command) printed argparse's usage block and then its message: several lines, where the
+  README promises ``one line`` for a bad unit or digit count.
+* Ctrl-C while ``occsurf convert`` imported OCP in the command's own process came out as
+  ``ImportError: initialization failed`` with a traceback and exit status 1 (OCP's module
+  initialisation turns the ``KeyboardInterrupt`` into an ``ImportError``).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+
+import pytest
+
+from occsurf.bridge import cli
+from occsurf.bridge.cli._common import EXIT_ERROR, EXIT_INTERRUPTED, guarded
+
+
+@pytest.mark.parametrize(("args", "start"), [
+    (["convert", "in.step", "out.igs", "--unit", "furlong"], "occsurf: convert: argument --unit: invalid choice: 'furlong'"),
+    (["convert", "in.step", "out.step", "--digits", "40"], "occsurf: convert: argument --digits: expected an integer"),
+    (["convert", "in.step"], "occsurf: convert: the following arguments are required: OUT"),
+    (["fill", "in.step"], "occsurf: fill: the following arguments are required: --out"),
+    (["inspect", "--samples", "x"], "occsurf: inspect: argument --samples"),
+    (["no-such-command"], "occsurf: argument COMMAND: invalid choice: 'no-such-command'"),
+])
+def test_usage_error_is_one_line(capsys, monkeypatch, tmp_path, args, start):
+    monkeypatch.chdir(tmp_path)
+    code = cli.main(args)
+    out, err = capsys.readouterr()
+    assert code == EXIT_ERROR and out == ""
+    assert len(err.splitlines()) == 1 and err.startswith(start), err
+    assert not list(tmp_path.iterdir())  # nothing written
+
+
+def test_help_still_prints_usage(capsys):
+    assert cli.main(["convert", "--help"]) == 0
+    assert capsys.readouterr().out.startswith("usage: occsurf convert")
+
+
+def _import_interrupted_by_ctrl_c(ns):
+    """What OCP's import does when Ctrl-C arrives during its initialisation."""
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        for _ in range(1000):  # the handler runs between bytecodes
+            pass
+    except KeyboardInterrupt:
+        raise ImportError("initialization failed") from None
+    raise AssertionError("SIGINT was not delivered")
+
+
+def test_ctrl_c_turned_into_import_error_is_an_interruption(capsys):
+    before = signal.getsignal(signal.SIGINT)
+    if before is not signal.default_int_handler:
+        pytest.skip("SIGINT is not Python's default handler here")
+    assert guarded(_import_interrupted_by_ctrl_c, None) == EXIT_INTERRUPTED
+    assert capsys.readouterr().err == "occsurf: interrupted\n"
+    assert signal.getsignal(signal.SIGINT) is before  # the command's handler is removed again
+
+
+def test_import_error_without_ctrl_c_is_not_hidden():
+    def broken(ns):
+        raise ImportError("a real one")
+
+    with pytest.raises(ImportError, match="a real one"):
+        guarded(broken, None)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
