@@ -49,9 +49,14 @@ def run(ns: argparse.Namespace) -> int:
     from ..exchange.convert import convert
     from ..messages import error_line
 
+    before = _identity(out)
     try:
         report = convert(ns.input, ns.output, unit=ns.unit, digits=ns.digits, isolated=not ns.in_process,
                          timeout=ns.timeout, strict=ns.strict)
+    except KeyboardInterrupt:
+        if _identity(out) != before:  # Ctrl-C after the atomic replace, while OUT was read back
+            error(f"{shown_path(ns.output)}: written, but interrupted while reading it back: nothing was compared")
+        raise
     except (OccsurfError, OSError) as err:
         message = error_line(err)
         shown = shown_path(ns.input)
@@ -66,6 +71,15 @@ def run(ns: argparse.Namespace) -> int:
     sys.stdout.write("\n".join(lines) + "\n")
     sys.stdout.flush()
     return EXIT_OK
+
+
+def _identity(path: Path) -> tuple[int, int, int] | None:
+    """Inode, size and modification time of ``path`` (``None`` when absent): a replaced file differs."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return (st.st_ino, st.st_size, st.st_mtime_ns)
 
 
 def _digits_arg(text: str) -> int:

@@ -68,3 +68,31 @@ def test_import_error_without_ctrl_c_is_not_hidden():
     with pytest.raises(ImportError, match="a real one"):
         guarded(broken, None)
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_ctrl_c_while_reading_back_says_the_output_was_written(capsys, monkeypatch, tmp_path):
+    """Ctrl-C after ``convert`` replaced OUT (while it reads OUT back to compare) says so: OUT is whole
+    and new, but nothing was compared; before that point OUT is untouched (atomic write)."""
+    bd = pytest.importorskip("build123d")
+    from occsurf.bridge.exchange import convert as convert_module
+    from occsurf.bridge.exchange.step_iges import write_step
+
+    src = write_step(tmp_path / "box.step", bd.Box(1, 2, 3), names="box")
+    out = tmp_path / "out.igs"
+    out.write_text("old")
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(convert_module, "compare", interrupted)
+    assert cli.main(["convert", str(src), str(out), "--in-process"]) == EXIT_INTERRUPTED
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"occsurf: {out}: written, but interrupted while reading it back: nothing was compared",
+                   "occsurf: interrupted"]
+    assert out.read_bytes().rstrip().endswith(b"T0000001")  # the whole new IGES file
+
+    monkeypatch.setattr("occsurf.bridge.exchange.step_iges.write_iges", interrupted)
+    out.write_text("old")
+    assert cli.main(["convert", str(src), str(out), "--in-process"]) == EXIT_INTERRUPTED
+    assert capsys.readouterr().err.splitlines() == ["occsurf: interrupted"]
+    assert out.read_text() == "old"
