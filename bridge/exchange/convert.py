@@ -7,8 +7,9 @@ significant digits, atomic), then reads the written file back and compares, face
 user cares about: the face count, names, colours, layers, instance paths and the unit, and the
 free curves' colours and layers. What the target format cannot hold (IGES: instances, per-instance
 colour overrides, transparency, 17 digits; STEP through OCC's writer: layers of instances) and
-whatever the comparison finds changed (also each face's wire count, and its area beyond
-:data:`AREA_RTOL`) is returned as one line per property in :attr:`ConversionReport.not_carried`.
+whatever the comparison finds changed (also each face's wire count, its area beyond
+:data:`AREA_RTOL` and its position beyond :data:`POSITION_RTOL`) is returned as one line per
+property in :attr:`ConversionReport.not_carried`.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from typing import Any
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 
 __all__ = ["ConversionReport", "convert", "target_format", "source_format", "STEP_SUFFIXES", "IGES_SUFFIXES",
-           "COLOR_TOLERANCE", "AREA_RTOL", "format_losses", "compare", "face_area", "wire_count", "trim_band"]
+           "COLOR_TOLERANCE", "AREA_RTOL", "POSITION_RTOL", "format_losses", "compare", "face_area", "wire_count", "trim_band"]
 
 STEP_SUFFIXES = (".step", ".stp", ".p21")
 IGES_SUFFIXES = (".iges", ".igs")
@@ -30,6 +31,14 @@ IGES_SUFFIXES = (".iges", ".igs")
 #: Largest difference of a colour component (RGBA in [0, 1]) read back that still counts as the same
 #: colour: IGES stores colours as percentages printed with 10 significant digits.
 COLOR_TOLERANCE: float = 1e-6
+
+#: Largest move of a face's centroid (``BRepGProp``), as a fraction of the model's bounding-box
+#: diagonal, that counts as the face staying in place: an instance or a face placed elsewhere keeps
+#: its area, wires, name and colour, so only its position shows it. Measured on the round trips of
+#: ../shared/realdata and build123d assemblies: up to 1.2e-5 (the bearing's sliver faces re-trimmed by
+#: OCC's IGES -> STEP reading; 17-digit STEP -> STEP 4.5e-9, IGES 1e-7); a lost placement moves faces
+#: by a part's size.
+POSITION_RTOL: float = 1e-4
 
 #: Largest relative change of a face's area (``BRepGProp``, 1e-9) that counts as unchanged, by target
 #: format. STEP: 17 digits, so round-off of the area computation only (measured 0 to 1e-15; the
@@ -258,9 +267,14 @@ def _geometry_changes(before: Any, after: Any, rtol: float) -> list[str]:
     wires = [(a.index, wire_count(a.face), wire_count(b.face)) for a, b in zip(before.faces, after.faces)]
     lines = [f"boundaries: the wire count of {len(bad)} faces changed (face {bad[0][0]}: {bad[0][1]} -> {bad[0][2]})"
              for bad in [[w for w in wires if w[1] != w[2]]] if bad]
-    moved = []
+    import numpy as np
+
+    moved, shifted = [], []
+    centres = []
     for a, b in zip(before.faces, after.faces):
-        area_a, area_b = face_area(a.face), face_area(b.face)
+        (area_a, centre_a), (area_b, centre_b) = _area_centre(a.face), _area_centre(b.face)
+        centres.append(centre_a)
+        shifted.append((float(np.linalg.norm(centre_b - centre_a)), a.index))
         change = abs(area_b - area_a)
         if change > rtol * abs(area_a):
             moved.append((change / abs(area_a) if area_a else float("inf"), a.index, change <= trim_band(a.face)))
@@ -270,7 +284,41 @@ def _geometry_changes(before: Any, after: Any, rtol: float) -> list[str]:
         lines.append(f"areas of {len(moved)} of {len(before.faces)} faces moved by more than {rtol:g} of themselves "
                      f"(face {worst[1]}: {worst[0]:.2g}; {inside} of them within their edges' tolerance band, "
                      "where OCC's reader recomputes the trimming)")
+    if shifted:
+        diagonal = _diagonal(before.faces)
+        far = [s for s in shifted if s[0] > POSITION_RTOL * diagonal]
+        if far:
+            worst_shift = max(far)
+            lines.append(f"positions of {len(far)} of {len(before.faces)} faces not carried: their centroids moved by "
+                         f"more than {POSITION_RTOL:g} of the model's size (face {worst_shift[1]}: "
+                         f"{worst_shift[0]:.3g}, model diagonal {diagonal:.3g})")
     return lines
+
+
+def _area_centre(face: Any) -> tuple[float, Any]:
+    """OCC's area and centroid of a face (``BRepGProp.SurfaceProperties_s`` to 1e-9), as in :func:`face_area`."""
+    import numpy as np
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props, 1e-9)
+    c = props.CentreOfMass()
+    return float(props.Mass()), np.array([c.X(), c.Y(), c.Z()])
+
+
+def _diagonal(faces: Any) -> float:
+    """The diagonal of the faces' bounding box (OCC's ``BRepBndLib``)."""
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+
+    box = Bnd_Box()
+    for f in faces:
+        BRepBndLib.Add_s(f.face, box)
+    if box.IsVoid():
+        return 0.0
+    x0, y0, z0, x1, y1, z1 = box.Get()
+    return float(((x1 - x0) ** 2 + (y1 - y0) ** 2 + (z1 - z0) ** 2) ** 0.5)
 
 
 def face_area(face: Any) -> float:

@@ -96,3 +96,29 @@ def test_ctrl_c_while_reading_back_says_the_output_was_written(capsys, monkeypat
     assert cli.main(["convert", str(src), str(out), "--in-process"]) == EXIT_INTERRUPTED
     assert capsys.readouterr().err.splitlines() == ["occsurf: interrupted"]
     assert out.read_text() == "old"
+
+
+def _plates(path, x_b: float):
+    bd = pytest.importorskip("build123d")
+    plate = bd.Box(10, 20, 2) - bd.Cylinder(2, 2)
+    a = plate.moved(bd.Location((0, 0, 0)))
+    a.label, a.color = "plate_a", bd.Color("red")
+    b = plate.moved(bd.Location((x_b, 0, 0)))
+    b.label, b.color = "plate_b", bd.Color("blue")
+    bd.export_step(bd.Compound(label="plates", children=[a, b]), str(path))
+    return path
+
+
+def test_compare_reports_a_moved_instance(tmp_path):
+    """An instance placed elsewhere keeps its faces' names, colours, areas and wires: ``convert``'s
+    comparison missed it. The faces' centroids show it (beyond POSITION_RTOL of the model's size)."""
+    from occsurf.bridge.exchange.convert import POSITION_RTOL, compare
+    from occsurf.bridge.exchange.step_iges import read_step
+
+    here = read_step(_plates(tmp_path / "here.step", 30.0))
+    there = read_step(_plates(tmp_path / "there.step", 45.0))
+    assert compare(here, read_step(tmp_path / "here.step"), "step", "mm") == []
+    lines = compare(here, there, "step", "mm")
+    assert len(lines) == 1 and lines[0].startswith("positions of 7 of 14 faces not carried"), lines
+    assert ": 15, model diagonal 44.8)" in lines[0]  # plate_b's faces moved by 15 mm; x -5..35, y 20, z 2
+    assert 15.0 / 44.8 > 1000 * POSITION_RTOL  # far above the tolerance (noise measured: <= 1.2e-5)
