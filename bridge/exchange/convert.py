@@ -239,6 +239,8 @@ def compare(before: Any, after: Any, out_fmt: str, unit: str) -> list[str]:
     if out_fmt == "step":
         checks["instance paths"] = lambda f: f.instance
     lines += _changed(before.faces, after.faces, "faces", "face", checks)
+    if out_fmt == "step" and before.assembly is not None:
+        lines += _structure_changes(before.assembly, after.assembly)
     if len(after.edges) != len(before.edges):
         lines.append(f"free curves: {len(before.edges)} written, {len(after.edges)} read back")
     else:
@@ -247,6 +249,31 @@ def compare(before: Any, after: Any, out_fmt: str, unit: str) -> list[str]:
             edge_checks["instance paths"] = lambda e: e.instance
         lines += _changed(before.edges, after.edges, "free curves", "curve", edge_checks)
     return lines + _geometry_changes(before, after, AREA_RTOL[out_fmt])
+
+
+def _structure_changes(before: Any, after: Any) -> list[str]:
+    """STEP keeps an assembly: the same tree (instance paths) and part names read back, else one line.
+    Faces' own instance paths are compared elsewhere; this covers what a face does not name: the parts
+    (an instance written as a copy of its part comes back as another part, ``'plate#2'``) and
+    sub-assemblies without faces."""
+    from .xcaf import iter_nodes
+
+    if after is None:
+        return ["assembly structure not carried: the file read back has none (flat)"]
+    a = [(path, node.part, len(node.children)) for path, node in iter_nodes(before)]
+    b = [(path, node.part, len(node.children)) for path, node in iter_nodes(after)]
+    if [(x[0], x[2]) for x in a] != [(y[0], y[2]) for y in b]:
+        first = next(((x, y) for x, y in zip(a, b) if (x[0], x[2]) != (y[0], y[2])), None)
+        where = ("" if first is None else f" ({first[0][0]!r} read back as {first[1][0]!r})" if first[0][0] != first[1][0]
+                 else f" ({first[0][0]!r}: {first[0][2]} children read back as {first[1][2]})")
+        return [f"assembly structure not carried: {len(a)} nodes written, {len(b)} read back{where}"]
+    lines = []
+    renamed = [(x[0], x[1], y[1]) for x, y in zip(a, b) if x[1] != y[1]]
+    if renamed:
+        path, was, now = renamed[0]
+        lines.append(f"part names of {len(renamed)} of {len(a)} assembly nodes not carried ({path}: {was!r} read back "
+                     f"as {now!r})")
+    return lines
 
 
 def _changed(before: Any, after: Any, items: str, item: str, checks: dict[str, Any]) -> list[str]:

@@ -122,3 +122,27 @@ def test_compare_reports_a_moved_instance(tmp_path):
     assert len(lines) == 1 and lines[0].startswith("positions of 7 of 14 faces not carried"), lines
     assert ": 15, model diagonal 44.8)" in lines[0]  # plate_b's faces moved by 15 mm; x -5..35, y 20, z 2
     assert 15.0 / 44.8 > 1000 * POSITION_RTOL  # far above the tolerance (noise measured: <= 1.2e-5)
+
+
+def test_compare_reports_assembly_structure(tmp_path):
+    """STEP -> STEP: part names and which instances share a part are compared too (a face names its
+    instance path, not its part)."""
+    import dataclasses
+
+    from occsurf.bridge.exchange.convert import compare
+    from occsurf.bridge.exchange.step_iges import read_step
+
+    model = read_step(_plates(tmp_path / "plates.step", 30.0))
+    again = read_step(tmp_path / "plates.step")
+    assert compare(model, again, "step", "mm") == []
+    root = again.assembly
+    a, b = root.children
+    renamed = dataclasses.replace(again, assembly=dataclasses.replace(
+        root, children=(a, dataclasses.replace(b, part="plate_c"))))
+    assert compare(model, renamed, "step", "mm") == [
+        "part names of 1 of 3 assembly nodes not carried (plates/plate_b: 'plate_b' read back as 'plate_c')"]
+    one = dataclasses.replace(again, assembly=dataclasses.replace(root, children=(a,)))
+    assert compare(model, one, "step", "mm") == [
+        "assembly structure not carried: 3 nodes written, 2 read back ('plates': 2 children read back as 1)"]
+    flat = dataclasses.replace(again, assembly=None)
+    assert compare(model, flat, "step", "mm") == ["assembly structure not carried: the file read back has none (flat)"]
