@@ -334,8 +334,20 @@ def _b3d_shape(shape: Any, label: str | None, color: RGBA | None) -> Any:
     obj = topods_lut.get(type(occ), bd.Compound)(occ)
     obj.label = label or ""
     if color is not None:
-        obj.color = bd.Color(*color)
+        obj.color = _b3d_color(color)
     return obj
+
+
+def _b3d_color(color: RGBA) -> Any:
+    """A build123d ``Color`` holding ``color``, the linear RGB OCC stores (as the readers report it).
+
+    ``bd.Color(r, g, b, a)`` takes sRGB values: given linear ones it darkens every colour that is not
+    pure (0.2 written by build123d came back as 0.033), so the OCC colour is handed over as such."""
+    import build123d as bd
+    from OCP.Quantity import Quantity_Color, Quantity_ColorRGBA, Quantity_TypeOfColor
+
+    r, g, b, a = color
+    return bd.Color(Quantity_ColorRGBA(Quantity_Color(r, g, b, Quantity_TypeOfColor.Quantity_TOC_RGB), a))
 
 
 def _b3d_node(node: Any, path: str, faces: dict[str, list[ImportedFace]]) -> Any:
@@ -346,7 +358,7 @@ def _b3d_node(node: Any, path: str, faces: dict[str, list[ImportedFace]]) -> Any
         obj = bd.Compound(label=node.name)
         obj.children = [_b3d_node(c, _child_path(path, c), faces) for c in node.children]
         if color is not None:
-            obj.color = bd.Color(*color)
+            obj.color = _b3d_color(color)
         obj.move(bd.Location(_location(node.location)))
         return obj
     if node.shape is None or node.shape.IsNull():

@@ -146,3 +146,24 @@ def test_compare_reports_assembly_structure(tmp_path):
         "assembly structure not carried: 3 nodes written, 2 read back ('plates': 2 children read back as 1)"]
     flat = dataclasses.replace(again, assembly=None)
     assert compare(model, flat, "step", "mm") == ["assembly structure not carried: the file read back has none (flat)"]
+
+
+def test_build123d_colours_come_back_as_set(tmp_path):
+    """``read_step(..., as_="build123d")`` gave ``bd.Color(*linear_rgba)``: build123d takes sRGB there, so
+    a part coloured ``Color(0.2, 0.4, 0.6, 0.5)`` came back as ``(0.033, 0.133, 0.319, 0.5)`` (pure
+    red and blue, as in the README, hide it). Written back, the file's colour is the original's."""
+    bd = pytest.importorskip("build123d")
+    from occsurf.bridge.exchange.step_iges import read_step, write_step
+
+    part = bd.Box(5, 5, 5)
+    part.label, part.color = "part", bd.Color(0.2, 0.4, 0.6, 0.5)
+    path = tmp_path / "grey_blue.step"
+    bd.export_step(bd.Compound(label="top", children=[part]), str(path))
+    obj = read_step(path, as_="build123d")
+    # 1e-6: OCC keeps colours as float32, and build123d's tuple goes through sRGB
+    assert tuple(obj.children[0].color) == pytest.approx((0.2, 0.4, 0.6, 0.5), abs=1e-6)
+    again = read_step(write_step(tmp_path / "again.step", obj))
+    before = {f.color for f in read_step(path).faces}
+    after = {f.color for f in again.faces}
+    assert len(before) == len(after) == 1
+    assert after.pop() == pytest.approx(before.pop(), abs=1e-7)
