@@ -51,9 +51,15 @@ cross-field coefficient is 0 there and grows linearly (the twist is solved for t
 normal tends to the neighbour's and G1 holds up to that one point. This lets a loop of one side (a
 round hole) or two (a slot end) be cut at arc-length points into four sides (S-patch-style central
 split of a smooth loop). Where the midpoints' mean lies outside the hole (a crescent, a tapering
-sliver), the centre is moved to the point farthest from the boundary and internal edges that would
-leave the hole leave their side at 30 degrees instead; one central split may still fold on a long
-curved hole, and :func:`measure_fill` counts the folds (:attr:`FillQuality.folds`).
+sliver), the centre is moved to the preimage of the domain's centre under a harmonic map of the hole
+onto the domain (the point farthest from the boundary if that map cannot be built) and internal
+edges that would leave the hole leave their side at 30 degrees instead. A fill that folds
+(:func:`count_folds`, :attr:`FillQuality.folds`: a long curved hole, a sliver) is rebuilt on the
+harmonic layout (:func:`_harmonic_layout`): centre, internal-edge directions and lengths at the
+midpoints, and the centre's tangent map all from that one-to-one map, so the internal edges follow
+the hole instead of cutting across it; the fill with fewer folds is kept. Very long thin curved holes
+(a sector whose middle arc is more than ~12 times its width) still fold near their internal edges,
+and :func:`measure_fill` says so.
 
 Known limits (reported, never hidden): at a hole corner the twist is over-determined when the two
 neighbours are only G1 (not G2) to each other there (Gregory's twist incompatibility): its normal
@@ -85,7 +91,8 @@ from ..kernel.basis import basis_matrix, greville
 from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError, ToleranceError
 from ..kernel.surface import BSplineSurface
-from .nsided_loops import arc_length_parameters, check_simple_loop, closest_parameters, inner_point, turns_inward
+from .nsided_loops import (arc_length_parameters, check_simple_loop, closest_parameters, harmonic_centre, harmonic_picture,
+                           inner_point, turns_inward)
 
 __all__ = [
     "HoleSide",
@@ -670,18 +677,60 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
     vdom, pdom = _domain_picture(sig)
     mid = _midpoints(S, sig, rational)
     loop = np.concatenate([_cart(sd.B.evaluate(np.linspace(0.0, 1.0, 49)[:-1]), rational) for sd in S])
-    C, c1 = _centre(mid, rational, loop)
-    corners = _corner_analysis(S, sig, rational, c1)
-    _check_inward(corners, c1)
-    Ch = np.r_[C, 1.0] if rational else C
-    DPhi = _centre_map(C, mid.cart, pdom, rational)
-    edges = [_internal_edge(i, vdom, pdom, sig[i], mid, c1[i], Ch, DPhi) for i in range(n)]
-    patches = [_corner_patch(i, S, sig, corners, c1, edges, rational, origin) for i in range(n)]
+    hb = _harmonic_boundary(S, sig, vdom, pdom, rational)
+
+    def build(C: Array, c1: Array, DPhi: Array) -> tuple[list[BSplineSurface], _CornerFit, int]:
+        corners = _corner_analysis(S, sig, rational, c1)
+        _check_inward(corners, c1)
+        Ch = np.r_[C, 1.0] if rational else C
+        edges = [_internal_edge(i, vdom, pdom, sig[i], mid, c1[i], Ch, DPhi) for i in range(n)]
+        patches = [_corner_patch(i, S, sig, corners, c1, edges, rational, origin) for i in range(n)]
+        return patches, corners, sum(count_folds(p) for p in patches)
+
+    # The plain layout first (midpoints' mean; a convex hole keeps its fill), then, if it folds or is
+    # refused, the harmonic layout (a long curved hole, a sliver); the fill with fewer folds is kept.
+    C, c1 = _centre(mid, rational, loop, hb)
+    err: InvalidGeometryError | None = None
+    try:
+        best = (*build(C, c1, _centre_map(C, mid.cart, pdom, rational)), C)
+    except InvalidGeometryError as e:
+        best, err = None, e
+    if best is None or best[2] > 0:
+        layout = _harmonic_layout(mid, rational, hb, pdom)
+        if layout is not None:
+            try:
+                cand = (*build(*layout), layout[0])
+                if best is None or cand[2] < best[2]:
+                    best = cand
+            except InvalidGeometryError:
+                pass
+    if best is None:
+        raise err if err is not None else InvalidGeometryError("sides: no layout of the central split could be built")
+    patches, corners, _, C = best
     return HoleFill(patches, unit, sig, C + origin, corners.residual, corners.twist, size, flat=corners.flat,
                     source=source)
 
 
 # ---- step 1: the domain picture
+def _harmonic_boundary(S: list[_Side], sig: Array, vdom: Array, pdom: Array, rational: bool,
+                       samples: int = 128) -> tuple[Array, Array]:
+    """Dense loop points (n * samples, 3) and their places (n * samples, 2) on the boundary of the
+    domain polygon, for :func:`~occsurf.algorithms.topology.nsided_loops.harmonic_centre`: the
+    half side ``[0, sig_i]`` of side ``i`` goes onto ``[v_i, p_i]`` and ``[sig_i, 1]`` onto
+    ``[p_i, v_{i+1}]``, each in proportion to arc length (a side's parametrisation, often far from
+    uniform on a fitted trace, does not skew the picture)."""
+    n = len(S)
+    pts, tgt = [], []
+    for i, sd in enumerate(S):
+        for lo, hi, a, b in ((0.0, sig[i], vdom[i], pdom[i]), (sig[i], 1.0, pdom[i], vdom[(i + 1) % n])):
+            t = np.linspace(lo, hi, samples // 2 + 1)[:-1]
+            P = _cart(sd.B.evaluate(np.r_[t, hi]), rational)
+            cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
+            f = (cum / max(cum[-1], 1e-300))[:-1, None]
+            pts.append(P[:-1]), tgt.append((1 - f) * a + f * b)
+    return np.concatenate(pts), np.concatenate(tgt)
+
+
 def _domain_picture(sig: Array) -> tuple[Array, Array]:
     """The regular n-gon of the kite split: its vertices and the images of the split points.
 
@@ -903,15 +952,20 @@ def _midpoints(S: list[_Side], sig: Array, rational: bool) -> _Midpoints:
     return _Midpoints(Fm, mh, mder, mc, normals)
 
 
-def _centre(mid: _Midpoints, rational: bool, loop: Array | None = None) -> tuple[Array, Array]:
+def _centre(mid: _Midpoints, rational: bool, loop: Array | None = None,
+            harmonic: tuple[Array, Array] | None = None) -> tuple[Array, Array]:
     """The centre ``C`` and the ribbon coefficients at the midpoints.
 
     ``C`` is the mean of the midpoints, each moved half-way towards that mean within its
     neighbour's tangent plane; the ribbon at ``m_i`` points along the projection of ``C - m_i``.
     When that leaves the hole at some midpoint (a long curved hole, a crescent: the midpoints' mean
     lies outside it), and ``loop`` (m, 3), points of the boundary, is given, ``C`` is instead the
-    point of the hole farthest from its boundary in the hole's mean plane (:func:`~occsurf.algorithms.topology.nsided_loops.inner_point`),
-    lifted to the mean of the midpoints' tangent planes above it.
+    preimage of the domain's centre under the harmonic map of ``harmonic`` (loop samples (k, 3) and
+    their domain places (k, 2), :func:`_harmonic_boundary`;
+    :func:`~occsurf.algorithms.topology.nsided_loops.harmonic_centre`), or without it the point of
+    the hole farthest from its boundary in the hole's mean plane
+    (:func:`~occsurf.algorithms.topology.nsided_loops.inner_point`: on a sector any point of the
+    medial arc, which folded the fill), lifted to the mean of the midpoints' tangent planes above it.
 
     Returns
     -------
@@ -930,7 +984,8 @@ def _centre(mid: _Midpoints, rational: bool, loop: Array | None = None) -> tuple
     c1 = _midpoint_coefficients(mid, C, rational)
     if loop is None or not np.any(c1[:, 0] >= 0) or not turns_inward(loop, normals):
         return C, c1  # convex enough, or cross fields that point into the hole: _check_inward says so
-    inner = inner_point(loop, normals)
+    inner = None if harmonic is None else harmonic_centre(harmonic[0], harmonic[1], normals)
+    inner = inner[:2] if inner is not None else inner_point(loop, normals)
     if inner is not None:
         C0, nh = inner
         C = C0 + nh * np.mean([nh @ (mc[i] + proj(i, C0 - mc[i]) - C0) for i in range(n)])
@@ -938,6 +993,59 @@ def _centre(mid: _Midpoints, rational: bool, loop: Array | None = None) -> tuple
     if np.any(c1[:, 0] >= 0):  # a sliver: the centre is along the side, not across it
         c1 = _midpoint_coefficients(mid, C, rational, turn=True)
     return C, c1
+
+
+def _harmonic_layout(mid: _Midpoints, rational: bool, boundary: tuple[Array, Array], pdom: Array
+                     ) -> tuple[Array, Array, Array] | None:
+    """Centre, midpoint ribbons and centre map from the harmonic picture of the hole (course §8-3).
+
+    A harmonic map of the hole onto the domain polygon (:func:`~occsurf.algorithms.topology.nsided_loops.harmonic_picture`,
+    ``boundary`` from :func:`_harmonic_boundary`) is one-to-one; the central split takes its layout
+    from it: ``C`` is the preimage of the domain's centre (lifted, as in :func:`_centre`, to the mean
+    of the midpoints' tangent planes), internal edge ``i`` leaves ``m_i`` along the preimage of the
+    domain segment ``p_i -> 0`` (its ribbon there: that direction in the neighbour's tangent plane,
+    as long as the preimage curve), and the centre map ``DPhi`` is the inverse map's Jacobian at the
+    centre (plus the slope of the chords ``C - m_i`` out of the mean plane). On a long curved hole
+    the chords ``C - m_i`` cut across the hole and the corner patches fold; the harmonic curves
+    follow it.
+
+    Returns
+    -------
+    (C, c1, DPhi) or None
+        As :func:`_centre` and :func:`_centre_map`; ``None`` when the picture cannot be built or
+        inverted (a degenerate projection), or a ribbon would not point into the hole.
+    """
+    n, mc, normals = len(mid.cart), mid.cart, mid.normals
+    if not turns_inward(boundary[0], normals):
+        return None
+    hp = harmonic_picture(boundary[0], boundary[1], normals)
+    if hp is None:
+        return None
+    fr = np.linspace(0.0, 1.0, 9)[1:]
+    uv = (pdom[:, None, :] * (1.0 - fr)[None, :, None]).reshape(-1, 2)
+    P, Jinv, ok = hp.preimage(np.r_[np.zeros((1, 2)), uv])
+    if not ok.all():
+        return None
+    nh = hp.normal
+    C0, Jc, curves = P[0], Jinv[0], P[1:].reshape(n, len(fr), 3)
+    proj = lambda i, d: d - normals[i] * (normals[i] @ d)  # noqa: E731
+    C = C0 + nh * np.mean([nh @ (mc[i] + proj(i, C0 - mc[i]) - C0) for i in range(n)])
+    c1 = np.zeros((n, mid.fields[0][0].shape[1]))
+    for i in range(n):
+        start = mc[i] - nh * (nh @ (mc[i] - hp.origin))  # m_i in the mean plane
+        poly = np.r_[start[None], curves[i]]
+        length = float(np.linalg.norm(np.diff(poly, axis=0), axis=1).sum())
+        t = proj(i, curves[i][1] - start)
+        t = length * _unit(t)
+        target = np.r_[mid.point[i, 3] * t, 0.0] if rational else t
+        c1[i], *_ = np.linalg.lstsq(mid.fields[i][0][0].T, target, rcond=tolerances.FILL_RCOND)
+    if np.any(c1[:, 0] >= 0):
+        return None
+    rise = np.array([nh @ (C - mc[i]) for i in range(n)])
+    slope = np.linalg.lstsq(-pdom, rise, rcond=tolerances.FILL_RCOND)[0]
+    D = Jc + np.outer(nh, slope)
+    DPhi = np.r_[D, np.zeros((1, 2))] if rational else D
+    return C, c1, DPhi
 
 
 #: Smallest angle (degrees) between an internal edge and its side at the side's midpoint: where the

@@ -21,7 +21,7 @@ from ..errors import InvalidGeometryError
 from ..kernel.curve import BSplineCurve
 
 __all__ = ["closest_parameters", "arc_length_parameters", "check_simple_loop", "mean_plane", "turns_inward",
-           "inner_point"]
+           "inner_point", "harmonic_centre", "harmonic_picture", "HarmonicPicture"]
 
 Array = NDArray[np.float64]
 
@@ -193,3 +193,138 @@ def inner_point(loop: Array, normals: Array, grid: int = 61) -> tuple[Array, Arr
     dist = np.sqrt(((G[inside][:, None] - xy[None]) ** 2).sum(-1)).min(1)
     x, y = G[inside][int(np.argmax(dist))]
     return o + x * e1 + y * e2, nh
+
+
+class HarmonicPicture:
+    """A discrete harmonic map of a hole (projected into its mean plane) onto a convex domain polygon.
+
+    Built by :func:`harmonic_picture`; :meth:`preimage` inverts it at domain points. Attributes:
+    ``origin``, ``normal`` (3,) of the mean plane, ``to3`` (3, 2) grid coordinates -> 3-D, ``h``
+    the grid spacing, ``lo`` (2,) the grid's corner, ``values`` (k, 2) the map at the ``nodes`` (k, 2)
+    (grid indices) inside the hole, ``index`` the node number of each grid point (-1 outside).
+    """
+
+    def __init__(self, origin: Array, normal: Array, to3: Array, h: float, lo: Array, nodes: NDArray[np.intp],
+                 values: Array, index: NDArray[np.intp]) -> None:
+        from scipy.spatial import cKDTree
+
+        self.origin, self.normal, self.to3, self.h, self.lo = origin, normal, to3, h, lo
+        self.nodes, self.values, self.index = nodes, values, index
+        self._tree = cKDTree(values)
+
+    def _value(self, i: NDArray[np.intp], j: NDArray[np.intp]) -> tuple[Array, NDArray[np.bool_]]:
+        nx, ny = self.index.shape
+        ok = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
+        k = np.full(i.shape, -1)
+        k[ok] = self.index[i[ok], j[ok]]
+        ok = k >= 0
+        return self.values[np.where(ok, k, 0)], ok
+
+    def preimage(self, uv: Array) -> tuple[Array, Array, NDArray[np.bool_]]:
+        """Points of the hole (m, 3, in the mean plane) mapped to the domain points ``uv`` (m, 2), the
+        inverse map's Jacobians there (m, 3, 2) and whether each was found (a non-singular
+        central- or one-sided-difference Jacobian at the nearest node)."""
+        uv = np.atleast_2d(np.asarray(uv, float))
+        k = self._tree.query(uv)[1]
+        i0, j0 = self.nodes[k, 0], self.nodes[k, 1]
+        U0 = self.values[k]
+        cols = []
+        ok = np.ones(len(uv), bool)
+        for di, dj in ((1, 0), (0, 1)):
+            fwd, okf = self._value(i0 + di, j0 + dj)
+            bwd, okb = self._value(i0 - di, j0 - dj)
+            d = np.where((okf & okb)[:, None], (fwd - bwd) / 2, np.where(okf[:, None], fwd - U0, U0 - bwd)) / self.h
+            ok &= okf | okb
+            cols.append(d)
+        Jac = np.stack(cols, 2)  # (m, 2 domain, 2 grid)
+        det = np.linalg.det(Jac)
+        ok &= np.abs(det) > 1e-12 * np.abs(Jac).max(axis=(1, 2)) ** 2
+        Jinv = np.linalg.inv(np.where(ok[:, None, None], Jac, np.eye(2)))
+        step = np.einsum("mij,mj->mi", Jinv, uv - U0)
+        size = np.linalg.norm(step, axis=1, keepdims=True)
+        step = np.where(size > 2 * self.h, step * 2 * self.h / np.maximum(size, 1e-300), step)
+        p = self.lo + self.h * np.c_[i0, j0] + step
+        return self.origin + p @ self.to3.T, np.einsum("ag,mgd->mad", self.to3, Jinv), ok
+
+
+def harmonic_picture(loop: Array, targets: Array, normals: Array, cells: int = 4000) -> HarmonicPicture | None:
+    """The discrete harmonic map of a hole onto the fill's domain polygon (course §8-3 central split).
+
+    The loop (m, 3), sampled densely and in order, is projected into the hole's mean plane
+    (:func:`mean_plane`); a square grid of about ``cells`` nodes inside it, aligned with the
+    projection's principal axes (so that a long thin hole is resolved across its width), carries the
+    discrete harmonic map (5-point Laplacian) whose boundary values are ``targets`` (m, 2), the
+    loop samples' positions on the boundary of the convex domain polygon (each grid neighbour outside
+    the hole takes the value of its nearest loop sample). A harmonic map onto a convex domain is
+    one-to-one (Radó–Kneser–Choquet; Floater's discrete analogue), so the preimages of the domain's
+    centre and of the segments from it to the split points lie inside the hole, spread along its
+    length: where a long curved hole or a sliver wants the centre and the internal edges.
+
+    Returns
+    -------
+    HarmonicPicture or None
+        ``None`` when no grid node lies inside the projected loop (a degenerate projection).
+
+    References
+    ----------
+    M. S. Floater, "One-to-one piecewise linear mappings over triangulations", Math. Comp. 72 (2003);
+    P. Joshi et al., "Harmonic coordinates for character articulation", SIGGRAPH 2007.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.linalg import spsolve
+    from scipy.spatial import cKDTree
+
+    o, nh, e1, e2 = mean_plane(loop, normals)
+    xy = (loop - o) @ np.stack([e1, e2], 1)
+    axes = np.linalg.svd(xy - xy.mean(0), full_matrices=False)[2]  # principal axes of the projection
+    q = xy @ axes.T
+    lo, hi = q.min(0), q.max(0)
+    area = 0.5 * abs(float(np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1])))
+    if not area > 0:
+        return None
+    h = max(np.sqrt(area / cells), float((hi - lo).max()) / 400.0)
+    nx, ny = (np.floor((hi - lo) / h).astype(int) + 1)
+    gx, gy = lo[0] + h * np.arange(nx + 1), lo[1] + h * np.arange(ny + 1)
+    G = np.stack(np.meshgrid(gx, gy, indexing="ij"), -1).reshape(-1, 2)
+    a, b = q, np.roll(q, -1, axis=0)
+    px, py = G[:, :1], G[:, 1:]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cross_x = a[:, 0] + (b[:, 0] - a[:, 0]) * (py - a[:, 1]) / (b[:, 1] - a[:, 1])
+    inside = (((a[:, 1] > py) != (b[:, 1] > py)) & (px < cross_x)).sum(1) % 2 == 1
+    if not inside.any():
+        return None
+    shape = (nx + 1, ny + 1)
+    inside = inside.reshape(shape)
+    index = np.full(shape, -1)
+    index[inside] = np.arange(int(inside.sum()))
+    I, J = np.nonzero(inside)
+    rows, cols, rhs = [np.arange(len(I))], [np.arange(len(I))], np.zeros((len(I), 2))
+    vals = [np.full(len(I), 4.0)]
+    tree = cKDTree(q)
+    for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+        ii, jj = I + di, J + dj
+        ok = (ii >= 0) & (ii <= nx) & (jj >= 0) & (jj <= ny)
+        nb = np.full(len(I), -1)
+        nb[ok] = index[ii[ok], jj[ok]]
+        interior = nb >= 0
+        rows.append(np.flatnonzero(interior)), cols.append(nb[interior]), vals.append(np.full(int(interior.sum()), -1.0))
+        out = np.flatnonzero(~interior)
+        if out.size:
+            pts = np.c_[lo[0] + h * ii[out], lo[1] + h * jj[out]]
+            rhs[out] += targets[tree.query(pts)[1]]
+    A = coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(len(I), len(I))).tocsc()
+    U = np.asarray(spsolve(A, rhs)).reshape(len(I), 2)
+    to3 = np.stack([e1, e2], 1) @ axes.T  # grid coordinates -> 3-D
+    return HarmonicPicture(o, nh, to3, h, lo, np.c_[I, J], U, index)
+
+
+def harmonic_centre(loop: Array, targets: Array, normals: Array, cells: int = 4000
+                    ) -> tuple[Array, Array, Array] | None:
+    """The point of a hole that the harmonic map of :func:`harmonic_picture` sends to the domain's
+    centre (the origin), with the plane's unit normal (3,) and the inverse map's Jacobian (3, 2)
+    there; ``None`` for a degenerate projection or a singular map."""
+    hp = harmonic_picture(loop, targets, normals, cells)
+    if hp is None:
+        return None
+    P, Jinv, ok = hp.preimage(np.zeros((1, 2)))
+    return (P[0], hp.normal, Jinv[0]) if ok[0] else None
