@@ -93,7 +93,8 @@ class AssemblyNode:
         RGBA in [0, 1] the file gives this occurrence: an override for this very occurrence (STEP
         SHUO: one of two instances of a sub-assembly's part recoloured; then the two nodes' colours
         differ although they are the same component of the same sub-assembly), else the instance's
-        (component's) colour, else its part's.
+        (component's) colour, else its part's. Linear RGB as OCC stores it (the file's values are sRGB;
+        see :attr:`occsurf.bridge.exchange.model.ImportedFace.color`).
     layer : str or None
         The instance's (else its part's) layer.
     location : ndarray, shape (4, 4)
