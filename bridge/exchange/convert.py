@@ -193,6 +193,9 @@ def format_losses(model: Any, out_fmt: str, digits: int | None) -> list[str]:
     if model.unit not in WRITE_UNITS:
         lines.append(f"unit '{model.unit}' cannot be written: the values are written in millimetres")
     if out_fmt != "iges":
+        if digits is not None and digits < 17:
+            lines.append(f"STEP written with {digits} significant digits (--digits): values move by up to "
+                         f"5e-{digits} of their size")
         layers = instance_layer_losses(model.assembly) if model.assembly is not None else []
         if layers:
             path, layer, written = layers[0]

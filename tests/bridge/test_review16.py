@@ -167,3 +167,17 @@ def test_build123d_colours_come_back_as_set(tmp_path):
     after = {f.color for f in again.faces}
     assert len(before) == len(after) == 1
     assert after.pop() == pytest.approx(before.pop(), abs=1e-7)
+
+
+def test_fewer_step_digits_are_reported(tmp_path):
+    """``--digits N`` below 17 is a loss by construction (as IGES's 10 digits): said even when the
+    read-back comparison finds nothing (the plates' values are all exact in 5 digits)."""
+    from occsurf.bridge.exchange.convert import convert, format_losses
+    from occsurf.bridge.exchange.step_iges import read_step
+
+    src = _plates(tmp_path / "plates.step", 30.0)
+    report = convert(src, tmp_path / "d5.step", digits=5, isolated=False)
+    assert report.not_carried == ["STEP written with 5 significant digits (--digits): values move by up to "
+                                  "5e-5 of their size"]
+    model = read_step(src)
+    assert format_losses(model, "step", None) == format_losses(model, "step", 17) == []
