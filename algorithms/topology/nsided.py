@@ -91,8 +91,8 @@ from ..kernel.basis import basis_matrix, greville
 from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError, ToleranceError
 from ..kernel.surface import BSplineSurface
-from .nsided_loops import (arc_length_parameters, check_simple_loop, closest_parameters, harmonic_centre, harmonic_picture,
-                           inner_point, turns_inward)
+from .nsided_loops import (arc_length_parameters, check_simple_loop, closest_parameters, harmonic_centre,
+                           harmonic_picture, inner_point, turns_inward)
 
 __all__ = [
     "HoleSide",
@@ -999,8 +999,9 @@ def _harmonic_layout(mid: _Midpoints, rational: bool, boundary: tuple[Array, Arr
                      ) -> tuple[Array, Array, Array] | None:
     """Centre, midpoint ribbons and centre map from the harmonic picture of the hole (course §8-3).
 
-    A harmonic map of the hole onto the domain polygon (:func:`~occsurf.algorithms.topology.nsided_loops.harmonic_picture`,
-    ``boundary`` from :func:`_harmonic_boundary`) is one-to-one; the central split takes its layout
+    A harmonic map of the hole onto the domain polygon
+    (:func:`~occsurf.algorithms.topology.nsided_loops.harmonic_picture`, ``boundary`` from
+    :func:`_harmonic_boundary`) is one-to-one; the central split takes its layout
     from it: ``C`` is the preimage of the domain's centre (lifted, as in :func:`_centre`, to the mean
     of the midpoints' tangent planes), internal edge ``i`` leaves ``m_i`` along the preimage of the
     domain segment ``p_i -> 0`` (its ribbon there: that direction in the neighbour's tangent plane,

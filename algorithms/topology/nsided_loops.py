@@ -307,7 +307,9 @@ def harmonic_picture(loop: Array, targets: Array, normals: Array, cells: int = 4
         nb = np.full(len(I), -1)
         nb[ok] = index[ii[ok], jj[ok]]
         interior = nb >= 0
-        rows.append(np.flatnonzero(interior)), cols.append(nb[interior]), vals.append(np.full(int(interior.sum()), -1.0))
+        rows.append(np.flatnonzero(interior))
+        cols.append(nb[interior])
+        vals.append(np.full(int(interior.sum()), -1.0))
         out = np.flatnonzero(~interior)
         if out.size:
             pts = np.c_[lo[0] + h * ii[out], lo[1] + h * jj[out]]
