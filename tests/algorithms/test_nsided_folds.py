@@ -8,8 +8,9 @@ as in test_nsided_split.py) and a fold shows as a sign change of the z-component
 Tolerances as in test_nsided_split.py: gaps 1e-11 of the hole size (the side curves are the boundary
 rows of poles: round-off), angles 1e-6 deg (G1 by construction).
 
-Measured before the harmonic centre (folded grid pairs, 41 x 41 per patch): 120 deg sector r0 = 1.6:
-236; 150 deg sector r0 = 1.5: 323. After: 0. The harmonic centre of a sector lies on its bisector
+Measured before the harmonic layout (folded grid pairs, 41 x 41 per patch; sectors between r0 and 2):
+120 deg r0 = 1.6: 236; 150 deg r0 = 1.5: 156; 100 deg r0 = 1.7: 78; 120 deg r0 = 1.0: 90; 68 deg
+r0 = 1.5: 20 (a convex-enough sector whose plain layout folds); 90 deg r0 = 1.25: 50. After: 0. The harmonic centre of a sector lies on its bisector
 by symmetry (up to the grid's asymmetry: <= 2 % of the width measured 0.3 %).
 """
 
