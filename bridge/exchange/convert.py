@@ -43,7 +43,7 @@ POSITION_RTOL: float = 1e-4
 #: Largest relative change of a face's area (``BRepGProp``, 1e-9) that counts as unchanged, by target
 #: format. STEP: 17 digits, so round-off of the area computation only (measured 0 to 1e-15; the
 #: screw's faces move 4.5e-8 through OCC's STEP reader with or without occsurf, so they are reported).
-#: IGES: 10 digits, a value moves by up to 5e-9 of itself (measured up to 6e-8 on the real files).
+#: IGES: 10 digits, a value moves by up to 5e-10 of itself (measured up to 6e-8 on the real files).
 AREA_RTOL: dict[str, float] = {"step": 1e-12, "iges": 1e-7}
 
 
@@ -203,7 +203,7 @@ def format_losses(model: Any, out_fmt: str, digits: int | None) -> list[str]:
                          f"instance, each part is written on its first instance's layer (instance '{path}' on "
                          f"{layer!r} written on {written!r})")
         return lines
-    lines.append("IGES keeps 10 significant digits: values move by up to 5e-9 of their size"
+    lines.append("IGES keeps 10 significant digits: values move by up to 5e-10 of their size"
                  + (f" (--digits {digits} not possible)" if digits is not None and digits > 10 else ""))
     if model.assembly is not None:
         counts: dict[str, int] = {}

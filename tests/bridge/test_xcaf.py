@@ -4,7 +4,7 @@ Models are built here with build123d (two instances of one part with two holes, 
 a file in metres) and read from ../shared/realdata. Per property the round trips are measured face by
 face: name, colour, layer, instance path, area (``BRepGProp``, 1e-9) and wire count. STEP keeps 17
 digits, so areas agree to round-off (1e-12 relative); IGES keeps 10 digits, so areas agree to 1e-7
-relative (a value moves by up to 5e-9 of itself; an area sums many such moves, and a trimmed face's
+relative (a value moves by up to 5e-10 of itself; an area sums many such moves, and a trimmed face's
 area also depends on its p-curves' 10-digit values).
 """
 
