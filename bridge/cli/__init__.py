@@ -14,7 +14,7 @@
     occsurf check FILE_OR_DIR ... [--out DIR] [--json | --jsonl] [--faces N ...] [--fail-on PRESET] [--no-pictures]
                   [--timeout S] [--strict] [--in-process]
     occsurf audit PATH... --out RESULTS [--scheduler ADDRESS] [--workers N] [--timeout S] [--resume] [--checks LIST]
-    occsurf convert IN OUT [--unit UNIT] [--digits N] [--timeout S] [--in-process]
+    occsurf convert IN OUT [--unit UNIT] [--digits N] [--timeout S] [--strict] [--in-process]
 
 One module per command, each holding its parser and a thin handler that calls the library:
 
@@ -36,8 +36,9 @@ Errors are one line each on stderr, ``occsurf: PATH: reason``; the exit status i
 Untrusted files are read in a worker process (:mod:`occsurf.bridge.isolation`), so a crash inside
 OCC costs one file, not the command.
 
-Only the standard library is imported at module level, and the command-line process itself never
-imports NumPy or OCC (the worker does): ``occsurf --help`` stays instant. A new command adds a module
+Only the standard library is imported at module level, so parsing and ``occsurf --help`` stay
+instant; a command imports NumPy and OCC when it runs. Untrusted input is only ever parsed by OCC in
+the worker; ``convert`` writes its output and reads that (trusted) file back in its own process. A new command adds a module
 with ``add_parser(sub)`` (its parser, with a ``func`` default) and registers it in
 :func:`build_parser`.
 """
