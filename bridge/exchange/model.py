@@ -48,9 +48,11 @@ class ImportedFace:
     color : (float, float, float, float) or None
         RGBA in [0, 1] the file gives this face: its own colour, else its solid's or shell's, else its
         instance's, else its part's (then up the assembly tree); ``None`` if the file gives none.
-        RGB is linear, as OCC stores colours; the numbers in the file (STEP ``COLOUR_RGB``, IGES 314
-        percentages) and build123d's/cadquery's ``Color`` tuples are sRGB: 0.2 in the file is 0.0331
-        here (``Quantity_Color(r, g, b, Quantity_TOC_RGB).Values(Quantity_TOC_sRGB)`` gives the file's).
+        RGB is sRGB, the file's numbers (STEP ``COLOUR_RGB``; IGES 314 percentages / 100), as
+        build123d's and cadquery's ``Color(r, g, b)`` take them: ``COLOUR_RGB('',0.2,0.5,0.8)`` reads
+        ``(0.2, 0.5, 0.8, 1.0)``. OCC holds colours as linear RGB in float32 (that 0.2 is 0.0331
+        there); the conversion moves values by at most 2e-8, undone by rounding to 7 decimals
+        (:data:`occsurf.bridge.exchange.xcaf.COLOR_DECIMALS`). Writing gives the file these numbers.
     layer : str or None
         The face's layer, resolved in the same order (the first, when an item is on several layers).
     instance : str or None
@@ -141,7 +143,7 @@ class ImportedEdge:
     color : (float, float, float, float) or None
         RGBA in [0, 1] the file gives this curve: its own curve colour, else its wire's or curve
         set's, else its instance's or part's (curve or generic colours; a surface colour does not
-        colour curves); ``None`` if the file gives none. Linear RGB, as for :attr:`ImportedFace.color`.
+        colour curves); ``None`` if the file gives none. sRGB, the file's numbers, as :attr:`ImportedFace.color`.
     layer : str or None
         The curve's layer, resolved in the same order.
     instance : str or None

@@ -339,15 +339,13 @@ def _b3d_shape(shape: Any, label: str | None, color: RGBA | None) -> Any:
 
 
 def _b3d_color(color: RGBA) -> Any:
-    """A build123d ``Color`` holding ``color``, the linear RGB OCC stores (as the readers report it).
-
-    ``bd.Color(r, g, b, a)`` takes sRGB values: given linear ones it darkens every colour that is not
-    pure (0.2 written by build123d came back as 0.033), so the OCC colour is handed over as such."""
+    """A build123d ``Color`` holding ``color``, sRGB as the readers report it: ``bd.Color(r, g, b, a)``
+    takes sRGB too (``Quantity_TOC_sRGB``), so the file's 0.2 is ``tuple(Color)``'s 0.2."""
     import build123d as bd
-    from OCP.Quantity import Quantity_Color, Quantity_ColorRGBA, Quantity_TypeOfColor
 
-    r, g, b, a = color
-    return bd.Color(Quantity_ColorRGBA(Quantity_Color(r, g, b, Quantity_TypeOfColor.Quantity_TOC_RGB), a))
+    from .xcaf import occ_color
+
+    return bd.Color(occ_color(color))
 
 
 def _b3d_node(node: Any, path: str, faces: dict[str, list[ImportedFace]]) -> Any:
@@ -407,7 +405,7 @@ def to_cadquery(model: ImportedModel) -> Any:
 def _cq_color(color: RGBA | None) -> Any:
     import cadquery as cq
 
-    return None if color is None else cq.Color(*color, False)  # linear RGB, as OCC stores it
+    return None if color is None else cq.Color(*color, True)  # sRGB, as the file states it and cadquery takes it
 
 
 def _unique(name: str, used: set[str]) -> str:
@@ -561,16 +559,18 @@ def _label_of(obj: Any) -> str | None:
 
 
 def _rgba(color: Any) -> RGBA | None:
-    """RGBA of a build123d / cadquery colour: the linear RGB OCC stores (as the reader reports it;
-    cadquery's ``toTuple`` goes through sRGB and gives 0.9999999999999999 for 1)."""
+    """RGBA of a build123d / cadquery colour: sRGB, the numbers ``bd.Color(r, g, b)`` / ``cq.Color(r, g, b)``
+    were given and the file will state, rounded as the readers round them
+    (:func:`~occsurf.bridge.exchange.xcaf.rgba_from_occ`: cadquery's ``toTuple`` gives 0.9999999999999999 for 1)."""
     if color is None:
         return None
-    from OCP.Quantity import Quantity_ColorRGBA, Quantity_TypeOfColor
+    from OCP.Quantity import Quantity_ColorRGBA
+
+    from .xcaf import rgba_from_occ
 
     occ = getattr(color, "wrapped", None)
     if isinstance(occ, Quantity_ColorRGBA):
-        r, g, b = occ.GetRGB().Values(Quantity_TypeOfColor.Quantity_TOC_RGB)
-        return (float(r), float(g), float(b), float(occ.Alpha()))
+        return rgba_from_occ(occ)
     values = tuple(float(x) for x in (color.toTuple() if hasattr(color, "toTuple") else tuple(color)))
     return values if len(values) == 4 else None  # type: ignore[return-value]
 

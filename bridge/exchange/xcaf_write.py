@@ -41,7 +41,7 @@ from occsurf.algorithms.errors import ExchangeError
 
 from ..messages import one_line
 from .xcaf import (_IDENTITY, _OCC_UNIT, AssemblyNode, _distinct, _location, instance_overrides, iter_nodes, label_entry,
-                   main_shuos, node_key, shuo_chain)
+                   main_shuos, occ_color, node_key, shuo_chain)
 
 __all__ = ["build_document", "step_document_bytes", "iges_document_bytes"]
 
@@ -58,13 +58,11 @@ def _set_name(label: Any, name: str | None, names: set[str] | None = None) -> No
 
 def _set_color(color_tool: Any, label: Any, rgba: Sequence[float] | None, *, curve: bool = False,
                generic: bool = False) -> None:
-    from OCP.Quantity import Quantity_Color, Quantity_ColorRGBA, Quantity_TypeOfColor
     from OCP.XCAFDoc import XCAFDoc_ColorType
 
     if rgba is None:
         return
-    r, g, b, a = (float(x) for x in rgba)
-    color = Quantity_ColorRGBA(Quantity_Color(r, g, b, Quantity_TypeOfColor.Quantity_TOC_RGB), a)
+    color = occ_color(rgba)  # sRGB, the numbers the file will state
     kind = XCAFDoc_ColorType.XCAFDoc_ColorCurv if curve else XCAFDoc_ColorType.XCAFDoc_ColorSurf
     if generic:  # an instance's colour: its faces' and its free curves'
         kind = XCAFDoc_ColorType.XCAFDoc_ColorGen

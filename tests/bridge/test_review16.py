@@ -160,7 +160,7 @@ def test_build123d_colours_come_back_as_set(tmp_path):
     path = tmp_path / "grey_blue.step"
     bd.export_step(bd.Compound(label="top", children=[part]), str(path))
     obj = read_step(path, as_="build123d")
-    # 1e-6: OCC keeps colours as float32, and build123d's tuple goes through sRGB
+    # 1e-6: OCC keeps colours as linear float32; build123d's tuple gives sRGB rounded to 7 decimals
     assert tuple(obj.children[0].color) == pytest.approx((0.2, 0.4, 0.6, 0.5), abs=1e-6)
     again = read_step(write_step(tmp_path / "again.step", obj))
     before = {f.color for f in read_step(path).faces}

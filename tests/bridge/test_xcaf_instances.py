@@ -36,8 +36,8 @@ PLATE_1, PLATE_2, POST_1, POST_2 = "top/sub_1/plate", "top/sub_2/plate", "top/su
 def _rgba(rgba):
     from OCP.Quantity import Quantity_Color, Quantity_ColorRGBA, Quantity_TypeOfColor
 
-    r, g, b, a = rgba
-    return Quantity_ColorRGBA(Quantity_Color(r, g, b, Quantity_TypeOfColor.Quantity_TOC_RGB), a)
+    r, g, b, a = rgba  # the file's (sRGB) numbers, as occsurf reports and writes them
+    return Quantity_ColorRGBA(Quantity_Color(r, g, b, Quantity_TypeOfColor.Quantity_TOC_sRGB), a)
 
 
 def _shift(z: float):
@@ -390,7 +390,7 @@ def test_overrides_in_build123d_and_cadquery_objects(nested_step):
         [("plate", RED), ("post", False)], [("plate", BLUE), ("post", False)]]
     assy = read_step(nested_step, as_="cadquery")
     colours = [[c.color.toTuple() if c.color else None for c in s.children] for s in assy.children]
-    np.testing.assert_allclose(colours[0][0], RED, atol=1e-15)  # cadquery's linear RGB round trip
+    np.testing.assert_allclose(colours[0][0], RED, atol=1e-15)  # sRGB through cadquery: 1 is 0.9999999999999999
     np.testing.assert_allclose(colours[1][0], BLUE, atol=1e-15)
 
 
