@@ -16,6 +16,10 @@ which OCC's STEP writer makes a ``SPECIFIED_HIGHER_USAGE_OCCURRENCE`` styled in 
 IGES (no instances) a placed copy of its own colour. Free curves carry their curve colour and layer
 on their part's sub-shape labels (IGES: on the placed copies).
 
+A part is written without locations inside it (:func:`_unlocated_items`: a located member of a
+compound becomes a moved copy): OCC's STEP writer drops the colour of a moved instance of a part
+whose members are located (every build123d primitive is a compound holding a located solid).
+
 What OCC cannot carry, measured: a layer on an instance (component or SHUO label) is not written
 (``STEPCAFControl_Writer::WriteLayers`` skips reference labels; a layer set on a placed shape lands
 on the part), so a part carries the layer of its first instance
@@ -94,6 +98,8 @@ class _Writer:
         self.explicit = explicit
         self.protos: dict[str, Any] = {}
         self.proto_shapes: dict[str, Any] = {}
+        #: the shape each part is written as (:func:`_unlocated_items` of its shape)
+        self.written: dict[str, Any] = {}
         #: an assembly prototype's component labels
         self.components: dict[str, list[Any]] = {}
         #: face names to set on the written face entities: (prototype face, name)
@@ -114,7 +120,8 @@ class _Writer:
                 _set_color(self.color_tool, comp, child.color, generic=True)
                 comps.append(comp)
         else:
-            label = self.shape_tool.AddShape(node.shape, False, False)
+            self.written[key] = _unlocated_items(node.shape)
+            label = self.shape_tool.AddShape(self.written[key], False, False)
         _set_name(label, node.part or node.name, self.names)
         # OCC's STEP writer drops layers of instances (components): the part carries the layer of its
         # first instance; an instance on another layer than its part's first instance loses it
@@ -197,18 +204,23 @@ class _Writer:
 
         label = self.protos[key]
         bare = TopTools_IndexedMapOfShape()
-        proto_faces = []
         ex = TopExp_Explorer(node.shape, TopAbs_FACE)
         identity = TopLoc_Location()
+        first: dict[int, int] = {}  # index in bare -> explorer position of the face's first occurrence
+        position = 0
         while ex.More():
-            bare.Add(ex.Current().Located(identity))
-            proto_faces.append(ex.Current())
+            first.setdefault(bare.Add(ex.Current().Located(identity)), position)
+            position += 1
             ex.Next()
+        # the faces of the shape written for the part (the same explorer order as node.shape's)
+        proto_faces = _explore_faces(self.written.get(key, node.shape))
+        if len(proto_faces) != position:
+            return
         for f in faces:
             j = bare.FindIndex(f.face.Located(identity))
             if not j:
                 continue
-            pf = proto_faces[j - 1]
+            pf = proto_faces[first[j]]
             own_name = f.name if f.name and f.name != node.name else None
             if f.color is None and f.layer is None and own_name is None:
                 continue
@@ -245,6 +257,59 @@ class _Writer:
                 _set_layer(self.layer_tool, sub, f.layer)
                 if own_name is not None:
                     _set_name(sub, own_name, self.names)
+
+
+def _unlocated_items(shape: Any) -> Any:
+    """``shape`` with every shape inside its compounds unplaced: a compound's located member is
+    replaced by a copy whose geometry is moved (``BRepBuilderAPI_Transform(..., copy=True)``), so a
+    part holds no ``TopLoc_Location`` below its own. ``shape`` itself when nothing inside is located.
+
+    Why (issue 16): ``STEPCAFControl_Writer`` looks up the STEP item of each member of a coloured
+    instance at the member's location composed with the instance's; it finds the item when that is
+    the member's own location or the identity, so the colour of a moved instance of a part with a
+    located member (every build123d primitive: a compound holding a located solid) was not written.
+    The STEP writer bakes such locations into the written geometry anyway; the copy keeps the
+    ``TopExp_Explorer`` order of the faces and edges.
+    """
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.TopAbs import TopAbs_COMPOUND
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS_Compound, TopoDS_Iterator
+
+    identity = TopLoc_Location()
+
+    def located_inside(s: Any) -> bool:
+        it = TopoDS_Iterator(s, False, False)
+        while it.More():
+            member = it.Value()
+            if not member.Location().IsIdentity():
+                return True
+            if member.ShapeType() == TopAbs_COMPOUND and located_inside(member):
+                return True
+            it.Next()
+        return False
+
+    def rebuilt(s: Any) -> Any:  # s: a compound, placed relative to the part
+        builder, out = BRep_Builder(), TopoDS_Compound()
+        builder.MakeCompound(out)
+        it = TopoDS_Iterator(s, False, True)  # members placed relative to the part, own orientation
+        while it.More():
+            member = it.Value()
+            if member.ShapeType() == TopAbs_COMPOUND:
+                member = rebuilt(member).Oriented(member.Orientation())
+            elif not member.Location().IsIdentity():
+                trsf = member.Location().Transformation()
+                member = BRepBuilderAPI_Transform(member.Located(identity), trsf, True).Shape()
+            builder.Add(out, member)
+            it.Next()
+        return out
+
+    if shape.ShapeType() != TopAbs_COMPOUND or not located_inside(shape):
+        return shape
+    out = rebuilt(shape.Located(identity))
+    out.Orientation(shape.Orientation())
+    return out.Located(shape.Location())
 
 
 def _explore_faces(shape: Any) -> list[Any]:
@@ -353,7 +418,8 @@ def build_document(source: Any, name: str, *, flatten: bool = False) -> _Writer:
                     # sub-shape colours per instance, and another instance's must not recolour the first's
                     done.add(key)
                     writer.faces(key, node, faces.get(path, []))
-                    writer.edges(writer.protos[key], node.shape, node.shape, edges.get(path, []))
+                    writer.edges(writer.protos[key], node.shape, writer.written.get(key, node.shape),
+                                 edges.get(path, []))
         writer.shape_tool.UpdateAssemblies()
         return writer
     # flat: one free shape per root, with the faces' common name/colour/layer on it

@@ -16,6 +16,7 @@ digits (a further 5e-11 after dividing by 100).
 from __future__ import annotations
 
 import re
+from typing import Any
 from pathlib import Path
 
 import numpy as np
@@ -194,3 +195,154 @@ def test_objects_give_the_file_their_numbers(tmp_path, kind):
         assert min(np.abs(np.subtract(values, g)).max() for g in given) <= SRGB_ATOL, values
     assert {tuple(np.round(v, 7)) for v in written} == set(given)
     assert {f.color for f in read_step(out).faces} == {(*g, 1.0) for g in given}
+
+
+# ------------------------------------------------------------------ moved instances (issue 16)
+#: Colours of the placed parts below, by name.
+PLACED = {"a": (1.0, 0.0, 0.0, 1.0), "b": (0.2, 0.5, 0.8, 1.0), "c": (0.1, 0.7, 0.3, 1.0),
+          "r": (0.9, 0.6, 0.1, 1.0), "s1": (0.3, 0.3, 0.9, 1.0), "s2": (0.8, 0.2, 0.6, 1.0)}
+#: Their world bounding boxes, by hand: a centred box moved by its placement (the rotated one: 90°
+#: about z swaps its x and y extents), the sub-assembly moved by 10 along z.
+BOXES = {"a": ((-0.5, -0.5, -0.5), (0.5, 0.5, 0.5)), "b": ((2.0, -0.5, -0.5), (4.0, 0.5, 0.5)),
+         "c": ((-0.5, 3.0, -0.5), (0.5, 5.0, 0.5)), "r": ((-0.5, -1.0, 4.5), (0.5, 1.0, 5.5)),
+         "s1": ((-0.5, -0.5, 9.5), (0.5, 0.5, 10.5)), "s2": ((1.5, -0.5, 9.5), (2.5, 0.5, 10.5))}
+#: Bounding boxes are compared within 1e-9: STEP and IGES keep >= 10 significant digits of
+#: coordinates <= 10.5 (OCP_NOTES §7), and the boxes are taken without OCC's enlargement (optimal, no gap).
+BOX_ATOL = 1e-9
+
+
+def _placed_tree(kind: str):
+    """Moved leaves (b, c), a rotated leaf (r) and a moved sub-assembly (sub: s1, s2) beside an
+    unmoved leaf (a): build123d (leaves are compounds holding a located solid) or cadquery (``loc=``)."""
+    sizes = {"a": (1, 1, 1), "b": (2, 1, 1), "c": (1, 2, 1), "r": (2, 1, 1), "s1": (1, 1, 1), "s2": (1, 1, 1)}
+    moves = {"a": ((0, 0, 0), 0), "b": ((3, 0, 0), 0), "c": ((0, 4, 0), 0), "r": ((0, 0, 5), 90),
+             "s1": ((0, 0, 0), 0), "s2": ((2, 0, 0), 0)}
+    if kind == "build123d":
+        def leaf(name):
+            (x, y, z), angle = moves[name]
+            part = bd.Pos(x, y, z) * bd.Rot(0, 0, angle) * bd.Box(*sizes[name])
+            part.label, part.color = name, bd.Color(*PLACED[name][:3])
+            return part
+        sub = bd.Compound(label="sub", children=[leaf("s1"), leaf("s2")])
+        sub.location = bd.Location((0, 0, 10))
+        return bd.Compound(label="top", children=[leaf(n) for n in ("a", "b", "c", "r")] + [sub])
+    cq = pytest.importorskip("cadquery")
+
+    def add(assy, name):
+        (x, y, z), angle = moves[name]
+        assy.add(cq.Workplane().box(*sizes[name]).val(), name=name, color=cq.Color(*PLACED[name][:3]),
+                 loc=cq.Location((x, y, z), (0, 0, 1), angle))
+    top = cq.Assembly(name="top")
+    for n in ("a", "b", "c", "r"):
+        add(top, n)
+    sub = cq.Assembly(name="sub")
+    for n in ("s1", "s2"):
+        add(sub, n)
+    top.add(sub, loc=cq.Location((0, 0, 10)))
+    return top
+
+
+def _box(shapes) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+
+    box = Bnd_Box()
+    for s in shapes:
+        BRepBndLib.AddOptimal_s(s, box, False, False)
+    box.SetGap(0.0)
+    x0, y0, z0, x1, y1, z1 = box.Get()
+    return (x0, y0, z0), (x1, y1, z1)
+
+
+def _leaves(model, key) -> dict[str, tuple[Any, Any]]:
+    """Per leaf name (the last name of ``key(face)``): (its faces' colours, its world bounding box)."""
+    groups: dict[str, list[Any]] = {}
+    for f in model.faces:
+        groups.setdefault(key(f).split("/")[-1], []).append(f)
+    return {name: ({f.color for f in fs}, _box([f.face for f in fs])) for name, fs in groups.items()}
+
+
+def _occ_leaves(path: Path) -> dict[str, tuple[Any, Any]]:
+    """What OCC's own XCAF reader gives each part occurrence (``XCAFPrs_DocumentExplorer``: the style
+    and world placement of each leaf node), by instance name: (surface colour, world bounding box)."""
+    from OCP.Quantity import Quantity_TypeOfColor
+    from OCP.STEPCAFControl import STEPCAFControl_Reader
+    from OCP.TCollection import TCollection_ExtendedString
+    from OCP.TDataStd import TDataStd_Name
+    from OCP.TDocStd import TDocStd_Document
+    from OCP.XCAFDoc import XCAFDoc_ShapeTool
+    from OCP.XCAFPrs import XCAFPrs_DocumentExplorer, XCAFPrs_DocumentExplorerFlags_None
+
+    reader = STEPCAFControl_Reader()
+    reader.SetColorMode(True)
+    reader.SetNameMode(True)
+    assert reader.ReadFile(str(path)) == 1  # IFSelect_RetDone
+    doc = TDocStd_Document(TCollection_ExtendedString("XCAF"))
+    assert reader.Transfer(doc)
+    out = {}
+    explorer = XCAFPrs_DocumentExplorer(doc, XCAFPrs_DocumentExplorerFlags_None)
+    while explorer.More():
+        node = explorer.Current()
+        if not node.IsAssembly:
+            attr = TDataStd_Name()
+            name = node.Label.FindAttribute(TDataStd_Name.GetID_s(), attr) and attr.Get().ToExtString()
+            style = node.Style
+            srgb = Quantity_TypeOfColor.Quantity_TOC_sRGB
+            rgb = style.GetColorSurf().Values(srgb) if style.IsSetColorSurf() else None
+            color = None if rgb is None else (*np.round(rgb, xcaf.COLOR_DECIMALS), 1.0)
+            shape = XCAFDoc_ShapeTool.GetShape_s(node.RefLabel).Moved(node.Location)
+            out[name] = (color, _box([shape]))
+        explorer.Next()
+    return out
+
+
+def _assert_placed(got: dict[str, tuple[Any, Any]], faces: bool = True) -> None:
+    assert sorted(got) == sorted(PLACED)
+    for name, (color, (lo, hi)) in got.items():
+        assert color == ({PLACED[name]} if faces else PLACED[name]), name
+        np.testing.assert_allclose(lo, BOXES[name][0], rtol=0, atol=BOX_ATOL, err_msg=name)
+        np.testing.assert_allclose(hi, BOXES[name][1], rtol=0, atol=BOX_ATOL, err_msg=name)
+
+
+@pytest.mark.parametrize("kind", ["build123d", "cadquery"])
+def test_moved_instances_keep_their_colours(tmp_path, kind):
+    """Issue 16: the colour of a moved build123d leaf was not written (OCC's STEP writer finds the item
+    of a coloured instance's member only at the member's own location or the identity, and every
+    build123d primitive is a compound holding a located solid). Moved, rotated and sub-assembly
+    leaves keep colour, name and placement through write_step -> read_step, for occsurf's reader
+    and OCC's, and through write_iges -> read_iges (placed copies named after the instance)."""
+    from occsurf.bridge.exchange.objects import model_from_object
+
+    obj = _placed_tree(kind)
+    model = model_from_object(obj)
+    _assert_placed(_leaves(model, lambda f: f.instance))  # the model holds what the object says
+    out = write_step(tmp_path / f"{kind}.step", obj)
+    back = read_step(out)
+    _assert_placed(_leaves(back, lambda f: f.instance))
+    _assert_placed(_occ_leaves(out), faces=False)
+    nodes = {path.split("/")[-1]: (n.color, n.location) for path, n in xcaf.iter_nodes(back.assembly)}
+    for path, n in xcaf.iter_nodes(model.assembly):
+        color, location = nodes[path.split("/")[-1]]
+        assert color == n.color, path
+        np.testing.assert_allclose(location, n.location, rtol=0, atol=BOX_ATOL, err_msg=path)
+    iges = read_iges(write_iges(tmp_path / f"{kind}.igs", obj))
+    _assert_placed(_leaves(iges, lambda f: f.name))
+
+
+def test_unlocated_items_keeps_a_part_without_located_members():
+    """The written part is the part itself unless a member inside a compound is located; then every
+    member is unplaced, the faces in the same order and at the same place."""
+    from OCP.TopLoc import TopLoc_Location
+
+    from occsurf.bridge.exchange.xcaf_write import _explore_faces, _unlocated_items
+
+    plain = bd.Box(1, 1, 1).solids()[0].wrapped.Located(TopLoc_Location())
+    assert _unlocated_items(plain).IsSame(plain)
+    part = (bd.Pos(3, 0, 0) * bd.Rot(0, 0, 30) * bd.Box(2, 1, 1)).wrapped
+    written = _unlocated_items(part)
+    assert written.Location().IsEqual(part.Location())  # the part's own placement stays
+    before, after = _explore_faces(part), _explore_faces(written)
+    assert len(after) == len(before) == 6
+    assert all(f.Location().IsIdentity() for f in _explore_faces(written.Located(TopLoc_Location())))
+    for f, g in zip(before, after):
+        np.testing.assert_allclose(np.ravel(_box([g])), np.ravel(_box([f])), rtol=0, atol=1e-12)
