@@ -74,6 +74,23 @@ def test_unfillable_hole_reported_others_filled(capsys, tmp_path: Path) -> None:
     assert out_file.exists() and len(read_step(out_file).faces) == 4 + 5 + 4 + 1
 
 
+def test_hole_neither_construction_takes_is_reported_others_filled(capsys, tmp_path: Path) -> None:
+    """A reflex hole (central split refuses) whose neighbours turn past vertical along an edge (95.7 deg
+    to the hole's mean plane: no height field, so the plate refuses too): one line naming both
+    reasons, exit 2, the other hole still filled and the file written."""
+    good = ring_model(4, center=(0.3, 0.5), radius=0.1, width=0.08)
+    reflex = np.array([[0.6, 0.4], [0.8, 0.4], [0.73, 0.5], [0.8, 0.6], [0.6, 0.6]])
+    steep = ring_model(5, polygon=reflex, bump=1.0, radius=0.1, width=0.08)
+    src = write_step(tmp_path / "two.step", sew_faces([make_face(f, 1e-7) for m in (good, steep) for f in m.faces]))
+    out_file = tmp_path / "out.step"
+    code, out, err = run_main(capsys, "fill", str(src), "--out", str(out_file), "--no-occ")
+    assert code == 2
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"occsurf: {src}: hole "), err
+    assert "reflex" in lines[0] and "plate" in lines[0] and "FILL_PLATE_MAX_TILT" in lines[0]
+    assert out_file.exists() and len(read_step(out_file).faces) == 4 + 5 + 4
+
+
 @pytest.mark.parametrize("content", [b"", b"ISO-10303-21;\ngarbage"])
 def test_bad_input_one_line_exit_2(capsys, tmp_path: Path, content: bytes) -> None:
     bad = tmp_path / "bad.step"
