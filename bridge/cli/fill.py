@@ -56,7 +56,7 @@ DEFAULT_TIMEOUT = 300.0
 FILL_JOB = "occsurf.bridge.cli.fill:fill_job"
 PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.modeling.fill")
 
-_HEADER = ("hole", "sides", "status", "G0 gap", "G1 angle", "time", "OCC G0 gap", "OCC G1 angle", "OCC time")
+_HEADER = ("hole", "sides", "status", "G0 gap", "G1 angle", "time", "OCC G0 gap", "OCC G1 angle", "OCC time", "ours by")
 
 
 def fill_job(item: dict[str, Any]) -> dict[str, Any]:
@@ -135,7 +135,8 @@ def _refill_job(item: dict[str, Any], model: Any, exchange: Any) -> dict[str, An
                       "seconds": r.seconds, "g0": r.g0, "g1": r.g1, "side_g0": r.side_g0, "side_g1": r.side_g1,
                       "valid": r.valid, "step_round_trip": r.step_round_trip,
                       "occ_status": d.get("status"), "occ_reason": d.get("reason"), "occ_seconds": d.get("seconds"),
-                      "occ_g0": d.get("g0"), "occ_g1": d.get("g1"), "occ_tuned": t or None, "folds": r.folds})
+                      "occ_g0": d.get("g0"), "occ_g1": d.get("g1"), "occ_tuned": t or None, "folds": r.folds,
+                      "method": r.method})
     if shape is not None and item.get("pictures", True):
         _pictures(Path(item["output"]), reports, holes, lambda r: r._removed)
     return {"holes": holes, "free_loops_after": None, "written": shape is not None, "warnings": list(model.warnings)}
@@ -153,7 +154,7 @@ def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
                ("failed: " + (h["occ_reason"] or "?"), "-", fmt_s(h["occ_seconds"])) if h["occ_status"] else
                ("-", "-", "-"))
         rows.append((str(h["index"]), str(h["sides"]), h["status"], fmt_dev(h["g0"]), fmt_deg(h["g1"]),
-                     fmt_s(h["seconds"]), *occ))
+                     fmt_s(h["seconds"]), *occ, h.get("method") or "-"))
     for line in format_rows(rows):
         sys.stdout.write(line + "\n")
     sys.stdout.write("  (G0 gap in model units, G1 angle between tangent planes: max along the hole's boundary, "
