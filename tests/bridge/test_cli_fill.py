@@ -61,13 +61,20 @@ def test_fill_json_and_rational_sample(capsys, tmp_path: Path) -> None:
             assert h["g1"] < h["occ_g1"]
 
 
-def test_unfillable_hole_reported_others_filled(capsys, tmp_path: Path) -> None:
+def _fill_with_reflex_hole(capsys, tmp_path: Path, bump: float) -> tuple[Path, Path, int, str]:
+    """A model with a 4-sided ring hole and a 5-sided reflex one (its ring raised by ``bump``), run
+    through ``occsurf fill --no-occ``: (input, output, exit code, stderr)."""
     good = ring_model(4, center=(0.3, 0.5), radius=0.1, width=0.08)
     reflex = np.array([[0.6, 0.4], [0.8, 0.4], [0.73, 0.5], [0.8, 0.6], [0.6, 0.6]])
-    bad = ring_model(5, polygon=reflex, bump=0.0, radius=0.1, width=0.08)
+    bad = ring_model(5, polygon=reflex, bump=bump, radius=0.1, width=0.08)
     src = write_step(tmp_path / "two.step", sew_faces([make_face(f, 1e-7) for m in (good, bad) for f in m.faces]))
     out_file = tmp_path / "out.step"
-    code, out, err = run_main(capsys, "fill", str(src), "--out", str(out_file), "--no-occ")
+    code, _, err = run_main(capsys, "fill", str(src), "--out", str(out_file), "--no-occ")
+    return src, out_file, code, err
+
+
+def test_unfillable_hole_reported_others_filled(capsys, tmp_path: Path) -> None:
+    src, out_file, code, err = _fill_with_reflex_hole(capsys, tmp_path, bump=0.0)
     # the reflex hole, refused by the central split, is filled by the trimmed plate (one face) since
     # issue 12's plate fill; before, this reported it (exit 2) and wrote 4 + 5 + 4 faces
     assert code == 0, err
@@ -78,12 +85,7 @@ def test_hole_neither_construction_takes_is_reported_others_filled(capsys, tmp_p
     """A reflex hole (central split refuses) whose neighbours turn past vertical along an edge (95.7 deg
     to the hole's mean plane: no height field, so the plate refuses too): one line naming both
     reasons, exit 2, the other hole still filled and the file written."""
-    good = ring_model(4, center=(0.3, 0.5), radius=0.1, width=0.08)
-    reflex = np.array([[0.6, 0.4], [0.8, 0.4], [0.73, 0.5], [0.8, 0.6], [0.6, 0.6]])
-    steep = ring_model(5, polygon=reflex, bump=1.0, radius=0.1, width=0.08)
-    src = write_step(tmp_path / "two.step", sew_faces([make_face(f, 1e-7) for m in (good, steep) for f in m.faces]))
-    out_file = tmp_path / "out.step"
-    code, out, err = run_main(capsys, "fill", str(src), "--out", str(out_file), "--no-occ")
+    src, out_file, code, err = _fill_with_reflex_hole(capsys, tmp_path, bump=1.0)
     assert code == 2
     lines = err.splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"occsurf: {src}: hole "), err
