@@ -627,7 +627,7 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
     InvalidGeometryError
         No variant can be filled by either construction (both last reasons).
     """
-    best, last_err, plate_err = None, None, None
+    best, best_score, last_err, plate_err = None, None, None, None
     etol = max(BRep_Tool.Tolerance_s(e) for e in edges)
     prepared = {}
     for follow in (True, False):  # the neighbours' traces (G0 to them), and the model's edge curves
@@ -637,17 +637,19 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
         except InvalidGeometryError as err:
             last_err = err
             continue
-        if best is None or _score(cand, size, etol) < _score(best, size, etol):
-            best = cand
-    if best is None or _score(best, size, etol) > (False, 1.0):  # refused, folded or a target missed
+        score = _score(cand, size, etol)  # once per candidate: it counts folds on a grid of every patch
+        if best is None or score < best_score:
+            best, best_score = cand, score
+    if best is None or best_score > (False, 1.0):  # refused, folded or a target missed
         for follow, prep in prepared.items():
             try:
                 cand = _our_fill(edges, nbs, owners, size, follow, samples, method="plate", prepared=prep)
             except OccsurfError as err:
                 plate_err = err
                 continue
-            if best is None or _plate_wins(_score(cand, size, etol), _score(best, size, etol)):
-                best = cand
+            score = _score(cand, size, etol)
+            if best is None or _plate_wins(score, best_score):
+                best, best_score = cand, score
     if best is None:
         if plate_err is None or last_err is None:
             raise last_err or plate_err
