@@ -217,21 +217,39 @@ def corner_normals(t_in: ArrayLike, t_out: ArrayLike, reference: ArrayLike) -> A
 def blend_normals(s: ArrayLike, normals: ArrayLike, start: ArrayLike, end: ArrayLike, span: float) -> Array:
     """Turn a normal field into given end normals over a fraction ``span`` of the side.
 
-    ``N(s) = unit((1 - b0 - b1) N + b0 start + b1 end)`` with ``b0 = h(1 - s / span)`` and
-    ``b1 = h(1 - (1 - s) / span)``, ``h`` the C2 smoothstep clipped to [0, 1]; ``s`` on [0, 1].
-    Where the field already ends in ``start``/``end`` nothing changes.
+    The rotation ``R0`` taking the field's first normal ``N(0)`` into ``start`` (about
+    ``N(0) x start``, by their angle ``theta0``) is applied to the field with the fraction ``b0`` of
+    its angle, and likewise ``R1`` (``N(1)`` into ``end``) with ``b1``:
+
+    .. math::
+
+        N'(s) = R_1(b_1\\,\\theta_1)\\,R_0(b_0\\,\\theta_0)\\,N(s), \\qquad
+        b_0 = h(1 - s / \\mathrm{span}), \\quad b_1 = h(1 - (1 - s) / \\mathrm{span}),
+
+    ``h`` the C2 smoothstep clipped to [0, 1]; ``s`` on [0, 1]. The field keeps its own turning
+    (a curved neighbour's normal turns along the side) and moves by at most ``theta0`` (``theta1``):
+    the corner's incompatibility, nothing more. Where the field already ends in ``start``/``end``
+    nothing changes.
 
     Parameters
     ----------
     s : array_like, shape (m,)
+        Sample parameters on [0, 1], increasing (``normals[0]``/``normals[-1]`` are the ends).
     normals : array_like, shape (m, 3)
     start, end : array_like, shape (3,)
+        Sign-free: taken with the sign of the field's end normal.
     span : float
         In (0, 0.5].
 
     Returns
     -------
     ndarray, shape (m, 3)
+        Unit normals.
+
+    Notes
+    -----
+    Blending the field with the constant end normal instead (``(1 - b) N(s) + b start``) moves it
+    by up to its own turn over the span: 0.92 deg on the bearing's face 172 for a 0.02 deg corner.
     """
     if not 0.0 < span <= 0.5:
         raise InvalidGeometryError(f"span: expected a number in (0, 0.5], got {span!r}")
@@ -242,11 +260,21 @@ def blend_normals(s: ArrayLike, normals: ArrayLike, start: ArrayLike, end: Array
         x = np.clip(x, 0.0, 1.0)
         return x ** 3 * (10 - 15 * x + 6 * x * x)
 
-    b0, b1 = h(1 - s / span), h(1 - (1 - s) / span)
+    def turn(V: Array, a: Array, b: Array, frac: Array) -> Array:
+        """Rotate the rows of ``V`` about ``a x b`` by ``frac`` of the angle from ``a`` to ``b``."""
+        k = np.cross(a, b)
+        sin, cos = np.linalg.norm(k), float(a @ b)
+        if sin <= 1e-300:
+            return V
+        k, phi = k / sin, frac * np.arctan2(sin, cos)
+        c, sn = np.cos(phi)[:, None], np.sin(phi)[:, None]
+        return V * c + np.cross(k, V) * sn + np.outer(V @ k, k) * (1 - c)  # Rodrigues
+
     st, en = _unit(np.asarray(start, float)), _unit(np.asarray(end, float))
     st = np.where((N[0] @ st) < 0, -st, st)
     en = np.where((N[-1] @ en) < 0, -en, en)
-    return _unit((1 - b0 - b1)[:, None] * N + b0[:, None] * st + b1[:, None] * en)
+    out = turn(N, N[0], st, h(1 - s / span))
+    return _unit(turn(out, N[-1], en, h(1 - (1 - s) / span)))
 
 
 def fit_boundary(params: ArrayLike, points: ArrayLike, tol: float, *, max_spans: int | None = None
