@@ -91,6 +91,7 @@ from ..kernel.basis import basis_matrix, greville
 from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError, ToleranceError
 from ..kernel.surface import BSplineSurface
+from ..kernel.trimmed import TrimmedSurface
 from .nsided_loops import (arc_length_parameters, check_simple_loop, closest_parameters, harmonic_centre,
                            harmonic_picture, inner_point, turns_inward)
 
@@ -103,6 +104,7 @@ __all__ = [
     "fill_hole",
     "measure_fill",
     "count_folds",
+    "fill_folds",
 ]
 
 Array = NDArray[np.float64]
@@ -1426,16 +1428,54 @@ def measure_fill(fill: HoleFill, samples: int = 201) -> FillQuality:
     return FillQuality(bg, ba, ig, ia, ca, np.array([count_folds(p) for p in P], np.intp))
 
 
-def count_folds(surface: BSplineSurface, grid: int = 41) -> int:
+def count_folds(surface: BSplineSurface | TrimmedSurface, grid: int = 41) -> int:
     """Neighbouring pairs of a ``grid`` x ``grid`` parameter grid of ``surface`` whose normals
     ``S_u x S_v`` point in opposite directions (:attr:`FillQuality.folds`); a degenerate normal (a
-    flat hole corner) counts as neither."""
-    (u0, u1), (v0, v1) = surface.domain
+    flat hole corner) counts as neither.
+
+    Parameters
+    ----------
+    surface : BSplineSurface or TrimmedSurface
+        For a trimmed surface (a plate fill's :attr:`~.plate_fill.PlateFill.trimmed`) the grid
+        spans the trimming loops' parameter box and only pairs with both points on the face
+        (:meth:`~occsurf.algorithms.kernel.trimmed.TrimmedSurface.contains`, boundary included)
+        count: outside its trim the surface is not part of the face (a plate's height field can
+        be steep there, beyond the hole, and those slopes are no fold of the fill).
+    grid : int
+        Grid points per direction.
+
+    Returns
+    -------
+    int
+    """
+    trimmed = surface if isinstance(surface, TrimmedSurface) else None
+    if trimmed is not None:
+        surface = trimmed.surface
+        uv = np.concatenate([np.asarray(c.evaluate(np.linspace(*c.domain, 65)), float)[:, :2] for c in trimmed.outer])
+        (u0, v0), (u1, v1) = uv.min(axis=0), uv.max(axis=0)
+        (a0, a1), (b0, b1) = surface.domain
+        u0, u1, v0, v1 = max(u0, a0), min(u1, a1), max(v0, b0), min(v1, b1)
+    else:
+        (u0, u1), (v0, v1) = surface.domain
     U, V = np.meshgrid(np.linspace(u0, u1, grid), np.linspace(v0, v1, grid), indexing="ij")
     D = surface.derivatives(U.ravel(), V.ravel(), 1)
     N = np.cross(D[:, 1, 0], D[:, 0, 1]).reshape(grid, grid, 3)
     length = np.linalg.norm(N, axis=2)
     N[length <= 1e-6 * np.median(length)] = 0.0  # a degenerate point (flat hole corner) has no side
-    du = np.einsum("ijk,ijk->ij", N[1:], N[:-1])
-    dv = np.einsum("ijk,ijk->ij", N[:, 1:], N[:, :-1])
-    return int((du < 0).sum() + (dv < 0).sum())
+    du = np.einsum("ijk,ijk->ij", N[1:], N[:-1]) < 0
+    dv = np.einsum("ijk,ijk->ij", N[:, 1:], N[:, :-1]) < 0
+    if trimmed is not None:  # only pairs on the face
+        inside = trimmed.contains(U, V)
+        du &= inside[1:] & inside[:-1]
+        dv &= inside[:, 1:] & inside[:, :-1]
+    return int(du.sum() + dv.sum())
+
+
+def fill_folds(fill: Any) -> int:
+    """Folds of a fill (:func:`count_folds`): summed over a :class:`HoleFill`'s patches; for a fill
+    that is one trimmed surface (a :class:`~.plate_fill.PlateFill`: its ``trimmed`` attribute),
+    counted on the face only, inside its trim."""
+    trimmed = getattr(fill, "trimmed", None)
+    if isinstance(trimmed, TrimmedSurface):
+        return count_folds(trimmed)
+    return sum(count_folds(p) for p in fill.patches)
