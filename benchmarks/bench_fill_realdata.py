@@ -70,7 +70,8 @@ def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only
         o, t = rep.occ.get("default", {}), rep.occ.get("tuned", {})
         print(f"{path.name} {faces}: {rep.status} {rep.method or '-'} n={rep.sides} G0 {rep.g0} G1 {rep.g1} folds {rep.folds} valid {rep.valid} "
               f"step {rep.step_round_trip} | OCC {o.get('status')} {o.get('g0')} {o.get('g1')} | tuned "
-              f"{t.get('status')} {t.get('g0')} {t.get('g1')} | {rep.reason or ''}", file=sys.stderr, flush=True)
+              f"{t.get('status')} {t.get('g0')} {t.get('g1')} | {row['wall']:.1f} s | {rep.reason or ''}",
+              file=sys.stderr, flush=True)
     return rows
 
 
@@ -106,6 +107,10 @@ def summary(rows: list[dict]) -> str:
                f"({', '.join(f'{m} {k}' for m, k in sorted(per_method.items()))}), "
                + ", ".join(f"OCC {name} {sum(1 for r in closed if _occ_usable(r, name))} / {len(closed)}"
                            for name in ("default", "tuned")))
+    slow = sorted(ours, key=lambda r: -r["seconds"])[:3]
+    if slow:  # where the time goes: the construction's own seconds (OCC's filler and the checks apart)
+        out.append("slowest occsurf fills: " + ", ".join(f"{r['file'].split('__')[-1]} {r['faces']} {r['seconds']:.1f} s"
+                                                          for r in slow))
     folded = [r for r in ours if r.get("folds")]
     if folded:
         out.append(f"occsurf fills that fold: {len(folded)} ("
