@@ -11,6 +11,12 @@ Two causes made our G1 worse than OCC's MakeFilling on bearing holes (faces 160,
   tangent by the gap over the first leg (face 181: 8.4e-7 over 8.4e-6, 0.32 deg out of the
   neighbour's plane, where no fill can then be G1); the next pole now moves with it.
 
+A hand-built hole (a cylinder patch whose side-0 neighbour twists about the side and meets the
+corner plane 0.02 or 0.5 deg off) checks the corner treatment end to end (``_corner_treatment``,
+``side_from_normals``) against the neighbour's own normals: the fitted field misses them by the
+corner's angle at that corner (no surface through the curves can do better there) and by at most
+FILL_FIT_ANGLE outside the blend span (the old blend: 1.56 deg).
+
 Tolerances: the snap moves two poles by the same vector, so the end tangent keeps its direction to
 round-off (1e-9 deg bound for legs of 1e-5 and coordinates of 1) and the ends meet exactly. On the
 bearing (skipped where ../shared/realdata is absent) our fill is judged against OCC's
@@ -88,3 +94,52 @@ def test_bearing_corner_holes_are_no_worse_than_occ(bearing, face) -> None:
     assert rep.g1_edges > 0
     assert rep.g1 <= occ["g1"], (rep.side_g1, occ["side_g1"])
     assert rep.g0 <= occ["g0"], (rep.side_g0, occ["side_g0"])
+
+
+def _cylinder_hole(delta: float):
+    """A hole cut from the cylinder y^2 + z^2 = 1 by x = +-0.5 and theta = +-0.6 (arcs exact, rational),
+    with side 0's neighbour twisted about the side (its normal turns about the tangent, up to 5 deg
+    over a tenth of the side) and leaving the cylinder's (the corner plane) by ``delta`` radians at its
+    end: the corner 0 -> 1 is incompatible by ``delta``, the others are compatible."""
+    c, t = np.cos(0.6), np.sin(0.6)
+
+    def arc(x: float, flip: bool) -> BSplineCurve:
+        P = np.array([[x, -t, c], [x, 0.0, 1.0 / c], [x, t, c]])
+        return BSplineCurve(2, np.r_[0, 0, 0, 1, 1, 1], P[::-1] if flip else P, np.array([1.0, c, 1.0]))
+
+    def line(a, b) -> BSplineCurve:
+        return BSplineCurve(1, np.r_[0, 0, 1, 1], np.array([a, b], float))
+
+    curves = [arc(-0.5, False), line([-0.5, t, c], [0.5, t, c]), arc(0.5, True), line([0.5, -t, c], [-0.5, -t, c])]
+    ends = np.geomspace(1e-4, 5e-2, 8)
+    s = np.unique(np.r_[np.linspace(0, 1, 81), ends, 1 - ends])
+    fields = []
+    for k, cv in enumerate(curves):
+        P = cv.evaluate(s)
+        N = np.c_[np.zeros(len(s)), P[:, 1:]] / np.linalg.norm(P[:, 1:], axis=1, keepdims=True)
+        if k == 0:  # turned about the arc's tangent (0, cos, -sin) by g: still normal to the curve
+            g = (delta * s + 0.3 * np.sin(np.pi * s))[:, None]  # 0 at the start, delta at the end
+            N = np.cos(g) * N + np.sin(g) * np.array([1.0, 0.0, 0.0])
+        fields.append((s, N))
+    return curves, fields
+
+
+@pytest.mark.parametrize("delta_deg", [0.02, 0.5])
+def test_an_incompatible_corner_costs_its_angle_and_only_near_it(delta_deg) -> None:
+    from occsurf.algorithms import tolerances
+    from occsurf.algorithms.topology.nsided_sides import plane_angle, side_from_normals
+    from occsurf.bridge.modeling.refill import _corner_treatment
+
+    curves, fields = _cylinder_hole(np.radians(delta_deg))
+    treated = _corner_treatment(curves, fields)
+    tol = tolerances.FILL_FIT_ANGLE
+    for k, (cv, (s, N), (_, Nt)) in enumerate(zip(curves, fields, treated)):
+        fit = side_from_normals(cv, s, Nt)
+        T = cv.derivatives(s, 1)[:, 1]
+        ang = plane_angle(N, T, fit.side.cross.evaluate(s)[:, :3])  # against the neighbour's own normals
+        if k == 0:
+            assert ang.max() <= delta_deg + tol  # the corner's angle (no surface does better there) ...
+            assert ang[s < 1 - tolerances.FILL_CORNER_BLEND].max() <= tol  # ... only near it (old: 1.56)
+            assert ang[-1] >= delta_deg - tol  # the corner plane is forced by the curves' tangents
+        else:  # compatible corners: the fit target
+            assert ang.max() <= tol, k
