@@ -5,8 +5,8 @@ p-curves (exact: the sides' poles projected onto the plate's plane), built by
 :func:`occsurf.bridge.conversion.trimming.trimmed_to_occ_face` through
 :func:`occsurf.bridge.conversion.splines.make_face`. The face's edges are the p-curves' images on
 the plate, which lie within the fill's achieved G0 of the hole's edges, so the face sews to the
-neighbours with the model's ``SEW_TOLERANCE`` (:mod:`.joints`) whenever that G0 is below it
-(:func:`plate_face` checks it and says so otherwise).
+neighbours with the model's ``SEW_TOLERANCE`` (:mod:`.joints`), or the hole edges' own larger
+tolerance, whenever that G0 is below it (:func:`plate_face` checks it and says so otherwise).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from .joints import SEW_TOLERANCE
 __all__ = ["plate_face", "plate_fill_faces", "plate_quality"]
 
 
-def plate_face(fill: PlateFill, tol: float | None = None) -> Any:
+def plate_face(fill: PlateFill, tol: float | None = None, gap: float = 0.0) -> Any:
     """The OCC ``TopoDS_Face`` of a plate fill (its trimmed surface).
 
     Parameters
@@ -34,23 +34,30 @@ def plate_face(fill: PlateFill, tol: float | None = None) -> Any:
     tol : float, optional
         Edge/vertex tolerance of the face; default the larger of 1e-7 and the fill's achieved G0
         (the p-curve images lie that close to the hole's edges).
+    gap : float
+        The hole edges' own tolerance (model units; the model declares its faces meet within it):
+        the fill may miss the boundary by that much (it is sewn in at a tolerance covering it,
+        :func:`occsurf.bridge.modeling.refill._sew_in`).
 
     Raises
     ------
     InvalidGeometryError
-        The fill misses its boundary by more than ``SEW_TOLERANCE`` (it would not sew in).
+        The fill misses its boundary by more than ``max(SEW_TOLERANCE, gap)`` (it would not sew in).
     """
     g0 = float(np.max(fill.side_g0))
-    if g0 > SEW_TOLERANCE:
+    limit = max(SEW_TOLERANCE, float(gap))
+    if g0 > limit:
         raise InvalidGeometryError(f"plate fill: it misses the hole's boundary by {g0:.3g}, more than the sewing "
-                                   f"tolerance {SEW_TOLERANCE:g} (raise max_spans or check the sides)")
+                                   f"tolerance {SEW_TOLERANCE:g} and the hole edges' own tolerance {gap:.3g} "
+                                   "(raise max_spans or check the sides)")
     return make_face(fill.trimmed, max(1e-7, g0) if tol is None else tol)
 
 
-def plate_fill_faces(sides: Sequence[HoleSide], g1: Sequence[bool], g0_tol: float, **kw: Any) -> tuple[PlateFill, list[Any]]:
-    """:func:`fill_plate` and its face: ``(fill, [face])``."""
+def plate_fill_faces(sides: Sequence[HoleSide], g1: Sequence[bool], g0_tol: float, gap: float = 0.0,
+                     **kw: Any) -> tuple[PlateFill, list[Any]]:
+    """:func:`fill_plate` and its face (``gap``: :func:`plate_face`): ``(fill, [face])``."""
     fill = fill_plate(sides, g1=g1, g0_tol=g0_tol, **kw)
-    return fill, [plate_face(fill)]
+    return fill, [plate_face(fill, gap=gap)]
 
 
 def plate_quality(fill: PlateFill) -> tuple[float, float, float, int]:

@@ -72,6 +72,10 @@ FIT_SAMPLES: int = 81
 #: fill that does not fold only when its worst number, in target units, is below this fraction of
 #: the central fill's (:func:`_plate_wins`).
 PLATE_MARGIN: float = 0.9
+#: A fill is sewn in at this multiple of the larger of its achieved G0 and the hole edges' own
+#: tolerance (and at least ``SEW_TOLERANCE``): the gap between a fill edge and a hole edge is at
+#: most about their sum (:func:`_sew_in`).
+SEW_GAP_FACTOR: float = 2.0
 #: ``BRepOffsetAPI_MakeFilling`` parameters: cadquery's ``makeNSidedSurface`` defaults, and the
 #: tuned ones of OCP_NOTES §6 (more points on each constraint, more iterations).
 OCC_DEFAULT = dict(degree=3, nb_pts_on_cur=15, nb_iter=2, anisotropy=False, tol2d=1e-5, tol3d=1e-4,
@@ -620,7 +624,7 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         rep._removed = [model.faces[i] for i in rep.faces]
         rep._neighbours = [f for k, f in enumerate(nbs) if not any(f.IsSame(g) for g in nbs[:k])]
         if check:
-            shape = _sew_in(model, rep.faces, occ_faces)
+            shape = _sew_in(model, rep.faces, occ_faces, rep.g0)
             rep.valid = bool(BRepCheck_Analyzer(shape).IsValid())
             rep.step_round_trip = _round_trip(shape, len(model_faces(shape)))
     except OccsurfError as err:
@@ -651,7 +655,8 @@ def _our_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, 
         flags = [any(g1[k] for k in range(len(edges)) if side_of_edge[k] == j) for j in range(len(sides))]
         # G0 target: the issue's 1e-7 of the model size, but at most half the sewing tolerance (the
         # face must sew in; plate_face refuses beyond SEW_TOLERANCE)
-        fill, occ_faces = plate_fill_faces(sides, flags, min(tolerances.FILL_FIT_G0 * size, 0.5 * SEW_TOLERANCE))
+        fill, occ_faces = plate_fill_faces(sides, flags, min(tolerances.FILL_FIT_G0 * size, 0.5 * SEW_TOLERANCE),
+                                           gap=max(BRep_Tool.Tolerance_s(e) for e in edges))
     else:
         fill = fill_hole(sides)
         occ_faces = [make_face(p, 1e-7) for p in fill.patches]
@@ -752,11 +757,39 @@ def _occ_variant(edges: list[Any], nbs: list[Any], g1: list[bool], params: dict[
                 "seconds": time.perf_counter() - t0}
 
 
-def _sew_in(model: SewnModel, removed: list[int], new_faces: list[Any]) -> Any:
-    sew = BRepBuilderAPI_Sewing(SEW_TOLERANCE)
+def hole_gap(model: SewnModel, removed: list[int]) -> float:
+    """The largest tolerance of an edge between a removed face and a kept one: the gap the model
+    itself declares along the hole (linkrods' faces 17/19 meet their neighbours with 8.7e-5)."""
+    gone = [model.faces[i] for i in removed]
+    gap = 0.0
+    for f in gone:
+        ex = TopExp_Explorer(f, TopAbs_EDGE)
+        while ex.More():
+            e = TopoDS.Edge_s(ex.Current())
+            if any(not any(g.IsSame(r) for r in gone) for g in model.edge_faces(e)):
+                gap = max(gap, BRep_Tool.Tolerance_s(e))
+            ex.Next()
+    return gap
+
+
+def _sew_in(model: SewnModel, removed: list[int], new_faces: list[Any], gap: float = 0.0) -> Any:
+    """The model without ``removed`` with ``new_faces`` sewn into the hole(s).
+
+    The kept faces go in as one shell (their shared edges stay as they are: sewing works on the
+    free edges), the new faces one by one, at the tolerance ``max(SEW_TOLERANCE, SEW_GAP_FACTOR *
+    max(gap, hole_gap))``: ``gap`` is the fill's achieved G0, :func:`hole_gap` the model's own
+    tolerance along the hole. At ``SEW_TOLERANCE`` alone a hole whose edges carry a larger
+    tolerance (linkrods [17, 19]: 8.7e-5) sewed only in part: a fill edge was left free beside two
+    hole edges and the neighbours' p-curves re-parametrised beyond their tolerance
+    (``BRepCheck_InvalidCurveOnSurface`` / ``InvalidSameParameterFlag`` -> faces unorientable)."""
+    tol = max(SEW_TOLERANCE, SEW_GAP_FACTOR * max(float(gap), hole_gap(model, removed)))
+    sew = BRepBuilderAPI_Sewing(tol)
+    shell, b = TopoDS_Shell(), BRep_Builder()
+    b.MakeShell(shell)
     for k, f in enumerate(model.faces):
         if k not in removed:
-            sew.Add(f)
+            b.Add(shell, f)
+    sew.Add(shell)
     for f in new_faces:
         sew.Add(f)
     with _occ.kernel_errors("sewing the fill in"):
@@ -809,7 +842,7 @@ def refill_model(shape: Any, faces: list[int], *, compare_occ: bool = True) -> t
     if not filled:
         return reports, None
     removed = sorted({i for r in filled for i in r.faces})
-    result = _sew_in(model, removed, [f for r in filled for f in r._fill_faces])
+    result = _sew_in(model, removed, [f for r in filled for f in r._fill_faces], max(r.g0 for r in filled))
     valid = bool(BRepCheck_Analyzer(result).IsValid())
     trip = _round_trip(result, len(model_faces(result)))
     for r in filled:
