@@ -41,12 +41,14 @@ component everywhere), its trimming curves are exact (the p-curve of a (rational
 is the side with its poles projected onto the plane, weights unchanged, since affine maps commute
 with B-splines), and points of the boundary are located by projection, exactly. Which plane: the
 loop's vector-area (Newell) normal, the mean neighbour normal and the principal-axes (PCA)
-normal are tried; the first on which the loop projects to a simple (non-self-intersecting)
+normal are tried; a plane passes when the loop projects onto it to a simple (non-self-intersecting)
 polygon and every G1 side's neighbour normal leans less than ``tolerances.FILL_PLATE_MAX_TILT``
-from the plane normal (with the orientation the loop gives) is kept; the one with the largest
-least lean among those. Holes that are not graphs over any of them (a thread strip, a hole whose
-neighbour turns vertical) are refused with the reason: a plate fill of them would miss the
-boundary (OCC's ``MakeFilling`` on a ten-turn thread strip of an M6 screw misses it by 0.8 mm).
+from its normal (with the orientation the loop gives); of those that pass, the one with the least
+lean is kept. When none passes, the axis of the smallest cap holding the neighbour normals (the
+least lean any plane can have) and two planes between it and the Newell plane are tried
+(:func:`plate_plane`). Holes that are not graphs over any of them (a thread strip, a hole whose
+neighbour turns vertical) are refused with the reason per plane: a plate fill of them would miss
+the boundary (OCC's ``MakeFilling`` on a ten-turn thread strip of an M6 screw misses it by 0.8 mm).
 
 References: course §8-3 (filling n-sided holes); Duchon 1977; OCC's GeomPlate (Plate_Plate,
 "thin plate" energy with G0/G1 point constraints).
@@ -229,6 +231,53 @@ def _crossings(Q: Array) -> tuple[int, int] | None:
     return None
 
 
+def _widest_cap_axis(M: Array, iterations: int = 400) -> Array:
+    """The axis of the smallest spherical cap holding the unit vectors ``M`` (shape (m, 3)): the
+    direction that the most-leaning of them leans least from (the minimax plane normal).
+
+    Badoiu and Clarkson's core-set iteration for the smallest enclosing ball ("Smaller core-sets for
+    balls", SODA 2003: step towards the farthest point by 1/(k+1)); for points on the unit sphere
+    within a hemisphere the ball's centre points along the cap's axis. Error ~ 1/iterations of the
+    cap's radius: a candidate plane, judged afterwards like the others."""
+    c = M.mean(axis=0)
+    for k in range(1, iterations + 1):
+        far = M[int(np.argmax(np.einsum("ij,ij->i", M - c, M - c)))]
+        c = c + (far - c) / (k + 1)
+    return c
+
+
+def _judge(P: Array, Q: Array, M: Array, g1: NDArray[np.bool_], N: Array, newell: Array
+           ) -> tuple[tuple[Array, Array, Array, Array, float] | None, str]:
+    """One candidate plane normal ``N``: ``(frame, "")`` when the hole is a height field over it
+    (loop simple in projection, every G1 normal leaning less than ``FILL_PLATE_MAX_TILT``), else
+    ``(None, why)``."""
+    length = float(np.linalg.norm(N))
+    if not np.isfinite(length) or length == 0:
+        return None, "no direction"
+    N = N / length
+    if float(newell @ N) < 0:
+        N = -N  # the loop runs counter-clockwise about the normal
+    e1, e2 = _in_plane_axes(Q, N)
+    uv = np.c_[Q @ e1, Q @ e2]
+    area = 0.5 * float(np.sum(uv[:, 0] * np.roll(uv[:, 1], -1) - np.roll(uv[:, 0], -1) * uv[:, 1]))
+    scale = float(np.ptp(uv, axis=0).max()) or 1.0
+    if area <= 1e-9 * scale * scale:
+        return None, "the loop encloses no area in projection (it winds back over itself)"
+    max_tilt = tolerances.FILL_PLATE_MAX_TILT
+    cosines = M[g1] @ N if g1.any() else np.ones(1)
+    lean = float(np.degrees(np.arccos(np.clip(cosines.min(), -1.0, 1.0))))
+    if lean >= max_tilt:
+        k = int(np.flatnonzero(g1)[np.argmin(cosines)])
+        return None, (f"a neighbour's tangent plane stands at {lean:.1f} deg to it (at "
+                      f"{np.array2string(P[k], precision=4)}; at most {max_tilt:g} deg, "
+                      "tolerances.FILL_PLATE_MAX_TILT; beyond 90 it turns back over the hole)")
+    hit = _crossings(uv)
+    if hit is not None:
+        return None, (f"the loop crosses itself in projection (samples {hit[0]} and {hit[1]} of {len(P)}, "
+                      f"near {np.array2string(P[hit[0]], precision=4)})")
+    return (P.mean(axis=0), e1, e2, N, lean), ""
+
+
 def plate_plane(points: Array, normals: Array, g1: NDArray[np.bool_] | None = None
                 ) -> tuple[Array, Array, Array, Array, float]:
     """The reference plane of a hole over which its fill is a height field.
@@ -250,12 +299,20 @@ def plate_plane(points: Array, normals: Array, g1: NDArray[np.bool_] | None = No
     (origin, e1, e2, normal, lean)
         The frame and the largest lean (degrees) of a G1 normal from ``normal``.
 
+    Notes
+    -----
+    Candidates, in order: the loop's vector area (Newell), the mean neighbour normal, the principal
+    axes' normal; of those that pass, the one with the least lean. Only when none passes, the axis
+    of the smallest cap holding the G1 normals (:func:`_widest_cap_axis`: the least lean any plane
+    can have) and that axis tilted towards the Newell normal (1/3, 2/3 of the way: a plane between
+    the two trades lean for a simpler projection) are tried, in that order (the first that passes
+    is kept), so that the holes the first three fill keep their fill.
+
     Raises
     ------
     InvalidGeometryError
-        No candidate plane (Newell, mean neighbour normal, principal axes) has the loop project
-        one-to-one with every G1 normal leaning less than the limit; the message says why for the
-        best candidate.
+        No candidate plane has the loop project one-to-one with every G1 normal leaning less than
+        the limit; the message says why for each candidate.
     """
     P = np.asarray(points, float)
     M = np.asarray(normals, float)
@@ -266,42 +323,26 @@ def plate_plane(points: Array, normals: Array, g1: NDArray[np.bool_] | None = No
     newell = 0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
     mean_n = M.sum(axis=0)
     _, _, Vt = np.linalg.svd(Q, full_matrices=False)
-    cands = [newell, mean_n, Vt[2]]
-    max_tilt = tolerances.FILL_PLATE_MAX_TILT
-    best, why = None, ""
-    for N in cands:
-        length = float(np.linalg.norm(N))
-        if not np.isfinite(length) or length == 0:
-            continue
-        N = N / length
-        if float(newell @ N) < 0:
-            N = -N  # the loop runs counter-clockwise about the normal
-        e1, e2 = _in_plane_axes(Q, N)
-        uv = np.c_[Q @ e1, Q @ e2]
-        area = 0.5 * float(np.sum(uv[:, 0] * np.roll(uv[:, 1], -1) - np.roll(uv[:, 0], -1) * uv[:, 1]))
-        scale = float(np.ptp(uv, axis=0).max()) or 1.0
-        if area <= 1e-9 * scale * scale:
-            why = why or "the loop encloses no area in projection (it winds back over itself)"
-            continue
-        cosines = M[g1] @ N if g1.any() else np.ones(1)
-        lean = float(np.degrees(np.arccos(np.clip(cosines.min(), -1.0, 1.0))))
-        if lean >= max_tilt:
-            k = int(np.flatnonzero(g1)[np.argmin(cosines)])
-            why = (f"a neighbour's tangent plane stands at {lean:.1f} deg to the hole's mean plane (at "
-                   f"{np.array2string(P[k], precision=4)}; at most {max_tilt:g} deg, "
-                   "tolerances.FILL_PLATE_MAX_TILT; beyond 90 it turns back over the hole)")
-            continue
-        hit = _crossings(uv)
-        if hit is not None:
-            why = (f"the hole does not project one-to-one onto its mean plane: the loop crosses itself in "
-                   f"projection (samples {hit[0]} and {hit[1]} of {len(P)}, near "
-                   f"{np.array2string(P[hit[0]], precision=4)})")
-            continue
-        if best is None or lean < best[4]:
-            best = (o, e1, e2, N, lean)
-    if best is None:
-        raise InvalidGeometryError(f"plate fill: not a height field over any plane tried: {why}")
-    return best
+    best, why = None, []
+    for name, N in (("vector area", newell), ("mean neighbour normal", mean_n), ("principal axes", Vt[2])):
+        frame, reason = _judge(P, Q, M, g1, N, newell)
+        if frame is None:
+            why.append(f"{name}: {reason}")
+        elif best is None or frame[4] < best[4]:
+            best = frame
+    if best is not None:
+        return best
+    G = M[g1] if g1.any() else M
+    axis = _widest_cap_axis(G)
+    nn = newell / max(float(np.linalg.norm(newell)), 1e-300)
+    axis = axis / max(float(np.linalg.norm(axis)), 1e-300)
+    for name, N in (("widest-cap axis", axis), ("cap axis 1/3 towards the vector area", 2 * axis + nn),
+                    ("cap axis 2/3 towards the vector area", axis + 2 * nn)):
+        frame, reason = _judge(P, Q, M, g1, N, newell)
+        if frame is not None:
+            return frame
+        why.append(f"{name}: {reason}")
+    raise InvalidGeometryError("plate fill: not a height field over any plane tried (" + "; ".join(why) + ")")
 
 
 # ===================================================================================== the fit
