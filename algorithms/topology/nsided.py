@@ -1440,9 +1440,14 @@ def count_folds(surface: BSplineSurface | TrimmedSurface, grid: int = 41) -> int
         spans the trimming loops' parameter box and only pairs with both points on the face
         (:meth:`~occsurf.algorithms.kernel.trimmed.TrimmedSurface.contains`, boundary included)
         count: outside its trim the surface is not part of the face (a plate's height field can
-        be steep there, beyond the hole, and those slopes are no fold of the fill).
+        be steep there, beyond the hole, and those slopes are no fold of the fill). Its grid has
+        at least two points per knot span of the box in each direction: one surface spans the
+        whole hole there (a plate of 127 x 51 spans), where the central split has ``n`` patches
+        of ``grid`` x ``grid`` each, and a ripple a span wide turned its normal by more than 90
+        degrees between samples 2e-3 apart on linkrods' faces [22, 26] (10 to 13 pairs on grids of
+        121 to 201, none on 41 x 41).
     grid : int
-        Grid points per direction.
+        Grid points per direction (the least, for a trimmed surface).
 
     Returns
     -------
@@ -1455,11 +1460,15 @@ def count_folds(surface: BSplineSurface | TrimmedSurface, grid: int = 41) -> int
         (u0, v0), (u1, v1) = uv.min(axis=0), uv.max(axis=0)
         (a0, a1), (b0, b1) = surface.domain
         u0, u1, v0, v1 = max(u0, a0), min(u1, a1), max(v0, b0), min(v1, b1)
+        ku, kv = (np.unique(k) for k in surface.knots)  # at least two grid points per span
+        gu = max(grid, 2 * int(np.count_nonzero((ku > u0) & (ku < u1))) + 3)
+        gv = max(grid, 2 * int(np.count_nonzero((kv > v0) & (kv < v1))) + 3)
     else:
         (u0, u1), (v0, v1) = surface.domain
-    U, V = np.meshgrid(np.linspace(u0, u1, grid), np.linspace(v0, v1, grid), indexing="ij")
+        gu = gv = grid
+    U, V = np.meshgrid(np.linspace(u0, u1, gu), np.linspace(v0, v1, gv), indexing="ij")
     D = surface.derivatives(U.ravel(), V.ravel(), 1)
-    N = np.cross(D[:, 1, 0], D[:, 0, 1]).reshape(grid, grid, 3)
+    N = np.cross(D[:, 1, 0], D[:, 0, 1]).reshape(gu, gv, 3)
     length = np.linalg.norm(N, axis=2)
     N[length <= 1e-6 * np.median(length)] = 0.0  # a degenerate point (flat hole corner) has no side
     du = np.einsum("ijk,ijk->ij", N[1:], N[:-1]) < 0

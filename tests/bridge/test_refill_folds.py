@@ -144,3 +144,19 @@ def test_count_folds_counts_only_inside_the_trim():
     assert count_folds(valley) > 0
     assert count_folds(TrimmedSurface(valley, _square_loop(0.0, 0.7, 0.0, 1.0))) == 0
     assert count_folds(TrimmedSurface(valley, _square_loop(0.5, 1.0, 0.0, 1.0))) > 0
+
+
+def test_a_ripple_one_span_wide_on_a_trimmed_face_is_seen():
+    """A height field of 128 cubic spans in u with one ripple (three poles +-0.02, three spans wide,
+    normals more than 90 degrees apart a span apart): the 41 x 41 grid steps over it (0 pairs, measured),
+    the trimmed face's grid (two points per span) counts it."""
+    m, p = 128, 3
+    K = np.r_[np.zeros(p + 1), np.arange(1, m) / m, np.ones(p + 1)]
+    n = len(K) - p - 1
+    P = np.zeros((n, 2, 3))
+    P[:, :, 0] = np.convolve(K[1:-1], np.ones(p) / p, mode="valid")[:, None]  # Greville abscissae: x = u
+    P[:, :, 1] = np.array([0.0, 1.0])[None, :]
+    P[41:44, :, 2] = 0.02 * np.array([1.0, -1.0, 1.0])[:, None]
+    ripple = BSplineSurface((p, 1), (K, [0, 0, 1, 1]), P)
+    assert count_folds(ripple) == 0
+    assert count_folds(TrimmedSurface(ripple, _square_loop(0.0, 1.0, 0.0, 1.0))) > 0
