@@ -84,7 +84,9 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import sparse
 from scipy.linalg import lu_factor, lu_solve
+from scipy.sparse.linalg import splu
 
 from .. import tolerances
 from ..kernel.basis import basis_matrix, greville
@@ -1347,14 +1349,20 @@ def _gram(knots: Array, degree: int, order: int) -> Array:
 
 
 def _fair_interior(H: Array, free: NDArray[np.bool_], degree: tuple[int, int], knots: tuple[Array, Array]) -> Array:
-    """Fill the free poles by minimising the thin-plate energy with the others fixed."""
+    """Fill the free poles by minimising the thin-plate energy with the others fixed.
+
+    The energy's matrix ``K = Gu2 (x) Gv0 + 2 Gu1 (x) Gv1 + Gu0 (x) Gv2`` is banded-Kronecker (at most
+    ``(2p+1)^2`` non-zeros a row), so it is built sparse and the free block is factored by SuperLU:
+    a dense (nu nv)^2 array was 1.1 GB and ~90 s for a 213 x 56 patch (lens face 2)."""
     if not free.any():
         return H
-    G = [[_gram(knots[d], degree[d], k) for k in range(3)] for d in range(2)]
-    K = np.kron(G[0][2], G[1][0]) + 2 * np.kron(G[0][1], G[1][1]) + np.kron(G[0][0], G[1][2])
+    G = [[sparse.csr_matrix(_gram(knots[d], degree[d], k)) for k in range(3)] for d in range(2)]
+    K = (sparse.kron(G[0][2], G[1][0]) + 2 * sparse.kron(G[0][1], G[1][1])
+         + sparse.kron(G[0][0], G[1][2])).tocsr()
     f = free.ravel()
     flat = H.reshape(-1, H.shape[2]).copy()
-    flat[f] = np.linalg.solve(K[np.ix_(f, f)], -K[np.ix_(f, ~f)] @ flat[~f])
+    Kf = K[f]
+    flat[f] = splu(Kf[:, f].tocsc()).solve(-(Kf[:, ~f] @ flat[~f]))
     return flat.reshape(H.shape)
 
 
