@@ -74,7 +74,9 @@ def test_uneven_side_folds_and_the_arc_length_refit_does_not(bend, k):
     side = _crawl(_quad([0, 0, 0], [length, -0.5, 0], bend), k)
     assert _speed_ratio(side) > 15  # e^3
     before = fill_hole(_sliver(side, length))
-    assert fill_folds(before) > 100  # measured 424 and 212 (module docstring)
+    # 424 and 212 (module docstring) while the cross field kept all the side's knots; with only the
+    # sampled ones (nsided_sides._sampled_knots) the sag that folded it is gone (lens helper, issue 12)
+    assert fill_folds(before) == 0
     tol = 1e-7 * length
     even = _even_speed(side, tol)
     assert even is not side and _speed_ratio(even) < 1.2
