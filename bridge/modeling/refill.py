@@ -68,9 +68,15 @@ __all__ = ["RefillReport", "refill_faces", "refill_model", "face_components", "m
 G1_EDGE_DEG: float = 1.0
 #: Samples of the neighbour's normal per edge for the cross-field fit (plus clustered end samples).
 FIT_SAMPLES: int = 81
+#: Where a side that follows its neighbour's trace must be moved across it at a corner (the two
+#: neighbours' traces do not quite meet: :func:`_corner_point`), the move is spread over a length
+#: that turns the side by this many radians on average (5.7e-3 deg; at most half the side: :func:`_pin_end`).
+CORNER_SLOPE: float = 1e-4
+#: Samples of a neighbour's trace per pole of the side curve it is fitted to (:func:`_trace`).
+TRACE_SAMPLES_PER_POLE: int = 16
 #: The plate (tried where the central split refuses, folds or misses a target) replaces a central
-#: fill that does not fold only when its worst number, in target units, is below this fraction of
-#: the central fill's (:func:`_plate_wins`).
+#: fill that does not fold only when its misses of the targets (:func:`_score`) are below this
+#: fraction of the central fill's (:func:`_plate_wins`).
 PLATE_MARGIN: float = 0.9
 #: A fill is sewn in at this multiple of the larger of its achieved G0 and the hole edges' own
 #: tolerance (and at least ``SEW_TOLERANCE``): the gap between a fill edge and a hole edge is at
@@ -360,23 +366,127 @@ def _merged_curve(curves: list[Any], size: float) -> tuple[Any, float]:
 
 def _trace(edge: Any, nb: Any, curve: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The neighbour's points along ``edge`` (from its p-curve), their parameters on ``curve`` and
-    their distances from it."""
-    P, _, _ = _normals_on(edge, nb, _edge_params(edge, nb, FIT_SAMPLES))
+    their distances from it: :data:`TRACE_SAMPLES_PER_POLE` per pole of ``curve`` (at least
+    ``FIT_SAMPLES``): :func:`fit_boundary` refines a span only while it holds 8 samples, and a
+    trace as detailed as a 24-pole edge curve stopped 5e-5 off with 81 (linkrods face 20)."""
+    k = min(max(FIT_SAMPLES, TRACE_SAMPLES_PER_POLE * len(curve.control_points)), 4001)
+    P, _, _ = _normals_on(edge, nb, _edge_params(edge, nb, k))
     s, d = closest_parameters(curve, P)
     return P, _unwrap_seam(curve, s, [len(P)]), d
 
 
-def _fit_traces(traces: list[tuple[np.ndarray, np.ndarray, np.ndarray]], tol: float) -> Any:
-    """One cubic through the neighbours' traces of a side (ordered along the side), within ``tol``:
-    where the model's edge curve lies off its neighbour by its tolerance, the fill follows the neighbour."""
-    P = np.concatenate([t[0] for t in traces])
-    s = np.concatenate([t[1] for t in traces])
-    order = np.argsort(s, kind="stable")
-    P = P[order]
-    keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > 1e-12 * max(tol, 1e-300)]
-    P = P[keep]
+def _along(trace: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    """A neighbour's trace points (:func:`_trace`), shape (m, 3), in the direction of its side.
+
+    The samples come in the p-curve's order; whether that runs with the side is read off the
+    middle half of their side parameters (near the ends, samples beyond the side curve's end all
+    have its end parameter, so sorting by it would scramble them)."""
+    P, s, _ = trace
+    m = len(s)
+    return P if float(np.median(np.diff(s[m // 4: 3 * m // 4 + 1]))) >= 0 else P[::-1]
+
+
+def _drop_repeats(P: np.ndarray) -> np.ndarray:
+    """``P`` (m, 3) without points closer than 1e-12 of the polyline's length to the one before
+    (the parameters of :func:`fit_boundary` must increase); the first and last points stay."""
+    step = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    eps = 1e-12 * max(float(step.sum()), 1e-300)
+    keep = np.r_[True, step > eps]
+    keep[-1] = True
+    idx = np.flatnonzero(keep)
+    if len(idx) > 2 and np.linalg.norm(P[idx[-1]] - P[idx[-2]]) <= eps:
+        keep[idx[-2]] = False
+    return P[keep]
+
+
+def _corner_point(p0: np.ndarray, t0: np.ndarray, p1: np.ndarray, t1: np.ndarray) -> np.ndarray:
+    """Where a side ending at ``p0`` (unit tangent ``t0``) should meet the next one starting at
+    ``p1`` (unit tangent ``t1``): the midpoint of the closest points of the rays ``p0 + a t0`` and
+    ``p1 - b t1`` (``a, b >= 0``).
+
+    ``p0``, ``p1`` are the ends of two neighbours' traces at a joint of the hole's edges. The
+    model's edges meet at a vertex, but each lies off its neighbour by up to its tolerance, so the
+    two traces end micrometres apart (bearing face 5: 4.7e-6, edge tolerance 4.9e-6), mostly
+    *along* one of them: one trace stops short of the other, or runs past it. Prolonged along
+    their tangents the two traces meet within ~1e-9 (the skew of their lines), and that corner is
+    G0 to both; the midpoint of ``p0`` and ``p1`` (:func:`_snap_ends`) is off each by half the gap.
+    A trace that runs past the other's line cannot be shortened for free: its points beyond the
+    corner are off the fill by their distance from it; the midpoint of the rays' closest points
+    makes the larger of the two sides' distances least (half the rays' distance: the distance
+    to a convex set is convex). Between parallel tangents (a flat joint inside a side) the rays
+    give the midpoint of an overlap, or of a gap where they overlap only with one another.
+    """
+    d = p1 - p0
+    cands = [(max(0.0, float(d @ t0)), 0.0), (0.0, max(0.0, float(d @ t1))), (0.0, 0.0)]
+    c = float(t0 @ t1)
+    if 1.0 - c * c > 1e-6:  # not parallel: a corner between sides
+        a, b = np.linalg.solve(np.array([[1.0, c], [c, 1.0]]), np.array([d @ t0, d @ t1]))
+        if a >= 0 and b >= 0:
+            cands.append((float(a), float(b)))
+    gaps = [np.linalg.norm(p0 + a * t0 - (p1 - b * t1)) for a, b in cands]
+    a, b = cands[int(np.argmin(gaps))]
+    return 0.5 * (p0 + a * t0 + p1 - b * t1)
+
+
+def _pin_end(P: np.ndarray, X: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """Samples ``P`` (m, 3) of a trace, made to end at the joint ``X`` (the trace's unit tangent
+    there ``T``): prolonged along ``T`` to ``X``, or cut there when the trace runs past it. What is
+    left across ``T`` (the traces' skew, a trace running past the corner: :func:`_corner_point`)
+    is spread over the samples near the end with a C2 smoothstep, over the length on which it
+    would turn the side by :data:`CORNER_SLOPE` radians on average (15/8 of it at the steepest;
+    at most half the trace, which then turns more): moving the end alone
+    would turn the side's end tangent by the gap over the first leg (bearing face 181: 0.32 deg)."""
+    end = P[-1]
+    along = float((X - end) @ T)
+    if along < 0:  # the trace runs past the joint: cut it there
+        P = P[(P - end) @ T < along]
+        if len(P) < 2:
+            raise InvalidGeometryError("a neighbour's trace runs past both ends of its hole edge")
+    P = np.r_[P, [end + along * T]]
+    h = X - P[-1]
+    dist = np.r_[np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1)[::-1])[::-1], 0.0]
+    length = min(0.5 * float(dist[0]), float(np.linalg.norm(h)) / CORNER_SLOPE)
+    if length > 0:
+        x = np.clip(dist / length, 0.0, 1.0)
+        P = P + (1.0 - x**3 * (10.0 - 15.0 * x + 6.0 * x**2))[:, None] * h
+    P[-1] = X
+    return P
+
+
+def _fit_points(P: np.ndarray, tol: float) -> Any:
+    """One cubic through ordered samples ``P`` (m, 3) of a side, within ``tol`` (chord length,
+    :func:`fit_boundary`: the ends interpolated)."""
+    P = _drop_repeats(P)
     arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
     return fit_boundary(arc / arc[-1], P, tol)[0]
+
+
+def _follow_traces(bounds: list[Any], groups: list[list[int]], curves: list[Any],
+                   traces: list[list[tuple[np.ndarray, np.ndarray, np.ndarray]]], tol: float) -> list[Any]:
+    """The side curves that follow the neighbours' traces (``traces`` per side, from :func:`_trace`).
+
+    At each joint of two hole edges (a corner between sides, a flat joint inside one) the two
+    neighbours' traces meet at :func:`_corner_point` (tangents from the model's edge ``curves``);
+    a side whose model curve (``bounds``) lies within ``tol`` of its traces and of both its corners
+    is kept, any other becomes the cubic within ``tol`` of its traces, each pinned to its two
+    joints (:func:`_pin_end`), so that the sides meet where both neighbours do."""
+    order = [k for g in groups for k in g]
+    P = {k: _along(t) for g, tr in zip(groups, traces) for k, t in zip(g, tr)}
+    tan = {k: [d / np.linalg.norm(d) for d in (curves[k].derivatives(np.array([curves[k].domain[e]]), 1)[0, 1]
+                                               for e in (0, 1))] for k in order}
+    nxt = {k: order[(m + 1) % len(order)] for m, k in enumerate(order)}
+    prv = {v: k for k, v in nxt.items()}
+    joint = {k: _corner_point(P[k][-1], tan[k][1], P[nxt[k]][0], tan[nxt[k]][0]) for k in order}
+    out = []
+    for g, c, tr in zip(groups, bounds, traces):
+        x0, x1 = joint[prv[g[0]]], joint[g[-1]]
+        ends = max(np.linalg.norm(c.evaluate(c.domain[0]) - x0), np.linalg.norm(c.evaluate(c.domain[1]) - x1))
+        if ends <= tol and max(float(d.max()) for _, _, d in tr) <= tol:
+            out.append(c)
+            continue
+        pieces = [_pin_end(_pin_end(P[k], joint[k], tan[k][1])[::-1], joint[prv[k]], -tan[k][0])[::-1] for k in g]
+        out.append(_fit_points(np.concatenate(pieces), tol))
+    return out
 
 
 #: A side curve whose parameter speed ``|C'(t)|`` varies by more than this factor is re-fitted by
@@ -485,7 +595,9 @@ def refill_sides(edges: list[Any], nbs: list[Any], owners: list[Any], size: floa
     """HoleSide data of the hole, fitted cross fields; edges at flat corners merged into one side.
 
     With ``follow_neighbour`` a side whose edge curve lies farther than ``FILL_FIT_G0 * size`` from
-    its neighbour's trace (the model's edge tolerance) follows the trace (a fitted cubic) instead.
+    its neighbour's trace (the model's edge tolerance), or whose corners do, follows the traces (a
+    fitted cubic) instead, and the sides meet where the neighbours' traces do
+    (:func:`_follow_traces`).
 
     Returns
     -------
@@ -503,13 +615,12 @@ def refill_sides(edges: list[Any], nbs: list[Any], owners: list[Any], size: floa
     order = [k for group in groups for k in group]
     side_of_edge = [side_of_edge[order.index(k)] for k in range(len(edges))]
     tol = tolerances.FILL_FIT_G0 * size
-    bounds = []
+    bounds, traces = [], []
     for group in groups:  # 1. the side curves: exact where the edge lies on its neighbour, else fitted
         c = curves[group[0]] if len(group) == 1 else _merged_curve([curves[k] for k in group], size)[0]
-        traces = [_trace(edges[k], nbs[k], c) for k in group]
-        if follow_neighbour and max(float(d.max()) for _, _, d in traces) > tol:
-            c = _fit_traces(traces, tol)
-        bounds.append(c)
+        bounds.append(c), traces.append([_trace(edges[k], nbs[k], c) for k in group])
+    if follow_neighbour:
+        bounds = _follow_traces(bounds, groups, curves, traces, tol)
     bounds = [_even_speed(c, tol) for c in _snap_ends(bounds)]  # uneven speed folds the fill: by arc length, within tol
     sides, fit, g1 = [], [], [False] * len(edges)
     fields = []
@@ -698,7 +809,7 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
         score = _score(cand, size, etol)  # once per candidate: it counts folds on a grid of every patch
         if best is None or score < best_score:
             best, best_score = cand, score
-    if best is None or best_score > (False, 1.0):  # refused, folded or a target missed
+    if best is None or best_score[0] or best_score[2] > 1.0:  # refused, folded or a target missed
         for follow, prep in prepared.items():
             try:
                 cand = _our_fill(edges, nbs, owners, size, follow, samples, method="plate", prepared=prep)
@@ -716,25 +827,38 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
     return best
 
 
-def _plate_wins(plate: tuple[bool, float], central: tuple[bool, float]) -> bool:
+def _plate_wins(plate: tuple[bool, float, float], central: tuple[bool, float, float]) -> bool:
     """The plate replaces the central split's fill when that folds and the plate does not, or when
-    both fold alike and the plate's worst (G0 or G1, in target units) is below ``PLATE_MARGIN`` of the
-    central split's: a tie in the worst number (the lens' face 1: both 0.0193 deg, set by the fitted
+    both fold alike and the plate's misses (G0 and G1 in target units, :func:`_score`) are below
+    ``PLATE_MARGIN`` of the central split's: a tie in the worst number (the lens' face 1: both 0.0193 deg, set by the fitted
     fields at a corner) keeps the central split, whose G0 there is round-off (the plate's is its
-    1e-7-of-the-size target)."""
+    1e-7-of-the-size target). The numbers compared are the misses in the issue's units
+    (``_score(...)[1]``): in the edges' tolerance (``[2]``) a central fill 1.3e-6 off a neighbour
+    (0.16 of 8.1e-6) beat a plate 2.4e-7 off it (bearing face 181, G1 0.012 and 0.011 deg; OCC
+    1.2e-6, 0.22 deg)."""
     if plate[0] != central[0]:
         return not plate[0]
     return plate[1] < PLATE_MARGIN * central[1]
 
 
-def _score(cand: tuple, size: float, edge_tol: float = 0.0) -> tuple[bool, float]:
-    """``(folds, worse of G0 and G1)``, smaller is better: a fill that folds (:func:`count_folds`)
-    comes after every one that does not; then G0 and G1 in units of the targets: 0.01 deg, and for
-    G0 1e-7 of the model size or the hole edges' own tolerance if larger (a gap the model itself
-    declares is not a defect)."""
-    g0 = max(cand[3]) / max(tolerances.FILL_FIT_G0 * size, edge_tol)
+def _score(cand: tuple, size: float, edge_tol: float = 0.0) -> tuple[bool, float, float]:
+    """``(folds, misses, worse of G0 and G1 in looser G0 units)``, smaller is better.
+
+    A fill that folds (:func:`fill_folds`) comes after every one that does not. Then ``misses``:
+    G0 and G1 in units of the issue's targets (1e-7 of the model size, 0.01 deg), each at least 1,
+    multiplied: a fill twice as far off in G0 is as bad as one twice as far off in G1, and a number
+    within its target does not count (bearing face 0: a fill 7.9e-7 off, G1 0.070 deg, against one
+    8.6e-7 off, 0.040 deg; the larger of the two numbers alone took the first). The third number
+    is the worse of G1 and of G0 in units of the hole edges' own tolerance where that is larger:
+    below 1 the fill meets its targets as far as the model itself declares its gaps
+    (:func:`fitted_fill` then tries no plate), but it does not decide between two fills: there a
+    fill 4.4e-6 off the neighbour of an edge of tolerance 5.1e-6 (bearing face 170, on the model's
+    edge curves) would count 0.86, as good as one 1.2e-8 off it (on the neighbour's trace)."""
+    g0 = max(cand[3])
     g1 = max([a for a in cand[4] if a is not None], default=0.0) / tolerances.FILL_FIT_ANGLE
-    return fill_folds(cand[5]) > 0, max(g0, g1)
+    target = tolerances.FILL_FIT_G0 * size
+    misses = max(g0 / target, 1.0) * max(g1, 1.0)
+    return fill_folds(cand[5]) > 0, misses, max(g0 / max(target, edge_tol), g1)
 
 
 def _safe_joint(e: Any, own: Any, nb: Any) -> bool:
