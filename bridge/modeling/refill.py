@@ -830,8 +830,8 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
 def _plate_wins(plate: tuple[bool, float, float], central: tuple[bool, float, float]) -> bool:
     """The plate replaces the central split's fill when that folds and the plate does not, or when
     both fold alike and the plate's misses (G0 and G1 in target units, :func:`_score`) are below
-    ``PLATE_MARGIN`` of the central split's: a tie in the worst number (the lens' face 1: both 0.0193 deg, set by the fitted
-    fields at a corner) keeps the central split, whose G0 there is round-off (the plate's is its
+    ``PLATE_MARGIN`` of the central split's: a tie (the lens' face 1: both 0.0193 deg, set by the
+    fitted fields at a corner) keeps the central split, whose G0 there is round-off (the plate's is its
     1e-7-of-the-size target). The numbers compared are the misses in the issue's units
     (``_score(...)[1]``): in the edges' tolerance (``[2]``) a central fill 1.3e-6 off a neighbour
     (0.16 of 8.1e-6) beat a plate 2.4e-7 off it (bearing face 181, G1 0.012 and 0.011 deg; OCC
