@@ -28,15 +28,10 @@ Measured (ours / OCC default): face 199 G1 0.015 / 1.73 deg (before 1.92), face 
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from occsurf.algorithms.kernel.curve import BSplineCurve
-
-REPO = Path(__file__).resolve().parents[2]
-BEARING = REPO.parent / "shared" / "realdata" / "occt__bearing.iges"
 
 
 def _deg(a: np.ndarray, b: np.ndarray) -> float:
@@ -67,20 +62,6 @@ def test_snapping_the_corners_keeps_the_end_tangents() -> None:
         assert _deg(_tangent(c, 0), t0) <= 1e-9 and _deg(_tangent(c, 1), t1) <= 1e-9
     moved = np.abs(np.asarray(out[0].control_points) - np.asarray(a.control_points)).max()
     assert moved <= 0.5 * np.abs(gap).max() * (1 + 1e-12)  # half the gap, at most
-
-
-@pytest.fixture(scope="module")
-def bearing():
-    if not BEARING.is_file():
-        pytest.skip(f"{BEARING} is absent (public real models)")
-    from OCP.IGESControl import IGESControl_Reader
-
-    from occsurf.bridge.modeling.refill import SewnModel
-
-    r = IGESControl_Reader()
-    assert int(r.ReadFile(str(BEARING))) == 1
-    r.TransferRoots()
-    return SewnModel(r.OneShape())
 
 
 @pytest.mark.parametrize("face", [199, 207])

@@ -29,8 +29,6 @@ default G0): face 5 2.3e-6 / 5.5e-9 / 3.0e-6, face 170 4.4e-6 / 1.2e-8 / 3.3e-8,
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -40,9 +38,6 @@ from scipy.optimize import minimize
 from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.nsided import closest_parameters
 from occsurf.bridge.modeling.refill import _along, _corner_point, _drop_repeats, _fit_points, _pin_end
-
-REPO = Path(__file__).resolve().parents[2]
-BEARING = REPO.parent / "shared" / "realdata" / "occt__bearing.iges"
 
 
 def _ray_distance(x: np.ndarray, p: np.ndarray, t: np.ndarray) -> float:
@@ -142,20 +137,6 @@ def test_pinning_a_trace_end_moves_it_across_gently() -> None:
     # cut where the trace runs past the corner
     Q = _pin_end(P, np.array([0.1 - 3e-6, 0.0, 0.0]), T)
     assert Q[:, 0].max() <= 0.1 - 3e-6 + 1e-17
-
-
-@pytest.fixture(scope="module")
-def bearing():
-    if not BEARING.is_file():
-        pytest.skip(f"{BEARING} is absent (public real models)")
-    from OCP.IGESControl import IGESControl_Reader
-
-    from occsurf.bridge.modeling.refill import SewnModel
-
-    r = IGESControl_Reader()
-    assert int(r.ReadFile(str(BEARING))) == 1
-    r.TransferRoots()
-    return SewnModel(r.OneShape())
 
 
 @pytest.mark.parametrize("face", [5, 170, 188])
