@@ -788,8 +788,15 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
     neighbours' traces, the model's edge curves) and the better kept (:func:`_score`).
 
     The central split (:func:`fill_hole`) first; when it refuses both variants, or its best fill
-    folds or misses a target (score above 1), the plate (:func:`fill_plate`, one trimmed surface:
-    reflex corners, long curved holes) is tried on both and the best of all kept.
+    folds or misses one of the issue's targets (G0 1e-7 of the size, G1 0.01 deg: ``_score(...)[1]``
+    above 1), the plate (:func:`fill_plate`, one trimmed surface: reflex corners, long curved holes)
+    is tried on both and the best of all kept. The trigger was the looser edge-tolerance number
+    (``[2]``) before: bearing faces 175, 185 and 198 kept central fills 1.8e-7, 1.7e-6 and 4.0e-8
+    off a neighbour (OCC 1.7e-7, 6.8e-8, 2.8e-8) without trying the plate, which reads 2.5e-9 to
+    7.4e-9 there with G1 no worse. The side curves (so the face's edge) are the same for both: at
+    face 185's corner where one neighbour's trace runs 3.4e-6 past the other's, both edges stop
+    there; the central split is measured at the closest point of its side curve, the plate (like
+    OCC's fill) at the neighbour point's projection on its surface, which continues past the edge.
 
     Returns the tuple of :func:`_our_fill` (its fill's type says which construction won:
     :func:`fill_method`).
@@ -812,7 +819,7 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
         score = _score(cand, size, etol)  # once per candidate: it counts folds on a grid of every patch
         if best is None or score < best_score:
             best, best_score = cand, score
-    if best is None or best_score[0] or best_score[2] > 1.0:  # refused, folded or a target missed
+    if best is None or best_score[0] or best_score[1] > 1.0:  # refused, folded or an issue target missed
         for follow, prep in prepared.items():
             try:
                 cand = _our_fill(edges, nbs, owners, size, follow, samples, method="plate", prepared=prep)
@@ -853,8 +860,8 @@ def _score(cand: tuple, size: float, edge_tol: float = 0.0) -> tuple[bool, float
     within its target does not count (bearing face 0: a fill 7.9e-7 off, G1 0.070 deg, against one
     8.6e-7 off, 0.040 deg; the larger of the two numbers alone took the first). The third number
     is the worse of G1 and of G0 in units of the hole edges' own tolerance where that is larger:
-    below 1 the fill meets its targets as far as the model itself declares its gaps
-    (:func:`fitted_fill` then tries no plate), but it does not decide between two fills: there a
+    below 1 the fill meets its targets as far as the model itself declares its gaps, but it
+    neither triggers the plate nor decides between two fills: there a
     fill 4.4e-6 off the neighbour of an edge of tolerance 5.1e-6 (bearing face 170, on the model's
     edge curves) would count 0.86, as good as one 1.2e-8 off it (on the neighbour's trace)."""
     g0 = max(cand[3])
