@@ -34,7 +34,14 @@ steps, the best iterate kept as judged on samples *between* the fit's, so that a
 grazing the loop is not blown up to fit round-off). Every knot span (in ``u`` and in ``v``)
 holding a sample that misses a target is bisected and the fit repeated, until both targets are
 met, ``max_spans`` is reached or four refinements in a row gain less than 10 %; the best stage is returned and what it achieved is reported per
-side (:class:`PlateFill`).
+side (:class:`PlateFill`). Ripples: the energy's weight, taken per stage from the traces, falls with
+every refinement (the finest spans dominate the energy's trace), and where data that cannot be met
+keep a fit refining (linkrods' faces [13, 22]: neighbours leaning 67.5 deg, 128 spans) the plate
+rippled a span inside its boundary, its normal turning by more than 90 deg between grid points
+(:func:`.nsided.count_folds` on the trimmed face: 6 folds). Every stage is therefore checked for
+folds; when one folds, the fit is redone from the first knots with the first stage's weight held
+(grown with the sample count only, so the balance per boundary sample stays), and a fold-free
+stage beats any that folds (then the least miss). Fits that never fold are unchanged.
 
 Why a height field: it cannot fold (``S_u x S_v = N - h_u e_1 - h_v e_2`` has a positive ``N``
 component everywhere), its trimming curves are exact (the p-curve of a (rational) B-spline side
@@ -70,7 +77,7 @@ from ..kernel.basis import basis_derivatives, find_span
 from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
-from .nsided import HoleSide
+from .nsided import HoleSide, count_folds
 
 __all__ = ["PlateFill", "fill_plate", "plate_plane"]
 
@@ -464,81 +471,97 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g
     ext = hi - lo
     p = _DEGREE
     start = [max(2, int(round(8 * e / ext.max()))) for e in ext]
-    ku, kv = _knots(lo[0], hi[0], min(start[0], max_spans), p), _knots(lo[1], hi[1], min(start[1], max_spans), p)
     lengths = np.array([np.linalg.norm(np.diff(d[0], axis=0), axis=1).sum() for d in dense]) / L
     tol0 = g0_tol / L
     tol1 = np.radians(angle_tol)
-    best = None  # (score, c, knots, g0 per side, g1 per side): the best stage is returned
-    stalled = 0
-    while True:
-        nu, nv = ku.size - p - 1, kv.size - p - 1
-        spans = max(nu, nv) - p
-        fit_t, chk_t = [], []
-        for s, ln in zip(sides, lengths):
-            t = _params(s.curve, max(24, int(np.ceil(6 * spans * ln / ext.max()))))
-            fit_t.append(t)
-            chk_t.append(0.5 * (t[1:] + t[:-1]))
-        data = [_local_data(s, t, o, R, L) for s, t in zip(sides, fit_t)]
-        sid = np.concatenate([np.full(len(t), i) for i, t in enumerate(fit_t)])
-        X = np.concatenate([d[0] for d in data])
-        Mn = np.concatenate([d[1] for d in data])
-        val, du, dv, cols = _rows(ku, kv, p, X[:, 0], X[:, 1])
-        n = nu * nv
-        gsel = flags[sid] & (np.abs(Mn[:, 2]) > 0)
-        gx, gy = -Mn[gsel, 0] / Mn[gsel, 2], -Mn[gsel, 1] / Mn[gsel, 2]
-        w1 = 1.0 / (tol1 * (1.0 + gx ** 2 + gy ** 2))  # a gradient error of 1/w1 tilts the normal ~1 target angle
-        rows_v = np.vstack([val / tol0, du[gsel] * w1[:, None], dv[gsel] * w1[:, None]])
-        cols_all = np.vstack([cols, cols[gsel], cols[gsel]])
-        rhs = np.r_[X[:, 2] / tol0, gx * w1, gy * w1]
-        k = rows_v.shape[1]
-        A = sp.csr_matrix((rows_v.ravel(), cols_all.ravel(), np.arange(0, rows_v.shape[0] * k + 1, k)),
-                          shape=(rows_v.shape[0], n))
-        Gu, Gv = _gram(ku, p), _gram(kv, p)
-        E = sp.kron(Gu[2], Gv[0]) + 2.0 * sp.kron(Gu[1], Gv[1]) + sp.kron(Gu[0], Gv[2])
-        AtA = (A.T @ A).tocsc()
-        eps = tolerances.FILL_PLATE_SMOOTHING * AtA.diagonal().sum() / max(E.diagonal().sum(), 1e-300)
-        lu = spla.splu((AtA + eps * E).tocsc())
-        ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L)
-        c = lu.solve(A.T @ rhs)
-        stage = (ev.score(c, g0_tol, angle_tol), c)
-        for _ in range(int(tolerances.FILL_PLATE_ITERATIONS)):
-            # iterated Tikhonov (the energy's bias leaves the data, not what no sample pins: a basis
-            # function grazing the loop), stopped by the samples between the fit's (validation)
-            if stage[0] <= 1.0:
-                break
-            c = c + lu.solve(A.T @ (rhs - A @ c))
-            sc = ev.score(c, g0_tol, angle_tol)
-            if sc < stage[0]:
-                stage = (sc, c)
-            elif sc > 2.0 * stage[0]:
-                break
-        c = stage[1]
-        g0_side, g1_side, bu, bv = ev.measure(c, g0_tol, angle_tol)
-        stalled = stalled + 1 if best is not None and stage[0] > 0.9 * best[0] else 0
-        if best is None or stage[0] < best[0]:
-            best = (stage[0], c, ku, kv, g0_side, g1_side)
-        if stage[0] <= 1.0 or stalled >= 4:  # met, or four refinements gained < 10 % (a target the
-            break  # data cannot meet, e.g. neighbours without a common tangent plane at a corner)
-        ku2, kv2 = _bisect(ku, p, bu, max_spans), _bisect(kv, p, bv, max_spans)
-        if ku2.size == ku.size and kv2.size == kv.size:
+    best = None  # (score, c, knots, g0 per side, g1 per side, folds): the best stage is returned
+    rippled = False
+    for held in (False, True):  # the energy's weight: per stage (of the traces); held (after a ripple)
+        if held and not rippled:
             break
-        ku, kv = ku2, kv2
-    score, c, ku, kv, g0_side, g1_side = best
+        ku = _knots(lo[0], hi[0], min(start[0], max_spans), p)
+        kv = _knots(lo[1], hi[1], min(start[1], max_spans), p)
+        stalled, eps0, top = 0, None, np.inf  # top: this pass's best score (for the stall test)
+        while True:
+            nu, nv = ku.size - p - 1, kv.size - p - 1
+            spans = max(nu, nv) - p
+            fit_t, chk_t = [], []
+            for s, ln in zip(sides, lengths):
+                t = _params(s.curve, max(24, int(np.ceil(6 * spans * ln / ext.max()))))
+                fit_t.append(t)
+                chk_t.append(0.5 * (t[1:] + t[:-1]))
+            data = [_local_data(s, t, o, R, L) for s, t in zip(sides, fit_t)]
+            sid = np.concatenate([np.full(len(t), i) for i, t in enumerate(fit_t)])
+            X = np.concatenate([d[0] for d in data])
+            Mn = np.concatenate([d[1] for d in data])
+            val, du, dv, cols = _rows(ku, kv, p, X[:, 0], X[:, 1])
+            n = nu * nv
+            gsel = flags[sid] & (np.abs(Mn[:, 2]) > 0)
+            gx, gy = -Mn[gsel, 0] / Mn[gsel, 2], -Mn[gsel, 1] / Mn[gsel, 2]
+            w1 = 1.0 / (tol1 * (1.0 + gx ** 2 + gy ** 2))  # a gradient error of 1/w1 tilts the normal ~1 target angle
+            rows_v = np.vstack([val / tol0, du[gsel] * w1[:, None], dv[gsel] * w1[:, None]])
+            cols_all = np.vstack([cols, cols[gsel], cols[gsel]])
+            rhs = np.r_[X[:, 2] / tol0, gx * w1, gy * w1]
+            k = rows_v.shape[1]
+            A = sp.csr_matrix((rows_v.ravel(), cols_all.ravel(), np.arange(0, rows_v.shape[0] * k + 1, k)),
+                              shape=(rows_v.shape[0], n))
+            Gu, Gv = _gram(ku, p), _gram(kv, p)
+            E = sp.kron(Gu[2], Gv[0]) + 2.0 * sp.kron(Gu[1], Gv[1]) + sp.kron(Gu[0], Gv[2])
+            AtA = (A.T @ A).tocsc()
+            eps = tolerances.FILL_PLATE_SMOOTHING * AtA.diagonal().sum() / max(E.diagonal().sum(), 1e-300)
+            eps0 = (eps, len(X)) if eps0 is None else eps0
+            if held:  # the first stage's weight, grown with the sample count only (see the module)
+                eps = eps0[0] * len(X) / eps0[1]
+            lu = spla.splu((AtA + eps * E).tocsc())
+            ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L)
+            c = lu.solve(A.T @ rhs)
+            stage = (ev.score(c, g0_tol, angle_tol), c)
+            for _ in range(int(tolerances.FILL_PLATE_ITERATIONS)):
+                # iterated Tikhonov (the energy's bias leaves the data, not what no sample pins: a basis
+                # function grazing the loop), stopped by the samples between the fit's (validation)
+                if stage[0] <= 1.0:
+                    break
+                c = c + lu.solve(A.T @ (rhs - A @ c))
+                sc = ev.score(c, g0_tol, angle_tol)
+                if sc < stage[0]:
+                    stage = (sc, c)
+                elif sc > 2.0 * stage[0]:
+                    break
+            c = stage[1]
+            g0_side, g1_side, bu, bv = ev.measure(c, g0_tol, angle_tol)
+            folds = count_folds(_build(c, ku, kv, p, o, e1, e2, N, L, sides)[1])
+            rippled |= folds > 0
+            stalled = stalled + 1 if stage[0] > 0.9 * top else 0
+            top = min(top, stage[0])
+            if best is None or (folds > 0, stage[0]) < (best[6] > 0, best[0]):  # a ripple loses to any fill without
+                best = (stage[0], c, ku, kv, g0_side, g1_side, folds)
+            if stage[0] <= 1.0 or stalled >= 4:  # met, or four refinements gained < 10 % (a target the
+                break  # data cannot meet, e.g. neighbours without a common tangent plane at a corner)
+            ku2, kv2 = _bisect(ku, p, bu, max_spans), _bisect(kv, p, bv, max_spans)
+            if ku2.size == ku.size and kv2.size == kv.size:
+                break
+            ku, kv = ku2, kv2
+    score, c, ku, kv, g0_side, g1_side, _ = best
     met = score <= 1.0
+    surf, trimmed = _build(c, ku, kv, p, o, e1, e2, N, L, sides)
+    return PlateFill(surf, trimmed, sides, flags, g0_side, g1_side, o, e1, e2, N,
+                     (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean)
+
+
+def _build(c: Array, ku: Array, kv: Array, p: int, o: Array, e1: Array, e2: Array, N: Array, L: float,
+           sides: list[HoleSide]) -> tuple[BSplineSurface, TrimmedSurface]:
+    """The height field of coefficients ``c`` in model units (``u``, ``v``: lengths along ``e1``, ``e2``
+    from ``o``) and its face trimmed by the sides' p-curves."""
     nu, nv = ku.size - p - 1, kv.size - p - 1
-    # ---- the surface in model units: u, v are lengths along e1, e2 from o
     gu, gv = _greville(ku, p), _greville(kv, p)
     U, V = np.meshgrid(gu, gv, indexing="ij")
-    H = c.reshape(nu, nv)
-    poles = o + L * (U[..., None] * e1 + V[..., None] * e2 + H[..., None] * N)
+    poles = o + L * (U[..., None] * e1 + V[..., None] * e2 + c.reshape(nu, nv)[..., None] * N)
     surf = BSplineSurface((p, p), (ku * L, kv * L), poles)
     pcurves = []
     for s in sides:
         cp = (s.curve.control_points - o) @ np.c_[e1, e2]
         pcurves.append(BSplineCurve(s.curve.degree, s.curve.knots, cp, s.curve.weights))
-    trimmed = TrimmedSurface(surf, pcurves)
-    return PlateFill(surf, trimmed, sides, flags, g0_side, g1_side, o, e1, e2, N,
-                     (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean)
+    return surf, TrimmedSurface(surf, pcurves)
 
 
 class _Evaluation:
