@@ -33,8 +33,8 @@ regularisation (``c += K^{-1} A^T (b - A c)``, at most ``tolerances.FILL_PLATE_I
 steps, the best iterate kept as judged on samples *between* the fit's, so that a basis function
 grazing the loop is not blown up to fit round-off). Every knot span (in ``u`` and in ``v``)
 holding a sample that misses a target is bisected and the fit repeated, until both targets are
-met, ``max_spans`` is reached or four refinements in a row gain less than 10 %; the best stage is returned and what it achieved is reported per
-side (:class:`PlateFill`). Ripples: the energy's weight, taken per stage from the traces, falls with
+met, ``max_spans`` is reached or four refinements in a row gain less than 10 %; the best stage is
+returned and what it achieved is reported per side (:class:`PlateFill`). Ripples: the energy's weight, taken per stage from the traces, falls with
 every refinement (the finest spans dominate the energy's trace), and where data that cannot be met
 keep a fit refining (linkrods' faces [13, 22]: neighbours leaning 67.5 deg, 128 spans) the plate
 rippled a span inside its boundary, its normal turning by more than 90 deg between grid points
