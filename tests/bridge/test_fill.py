@@ -209,7 +209,12 @@ def test_round_hole_with_a_trimming_edge_is_capped(bump: float) -> None:
     G1 (OCC LocalAnalysis): 0 on the plane, 2.7e-4 deg measured on the paraboloid, bound
     FILL_FIT_ANGLE. The cap lies on the surface it replaces: on the plane to round-off (bound 1e-12),
     within 1.6e-3 of the paraboloid z = (x^2 + y^2) / 8 measured at radius 0.5 (another G1 surface
-    with the same boundary data), bound 2.4e-3; inside the circle; no fold."""
+    with the same boundary data), bound 2.4e-3; inside the circle; no fold.
+
+    Which construction: the central split's cap (four patches, the cut points flat corners) is
+    4.4e-6 off, above the issue's 1e-7 of the size, so ``fitted_fill`` tries the plate, which
+    reads 5e-16 (plane) and 5.5e-7 (paraboloid; G1 4.5e-4 deg) and is kept: the same bounds
+    apply to either, checked on the surface inside its trim."""
     from occsurf.algorithms import tolerances
 
     face = _face_with_round_hole(0.5, bump)
@@ -220,9 +225,17 @@ def test_round_hole_with_a_trimming_edge_is_capped(bump: float) -> None:
     assert h.sides == 1 and h.status == "filled" and h.construction == "fitted", h.reason
     assert h.g0 <= 1e-5 and h.g1 <= tolerances.FILL_FIT_ANGLE and h.folds == 0
     fill = res.fills[h.index]
-    assert len(fill.patches) == 4 and fill.flat.all()
-    uv = np.linspace(0, 1, 21)
-    P = np.concatenate([p.evaluate(uv[:, None], uv[None, :]).reshape(-1, 3) for p in fill.patches])
+    if h.method == "central":
+        assert len(fill.patches) == 4 and fill.flat.all()
+        uv = np.linspace(0, 1, 21)
+        P = np.concatenate([p.evaluate(uv[:, None], uv[None, :]).reshape(-1, 3) for p in fill.patches])
+    else:
+        assert h.method == "plate" and len(fill.patches) == 1
+        (u0, u1), (v0, v1) = fill.surface.domain
+        U, V = np.meshgrid(np.linspace(u0, u1, 61), np.linspace(v0, v1, 61), indexing="ij")
+        inside = fill.trimmed.contains(U.ravel(), V.ravel())
+        assert inside.sum() > 1000  # the disc covers ~pi/4 of its box
+        P = fill.surface.evaluate(U.ravel()[inside], V.ravel()[inside])
     dev = np.abs(P[:, 2] - bump * (P[:, 0] ** 2 + P[:, 1] ** 2) / 8.0).max()
     assert dev <= (1e-12 if bump == 0 else 2.4e-3)
     assert np.hypot(P[:, 0], P[:, 1]).max() <= 0.5 + 1e-5
