@@ -231,6 +231,14 @@ def corner_normals(t_in: ArrayLike, t_out: ArrayLike, reference: ArrayLike) -> A
     return _unit(c)
 
 
+def smoothstep(x: ArrayLike) -> Array:
+    """The C2 smoothstep ``x^3 (10 - 15 x + 6 x^2)`` of ``x`` clipped to [0, 1] (0 and 1 with vanishing
+    first and second derivatives at both ends): the blend of :func:`blend_normals` and of refill's
+    corner pinning (``refill._pin_end``)."""
+    x = np.clip(np.asarray(x, float), 0.0, 1.0)
+    return x ** 3 * (10 - 15 * x + 6 * x * x)
+
+
 def blend_normals(s: ArrayLike, normals: ArrayLike, start: ArrayLike, end: ArrayLike, span: float) -> Array:
     """Turn a normal field into given end normals over a fraction ``span`` of the side.
 
@@ -273,10 +281,6 @@ def blend_normals(s: ArrayLike, normals: ArrayLike, start: ArrayLike, end: Array
     s = np.asarray(s, float)
     N = _unit(np.asarray(normals, float))
 
-    def h(x: Array) -> Array:
-        x = np.clip(x, 0.0, 1.0)
-        return x ** 3 * (10 - 15 * x + 6 * x * x)
-
     def turn(V: Array, a: Array, b: Array, frac: Array) -> Array:
         """Rotate the rows of ``V`` about ``a x b`` by ``frac`` of the angle from ``a`` to ``b``."""
         k = np.cross(a, b)
@@ -290,8 +294,8 @@ def blend_normals(s: ArrayLike, normals: ArrayLike, start: ArrayLike, end: Array
     st, en = _unit(np.asarray(start, float)), _unit(np.asarray(end, float))
     st = np.where((N[0] @ st) < 0, -st, st)
     en = np.where((N[-1] @ en) < 0, -en, en)
-    out = turn(N, N[0], st, h(1 - s / span))
-    return _unit(turn(out, N[-1], en, h(1 - (1 - s) / span)))
+    out = turn(N, N[0], st, smoothstep(1 - s / span))
+    return _unit(turn(out, N[-1], en, smoothstep(1 - (1 - s) / span)))
 
 
 def fit_boundary(params: ArrayLike, points: ArrayLike, tol: float, *, max_spans: int | None = None

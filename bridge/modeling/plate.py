@@ -64,6 +64,7 @@ def plate_quality(fill: PlateFill) -> tuple[float, float, float, int]:
     """Our own numbers for a plate, as :class:`.fill.HoleReport` records them for the central split:
     ``(own_g0, own_g1, internal_g1, folds)``: the fit's largest distance and angle over the sides
     (angle 0 where only G0 was asked), no internal edges (0.0), and the folds *measured* on the
-    face (:func:`count_folds` inside its trim; a height field has none)."""
+    face (:func:`count_folds` inside its trim: a height field does not fold over itself, but a steep
+    ripple turns its normals by more than 90 degrees between neighbouring samples, and counts)."""
     g1 = fill.side_g1[np.isfinite(fill.side_g1)]
     return float(np.max(fill.side_g0)), float(g1.max()) if g1.size else 0.0, 0.0, int(count_folds(fill.trimmed))

@@ -51,7 +51,8 @@ from OCP.TopTools import TopTools_IndexedMapOfShape
 from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.topology.nsided import HoleFill, closest_parameters, fill_folds, fill_hole
 from occsurf.algorithms import tolerances
-from occsurf.algorithms.topology.nsided_sides import blend_normals, corner_normals, fit_boundary, side_from_normals
+from occsurf.algorithms.topology.nsided_sides import (blend_normals, corner_normals, fit_boundary, side_from_normals,
+                                                     smoothstep)
 from occsurf.algorithms.topology.plate_fill import PlateFill
 
 from .. import _occ
@@ -447,8 +448,7 @@ def _pin_end(P: np.ndarray, X: np.ndarray, T: np.ndarray) -> np.ndarray:
     dist = np.r_[np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1)[::-1])[::-1], 0.0]
     length = min(0.5 * float(dist[0]), float(np.linalg.norm(h)) / CORNER_SLOPE)
     if length > 0:
-        x = np.clip(dist / length, 0.0, 1.0)
-        P = P + (1.0 - x**3 * (10.0 - 15.0 * x + 6.0 * x**2))[:, None] * h
+        P = P + (1.0 - smoothstep(dist / length))[:, None] * h
     P[-1] = X
     return P
 
@@ -861,7 +861,8 @@ def _score(cand: tuple, size: float, edge_tol: float = 0.0) -> tuple[bool, float
     8.6e-7 off, 0.040 deg; the larger of the two numbers alone took the first). The third number
     is the worse of G1 and of G0 in units of the hole edges' own tolerance where that is larger:
     below 1 the fill meets its targets as far as the model itself declares its gaps, but it
-    neither triggers the plate nor decides between two fills: there a
+    neither triggers the plate nor decides between two fills whose misses differ (it only breaks
+    an exact tie of misses, e.g. two fills both within the targets): there a
     fill 4.4e-6 off the neighbour of an edge of tolerance 5.1e-6 (bearing face 170, on the model's
     edge curves) would count 0.86, as good as one 1.2e-8 off it (on the neighbour's trace)."""
     g0 = max(cand[3])
