@@ -198,7 +198,8 @@ def _validate(sides: Sequence[HoleSide], g1: Sequence[bool] | None) -> tuple[lis
     if flags.shape != (len(sides),):
         raise InvalidGeometryError(f"g1: expected {len(sides)} flags (one per side), got {flags.shape[0]}")
     ends = np.array([[s.curve.evaluate(s.curve.domain[0]), s.curve.evaluate(s.curve.domain[1])] for s in sides])
-    size = float(np.ptp(ends.reshape(-1, 3), axis=0).max()) or 1.0
+    # the loop's extent from the poles (the ends alone span nothing for a one-sided loop: a circle)
+    size = float(np.ptp(np.concatenate([s.curve.control_points for s in sides]), axis=0).max()) or 1.0
     gaps = np.linalg.norm(ends[:, 1] - np.roll(ends[:, 0], -1, axis=0), axis=1)
     if np.any(gaps > tolerances.FILL_CLOSURE_TOL * size):
         j = int(np.argmax(gaps))
@@ -285,8 +286,8 @@ def _judge(P: Array, Q: Array, M: Array, g1: NDArray[np.bool_], N: Array, newell
     return (P.mean(axis=0), e1, e2, N, lean), ""
 
 
-def plate_plane(points: Array, normals: Array, g1: NDArray[np.bool_] | None = None
-                ) -> tuple[Array, Array, Array, Array, float]:
+def plate_plane(points: Array, normals: Array, g1: NDArray[np.bool_] | None = None,
+                normal: ArrayLike | None = None) -> tuple[Array, Array, Array, Array, float]:
     """The reference plane of a hole over which its fill is a height field.
 
     Parameters
@@ -328,6 +329,11 @@ def plate_plane(points: Array, normals: Array, g1: NDArray[np.bool_] | None = No
     o = P.mean(axis=0)
     Q = P - o
     newell = 0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
+    if normal is not None:
+        frame, reason = _judge(P, Q, M, g1, np.asarray(normal, float).ravel(), newell)
+        if frame is None:
+            raise InvalidGeometryError(f"plate fill: not a height field over the plane asked: {reason}")
+        return frame
     mean_n = M.sum(axis=0)
     _, _, Vt = np.linalg.svd(Q, full_matrices=False)
     best, why = None, []
@@ -412,7 +418,8 @@ def _angle(gu: Array, gv: Array, m: Array) -> Array:
 
 
 def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g0_tol: float | None = None,
-               angle_tol: float | None = None, max_spans: int | None = None, size: float | None = None) -> PlateFill:
+               angle_tol: float | None = None, max_spans: int | None = None, size: float | None = None,
+               normal: ArrayLike | None = None) -> PlateFill:
     """Fill a hole with one trimmed thin-plate height field (see the module; course §8-3, GeomPlate).
 
     Parameters
@@ -432,6 +439,8 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g
     size : float, optional
         Model size for the default ``g0_tol``; default the loop's diameter about its centroid
         (twice the largest distance of a boundary point from it: invariant under rigid motions).
+    normal : array_like, shape (3,), optional
+        The plane's normal, when the caller knows it (:func:`plate_plane`); default: the candidates.
 
     Returns
     -------
@@ -461,7 +470,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g
     g0_tol = float(tolerances.FILL_FIT_G0 * size if g0_tol is None else g0_tol)
     if not (g0_tol > 0 and angle_tol > 0):
         raise InvalidGeometryError(f"g0_tol, angle_tol: expected positive targets, got {g0_tol}, {angle_tol}")
-    o, e1, e2, N, lean = plate_plane(P, M, Gm)
+    o, e1, e2, N, lean = plate_plane(P, M, Gm, normal)
     R = np.c_[e1, e2, N]  # world = o + R @ local
     L = diag  # internal unit: the fit runs on coordinates / L (scale-free)
     loc = (P - o) @ R / L

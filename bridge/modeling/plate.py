@@ -18,11 +18,12 @@ import numpy as np
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.topology.nsided import HoleSide, count_folds
 from occsurf.algorithms.topology.plate_fill import PlateFill, fill_plate
+from occsurf.algorithms.topology.plate_wrap import WrappedPlateFill, fill_wrapped_plate
 
 from ..conversion.splines import make_face
 from .joints import SEW_TOLERANCE
 
-__all__ = ["plate_face", "plate_fill_faces", "plate_quality"]
+__all__ = ["plate_face", "plate_fill_faces", "plate_quality", "revolution_axes", "wrapped_fill_faces"]
 
 
 def plate_face(fill: PlateFill, tol: float | None = None, gap: float = 0.0) -> Any:
@@ -57,6 +58,38 @@ def plate_fill_faces(sides: Sequence[HoleSide], g1: Sequence[bool], g0_tol: floa
                      **kw: Any) -> tuple[PlateFill, list[Any]]:
     """:func:`fill_plate` and its face (``gap``: :func:`plate_face`): ``(fill, [face])``."""
     fill = fill_plate(sides, g1=g1, g0_tol=g0_tol, **kw)
+    return fill, [plate_face(fill, gap=gap)]
+
+
+def revolution_axes(faces: Sequence[Any]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The axes ``(point, direction)`` of the cylinders, cones, tori and surfaces of revolution among
+    ``faces`` (each once): where a hole that winds around an axis (a thread strip) is unrolled
+    (:func:`wrapped_fill_faces`)."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.GeomAbs import GeomAbs_SurfaceType as T
+
+    getters = {T.GeomAbs_Cylinder: lambda s: s.Cylinder().Axis(), T.GeomAbs_Cone: lambda s: s.Cone().Axis(),
+               T.GeomAbs_Torus: lambda s: s.Torus().Axis(), T.GeomAbs_SurfaceOfRevolution: lambda s: s.AxeOfRevolution()}
+    out: list[tuple[np.ndarray, np.ndarray]] = []
+    for f in faces:
+        s = BRepAdaptor_Surface(f)
+        get = getters.get(s.GetType())
+        if get is None:
+            continue
+        ax = get(s)
+        c = np.array(ax.Location().Coord())
+        a = np.array(ax.Direction().Coord())
+        if not any(abs(abs(float(a @ b)) - 1) < 1e-9 and np.linalg.norm(np.cross(c - d, b)) < 1e-9 * (1 + np.linalg.norm(c))
+                   for d, b in out):
+            out.append((c, a))
+    return out
+
+
+def wrapped_fill_faces(sides: Sequence[HoleSide], g1: Sequence[bool], g0_tol: float, gap: float = 0.0,
+                       axes: Sequence[tuple[np.ndarray, np.ndarray]] = (), **kw: Any) -> tuple[WrappedPlateFill, list[Any]]:
+    """:func:`occsurf.algorithms.topology.plate_wrap.fill_wrapped_plate` (a hole winding around an axis:
+    ``axes`` first, e.g. :func:`revolution_axes` of its neighbours) and its face: ``(fill, [face])``."""
+    fill = fill_wrapped_plate(sides, axes=axes, g1=g1, g0_tol=g0_tol, **kw)
     return fill, [plate_face(fill, gap=gap)]
 
 

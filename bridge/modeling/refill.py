@@ -59,7 +59,7 @@ from .. import _occ
 from ..conversion.splines import from_occ, make_face
 from ..messages import one_line
 from .joints import ASSESS_SAMPLES, SEW_TOLERANCE, assess_joint, edge_face_map
-from .plate import plate_fill_faces
+from .plate import plate_fill_faces, revolution_axes, wrapped_fill_faces
 
 __all__ = ["RefillReport", "refill_faces", "refill_model", "face_components", "model_faces", "fitted_fill", "G1_EDGE_DEG",
            "OCC_TUNED", "OCC_DEFAULT", "fill_method"]
@@ -113,7 +113,7 @@ class RefillReport:
     valid: bool | None = None
     step_round_trip: bool | None = None
     folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; see FillQuality.folds)
-    method: str | None = None  # 'central' (fill_hole's n patches) or 'plate' (one trimmed plate, fill_plate)
+    method: str | None = None  # 'central' (fill_hole's n patches), 'plate' (one trimmed plate, fill_plate) or 'wrapped' (a plate about an axis, fill_wrapped_plate)
     occ: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
@@ -754,8 +754,12 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
 
 
 def fill_method(fill: Any) -> str:
-    """``'plate'`` for a :class:`PlateFill`, ``'central'`` for the central split's :class:`HoleFill`."""
-    return "plate" if isinstance(fill, PlateFill) else "central"
+    """``'plate'`` for a :class:`PlateFill`, ``'wrapped'`` for a plate made about an axis
+    (:class:`~occsurf.algorithms.topology.plate_wrap.WrappedPlateFill`), ``'central'`` for the
+    central split's :class:`HoleFill`."""
+    if isinstance(fill, PlateFill):
+        return "wrapped" if fill.method == "wrapped plate" else "plate"
+    return "central"
 
 
 def _our_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, follow: bool,
@@ -771,6 +775,11 @@ def _our_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, 
         # face must sew in; plate_face refuses beyond SEW_TOLERANCE)
         fill, occ_faces = plate_fill_faces(sides, flags, min(tolerances.FILL_FIT_G0 * size, 0.5 * SEW_TOLERANCE),
                                            gap=max(BRep_Tool.Tolerance_s(e) for e in edges))
+    elif method == "wrapped":  # a plate in cylindrical coordinates about the neighbours' (or a fitted) axis
+        flags = [any(g1[k] for k in range(len(edges)) if side_of_edge[k] == j) for j in range(len(sides))]
+        fill, occ_faces = wrapped_fill_faces(sides, flags, min(tolerances.FILL_FIT_G0 * size, 0.5 * SEW_TOLERANCE),
+                                             gap=max(BRep_Tool.Tolerance_s(e) for e in edges),
+                                             axes=revolution_axes(nbs))
     else:
         fill = fill_hole(sides)
         occ_faces = [make_face(p, 1e-7) for p in fill.patches]
@@ -806,7 +815,7 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
     InvalidGeometryError
         No variant can be filled by either construction (both last reasons).
     """
-    best, best_score, last_err, plate_err = None, None, None, None
+    best, best_score, last_err, plate_err, wrap_err = None, None, None, None, None
     etol = max(BRep_Tool.Tolerance_s(e) for e in edges)
     prepared = {}
     for follow in (True, False):  # the neighbours' traces (G0 to them), and the model's edge curves
@@ -829,11 +838,22 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
             score = _score(cand, size, etol)
             if best is None or _plate_wins(score, best_score):
                 best, best_score = cand, score
+    if best is None or best_score[0]:  # neither gives a fold-free fill: a hole winding around an axis?
+        for follow, prep in prepared.items():
+            try:
+                cand = _our_fill(edges, nbs, owners, size, follow, samples, method="wrapped", prepared=prep)
+            except OccsurfError as err:
+                wrap_err = err
+                continue
+            score = _score(cand, size, etol)
+            if best is None or _plate_wins(score, best_score):
+                best, best_score = cand, score
     if best is None:
         if plate_err is None or last_err is None:
             raise last_err or plate_err
         raise InvalidGeometryError(f"central split: {one_line(last_err, expected=(OccsurfError,))}; "
-                                   f"plate: {one_line(plate_err, expected=(OccsurfError,))}") from plate_err
+                                   f"plate: {one_line(plate_err, expected=(OccsurfError,))}; "
+                                   f"wrapped plate: {one_line(wrap_err, expected=(OccsurfError,))}") from plate_err
     return best
 
 

@@ -1,0 +1,449 @@
+"""A hole that winds around an axis, filled by a plate in cylindrical coordinates (course §8-3).
+
+The plate (:mod:`.plate_fill`) needs a plane over which the hole is a height field. A thread strip
+is over none: the flank of an M6 screw's thread, removed, leaves a strip 0.3 mm wide that winds nine
+times around the screw's axis, and every plane sees the loop cross itself. Around the axis, though,
+the strip is a height field: in cylindrical coordinates ``(theta, z, r)`` about the axis the loop is
+simple, and the flank is ``r(theta, z)``. So the hole is *unrolled* by
+
+.. math::
+
+    U(P) = (r_0\\, \\theta, z, r), \\qquad \\Phi(x, z, r) = c + z\\, a + r\\,(\\cos(x / r_0)\\, e_1
+    + \\sin(x / r_0)\\, e_2) = U^{-1}
+
+(``theta`` unwrapped continuously along the loop, ``r_0`` the loop's mean radius, so ``x`` is arc
+length on the mean cylinder), the plate is fitted there, and mapped back:
+
+1. every side's curve ``U(C(t))`` and cross derivative ``J_U X(t)`` (the Jacobian maps tangent
+   vectors, so the neighbour's tangent plane maps to the unrolled neighbour's: G1 is a statement
+   about tangency, which a diffeomorphism keeps) are interpolated by cubic B-splines on the side's
+   own parameter (``scipy.interpolate.make_interp_spline``), densely enough that the unrolled side is
+   within a twentieth of the target of ``U(C(t))``;
+2. :func:`.plate_fill.fill_plate` fits the height field ``r(u, v)`` over the plane normal to the
+   unrolled ``r`` axis, with the targets shrunk by the map's distortion (distances along ``x``
+   scale by ``r / r_0``, angles at most by ``max(r / r_0, r_0 / r)``);
+3. the surface ``Phi(plate(u, v))`` is interpolated on a grid of the plate's parameter box by a
+   quintic tensor-product spline (``scipy.interpolate.RectBivariateSpline``, one per coordinate on
+   the same grid, so one set of knots) whose grid holds the plate's knots and at least
+   ``_NODES_PER_RADIAN`` nodes per radian of turn, doubled until the spline is within a quarter of
+   the G0 target of ``Phi(plate)`` between the nodes;
+4. the face is that surface trimmed by the plate's p-curves (the same parameter plane).
+
+What is achieved is measured in model space against the input sides (:attr:`PlateFill.side_g0`,
+``side_g1``), not in the unrolled one. The axis: each one given (the bridge passes the axes of
+neighbouring cylinders, cones and surfaces of revolution), then the least-squares cylinder through
+the loop (:func:`fitted_axes`, started from each principal axis). An axis is refused when the loop
+winds around it (then it bounds no strip of the cylinder: a cap is a plate over a plane), comes
+close to it (``theta`` is singular there) or the unrolled plate is no height field; the reasons are
+named per axis.
+
+References: course §8-3; Duchon 1977 (the thin-plate energy); for the unrolling, the cylindrical
+development of ruled and helical surfaces in any text on differential geometry of surfaces (do
+Carmo, "Differential Geometry of Curves and Surfaces", 1976, §1-3 and §4-2: local isometries of
+the cylinder and the plane); for the axis, Pottmann and Randrup, "Rotational and helical surface
+approximation for reverse engineering", Computing 60 (1998).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.interpolate import RectBivariateSpline, make_interp_spline
+from scipy.optimize import least_squares
+
+from .. import tolerances
+from ..errors import InvalidGeometryError, OccsurfError
+from ..kernel.curve import BSplineCurve
+from ..kernel.surface import BSplineSurface
+from ..kernel.trimmed import TrimmedSurface
+from .nsided import HoleSide
+from .nsided_loops import closest_parameters
+from .plate_fill import PlateFill, _side_samples, _validate, fill_plate
+
+Array = np.ndarray
+
+__all__ = ["WrappedPlateFill", "fill_wrapped_plate", "fitted_axes", "helical_axis"]
+
+_NODES_PER_RADIAN = 5.0  # grid nodes of the map-back spline per radian of turn (refined until met)
+_MAX_NODES = 6000  # per direction
+_SIDE_SAMPLES = 64  # first interpolation samples per side (doubled until the side is met)
+_MAX_SIDE_SAMPLES = 1 << 15
+_MIN_RADIUS = 0.05  # of the mean radius: closer to the axis, theta is too steep to unroll
+
+
+@dataclass(frozen=True, eq=False)
+class WrappedPlateFill(PlateFill):
+    """A :class:`.plate_fill.PlateFill` made in cylindrical coordinates about an axis.
+
+    Attributes (besides the plate's)
+    ----------
+    unrolled : PlateFill
+        The plate in the unrolled space ``(r_0 theta, z, r)``; ``origin``, ``e1``, ``e2``, ``normal``
+        are its frame (in that space), ``surface`` and ``trimmed`` are the model-space surface.
+    axis_point, axis, ref : ndarray, shape (3,)
+        The axis (``ref``: the direction of ``theta = 0``).
+    radius : float
+        ``r_0``.
+    """
+
+    unrolled: PlateFill | None = None
+    axis_point: Array = field(default_factory=lambda: np.zeros(3))
+    axis: Array = field(default_factory=lambda: np.zeros(3))
+    ref: Array = field(default_factory=lambda: np.zeros(3))
+    radius: float = 1.0
+
+    def _uv(self, side: int, t: Array, points: Array) -> tuple[Array, Array]:
+        """Plate parameters of ``points`` lying near side ``side`` at its parameters ``t`` (the turn
+        of ``theta`` is the one of the unrolled side there)."""
+        X = _unroll(points, self.axis_point, self.axis, self.ref, self.radius)
+        xref = self.unrolled.sides[side].curve.evaluate(t)[:, 0]
+        turn = 2 * np.pi * self.radius
+        X[:, 0] += np.round((xref - X[:, 0]) / turn) * turn
+        Q = X - self.origin
+        return Q @ self.e1, Q @ self.e2
+
+    def locate(self, side: int, points: ArrayLike) -> tuple[Array, Array]:
+        """Parameters ``(u, v)`` on :attr:`surface` of points on (or near) side ``side``: unrolled
+        about the axis (on the turn of the side's closest point) and projected onto the plate's plane."""
+        if not 0 <= int(side) < len(self.sides):
+            raise InvalidGeometryError(f"side: expected 0..{len(self.sides) - 1}, got {side}")
+        P = np.asarray(points, float).reshape(-1, 3)
+        t, _ = closest_parameters(self.sides[side].curve, P)
+        return self._uv(int(side), t, P)
+
+
+# ===================================================================================== the map
+def _frame(axis: Array) -> tuple[Array, Array]:
+    a = axis / np.linalg.norm(axis)
+    e1 = np.eye(3)[int(np.argmin(np.abs(a)))]
+    e1 = e1 - (e1 @ a) * a
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(a, e1)
+
+
+def _unroll(P: Array, c: Array, a: Array, e1: Array, r0: float) -> Array:
+    """``(r0 theta, z, r)`` of points ``P`` (``theta`` in (-pi, pi])."""
+    Q = np.asarray(P, float) - c
+    z = Q @ a
+    e2 = np.cross(a, e1)
+    x, y = Q @ e1, Q @ e2
+    return np.c_[r0 * np.arctan2(y, x), z, np.hypot(x, y)]
+
+
+def _jacobian_apply(P: Array, V: Array, c: Array, a: Array, e1: Array, r0: float) -> Array:
+    """The unrolling's Jacobian applied to vectors ``V`` at points ``P``: ``(r0/r e_theta . V, a . V,
+    e_r . V)``."""
+    Q = P - c
+    R = Q - np.outer(Q @ a, a)
+    r = np.linalg.norm(R, axis=1)
+    er = R / r[:, None]
+    et = np.cross(a, er)
+    return np.c_[r0 / r * np.einsum("ij,ij->i", et, V), V @ a, np.einsum("ij,ij->i", er, V)]
+
+
+def _roll_back(X: Array, c: Array, a: Array, e1: Array, r0: float) -> Array:
+    """``Phi``: points of the unrolled space back in the model."""
+    e2 = np.cross(a, e1)
+    th = X[..., 0] / r0
+    return c + X[..., 1, None] * a + X[..., 2, None] * (np.cos(th)[..., None] * e1 + np.sin(th)[..., None] * e2)
+
+
+# ===================================================================================== the axis
+def helical_axis(points: ArrayLike, normals: ArrayLike) -> tuple[Array, Array, float] | None:
+    """The axis of the helical motion (rotation, or screw) most nearly tangent to a surface at
+    ``points`` with ``normals``: Pottmann and Randrup's line-geometric fit ("Rotational and helical
+    surface approximation for reverse engineering", Computing 60, 1998).
+
+    A helical motion has the velocity field ``v(P) = c + a x P``; a surface of revolution (``a . c =
+    0``) or a helical surface (a thread flank) is tangent to it: ``v . n = c . n + a . (P x n) = 0``
+    at every point, linear in ``(c, a)``. ``c`` is eliminated by least squares (the Schur complement)
+    and ``a`` is the eigenvector of the smallest eigenvalue, ``|a| = 1``; the axis passes through
+    ``a x c`` with pitch ``a . c``.
+
+    Returns
+    -------
+    (point, direction, residual) or None
+        ``residual``: root mean square of ``v . n`` per unit normal and unit of the points' spread
+        (0 for an exact surface of revolution or helical surface); None when the normals do not
+        determine an axis (all parallel: a plane).
+    """
+    P = np.asarray(points, float).reshape(-1, 3)
+    N = np.asarray(normals, float).reshape(-1, 3)
+    N = N / np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
+    o = P.mean(axis=0)
+    scale = float(np.linalg.norm(P - o, axis=1).max()) or 1.0
+    Q = (P - o) / scale
+    A = np.c_[N, np.cross(Q, N)]
+    M = A.T @ A
+    Mcc, Mca, Maa = M[:3, :3], M[:3, 3:], M[3:, 3:]
+    K = np.linalg.pinv(Mcc, rcond=1e-10) @ Mca
+    w, V = np.linalg.eigh(Maa - Mca.T @ K)
+    a = V[:, 0]
+    c = -K @ a
+    if w[1] <= 1e-9 * max(w[2], 1e-300):  # no unique axis (a plane, a sphere)
+        return None
+    residual = float(np.sqrt(max(w[0], 0.0) / len(P)))
+    return o + scale * np.cross(a, c), a, residual
+
+
+def fitted_axes(points: ArrayLike, normals: ArrayLike | None = None) -> list[tuple[Array, Array]]:
+    """Candidate axes of a loop that winds around one.
+
+    First, with ``normals`` (the neighbours' at the loop), the helical axis (:func:`helical_axis`:
+    exact for neighbours that are surfaces of revolution or helical surfaces); then least-squares
+    cylinders through ``points``: each principal axis of the points starts a Levenberg-Marquardt
+    fit (``scipy.optimize.least_squares``) of ``dist(P_i, axis) - R`` over the axis (two angles,
+    two offsets) and ``R`` (two coaxial helices of different radii tilt it: a thread flank's
+    fitted cylinder is 5e-3 rad off its axis, which the first candidate is not). Distinct ones only.
+
+    Parameters
+    ----------
+    points : array_like, shape (m, 3)
+    normals : array_like, shape (m, 3), optional
+
+    Returns
+    -------
+    list of (point, direction)
+    """
+    P = np.asarray(points, float).reshape(-1, 3)
+    o = P.mean(axis=0)
+    Q = P - o
+    _, _, Vt = np.linalg.svd(Q, full_matrices=False)
+    first = []
+    if normals is not None:
+        hel = helical_axis(P, normals)
+        if hel is not None:
+            first.append((-1.0, hel[0], hel[1]))
+    found = []
+    for k in range(3):
+        a0 = Vt[k]
+        e1, e2 = _frame(a0)
+
+        def residual(x: Array, a0: Array = a0, e1: Array = e1, e2: Array = e2) -> Array:
+            a = a0 + x[0] * e1 + x[1] * e2
+            a = a / np.linalg.norm(a)
+            c = x[2] * e1 + x[3] * e2
+            R = Q - c
+            R = R - np.outer(R @ a, a)
+            return np.linalg.norm(R, axis=1) - x[4]
+
+        r_start = float(np.mean(np.linalg.norm(Q - np.outer(Q @ a0, a0), axis=1)))
+        sol = least_squares(residual, np.r_[0.0, 0.0, 0.0, 0.0, r_start], method="lm")
+        a = a0 + sol.x[0] * e1 + sol.x[1] * e2
+        a /= np.linalg.norm(a)
+        found.append((float(sol.cost), o + sol.x[2] * e1 + sol.x[3] * e2, a))
+    found.sort(key=lambda f: f[0])
+    out: list[tuple[Array, Array]] = []
+    for _, c, a in first + found:
+        if all(abs(abs(float(a @ b)) - 1) > 1e-6 or np.linalg.norm(np.cross(c - d, b)) > 1e-6 * (1 + np.linalg.norm(Q, axis=1).max())
+               for d, b in out):
+            out.append((c, a))
+    return out
+
+
+# ===================================================================================== the sides
+def _unrolled_side(side: HoleSide, c: Array, a: Array, e1: Array, r0: float, x_start: float | None,
+                   tol: float) -> HoleSide:
+    """The side in the unrolled space, on the turn that starts nearest ``x_start`` (the previous
+    side's end), interpolated within ``tol`` of the exact unrolled curve."""
+    lo, hi = side.curve.domain
+    count = _SIDE_SAMPLES
+    while True:
+        t = np.linspace(lo, hi, count + 1)
+        P, T, X = _side_samples(side, t)
+        U = _unroll(P, c, a, e1, r0)
+        U[:, 0] = r0 * np.unwrap(U[:, 0] / r0)
+        if x_start is not None:
+            turn = 2 * np.pi * r0
+            U[:, 0] += np.round((x_start - U[0, 0]) / turn) * turn
+        steps = np.abs(np.diff(U[:, 0])) / r0
+        if steps.max() < 0.25 or count >= _MAX_SIDE_SAMPLES:  # theta unwrapped safely
+            curve = make_interp_spline(t, U, k=3)
+            tm = 0.5 * (t[1:] + t[:-1])
+            Pm = _side_samples(side, tm)[0]
+            Um = _unroll(Pm, c, a, e1, r0)
+            Ui = curve(tm)
+            turn = 2 * np.pi * r0
+            Um[:, 0] += np.round((Ui[:, 0] - Um[:, 0]) / turn) * turn
+            err = float(np.linalg.norm(Ui - Um, axis=1).max())
+            if err <= tol or count >= _MAX_SIDE_SAMPLES:
+                break
+        count *= 2
+    if err > tol:
+        raise InvalidGeometryError(f"wrapped plate: a side unrolled about the axis is {err:.3g} off its "
+                                   f"interpolation with {count} samples (target {tol:.3g})")
+    cross = make_interp_spline(t, _jacobian_apply(P, X, c, a, e1, r0), k=3)
+    return HoleSide(BSplineCurve(3, curve.t, curve.c), BSplineCurve(3, cross.t, cross.c))
+
+
+# ===================================================================================== the fill
+def _one_axis(sides: list[HoleSide], flags: Array, c: Array, a: Array, g0_tol: float, angle_tol: float,
+              max_spans: int | None) -> WrappedPlateFill:
+    a = a / np.linalg.norm(a)
+    e1, _ = _frame(a)
+    dense = np.concatenate([_side_samples(s, np.linspace(*s.curve.domain, 257))[0] for s in sides])
+    Q = dense - c
+    r = np.linalg.norm(Q - np.outer(Q @ a, a), axis=1)
+    r0 = float(r.mean())
+    if r.min() < _MIN_RADIUS * r0:
+        k = int(np.argmin(r))
+        raise InvalidGeometryError(f"the loop comes within {r[k]:.3g} of the axis (at "
+                                   f"{np.array2string(dense[k], precision=4)}; mean radius {r0:.3g})")
+    stretch = max(1.0, float(r.max()) / r0)
+    kappa = max(stretch, r0 / float(r.min()))
+    usides, x_end = [], None
+    for s in sides:
+        us = _unrolled_side(s, c, a, e1, r0, x_end, 0.05 * g0_tol / stretch)
+        usides.append(us)
+        x_end = float(us.curve.evaluate(us.curve.domain[1])[0])
+    x_first = float(usides[0].curve.evaluate(usides[0].curve.domain[0])[0])
+    winding = (x_end - x_first) / (2 * np.pi * r0)
+    if abs(winding) > 0.25:
+        raise InvalidGeometryError(f"the loop winds {winding:+.2f} times around the axis (a strip of the "
+                                   "cylinder about it must wind 0 times)")
+    if abs(x_end - x_first) > 0:  # close the loop exactly in the unrolled space (it closes in the model)
+        us = usides[-1]
+        cp = us.curve.control_points.copy()
+        cp[-1, 0] = x_first
+        usides[-1] = HoleSide(BSplineCurve(3, us.curve.knots, cp), us.cross)
+    plate = fill_plate(usides, g1=flags, g0_tol=0.5 * g0_tol / stretch, angle_tol=0.5 * angle_tol / kappa,
+                       max_spans=max_spans, normal=np.array([0.0, 0.0, 1.0]))
+    surf = _map_back(plate, c, a, e1, r0, g0_tol)
+    trimmed = TrimmedSurface(surf, list(plate.trimmed.outer))
+    fill = WrappedPlateFill(surf, trimmed, sides, flags, np.zeros(len(sides)), np.full(len(sides), np.nan),
+                            plate.origin, plate.e1, plate.e2, plate.normal, surf.n_poles, False, g0_tol, angle_tol,
+                            plate.lean, "wrapped plate", plate, c, a, e1, r0)
+    g0, g1 = _measure(fill)
+    met = bool(np.all(g0 <= g0_tol) and np.all(np.nan_to_num(g1, nan=0.0) <= angle_tol))
+    object.__setattr__(fill, "side_g0", g0)
+    object.__setattr__(fill, "side_g1", g1)
+    object.__setattr__(fill, "met", met)
+    return fill
+
+
+def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol: float) -> BSplineSurface:
+    """``Phi(plate(u, v))`` as a quintic B-spline surface on the plate's parameter box, within a
+    quarter of ``g0_tol`` between its interpolation nodes."""
+    (u0, u1), (v0, v1) = plate.surface.domain
+    ku, kv = (np.unique(k) for k in plate.surface.knots)
+
+    def plate_model(U: Array, V: Array) -> Array:
+        H = plate.surface.evaluate_grid(U, V)  # unrolled points (the plate is u e1 + v e2 + h N about o)
+        return _roll_back(H, c, a, e1, r0)
+
+    # radians of turn per unit of u and v: the unrolled x runs along e1, e2 of the plate's frame
+    rate = np.abs(np.array([plate.e1[0], plate.e2[0]])) / r0
+    nodes = []
+    for k, rt in zip((ku, kv), rate):
+        per = np.maximum(1, np.ceil(np.diff(k) * rt * _NODES_PER_RADIAN)).astype(int)
+        nodes.append(per)
+    while True:
+        grids = []
+        for k, per in zip((ku, kv), nodes):
+            g = np.concatenate([np.linspace(k[i], k[i + 1], per[i] + 1)[:-1] for i in range(len(per))] + [k[-1:]])
+            if g.size < 6:
+                g = np.linspace(k[0], k[-1], 6)
+            grids.append(g)
+        gu, gv = grids
+        F = plate_model(gu, gv)
+        fits = [RectBivariateSpline(gu, gv, F[..., d], kx=5, ky=5, s=0) for d in range(3)]
+        mu, mv = 0.5 * (gu[1:] + gu[:-1]), 0.5 * (gv[1:] + gv[:-1])
+        Fm = plate_model(mu, mv)
+        Sm = np.stack([f(mu, mv) for f in fits], axis=-1)
+        err = float(np.linalg.norm(Fm - Sm, axis=-1).max())
+        if err <= 0.25 * g0_tol or max(gu.size, gv.size) >= _MAX_NODES:
+            break
+        nodes = [n * 2 for n in nodes]
+    if err > 0.25 * g0_tol:
+        raise InvalidGeometryError(f"wrapped plate: the surface mapped back about the axis is {err:.3g} off "
+                                   f"its spline with {gu.size} x {gv.size} nodes (target {0.25 * g0_tol:.3g})")
+    tx, ty = fits[0].get_knots()
+    full_u = np.r_[np.full(5, u0), tx, np.full(5, u1)] if tx[0] != tx[1] else tx
+    full_v = np.r_[np.full(5, v0), ty, np.full(5, v1)] if ty[0] != ty[1] else ty
+    nu, nv = full_u.size - 6, full_v.size - 6
+    poles = np.stack([f.get_coeffs().reshape(nu, nv) for f in fits], axis=-1)
+    return BSplineSurface((5, 5), (full_u, full_v), poles)
+
+
+def _measure(fill: WrappedPlateFill, per_span: int = 16) -> tuple[Array, Array]:
+    """Per side: the largest distance to the surface and angle (degrees) to the neighbour's tangent
+    plane (nan on G0-only sides), in model space, at ``per_span`` samples per smallest knot span of
+    the unrolled plate that the side crosses (at least 400; a side of nine turns crosses hundreds)."""
+    g0 = np.zeros(len(fill.sides))
+    g1 = np.full(len(fill.sides), np.nan)
+    h = min(float(np.diff(np.unique(k)).min()) for k in fill.unrolled.surface.knots)
+    for i, s in enumerate(fill.sides):
+        U = fill.unrolled.sides[i].curve.evaluate(np.linspace(*s.curve.domain, 513))
+        length = float(np.linalg.norm(np.diff(U, axis=0), axis=1).sum())
+        t = np.linspace(*s.curve.domain, max(400, int(np.ceil(per_span * length / h))))
+        P, T, X = _side_samples(s, t)
+        u, v = fill._uv(i, t, P)
+        D = fill.surface.derivatives(u, v, 1)
+        g0[i] = float(np.linalg.norm(D[:, 0, 0] - P, axis=1).max())
+        if fill.g1[i]:
+            n = np.cross(D[:, 1, 0], D[:, 0, 1])
+            m = np.cross(X, T)
+            cs = np.abs(np.einsum("ij,ij->i", n, m))
+            sn = np.linalg.norm(np.cross(n, m), axis=1)
+            g1[i] = float(np.degrees(np.arctan2(sn, cs)).max())
+    return g0, g1
+
+
+def fill_wrapped_plate(sides: Sequence[HoleSide], *, axes: Sequence[tuple[ArrayLike, ArrayLike]] = (),
+                       g1: Sequence[bool] | None = None, g0_tol: float | None = None,
+                       angle_tol: float | None = None, max_spans: int | None = None,
+                       size: float | None = None) -> WrappedPlateFill:
+    """Fill a hole that winds around an axis (a thread strip) with a plate in cylindrical
+    coordinates (see the module; course §8-3).
+
+    Parameters
+    ----------
+    sides : sequence of HoleSide
+        As for :func:`.plate_fill.fill_plate`.
+    axes : sequence of (point, direction)
+        Axes to try first (e.g. of neighbouring surfaces of revolution); then :func:`fitted_axes`.
+    g1, g0_tol, angle_tol, max_spans, size
+        As for :func:`.plate_fill.fill_plate` (the targets are met in model space).
+
+    Returns
+    -------
+    WrappedPlateFill
+        The first axis whose fill meets both targets, else the one that comes closest.
+
+    Raises
+    ------
+    InvalidGeometryError
+        No axis gives a fill; the reason per axis.
+    """
+    sides, flags = _validate(sides, g1)
+    angle_tol = float(tolerances.FILL_FIT_ANGLE if angle_tol is None else angle_tol)
+    samples = [_side_samples(s, np.linspace(*s.curve.domain, 129)) for s in sides]
+    dense = np.concatenate([d[0] for d in samples])
+    normals = np.concatenate([np.cross(d[2], d[1]) for d in samples])
+    diag = 2.0 * float(np.linalg.norm(dense - dense.mean(axis=0), axis=1).max()) or 1.0
+    g0_tol = float(tolerances.FILL_FIT_G0 * (diag if size is None else float(size)) if g0_tol is None else g0_tol)
+    if not (g0_tol > 0 and angle_tol > 0):
+        raise InvalidGeometryError(f"g0_tol, angle_tol: expected positive targets, got {g0_tol}, {angle_tol}")
+    given = [(np.asarray(c, float).ravel(), np.asarray(a, float).ravel()) for c, a in axes]
+    best, why = None, []
+    for k, (c, a) in enumerate(given + fitted_axes(dense, normals)):
+        if not (np.all(np.isfinite(a)) and np.linalg.norm(a) > 0):
+            continue
+        name = f"axis {k}" + (" (given)" if k < len(given) else " (fitted)")
+        try:
+            fill = _one_axis(sides, flags, c, a, g0_tol, angle_tol, max_spans)
+        except OccsurfError as err:
+            why.append(f"{name}: {err}")
+            continue
+        score = max(float(np.max(fill.side_g0)) / g0_tol,
+                    float(np.nanmax(np.r_[fill.side_g1, 0.0])) / angle_tol)
+        if best is None or score < best[0]:
+            best = (score, fill)
+        if fill.met:
+            break
+    if best is None:
+        raise InvalidGeometryError("wrapped plate: no axis the hole winds around gives a fill (" + "; ".join(why) + ")")
+    return best[1]

@@ -1,0 +1,64 @@
+"""Thread strips of a real screw refilled by the wrapped plate (issue 12; :mod:`occsurf.algorithms.topology.plate_wrap`).
+
+build123d's M6 x 12 countersunk screw (``../shared/realdata``): face 9 is the thread's crest, a strip
+0.12 mm wide winding nine times around the screw's axis (z through the origin). No plane sees it as
+a height field, the central split refuses it, and OCC's ``BRepOffsetAPI_MakeFilling`` fails on it
+(default and tuned); the wrapped plate, about the axis of the neighbouring cylinders, fills it within
+the issue's G0 target (1e-7 of the model size: 1.9e-6), as a valid face that sews in and round-trips
+through STEP. All sides are G0-only (the crest meets the flanks at a crease).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from occsurf.algorithms import tolerances
+
+from .conftest import REALDATA
+
+SCREW = REALDATA / "build123d__M6-1x12-countersunk-screw.step"
+
+
+@pytest.fixture(scope="module")
+def screw():
+    if not SCREW.is_file():
+        pytest.skip(f"{SCREW} is absent (public real models)")
+    from OCP.STEPControl import STEPControl_Reader
+
+    from occsurf.bridge.modeling.refill import SewnModel
+
+    r = STEPControl_Reader()
+    assert int(r.ReadFile(str(SCREW))) == 1
+    r.TransferRoots()
+    return SewnModel(r.OneShape())
+
+
+@pytest.fixture(scope="module")
+def crest(screw):
+    from occsurf.bridge.modeling.refill import refill_faces
+
+    return refill_faces(screw, [9])
+
+
+def test_neighbour_axes_hold_the_screw_axis(screw) -> None:
+    from occsurf.bridge.modeling.plate import revolution_axes
+    from occsurf.bridge.modeling.refill import _hole_loop
+
+    _, nbs, _ = _hole_loop(screw, [9])
+    axes = revolution_axes(nbs)
+    assert any(abs(abs(a[2]) - 1) < 1e-12 and np.hypot(*c[:2]) < 1e-9 for c, a in axes)
+
+
+def test_thread_crest_is_filled_by_the_wrapped_plate(screw, crest) -> None:
+    rep, shape = crest
+    assert rep.status == "filled" and rep.method == "wrapped", rep.reason
+    assert rep.valid and rep.step_round_trip and rep.folds == 0
+    assert max(rep.side_g0) <= tolerances.FILL_FIT_G0 * screw.size  # 1.9e-6, measured by LocalAnalysis
+
+
+@pytest.mark.xfail(strict=True, reason="OCC defect: BRepOffsetAPI_MakeFilling fails on the nine-turn thread "
+                   "crest strip (default: not done; tuned: Standard_ConstructionError)")
+def test_occ_filling_fills_the_thread_crest(crest) -> None:
+    rep, _ = crest
+    assert any(o.get("status") == "ok" for o in rep.occ.values())
