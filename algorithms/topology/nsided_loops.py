@@ -78,59 +78,187 @@ def _segment_distances(a0: Array, a1: Array, b0: Array, b1: Array) -> tuple[Arra
     return np.linalg.norm(a0 + s[:, None] * d1 - b0 - t[:, None] * d2, axis=1), s, t
 
 
+#: Target length of a segment of the loop's polyline in :func:`check_simple_loop`, as a fraction of
+#: the loop's size (bounding-box diagonal): far apart turns of a long side (a helix) are then no
+#: candidates of each other. A sampling parameter, not a tolerance: the decision is made on the curves.
+LOOP_SEGMENT_FRACTION = 1.0 / 128
+#: Largest chord deviation (at the midpoint) of a segment, as a fraction of its length: a segment
+#: turns by at most ~14 deg, so a side's own nearby segments are no candidates of each other.
+LOOP_FLATNESS = 1.0 / 32
+#: Cap on the polyline's segments (all sides): bisection stops refining there.
+LOOP_MAX_SEGMENTS = 1 << 18
+
+
+def _side_polyline(curve: BSplineCurve, samples: int, seg_len: float, budget: int) -> tuple[Array, Array, Array]:
+    """Parameters (N+1,), points (N+1, 3) and midpoint chord deviations (N,) of one side's polyline:
+    ``samples`` uniform parameters, segments bisected (all of a round at once) until each is at most
+    ``seg_len`` long and deviates from the curve at its midpoint by at most ``LOOP_FLATNESS`` of its
+    length (or the segment budget is spent, or a segment's parameter width reaches round-off)."""
+    t = np.linspace(0.0, 1.0, samples)
+    p = curve.evaluate(t)
+    while True:
+        tm = 0.5 * (t[1:] + t[:-1])
+        pm = curve.evaluate(tm)
+        length = np.linalg.norm(p[1:] - p[:-1], axis=1)
+        dev = np.linalg.norm(pm - 0.5 * (p[1:] + p[:-1]), axis=1)
+        bad = ((length > seg_len) | (dev > LOOP_FLATNESS * length)) & (np.diff(t) > 1e-12)
+        k = np.flatnonzero(bad)
+        if len(k) == 0 or len(t) - 1 + len(k) > budget:
+            return t, p, dev
+        t = np.insert(t, k + 1, tm[k])
+        p = np.insert(p, k + 1, pm[k], axis=0)
+
+
+def _side_derivatives(curves: list[BSplineCurve], side: NDArray[np.intp], t: Array, order: int) -> Array:
+    """``curves[side[m]].derivatives(t[m], order)`` for all m, (m, order+1, 3): one call per side."""
+    out = np.empty((t.shape[0], order + 1, curves[0].dim))
+    for k in np.unique(side):
+        sel = side == k
+        out[sel] = curves[k].derivatives(t[sel], order)
+    return out
+
+
+def _project(curves: list[BSplineCurve], side: NDArray[np.intp], P: Array, lo: Array, hi: Array,
+             t: Array | None = None, grid: int = 17, iterations: int = 8) -> Array:
+    """Parameters of the points of ``curves[side]`` restricted to ``[lo, hi]`` closest to ``P`` (m, 3),
+    all at once: the nearest of ``grid`` parameters on each stretch (unless a start ``t`` is given),
+    then Newton's iteration on ``(C(t) - p) . C'(t) = 0`` clamped to the stretch."""
+    if t is None:
+        U = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, grid)
+        pts = _side_derivatives(curves, np.repeat(side, grid), U.ravel(), 0)[:, 0].reshape(len(P), grid, -1)
+        t = U[np.arange(len(P)), np.argmin(((pts - P[:, None]) ** 2).sum(-1), axis=1)]
+    for _ in range(iterations):
+        D = _side_derivatives(curves, side, t, 2)
+        r = D[:, 0] - P
+        g = np.einsum("md,md->m", r, D[:, 1])
+        h = np.einsum("md,md->m", D[:, 1], D[:, 1]) + np.einsum("md,md->m", r, D[:, 2])
+        t_new = np.clip(t - np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0), lo, hi)
+        done = np.abs(t_new - t).max() <= 1e-15
+        t = t_new
+        if done:
+            break
+    return t
+
+
+def _closest_pairs(curves: list[BSplineCurve], sa: NDArray[np.intp], sb: NDArray[np.intp], ta: Array, tb: Array,
+                   stretch_a: tuple[Array, Array], stretch_b: tuple[Array, Array]) -> tuple[Array, Array, Array]:
+    """Nearest pairs of points of ``curves[sa]`` on ``stretch_a`` and ``curves[sb]`` on ``stretch_b``
+    (each ``(lo, hi)``, (m,)), from the starts ``ta, tb`` (m,), all pairs at once.
+
+    Four rounds of alternating closest points (each point projected onto the other stretch; the
+    distance never grows), then Newton's iteration on both parameters for ``|A(s) - B(t)|^2``
+    (clamped to the stretches, a step kept only where it brings the points closer): it converges
+    fast where alternating projections crawl (curves crossing at a small angle).
+
+    Returns
+    -------
+    ta, tb, distance : ndarray, shape (m,)
+    """
+    (la, ha), (lb, hb) = stretch_a, stretch_b
+    for r in range(4):
+        first = r == 0
+        tb = _project(curves, sb, _side_derivatives(curves, sa, ta, 0)[:, 0], lb, hb, None if first else tb)
+        ta = _project(curves, sa, _side_derivatives(curves, sb, tb, 0)[:, 0], la, ha, None if first else ta)
+    dist = np.linalg.norm(_side_derivatives(curves, sa, ta, 0)[:, 0] - _side_derivatives(curves, sb, tb, 0)[:, 0],
+                          axis=1)
+    for _ in range(16):
+        A, B = _side_derivatives(curves, sa, ta, 2), _side_derivatives(curves, sb, tb, 2)
+        r = A[:, 0] - B[:, 0]
+        g1, g2 = np.einsum("md,md->m", r, A[:, 1]), -np.einsum("md,md->m", r, B[:, 1])
+        h11 = np.einsum("md,md->m", A[:, 1], A[:, 1]) + np.einsum("md,md->m", r, A[:, 2])
+        h22 = np.einsum("md,md->m", B[:, 1], B[:, 1]) - np.einsum("md,md->m", r, B[:, 2])
+        h12 = -np.einsum("md,md->m", A[:, 1], B[:, 1])
+        det = h11 * h22 - h12 * h12
+        ok = (h11 > 0) & (det > 1e-12 * np.abs(h11 * h22))
+        det = np.where(ok, det, 1.0)
+        ta_new = np.clip(ta - np.where(ok, (h22 * g1 - h12 * g2) / det, 0.0), la, ha)
+        tb_new = np.clip(tb - np.where(ok, (h11 * g2 - h12 * g1) / det, 0.0), lb, hb)
+        d_new = np.linalg.norm(_side_derivatives(curves, sa, ta_new, 0)[:, 0]
+                               - _side_derivatives(curves, sb, tb_new, 0)[:, 0], axis=1)
+        better = ok & (d_new < dist)
+        if not better.any():
+            break
+        ta, tb, dist = np.where(better, ta_new, ta), np.where(better, tb_new, tb), np.where(better, d_new, dist)
+    return ta, tb, dist
+
+
 def check_simple_loop(unit: list, tol: float, samples: int = 65) -> None:
     """Refuse a loop that touches or crosses itself (bad input: no surface bounded by it is a disk).
 
-    Each side is sampled at ``samples`` parameters (a polyline); pairs of segments that are not
-    neighbours along the loop and come within ``tol`` plus the polylines' chord error of each other
-    are candidates (a k-d tree over segment midpoints), confirmed on the curves themselves
-    (alternating closest points, :func:`closest_parameters`): a distance within ``tol`` is a
-    self-intersection.
+    Each side (on the unit domain) is sampled as a polyline: ``samples`` uniform parameters, then
+    segments bisected until each is at most ``LOOP_SEGMENT_FRACTION`` of the loop's size long and
+    nearly straight (midpoint chord deviation at most ``LOOP_FLATNESS`` of its length), so that the
+    segments are short against the loop and far apart stretches of a long side (the turns of a
+    helix) are not candidates of each other. Pairs of segments that are not neighbours along the
+    loop (not within six segments of each other along it) and come within ``tol`` plus twice
+    their chord deviations of each other are candidates (a k-d tree over segment midpoints, then
+    the segments' exact distance, Ericson 5.1.9), all confirmed at once on the curves themselves,
+    each on its own stretch of two segments either side (:func:`_closest_pairs`): a distance
+    within ``tol`` is a self-intersection, except where two consecutive sides meet at their
+    shared corner.
+
+    Parameters
+    ----------
+    unit : list of HoleSide, length n
+        The sides in loop order, each ``curve`` a 3-D curve on ``[0, 1]``.
+    tol : float
+        Distance at which two points of the loop count as touching.
+    samples : int
+        Uniform samples per side that the bisection starts from.
 
     Raises
     ------
     InvalidGeometryError
-        Naming the two sides, the parameters and the distance.
+        Naming the two sides, the parameters and the distance (the closest offending pair).
     """
     from scipy.spatial import cKDTree
 
-    t = np.linspace(0.0, 1.0, samples)
-    pts = [sd.curve.evaluate(t) for sd in unit]
-    mids = [sd.curve.evaluate(0.5 * (t[1:] + t[:-1])) for sd in unit]
-    chord = max(float(np.linalg.norm(m - 0.5 * (p[1:] + p[:-1]), axis=1).max()) for m, p in zip(mids, pts))
-    A0 = np.concatenate([p[:-1] for p in pts])
-    A1 = np.concatenate([p[1:] for p in pts])
-    side = np.repeat(np.arange(len(unit)), samples - 1)
-    seg = np.tile(np.arange(samples - 1), len(unit))
+    n = len(unit)
+    curves = [sd.curve for sd in unit]
+    coarse = np.concatenate([c.evaluate(np.linspace(0.0, 1.0, samples)) for c in curves])
+    size = float(np.linalg.norm(np.ptp(coarse, axis=0)))
+    if not size > 0:
+        return
+    budget = LOOP_MAX_SEGMENTS // n
+    lines = [_side_polyline(c, samples, LOOP_SEGMENT_FRACTION * size, budget) for c in curves]
+    T0 = np.concatenate([t[:-1] for t, _, _ in lines])
+    T1 = np.concatenate([t[1:] for t, _, _ in lines])
+    lo = np.concatenate([t[np.maximum(np.arange(len(t) - 1) - 2, 0)] for t, _, _ in lines])
+    hi = np.concatenate([t[np.minimum(np.arange(len(t) - 1) + 3, len(t) - 1)] for t, _, _ in lines])
+    A0 = np.concatenate([p[:-1] for _, p, _ in lines])
+    A1 = np.concatenate([p[1:] for _, p, _ in lines])
+    dev = np.concatenate([d for _, _, d in lines])
+    side = np.concatenate([np.full(len(t) - 1, k) for k, (t, _, _) in enumerate(lines)])
     m = len(A0)
-    reach = float(np.linalg.norm(A1 - A0, axis=1).max()) + 2 * chord + tol
+    reach = float(np.linalg.norm(A1 - A0, axis=1).max()) + 4 * float(dev.max()) + tol
     pairs = cKDTree(0.5 * (A0 + A1)).query_pairs(reach, output_type="ndarray")
     if len(pairs) == 0:
         return
     i, j = pairs[:, 0], pairs[:, 1]
     gap = np.abs(i - j)
-    keep = np.minimum(gap, m - gap) > 2  # not neighbours along the loop
+    # not within six segments of each other along the loop: the two stretches (two segments either
+    # side) are then apart by two segments at least, so they cannot slide into each other and find
+    # the same point, and at most one of them reaches a corner (at a zero-angle corner the sides
+    # approach each other only there: the nearest pair would creep towards it, never reach it)
+    keep = np.minimum(gap, m - gap) > 6
     i, j = i[keep], j[keep]
     d, si, sj = _segment_distances(A0[i], A1[i], A0[j], A1[j])
-    cand = d <= tol + 2 * chord
-    step = t[1] - t[0]
-    for a, b, sa, sb in zip(i[cand], j[cand], si[cand], sj[cand]):
-        ta, tb = (seg[a] + sa) * step, (seg[b] + sb) * step
-        # each point refined on its own stretch of curve (two stretches of one side must not slide
-        # into each other: projecting a side's point onto the whole side finds the point itself)
-        ca = unit[side[a]].curve.segment(max(0.0, ta - 2 * step), min(1.0, ta + 2 * step))
-        cb = unit[side[b]].curve.segment(max(0.0, tb - 2 * step), min(1.0, tb + 2 * step))
-        if side[a] == side[b] and abs(ta - tb) <= 4 * step:
-            continue
-        for _ in range(4):  # alternating closest points converge to the curves' nearest pair
-            tb = float(closest_parameters(cb, ca.evaluate(np.array([ta])))[0][0])
-            ta = float(closest_parameters(ca, cb.evaluate(np.array([tb])))[0][0])
-        dist = float(np.linalg.norm(ca.evaluate(ta) - cb.evaluate(tb)))
-        at_corner = (side[a] != side[b]) and min(abs(ta - 1) + tb, ta + abs(tb - 1)) < 1e-9
-        if dist <= tol and not at_corner:
-            raise InvalidGeometryError(
-                f"sides: the loop crosses itself: side {side[a]} at parameter {ta:.4g} comes within {dist:.3g} of "
-                f"side {side[b]} at {tb:.4g} (tolerance {tol:.3g}); a hole's boundary must be a simple loop")
+    cand = d <= tol + 2 * (dev[i] + dev[j])
+    if not cand.any():
+        return
+    i, j, si, sj = i[cand], j[cand], si[cand], sj[cand]
+    sa, sb = side[i], side[j]
+    ta, tb, dist = _closest_pairs(curves, sa, sb, T0[i] + si * (T1[i] - T0[i]), T0[j] + sj * (T1[j] - T0[j]),
+                                  (lo[i], hi[i]), (lo[j], hi[j]))
+    # consecutive sides meet at their shared corner (the end of one, the start of the next)
+    at_corner = (((sb == (sa + 1) % n) & (np.abs(ta - 1) + tb < 1e-9))
+                 | ((sa == (sb + 1) % n) & (ta + np.abs(tb - 1) < 1e-9)))
+    bad = np.flatnonzero((dist <= tol) & ~at_corner)
+    if len(bad):
+        k = bad[np.argmin(dist[bad])]
+        raise InvalidGeometryError(
+            f"sides: the loop crosses itself: side {sa[k]} at parameter {ta[k]:.4g} comes within {dist[k]:.3g} of "
+            f"side {sb[k]} at {tb[k]:.4g} (tolerance {tol:.3g}); a hole's boundary must be a simple loop")
 
 
 def arc_length_parameters(curve: BSplineCurve, fractions: Array, samples: int = 1025) -> Array:
