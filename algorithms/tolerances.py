@@ -317,6 +317,11 @@ _DEFAULTS: dict[str, float] = {
     # Fraction of a side over which the neighbour's normal is turned into the fill's corner plane
     # where the two neighbours of a corner do not share a tangent plane (G1 is lost only there).
     "FILL_CORNER_BLEND": 0.1,
+    # Fraction of the G0 target (FILL_FIT_G0 * size) by which a G0-only hole side may move near a
+    # corner where it meets a G1 side, to turn its end tangent into the G1 neighbour's tangent plane
+    # (nsided_sides.turn_end_tangent): with the tangent left as it was, no surface through both
+    # sides is closer to that neighbour at the corner than the tangent's angle out of its plane.
+    "FILL_CORNER_TURN_G0": 0.5,
     # Plate fill (topology/plate_fill.py): largest angle (degrees) between a G1 side's neighbour
     # normal and the reference plane's normal; beyond it the height field's slope is too steep to fit
     # (at 90 the neighbour stands vertical, beyond it turns back over the hole).

@@ -24,7 +24,11 @@ achieved fitting angle (the fill is G1 to the fitted field by construction).
 the original model: only G0 is asked) and corners where the neighbours do not share a tangent plane
 (the fill's plane at a corner is spanned by the two side tangents; a neighbour whose plane differs
 there cannot be met at the corner by any surface; the normal field is turned into the corner plane
-over a short span, and the G1 error left there is reported per edge).
+over a short span, and the G1 error left there is reported per edge). Where such a corner lies
+between a side asking G1 and one asking only G0 (a crease of the original model ending at a
+smooth joint), :func:`turn_end_tangent` first turns the G0 side's end tangent into the G1
+neighbour's plane, moving that side near the corner by less than its G0 tolerance: G0 asks
+position only, and the corner's G1 bound (the tangent's angle out of the plane) drops to zero.
 
 References
 ----------
@@ -45,7 +49,8 @@ from ..kernel.basis import basis_matrix
 from ..kernel.curve import BSplineCurve
 from .nsided import HoleSide
 
-__all__ = ["SideFit", "side_from_normals", "fit_boundary", "corner_normals", "blend_normals", "plane_angle"]
+__all__ = ["SideFit", "side_from_normals", "fit_boundary", "corner_normals", "blend_normals", "plane_angle",
+           "turn_end_tangent"]
 
 Array = NDArray[np.float64]
 
@@ -350,3 +355,117 @@ def fit_boundary(params: ArrayLike, points: ArrayLike, tol: float, *, max_spans:
             break
         inner = np.unique(np.r_[inner, 0.5 * (breaks[bad] + breaks[bad + 1])])
     return c, float(err.max())
+
+
+def _second_derivative_kept(curve: BSplineCurve, end: int, i1: int, i2: int, D: Array, d2: Array
+                            ) -> tuple[BSplineCurve, Array]:
+    """``curve`` with pole ``i1`` moved by ``D`` and pole ``i2`` by the ``E`` that keeps its second
+    derivative ``d2`` at the end ``end``; returns the curve and ``E``. Poles and weights enter the
+    Cartesian curve as ``sum_i R_i P_i`` with the rational basis ``R_i`` fixed by the weights, so the
+    second derivative is affine in ``E`` with the scalar slope ``R_i2''``, found from one trial move."""
+    at = np.array([curve.domain[end]])
+    P = np.array(curve.control_points, float)
+    P[i1] += D
+    trial = P.copy()
+    trial[i2, 0] += 1.0
+    v0 = BSplineCurve(curve.degree, curve.knots, P, curve.weights).derivatives(at, 2)[0, 2]
+    v1 = BSplineCurve(curve.degree, curve.knots, trial, curve.weights).derivatives(at, 2)[0, 2]
+    E = (d2 - v0) / (v1[0] - v0[0])
+    P[i2] += E
+    return BSplineCurve(curve.degree, curve.knots, P, curve.weights), E
+
+
+def turn_end_tangent(curve: BSplineCurve, end: int, normal: ArrayLike, budget: float, *,
+                     min_angle: float | None = None) -> tuple[BSplineCurve, float]:
+    """Turn a side's end tangent into a plane, moving the side by at most ``budget`` near that end.
+
+    At a hole corner between a side that asks G1 to its neighbour and one that asks only G0 (a
+    sharp edge of the original model), a fill regular at the corner has its tangent plane spanned
+    by the two side tangents. When the G0 side's tangent ``t`` leaves the G1 neighbour's plane
+    (normal ``n``) by ``beta``, the fill misses that neighbour by ``beta`` at the corner, whatever it
+    does elsewhere (the screw's faces [22, 23]: 0.767 deg, the original model's own crease there).
+    G0 asks position only: the tangent is turned by ``beta`` into the plane (``t`` projected on
+    it) within a short end stretch, the side moving by at most ``budget`` (its G0 tolerance).
+
+    Knots are inserted at ``e, 2e, 3e`` from the end (simple: the curve stays C^(p-1)), which
+    shortens the end leg ``P1 - P0`` to about ``e |C'| / p``; ``P1`` is rotated into the plane
+    about ``P0`` (so the end point stays and the new tangent is the projection of the old), and
+    ``P2`` moves by the ``E`` that keeps the second derivative at the end: the twist that the
+    fill's two ribbons ask at the corner (Gregory's compatibility) stays what it was (moving ``P1``
+    alone bends the side with curvature ``~ beta / e`` at the corner and left a corner twist
+    mismatch of 2.1 on the screw, 0.07 deg along the G1 side). Both poles act on ``[0, 3e]`` only
+    and ``|C_new - C| = |R_1 D + R_2 E| <= max(|D|, |E|)`` (rational basis, non-negative and at most
+    one in sum), which ``e`` is chosen to keep within ``budget``.
+
+    Parameters
+    ----------
+    curve : BSplineCurve
+        The side (3-D, clamped or not, polynomial or rational).
+    end : {0, 1}
+        The end of the domain at the corner.
+    normal : array_like, shape (3,)
+        Normal of the plane the end tangent must lie in (the G1 neighbour's at the corner).
+    budget : float
+        Largest movement of the curve (model units), > 0.
+    min_angle : float, optional
+        Angles (degrees) up to this are left alone; default a tenth of ``tolerances.FILL_FIT_ANGLE``.
+
+    Returns
+    -------
+    (BSplineCurve, float)
+        The curve (the input itself when nothing is turned; at least cubic otherwise) and the angle
+        turned (degrees; 0 when nothing is).
+
+    Raises
+    ------
+    InvalidGeometryError
+        A curve that is not a 3-D BSplineCurve, ``end`` not 0 or 1, a zero or non-finite normal, a
+        budget that is not a positive number.
+    """
+    if not isinstance(curve, BSplineCurve) or curve.dim != 3:
+        raise InvalidGeometryError(f"curve: expected a 3-D BSplineCurve, got {type(curve).__name__}")
+    if end not in (0, 1):
+        raise InvalidGeometryError(f"end: expected 0 or 1, got {end!r}")
+    n = np.asarray(normal, float)
+    if n.shape != (3,) or not np.all(np.isfinite(n)) or np.linalg.norm(n) == 0:
+        raise InvalidGeometryError(f"normal: expected a finite non-zero 3-vector, got {normal!r}")
+    if not (np.isfinite(budget) and budget > 0):
+        raise InvalidGeometryError(f"budget: expected a positive number, got {budget!r}")
+    n = _unit(n)
+    least = 0.1 * tolerances.FILL_FIT_ANGLE if min_angle is None else float(min_angle)
+    c = curve.clamp()
+    P = np.asarray(c.control_points)
+    leg = P[1] - P[0] if end == 0 else P[-2] - P[-1]
+    if np.linalg.norm(leg) == 0:
+        return curve, 0.0
+    d = _unit(leg)
+    beta = float(np.arctan2(abs(d @ n), np.linalg.norm(d - (d @ n) * n)))
+    if np.degrees(beta) <= least:
+        return curve, 0.0
+    if c.degree < 3:
+        c = c.elevate_degree(3 - c.degree)
+    p, (lo, hi) = c.degree, c.domain
+    at = np.array([(lo, hi)[end]])
+    D2 = c.derivatives(at, 2)[0]
+    inner = np.unique(c.knots[(c.knots > lo) & (c.knots < hi)])
+    room = (hi - lo) if inner.size == 0 else (inner[0] - lo if end == 0 else hi - inner[-1])
+    chord = 2.0 * np.sin(0.5 * beta)  # |D| = chord |P1 - P0|
+    # |P1 - P0| ~ e |C'| / p and |E| ~ 3 |D| (polynomial, knots e, 2e, 3e): a first guess, then checked
+    e = min(0.25 * room, p * budget / (3.0 * chord * max(float(np.linalg.norm(D2[1])), 1e-300)))
+    for _ in range(60):
+        if e <= 1e-9 * (hi - lo):  # within the knots' round-off of the end: leave the side as it is
+            break
+        steps = e * np.arange(1.0, 4.0)
+        r = c.refine(lo + steps if end == 0 else hi - steps[::-1])
+        Q = np.asarray(r.control_points)
+        m = len(Q)
+        i0, i1, i2 = (0, 1, 2) if end == 0 else (m - 1, m - 2, m - 3)
+        L = Q[i1] - Q[i0]
+        u = _unit(L)
+        D = Q[i0] + np.linalg.norm(L) * _unit(u - (u @ n) * n) - Q[i1]
+        out, E = _second_derivative_kept(r, end, i1, i2, D, D2[2])
+        moved = max(float(np.linalg.norm(D)), float(np.linalg.norm(E)))
+        if moved <= budget:
+            return out, float(np.degrees(beta))
+        e *= min(0.5, 0.9 * budget / moved)
+    return curve, 0.0

@@ -112,7 +112,7 @@ def test_an_incompatible_corner_costs_its_angle_and_only_near_it(delta_deg) -> N
     from occsurf.bridge.modeling.refill import _corner_treatment
 
     curves, fields = _cylinder_hole(np.radians(delta_deg))
-    treated = _corner_treatment(curves, fields)
+    _, treated = _corner_treatment(curves, fields)
     tol = tolerances.FILL_FIT_ANGLE
     for k, (cv, (s, N), (_, Nt)) in enumerate(zip(curves, fields, treated)):
         fit = side_from_normals(cv, s, Nt)
