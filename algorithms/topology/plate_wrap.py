@@ -22,11 +22,11 @@ length on the mean cylinder), the plate is fitted there, and mapped back:
 2. :func:`.plate_fill.fill_plate` fits the height field ``r(u, v)`` over the plane normal to the
    unrolled ``r`` axis, with the targets shrunk by the map's distortion (distances along ``x``
    scale by ``r / r_0``, angles at most by ``max(r / r_0, r_0 / r)``);
-3. the surface ``Phi(plate(u, v))`` is interpolated on a grid of the plate's parameter box by a
-   quintic tensor-product spline (``scipy.interpolate.RectBivariateSpline``, one per coordinate on
-   the same grid, so one set of knots) whose grid holds the plate's knots and at least
-   ``_NODES_PER_RADIAN`` nodes per radian of turn, doubled until the spline is within a quarter of
-   the G0 target of ``Phi(plate)`` between the nodes;
+3. the surface ``Phi(plate(u, v))`` is fitted on the plate's parameter box by a cubic
+   tensor-product spline whose knots are the plate's, cut to at least ``_NODES_PER_RADIAN`` spans per
+   radian of turn (least squares, ``scipy.interpolate.make_lsq_spline`` along each direction),
+   spans bisected until it is within a quarter of the G0 target of ``Phi(plate)`` on the face
+   (:func:`_map_back`);
 4. the face is that surface trimmed by the plate's p-curves (the same parameter plane).
 
 What is achieved is measured in model space against the input sides (:attr:`PlateFill.side_g0`,
@@ -51,7 +51,7 @@ from typing import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.interpolate import RectBivariateSpline, make_interp_spline
+from scipy.interpolate import make_interp_spline, make_lsq_spline
 from scipy.optimize import least_squares
 
 from .. import tolerances
@@ -67,8 +67,8 @@ Array = np.ndarray
 
 __all__ = ["WrappedPlateFill", "fill_wrapped_plate", "fitted_axes", "helical_axis"]
 
-_NODES_PER_RADIAN = 5.0  # grid nodes of the map-back spline per radian of turn (refined until met)
-_MAX_NODES = 6000  # per direction
+_NODES_PER_RADIAN = 12.0  # knot spans of the map-back spline per radian of turn (refined until met)
+_MAX_NODES = 8000  # knots of the map-back spline per direction
 _SIDE_SAMPLES = 64  # first interpolation samples per side (doubled until the side is met)
 _MAX_SIDE_SAMPLES = 1 << 15
 _MIN_RADIUS = 0.05  # of the mean radius: closer to the axis, theta is too steep to unroll
@@ -325,47 +325,54 @@ def _one_axis(sides: list[HoleSide], flags: Array, c: Array, a: Array, g0_tol: f
 
 
 def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol: float) -> BSplineSurface:
-    """``Phi(plate(u, v))`` as a quintic B-spline surface on the plate's parameter box, within a
-    quarter of ``g0_tol`` between its interpolation nodes."""
-    (u0, u1), (v0, v1) = plate.surface.domain
+    """``Phi(plate(u, v))`` as a cubic B-spline surface on the plate's parameter box, within a
+    quarter of ``g0_tol`` of it on the face (inside the plate's trim).
+
+    The knots are the plate's, each span cut into pieces of at most ``1 / _NODES_PER_RADIAN`` radian
+    of turn (``Phi`` is analytic, the plate a C2 cubic: with the plate's knots among its own, the
+    surface has no kink to chase), fitted by tensor-product least squares (one
+    ``scipy.interpolate.make_lsq_spline`` along ``u`` for all rows, then one along ``v``: exact for
+    gridded data) at four samples per span; spans where a sample between them, on the face, misses
+    are bisected and the fit repeated. Off the face the plate may be steep (nothing holds it there)
+    and is not chased."""
+    p = 3
     ku, kv = (np.unique(k) for k in plate.surface.knots)
-
-    def plate_model(U: Array, V: Array) -> Array:
-        H = plate.surface.evaluate_grid(U, V)  # unrolled points (the plate is u e1 + v e2 + h N about o)
-        return _roll_back(H, c, a, e1, r0)
-
-    # radians of turn per unit of u and v: the unrolled x runs along e1, e2 of the plate's frame
-    rate = np.abs(np.array([plate.e1[0], plate.e2[0]])) / r0
-    nodes = []
+    rate = np.abs(np.array([plate.e1[0], plate.e2[0]])) / r0  # radians of turn per unit of u and of v
+    breaks = []
     for k, rt in zip((ku, kv), rate):
         per = np.maximum(1, np.ceil(np.diff(k) * rt * _NODES_PER_RADIAN)).astype(int)
-        nodes.append(per)
+        breaks.append(np.concatenate([np.linspace(k[i], k[i + 1], per[i] + 1)[:-1] for i in range(len(per))] + [k[-1:]]))
+    f = np.array([0.1, 0.35, 0.65, 0.9])  # samples per span (Schoenberg-Whitney holds: 4 per span)
+    g = np.array([0.0, 0.225, 0.5, 0.775])  # checks: between the samples and at the breaks
+
+    def model(U: Array, V: Array) -> Array:
+        return _roll_back(plate.surface.evaluate_grid(U, V), c, a, e1, r0)
+
     while True:
-        grids = []
-        for k, per in zip((ku, kv), nodes):
-            g = np.concatenate([np.linspace(k[i], k[i + 1], per[i] + 1)[:-1] for i in range(len(per))] + [k[-1:]])
-            if g.size < 6:
-                g = np.linspace(k[0], k[-1], 6)
-            grids.append(g)
-        gu, gv = grids
-        F = plate_model(gu, gv)
-        fits = [RectBivariateSpline(gu, gv, F[..., d], kx=5, ky=5, s=0) for d in range(3)]
-        mu, mv = 0.5 * (gu[1:] + gu[:-1]), 0.5 * (gv[1:] + gv[:-1])
-        Fm = plate_model(mu, mv)
-        Sm = np.stack([f(mu, mv) for f in fits], axis=-1)
-        err = float(np.linalg.norm(Fm - Sm, axis=-1).max())
-        if err <= 0.25 * g0_tol or max(gu.size, gv.size) >= _MAX_NODES:
-            break
-        nodes = [n * 2 for n in nodes]
-    if err > 0.25 * g0_tol:
-        raise InvalidGeometryError(f"wrapped plate: the surface mapped back about the axis is {err:.3g} off "
-                                   f"its spline with {gu.size} x {gv.size} nodes (target {0.25 * g0_tol:.3g})")
-    tx, ty = fits[0].get_knots()
-    full_u = np.r_[np.full(5, u0), tx, np.full(5, u1)] if tx[0] != tx[1] else tx
-    full_v = np.r_[np.full(5, v0), ty, np.full(5, v1)] if ty[0] != ty[1] else ty
-    nu, nv = full_u.size - 6, full_v.size - 6
-    poles = np.stack([f.get_coeffs().reshape(nu, nv) for f in fits], axis=-1)
-    return BSplineSurface((5, 5), (full_u, full_v), poles)
+        bu, bv = breaks
+        tu, tv = (np.r_[np.full(p, b[0]), b, np.full(p, b[-1])] for b in breaks)
+        xu = (bu[:-1, None] + f[None] * np.diff(bu)[:, None]).ravel()
+        xv = (bv[:-1, None] + f[None] * np.diff(bv)[:, None]).ravel()
+        F = model(xu, xv)
+        su = make_lsq_spline(xu, F.reshape(len(xu), -1), tu, k=p)
+        Cu = su.c.reshape(-1, len(xv), 3)
+        sv = make_lsq_spline(xv, Cu.transpose(1, 0, 2).reshape(len(xv), -1), tv, k=p)
+        poles = sv.c.reshape(-1, Cu.shape[0], 3).transpose(1, 0, 2)
+        surf = BSplineSurface((p, p), (tu, tv), poles)
+        cu = np.r_[(bu[:-1, None] + g[None] * np.diff(bu)[:, None]).ravel(), bu[-1]]
+        cv = np.r_[(bv[:-1, None] + g[None] * np.diff(bv)[:, None]).ravel(), bv[-1]]
+        err = np.linalg.norm(surf.evaluate_grid(cu, cv) - model(cu, cv), axis=-1)
+        U, V = np.meshgrid(cu, cv, indexing="ij")
+        err[~plate.trimmed.contains(U, V)] = 0.0
+        worst = float(err.max())
+        if worst <= 0.25 * g0_tol:
+            return surf
+        bad_u = np.unique(np.clip(np.searchsorted(bu, cu[np.any(err > 0.25 * g0_tol, axis=1)], "right") - 1, 0, len(bu) - 2))
+        bad_v = np.unique(np.clip(np.searchsorted(bv, cv[np.any(err > 0.25 * g0_tol, axis=0)], "right") - 1, 0, len(bv) - 2))
+        if len(bu) + bad_u.size > _MAX_NODES or len(bv) + bad_v.size > _MAX_NODES:
+            raise InvalidGeometryError(f"wrapped plate: the surface mapped back about the axis is {worst:.3g} off "
+                                       f"its spline with {len(bu) - 1} x {len(bv) - 1} spans (target {0.25 * g0_tol:.3g})")
+        breaks = [np.sort(np.r_[b, 0.5 * (b[bad] + b[bad + 1])]) for b, bad in ((bu, bad_u), (bv, bad_v))]
 
 
 def _measure(fill: WrappedPlateFill, per_span: int = 16) -> tuple[Array, Array]:
