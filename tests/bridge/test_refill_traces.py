@@ -248,12 +248,13 @@ def test_a_fit_that_swings_between_its_samples_is_reported() -> None:
 
 
 def test_a_long_helix_side_of_several_edges_follows_its_traces() -> None:
-    from occsurf.algorithms.errors import InvalidGeometryError
     from occsurf.bridge.modeling.refill import _follow_traces
 
     bounds, groups, curves, traces, trace = _helix_side(257)  # 257 samples per turn: too few for tol
-    with pytest.raises(InvalidGeometryError, match="stays .* off them"):
-        _follow_traces(bounds, groups, curves, traces, HELIX_TOL)  # no way to ask for more: refused
+    with pytest.warns(RuntimeWarning, match=r"side 0: .* stays .* off them .*; kept \(the model's edge curve is"):
+        kept = _follow_traces(bounds, groups, curves, traces, HELIX_TOL)[0]  # no way to ask for more
+    miss = closest_parameters(kept, _helix(np.linspace(0, 2 * np.pi, 5001), HELIX_R + HELIX_OFF))[1].max()
+    assert HELIX_TOL < miss < 1e-4  # what the warning says: beyond tol, closer than the edge curve
     side = _follow_traces(bounds, groups, curves, traces, HELIX_TOL, trace)[0]  # more samples asked
     th = np.linspace(0, 2 * np.pi * HELIX_TURNS, 40001)
     truth = _helix(th, HELIX_R + HELIX_OFF)
@@ -299,3 +300,14 @@ def test_screw_thread_sides_lie_on_their_neighbours(screw) -> None:
         c = sides[side_of_edge[k]].curve
         worst[side_of_edge[k]] = max(worst[side_of_edge[k]], closest_parameters(c, P)[1].max())
     assert worst.max() <= tol, worst
+
+
+def test_a_fit_farther_than_the_edge_curve_gives_way_to_it() -> None:
+    # 24 samples per turn: the cubic cannot follow the helix (spans of a third of a turn); the
+    # model's edge curve (1e-4 + 2e-5 off the traces) is closer, and is returned with a warning
+    from occsurf.bridge.modeling.refill import _follow_traces
+
+    bounds, groups, curves, traces, _ = _helix_side(24)
+    with pytest.warns(RuntimeWarning, match="the model's edge curve .* is used instead"):
+        side = _follow_traces(bounds, groups, curves, traces, HELIX_TOL)[0]
+    assert side is bounds[0]
