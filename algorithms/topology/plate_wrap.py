@@ -46,7 +46,7 @@ approximation for reverse engineering", Computing 60 (1998).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
 import numpy as np
@@ -65,10 +65,10 @@ from .plate_fill import PlateFill, _side_samples, _validate, fill_plate
 
 Array = np.ndarray
 
-__all__ = ["WrappedPlateFill", "fill_wrapped_plate", "fitted_axes", "helical_axis"]
+__all__ = ["WrappedPlateFill", "axis_residual", "fill_wrapped_plate", "fitted_axes", "helical_axis"]
 
 _NODES_PER_RADIAN = 12.0  # knot spans of the map-back spline per radian of turn (refined until met)
-_MAX_NODES = 8000  # knots of the map-back spline per direction
+_MAX_SPANS_PRODUCT = 250_000  # spans of the map-back spline, u x v (its check grid is 16 times that)
 _SIDE_SAMPLES = 64  # first interpolation samples per side (doubled until the side is met)
 _MAX_SIDE_SAMPLES = 1 << 15
 _MIN_RADIUS = 0.05  # of the mean radius: closer to the axis, theta is too steep to unroll
@@ -78,11 +78,14 @@ _MIN_RADIUS = 0.05  # of the mean radius: closer to the axis, theta is too steep
 class WrappedPlateFill(PlateFill):
     """A :class:`.plate_fill.PlateFill` made in cylindrical coordinates about an axis.
 
-    Attributes (besides the plate's)
+    Those of :class:`.plate_fill.PlateFill`, with ``surface``, ``trimmed``, ``side_g0``, ``side_g1``
+    and ``met`` in model space; ``origin``, ``e1``, ``e2``, ``normal`` and ``lean`` are the plate's
+    frame in the unrolled space (nothing in the bridge reads them); and:
+
+    Attributes
     ----------
     unrolled : PlateFill
-        The plate in the unrolled space ``(r_0 theta, z, r)``; ``origin``, ``e1``, ``e2``, ``normal``
-        are its frame (in that space), ``surface`` and ``trimmed`` are the model-space surface.
+        The plate in the unrolled space ``(r_0 theta, z, r)``.
     axis_point, axis, ref : ndarray, shape (3,)
         The axis (``ref``: the direction of ``theta = 0``).
     radius : float
@@ -163,12 +166,20 @@ def helical_axis(points: ArrayLike, normals: ArrayLike) -> tuple[Array, Array, f
     and ``a`` is the eigenvector of the smallest eigenvalue, ``|a| = 1``; the axis passes through
     ``a x c`` with pitch ``a . c``.
 
+    Parameters
+    ----------
+    points : array_like, shape (m, 3)
+        Points of the surface (the loop's samples).
+    normals : array_like, shape (m, 3)
+        The surface's normals there (any length).
+
     Returns
     -------
     (point, direction, residual) or None
         ``residual``: root mean square of ``v . n`` per unit normal and unit of the points' spread
         (0 for an exact surface of revolution or helical surface); None when the normals do not
-        determine an axis (all parallel: a plane).
+        determine one axis: a second motion fits as well (a sphere: every line through its centre),
+        or the axis's point is free (all normals parallel: a plane, about any of its normal lines).
     """
     P = np.asarray(points, float).reshape(-1, 3)
     N = np.asarray(normals, float).reshape(-1, 3)
@@ -183,10 +194,30 @@ def helical_axis(points: ArrayLike, normals: ArrayLike) -> tuple[Array, Array, f
     w, V = np.linalg.eigh(Maa - Mca.T @ K)
     a = V[:, 0]
     c = -K @ a
-    if w[1] <= 1e-9 * max(w[2], 1e-300):  # no unique axis (a plane, a sphere)
+    if w[1] <= 1e-9 * max(float(np.trace(M)), 1e-300):  # a second motion as tangent: a sphere
+        return None
+    wc, Vc = np.linalg.eigh(Mcc)
+    free = Vc[:, wc <= 1e-9 * max(float(wc.max()), 1e-300)]  # translations c the normals do not see
+    if free.size and np.any(np.linalg.norm(np.cross(free.T, a), axis=1) > 1e-6):  # other than along a: a plane
         return None
     residual = float(np.sqrt(max(w[0], 0.0) / len(P)))
     return o + scale * np.cross(a, c), a, residual
+
+
+def axis_residual(points: ArrayLike, normals: ArrayLike, point: ArrayLike, direction: ArrayLike) -> float:
+    """How far a surface is from being tangent to the best helical motion about a given axis:
+    root mean square of ``v . n`` (unit normals, points in units of their spread), the pitch fitted
+    by least squares (as :func:`helical_axis` measures it; 0 for a surface of revolution or a
+    helical surface about that axis)."""
+    P = np.asarray(points, float).reshape(-1, 3)
+    N = np.asarray(normals, float).reshape(-1, 3)
+    N = N / np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
+    a = np.asarray(direction, float) / np.linalg.norm(direction)
+    scale = float(np.linalg.norm(P - P.mean(axis=0), axis=1).max()) or 1.0
+    rot = np.einsum("ij,ij->i", np.cross(a, (P - np.asarray(point, float)) / scale), N)
+    an = N @ a
+    pitch = -float(rot @ an) / max(float(an @ an), 1e-300)
+    return float(np.sqrt(np.mean((rot + pitch * an) ** 2)))
 
 
 def fitted_axes(points: ArrayLike, normals: ArrayLike | None = None) -> list[tuple[Array, Array]]:
@@ -259,8 +290,13 @@ def _unrolled_side(side: HoleSide, c: Array, a: Array, e1: Array, r0: float, x_s
         if x_start is not None:
             turn = 2 * np.pi * r0
             U[:, 0] += np.round((x_start - U[0, 0]) / turn) * turn
-        steps = np.abs(np.diff(U[:, 0])) / r0
-        if steps.max() < 0.25 or count >= _MAX_SIDE_SAMPLES:  # theta unwrapped safely
+        # theta unwrapped safely: its speed |e_theta . T| / r (from the tangent, so a step near a whole
+        # turn cannot alias as np.unwrap's differences would) times the step below a quarter radian
+        Qs = P - c
+        Rs = Qs - np.outer(Qs @ a, a)
+        rs = np.maximum(np.linalg.norm(Rs, axis=1), 1e-300)
+        speed = np.abs(np.einsum("ij,ij->i", np.cross(a, Rs / rs[:, None]), T)) / rs
+        if float(speed.max()) * (hi - lo) / count < 0.25 or count >= _MAX_SIDE_SAMPLES:
             curve = make_interp_spline(t, U, k=3)
             tm = 0.5 * (t[1:] + t[:-1])
             Pm = _side_samples(side, tm)[0]
@@ -304,27 +340,43 @@ def _one_axis(sides: list[HoleSide], flags: Array, c: Array, a: Array, g0_tol: f
     if abs(winding) > 0.25:
         raise InvalidGeometryError(f"the loop winds {winding:+.2f} times around the axis (a strip of the "
                                    "cylinder about it must wind 0 times)")
-    if abs(x_end - x_first) > 0:  # close the loop exactly in the unrolled space (it closes in the model)
+    gap = abs(x_end - x_first)
+    if gap > tolerances.FILL_CLOSURE_TOL * 2 * float(r.max()) * r0 / float(r.min()):
+        raise InvalidGeometryError(f"the loop does not close when unrolled about the axis: it ends {gap:.3g} "
+                                   "along the turn from its start")
+    if gap > 0:  # close the loop exactly in the unrolled space (it closes in the model)
         us = usides[-1]
         cp = us.curve.control_points.copy()
         cp[-1, 0] = x_first
         usides[-1] = HoleSide(BSplineCurve(3, us.curve.knots, cp), us.cross)
-    plate = fill_plate(usides, g1=flags, g0_tol=0.5 * g0_tol / stretch, angle_tol=0.5 * angle_tol / kappa,
-                       max_spans=max_spans, normal=np.array([0.0, 0.0, 1.0]))
-    surf = _map_back(plate, c, a, e1, r0, g0_tol)
+    plate, why = None, []
+    # the height: r over (r0 theta, z) (a flank, a crest); else z over (r0 theta, r) (a flank
+    # square to the axis: r spans it at constant z, which r over (theta, z) cannot)
+    for height, normal in (("r", (0.0, 0.0, 1.0)), ("z", (0.0, 1.0, 0.0))):
+        try:
+            plate = fill_plate(usides, g1=flags, g0_tol=0.5 * g0_tol / stretch, angle_tol=0.5 * angle_tol / kappa,
+                               max_spans=max_spans, normal=np.array(normal))
+            break
+        except OccsurfError as err:
+            why.append(f"{height} as the height: {err}")
+    if plate is None:
+        raise InvalidGeometryError("in the unrolled space (r0 theta, z, r) about the axis through "
+                                   f"{np.array2string(c, precision=4)} along {np.array2string(a, precision=4)}: "
+                                   + "; ".join(why))
+    surf = _map_back(plate, c, a, e1, r0, g0_tol, sides)
     trimmed = TrimmedSurface(surf, list(plate.trimmed.outer))
-    fill = WrappedPlateFill(surf, trimmed, sides, flags, np.zeros(len(sides)), np.full(len(sides), np.nan),
-                            plate.origin, plate.e1, plate.e2, plate.normal, surf.n_poles, False, g0_tol, angle_tol,
-                            plate.lean, "wrapped plate", plate, c, a, e1, r0)
+    fill = WrappedPlateFill(surface=surf, trimmed=trimmed, sides=sides, g1=flags, side_g0=np.zeros(len(sides)),
+                            side_g1=np.full(len(sides), np.nan), origin=plate.origin, e1=plate.e1, e2=plate.e2,
+                            normal=plate.normal, spans=surf.n_poles, met=False, g0_tol=g0_tol, angle_tol=angle_tol,
+                            lean=plate.lean, method="wrapped plate", unrolled=plate, axis_point=c, axis=a, ref=e1,
+                            radius=r0)
     g0, g1 = _measure(fill)
     met = bool(np.all(g0 <= g0_tol) and np.all(np.nan_to_num(g1, nan=0.0) <= angle_tol))
-    object.__setattr__(fill, "side_g0", g0)
-    object.__setattr__(fill, "side_g1", g1)
-    object.__setattr__(fill, "met", met)
-    return fill
+    return replace(fill, side_g0=g0, side_g1=g1, met=met)
 
 
-def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol: float) -> BSplineSurface:
+def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol: float,
+              sides: list[HoleSide]) -> BSplineSurface:
     """``Phi(plate(u, v))`` as a cubic B-spline surface on the plate's parameter box, within a
     quarter of ``g0_tol`` of it on the face (inside the plate's trim).
 
@@ -333,8 +385,9 @@ def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol
     surface has no kink to chase), fitted by tensor-product least squares (one
     ``scipy.interpolate.make_lsq_spline`` along ``u`` for all rows, then one along ``v``: exact for
     gridded data) at four samples per span; spans where a sample between them, on the face, misses
-    are bisected and the fit repeated. Off the face the plate may be steep (nothing holds it there)
-    and is not chased."""
+    are bisected and the fit repeated; the sides' own points (where the face's edges lie, which a
+    grid point inside the trim may never land near) are checked as well. Off the face the plate may
+    be steep (nothing holds it there) and is not chased."""
     p = 3
     ku, kv = (np.unique(k) for k in plate.surface.knots)
     rate = np.abs(np.array([plate.e1[0], plate.e2[0]])) / r0  # radians of turn per unit of u and of v
@@ -347,6 +400,12 @@ def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol
 
     def model(U: Array, V: Array) -> Array:
         return _roll_back(plate.surface.evaluate_grid(U, V), c, a, e1, r0)
+
+    edge_uv = np.concatenate([np.c_[plate.locate(i, s.curve.evaluate(np.linspace(*s.curve.domain, 2049)))]
+                              for i, s in enumerate(plate.sides)])
+    (u0, u1), (v0, v1) = plate.surface.domain
+    edge_uv = np.clip(edge_uv, [u0, v0], [u1, v1])
+    edge_model = _roll_back(plate.surface.evaluate(edge_uv[:, 0], edge_uv[:, 1]), c, a, e1, r0)
 
     while True:
         bu, bv = breaks
@@ -364,12 +423,16 @@ def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol
         err = np.linalg.norm(surf.evaluate_grid(cu, cv) - model(cu, cv), axis=-1)
         U, V = np.meshgrid(cu, cv, indexing="ij")
         err[~plate.trimmed.contains(U, V)] = 0.0
-        worst = float(err.max())
+        e_edge = np.linalg.norm(surf.evaluate(edge_uv[:, 0], edge_uv[:, 1]) - edge_model, axis=1)
+        worst = max(float(err.max()), float(e_edge.max()))
         if worst <= 0.25 * g0_tol:
             return surf
-        bad_u = np.unique(np.clip(np.searchsorted(bu, cu[np.any(err > 0.25 * g0_tol, axis=1)], "right") - 1, 0, len(bu) - 2))
-        bad_v = np.unique(np.clip(np.searchsorted(bv, cv[np.any(err > 0.25 * g0_tol, axis=0)], "right") - 1, 0, len(bv) - 2))
-        if len(bu) + bad_u.size > _MAX_NODES or len(bv) + bad_v.size > _MAX_NODES:
+        miss = e_edge > 0.25 * g0_tol
+        bad_u = np.unique(np.clip(np.searchsorted(bu, np.r_[cu[np.any(err > 0.25 * g0_tol, axis=1)], edge_uv[miss, 0]],
+                                                  "right") - 1, 0, len(bu) - 2))
+        bad_v = np.unique(np.clip(np.searchsorted(bv, np.r_[cv[np.any(err > 0.25 * g0_tol, axis=0)], edge_uv[miss, 1]],
+                                                  "right") - 1, 0, len(bv) - 2))
+        if (len(bu) + bad_u.size) * (len(bv) + bad_v.size) > _MAX_SPANS_PRODUCT:
             raise InvalidGeometryError(f"wrapped plate: the surface mapped back about the axis is {worst:.3g} off "
                                        f"its spline with {len(bu) - 1} x {len(bv) - 1} spans (target {0.25 * g0_tol:.3g})")
         breaks = [np.sort(np.r_[b, 0.5 * (b[bad] + b[bad + 1])]) for b, bad in ((bu, bad_u), (bv, bad_v))]
@@ -434,12 +497,22 @@ def fill_wrapped_plate(sides: Sequence[HoleSide], *, axes: Sequence[tuple[ArrayL
     g0_tol = float(tolerances.FILL_FIT_G0 * (diag if size is None else float(size)) if g0_tol is None else g0_tol)
     if not (g0_tol > 0 and angle_tol > 0):
         raise InvalidGeometryError(f"g0_tol, angle_tol: expected positive targets, got {g0_tol}, {angle_tol}")
-    given = [(np.asarray(c, float).ravel(), np.asarray(a, float).ravel()) for c, a in axes]
+    given = []
+    for k, (c, a) in enumerate(axes):
+        c, a = np.asarray(c, float).ravel(), np.asarray(a, float).ravel()
+        if c.shape != (3,) or a.shape != (3,) or not (np.all(np.isfinite(np.r_[c, a])) and np.linalg.norm(a) > 0):
+            raise InvalidGeometryError(f"axes[{k}]: expected a finite point and a non-zero direction in 3-D, "
+                                       f"got {np.array2string(c)}, {np.array2string(a)}")
+        given.append((c, a))
+    # the axes the neighbours turn about best first (a neighbour's axis may have nothing to do with
+    # this hole: the first axis whose fill meets the targets is kept, and the boundary targets can be
+    # met about a wrong axis with the inside off the surface it was cut from)
+    cands = [(axis_residual(dense, normals, c, a), k < len(given), c, a)
+             for k, (c, a) in enumerate(given + fitted_axes(dense, normals))]
+    cands.sort(key=lambda x: (x[0], not x[1]))
     best, why = None, []
-    for k, (c, a) in enumerate(given + fitted_axes(dense, normals)):
-        if not (np.all(np.isfinite(a)) and np.linalg.norm(a) > 0):
-            continue
-        name = f"axis {k}" + (" (given)" if k < len(given) else " (fitted)")
+    for k, (res, is_given, c, a) in enumerate(cands):
+        name = f"axis {k}" + (" (given" if is_given else " (fitted") + f", residual {res:.2g})"
         try:
             fill = _one_axis(sides, flags, c, a, g0_tol, angle_tol, max_spans)
         except OccsurfError as err:

@@ -19,7 +19,7 @@ from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.nsided import HoleSide, count_folds
 from occsurf.algorithms.topology.plate_fill import _side_samples
-from occsurf.algorithms.topology.plate_wrap import WrappedPlateFill, fill_wrapped_plate, fitted_axes
+from occsurf.algorithms.topology.plate_wrap import WrappedPlateFill, fill_wrapped_plate, fitted_axes, helical_axis
 
 R, PITCH, TURNS = 3.0, 1.0, 3.0
 END = 2 * np.pi * TURNS
@@ -159,3 +159,48 @@ def test_a_loop_winding_around_the_axis_is_refused_with_the_reason() -> None:
 def test_bad_targets_are_refused() -> None:
     with pytest.raises(InvalidGeometryError, match="positive targets"):
         fill_wrapped_plate(_strip(0.0, 0.3), g0_tol=-1.0)
+
+
+def test_helical_axis_is_none_where_no_single_axis_fits() -> None:
+    """A plane turns into itself about any of its normal lines, a sphere about any line through its
+    centre: no axis is returned (the review of 2026-11-28 found both returned arbitrary axes)."""
+    rng = np.random.default_rng(3)
+    P = np.c_[rng.uniform(-1, 1, (200, 2)), np.zeros(200)]
+    assert helical_axis(P, np.tile([0, 0, 1.0], (200, 1))) is None
+    S = rng.normal(size=(200, 3))
+    S /= np.linalg.norm(S, axis=1, keepdims=True)
+    assert helical_axis(2 * S + [1, 2, 3], S) is None
+
+
+def test_a_thread_flank_on_a_cone_is_refilled_on_it() -> None:
+    """A strip of the cone r = 3 - 0.5 s, z = s (s across it) between two of its helices, G1 to the
+    cone on the long sides: about the fitted helical axis, back on the cone."""
+    sides = _strip(0.5, 0.3)
+    fill = fill_wrapped_plate(sides, g1=[True, False, True, False], g0_tol=G0)
+    assert fill.met and np.all(fill.side_g0 <= G0) and np.nanmax(fill.side_g1) <= 0.01
+    assert _off_helicoid(_interior(fill), 0.5, 0.3).max() <= 2 * G0
+
+
+def test_a_flank_square_to_the_axis_takes_z_as_the_height() -> None:
+    """r falls 0.5 across the strip at constant height: no height r(theta, z); z(theta, r) is."""
+    fill = fill_wrapped_plate(_strip(0.5, 0.0), axes=[(np.zeros(3), np.array([0, 0, 1.0]))], g1=[False] * 4, g0_tol=G0)
+    assert fill.met and np.all(fill.side_g0 <= G0)
+    P = _interior(fill)
+    th = np.arctan2(P[:, 1], P[:, 0])
+    assert np.abs((P[:, 2] - PITCH * th / (2 * np.pi) + PITCH / 2) % PITCH - PITCH / 2).max() <= 2 * G0
+
+
+def test_an_unrelated_given_axis_is_tried_after_the_neighbours_own() -> None:
+    """The bridge passes every neighbouring cylinder's axis; one tilted 0.1 rad would still meet
+    the boundary targets with the inside off the cylinder (4e-4): the axes are tried in order of
+    how nearly the neighbours turn about them, so the fill is made about the true one."""
+    tilted = np.array([np.sin(0.1), 0.0, np.cos(0.1)])
+    fill = fill_wrapped_plate(_strip(0.0, 0.3), axes=[(np.zeros(3), tilted)], g1=[True] * 4, g0_tol=G0)
+    assert abs(abs(fill.axis[2]) - 1) < 1e-6
+    P = _interior(fill)
+    assert np.abs(np.hypot(P[:, 0], P[:, 1]) - R).max() <= G0
+
+
+def test_a_malformed_axis_is_named() -> None:
+    with pytest.raises(InvalidGeometryError, match=r"axes\[0\]: expected a finite point"):
+        fill_wrapped_plate(_strip(0.0, 0.3), axes=[(np.zeros(3), np.zeros(3))], g0_tol=G0)
