@@ -126,9 +126,16 @@ def _occ_usable(r: dict, name: str) -> bool:
     return o.get("status") == "ok" and o["g0"] <= 1e-3 * r.get("size", float("inf"))
 
 
+#: Round-off floors of the comparison with OCC: G0 below 1e-12 of the model size and G1 below 1e-9
+#: degrees are both exact (bearing pair [9, 24], planar: ours 1.4e-17 / 5.4e-13 deg, OCC's 2.2e-17 /
+#: 2.2e-13 deg); beneath them "no worse" compares noise.
+G0_FLOOR, G1_FLOOR = 1e-12, 1e-9
+
+
 def _no_worse(closed: list[dict]) -> str:
     both = [r for r in closed if r["status"] == "filled" and r["occ"].get("default", {}).get("status") == "ok"]
-    good = [r for r in both if r["g0"] <= r["occ"]["default"]["g0"] and r["g1"] <= r["occ"]["default"]["g1"]]
+    good = [r for r in both if r["g0"] <= max(r["occ"]["default"]["g0"], G0_FLOOR * r.get("size", 0.0))
+            and r["g1"] <= max(r["occ"]["default"]["g1"], G1_FLOOR)]
     return f"{len(good)} / {len(both)}"
 
 

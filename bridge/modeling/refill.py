@@ -53,6 +53,7 @@ from occsurf.algorithms.topology.nsided import HoleFill, closest_parameters, fil
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.topology.nsided_sides import (blend_normals, corner_normals, fit_boundary, side_from_normals,
                                                      smoothstep, turn_end_tangent)
+from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.plate_fill import PlateFill
 
 from .. import _occ
@@ -361,6 +362,9 @@ def _merged_curve(curves: list[Any], size: float) -> tuple[Any, float]:
     its largest distance from their samples (:data:`TRACE_SAMPLES_PER_POLE` per pole of each, at
     least 121; up to ``FILL_FIT_MAX_SPANS`` knot spans per curve). The M6 screw's thread root, 8
     helix turns of 51..65 poles each, was 1e-4 off with 121 samples and 256 spans for all of them."""
+    joined = _joined(curves, tolerances.FILL_FIT_G0 * size)
+    if joined is not None:
+        return joined, 0.0
     pts, par, s0 = [], [], 0.0
     for c in curves:
         t = np.linspace(*c.domain, max(121, TRACE_SAMPLES_PER_POLE * len(c.control_points)))
@@ -371,6 +375,42 @@ def _merged_curve(curves: list[Any], size: float) -> tuple[Any, float]:
         s0 += arc[-1]
     return fit_boundary(np.concatenate(par), np.concatenate(pts), tolerances.FILL_FIT_G0 * size,
                         max_spans=tolerances.FILL_FIT_MAX_SPANS * len(curves))
+
+
+def _joined(curves: list[Any], tol: float) -> Any | None:
+    """A chain of curves as one B-spline, exactly (None when two do not meet within ``1e-3 * tol``).
+
+    Each is raised to the highest degree ``p`` and mapped to a parameter interval as long as its arc
+    length (so the speed of the whole is as even as its pieces'); rational pieces keep their
+    weights, scaled so that the pole shared at a joint has one weight (a rational curve is unchanged
+    by scaling all its weights); the joints become knots of multiplicity ``p`` (the chain is
+    tangent-continuous geometrically: a flat corner). Fitting one cubic through such a chain
+    instead left bearing pair [9, 24]'s merged sides 4.1e-9 off exact arcs that OCC's filler
+    reproduced to 2e-17."""
+    p = max(c.degree for c in curves)
+    parts = [c.elevate_degree(p - c.degree) if c.degree < p else c for c in curves]
+    for a, b in zip(parts, parts[1:]):
+        if np.linalg.norm(a.evaluate(a.domain[1]) - b.evaluate(b.domain[0])) > 1e-3 * tol:
+            return None
+    lengths = []
+    for c in parts:
+        P = c.evaluate(np.linspace(*c.domain, 257))
+        lengths.append(float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum()) or 1.0)
+    bounds = np.r_[0.0, np.cumsum(lengths)] / sum(lengths)
+    parts = [c.reparametrize(float(lo), float(hi)) for c, lo, hi in zip(parts, bounds[:-1], bounds[1:])]
+    rational = any(c.is_rational for c in parts)
+    knots = [parts[0].knots[:-1]]
+    poles = [parts[0].control_points]
+    weights = [parts[0].weights if parts[0].is_rational else np.ones(len(parts[0].control_points))]
+    for c in parts[1:]:
+        w = c.weights if c.is_rational else np.ones(len(c.control_points))
+        w = w * (weights[-1][-1] / w[0])
+        knots.append(c.knots[p + 1:-1] if c is not parts[-1] else c.knots[p + 1:])
+        poles.append(c.control_points[1:]), weights.append(w[1:])
+    if len(parts) == 1:
+        knots = [parts[0].knots]
+    K = np.concatenate(knots)
+    return BSplineCurve(p, K, np.concatenate(poles), np.concatenate(weights) if rational else None)
 
 
 def _trace(edge: Any, nb: Any, curve: Any, samples: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
