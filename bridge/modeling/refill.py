@@ -932,7 +932,10 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
     The central split (:func:`fill_hole`) first; when it refuses both variants, or its best fill
     folds or misses one of the issue's targets (G0 1e-7 of the size, G1 0.01 deg: ``_score(...)[1]``
     above 1), the plate (:func:`fill_plate`, one trimmed surface: reflex corners, long curved holes)
-    is tried on both and the best of all kept. The trigger was the looser edge-tolerance number
+    is tried on both and the best of all kept; where none of those is fold-free, the wrapped plate
+    (:func:`~occsurf.algorithms.topology.plate_wrap.fill_wrapped_plate`, a plate in cylindrical
+    coordinates about the neighbours' or a fitted axis: thread strips, fillet strips wrapping around
+    an axis) is tried on both as well. The trigger was the looser edge-tolerance number
     (``[2]``) before: bearing faces 175, 185 and 198 kept central fills 1.8e-7, 1.7e-6 and 4.0e-8
     off a neighbour (OCC 1.7e-7, 6.8e-8, 2.8e-8) without trying the plate, which reads 2.5e-9 to
     7.4e-9 there with G1 no worse. The side curves (so the face's edge) are the same for both: at
@@ -946,9 +949,9 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
     Raises
     ------
     InvalidGeometryError
-        No variant can be filled by either construction (both last reasons).
+        No variant can be filled by any construction (the last reason of each).
     """
-    best, best_score, last_err, plate_err, wrap_err = None, None, None, None, None
+    best, best_score, last_err = None, None, None
     etol = max(BRep_Tool.Tolerance_s(e) for e in edges)
     prepared = {}
     for follow in (True, False):  # the neighbours' traces (G0 to them), and the model's edge curves
@@ -961,26 +964,23 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
         score = _score(cand, size, etol)  # once per candidate: it counts folds on a grid of every patch
         if best is None or score < best_score:
             best, best_score = cand, score
-    if best is None or best_score[0] or best_score[1] > 1.0:  # refused, folded or an issue target missed
+    # the plate where the central split refuses, folds or misses an issue target; the wrapped plate
+    # (a hole winding around an axis) where neither gives a fold-free fill
+    errors = {}
+    for method, wanted in (("plate", lambda: best is None or best_score[0] or best_score[1] > 1.0),
+                           ("wrapped", lambda: best is None or best_score[0])):
+        if not wanted():
+            continue
         for follow, prep in prepared.items():
             try:
-                cand = _our_fill(edges, nbs, owners, size, follow, samples, method="plate", prepared=prep)
+                cand = _our_fill(edges, nbs, owners, size, follow, samples, method=method, prepared=prep)
             except OccsurfError as err:
-                plate_err = err
+                errors[method] = err
                 continue
             score = _score(cand, size, etol)
             if best is None or _plate_wins(score, best_score):
                 best, best_score = cand, score
-    if best is None or best_score[0]:  # neither gives a fold-free fill: a hole winding around an axis?
-        for follow, prep in prepared.items():
-            try:
-                cand = _our_fill(edges, nbs, owners, size, follow, samples, method="wrapped", prepared=prep)
-            except OccsurfError as err:
-                wrap_err = err
-                continue
-            score = _score(cand, size, etol)
-            if best is None or _plate_wins(score, best_score):
-                best, best_score = cand, score
+    plate_err, wrap_err = errors.get("plate"), errors.get("wrapped")
     if best is None:
         if plate_err is None or last_err is None:
             raise last_err or plate_err

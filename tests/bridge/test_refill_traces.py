@@ -265,23 +265,6 @@ def test_a_long_helix_side_of_several_edges_follows_its_traces() -> None:
     assert np.abs(np.hypot(dense[:, 0], dense[:, 1]) - (HELIX_R + HELIX_OFF)).max() <= HELIX_TOL
 
 
-@pytest.fixture(scope="module")
-def screw():
-    from tests.bridge.conftest import REALDATA
-
-    path = REALDATA / "build123d__M6-1x12-countersunk-screw.step"
-    if not path.is_file():
-        pytest.skip(f"{path} is absent (public real models)")
-    from OCP.STEPControl import STEPControl_Reader
-
-    from occsurf.bridge.modeling.refill import SewnModel
-
-    r = STEPControl_Reader()
-    assert int(r.ReadFile(str(path))) == 1
-    r.TransferRoots()
-    return SewnModel(r.OneShape())
-
-
 def test_screw_thread_sides_lie_on_their_neighbours(screw) -> None:
     """Every side of the screw's face 8 hole within FILL_FIT_G0 * size of its edges' traces (the
     neighbours' points along the p-curves, 1001 per edge). Before: side 4 (8 edges, the thread

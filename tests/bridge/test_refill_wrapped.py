@@ -15,25 +15,6 @@ import pytest
 
 from occsurf.algorithms import tolerances
 
-from .conftest import REALDATA
-
-SCREW = REALDATA / "build123d__M6-1x12-countersunk-screw.step"
-
-
-@pytest.fixture(scope="module")
-def screw():
-    if not SCREW.is_file():
-        pytest.skip(f"{SCREW} is absent (public real models)")
-    from OCP.STEPControl import STEPControl_Reader
-
-    from occsurf.bridge.modeling.refill import SewnModel
-
-    r = STEPControl_Reader()
-    assert int(r.ReadFile(str(SCREW))) == 1
-    r.TransferRoots()
-    return SewnModel(r.OneShape())
-
-
 @pytest.fixture(scope="module")
 def crest(screw):
     from occsurf.bridge.modeling.refill import refill_faces
