@@ -16,9 +16,10 @@ length on the mean cylinder), the plate is fitted there, and mapped back:
 
 1. every side's curve ``U(C(t))`` and cross derivative ``J_U X(t)`` (the Jacobian maps tangent
    vectors, so the neighbour's tangent plane maps to the unrolled neighbour's: G1 is a statement
-   about tangency, which a diffeomorphism keeps) are interpolated by cubic B-splines on the side's
-   own parameter (``scipy.interpolate.make_interp_spline``), densely enough that the unrolled side is
-   within a twentieth of the target of ``U(C(t))``;
+   about tangency, which a diffeomorphism keeps) are fitted by cubic B-splines on the side's own
+   parameter (least squares, ``scipy.interpolate.make_lsq_spline``; the side's own C0 and C1 knots
+   kept as C0 knots), densely enough that the unrolled side is within a twentieth of the target of
+   ``U(C(t))``;
 2. :func:`.plate_fill.fill_plate` fits the height field ``r(u, v)`` over the plane normal to the
    unrolled ``r`` axis, with the targets shrunk by the map's distortion (distances along ``x``
    scale by ``r / r_0``, angles at most by ``max(r / r_0, r_0 / r)``);
@@ -51,7 +52,7 @@ from typing import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.interpolate import make_interp_spline, make_lsq_spline
+from scipy.interpolate import make_lsq_spline
 from scipy.optimize import least_squares
 
 from .. import tolerances
@@ -69,8 +70,8 @@ __all__ = ["WrappedPlateFill", "axis_residual", "fill_wrapped_plate", "fitted_ax
 
 _NODES_PER_RADIAN = 12.0  # knot spans of the map-back spline per radian of turn (refined until met)
 _MAX_SPANS_PRODUCT = 250_000  # spans of the map-back spline, u x v (its check grid is 16 times that)
-_SIDE_SAMPLES = 64  # first interpolation samples per side (doubled until the side is met)
-_MAX_SIDE_SAMPLES = 1 << 15
+_SIDE_SAMPLES = 64  # first knot spans of an unrolled side's fit (doubled until the side is met)
+_MAX_SIDE_SAMPLES = 1 << 15  # most spans
 _MIN_RADIUS = 0.05  # of the mean radius: closer to the axis, theta is too steep to unroll
 
 
@@ -276,19 +277,38 @@ def fitted_axes(points: ArrayLike, normals: ArrayLike | None = None) -> list[tup
 
 
 # ===================================================================================== the sides
+def _layout(curve: BSplineCurve, spans: int) -> tuple[Array, Array]:
+    """Knots (cubic, clamped) and samples for fitting a function of ``curve``'s parameter: about
+    ``spans`` uniform spans spread over the pieces between the curve's knots of continuity C1 or
+    lower (a side joined from several edges has C0 knots: :func:`occsurf.bridge.modeling.refill._joined`),
+    which become triple knots (C0) of the fit, three samples per span."""
+    p = curve.degree
+    k, mult = np.unique(curve.knots, return_counts=True)
+    lo, hi = curve.domain
+    b = np.r_[lo, k[(k > lo) & (k < hi) & (mult >= max(p - 1, 1))], hi]
+    L = np.diff(b)
+    per = np.maximum(1, np.round(spans * L / (hi - lo))).astype(int)
+    knots, x = [np.full(4, lo)], []
+    for i in range(len(L)):  # per piece (a handful), vectorised inside
+        knots += [np.linspace(b[i], b[i + 1], per[i] + 1)[1:-1], np.full(3 if i < len(L) - 1 else 4, b[i + 1])]
+        xs = np.linspace(b[i], b[i + 1], 3 * per[i] + 1)
+        x.append(xs if i == len(L) - 1 else xs[:-1])
+    return np.concatenate(knots), np.concatenate(x)
+
+
 def _unrolled_side(side: HoleSide, c: Array, a: Array, e1: Array, r0: float, x_start: float | None,
                    tol: float) -> HoleSide:
     """The side in the unrolled space, on the turn that starts nearest ``x_start`` (the previous
-    side's end), interpolated within ``tol`` of the exact unrolled curve."""
-    lo, hi = side.curve.domain
+    side's end), fitted (least squares, :func:`_layout`) within ``tol`` of the exact unrolled curve
+    half-way between the samples."""
     count = _SIDE_SAMPLES
+    turn = 2 * np.pi * r0
     while True:
-        t = np.linspace(lo, hi, count + 1)
+        knots, t = _layout(side.curve, count)
         P, T, X = _side_samples(side, t)
         U = _unroll(P, c, a, e1, r0)
         U[:, 0] = r0 * np.unwrap(U[:, 0] / r0)
         if x_start is not None:
-            turn = 2 * np.pi * r0
             U[:, 0] += np.round((x_start - U[0, 0]) / turn) * turn
         # theta unwrapped safely: its speed |e_theta . T| / r (from the tangent, so a step near a whole
         # turn cannot alias as np.unwrap's differences would) times the step below a quarter radian
@@ -296,13 +316,11 @@ def _unrolled_side(side: HoleSide, c: Array, a: Array, e1: Array, r0: float, x_s
         Rs = Qs - np.outer(Qs @ a, a)
         rs = np.maximum(np.linalg.norm(Rs, axis=1), 1e-300)
         speed = np.abs(np.einsum("ij,ij->i", np.cross(a, Rs / rs[:, None]), T)) / rs
-        if float(speed.max()) * (hi - lo) / count < 0.25 or count >= _MAX_SIDE_SAMPLES:
-            curve = make_interp_spline(t, U, k=3)
+        if float(np.max(np.maximum(speed[1:], speed[:-1]) * np.diff(t))) < 0.25 or count >= _MAX_SIDE_SAMPLES:
+            curve = make_lsq_spline(t, U, knots, k=3)
             tm = 0.5 * (t[1:] + t[:-1])
-            Pm = _side_samples(side, tm)[0]
-            Um = _unroll(Pm, c, a, e1, r0)
+            Um = _unroll(_side_samples(side, tm)[0], c, a, e1, r0)
             Ui = curve(tm)
-            turn = 2 * np.pi * r0
             Um[:, 0] += np.round((Ui[:, 0] - Um[:, 0]) / turn) * turn
             err = float(np.linalg.norm(Ui - Um, axis=1).max())
             if err <= tol or count >= _MAX_SIDE_SAMPLES:
@@ -310,8 +328,8 @@ def _unrolled_side(side: HoleSide, c: Array, a: Array, e1: Array, r0: float, x_s
         count *= 2
     if err > tol:
         raise InvalidGeometryError(f"wrapped plate: a side unrolled about the axis is {err:.3g} off its "
-                                   f"interpolation with {count} samples (target {tol:.3g})")
-    cross = make_interp_spline(t, _jacobian_apply(P, X, c, a, e1, r0), k=3)
+                                   f"fit with {count} spans (target {tol:.3g})")
+    cross = make_lsq_spline(t, _jacobian_apply(P, X, c, a, e1, r0), knots, k=3)
     return HoleSide(BSplineCurve(3, curve.t, curve.c), BSplineCurve(3, cross.t, cross.c))
 
 

@@ -269,17 +269,24 @@ def _side_of(face: Any, uv: Any, direction: np.ndarray) -> int:
 
 
 def _oriented_curves(edges: list[Any]) -> list[Any]:
+    """The loop's edge curves, each running from the previous one's end: the first ends where the
+    next one touches it, every later one starts where the one before it ends (a walk along the
+    chain). Deciding each curve by its next neighbour alone cannot work on a two-edge loop (a line
+    and an arc: both ends of each touch the other), where both curves kept their direction and the
+    sides were mm off their traces (screw face 24)."""
     curves = [from_occ(e) for e in edges]
     n = len(curves)
     ends = [(c.evaluate(c.domain[0]), c.evaluate(c.domain[1])) for c in curves]
-    out = []
-    for k in range(n):
-        a0, a1 = ends[k]
-        b0, b1 = ends[(k + 1) % n]
-        d_end = min(np.linalg.norm(a1 - b0), np.linalg.norm(a1 - b1))
-        d_start = min(np.linalg.norm(a0 - b0), np.linalg.norm(a0 - b1))
-        out.append((curves[k] if d_end <= d_start else curves[k].reverse()).clamp())
-    return _snap_ends(out)
+    a0, a1 = ends[0]
+    b0, b1 = ends[1 % n]
+    d_end = min(np.linalg.norm(a1 - b0), np.linalg.norm(a1 - b1))
+    d_start = min(np.linalg.norm(a0 - b0), np.linalg.norm(a0 - b1))
+    out = [curves[0] if d_end <= d_start else curves[0].reverse()]
+    for k in range(1, n):
+        prev = out[-1].evaluate(out[-1].domain[1])
+        c0, c1 = ends[k]
+        out.append(curves[k] if np.linalg.norm(c0 - prev) <= np.linalg.norm(c1 - prev) else curves[k].reverse())
+    return _snap_ends([c.clamp() for c in out])
 
 
 def _snap_ends(curves: list[Any]) -> list[Any]:
