@@ -405,7 +405,8 @@ def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol
     gridded data) at four samples per span; spans where a sample between them, on the face, misses
     are bisected and the fit repeated; the sides' own points (where the face's edges lie, which a
     grid point inside the trim may never land near) are checked as well. Off the face the plate may
-    be steep (nothing holds it there) and is not chased."""
+    be steep (nothing holds it there) and is not chased. At ``_MAX_SPANS_PRODUCT`` spans the
+    spline is returned as it is; the fill's boundary is measured afterwards."""
     p = 3
     ku, kv = (np.unique(k) for k in plate.surface.knots)
     rate = np.abs(np.array([plate.e1[0], plate.e2[0]])) / r0  # radians of turn per unit of u and of v
@@ -451,8 +452,10 @@ def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol
         bad_v = np.unique(np.clip(np.searchsorted(bv, np.r_[cv[np.any(err > 0.25 * g0_tol, axis=0)], edge_uv[miss, 1]],
                                                   "right") - 1, 0, len(bv) - 2))
         if (len(bu) + bad_u.size) * (len(bv) + bad_v.size) > _MAX_SPANS_PRODUCT:
-            raise InvalidGeometryError(f"wrapped plate: the surface mapped back about the axis is {worst:.3g} off "
-                                       f"its spline with {len(bu) - 1} x {len(bv) - 1} spans (target {0.25 * g0_tol:.3g})")
+            # as fine as it may get: what the face achieves on its boundary is measured in model space
+            # (:func:`_measure`, ``met``), which is what counts (screw pair [9, 12]: 1.5e-6 left here
+            # at the edges' points, the fill's boundary within 1.3e-6 of the hole's, target 1.9e-6)
+            return surf
         breaks = [np.sort(np.r_[b, 0.5 * (b[bad] + b[bad + 1])]) for b, bad in ((bu, bad_u), (bv, bad_v))]
 
 

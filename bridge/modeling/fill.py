@@ -91,7 +91,7 @@ class HoleReport:
     side_g0: list[float] = field(default_factory=list)
     side_g1: list[float] = field(default_factory=list)
     construction: str | None = None  # 'iso' (exact cross derivatives) or 'fitted' (trimming-curve edges)
-    method: str | None = None  # 'central' (fill_hole's n patches), 'plate' (one trimmed plate, fill_plate) or 'wrapped' (a plate about an axis, fill_wrapped_plate)
+    method: str | None = None  # 'central' (fill_hole's n patches), 'plate' (one trimmed plate, fill_plate) or 'wrap' (a plate about an axis, fill_wrapped_plate)
     fit_g1: list[float] = field(default_factory=list)  # fitted sides: the fields' angle to the neighbours
     folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; FillQuality.folds)
     occ_status: str | None = None  # 'ok', 'failed', None (not run)
@@ -384,7 +384,7 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
             t0 = time.perf_counter()
             fill, occ_faces = _fill_loop(edges, nb, size, samples, rep)
             rep.seconds = time.perf_counter() - t0
-            if rep.method in ("plate", "wrapped"):
+            if rep.method in ("plate", "wrap"):
                 from .plate import plate_quality
 
                 rep.own_g0, rep.own_g1, rep.internal_g1, rep.folds = plate_quality(fill)

@@ -118,7 +118,7 @@ class RefillReport:
     valid: bool | None = None
     step_round_trip: bool | None = None
     folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; see FillQuality.folds)
-    method: str | None = None  # 'central' (fill_hole's n patches), 'plate' (one trimmed plate, fill_plate) or 'wrapped' (a plate about an axis, fill_wrapped_plate)
+    method: str | None = None  # 'central' (fill_hole's n patches), 'plate' (one trimmed plate, fill_plate) or 'wrap' (a plate about an axis, fill_wrapped_plate)
     occ: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
@@ -894,11 +894,11 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
 
 
 def fill_method(fill: Any) -> str:
-    """``'plate'`` for a :class:`PlateFill`, ``'wrapped'`` for a plate made about an axis
+    """``'plate'`` for a :class:`PlateFill`, ``'wrap'`` for a plate made about an axis
     (:class:`~occsurf.algorithms.topology.plate_wrap.WrappedPlateFill`), ``'central'`` for the
     central split's :class:`HoleFill`."""
     if isinstance(fill, PlateFill):
-        return "wrapped" if fill.method == "wrapped plate" else "plate"
+        return "wrap" if fill.method == "wrapped plate" else "plate"
     return "central"
 
 
@@ -915,7 +915,7 @@ def _our_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, 
         # face must sew in; plate_face refuses beyond SEW_TOLERANCE)
         fill, occ_faces = plate_fill_faces(sides, flags, min(tolerances.FILL_FIT_G0 * size, 0.5 * SEW_TOLERANCE),
                                            gap=max(BRep_Tool.Tolerance_s(e) for e in edges))
-    elif method == "wrapped":  # a plate in cylindrical coordinates about the neighbours' (or a fitted) axis
+    elif method == "wrap":  # a plate in cylindrical coordinates about the neighbours' (or a fitted) axis
         flags = [any(g1[k] for k in range(len(edges)) if side_of_edge[k] == j) for j in range(len(sides))]
         fill, occ_faces = wrapped_fill_faces(sides, flags, min(tolerances.FILL_FIT_G0 * size, 0.5 * SEW_TOLERANCE),
                                              gap=max(BRep_Tool.Tolerance_s(e) for e in edges),
@@ -975,7 +975,7 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
     # (a hole winding around an axis) where neither gives a fold-free fill
     errors = {}
     for method, wanted in (("plate", lambda: best is None or best_score[0] or best_score[1] > 1.0),
-                           ("wrapped", lambda: best is None or best_score[0])):
+                           ("wrap", lambda: best is None or best_score[0])):
         if not wanted():
             continue
         for follow, prep in prepared.items():
@@ -987,7 +987,7 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
             score = _score(cand, size, etol)
             if best is None or _plate_wins(score, best_score):
                 best, best_score = cand, score
-    plate_err, wrap_err = errors.get("plate"), errors.get("wrapped")
+    plate_err, wrap_err = errors.get("plate"), errors.get("wrap")
     if best is None:
         if plate_err is None or last_err is None:
             raise last_err or plate_err

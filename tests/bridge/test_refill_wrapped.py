@@ -33,7 +33,7 @@ def test_neighbour_axes_hold_the_screw_axis(screw) -> None:
 
 def test_thread_crest_is_filled_by_the_wrapped_plate(screw, crest) -> None:
     rep, shape = crest
-    assert rep.status == "filled" and rep.method == "wrapped", rep.reason
+    assert rep.status == "filled" and rep.method == "wrap", rep.reason
     assert rep.valid and rep.step_round_trip and rep.folds == 0
     assert max(rep.side_g0) <= tolerances.FILL_FIT_G0 * screw.size  # 1.9e-6, measured by LocalAnalysis
 
