@@ -137,12 +137,18 @@ def _unroll(P: Array, c: Array, a: Array, e1: Array, r0: float) -> Array:
     return np.c_[r0 * np.arctan2(y, x), z, np.hypot(x, y)]
 
 
+def _radial(P: Array, c: Array, a: Array) -> tuple[Array, Array]:
+    """The points' offsets from the axis, square to it, and their lengths ``r``."""
+    Q = np.asarray(P, float) - c
+    R = Q - np.outer(Q @ a, a)
+    return R, np.linalg.norm(R, axis=1)
+
+
 def _jacobian_apply(P: Array, V: Array, c: Array, a: Array, e1: Array, r0: float) -> Array:
     """The unrolling's Jacobian applied to vectors ``V`` at points ``P``: ``(r0/r e_theta . V, a . V,
     e_r . V)``."""
-    Q = P - c
-    R = Q - np.outer(Q @ a, a)
-    r = np.linalg.norm(R, axis=1)
+    R, r = _radial(P, c, a)
+    r = np.maximum(r, 1e-300)
     er = R / r[:, None]
     et = np.cross(a, er)
     return np.c_[r0 / r * np.einsum("ij,ij->i", et, V), V @ a, np.einsum("ij,ij->i", er, V)]
@@ -312,10 +318,7 @@ def _unrolled_side(side: HoleSide, c: Array, a: Array, e1: Array, r0: float, x_s
             U[:, 0] += np.round((x_start - U[0, 0]) / turn) * turn
         # theta unwrapped safely: its speed |e_theta . T| / r (from the tangent, so a step near a whole
         # turn cannot alias as np.unwrap's differences would) times the step below a quarter radian
-        Qs = P - c
-        Rs = Qs - np.outer(Qs @ a, a)
-        rs = np.maximum(np.linalg.norm(Rs, axis=1), 1e-300)
-        speed = np.abs(np.einsum("ij,ij->i", np.cross(a, Rs / rs[:, None]), T)) / rs
+        speed = np.abs(_jacobian_apply(P, T, c, a, e1, r0)[:, 0]) / r0
         if float(np.max(np.maximum(speed[1:], speed[:-1]) * np.diff(t))) < 0.25 or count >= _MAX_SIDE_SAMPLES:
             curve = make_lsq_spline(t, U, knots, k=3)
             tm = 0.5 * (t[1:] + t[:-1])
@@ -339,8 +342,7 @@ def _one_axis(sides: list[HoleSide], flags: Array, c: Array, a: Array, g0_tol: f
     a = a / np.linalg.norm(a)
     e1, _ = _frame(a)
     dense = np.concatenate([_side_samples(s, np.linspace(*s.curve.domain, 257))[0] for s in sides])
-    Q = dense - c
-    r = np.linalg.norm(Q - np.outer(Q @ a, a), axis=1)
+    _, r = _radial(dense, c, a)
     r0 = float(r.mean())
     if r.min() < _MIN_RADIUS * r0:
         k = int(np.argmin(r))
