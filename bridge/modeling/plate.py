@@ -45,12 +45,14 @@ def plate_face(fill: PlateFill, tol: float | None = None, gap: float = 0.0) -> A
     InvalidGeometryError
         The fill misses its boundary by more than ``max(SEW_TOLERANCE, gap)`` (it would not sew in).
     """
-    g0 = float(np.max(fill.side_g0))
+    k = int(np.argmax(fill.side_g0))
+    g0 = float(fill.side_g0[k])
     limit = max(SEW_TOLERANCE, float(gap))
     if g0 > limit:
-        raise InvalidGeometryError(f"plate fill: it misses the hole's boundary by {g0:.3g}, more than the sewing "
-                                   f"tolerance {SEW_TOLERANCE:g} and the hole edges' own tolerance {gap:.3g} "
-                                   "(raise max_spans or check the sides)")
+        raise InvalidGeometryError(f"plate fill: it misses the hole's boundary by {g0:.3g} (side {k} of "
+                                   f"{len(fill.side_g0)}), more than the sewing tolerance {SEW_TOLERANCE:g} and "
+                                   f"the hole edges' own tolerance {gap:.3g} (its best with {fill.spans[0]} x "
+                                   f"{fill.spans[1]} spans)")
     return make_face(fill.trimmed, max(1e-7, g0) if tol is None else tol)
 
 

@@ -204,3 +204,50 @@ def test_an_unrelated_given_axis_is_tried_after_the_neighbours_own() -> None:
 def test_a_malformed_axis_is_named() -> None:
     with pytest.raises(InvalidGeometryError, match=r"axes\[0\]: expected a finite point"):
         fill_wrapped_plate(_strip(0.0, 0.3), axes=[(np.zeros(3), np.zeros(3))], g0_tol=G0)
+
+
+def _run_out(turns: float = 2.0) -> list[HoleSide]:
+    """The loop of screw pair [8, 22]'s hole, in closed form: a thread flank between the root helix
+    (r 2.46) and the crest helix (r 3, 0.31 lower), cut square at its top and ending at the bottom
+    in a run-out: from the root's end the loop runs back 1.47 rad at r 2.46 (side 0), then forward
+    along the crest helix's own (theta, z) line while r climbs to 3 (side 1), reaching the crest
+    helix with r still rising at 0.73 per radian. Over (theta, z) sides 1 and 2 go on straight with
+    a kink in r, so a height r(theta, z) stands upright there; at the root's end both sides keep r
+    at 2.46, so a height z(theta, r) stands upright there (G0 only, as on the screw)."""
+    r1, r2, zr, zc, tw = 2.46, 3.0, 0.0, -0.31, 1.47
+    lead = PITCH / (2 * np.pi)  # z per radian along the helices
+    end = 2 * np.pi * turns
+    s0 = (zr - zc) / tw + lead  # side 0's z per radian: it meets side 1 at theta = -tw
+
+    def cyl(th, r, z):
+        return np.stack([r * np.cos(th), r * np.sin(th), z], axis=-1)
+
+    def tangent(th, r):  # d/dtheta along a helix of radius r, as an outward cross field at the ends
+        return np.stack([-r * np.sin(th), r * np.cos(th), np.full_like(th, lead)], axis=-1)
+
+    def across(th):  # root to crest at theta: the flank's direction across the strip
+        return cyl(th, r2, zc + lead * th) - cyl(th, r1, zr + lead * th)
+
+    def run_out_r(q):
+        return r1 + (r2 - r1) * q ** 2
+
+    return [
+        _side(lambda s: cyl(-tw * s, r1, zr - s0 * tw * s), lambda s: -across(-tw * s)),
+        _side(lambda s: cyl(tw * (s - 1), run_out_r(s), zc + lead * tw * (s - 1)), lambda s: -tangent(tw * (s - 1), r2)),
+        _side(lambda s: cyl(end * s, r2, zc + lead * end * s), lambda s: across(end * s)),
+        _side(lambda s: cyl(np.full_like(s, end), r2 - (r2 - r1) * s, zc + (zr - zc) * s + lead * end),
+              lambda s: tangent(np.full_like(s, end), r1)),
+        _side(lambda s: cyl(end * (1 - s), r1, zr + lead * end * (1 - s)), lambda s: -across(end * (1 - s))),
+    ]
+
+
+def test_a_run_out_corner_takes_the_plane_of_the_unrolled_loop() -> None:
+    """Screw pair [8, 22]: neither r nor z is a height over the whole unrolled run-out (see
+    :func:`_run_out`); r as the height stayed 2.9e-3 off at the run-out, z 1.6e-3 off at the root's
+    end. The plate over the unrolled loop's own plane (its vector area, between the two) meets the
+    target on every side, without a fold."""
+    sides = _run_out()
+    fill = fill_wrapped_plate(sides, axes=[(np.zeros(3), np.array([0, 0, 1.0]))], g1=[False] * 5, g0_tol=G0)
+    assert fill.met and np.all(fill.side_g0 <= G0), fill.side_g0
+    assert abs(fill.unrolled.normal[1]) < 0.99 and abs(fill.unrolled.normal[2]) < 0.99  # neither z nor r
+    assert count_folds(fill.trimmed) == 0
