@@ -233,7 +233,8 @@ def _run_out(turns: float = 2.0) -> list[HoleSide]:
 
     return [
         _side(lambda s: cyl(-tw * s, r1, zr - s0 * tw * s), lambda s: -across(-tw * s)),
-        _side(lambda s: cyl(tw * (s - 1), run_out_r(s), zc + lead * tw * (s - 1)), lambda s: -tangent(tw * (s - 1), r2)),
+        _side(lambda s: cyl(tw * (s - 1), run_out_r(s), zc + lead * tw * (s - 1)),
+              lambda s: -tangent(tw * (s - 1), r2)),
         _side(lambda s: cyl(end * s, r2, zc + lead * end * s), lambda s: across(end * s)),
         _side(lambda s: cyl(np.full_like(s, end), r2 - (r2 - r1) * s, zc + (zr - zc) * s + lead * end),
               lambda s: tangent(np.full_like(s, end), r1)),
