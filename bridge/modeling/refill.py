@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
 from OCP.Bnd import Bnd_Box
 from OCP.BRepBndLib import BRepBndLib
@@ -882,7 +883,7 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
             rep.valid = bool(BRepCheck_Analyzer(shape).IsValid())
             rep.step_round_trip = _round_trip(shape, len(model_faces(shape)))
     except OccsurfError as err:
-        rep.status, rep.reason = "refused", one_line(err, expected=(OccsurfError,))
+        rep.status, rep.reason = "refused", one_line(err, expected=(OccsurfError,)) + _crease_note(model, rep.faces)
     except Exception as err:  # noqa: BLE001 - an OCC failure on one hole must not stop the others
         rep.status, rep.reason = "failed", one_line(err, expected=(OccsurfError,))
     if compare_occ:
@@ -1030,6 +1031,47 @@ def _score(cand: tuple, size: float, edge_tol: float = 0.0) -> tuple[bool, float
     target = tolerances.FILL_FIT_G0 * size
     misses = max(g0 / target, 1.0) * max(g1, 1.0)
     return fill_folds(cand[5]) > 0, misses, max(g0 / max(target, edge_tol), g1)
+
+
+def _inner_creases(model: SewnModel, removed: list[int]) -> list[tuple[float, np.ndarray]]:
+    """The sharp edges between two removed faces: ``(largest angle in degrees between the faces'
+    normals along it, its mid point)`` for each edge where it exceeds :data:`G1_EDGE_DEG`, sharpest
+    first. Such an edge runs across the hole from boundary to boundary: a fill smooth across it
+    must turn its tangent plane by that angle at the corners where the edge ends (screw pairs
+    [8, 9] and [9, 12]: flank and crest meet at 60 deg, and no fill comes within 6e-4 of the
+    boundary there; OCC's filler fails on both)."""
+    gone = [model.faces[i] for i in removed]
+    seen: list[Any] = []
+    out = []
+    for f in gone:
+        ex = TopExp_Explorer(f, TopAbs_EDGE)
+        while ex.More():
+            e = TopoDS.Edge_s(ex.Current())
+            ex.Next()
+            pair = [g for g in model.edge_faces(e) if any(g.IsSame(r) for r in gone)]
+            if len(pair) != 2 or any(e.IsSame(o) for o in seen) or BRep_Tool.Degenerated_s(e):
+                continue
+            seen.append(e)
+            angle = _joint_angle(e, pair[0], pair[1])
+            if angle > G1_EDGE_DEG:
+                a, b = BRep_Tool.Range_s(e)
+                mid = BRepAdaptor_Curve(e).Value(0.5 * (a + b))
+                out.append((angle, np.array([mid.X(), mid.Y(), mid.Z()])))
+    return sorted(out, key=lambda c: -c[0])
+
+
+def _crease_note(model: SewnModel, removed: list[int]) -> str:
+    """A refusal's postscript naming the sharpest crease between removed faces, if any."""
+    try:
+        creases = _inner_creases(model, removed) if len(removed) > 1 else []
+    except Exception:  # noqa: BLE001 - a note, never a second failure
+        return ""
+    if not creases:
+        return ""
+    angle, mid = creases[0]
+    return (f" (the removed faces meet at {len(creases)} sharp edge(s), the sharpest at {angle:.1f} deg near "
+            f"{np.array2string(mid, precision=4)}: a fill smooth across it turns its tangent plane by that "
+            "much where the edge meets the hole's boundary)")
 
 
 def _safe_joint(e: Any, own: Any, nb: Any) -> bool:

@@ -64,3 +64,18 @@ def test_a_flank_with_its_run_out_is_filled_over_the_unrolled_loops_plane(screw,
     assert max(rep.side_g0) <= tolerances.FILL_FIT_G0 * screw.size
     occ = [max(o["side_g0"]) for o in rep.occ.values() if o.get("status") == "ok"]
     assert all(g > 1e3 * max(rep.side_g0) for g in occ)  # where OCC fills it, a thousand times further off
+
+
+def test_a_refusal_names_the_crease_between_removed_faces(screw, bearing) -> None:
+    """Flank and crest (screw faces 8 and 9) meet at a 60 deg crease that runs the strip's length;
+    removed together, no fill comes within 6e-4 of the boundary where the crease ends on it (OCC's
+    filler fails too), and the refusal says so. The bearing's fillet pair [4, 166] meets
+    tangentially: no crease."""
+    from occsurf.bridge.modeling.refill import _crease_note, _inner_creases
+
+    creases = _inner_creases(screw, [8, 9])
+    assert len(creases) == 1 and abs(creases[0][0] - 60.0) < 0.5
+    assert abs(np.hypot(*creases[0][1][:2]) - 3.0) < 0.1  # on the crest's radius
+    assert "sharpest at 60.1 deg" in _crease_note(screw, [8, 9])
+    assert _inner_creases(bearing, [4, 166]) == [] and _crease_note(bearing, [4, 166]) == ""
+    assert _crease_note(screw, [9]) == ""  # a single face has no inner edge
