@@ -88,7 +88,7 @@ def summary(rows: list[dict]) -> str:
     out.append(f"| occsurf | {len(ours)} / {len(closed)} | {_stats([r['g0'] for r in ours])} | "
                f"{_stats([r['g1'] for r in ours])} | {statistics.median([r['seconds'] for r in ours]) if ours else 0:.2f} s | "
                f"{_no_worse(closed)} |")
-    for method in ("central", "plate"):  # which construction each filled hole kept (refill.fitted_fill)
+    for method in ("central", "plate", "wrap"):  # which construction each filled hole kept (refill.fitted_fill)
         mine = [r for r in ours if r.get("method", "central") == method]
         out.append(f"| occsurf, {method} | {len(mine)} / {len(closed)} | {_stats([r['g0'] for r in mine])} | "
                    f"{_stats([r['g1'] for r in mine])} | {statistics.median([r['seconds'] for r in mine]) if mine else 0:.2f} s | "
