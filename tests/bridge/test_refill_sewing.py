@@ -123,3 +123,16 @@ def test_plate_face_accepts_a_miss_within_the_hole_edges_tolerance() -> None:
     with pytest.raises(InvalidGeometryError, match="misses the hole's boundary by 3e-05"):
         plate_face(fill)
     assert not plate_face(fill, gap=4e-5).IsNull()  # the hole's edges declare 4e-5: it sews in
+
+
+def test_a_fill_that_sews_in_invalid_is_sewn_again_lower(bearing) -> None:
+    """Bearing pair [79, 84]: sewn at twice the hole edges' tolerance (1.4e-5) a corner of the
+    kept neighbour 208 collapses into a self-intersecting wire (BRepCheck_SelfIntersectingWire,
+    the face unorientable); refill sews again at half the tolerance, and keeps that (valid, the
+    model's own free edges only), where before it reported the filled model invalid."""
+    rep, shape = refill.refill_faces(bearing, [79, 84], compare_occ=False)
+    assert rep.status == "filled" and rep.valid and rep.step_round_trip, rep.reason
+    at_first = refill._sew_in(bearing, rep.faces, rep._fill_faces, rep.g0)
+    assert not BRepCheck_Analyzer(at_first).IsValid()  # the cause, as measured
+    assert BRepCheck_Analyzer(shape).IsValid()
+    assert refill._free_edge_count(shape) == refill._free_edge_count(bearing.shape)
