@@ -408,7 +408,7 @@ def _one_axis(sides: list[HoleSide], flags: Array, c: Array, a: Array, g0_tol: f
         except OccsurfError as err:
             why.append(f"{height} as the height: {err}")
             continue
-        score = max(float(np.max(cand.side_g0)) / tol0, float(np.nanmax(np.r_[cand.side_g1, 0.0])) / tol1)
+        score = _miss(cand, tol0, tol1)
         if score < best:
             plate, best = cand, score
         if cand.met:
@@ -427,6 +427,11 @@ def _one_axis(sides: list[HoleSide], flags: Array, c: Array, a: Array, g0_tol: f
     g0, g1 = _measure(fill)
     met = bool(np.all(g0 <= g0_tol) and np.all(np.nan_to_num(g1, nan=0.0) <= angle_tol))
     return replace(fill, side_g0=g0, side_g1=g1, met=met)
+
+
+def _miss(fill: PlateFill, g0_tol: float, angle_tol: float) -> float:
+    """The fill's worst side in units of the targets (<= 1: both met; G0-only sides have no angle)."""
+    return max(float(np.max(fill.side_g0)) / g0_tol, float(np.nanmax(np.r_[fill.side_g1, 0.0])) / angle_tol)
 
 
 def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol: float,
@@ -571,7 +576,7 @@ def fill_wrapped_plate(sides: Sequence[HoleSide], *, axes: Sequence[tuple[ArrayL
     # the axes the neighbours turn about best first (a neighbour's axis may have nothing to do with
     # this hole: the first axis whose fill meets the targets is kept, and the boundary targets can be
     # met about a wrong axis with the inside off the surface it was cut from)
-    lengths = np.concatenate([np.linalg.norm(d[1], axis=1) * (s.curve.domain[1] - s.curve.domain[0]) / 128
+    lengths = np.concatenate([np.linalg.norm(d[1], axis=1) * (s.curve.domain[1] - s.curve.domain[0]) / (len(d[1]) - 1)
                               for d, s in zip(samples, sides)])  # each sample's arc length
     cands = [(axis_residual(dense, normals, c, a, lengths), k < len(given), c, a)
              for k, (c, a) in enumerate(given + fitted_axes(dense, normals))]
@@ -593,8 +598,7 @@ def fill_wrapped_plate(sides: Sequence[HoleSide], *, axes: Sequence[tuple[ArrayL
             why.append(f"{name}: {err}")
             continue
         anchor = res if anchor is None else anchor
-        score = max(float(np.max(fill.side_g0)) / g0_tol,
-                    float(np.nanmax(np.r_[fill.side_g1, 0.0])) / angle_tol)
+        score = _miss(fill, g0_tol, angle_tol)
         if best is None or score < best[0]:
             best = (score, fill)
         if fill.met:

@@ -1040,22 +1040,20 @@ def _inner_creases(model: SewnModel, removed: list[int]) -> list[tuple[float, np
     [8, 9] and [9, 12]: flank and crest meet at 60 deg, and no fill comes within 6e-4 of the
     boundary there; OCC's filler fails on both)."""
     gone = [model.faces[i] for i in removed]
-    seen: list[Any] = []
-    out = []
+    edges = TopTools_IndexedMapOfShape()  # each edge once
     for f in gone:
-        ex = TopExp_Explorer(f, TopAbs_EDGE)
-        while ex.More():
-            e = TopoDS.Edge_s(ex.Current())
-            ex.Next()
-            pair = [g for g in model.edge_faces(e) if any(g.IsSame(r) for r in gone)]
-            if len(pair) != 2 or any(e.IsSame(o) for o in seen) or BRep_Tool.Degenerated_s(e):
-                continue
-            seen.append(e)
-            angle = _joint_angle(e, pair[0], pair[1])
-            if angle > G1_EDGE_DEG:
-                a, b = BRep_Tool.Range_s(e)
-                mid = BRepAdaptor_Curve(e).Value(0.5 * (a + b))
-                out.append((angle, np.array([mid.X(), mid.Y(), mid.Z()])))
+        TopExp.MapShapes_s(f, TopAbs_EDGE, edges)
+    out = []
+    for i in range(1, edges.Extent() + 1):
+        e = TopoDS.Edge_s(edges.FindKey(i))
+        pair = [g for g in model.edge_faces(e) if any(g.IsSame(r) for r in gone)]
+        if len(pair) != 2 or BRep_Tool.Degenerated_s(e):
+            continue
+        angle = _joint_angle(e, pair[0], pair[1])
+        if angle > G1_EDGE_DEG:
+            a, b = BRep_Tool.Range_s(e)
+            mid = BRepAdaptor_Curve(e).Value(0.5 * (a + b))
+            out.append((angle, np.array([mid.X(), mid.Y(), mid.Z()])))
     return sorted(out, key=lambda c: -c[0])
 
 
@@ -1124,11 +1122,11 @@ def _sew_in_checked(model: SewnModel, removed: list[int], new_faces: list[Any], 
     [79, 199]) into a self-intersecting wire; at 7.1e-6 the same fills sew in valid, with the
     model's own 25 free edges (at 1e-6 three fill edges stay free). The hole's edges declare up to
     9.9e-6 there, but lie closer than that."""
-    shape = _sew_in(model, removed, new_faces, gap)
+    tol = _sew_tolerance(model, removed, gap)
+    shape = _sew_in(model, removed, new_faces, gap, tol=tol)
     if BRepCheck_Analyzer(shape).IsValid():
         return shape, True
     free = _free_edge_count(shape)
-    tol = max(SEW_TOLERANCE, SEW_GAP_FACTOR * max(float(gap), hole_gap(model, removed)))
     for _ in range(6):
         tol *= 0.5
         if tol <= float(gap):
@@ -1137,6 +1135,12 @@ def _sew_in_checked(model: SewnModel, removed: list[int], new_faces: list[Any], 
         if _free_edge_count(cand) <= free and BRepCheck_Analyzer(cand).IsValid():
             return cand, True
     return shape, False
+
+
+def _sew_tolerance(model: SewnModel, removed: list[int], gap: float) -> float:
+    """The tolerance :func:`_sew_in` sews at by default: ``max(SEW_TOLERANCE, SEW_GAP_FACTOR *
+    max(gap, hole_gap))``."""
+    return max(SEW_TOLERANCE, SEW_GAP_FACTOR * max(float(gap), hole_gap(model, removed)))
 
 
 def _sew_in(model: SewnModel, removed: list[int], new_faces: list[Any], gap: float = 0.0,
@@ -1151,9 +1155,7 @@ def _sew_in(model: SewnModel, removed: list[int], new_faces: list[Any], gap: flo
     hole edges and the neighbours' p-curves re-parametrised beyond their tolerance
     (``BRepCheck_InvalidCurveOnSurface`` / ``InvalidSameParameterFlag`` -> faces unorientable).
     ``tol`` overrides that tolerance (:func:`_sew_in_checked`)."""
-    if tol is None:
-        tol = max(SEW_TOLERANCE, SEW_GAP_FACTOR * max(float(gap), hole_gap(model, removed)))
-    sew = BRepBuilderAPI_Sewing(tol)
+    sew = BRepBuilderAPI_Sewing(_sew_tolerance(model, removed, gap) if tol is None else tol)
     shell, b = TopoDS_Shell(), BRep_Builder()
     b.MakeShell(shell)
     for k, f in enumerate(model.faces):
