@@ -19,6 +19,21 @@ Cross-cutting modules stay at this level: :mod:`.errors` (the exception hierarch
 :mod:`._numba_kernels` (optional compiled kernels).
 """
 
+from .construction import (
+    SweepResult,
+    coons,
+    coons_bicubic,
+    exact_sweep,
+    extrude,
+    gordon,
+    network_parameters,
+    polynomial_approximation,
+    revolve,
+    rotational_sweep,
+    ruled,
+    sweep,
+    translational_sweep,
+)
 from .errors import (
     ExchangeError,
     InvalidGeometryError,
@@ -27,18 +42,15 @@ from .errors import (
     ParameterError,
     ToleranceError,
 )
-from .kernel import (
-    BSplineCurve,
-    BSplineSurface,
-    TrimmedSurface,
-    arc,
-    circle,
-    conic_arc,
-    conic_from_shoulder,
-    conic_through_point,
-    conic_type,
-    ellipse,
-    make_compatible,
+from .fitting import (
+    approximation_knots,
+    averaged_knots,
+    fit_curve,
+    fit_surface,
+    interpolate_curve,
+    interpolate_surface,
+    loft,
+    parametrize,
 )
 from .geometry import (
     AffineMap,
@@ -55,30 +67,27 @@ from .geometry import (
     surface_curvatures,
     torsion,
 )
-from .construction import (
-    SweepResult,
-    coons,
-    coons_bicubic,
-    exact_sweep,
-    extrude,
-    gordon,
-    network_parameters,
-    polynomial_approximation,
-    revolve,
-    rotational_sweep,
-    ruled,
-    sweep,
-    translational_sweep,
+from .hierarchical import (
+    ADDITIVE_OFFSETS,
+    FRAME_OFFSETS,
+    HierarchicalCurve,
+    HierarchicalSurface,
+    OffsetMapping,
+    Overlay,
+    register_offset_mapping,
 )
-from .fitting import (
-    approximation_knots,
-    averaged_knots,
-    fit_curve,
-    fit_surface,
-    interpolate_curve,
-    interpolate_surface,
-    loft,
-    parametrize,
+from .kernel import (
+    BSplineCurve,
+    BSplineSurface,
+    TrimmedSurface,
+    arc,
+    circle,
+    conic_arc,
+    conic_from_shoulder,
+    conic_through_point,
+    conic_type,
+    ellipse,
+    make_compatible,
 )
 from .manipulation import (
     ConstraintError,
@@ -92,15 +101,6 @@ from .manipulation import (
     constrain,
     drag_point,
     drag_surface_point,
-)
-from .hierarchical import (
-    ADDITIVE_OFFSETS,
-    FRAME_OFFSETS,
-    HierarchicalCurve,
-    HierarchicalSurface,
-    OffsetMapping,
-    Overlay,
-    register_offset_mapping,
 )
 from .topology import (
     FillQuality,

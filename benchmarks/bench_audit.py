@@ -170,7 +170,7 @@ def main() -> None:
             rows.append((label, dt, summary["n_faces"], len(files) - summary["counts"]["ok"], peaks))
             last_summary = summary
         base = rows[0][1]
-        print(f"\n| run | wall s | files/s | faces/s | vs sequential | files not ok | peak RSS worker / reader (MB) |")
+        print("\n| run | wall s | files/s | faces/s | vs sequential | files not ok | peak RSS worker / reader (MB) |")
         print("|---|---|---|---|---|---|---|")
         for label, dt, nf, bad, peaks in rows:
             print(f"| {label} | {dt:.1f} | {len(files) / dt:.2f} | {nf / dt:.1f} | {base / dt:.2f}x | {bad} | "

@@ -17,14 +17,13 @@ Run:  python benchmarks/bench_continuity.py
 
 from __future__ import annotations
 
-import common  # noqa: F401 - pins BLAS threads before NumPy
-
 import math
 import sys
 import time
 from collections import Counter
 from pathlib import Path
 
+import common  # noqa: F401 - pins BLAS threads before NumPy
 import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.GeomAbs import GeomAbs_Shape

@@ -18,13 +18,12 @@ Cases (times best of N, wall clock, one BLAS thread; see benchmarks/common.py):
 from __future__ import annotations
 
 import common  # noqa: F401  (pins BLAS threads before NumPy)
+import numpy as np  # noqa: E402
 from common import Row, best_of, machine_note, print_table
 
-import numpy as np  # noqa: E402
-
+from occsurf.algorithms.construction import coons, gordon  # noqa: E402
 from occsurf.algorithms.kernel.basis import basis_matrix  # noqa: E402
 from occsurf.algorithms.kernel.curve import BSplineCurve  # noqa: E402
-from occsurf.algorithms.construction import coons, gordon  # noqa: E402
 from occsurf.algorithms.kernel.surface import BSplineSurface  # noqa: E402
 
 

@@ -19,7 +19,6 @@ Exit status 1 if a target fails.
 from __future__ import annotations
 
 import argparse
-import math
 
 import common  # first: pins BLAS to one thread  # noqa: I001
 import numpy as np

@@ -11,9 +11,9 @@ Run:  python benchmarks/bench_fill.py  (about a minute on the 2-core machine)
 
 from __future__ import annotations
 
-import common  # noqa: F401 - pins BLAS threads before NumPy
-
 import time
+
+import common  # noqa: F401 - pins BLAS threads before NumPy
 
 from occsurf.bridge.conversion.splines import make_face
 from occsurf.bridge.modeling.fill import fill_model, sew_faces

@@ -23,8 +23,6 @@ Run:  python benchmarks/bench_fill_realdata.py [--pairs | --only-pairs] [--skip 
 
 from __future__ import annotations
 
-import common  # noqa: F401 - pins BLAS threads before NumPy
-
 import argparse
 import json
 import statistics
@@ -33,6 +31,8 @@ import time
 from collections import Counter
 from dataclasses import asdict
 from pathlib import Path
+
+import common  # noqa: F401 - pins BLAS threads before NumPy
 
 REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata"
 

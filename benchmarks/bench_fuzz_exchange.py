@@ -30,10 +30,9 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from tests.bridge import corrupt_files as C  # noqa: E402
-
 from occsurf.bridge.exchange.step_iges import READ_JOB, READ_PRELOAD, read_iges, read_step, write_iges, write_step  # noqa: E402
 from occsurf.bridge.isolation import run_jobs  # noqa: E402
+from tests.bridge import corrupt_files as C  # noqa: E402
 
 
 def main() -> int:

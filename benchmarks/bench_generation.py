@@ -23,14 +23,13 @@ outside the timing); ours include input validation. The ratio is OCC time / our 
 from __future__ import annotations
 
 import common  # noqa: F401  (pins BLAS threads before NumPy)
-
 import numpy as np  # noqa: E402
 from common import Row, best_of, machine_note, print_table  # noqa: E402
 
 from occsurf.algorithms import BSplineCurve, ellipse  # noqa: E402
-from occsurf.algorithms.fitting.interpolation import interpolate_curve  # noqa: E402
 from occsurf.algorithms.construction.generation import extrude, revolve, ruled, translational_sweep  # noqa: E402
 from occsurf.algorithms.construction.sweeping import sweep  # noqa: E402
+from occsurf.algorithms.fitting.interpolation import interpolate_curve  # noqa: E402
 
 
 def inputs():

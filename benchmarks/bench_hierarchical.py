@@ -29,7 +29,6 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import common  # noqa: E402  (pins BLAS threads before NumPy)
-
 import numpy as np  # noqa: E402
 
 from occsurf.algorithms.hierarchical.surface import HierarchicalSurface  # noqa: E402

@@ -48,8 +48,9 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer repetitions")
     args = ap.parse_args()
-    from occsurf.bridge import from_occ
     from geomdl import operations
+
+    from occsurf.bridge import from_occ
 
     rep = 20 if args.quick else 200
     s = common.test_surface()

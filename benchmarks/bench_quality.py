@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 
-import common  # first: pins BLAS to one thread  # noqa: I001
 import numpy as np
 from common import Row, best_of, check_targets, machine_note, numpy_path, print_table, test_surface
 

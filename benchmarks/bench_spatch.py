@@ -22,10 +22,9 @@ Run:  python benchmarks/bench_spatch.py   (~20 s on the 2-core machine)
 
 from __future__ import annotations
 
-import common  # noqa: F401 - pins BLAS threads before NumPy
-
 from math import comb
 
+import common  # noqa: F401 - pins BLAS threads before NumPy
 import numpy as np
 from OCP.gp import gp_Pnt, gp_Vec
 

@@ -23,8 +23,10 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
 
-from occsurf.algorithms import BSplineSurface  # noqa: E402
-from occsurf.algorithms import _numba_kernels  # noqa: E402
+from occsurf.algorithms import (
+    BSplineSurface,  # noqa: E402
+    _numba_kernels,  # noqa: E402
+)
 
 SEED = 20240611
 
@@ -98,7 +100,7 @@ def splipy_surface(s: BSplineSurface):
 
 
 def geomdl_surface(s: BSplineSurface):
-    from geomdl import BSpline, NURBS
+    from geomdl import NURBS, BSpline
 
     (p, q), (U, V) = s.degree, s.knots
     g = NURBS.Surface() if s.is_rational else BSpline.Surface()

@@ -13,9 +13,9 @@ import numpy as np
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface
 from occsurf.algorithms.construction import coons, coons_bicubic, gordon
-
 from occsurf.bridge.exchange.step_iges import write_step
 from occsurf.bridge.rendering.surfaces import render_surfaces
+
 from ._common import output_folder
 
 __all__ = ["render_curvenet_demo", "demo_boundaries", "demo_network"]

@@ -17,6 +17,7 @@ from occsurf.bridge.exchange.files import write_figure, write_text
 from occsurf.bridge.exchange.step_iges import write_step
 from occsurf.bridge.modeling.fill import fill_model, sew_faces
 from occsurf.bridge.rendering.surfaces import render_surfaces
+
 from ._common import output_folder
 
 __all__ = ["render_fill_demo"]

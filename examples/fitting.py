@@ -16,6 +16,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+
 from ._common import output_folder
 
 __all__ = ["render_fitting_demo", "sharp_feature", "franke"]
@@ -60,8 +61,8 @@ def render_fitting_demo(out_dir: Path) -> list[Path]:
         hierarchy), ``fitting_counts.txt`` (control points: adaptive vs uniform).
     """
     from occsurf.algorithms.fitting import fit_adaptive
-    from occsurf.bridge.exchange.hierarchical_io import write_hierarchical_step
     from occsurf.bridge.exchange.files import write_text
+    from occsurf.bridge.exchange.hierarchical_io import write_hierarchical_step
     from occsurf.bridge.modeling.fit import _panel
     from occsurf.bridge.rendering.error_maps import render_error_maps
 

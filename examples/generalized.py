@@ -18,11 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from occsurf.bridge.exchange.files import write_figure
 from occsurf.algorithms.topology.generalized import GeneralizedSurface, generalized_biquadratic, spatch_curvatures
 from occsurf.algorithms.topology.generalized_bicubic import generalized_bicubic
 from occsurf.algorithms.topology.mesh import Mesh
 from occsurf.algorithms.topology.spatch_convert import piece_domain_points
+from occsurf.bridge.exchange.files import write_figure
+
 from ._common import output_folder
 
 __all__ = ["render_generalized_demo", "demo_dome", "demo_frame", "render_generalized"]

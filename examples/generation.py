@@ -15,9 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from occsurf.algorithms import BSplineCurve, circle, ellipse
-from occsurf.algorithms.fitting.interpolation import interpolate_curve
 from occsurf.algorithms.construction.generation import extrude, revolve, rotational_sweep, ruled, translational_sweep
 from occsurf.algorithms.construction.sweeping import sweep
+from occsurf.algorithms.fitting.interpolation import interpolate_curve
+
 from ._common import output_folder, script
 
 __all__ = ["render_generation_demo", "demo_surfaces"]

@@ -17,9 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-from occsurf.bridge.exchange.files import write_figure
 from occsurf.algorithms import BSplineSurface
 from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
+from occsurf.bridge.exchange.files import write_figure
+
 from ._common import label_axes, output_folder, script
 
 __all__ = ["render_hierarchical_demo", "demo_hierarchy"]

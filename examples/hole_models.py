@@ -22,8 +22,8 @@ import numpy as np
 
 from occsurf.algorithms.kernel.basis import basis_matrix, greville
 from occsurf.algorithms.kernel.curve import BSplineCurve
-from occsurf.algorithms.topology.nsided import HoleSide, side_from_surface
 from occsurf.algorithms.kernel.surface import BSplineSurface
+from occsurf.algorithms.topology.nsided import HoleSide, side_from_surface
 
 __all__ = ["RingModel", "base_surface", "ring_model", "represent_grid"]
 

@@ -16,7 +16,6 @@ from pathlib import Path
 
 import numpy as np
 
-from occsurf.bridge.exchange.files import write_figure
 from occsurf.algorithms import (
     BSplineCurve,
     BSplineSurface,
@@ -27,6 +26,8 @@ from occsurf.algorithms import (
     drag_point,
     drag_surface_point,
 )
+from occsurf.bridge.exchange.files import write_figure
+
 from ._common import label_axes, output_folder, script
 
 __all__ = ["render_manipulation_demo", "demo_curve", "demo_surface"]

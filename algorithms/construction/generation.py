@@ -45,9 +45,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
+from ..errors import InvalidGeometryError
 from ..kernel.compat import make_compatible
 from ..kernel.curve import BSplineCurve
-from ..errors import InvalidGeometryError
 from ..kernel.surface import BSplineSurface
 from ._common import check_curve
 

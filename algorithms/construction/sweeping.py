@@ -65,11 +65,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
-from ..kernel.basis import greville
-from ..kernel.curve import BSplineCurve
-from ..geometry.differential import curve_frenet, rotation_minimizing_frames
 from ..errors import InvalidGeometryError, ToleranceError
 from ..fitting.interpolation import interpolate_values
+from ..geometry.differential import curve_frenet, rotation_minimizing_frames
+from ..kernel.basis import greville
+from ..kernel.curve import BSplineCurve
 from ..kernel.knots import distinct_knots
 from ..kernel.surface import BSplineSurface
 from ._common import check_curve

@@ -23,7 +23,16 @@ from ._common import project_points
 from .adaptive import AdaptiveFit, LevelReport, fit_adaptive
 from .adaptive_scattered import ScatteredAdaptiveFit, fit_adaptive_scattered
 from .gridded import BoundaryCurve, CrossDerivative, FixedPoint, GridFit, Symmetry, TangentPlane, fit_grid
-from .interpolation import approximation_knots, averaged_knots, fit_curve, fit_surface, interpolate_curve, interpolate_surface, loft, parametrize
+from .interpolation import (
+    approximation_knots,
+    averaged_knots,
+    fit_curve,
+    fit_surface,
+    interpolate_curve,
+    interpolate_surface,
+    loft,
+    parametrize,
+)
 from .scattered import ScatteredFit, fit_scattered
 
 __all__ = [

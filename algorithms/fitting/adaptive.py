@@ -54,8 +54,19 @@ from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.basis import basis_matrix
 from ..kernel.surface import BSplineSurface
 from ._common import project_points
-from ._refine import (FitSummary, LevelReport, OverlayFitter, check_tol_levels, grow_base, level_reports, owner,
-                      rectangles, refine, span_index, support)
+from ._refine import (
+    FitSummary,
+    LevelReport,
+    OverlayFitter,
+    check_tol_levels,
+    grow_base,
+    level_reports,
+    owner,
+    rectangles,
+    refine,
+    span_index,
+    support,
+)
 from .gridded import GridFit, _grid_data, _pair_of, fit_grid
 
 __all__ = ["LevelReport", "AdaptiveFit", "fit_adaptive", "measure_grid", "normal_deviation", "boundary_error"]

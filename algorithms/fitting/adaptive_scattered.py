@@ -50,8 +50,19 @@ from ..hierarchical.core import Overlay
 from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.surface import BSplineSurface
 from ._common import difference_penalty, project_points
-from ._refine import FitSummary, LevelReport, OverlayFitter, grow_base, level_reports, owner, rectangles, refine
-from ._refine import check_tol_levels, span_index, support
+from ._refine import (
+    FitSummary,
+    LevelReport,
+    OverlayFitter,
+    check_tol_levels,
+    grow_base,
+    level_reports,
+    owner,
+    rectangles,
+    refine,
+    span_index,
+    support,
+)
 from .gridded import _pair_of
 from .scattered import _local, base_parameters, fit_scattered, plane_parameters, scattered_collocation
 

@@ -51,7 +51,6 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.optimize
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
@@ -61,7 +60,7 @@ from ..kernel.basis import basis_matrix, greville
 from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 from ..manipulation.linalg import ConstraintError, ConstraintFactor
-from ._common import difference_penalty, sparse_collocation
+from ._common import difference_penalty
 from ._missing import SparseGrid
 from .interpolation import _lsq_operator, approximation_knots, parametrize
 

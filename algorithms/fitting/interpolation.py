@@ -20,10 +20,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
+from ..errors import InvalidGeometryError, ParameterError
 from ..kernel.basis import basis_matrix
 from ..kernel.compat import make_compatible
 from ..kernel.curve import BSplineCurve
-from ..errors import InvalidGeometryError, ParameterError
 from ..kernel.rational import from_homogeneous, to_homogeneous
 from ..kernel.surface import BSplineSurface
 

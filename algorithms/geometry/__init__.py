@@ -9,8 +9,15 @@ differential geometry of curves and surfaces: :func:`curve_frenet`, :func:`curva
 
 from .affine import Normal, Point, Vector, affine_combination
 from .affine_maps import AffineMap, Frame, ProjectiveMap
-from .differential import (arc_length, curvature, curvatures_from_derivatives, curve_frenet, rotation_minimizing_frames,
-                           surface_curvatures, torsion)
+from .differential import (
+                           arc_length,
+                           curvature,
+                           curvatures_from_derivatives,
+                           curve_frenet,
+                           rotation_minimizing_frames,
+                           surface_curvatures,
+                           torsion,
+)
 
 __all__ = [
     "AffineMap",

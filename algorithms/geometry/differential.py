@@ -39,8 +39,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
-from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError, ToleranceError
+from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 
 Array = NDArray[np.float64]

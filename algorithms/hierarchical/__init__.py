@@ -6,10 +6,10 @@ Public names: :class:`HierarchicalSurface`, :class:`HierarchicalCurve`, :class:`
 :func:`register_offset_mapping`.
 """
 
-from .surface import HierarchicalSurface
 from .core import Overlay
 from .curve import HierarchicalCurve
 from .offsets import ADDITIVE_OFFSETS, FRAME_OFFSETS, OffsetMapping, register_offset_mapping
+from .surface import HierarchicalSurface
 
 __all__ = [
     "HierarchicalSurface",

@@ -40,10 +40,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
-from ..kernel.basis import greville
 from ..errors import InvalidGeometryError, ParameterError
-from .offsets import OffsetMapping, get_offset_mapping
+from ..kernel.basis import greville
 from ..kernel.knots import knot_tol, merge_knots, refinement_matrix, snap_knots
+from .offsets import OffsetMapping, get_offset_mapping
 
 __all__ = ["FORMAT_VERSION", "Hierarchy", "Node", "Overlay", "check_format", "support_mask"]
 

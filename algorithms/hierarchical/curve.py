@@ -25,13 +25,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
-from ..kernel.curve import BSplineCurve
 from ..errors import InvalidGeometryError
+from ..kernel.curve import BSplineCurve
+from ..kernel.rational import curve_quotient_rule
+from ..manipulation.curves import drag_point as _drag_curve_point
+from ..manipulation.linalg import ConvergenceError
 from .core import Hierarchy, Overlay, check_format, support_mask
 from .offsets import OffsetMapping, curve_frames
-from ..manipulation.linalg import ConvergenceError
-from ..manipulation.curves import drag_point as _drag_curve_point
-from ..kernel.rational import curve_quotient_rule
 
 __all__ = ["HierarchicalCurve"]
 

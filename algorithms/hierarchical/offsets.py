@@ -52,9 +52,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..kernel.curve import BSplineCurve
 from .. import tolerances
 from ..errors import InvalidGeometryError
+from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 
 __all__ = [

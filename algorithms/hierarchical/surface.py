@@ -36,13 +36,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
-from ..errors import InvalidGeometryError, ParameterError
-from .core import FORMAT_VERSION, Hierarchy, Node, Overlay, check_format, support_mask
-from .offsets import OffsetMapping, surface_frames
-from ..manipulation.linalg import ConvergenceError
+from ..errors import InvalidGeometryError
 from ..kernel.rational import surface_quotient_rule
 from ..kernel.surface import BSplineSurface
+from ..manipulation.linalg import ConvergenceError
 from ..manipulation.surfaces import drag_surface_point
+from .core import FORMAT_VERSION, Hierarchy, Node, Overlay, check_format, support_mask
+from .offsets import OffsetMapping, surface_frames
 
 __all__ = ["HierarchicalSurface", "Overlay", "FORMAT_VERSION"]
 

@@ -13,11 +13,11 @@ A surface method that works along one direction takes the curve method's argumen
 ``direction="u" | "v"`` as a required keyword (see :class:`BSplineSurface`).
 """
 
+from .compat import make_compatible
+from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_point, conic_type, ellipse
 from .curve import BSplineCurve
 from .surface import BSplineSurface
-from .compat import make_compatible
 from .trimmed import TrimmedSurface
-from .conics import arc, circle, conic_arc, conic_from_shoulder, conic_through_point, conic_type, ellipse
 
 __all__ = [
     "BSplineCurve",

@@ -14,8 +14,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from .. import tolerances
-from .curve import BSplineCurve
 from ..errors import InvalidGeometryError, ParameterError
+from .curve import BSplineCurve
 
 __all__ = ["make_compatible", "common_knots", "missing_knots"]
 

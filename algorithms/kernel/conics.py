@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
-from .curve import BSplineCurve
 from ..errors import InvalidGeometryError
+from .curve import BSplineCurve
 
 __all__ = ["circle", "arc", "ellipse", "conic_arc", "conic_from_shoulder", "conic_through_point", "conic_type"]
 

@@ -16,27 +16,27 @@ from numpy.typing import ArrayLike, NDArray
 from .. import _numba_kernels as _nk
 from .. import _validate as V
 from .. import tolerances
+from ..errors import InvalidGeometryError, ParameterError, ToleranceError
 from ._common import ARRAY, SCALAR, ControlPointValue
 from ._poles import HomogeneousPoles
 from .basis import basis_derivatives, basis_functions, find_span, greville
 from .blossom import blossom_poles
 from .degree import elevate_poles
-from ..errors import InvalidGeometryError, ParameterError, ToleranceError
 from .knots import (
     bezier_poles,
+    check_rescaled,
     clamp_poles,
     insert_knot_boehm,
     merge_knots,
     multiplicity,
     refine_poles,
-    check_rescaled,
-    rescale_knots,
     remove_knot_lsq,
+    rescale_knots,
     snap_knot,
     snap_knots,
     split_poles,
 )
-from .rational import pole_deviation, curve_quotient_rule
+from .rational import curve_quotient_rule, pole_deviation
 
 __all__ = ["BSplineCurve"]
 

@@ -15,25 +15,25 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .. import _numba_kernels as _nk
 from .. import _validate as V
 from .. import tolerances
-from .. import _numba_kernels as _nk
+from ..errors import InvalidGeometryError, ParameterError, ToleranceError
 from ._common import ARRAY_PAIR, PAIR, ControlPointValue
 from ._poles import HomogeneousPoles
 from .basis import band_product, basis_derivatives, basis_functions, find_span, greville, span_groups
 from .blossom import blossom_basis
 from .degree import elevate_poles
-from ..errors import InvalidGeometryError, ParameterError, ToleranceError
 from .knots import (
     bezier_poles,
+    check_rescaled,
     clamp_poles,
     insert_knot_boehm,
     merge_knots,
     multiplicity,
     refine_poles,
-    check_rescaled,
-    rescale_knots,
     remove_knot_lsq,
+    rescale_knots,
     snap_knot,
     snap_knots,
     split_poles,

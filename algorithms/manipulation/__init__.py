@@ -9,8 +9,8 @@ errors :class:`ConstraintError`, :class:`ConvergenceError`.
 
 from .constraints import Curvature, Derivative, Position, Tangent
 from .curves import Dragger, PreparedConstraints, constrain, drag_point
-from .surfaces import drag_surface_point
 from .linalg import ConstraintError, ConvergenceError
+from .surfaces import drag_surface_point
 
 __all__ = [
     "Curvature",

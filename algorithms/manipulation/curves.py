@@ -55,7 +55,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
+from ..errors import InvalidGeometryError
 from ..kernel.basis import basis_derivatives, find_span
+from ..kernel.curve import BSplineCurve
+from ..kernel.rational import curve_quotient_rule
 from .constraints import (
     Constraint,
     Curvature,
@@ -68,10 +71,7 @@ from .constraints import (
     pole_index,
     pole_weights,
 )
-from ..kernel.curve import BSplineCurve
-from ..errors import InvalidGeometryError
 from .linalg import ConstraintError, ConstraintFactor, ConvergenceError, lstsq
-from ..kernel.rational import curve_quotient_rule
 from .surfaces import drag_surface_point
 
 __all__ = [

@@ -24,12 +24,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
-from ..kernel.basis import basis_derivatives, find_span
-from .constraints import as_parameter, pole_index, pole_weights
 from ..errors import InvalidGeometryError
-from .linalg import ConstraintError, ConstraintFactor
+from ..kernel.basis import basis_derivatives, find_span
 from ..kernel.rational import surface_quotient_rule
 from ..kernel.surface import BSplineSurface
+from .constraints import as_parameter, pole_index, pole_weights
+from .linalg import ConstraintError, ConstraintFactor
 
 __all__ = ["drag_surface_point"]
 

@@ -19,13 +19,21 @@ Problem areas: :func:`face_flags` -> :class:`Flag` (:data:`FLAG_KINDS`).
 Every threshold is a ``QUALITY_...`` entry of :mod:`occsurf.algorithms.tolerances`.
 """
 
-from .curvature_maps import KINDS, SCALE_MODES, ColorScale, CurvatureMap, color_scale, curvature_map, curvature_values
-from .normals import (DRAFT_INSUFFICIENT, DRAFT_OK, DRAFT_UNDEFINED, DRAFT_UNDERCUT, classify_draft, draft_angle,
-                      normal_flips, normal_hedgehog)
-from .reflection import Isophotes, Stripes, highlight_lines, isophotes, zebra
 from .combs import Comb, SampledCurve, curvature_comb, iso_curves
-from .sections import Section, SectionCurve, axial_sections, plane_sections
+from .curvature_maps import KINDS, SCALE_MODES, ColorScale, CurvatureMap, color_scale, curvature_map, curvature_values
 from .flags import FLAG_KINDS, Flag, face_flags
+from .normals import (
+                      DRAFT_INSUFFICIENT,
+                      DRAFT_OK,
+                      DRAFT_UNDEFINED,
+                      DRAFT_UNDERCUT,
+                      classify_draft,
+                      draft_angle,
+                      normal_flips,
+                      normal_hedgehog,
+)
+from .reflection import Isophotes, Stripes, highlight_lines, isophotes, zebra
+from .sections import Section, SectionCurve, axial_sections, plane_sections
 
 __all__ = [
     "KINDS",

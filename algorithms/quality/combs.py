@@ -10,8 +10,8 @@ kinks and extra sign changes of the outline are the defects a designer looks for
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike

@@ -28,7 +28,7 @@ from ..geometry.differential import curvatures_from_derivatives
 from ..kernel.surface import BSplineSurface
 from ..topology.spatch import SPatch
 from . import _kernels
-from ._common import Array, GridPartials, check_mask, trim_mask, grid_axes, grid_partials, nudged_normals, surface_of
+from ._common import Array, GridPartials, check_mask, grid_axes, grid_partials, nudged_normals, surface_of, trim_mask
 
 __all__ = ["KINDS", "SCALE_MODES", "CurvatureMap", "ColorScale", "curvature_map", "curvature_values", "color_scale"]
 

@@ -7,8 +7,9 @@ caller tightens or loosens them with ``tolerances.override`` or the ``thresholds
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -16,7 +17,7 @@ from scipy import ndimage
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ._common import Array, check_mask, trim_mask, grid_axes, grid_partials, surface_of
+from ._common import Array, check_mask, grid_axes, grid_partials, surface_of, trim_mask
 from .curvature_maps import CurvatureMap, map_from_partials
 
 __all__ = ["FLAG_KINDS", "Flag", "face_flags"]

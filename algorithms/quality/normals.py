@@ -10,7 +10,18 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ._common import Array, check_mask, trim_mask, dot, grid_axes, grid_partials, nudged_normals, surface_of, unit_vectors, vectors
+from ._common import (
+    Array,
+    check_mask,
+    dot,
+    grid_axes,
+    grid_partials,
+    nudged_normals,
+    surface_of,
+    trim_mask,
+    unit_vectors,
+    vectors,
+)
 
 __all__ = ["DRAFT_OK", "DRAFT_INSUFFICIENT", "DRAFT_UNDERCUT", "DRAFT_UNDEFINED", "draft_angle", "classify_draft",
            "normal_hedgehog", "normal_flips"]

@@ -12,14 +12,14 @@ neighbour's normals (trimmed neighbours): :func:`side_from_normals`, :class:`Sid
 :func:`biquadratic_patch`, :func:`spatch_curvatures`.
 """
 
-from .spatch import SPatch, domain_vertices, spatch_indices, wachspress, wachspress_derivatives, wachspress_gradient
-from .spatch_convert import SPatchConversion, convert_spatch, spatch_to_surfaces
+from .generalized import GeneralizedSurface, biquadratic_patch, generalized_biquadratic, ribbon_patch, spatch_curvatures
+from .generalized_bicubic import generalized_bicubic
+from .mesh import Mesh, catmull_clark, doo_sabin, read_obj, write_obj
 from .nsided import FillQuality, HoleFill, HoleSide, count_folds, fill_hole, measure_fill, side_from_surface
 from .nsided_sides import SideFit, fit_boundary, side_from_normals
 from .plate_fill import PlateFill, fill_plate
-from .mesh import Mesh, catmull_clark, doo_sabin, read_obj, write_obj
-from .generalized import GeneralizedSurface, biquadratic_patch, generalized_biquadratic, ribbon_patch, spatch_curvatures
-from .generalized_bicubic import generalized_bicubic
+from .spatch import SPatch, domain_vertices, spatch_indices, wachspress, wachspress_derivatives, wachspress_gradient
+from .spatch_convert import SPatchConversion, convert_spatch, spatch_to_surfaces
 
 __all__ = [
     "SPatch",

@@ -104,9 +104,9 @@ from scipy.sparse.linalg import spsolve
 from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError
+from ..kernel.surface import BSplineSurface
 from .mesh import Mesh, catmull_clark
 from .spatch import SPatch, domain_vertices, spatch_indices
-from ..kernel.surface import BSplineSurface
 
 __all__ = [
     "GeneralizedSurface",

@@ -89,13 +89,20 @@ from scipy.linalg import lu_factor, lu_solve
 from scipy.sparse.linalg import splu
 
 from .. import tolerances
+from ..errors import InvalidGeometryError, ToleranceError
 from ..kernel.basis import basis_matrix, greville
 from ..kernel.curve import BSplineCurve
-from ..errors import InvalidGeometryError, ToleranceError
 from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
-from .nsided_loops import (arc_length_parameters, check_simple_loop, closest_parameters, harmonic_centre,
-                           harmonic_picture, inner_point, turns_inward)
+from .nsided_loops import (
+    arc_length_parameters,
+    check_simple_loop,
+    closest_parameters,
+    harmonic_centre,
+    harmonic_picture,
+    inner_point,
+    turns_inward,
+)
 
 __all__ = [
     "HoleSide",

@@ -63,8 +63,8 @@ References: course §8-3 (filling n-sided holes); Duchon 1977; OCC's GeomPlate (
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 import scipy.sparse as sp

@@ -50,8 +50,8 @@ approximation for reverse engineering", Computing 60 (1998).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike

@@ -60,9 +60,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
+from ..errors import InvalidGeometryError, ParameterError
 from ..kernel._common import SCALAR, ControlPointValue
 from ..kernel.curve import BSplineCurve
-from ..errors import InvalidGeometryError, ParameterError
 from ._common import edge_normals, index_tuples
 
 __all__ = [

@@ -74,9 +74,9 @@ from numpy.typing import NDArray
 from .. import tolerances
 from ..errors import InvalidGeometryError, ToleranceError
 from ..fitting.interpolation import fit_surface
+from ..kernel.surface import BSplineSurface
 from ._common import edge_normals, index_tuples
 from .spatch import SPatch, domain_vertices
-from ..kernel.surface import BSplineSurface
 
 __all__ = [
     "SPatchConversion",

@@ -56,8 +56,18 @@ from pathlib import Path
 from typing import Any
 
 from ..messages import error_line
-from ._common import (EXIT_ERROR, EXIT_OK, InOrder, add_strict_option, error, strip_path, timeout_arg, worker_failure,
-                      write_json_line, write_out)
+from ._common import (
+    EXIT_ERROR,
+    EXIT_OK,
+    InOrder,
+    add_strict_option,
+    error,
+    strip_path,
+    timeout_arg,
+    worker_failure,
+    write_json_line,
+    write_out,
+)
 
 __all__ = ["add_parser", "run", "check_job", "check_file", "collect_files", "file_summary", "PRESET_NAMES", "EXIT_FAILED",
            "DEFAULT_TIMEOUT", "MAX_RETRIES"]

@@ -34,15 +34,15 @@ from ._common import (
     EXIT_OK,
     add_strict_option,
     error,
-    output_problem,
-    shown_path,
-    timeout_arg,
     fmt_deg,
     fmt_dev,
     fmt_s,
     format_rows,
+    output_problem,
     read_model,
+    shown_path,
     strip_path,
+    timeout_arg,
     worker_failure,
 )
 
@@ -106,8 +106,8 @@ def fill_job(item: dict[str, Any]) -> dict[str, Any]:
 def _pictures(out: Path, reports: list[Any], holes: list[dict[str, Any]], removed: Any) -> None:
     """Write ``OUT_STEM.holeK.png`` per filled hole (zebra before/after); the path (or why not) goes
     into the hole's dict as ``picture`` / ``picture_error``."""
-    from ..modeling.fill_pictures import zebra_before_after
     from ..messages import one_line
+    from ..modeling.fill_pictures import zebra_before_after
 
     for k, (r, h) in enumerate(zip(reports, holes)):
         if r.status != "filled" or not hasattr(r, "_fill_faces"):

@@ -33,8 +33,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ._common import (EXIT_ERROR, EXIT_OK, add_strict_option, error, format_rows, strip_path, timeout_arg,
-                      worker_failure)
+from ._common import EXIT_ERROR, EXIT_OK, add_strict_option, error, format_rows, strip_path, timeout_arg, worker_failure
 
 __all__ = ["fit_job", "add_parser", "run"]
 

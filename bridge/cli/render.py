@@ -25,8 +25,17 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-from ._common import (EXIT_ERROR, EXIT_OK, add_strict_option, error, output_problem, read_model, strip_path, timeout_arg,
-                      worker_failure)
+from ._common import (
+    EXIT_ERROR,
+    EXIT_OK,
+    add_strict_option,
+    error,
+    output_problem,
+    read_model,
+    strip_path,
+    timeout_arg,
+    worker_failure,
+)
 
 __all__ = ["render_job", "add_parser", "run", "VIEW_NAMES"]
 
@@ -56,12 +65,11 @@ def render_job(item: dict[str, Any]) -> dict[str, Any]:
     """
     import numpy as np
 
+    from occsurf.algorithms._files import check_target
     from occsurf.algorithms.lighting import preset, setup_from_dict
 
     from ..isolation import quiet_native_stdout
     from ..rendering.lighting import Camera, camera_for_view, mesh_of_model, render_lit, write_png
-
-    from occsurf.algorithms._files import check_target
 
     # fail before reading the model: the lights, then the target (again: it may have changed)
     setup = setup_from_dict(item["lights"]) if item.get("lights") is not None else None

@@ -45,7 +45,7 @@ from OCP.TopTools import TopTools_IndexedMapOfShape
 from occsurf.algorithms.errors import InvalidGeometryError
 
 if TYPE_CHECKING:
-    from ..exchange.step_iges import ImportedModel
+    pass
 
 __all__ = ["as_shape", "as_faces", "as_face", "as_edges", "as_edge", "as_curve", "is_shape_like", "is_edge_like",
            "compound"]

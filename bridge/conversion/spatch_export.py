@@ -31,8 +31,8 @@ from occsurf.algorithms.topology.spatch_convert import SPatchConversion, convert
 
 from .. import _occ
 from ..exchange.occ_io import FACE_TOLERANCE
-from .splines import to_occ
 from ..exchange.step_iges import ImportedModel, read_step, write_step
+from .splines import to_occ
 
 __all__ = [
     "SPatchExport",

@@ -31,9 +31,9 @@ import numpy as np
 
 from occsurf.algorithms import BSplineSurface
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
-from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 from occsurf.algorithms.hierarchical.curve import HierarchicalCurve
 from occsurf.algorithms.hierarchical.offsets import OffsetMapping
+from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 
 from . import files as _files
 from . import occ_io as _xocc

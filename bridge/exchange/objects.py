@@ -98,10 +98,9 @@ def shape_object(shape: Any, as_: str, *, solid: bool = True) -> Any:
     if solid and occ.ShapeType() == TopAbs_SHELL and _is_closed(occ):
         occ = _solid(occ)
     if as_ == "build123d":
+        import build123d as bd
         from build123d.importers import topods_lut
         from build123d.topology.shape_core import downcast
-
-        import build123d as bd
 
         occ = downcast(occ)
         return topods_lut.get(type(occ), bd.Compound)(occ)

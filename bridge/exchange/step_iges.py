@@ -77,21 +77,28 @@ from __future__ import annotations
 import io
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from occsurf.algorithms import BSplineCurve, BSplineSurface
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 
 from ..messages import one_line
 from . import files as _files
 from . import occ_io as _xocc
 from . import xcaf, xcaf_write
-from .occ_io import FACE_TOLERANCE  # re-exported: part of the public constants
 from .model import (  # noqa: F401 - the model types are part of this module's names
-    ImportedEdge, ImportedFace, ImportedModel, _LazyTrimmed, _build_trimmed, _conversion_bounds, _geomabs_name,
-    _import_edge, _import_face, _maps)
+    ImportedEdge,
+    ImportedFace,
+    ImportedModel,
+    _build_trimmed,
+    _conversion_bounds,
+    _geomabs_name,
+    _import_edge,
+    _import_face,
+    _LazyTrimmed,
+    _maps,
+)
+from .occ_io import FACE_TOLERANCE  # re-exported: part of the public constants
 
 __all__ = [
     "ImportedFace",

@@ -44,8 +44,20 @@ import numpy as np
 from occsurf.algorithms.errors import ExchangeError
 
 from ..messages import one_line
-from .xcaf import (_IDENTITY, _OCC_UNIT, AssemblyNode, _distinct, _location, instance_overrides, iter_nodes, label_entry,
-                   main_shuos, occ_color, node_key, shuo_chain)
+from .xcaf import (
+    _IDENTITY,
+    _OCC_UNIT,
+    AssemblyNode,
+    _distinct,
+    _location,
+    instance_overrides,
+    iter_nodes,
+    label_entry,
+    main_shuos,
+    node_key,
+    occ_color,
+    shuo_chain,
+)
 
 __all__ = ["build_document", "step_document_bytes", "iges_document_bytes"]
 

@@ -37,31 +37,41 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from OCP.BRep import BRep_Tool
+from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
 from OCP.BRepOffsetAPI import BRepOffsetAPI_MakeFilling
 from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
 from OCP.GeomAbs import GeomAbs_Shape
-from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
-from OCP.gp import gp_Pnt
-from OCP.LocalAnalysis import LocalAnalysis_SurfaceContinuity
 from OCP.ShapeAnalysis import ShapeAnalysis_FreeBounds
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL, TopAbs_WIRE
-from OCP.TopExp import TopExp, TopExp_Explorer
-from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shape, TopoDS_Shell
-from OCP.BRep import BRep_Builder
+from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL, TopAbs_WIRE
+from OCP.TopExp import TopExp_Explorer
+from OCP.TopoDS import TopoDS, TopoDS_Shape, TopoDS_Shell
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
-from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.errors import InvalidGeometryError, KernelError, OccsurfError
-from occsurf.algorithms.topology.nsided import HoleFill, HoleSide, closest_parameters, fill_hole, measure_fill, side_from_surface
 from occsurf.algorithms.kernel.surface import BSplineSurface
+from occsurf.algorithms.topology.nsided import (
+    HoleFill,
+    HoleSide,
+    closest_parameters,
+    fill_hole,
+    measure_fill,
+    side_from_surface,
+)
 
 from .. import _occ
 from ..conversion.shapes import as_edge, as_face, as_shape
 from ..conversion.splines import from_occ, make_face
 from ..messages import one_line
-from .joints import ASSESS_END_SAMPLES, ASSESS_SAMPLES, SEW_TOLERANCE, _edge_samples, _local_analysis, assess_joint, edge_face_map  # noqa: F401 - re-exported
+from .joints import (  # noqa: F401 - re-exported
+    ASSESS_END_SAMPLES,
+    ASSESS_SAMPLES,
+    SEW_TOLERANCE,
+    _edge_samples,
+    _local_analysis,
+    assess_joint,
+    edge_face_map,
+)
 
 __all__ = ["HoleReport", "FillResult", "fill_model", "find_loops", "hole_sides", "assess_joint",
            "occ_fill", "sew_faces", "edge_face_map", "neighbour_face", "SEW_TOLERANCE", "ASSESS_SAMPLES",

@@ -11,7 +11,8 @@ tolerance, whenever that G0 is below it (:func:`plate_face` checks it and says s
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 

@@ -29,11 +29,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from OCP.Bnd import Bnd_Box
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
-from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
-from OCP.Bnd import Bnd_Box
 from OCP.BRepBndLib import BRepBndLib
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepClass import BRepClass_FaceClassifier
 from OCP.BRepOffsetAPI import BRepOffsetAPI_MakeFilling
@@ -49,12 +49,18 @@ from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Shell
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
-from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
-from occsurf.algorithms.topology.nsided import HoleFill, closest_parameters, fill_folds, fill_hole
 from occsurf.algorithms import tolerances
-from occsurf.algorithms.topology.nsided_sides import (blend_normals, corner_normals, fit_boundary, side_from_normals,
-                                                     smoothstep, turn_end_tangent)
+from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.kernel.curve import BSplineCurve
+from occsurf.algorithms.topology.nsided import closest_parameters, fill_folds, fill_hole
+from occsurf.algorithms.topology.nsided_sides import (
+    blend_normals,
+    corner_normals,
+    fit_boundary,
+    side_from_normals,
+    smoothstep,
+    turn_end_tangent,
+)
 from occsurf.algorithms.topology.plate_fill import PlateFill
 
 from .. import _occ

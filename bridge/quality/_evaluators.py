@@ -23,8 +23,9 @@ P-curves (``Geom2d``) likewise: lines in closed form, B-spline/Bézier p-curves 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray

@@ -65,7 +65,6 @@ Classification of an edge (``Thresholds`` of the chosen preset):
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -79,7 +78,7 @@ from occsurf.algorithms.errors import InvalidGeometryError
 
 from ..messages import one_line
 from ._batch import SurfaceBatch
-from ._engine import Engine, occ_fold, occ_gap
+from ._engine import Engine, occ_fold
 from ._pairs import FaceData, Pair, collect_faces, match_free_edges, topology_pairs
 
 Array = NDArray[np.float64]

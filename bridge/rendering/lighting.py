@@ -44,8 +44,18 @@ import numpy as np
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.lighting import LightingSetup, WarnLight
 
-from .vtk_scene import VIEW_ANGLE, VIEWS, Camera, apply_camera, fit_camera, read_pixels, render_available, vtk_matrix
-from .vtk_scene import _polydata, _vertex_normals
+from .vtk_scene import (
+    VIEW_ANGLE,
+    VIEWS,
+    Camera,
+    _polydata,
+    _vertex_normals,
+    apply_camera,
+    fit_camera,
+    read_pixels,
+    render_available,
+    vtk_matrix,
+)
 from .vtk_scene import window as _window
 
 if TYPE_CHECKING:

@@ -23,21 +23,21 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
-from occsurf.algorithms.kernel.basis import basis_matrix
-from occsurf.algorithms.kernel.compat import make_compatible
-from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms import tolerances
-from occsurf.algorithms.construction import _common
-from occsurf.algorithms.construction import coons_patches as cp
-from occsurf.algorithms.construction import gordon_surfaces as gs
 from occsurf.algorithms.construction import (
+    _common,
     coons,
     coons_bicubic,
     gordon,
     network_parameters,
     polynomial_approximation,
 )
+from occsurf.algorithms.construction import coons_patches as cp
+from occsurf.algorithms.construction import gordon_surfaces as gs
 from occsurf.algorithms.errors import InvalidGeometryError, ToleranceError
+from occsurf.algorithms.kernel.basis import basis_matrix
+from occsurf.algorithms.kernel.compat import make_compatible
+from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.kernel.surface import BSplineSurface
 from tests.algorithms.strategies import affine_maps, test_settings
 

@@ -14,7 +14,8 @@ from hypothesis import assume, example, given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from occsurf.algorithms import BSplineCurve, BSplineSurface, arc, circle
+from occsurf.algorithms import BSplineCurve, BSplineSurface, arc, circle, tolerances
+from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
 from occsurf.algorithms.geometry.differential import (
     FrenetFrame,
     SurfaceCurvatures,
@@ -29,8 +30,6 @@ from occsurf.algorithms.geometry.differential import (
     surface_curvatures,
     torsion,
 )
-from occsurf.algorithms import tolerances
-from occsurf.algorithms.errors import InvalidGeometryError, ParameterError, ToleranceError
 
 from .strategies import curves, surfaces, test_settings
 

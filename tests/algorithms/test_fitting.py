@@ -15,7 +15,6 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, ParameterError, circle
-from occsurf.algorithms.kernel.compat import make_compatible
 from occsurf.algorithms.fitting.interpolation import (
     approximation_knots,
     averaged_knots,
@@ -27,6 +26,7 @@ from occsurf.algorithms.fitting.interpolation import (
     loft,
     parametrize,
 )
+from occsurf.algorithms.kernel.compat import make_compatible
 from tests.algorithms.strategies import curves as bspline_curves
 from tests.algorithms.strategies import test_settings
 

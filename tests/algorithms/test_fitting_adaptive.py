@@ -126,7 +126,7 @@ def test_point_grids_and_level_limit():
 
 
 def test_project_points_closed_form_on_a_cylinder():
-    from occsurf.algorithms import extrude, circle
+    from occsurf.algorithms import circle, extrude
 
     cyl = extrude(circle([0, 0, 0], 2.0), [0, 0, 3.0])
     rng = np.random.default_rng(7)

@@ -80,7 +80,7 @@ def test_parameter_correction_reduces_the_error_of_a_curved_sheet():
 
 
 def test_parameters_from_a_base_surface():
-    from occsurf.algorithms import extrude, circle
+    from occsurf.algorithms import circle, extrude
 
     cyl = extrude(circle([0, 0, 0], 1.0), [0, 0, 1.0])
     (u0, u1), (v0, v1) = cyl.domain

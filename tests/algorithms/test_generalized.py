@@ -16,8 +16,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from occsurf.algorithms.geometry.differential import surface_curvatures
 from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.algorithms.geometry.differential import surface_curvatures
+from occsurf.algorithms.kernel.surface import BSplineSurface
 from occsurf.algorithms.topology.generalized import (
     BIQUADRATIC_DEPTH,
     GeneralizedSurface,
@@ -27,7 +28,6 @@ from occsurf.algorithms.topology.generalized import (
 )
 from occsurf.algorithms.topology.mesh import Mesh, catmull_clark, read_obj
 from occsurf.algorithms.topology.spatch import domain_vertices
-from occsurf.algorithms.kernel.surface import BSplineSurface
 from tests.algorithms.strategies import test_settings
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "meshes"

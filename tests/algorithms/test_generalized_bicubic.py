@@ -22,13 +22,19 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.algorithms.kernel.surface import BSplineSurface
 from occsurf.algorithms.topology.generalized_bicubic import BICUBIC_DEPTH, generalized_bicubic
 from occsurf.algorithms.topology.mesh import Mesh, doo_sabin, read_obj
 from occsurf.algorithms.topology.spatch import domain_vertices
-from occsurf.algorithms.kernel.surface import BSplineSurface
 from tests.algorithms.strategies import test_settings
-from tests.algorithms.test_generalized import (_assert_g1, assert_affine_invariant, assert_c1_joins, grid, jittered_prism,
-                                              ngon_with_skirt)
+from tests.algorithms.test_generalized import (
+    _assert_g1,
+    assert_affine_invariant,
+    assert_c1_joins,
+    grid,
+    jittered_prism,
+    ngon_with_skirt,
+)
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "meshes"
 EXACT_TOL = 1e-12

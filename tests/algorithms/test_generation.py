@@ -19,8 +19,8 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from occsurf.algorithms import BSplineCurve, arc, circle, ellipse, tolerances
-from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.construction.generation import extrude, revolve, rotational_sweep, ruled, translational_sweep
+from occsurf.algorithms.errors import InvalidGeometryError
 from tests.algorithms.strategies import affine_maps, curves, fractions, test_settings
 
 EXACT = 1e-12     # defining identities (round-off of a few rational evaluations), relative

@@ -17,8 +17,13 @@ from numpy.testing import assert_allclose
 
 from occsurf.algorithms import BSplineSurface, tolerances
 from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
+from occsurf.algorithms.hierarchical.offsets import (
+    ADDITIVE_OFFSETS,
+    FRAME_OFFSETS,
+    OffsetMapping,
+    register_offset_mapping,
+)
 from occsurf.algorithms.hierarchical.surface import HierarchicalSurface, Overlay
-from occsurf.algorithms.hierarchical.offsets import ADDITIVE_OFFSETS, FRAME_OFFSETS, OffsetMapping, register_offset_mapping
 from occsurf.algorithms.manipulation.linalg import ConstraintError
 from occsurf.algorithms.manipulation.surfaces import drag_surface_point
 from tests.algorithms.strategies import surfaces, test_settings

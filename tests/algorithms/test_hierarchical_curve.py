@@ -12,7 +12,6 @@ from numpy.testing import assert_allclose
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface, tolerances
 from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
-from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 from occsurf.algorithms.hierarchical.curve import HierarchicalCurve
 from occsurf.algorithms.hierarchical.offsets import (
     ADDITIVE_OFFSETS,
@@ -22,6 +21,7 @@ from occsurf.algorithms.hierarchical.offsets import (
     get_offset_mapping,
     surface_frames,
 )
+from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 from tests.algorithms.strategies import curves, test_settings
 
 

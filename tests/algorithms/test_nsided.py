@@ -16,10 +16,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
-from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.nsided import HoleSide, fill_hole, measure_fill, side_from_surface
 from occsurf.examples.hole_models import ring_model
 from tests.algorithms.strategies import test_settings

@@ -23,7 +23,8 @@ from __future__ import annotations
 import tracemalloc
 
 import numpy as np
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from occsurf.algorithms.kernel.basis import greville
 from occsurf.algorithms.topology.nsided import _fair_interior, _gram

@@ -22,14 +22,20 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.nsided import fill_hole, measure_fill
-from occsurf.algorithms.topology.nsided_sides import (blend_normals, corner_normals, fit_boundary, plane_angle,
-                                                     side_from_normals)
+from occsurf.algorithms.topology.nsided_sides import (
+    blend_normals,
+    corner_normals,
+    fit_boundary,
+    plane_angle,
+    side_from_normals,
+)
 from tests.algorithms.strategies import test_settings
 
 R = 2.0

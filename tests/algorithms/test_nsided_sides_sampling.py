@@ -19,7 +19,8 @@ at the samples); measured 1e-6 deg (24 spans kept); with every curve knot kept (
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.kernel.basis import basis_matrix, greville

@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.kernel.curve import BSplineCurve

@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError

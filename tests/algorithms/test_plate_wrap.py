@@ -19,8 +19,13 @@ from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.nsided import HoleSide, count_folds
 from occsurf.algorithms.topology.plate_fill import _side_samples
-from occsurf.algorithms.topology.plate_wrap import (WrappedPlateFill, axis_residual, fill_wrapped_plate, fitted_axes,
-                                                   helical_axis)
+from occsurf.algorithms.topology.plate_wrap import (
+    WrappedPlateFill,
+    axis_residual,
+    fill_wrapped_plate,
+    fitted_axes,
+    helical_axis,
+)
 
 R, PITCH, TURNS = 3.0, 1.0, 3.0
 END = 2 * np.pi * TURNS

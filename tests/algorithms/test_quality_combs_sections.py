@@ -17,7 +17,7 @@ from numpy.testing import assert_allclose
 from occsurf.algorithms import BSplineCurve, circle, tolerances
 from occsurf.algorithms.construction import extrude
 from occsurf.algorithms.errors import InvalidGeometryError
-from occsurf.algorithms.quality import (SampledCurve, axial_sections, curvature_comb, iso_curves, plane_sections)
+from occsurf.algorithms.quality import SampledCurve, axial_sections, curvature_comb, iso_curves, plane_sections
 from occsurf.algorithms.quality.sections import _order_chains, _rank
 
 from .strategies import test_settings

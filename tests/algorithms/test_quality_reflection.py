@@ -15,9 +15,20 @@ from numpy.testing import assert_allclose
 
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError
-from occsurf.algorithms.quality import (DRAFT_INSUFFICIENT, DRAFT_OK, DRAFT_UNDEFINED, DRAFT_UNDERCUT, classify_draft,
-                                        curvature_map, draft_angle, highlight_lines, isophotes, normal_flips,
-                                        normal_hedgehog, zebra)
+from occsurf.algorithms.quality import (
+    DRAFT_INSUFFICIENT,
+    DRAFT_OK,
+    DRAFT_UNDEFINED,
+    DRAFT_UNDERCUT,
+    classify_draft,
+    curvature_map,
+    draft_angle,
+    highlight_lines,
+    isophotes,
+    normal_flips,
+    normal_hedgehog,
+    zebra,
+)
 
 from .test_quality_maps import cylinder, sphere
 

@@ -18,8 +18,9 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from occsurf.algorithms.kernel.bezier import de_casteljau
 from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
+from occsurf.algorithms.kernel.bezier import de_casteljau
+from occsurf.algorithms.kernel.surface import BSplineSurface
 from occsurf.algorithms.topology.spatch import (
     SPatch,
     domain_vertices,
@@ -28,7 +29,6 @@ from occsurf.algorithms.topology.spatch import (
     wachspress_derivatives,
     wachspress_gradient,
 )
-from occsurf.algorithms.kernel.surface import BSplineSurface
 from tests.algorithms.strategies import test_settings
 
 # Tolerances. The identities below are exact in real arithmetic; the computations are short sums

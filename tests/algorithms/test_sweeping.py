@@ -19,11 +19,11 @@ from scipy.integrate import solve_ivp
 
 import occsurf.algorithms.construction.sweeping as sw
 from occsurf.algorithms import BSplineCurve, arc, circle, tolerances
+from occsurf.algorithms.construction.generation import translational_sweep
+from occsurf.algorithms.construction.sweeping import SweepResult, exact_sweep, sweep
 from occsurf.algorithms.errors import InvalidGeometryError, ToleranceError
 from occsurf.algorithms.fitting.interpolation import interpolate_curve
 from occsurf.algorithms.kernel.basis import greville
-from occsurf.algorithms.construction.generation import translational_sweep
-from occsurf.algorithms.construction.sweeping import SweepResult, exact_sweep, sweep
 
 ROUND = 1e-12
 

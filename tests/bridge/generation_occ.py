@@ -35,21 +35,24 @@ from OCP.BRepFill import BRepFill
 from OCP.BRepOffsetAPI import BRepOffsetAPI_MakePipeShell
 from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism, BRepPrimAPI_MakeRevol
 from OCP.BRepTools import BRepTools
-from OCP.Geom import Geom_RectangularTrimmedSurface, Geom_Surface, Geom_SurfaceOfLinearExtrusion, Geom_SurfaceOfRevolution
+from OCP.Geom import (
+    Geom_RectangularTrimmedSurface,
+    Geom_Surface,
+    Geom_SurfaceOfLinearExtrusion,
+    Geom_SurfaceOfRevolution,
+)
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GeomFill import GeomFill
-from OCP.gp import gp_Ax1, gp_Ax2, gp_Dir, gp_GTrsf, gp_Mat, gp_Pnt, gp_Vec, gp_XYZ
+from OCP.gp import gp_Ax1, gp_Ax2, gp_Dir, gp_GTrsf, gp_Mat, gp_Pnt, gp_Pnt2d, gp_Vec, gp_XYZ
 from OCP.Law import Law_Interpol
-from OCP.TColgp import TColgp_Array1OfPnt2d
-from OCP.gp import gp_Pnt2d
 from OCP.ShapeAnalysis import ShapeAnalysis_Surface
+from OCP.TColgp import TColgp_Array1OfPnt2d
 from OCP.TopAbs import TopAbs_FACE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shape
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface
 from occsurf.algorithms.errors import KernelError
-
 from occsurf.bridge import _occ
 from occsurf.bridge.conversion.splines import make_edge, to_occ
 

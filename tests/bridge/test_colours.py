@@ -16,8 +16,8 @@ digits (a further 5e-11 after dividing by 100).
 from __future__ import annotations
 
 import re
-from typing import Any
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest

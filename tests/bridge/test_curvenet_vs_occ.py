@@ -35,8 +35,8 @@ pytest.importorskip("OCP")
 
 from OCP.GeomFill import GeomFill_BSplineCurves, GeomFill_FillingStyle  # noqa: E402
 
-from occsurf.algorithms.kernel.curve import BSplineCurve  # noqa: E402
 from occsurf.algorithms.construction import coons, coons_bicubic, gordon  # noqa: E402
+from occsurf.algorithms.kernel.curve import BSplineCurve  # noqa: E402
 from occsurf.bridge.conversion.splines import from_occ, to_occ  # noqa: E402
 from occsurf.bridge.exchange.step_iges import read_step, write_step  # noqa: E402
 from tests.algorithms.test_curvenet import boundary_net, network, random_loop, random_surface  # noqa: E402

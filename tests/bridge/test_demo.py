@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 
 from occsurf.bridge import cli
-from occsurf.examples import gallery as demo
 from occsurf.bridge.exchange.step_iges import read_step
+from occsurf.examples import gallery as demo
 
 
 def test_demo_writes_pngs_and_readable_step(tmp_path, capsys):

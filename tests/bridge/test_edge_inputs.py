@@ -170,8 +170,14 @@ def open_ball():
 
 
 def test_fill_helpers_take_build123d_and_cadquery_edges_and_faces(open_ball):
-    from occsurf.bridge.modeling.fill import (assess_joint, edge_face_map, find_loops, hole_sides, neighbour_face,
-                                              occ_fill)
+    from occsurf.bridge.modeling.fill import (
+        assess_joint,
+        edge_face_map,
+        find_loops,
+        hole_sides,
+        neighbour_face,
+        occ_fill,
+    )
 
     shell, edges, faces = open_ball
     b3d_edges, b3d_faces = [bd.Edge(e) for e in edges], [bd.Face(f) for f in faces]

@@ -111,9 +111,9 @@ def _trimmed_ring(ext: float):
     u in [s0, s1]; the hole edges lie on the surfaces' v = 0 boundary for that range only)."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
 
-    from occsurf.examples.hole_models import base_surface, represent_grid
     from occsurf.algorithms.kernel.surface import BSplineSurface
     from occsurf.bridge.conversion.splines import to_occ
+    from occsurf.examples.hole_models import base_surface, represent_grid
 
     G = base_surface(False)
     m = ring_model(5, bump=0.0)

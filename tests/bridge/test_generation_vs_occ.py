@@ -37,9 +37,9 @@ import pytest
 pytest.importorskip("OCP")
 
 from occsurf.algorithms import BSplineCurve, arc, circle, ellipse  # noqa: E402
-from occsurf.algorithms.fitting.interpolation import interpolate_curve  # noqa: E402
 from occsurf.algorithms.construction.generation import extrude, revolve, rotational_sweep, ruled, translational_sweep  # noqa: E402
 from occsurf.algorithms.construction.sweeping import sweep  # noqa: E402
+from occsurf.algorithms.fitting.interpolation import interpolate_curve  # noqa: E402
 
 EXACT = 1e-11
 SWEEP = 2e-7

@@ -13,16 +13,16 @@ from OCP.gp import gp_Pnt, gp_Vec
 
 from occsurf.algorithms import BSplineSurface
 from occsurf.algorithms.errors import ExchangeError
-from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 from occsurf.algorithms.hierarchical.curve import HierarchicalCurve
+from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 from occsurf.bridge import to_occ
-from occsurf.bridge.exchange.step_iges import read_step, write_step
 from occsurf.bridge.exchange.hierarchical_io import (
     import_step_base,
     read_hierarchical_step,
     sidecar_path,
     write_hierarchical_step,
 )
+from occsurf.bridge.exchange.step_iges import read_step, write_step
 
 
 def make_hierarchy(rational: bool = False) -> HierarchicalSurface:

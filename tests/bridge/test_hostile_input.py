@@ -472,8 +472,11 @@ def test_iges_closed_shell_that_is_open_is_reported(tmp_path):
 
 def test_hierarchical_step_reads_isolated(tmp_path, monkeypatch):
     from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
-    from occsurf.bridge.exchange.hierarchical_io import (import_step_base, read_hierarchical_step,
-                                                         write_hierarchical_step)
+    from occsurf.bridge.exchange.hierarchical_io import (
+        import_step_base,
+        read_hierarchical_step,
+        write_hierarchical_step,
+    )
 
     P = np.zeros((4, 4, 3))
     P[..., 0], P[..., 1] = np.meshgrid(np.arange(4.0), np.arange(4.0), indexing="ij")

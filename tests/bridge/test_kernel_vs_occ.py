@@ -43,7 +43,6 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
-from OCP.gp import gp_Ax1, gp_Ax2, gp_Ax3, gp_Circ, gp_Dir, gp_Pnt, gp_Vec
 from OCP.Geom import (
     Geom_BezierSurface,
     Geom_BSplineCurve,
@@ -61,6 +60,7 @@ from OCP.Geom import (
 )
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GeomConvert import GeomConvert
+from OCP.gp import gp_Ax1, gp_Ax2, gp_Ax3, gp_Circ, gp_Dir, gp_Pnt, gp_Vec
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface, tolerances
 from occsurf.algorithms.errors import InvalidGeometryError, ToleranceError

@@ -15,6 +15,7 @@ import pytest
 
 from occsurf.algorithms import tolerances
 
+
 @pytest.fixture(scope="module")
 def crest(screw):
     from occsurf.bridge.modeling.refill import refill_faces

@@ -20,9 +20,9 @@ cq = pytest.importorskip("cadquery")
 
 from OCP.TopoDS import TopoDS_Shape  # noqa: E402
 
+from occsurf import bridge  # noqa: E402
 from occsurf.algorithms import BSplineSurface  # noqa: E402
 from occsurf.algorithms.errors import InvalidGeometryError  # noqa: E402
-from occsurf import bridge  # noqa: E402
 from occsurf.bridge.conversion.shapes import as_faces, as_shape  # noqa: E402
 from occsurf.bridge.exchange.objects import as_model  # noqa: E402
 

@@ -19,7 +19,12 @@ import occsurf.bridge.conversion.spatch_export as export_mod
 from occsurf.algorithms.errors import InvalidGeometryError, KernelError
 from occsurf.algorithms.topology.spatch import SPatch, spatch_indices
 from occsurf.algorithms.topology.spatch_convert import piece_domain_points
-from occsurf.bridge.conversion.spatch_export import export_spatches, read_spatches_step, spatch_faces, write_spatches_step
+from occsurf.bridge.conversion.spatch_export import (
+    export_spatches,
+    read_spatches_step,
+    spatch_faces,
+    write_spatches_step,
+)
 
 # OCC evaluates the exact rational Bézier pieces (bidegree <= 18 here) by its own de Boor in
 # homogeneous coordinates; measured agreement with SPatch.evaluate: <= 4e-15 relative to the

@@ -18,8 +18,8 @@ from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepClass import BRepClass_FaceClassifier  # noqa: E402
 from OCP.BRepGProp import BRepGProp  # noqa: E402
 from OCP.BRepTools import BRepTools  # noqa: E402
-from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.gp import gp_Pnt2d  # noqa: E402
+from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FORWARD, TopAbs_IN, TopAbs_ON, TopAbs_OUT, TopAbs_WIRE  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS  # noqa: E402
