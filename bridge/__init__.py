@@ -24,7 +24,78 @@ Names are imported lazily: ``import occsurf.bridge`` does not load OCC until a f
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from occsurf._lazy import lazy_exports
+
+if TYPE_CHECKING:  # the lazily served names, for type checkers and IDEs
+    from ._occ import (
+        quiet_messages,
+        silence_messages,
+    )
+    from .conversion.shapes import (
+        as_curve,
+        as_edge,
+        as_faces,
+        as_shape,
+    )
+    from .conversion.splines import (
+        from_occ,
+        is_reversed,
+        to_cq_edge,
+        to_cq_face,
+        to_edge,
+        to_face,
+        to_occ,
+    )
+    from .exchange.convert import (
+        ConversionReport,
+        convert,
+    )
+    from .exchange.objects import (
+        model_from_object,
+        to_build123d,
+        to_cadquery,
+    )
+    from .exchange.step_iges import (
+        ImportedEdge,
+        ImportedFace,
+        ImportedModel,
+        read_iges,
+        read_step,
+        write_iges,
+        write_step,
+    )
+    from .exchange.xcaf import (
+        AssemblyNode,
+    )
+    from .modeling.fill import (
+        FillResult,
+        HoleReport,
+        fill_model,
+    )
+    from .quality.continuity import (
+        PRESETS,
+        EdgeReport,
+        Thresholds,
+        Violation,
+        check_edges,
+        edge_continuity,
+    )
+    from .rendering.lighting import (
+        render_lit,
+        render_model_lit,
+        render_surfaces_lit,
+    )
+    from .validation.deviation import (
+        curve_deviation,
+        roundtrip_deviation,
+        surface_deviation,
+    )
+    from .validation.inspect import (
+        FaceReport,
+        inspect_model,
+    )
 
 _EXPORTS = {
     "to_occ": "conversion.splines",

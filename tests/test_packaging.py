@@ -227,9 +227,45 @@ def test_every_name_in_occsurf_all_resolves():
 
 def test_wheel_ships_the_py_typed_marker(built):
     """PEP 561: type checkers use the hints of an installed occsurf (one marker covers the subpackages)."""
-    assert (REPO / "occsurf" / "py.typed").is_file()
+    assert (REPO / PACKAGE_DIR["occsurf"] / "py.typed").is_file()
     assert "occsurf/py.typed" in set(_names(built["wheel"]))
     assert (built["site"] / "occsurf" / "py.typed").is_file()
+
+
+#: What a user's type checker is asked: names through the subpackage, the lazy top level and a tolerance.
+MYPY_PROBE = """
+import occsurf
+import occsurf.algorithms
+from occsurf.algorithms import tolerances
+occsurf.algorithms.BSplineSurface
+reveal_type(occsurf.algorithms.BSplineSurface)
+reveal_type(occsurf.BSplineSurface)
+reveal_type(occsurf.read_step)
+reveal_type(tolerances.KNOT_EQUALITY)
+reveal_type(tolerances.MAX_ARRAY_BYTES)
+"""
+
+
+@pytest.mark.slow
+def test_fresh_install_is_visible_to_mypy(built, tmp_path):
+    """Issue 26: ``pip install .`` (the wheel) in a new venv, without system site-packages, and mypy
+    run from an empty folder resolves ``occsurf.algorithms.BSplineSurface``, the lazily exported
+    top-level names and the tolerance names (served by a module ``__getattr__`` at run time)."""
+    venv = tmp_path / "venv"
+    _run([sys.executable, "-m", "venv", str(venv)], cwd=tmp_path)
+    python = venv / "bin" / "python"
+    _run([str(python), "-m", "pip", "install", "--no-deps", "--no-index", "--disable-pip-version-check",
+          str(built["wheel"])], cwd=tmp_path)
+    mypy = [sys.executable, "-m", "mypy", "--python-executable", str(python), "--no-incremental"]
+    _run([*mypy, "-c", "import occsurf.algorithms; occsurf.algorithms.BSplineSurface"], cwd=built["empty"])
+    proc = subprocess.run([*mypy, "-c", MYPY_PROBE], cwd=built["empty"], capture_output=True, text=True, timeout=300)
+    revealed = [line.split("Revealed type is ", 1)[1] for line in proc.stdout.splitlines() if "Revealed type is" in line]
+    assert len(revealed) == 5, proc.stdout + proc.stderr
+    assert all("occsurf.algorithms.kernel.surface.BSplineSurface" in r for r in revealed[:2]), revealed
+    assert "occsurf.bridge.exchange" in revealed[2] and "def" in revealed[2], revealed
+    assert [r.strip('"').removeprefix("builtins.") for r in revealed[3:]] == ["float", "int"], revealed
+    errors = [line for line in proc.stdout.splitlines() if ": error:" in line]
+    assert errors == [], proc.stdout
 
 
 NO_NUMBA = r"""

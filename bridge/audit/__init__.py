@@ -25,10 +25,31 @@ occsurf.bridge.audit``).
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 __all__ = ["audit", "AuditResult", "AuditInputError", "CorpusError", "StoreError", "ClusterError", "read_files", "read_faces",
            "write_summary"]
+
+if TYPE_CHECKING:  # the lazily served names, for type checkers and IDEs
+    from .cluster import (
+        ClusterError,
+    )
+    from .corpus import (
+        CorpusError,
+    )
+    from .run import (
+        AuditInputError,
+        AuditResult,
+        audit,
+    )
+    from .store import (
+        StoreError,
+        read_faces,
+        read_files,
+    )
+    from .summary import (
+        write_summary,
+    )
 
 _WHERE = {"audit": ".run", "AuditResult": ".run", "AuditInputError": ".run", "CorpusError": ".corpus", "StoreError": ".store",
           "ClusterError": ".cluster", "read_files": ".store", "read_faces": ".store", "write_summary": ".summary"}

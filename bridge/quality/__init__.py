@@ -21,7 +21,27 @@ Names are imported lazily: importing this package does not load OCC.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from occsurf._lazy import lazy_exports
+
+if TYPE_CHECKING:  # the lazily served names, for type checkers and IDEs
+    from .continuity import (
+        PRESETS,
+        ContinuityResult,
+        EdgeReport,
+        Thresholds,
+        Violation,
+        check_edges,
+        edge_continuity,
+        occ_fold,
+        occ_gap,
+    )
+    from .report import (
+        QualityReport,
+        check_model,
+        summarize_model,
+    )
 
 _EXPORTS = {
     name: "continuity"

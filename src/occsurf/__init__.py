@@ -15,23 +15,86 @@ loads neither NumPy's users nor OpenCascade until a name is asked for::
     occsurf.write_step("c.step", [c])            # loads OCC now
 
 Layout: in the repository the subpackages are the top-level folders ``algorithms/``, ``bridge/``,
-``examples/`` and ``step_samples/``; ``pyproject.toml`` maps them below ``occsurf`` in a wheel. When
-this file is imported from a source checkout (not installed, or the repository root is the current
-directory), the repository root is added to this package's ``__path__`` so that the same dotted
-names resolve to those folders.
+``examples/`` and ``step_samples/``, and this file lives in ``src/occsurf/``; ``pyproject.toml``
+maps them below ``occsurf`` (``[tool.setuptools.package-dir]``). A source checkout is used through
+the README's install (``pip install .``, or ``pip install -e .`` while developing): the installed
+package, editable or not, is what tests, type checkers and IDEs see, so ``occsurf.algorithms`` is the
+same module for all of them.
+
+Type checkers see the lazy names through the ``if TYPE_CHECKING:`` imports below (the same names
+:data:`__all__` lists); at run time they are imported on first use by :func:`_lazy.lazy_exports`.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ._lazy import lazy_exports
 
 __version__ = "0.1.0"
 
-_here = Path(__file__).resolve().parent
-if not (_here / "algorithms").is_dir() and (_here.parent / "algorithms" / "__init__.py").is_file():
-    __path__.append(str(_here.parent))  # source checkout: occsurf.algorithms is ../algorithms
+if TYPE_CHECKING:  # the names of _ALGORITHMS and _BRIDGE, for type checkers and IDEs
+    from .algorithms import (
+        AffineMap,
+        BSplineCurve,
+        BSplineSurface,
+        Curvature,
+        ExchangeError,
+        Frame,
+        HierarchicalCurve,
+        HierarchicalSurface,
+        HoleSide,
+        InvalidGeometryError,
+        KernelError,
+        Mesh,
+        Normal,
+        OccsurfError,
+        ParameterError,
+        Point,
+        Position,
+        SPatch,
+        Tangent,
+        ToleranceError,
+        TrimmedSurface,
+        Vector,
+        arc,
+        circle,
+        constrain,
+        coons,
+        coons_bicubic,
+        curve_frenet,
+        drag_point,
+        drag_surface_point,
+        ellipse,
+        extrude,
+        fill_hole,
+        fit_curve,
+        fit_surface,
+        generalized_bicubic,
+        generalized_biquadratic,
+        gordon,
+        interpolate_curve,
+        interpolate_surface,
+        loft,
+        make_compatible,
+        revolve,
+        ruled,
+        surface_curvatures,
+        sweep,
+    )
+    from .bridge import (
+        ImportedModel,
+        curve_deviation,
+        from_occ,
+        read_iges,
+        read_step,
+        surface_deviation,
+        to_edge,
+        to_face,
+        to_occ,
+        write_iges,
+        write_step,
+    )
 
 _ALGORITHMS = (
     "BSplineCurve", "BSplineSurface", "TrimmedSurface", "circle", "arc", "ellipse", "make_compatible",
