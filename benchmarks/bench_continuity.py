@@ -111,7 +111,7 @@ def bearing(samples: int = 33) -> None:
     print(f"  agreement: |g0 - C0Value| <= {d0:.2e} (model size {size:.3g}), |g1 - G1Angle| <= {d1:.2e} deg, "
           f"gap rel. diff <= {d2:.2e}")
     t0 = time.perf_counter()
-    r = edge_continuity(model)
+    edge_continuity(model)
     print(f"  edge_continuity end to end (matching + {samples} samples + worst-point search): "
           f"{time.perf_counter() - t0:.2f} s")
 

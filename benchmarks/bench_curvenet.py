@@ -81,13 +81,13 @@ def main() -> None:
         A, B = network(m, n)
         peers = {}
         if ocp_gordon is not None:
-            peers["ocp_gordon"] = best_of(lambda: ocp_gordon.interpolate_curve_network(
+            peers["ocp_gordon"] = best_of(lambda A=A, B=B: ocp_gordon.interpolate_curve_network(
                 [to_occ(a) for a in A], [to_occ(c) for c in B], tolerance=1e-6), repeat=5)
-        rows.append(Row(f"gordon, {m} x {n} network, parameters found", best_of(lambda: gordon(A, B), repeat=10),
+        rows.append(Row(f"gordon, {m} x {n} network, parameters found", best_of(lambda A=A, B=B: gordon(A, B), repeat=10),
                         peers=peers))
         us, vs = np.linspace(0, 1, n), np.linspace(0, 1, m)
         rows.append(Row(f"gordon, {m} x {n} network, parameters given",
-                        best_of(lambda: gordon(A, B, u_params=us, v_params=vs), repeat=10), peers=peers))
+                        best_of(lambda A=A, B=B, us=us, vs=vs: gordon(A, B, u_params=us, v_params=vs), repeat=10), peers=peers))
     print(machine_note())
     print_table(rows, ["GeomFill Coons style", "ocp_gordon"])
 

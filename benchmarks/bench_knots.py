@@ -72,8 +72,8 @@ def main() -> int:
         # from other processes cannot fall on one of them only.
         t_ours = t_kernel = t_occ = float("inf")
         for _ in range(5):
-            t_ours = min(t_ours, best_of(lambda: s.refine(knots, direction=direction), rep // 5, budget=1.0))
-            t_kernel = min(t_kernel, best_of(lambda: refine_poles(s.knots[ax], s.degree[ax], H, tau), rep // 5, budget=1.0))
+            t_ours = min(t_ours, best_of(lambda direction=direction: s.refine(knots, direction=direction), rep // 5, budget=1.0))
+            t_kernel = min(t_kernel, best_of(lambda ax=ax, H=H, tau=tau: refine_poles(s.knots[ax], s.degree[ax], H, tau), rep // 5, budget=1.0))
             t, occ_done = occ_insert_time(occ, knots, direction, rep // 5)
             t_occ = min(t_occ, t)
         r = Row(f"refine 100 knots along {direction}", t_ours)
@@ -81,7 +81,7 @@ def main() -> int:
         r.peers["OCC Insert*Knots"] = t_occ
         deviations.append(f"{direction}: OCC poles {max_dev(from_occ(occ_done).control_points, ours.control_points):.1e}")
 
-        def splipy_refine(direction=direction):
+        def splipy_refine(ax=ax):
             spl = common.splipy_surface(s)  # splipy refines in place: a fresh object per call
             return spl.insert_knot(list(knots), direction=ax)
 
@@ -90,7 +90,7 @@ def main() -> int:
         r.notes.append(f"splipy: insert_knot on a fresh copy, the copy's {t_make:.2f} ms subtracted")
         n_geo = 10
 
-        def geomdl_insert(direction=direction):
+        def geomdl_insert(ax=ax, n_geo=n_geo):
             g = common.geomdl_surface(s)
             for x in knots[:n_geo]:
                 operations.insert_knot(g, [float(x), None] if ax == 0 else [None, float(x)], [1, 0] if ax == 0 else [0, 1])

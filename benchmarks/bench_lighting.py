@@ -210,9 +210,10 @@ def time_reference(repeat):
                 for k in (1, 3):
                     s = LightingSetup(lights=setup.lights[:k], ambient=0.05, material=setup.material)
                     shade(P[:100_000], N[:100_000], [5, -30, 20], s, dtype=dtype)  # compiles once per machine
-                    wall = min(_timed(lambda: shade(P, N, [5, -30, 20], s, dtype=dtype)) for _ in range(repeat))
+                    wall = min(_timed(lambda s=s, dtype=dtype: shade(P, N, [5, -30, 20], s, dtype=dtype))
+                               for _ in range(repeat))
                     with tolerances.override(LIGHT_THREADS=1):
-                        cpu = min(_timed(lambda: shade(P, N, [5, -30, 20], s, dtype=dtype), time.process_time)
+                        cpu = min(_timed(lambda s=s, dtype=dtype: shade(P, N, [5, -30, 20], s, dtype=dtype), time.process_time)
                                   for _ in range(repeat))
                     rows.append((path, np.dtype(dtype).name, k, len(P) / wall / 1e6, len(P) / cpu / 1e6))
         finally:

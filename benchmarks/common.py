@@ -21,12 +21,7 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
-
-from occsurf.algorithms import (
-    BSplineSurface,  # noqa: E402
-    _numba_kernels,  # noqa: E402
-)
+from occsurf.algorithms import BSplineSurface, _numba_kernels  # noqa: E402  (the installed occsurf)
 
 SEED = 20240611
 
