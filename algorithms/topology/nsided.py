@@ -255,7 +255,7 @@ class FillQuality:
 def _mult_map(knots: Array, degree: int) -> dict[float, int]:
     """Interior knots (strictly inside the domain) -> multiplicity."""
     lo, hi = knots[degree], knots[-degree - 1]
-    eps = 1e-12 * (hi - lo)  # a knot within round-off of an end is that end (no sliver span)
+    eps = tolerances.FILL_KNOT_END_TOL * (hi - lo)  # a knot within round-off of an end is that end (no sliver span)
     vals, counts = np.unique(knots[(knots > lo + eps) & (knots < hi - eps)], return_counts=True)
     return {float(v): int(c) for v, c in zip(vals, counts)}
 
@@ -488,7 +488,8 @@ def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Sid
                 f"sides[{k}].cross: expected a non-rational {want}-D field "
                 f"({'homogeneous, for a rational curve' if want == 4 else 'Cartesian'}), got "
                 f"{'rational ' if sd.cross.is_rational else ''}{sd.cross.dim}-D")
-        if not np.allclose(sd.curve.domain, sd.cross.domain, rtol=1e-12, atol=1e-12):
+        domain_tol = tolerances.FILL_DOMAIN_TOL
+        if not np.allclose(sd.curve.domain, sd.cross.domain, rtol=domain_tol, atol=domain_tol):
             raise InvalidGeometryError(f"sides[{k}].cross: domain {sd.cross.domain} differs from the curve's "
                                        f"{sd.curve.domain}")
         rational |= sd.curve.is_rational
@@ -511,7 +512,7 @@ def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Sid
     # 1e6 away failed the representation check; at 1e4 the G1 angle grew from 4e-11 to 1e-7 deg).
     origin = ends[:, 0].mean(axis=0)
     work: list[_Side] = []
-    for k, sd in enumerate(unit):
+    for sd in unit:
         c = BSplineCurve._trusted(sd.curve.degree, sd.curve.knots, np.asarray(sd.curve.control_points, float) - origin,
                                  sd.curve.weights)
         X = sd.cross
@@ -524,7 +525,8 @@ def _working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[_Sid
             B = BSplineCurve._trusted(c.degree, c.knots, Hc)
             Xc = BSplineCurve._trusted(X.degree, X.knots, Xh)
             w0, w1 = float(Hc[0, 3]), float(Hc[-1, 3])
-            if abs(w0 - 1.0) > 1e-15 or abs(w1 - 1.0) > 1e-15:
+            weight_tol = tolerances.FILL_END_WEIGHT_TOL
+            if abs(w0 - 1.0) > weight_tol or abs(w1 - 1.0) > weight_tol:
                 # lambda(s) B(s) with lambda linear: end weights 1, same projected curve and same span.
                 lam = lambda s, w0=w0, w1=w1: (1 - s) / w0 + s / w1  # noqa: E731
                 B, Xc = _times_linear(B, lam), _times_linear(Xc, lam)
@@ -556,7 +558,7 @@ def _split_short_loop(unit: list[HoleSide]) -> tuple[list[HoleSide], Array]:
         # would make the fill's knot spaces singular
         knots = np.unique(np.r_[sd.curve.knots, sd.cross.knots])
         near = np.abs(knots[None, :] - t[:, None])
-        t = np.where(near.min(1) <= 1e-6, knots[near.argmin(1)], t)
+        t = np.where(near.min(1) <= tolerances.FILL_CUT_SNAP, knots[near.argmin(1)], t)
         b = np.r_[0.0, t, 1.0]
         for t0, t1 in zip(b[:-1], b[1:]):
             out.append(HoleSide(sd.curve.segment(t0, t1).reparametrize(0.0, 1.0),
@@ -579,10 +581,11 @@ def _choose_split(side: _Side) -> float:
     """1/2, unless a knot there breaks the continuity of the fields' first derivative."""
     cont = side.continuity()
     bad = sorted(k for k, c in cont.items() if c < 1)
-    if not any(abs(k - 0.5) < 1e-9 for k in bad):
+    tol = tolerances.FILL_SPLIT_KNOT_TOL
+    if not any(abs(k - 0.5) < tol for k in bad):
         return 0.5
     knots = np.unique(np.r_[0.0, list(cont), 1.0])
-    j = int(np.searchsorted(knots, 0.5 - 1e-9))  # knots[j] ~ 0.5
+    j = int(np.searchsorted(knots, 0.5 - tol))  # knots[j] ~ 0.5
     left, right = 0.5 * (knots[j - 1] + knots[j]), 0.5 * (knots[j] + knots[j + 1])
     return float(left if 0.5 - left <= right - 0.5 else right)
 
@@ -590,8 +593,9 @@ def _choose_split(side: _Side) -> float:
 def _half_space(side: _Side, lo: float, hi: float, reverse: bool, degree: int) -> Array:
     """Knot vector (degree ``degree``, on [0, 1]) of the part ``[lo, hi]`` of a side."""
     inner: list[float] = []
+    tol = tolerances.FILL_KNOT_END_TOL  # the side is on [0, 1]: absolute is relative
     for k, c in side.continuity().items():
-        if lo + 1e-12 < k < hi - 1e-12:
+        if lo + tol < k < hi - tol:
             if c < 0:
                 raise InvalidGeometryError(
                     f"sides: a side has a C0 knot (no tangent) at parameter {k:.6g}; split the side there")
@@ -630,7 +634,8 @@ def _kite_relation(v: Array, p: Array, i: int, n: int) -> tuple[_Poly, _Poly, _P
             f"({np.array2string(x, precision=3)}): the side split parameters are too uneven")
     a, b = _scalar_poly([x[0], x[1] - x[0]]), _scalar_poly([x[2], x[3] - x[2]])
     # r(t) = (a A + b B) . T / |T|^2, quadratic
-    A = _Poly(np.array([A0, A1 - A0])); Bp = _Poly(np.array([B0, B1 - B0]))
+    A = _Poly(np.array([A0, A1 - A0]))
+    Bp = _Poly(np.array([B0, B1 - B0]))
     V = a * A + b * Bp
     r = _Poly((V.coef @ T / (T @ T))[:, None])
     return a, b, r, {"A0": A0, "A1": A1, "B0": B0, "B1": B1, "T": T}
@@ -1060,16 +1065,10 @@ def _harmonic_layout(mid: _Midpoints, rational: bool, boundary: tuple[Array, Arr
     return C, c1, DPhi
 
 
-#: Smallest angle (degrees) between an internal edge and its side at the side's midpoint: where the
-#: centre lies (nearly) along the side (a tapering sliver of a hole), the edge leaves the side at this
-#: angle and turns towards the centre on its way (its Hermite curve), instead of leaving the hole.
-_MIN_EDGE_ANGLE = 30.0
-
-
 def _midpoint_coefficients(mid: _Midpoints, C: Array, rational: bool, turn: bool = False) -> Array:
     """Coefficients (n, nf) of the fields at the midpoints for ribbons along the projections of
     ``C - m_i`` into the neighbours' tangent planes; with ``turn``, a projection that leaves the
-    side at less than :data:`_MIN_EDGE_ANGLE` into the hole is turned to that angle (same length)."""
+    side at less than ``tolerances.FILL_MIN_EDGE_ANGLE`` into the hole is turned to that angle (same length)."""
     n, mc, normals = len(mid.cart), mid.cart, mid.normals
     c1 = np.zeros((n, mid.fields[0][0].shape[1]))
     for i in range(n):
@@ -1080,7 +1079,7 @@ def _midpoint_coefficients(mid: _Midpoints, C: Array, rational: bool, turn: bool
             x = _cart_tangent(mid.point[i], mid.fields[i][0][0, 0], rational)
             w = -_unit(x - tau * (x @ tau))  # in the tangent plane, across the side, into the hole
             a, b, length = float(t @ tau), float(t @ w), float(np.linalg.norm(t))
-            lo = np.radians(_MIN_EDGE_ANGLE)
+            lo = np.radians(tolerances.FILL_MIN_EDGE_ANGLE)
             if b < np.sin(lo) * length:
                 t = length * (np.cos(lo) * (1.0 if a >= 0 else -1.0) * tau + np.sin(lo) * w)
         target = np.r_[mid.point[i, 3] * t, 0.0] if rational else t
@@ -1185,7 +1184,8 @@ def _edge_cross_fields(i: int, a: _Poly, b: _Poly, r: _Poly, T: _Poly, left: tup
     Amat = np.array([[a.coef[0, 0], 0, b.coef[0, 0], 0],
                      [a.coef[1, 0], a.coef[0, 0], b.coef[1, 0], b.coef[0, 0]],
                      [0, a.coef[1, 0], 0, b.coef[1, 0]]])
-    rc = np.zeros(3); rc[:r.coef.shape[0]] = r.coef[:3, 0]
+    rc = np.zeros(3)
+    rc[:r.coef.shape[0]] = r.coef[:3, 0]
     lm = np.linalg.lstsq(Amat, rc, rcond=tolerances.FILL_RCOND)[0]
     ell, emm = _scalar_poly(lm[:2]), _scalar_poly(lm[2:])
     b0, b0d = b(0.0)[0], b(0.0, 1)[0]
@@ -1200,7 +1200,7 @@ def _edge_cross_fields(i: int, a: _Poly, b: _Poly, r: _Poly, T: _Poly, left: tup
     scale = max(np.abs(L0).max(), np.abs(L1).max(), 1e-300)
     err = max(np.abs(Ri(0.0) - R0).max(), np.abs(Ri(1.0) - R1).max(), np.abs(Ri(0.0, 1) - R0d).max(),
               np.abs(Ri(1.0, 1) - R1d).max()) / scale
-    if err > 1e-7:
+    if err > tolerances.FILL_EDGE_CONSISTENCY_TOL:
         raise ToleranceError(f"internal: the G1 data of internal edge {i} are inconsistent ({err:.2e})")
     return Li, Ri
 
@@ -1378,21 +1378,24 @@ def _point_normal(surface: BSplineSurface, u: Array, v: Array) -> tuple[Array, A
     """Points and (unnormalised) normals ``S_u x S_v`` from one derivative evaluation.
 
     Where ``S_u`` and ``S_v`` are parallel (the degenerate corner of a flat hole corner) the normal
-    is the limit, taken ``1e-7`` into the patch (angle error ~1e-5 deg); a normal still degenerate
-    there is NaN (as :meth:`BSplineSurface.normal`), so that it fails every angle check."""
+    is the limit, taken ``tolerances.FILL_NORMAL_STEP`` (1e-7) of the domain into the patch (angle
+    error ~1e-5 deg); a normal still degenerate there is NaN (as :meth:`BSplineSurface.normal`), so
+    that it fails every angle check. Degenerate: ``|S_u x S_v|`` at most
+    ``tolerances.FILL_DEGENERATE_NORMAL`` times ``|S_u| |S_v|``."""
+    degenerate, step = tolerances.FILL_DEGENERATE_NORMAL, tolerances.FILL_NORMAL_STEP
     D = surface.derivatives(u, v, 1)
     nrm = np.cross(D[:, 1, 0], D[:, 0, 1])
     scale = np.linalg.norm(D[:, 1, 0], axis=1) * np.linalg.norm(D[:, 0, 1], axis=1)
-    bad = np.linalg.norm(nrm, axis=1) <= 1e-9 * scale
+    bad = np.linalg.norm(nrm, axis=1) <= degenerate * scale
     if bad.any():
         (u0, u1), (v0, v1) = surface.domain
         ub, vb = np.broadcast_to(u, bad.shape)[bad], np.broadcast_to(v, bad.shape)[bad]
-        ub = ub + np.where(ub < 0.5 * (u0 + u1), 1e-7, -1e-7) * (u1 - u0)
-        vb = vb + np.where(vb < 0.5 * (v0 + v1), 1e-7, -1e-7) * (v1 - v0)
+        ub = ub + np.where(ub < 0.5 * (u0 + u1), step, -step) * (u1 - u0)
+        vb = vb + np.where(vb < 0.5 * (v0 + v1), step, -step) * (v1 - v0)
         Db = surface.derivatives(ub, vb, 1)
         nb = np.cross(Db[:, 1, 0], Db[:, 0, 1])
         sb = np.linalg.norm(Db[:, 1, 0], axis=1) * np.linalg.norm(Db[:, 0, 1], axis=1)
-        nb[~(np.linalg.norm(nb, axis=1) > 1e-9 * sb)] = np.nan
+        nb[~(np.linalg.norm(nb, axis=1) > degenerate * sb)] = np.nan
         nrm[bad] = nb
     return D[:, 0, 0], nrm
 
@@ -1485,7 +1488,7 @@ def count_folds(surface: BSplineSurface | TrimmedSurface, grid: int = 41) -> int
     D = surface.derivatives(U.ravel(), V.ravel(), 1)
     N = np.cross(D[:, 1, 0], D[:, 0, 1]).reshape(gu, gv, 3)
     length = np.linalg.norm(N, axis=2)
-    N[length <= 1e-6 * np.median(length)] = 0.0  # a degenerate point (flat hole corner) has no side
+    N[length <= tolerances.FILL_FOLD_DEGENERATE * np.median(length)] = 0.0  # a degenerate point (flat hole corner) has no side
     du = np.einsum("ijk,ijk->ij", N[1:], N[:-1]) < 0
     dv = np.einsum("ijk,ijk->ij", N[:, 1:], N[:, :-1]) < 0
     if trimmed is not None:  # only pairs on the face
