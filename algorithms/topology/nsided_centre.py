@@ -107,8 +107,8 @@ def centre(mid: Midpoints, rational: bool, loop: Array | None = None,
     c1 = _midpoint_coefficients(mid, C, rational)
     if loop is None or not np.any(c1[:, 0] >= 0) or not turns_inward(loop, normals):
         return C, c1  # convex enough, or cross fields that point into the hole: check_inward says so
-    inner = None if harmonic is None else harmonic_centre(harmonic[0], harmonic[1], normals)
-    inner = inner[:2] if inner is not None else inner_point(loop, normals)
+    hc = None if harmonic is None else harmonic_centre(harmonic[0], harmonic[1], normals)
+    inner = hc[:2] if hc is not None else inner_point(loop, normals)
     if inner is not None:
         C0, nh = inner
         C = C0 + nh * np.mean([nh @ (mc[i] + proj(i, C0 - mc[i]) - C0) for i in range(n)])
@@ -164,7 +164,8 @@ def harmonic_boundary(S: list[Side], sig: Array, vdom: Array, pdom: Array, ratio
             P = cart(sd.B.evaluate(np.r_[t, hi]), rational)
             cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
             f = (cum / max(cum[-1], 1e-300))[:-1, None]
-            pts.append(P[:-1]), tgt.append((1 - f) * a + f * b)
+            pts.append(P[:-1])
+            tgt.append((1 - f) * a + f * b)
     return np.concatenate(pts), np.concatenate(tgt)
 
 

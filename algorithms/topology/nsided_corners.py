@@ -118,8 +118,8 @@ def _corner(i: int, S: list[Side], sig: Array, rational: bool,
     rcond = tolerances.FILL_RCOND
     xa, *_ = np.linalg.lstsq(Fa.T, tb, rcond=rcond)
     xb, *_ = np.linalg.lstsq(Fb.T, ta, rcond=rcond)
-    residual = max(np.linalg.norm(Fa.T @ xa - tb) / np.linalg.norm(tb),
-                   np.linalg.norm(Fb.T @ xb - ta) / np.linalg.norm(ta))
+    residual = float(max(np.linalg.norm(Fa.T @ xa - tb) / np.linalg.norm(tb),
+                         np.linalg.norm(Fb.T @ xb - ta) / np.linalg.norm(ta)))
     plane_tol = tolerances.FILL_CORNER_PLANE_TOL
     if not residual <= plane_tol:
         raise InvalidGeometryError(
@@ -145,7 +145,7 @@ def _corner(i: int, S: list[Side], sig: Array, rational: bool,
     scale = max(float(np.abs(np.r_[xa, xb, c1[i], c1[j]]).max()), 1e-300)
     if np.abs(y).max() > tolerances.FILL_MAX_TWIST_RATIO * scale:
         y = np.r_[c1[i] - xa, c1[j] - xb]
-    twist = np.linalg.norm(M @ y - rhs) / max(np.linalg.norm(ta), np.linalg.norm(tb), 1e-300)
+    twist = float(np.linalg.norm(M @ y - rhs) / max(float(np.linalg.norm(ta)), float(np.linalg.norm(tb)), 1e-300))
     return xa, xb, y[:nf], y[nf:], residual, twist, flat
 
 

@@ -46,7 +46,7 @@ class Poly:
                 A[row, c] = np.prod(np.arange(c - k + 1, c + 1)) * t ** (c - k)
         return cls(np.linalg.solve(A, Y.reshape(m, -1)))
 
-    def __call__(self, t: Array, k: int = 0) -> Array:
+    def __call__(self, t: float | Array, k: int = 0) -> Array:
         t = np.asarray(t, float)
         out = np.zeros(t.shape + self.coef.shape[1:])
         for c in range(k, self.coef.shape[0]):

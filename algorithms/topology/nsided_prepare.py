@@ -34,7 +34,7 @@ class Side:
         self.B, self.X, self.rational = B, X, rational
         self.nf = 3 if rational else 2
 
-    def fields(self, s: Array) -> tuple[Array, Array]:
+    def fields(self, s: float | Array) -> tuple[Array, Array]:
         """Fields ``[X, B', (B)]`` and their s-derivatives at ``s``: each (m, nf, w)."""
         s = np.atleast_1d(np.asarray(s, float))
         DB = self.B.derivatives(s, 2)
