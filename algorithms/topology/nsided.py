@@ -54,13 +54,12 @@ split of a smooth loop). Where the midpoints' mean lies outside the hole (a cres
 sliver), the centre is moved to the preimage of the domain's centre under a harmonic map of the hole
 onto the domain (the point farthest from the boundary if that map cannot be built) and internal
 edges that would leave the hole leave their side at 30 degrees (``tolerances.FILL_MIN_EDGE_ANGLE``)
-instead. A fill that folds
-(:func:`count_folds`, :attr:`FillQuality.folds`: a long curved hole, a sliver) is rebuilt on the
-harmonic layout (:func:`.nsided_centre.harmonic_layout`): centre, internal-edge directions and lengths at the
-midpoints, and the centre's tangent map all from that one-to-one map, so the internal edges follow
-the hole instead of cutting across it; the fill with fewer folds is kept. Very long thin curved holes
-(a sector whose middle arc is more than ~12 times its width) still fold near their internal edges,
-and :func:`measure_fill` says so.
+instead. A fill that folds (:func:`count_folds`, :attr:`FillQuality.folds`: a long curved hole, a
+sliver) is rebuilt on the harmonic layout (:func:`.nsided_centre.harmonic_layout`): centre,
+internal-edge directions and lengths at the midpoints, and the centre's tangent map all from that
+one-to-one map, so the internal edges follow the hole instead of cutting across it; the fill with
+fewer folds is kept. Very long thin curved holes (a sector whose middle arc is more than ~12 times
+its width) still fold near their internal edges, and :func:`measure_fill` says so.
 
 Known limits (reported, never hidden): at a hole corner the twist is over-determined when the two
 neighbours are only G1 (not G2) to each other there (Gregory's twist incompatibility): its normal

@@ -1,4 +1,4 @@
-"""Where the internal edges of the n-sided fill go (step 3 of :func:`~occsurf.algorithms.topology.nsided.fill_hole`).
+"""Where the internal edges of the n-sided fill go (step 3 of :func:`.nsided.fill_hole`, course §8-3).
 
 The central split joins a point ``m_i`` on every side (:func:`midpoints`) to a centre ``C``
 (:func:`centre`); the ribbon coefficients at ``m_i`` say which way the internal edge leaves the

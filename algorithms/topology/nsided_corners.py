@@ -1,4 +1,4 @@
-"""The hole corners of the n-sided fill (step 2 of :func:`~occsurf.algorithms.topology.nsided.fill_hole`).
+"""The hole corners of the n-sided fill (step 2 of :func:`.nsided.fill_hole`, course §8-3).
 
 At hole corner ``V_i`` side ``i`` starts and side ``i - 1`` ends; the corner patch ``i`` sees both.
 :func:`corner_analysis` fits the two sides' ribbon coefficients to each other there (each ribbon is
@@ -145,7 +145,8 @@ def _corner(i: int, S: list[Side], sig: Array, rational: bool,
     scale = max(float(np.abs(np.r_[xa, xb, c1[i], c1[j]]).max()), 1e-300)
     if np.abs(y).max() > tolerances.FILL_MAX_TWIST_RATIO * scale:
         y = np.r_[c1[i] - xa, c1[j] - xb]
-    twist = float(np.linalg.norm(M @ y - rhs) / max(float(np.linalg.norm(ta)), float(np.linalg.norm(tb)), 1e-300))
+    twist = float(np.linalg.norm(M @ y - rhs) / max(float(np.linalg.norm(ta)), float(np.linalg.norm(tb)),
+                                                    1e-300))
     return xa, xb, y[:nf], y[nf:], residual, twist, flat
 
 

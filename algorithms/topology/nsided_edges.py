@@ -1,5 +1,5 @@
 """The domain picture and the internal edges of the n-sided fill (steps 1 and 4 of
-:func:`~occsurf.algorithms.topology.nsided.fill_hole`).
+:func:`.nsided.fill_hole`, course §8-3).
 
 The domain is a regular n-gon split into kites (:func:`domain_picture`); along each kite edge the
 bilinear parametrisations of the two kites satisfy ``a A + b B = r T`` with ``a, b`` linear and

@@ -54,6 +54,8 @@ def _point_normal(surface: BSplineSurface, u: Array, v: Array) -> tuple[Array, A
 
 
 def _neighbour_normal(side: HoleSide, s: Array) -> Array:
+    """The neighbour's (unnormalised) normals ``B' x X`` along ``side`` at ``s`` (Cartesian ``X`` for a
+    rational side, from its homogeneous field)."""
     c = side.curve
     D = c.derivatives(s, 1)
     X = side.cross.evaluate(s)
@@ -141,7 +143,8 @@ def count_folds(surface: BSplineSurface | TrimmedSurface, grid: int = 41) -> int
     D = surface.derivatives(U.ravel(), V.ravel(), 1)
     N = np.cross(D[:, 1, 0], D[:, 0, 1]).reshape(gu, gv, 3)
     length = np.linalg.norm(N, axis=2)
-    N[length <= tolerances.FILL_FOLD_DEGENERATE * np.median(length)] = 0.0  # a degenerate point (flat hole corner) has no side
+    # a degenerate point (flat hole corner) has no side
+    N[length <= tolerances.FILL_FOLD_DEGENERATE * np.median(length)] = 0.0
     du = np.einsum("ijk,ijk->ij", N[1:], N[:-1]) < 0
     dv = np.einsum("ijk,ijk->ij", N[:, 1:], N[:, :-1]) < 0
     if trimmed is not None:  # only pairs on the face

@@ -1,4 +1,4 @@
-"""The corner patches of the n-sided fill (step 5 of :func:`~occsurf.algorithms.topology.nsided.fill_hole`).
+"""The corner patches of the n-sided fill (step 5 of :func:`.nsided.fill_hole`, course §8-3).
 
 Patch ``i`` covers hole corner ``V_i``: its two hole sides and the ribbons along them are placed
 exactly into the patch's knot space (:func:`_boundary_ribbons`: the side's knots, the degree raised
@@ -159,11 +159,13 @@ def _corner_knot(K: Array, degree: int) -> Array:
 # ==================================================================================== fairing
 @functools.lru_cache(maxsize=16)
 def _leggauss(m: int) -> tuple[Array, Array]:
+    """Gauss-Legendre nodes and weights of order ``m`` on ``[-1, 1]`` (cached)."""
     return np.polynomial.legendre.leggauss(m)
 
 
 @functools.lru_cache(maxsize=64)
 def _gram_cached(knots_key: bytes, degree: int, order: int) -> Array:
+    """:func:`_gram` for the knots as bytes (hashable); the result is read-only, shared by the cache."""
     knots = np.frombuffer(knots_key)
     n = len(knots) - degree - 1
     xg, wg = _leggauss(degree + 1)

@@ -4,7 +4,8 @@ The ribbons of :func:`~occsurf.algorithms.topology.nsided.fill_hole` are product
 polynomials (:class:`Poly`, monomial form) and the sides' splines; :func:`represent` places such a
 function into a spline space that holds it exactly (collocation at the Greville abscissae, checked
 against ``tolerances.FILL_REPRESENT_TOL``), :func:`times_linear` multiplies a spline by a linear
-factor (The NURBS Book, 2nd ed., A2.3 for the derivatives involved). Also the small vector helpers
+factor (the product of a spline and a polynomial is a spline on the same knots, each knot's
+multiplicity raised). Also the small vector helpers
 shared by the fill's modules: homogeneous to Cartesian points and tangents, unit vectors, angles.
 """
 
@@ -47,6 +48,7 @@ class Poly:
         return cls(np.linalg.solve(A, Y.reshape(m, -1)))
 
     def __call__(self, t: float | Array, k: int = 0) -> Array:
+        """The ``k``-th derivative (the value for ``k = 0``) at ``t``: shape ``t.shape + (w,)``."""
         t = np.asarray(t, float)
         out = np.zeros(t.shape + self.coef.shape[1:])
         for c in range(k, self.coef.shape[0]):
@@ -72,6 +74,7 @@ class Poly:
         return Poly(-self.coef)
 
     def deriv(self) -> Poly:
+        """The derivative."""
         c = self.coef
         if c.shape[0] == 1:
             return Poly(np.zeros_like(c))
@@ -79,6 +82,7 @@ class Poly:
 
 
 def scalar_poly(coefs: Sequence[float]) -> Poly:
+    """The scalar polynomial (w = 1) with the monomial coefficients ``coefs``."""
     return Poly(np.asarray(coefs, float)[:, None])
 
 
@@ -132,6 +136,7 @@ def times_linear(c: BSplineCurve, lam: Callable[[Array], Array]) -> BSplineCurve
 
 # ================================================================================== vectors
 def cart(h: Array, rational: bool) -> Array:
+    """Cartesian points from homogeneous ones ``(w x, w y, w z, w)`` (``h`` itself if not ``rational``)."""
     return h[..., :3] / h[..., 3:4] if rational else h
 
 
@@ -143,6 +148,7 @@ def cart_tangent(h: Array, dh: Array, rational: bool) -> Array:
 
 
 def unit(v: Array) -> Array:
+    """The vectors along the last axis scaled to length 1 (a zero vector stays zero)."""
     return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-300)
 
 

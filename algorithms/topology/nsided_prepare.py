@@ -1,4 +1,4 @@
-"""Preparing a hole's sides for the n-sided fill (step 0 of :func:`~occsurf.algorithms.topology.nsided.fill_hole`).
+"""Preparing a hole's sides for the n-sided fill (step 0 of :func:`.nsided.fill_hole`, course §8-3).
 
 :func:`working_sides` checks the sides (types, domains, a closed and simple loop) and brings them
 into working coordinates about the hole's own centre, homogeneous if any side is rational, as
@@ -58,11 +58,13 @@ class Side:
 
     @property
     def degree(self) -> int:
+        """The larger of the boundary's and the cross field's degrees."""
         return max(self.B.degree, self.X.degree)
 
 
 def working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[Side], bool, float, Array]:
-    """Check the sides of a hole and bring them into working coordinates (step 0 of :func:`.nsided.fill_hole`).
+    """Check the sides of a hole and bring them into working coordinates (step 0 of
+    :func:`.nsided.fill_hole`).
 
     Returns
     -------
