@@ -306,6 +306,37 @@ _DEFAULTS: dict[str, float] = {
     # Most sides of a hole (the construction works for any n: 48 sides measured G1 to 5e-10 deg in
     # 6 s; this bounds the output size, n patches, and the time).
     "FILL_MAX_SIDES": 96,
+    # An interior knot of a side within this (relative to the side's parameter range) of an end of
+    # the side, or of the half side a corner patch covers, is that end: no sliver span is made.
+    "FILL_KNOT_END_TOL": 1e-12,
+    # A side's cross field must have the curve's domain within this (absolute and relative).
+    "FILL_DOMAIN_TOL": 1e-12,
+    # A rational side whose end weights differ from 1 by more than this is rescaled (times a linear
+    # factor: the same curve) to end weights 1 in working coordinates; closer, it is left as it is.
+    "FILL_END_WEIGHT_TOL": 1e-15,
+    # A cut of a loop of one or two sides (on [0, 1]) within this of a knot is moved onto the knot:
+    # a sliver span left by the cut would make the fill's knot spaces singular.
+    "FILL_CUT_SNAP": 1e-6,
+    # A knot of low continuity within this of a side's middle (parameter, on [0, 1]) is at the
+    # middle: the internal edge then leaves the side half a span away instead.
+    "FILL_SPLIT_KNOT_TOL": 1e-9,
+    # Smallest angle (degrees) between an internal edge and its side at the side's midpoint: where
+    # the centre lies (nearly) along the side (a tapering sliver of a hole), the edge leaves the side
+    # at this angle and turns towards the centre on its way (its Hermite curve), instead of leaving
+    # the hole.
+    "FILL_MIN_EDGE_ANGLE": 30.0,
+    # Self-check of an internal edge's G1 data (relative to its cross fields' size): the second
+    # cross field must meet its end data when the corner conditions hold; round-off gives ~1e-15,
+    # larger means a bug, and raises.
+    "FILL_EDGE_CONSISTENCY_TOL": 1e-7,
+    # measure_fill: a normal S_u x S_v no longer than this times |S_u| |S_v| (the sine of the angle
+    # between the partials) is degenerate (the corner of a flat hole corner's patch); the limit normal
+    # is then taken FILL_NORMAL_STEP of the domain into the patch.
+    "FILL_DEGENERATE_NORMAL": 1e-9,
+    "FILL_NORMAL_STEP": 1e-7,
+    # count_folds: a grid normal shorter than this times the median normal's length is degenerate
+    # (a flat hole corner) and counts on neither side of a fold.
+    "FILL_FOLD_DEGENERATE": 1e-6,
     # Trimmed hole sides (topology/nsided_sides.py): target angle (degrees) between the fitted
     # cross field's tangent plane and the neighbour's, the issue's 0.01 deg; the fit bisects spans
     # until it is met or the field has FILL_FIT_MAX_SPANS spans.

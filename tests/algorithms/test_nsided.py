@@ -193,7 +193,7 @@ def test_kite_relation_is_well_posed(n: int, split: float) -> None:
     # split at its middle (A and B mirror each other about T); the chosen member must not depend on
     # LAPACK's choice of null vector (one with a(0) = 0 broke the fill on some builds) and must be
     # positive along the edge. Checked here on the polynomials themselves, at many t.
-    from occsurf.algorithms.topology.nsided import _kite_relation
+    from occsurf.algorithms.topology.nsided_edges import _kite_relation
 
     th = 2 * np.pi * np.arange(n) / n
     v = np.c_[np.cos(th), np.sin(th)]
@@ -239,11 +239,11 @@ def test_fill_does_not_depend_on_where_the_hole_is(rational: bool) -> None:
 def test_pole_of_a_neighbour_at_a_corner_is_named() -> None:
     """Review: a neighbour whose cross derivative vanishes at a hole corner (a sphere's pole, as at
     every filleted box corner) was refused as 'a reflex corner', or filled nearly degenerate."""
-    from occsurf.algorithms.topology.nsided import _times_linear
+    from occsurf.algorithms.topology.nsided_poly import times_linear
 
     m = ring_model(5)
     sides = list(m.sides)
-    sides[2] = HoleSide(sides[2].curve, _times_linear(sides[2].cross.clamp(), lambda s: s))
+    sides[2] = HoleSide(sides[2].curve, times_linear(sides[2].cross.clamp(), lambda s: s))
     with pytest.raises(InvalidGeometryError, match=r"^sides\[2\]\.cross: degenerate at the start .*pole"):
         fill_hole(sides)
 
@@ -266,17 +266,20 @@ def test_neighbours_meeting_at_a_sharp_edge_at_a_corner_are_refused() -> None:
 # ------------------------------------------------------------------- the steps of fill_hole
 def _steps(m):
     """Run the steps of fill_hole up to the internal edges (working coordinates)."""
-    from occsurf.algorithms.topology import nsided as ns
+    from occsurf.algorithms.topology.nsided_centre import centre, centre_map, midpoints
+    from occsurf.algorithms.topology.nsided_corners import corner_analysis
+    from occsurf.algorithms.topology.nsided_edges import domain_picture, internal_edge
+    from occsurf.algorithms.topology.nsided_prepare import choose_split, working_sides
 
-    unit, S, rational, size, origin = ns._working_sides(m.sides)
-    sig = np.array([ns._choose_split(sd) for sd in S])
-    vdom, pdom = ns._domain_picture(sig)
-    corners = ns._corner_analysis(S, sig, rational)
-    mid = ns._midpoints(S, sig, rational)
-    C, c1 = ns._centre(mid, rational)
+    unit, S, rational, size, origin = working_sides(m.sides)
+    sig = np.array([choose_split(sd) for sd in S])
+    vdom, pdom = domain_picture(sig)
+    corners = corner_analysis(S, sig, rational)
+    mid = midpoints(S, sig, rational)
+    C, c1 = centre(mid, rational)
     Ch = np.r_[C, 1.0] if rational else C
-    DPhi = ns._centre_map(C, mid.cart, pdom, rational)
-    edges = [ns._internal_edge(i, vdom, pdom, sig[i], mid, c1[i], Ch, DPhi) for i in range(len(S))]
+    DPhi = centre_map(C, mid.cart, pdom, rational)
+    edges = [internal_edge(i, vdom, pdom, sig[i], mid, c1[i], Ch, DPhi) for i in range(len(S))]
     return dict(S=S, rational=rational, size=size, sig=sig, vdom=vdom, pdom=pdom, corners=corners, mid=mid,
                 Ch=Ch, c1=c1, edges=edges)
 
@@ -313,7 +316,7 @@ def test_internal_edges_satisfy_the_kite_relation_identically(rational: bool) ->
     """Step 4 on its own: along every internal edge a L + b R = r E' (the G1 condition between
     patches i and i+1) at any t, E runs from the side's split point to the centre, and L starts as
     the side's tangent (measured relation error 1e-15 relative)."""
-    from occsurf.algorithms.topology.nsided import _kite_relation
+    from occsurf.algorithms.topology.nsided_edges import _kite_relation
 
     st_ = _steps(ring_model(6, rational=rational, bump=0.8))
     t = np.linspace(0.0, 1.0, 41)
@@ -334,7 +337,7 @@ def test_boundary_step_reproduces_each_side_exactly(rational: bool, bump_order: 
     the coefficient polynomials times the fields, exactly (measured 1e-14; a corner span inserted
     for an incompatible twist changes nothing)."""
     from occsurf.algorithms import tolerances
-    from occsurf.algorithms.topology import nsided as ns
+    from occsurf.algorithms.topology.nsided_patches import _boundary_ribbons, _coefficient_poly, _patch_space
 
     st_ = _steps(ring_model(5, rational=rational, bump_order=bump_order))
     S, sig, cf, c1, edges = st_["S"], st_["sig"], st_["corners"], st_["c1"], st_["edges"]
@@ -342,12 +345,12 @@ def test_boundary_step_reproduces_each_side_exactly(rational: bool, bump_order: 
     u = np.linspace(0.0, 1.0, 57)
     for i in range(5):
         j = (i - 1) % 5
-        pa = ns._coefficient_poly(cf.start[i], cf.start_d[i], c1[i], edges[i].coef_d_before)
-        pb = ns._coefficient_poly(cf.end[i], cf.end_d[i], c1[j], edges[j].coef_d_after)
+        pa = _coefficient_poly(cf.start[i], cf.start_d[i], c1[i], edges[i].coef_d_before)
+        pb = _coefficient_poly(cf.end[i], cf.end_d[i], c1[j], edges[j].coef_d_after)
         twisted = bool(cf.twist[i] > tolerances.FILL_TWIST_TOL)
         assert twisted == (bump_order == 1)
-        (pu, pv), (ku, kv) = ns._patch_space(S[i], S[j], sig[i], sig[j], twisted)
-        row0, da, col0, db = ns._boundary_ribbons(S[i], S[j], pa, pb, sig[i], 1.0 - sig[j], (pu, pv), (ku, kv))
+        (pu, pv), (ku, kv) = _patch_space(S[i], S[j], sig[i], sig[j], twisted)
+        row0, da, col0, db = _boundary_ribbons(S[i], S[j], pa, pb, sig[i], 1.0 - sig[j], (pu, pv), (ku, kv))
         s_a, s_b = sig[i] * u, 1.0 - (1.0 - sig[j]) * u
         checks = [(BSplineCurve(pu, ku, row0), S[i].B.evaluate(s_a)),
                   (BSplineCurve(pv, kv, col0), S[j].B.evaluate(s_b)),

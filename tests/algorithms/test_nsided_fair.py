@@ -1,5 +1,5 @@
 """Tests of the thin-plate fairing of a fill patch's interior poles (``_fair_interior``,
-algorithms/topology/nsided.py).
+algorithms/topology/nsided_patches.py).
 
 ``_fair_interior`` minimises ``int |S_uu|^2 + 2 |S_uv|^2 + |S_vv|^2`` over the free poles with the
 others fixed. Its matrix ``K = Gu2 (x) Gv0 + 2 Gu1 (x) Gv1 + Gu0 (x) Gv2`` is banded-Kronecker and is
@@ -27,7 +27,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from occsurf.algorithms.kernel.basis import greville
-from occsurf.algorithms.topology.nsided import _fair_interior, _gram
+from occsurf.algorithms.topology.nsided_patches import _fair_interior, _gram
 from tests.algorithms.strategies import test_settings
 
 

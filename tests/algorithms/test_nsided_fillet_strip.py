@@ -8,7 +8,7 @@ within 46 deg of one end). Sides: :func:`fit_boundary` to 1e-9, fields :func:`si
 the torus normals. The distance of a point to the torus is ``| |(rho - RC, z)| - RT |``.
 
 Measured: folds 75 (41 x 41 per patch), deviation from the torus 0.32 (the strip is 0.25 across).
-Why: the harmonic layout (``nsided._harmonic_layout``) is refused because three midpoint ribbons,
+Why: the harmonic layout (``nsided_centre.harmonic_layout``) is refused because three midpoint ribbons,
 projected from its mean-plane picture into the wall's steep tangent plane, point along or out of
 their side; the plain layout's centre (the harmonic centre) lies near the end with four corners,
 and internal edge 0 runs from the other end straight across the half annulus. Turning those

@@ -6,7 +6,7 @@ domain, fitted by :func:`fit_boundary`), refilled with the normals of the exact 
 
 Tolerances. G0: the side curve is the boundary itself, so the fill's gap is round-off: 1e-11 of the
 hole size for the arcs; the fitted torus sides (up to ~40 spans, some short) go through the
-collocation of nsided._represent, whose own check is FILL_REPRESENT_TOL = 1e-9 relative: 1.9e-9 of
+collocation of nsided_poly.represent, whose own check is FILL_REPRESENT_TOL = 1e-9 relative: 1.9e-9 of
 the size measured at h = 0.4, 1.9e-8 at h = 0.1, bound 5e-8; likewise the angle to the fitted field, 2.4e-5 deg measured, bound
 1e-4 (100x below FILL_FIT_ANGLE). G1: the fill is G1 to the fitted field by construction (1e-6 deg
 as in test_nsided.py); the field meets the exact normals within FILL_FIT_ANGLE (0.01 deg), checked

@@ -219,9 +219,9 @@ def test_loop_touching_itself_is_refused_but_a_narrow_one_is_not() -> None:
                 _planar(_line([1, 1, 0], [1, 0, 0])), _planar(bulge)]
     with pytest.raises(InvalidGeometryError, match="crosses itself: side 1 .* side 3"):
         fill_hole(hole(0.0))
-    from occsurf.algorithms.topology import nsided
+    from occsurf.algorithms.topology.nsided_prepare import working_sides
 
-    assert len(nsided._working_sides(hole(1e-3))[0]) == 4  # the loop check lets a narrow hole through
+    assert len(working_sides(hole(1e-3))[0]) == 4  # the loop check lets a narrow hole through
 
 
 def test_max_twist_ratio_is_read_at_call_time() -> None:

@@ -8,7 +8,7 @@
   kept every knot of its side, spans without a normal sample included: the minimum-norm field sagged
   between samples. With only the sampled knots (``nsided_sides._sampled_knots``) neither the crawling
   side nor its re-fit folds; the re-fit is kept for its few poles (the patches take the side's knots,
-  ``nsided._patch_space``). The re-fit stays within its tolerance
+  ``nsided_patches._patch_space``). The re-fit stays within its tolerance
   (1e-7 of the hole's length here, as refill_sides asks 1e-7 of the model size) of the original curve,
   both ways (closest points by Newton's iteration, converged to round-off), and keeps both ends
   bit-exact (the sides meet).

@@ -1,0 +1,199 @@
+"""The data of an n-sided hole fill (course §8-3): its input sides, its result and their measurement.
+
+:class:`HoleSide` is one side of the hole (the boundary curve and the neighbour's cross-boundary
+derivative), :func:`side_from_surface` makes one from an iso-boundary of a neighbour surface;
+:class:`HoleFill` is what :func:`~occsurf.algorithms.topology.nsided.fill_hole` returns and
+:class:`FillQuality` what :func:`~occsurf.algorithms.topology.nsided_measure.measure_fill` finds.
+All four are re-exported by :mod:`occsurf.algorithms.topology.nsided`, where the construction is
+described.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InvalidGeometryError
+from ..kernel.curve import BSplineCurve
+from ..kernel.surface import BSplineSurface
+from .nsided_loops import closest_parameters
+
+__all__ = ["HoleSide", "HoleFill", "FillQuality", "side_from_surface"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class HoleSide:
+    """One side of a hole: the boundary curve and the neighbour's cross-boundary derivative.
+
+    Parameters
+    ----------
+    curve : BSplineCurve
+        The boundary, 3-D, oriented along the loop (side ``i`` ends where side ``i+1`` starts).
+    cross : BSplineCurve
+        Non-rational, on the same domain as ``curve``: the derivative of the neighbour surface
+        across the boundary, pointing *into the neighbour* (away from the hole). For a polynomial
+        ``curve`` it is 3-D; for a rational one it is the 4-D derivative of the neighbour's
+        homogeneous surface ``(w x, w y, w z, w)`` (what :func:`side_from_surface` returns).
+    """
+
+    curve: BSplineCurve
+    cross: BSplineCurve
+
+
+@dataclass(frozen=True)
+class HoleFill:
+    """The result of :func:`.nsided.fill_hole`.
+
+    Attributes
+    ----------
+    patches : list of BSplineSurface
+        ``n`` four-sided patches; patch ``i`` has corner ``(0, 0)`` at the start of side ``i``, its
+        ``v = 0`` edge on side ``i`` (parameters ``[0, split[i]]``), its ``u = 0`` edge on side
+        ``i-1`` (``[split[i-1], 1]`` reversed), its ``u = 1`` edge on internal edge ``i`` and its
+        ``(1, 1)`` corner at the centre.
+    sides : list of HoleSide
+        The input sides reparametrised to ``[0, 1]``.
+    split : ndarray, shape (n,)
+        Parameter on each side where the internal edge starts (1/2 unless a knot of low continuity
+        sits there).
+    center : ndarray, shape (3,)
+    corner_residual : ndarray, shape (n,)
+        At each hole corner: how far (relative) the adjacent side's tangent lies out of the
+        neighbour's tangent plane. Zero when the neighbours are G1 to each other at the corner.
+    twist_mismatch : ndarray, shape (n,)
+        At each hole corner: relative size of the twist incompatibility (0 when the neighbours are
+        G2-compatible there; see :mod:`.nsided`, Known limits).
+    flat : ndarray of bool, shape (n,)
+        Hole corners where the two sides meet tangentially (within
+        ``tolerances.FILL_MIN_CORNER_ANGLE`` of 180 degrees): the corner patch has a degenerate
+        (180 degree) corner there, its normal defined by continuity (see :func:`.nsided.fill_hole`).
+    source : ndarray, shape (n, 3)
+        Per side of the fill: ``(input side, t0, t1)``, the part ``[t0, t1]`` (on ``[0, 1]``) of the
+        input side it is. The identity unless the input had fewer than 3 sides and was split
+        (:func:`.nsided.fill_hole`).
+    """
+
+    patches: list[BSplineSurface]
+    sides: list[HoleSide]
+    split: Array
+    center: Array
+    corner_residual: Array
+    twist_mismatch: Array
+    size: float = field(default=1.0)
+
+    method: str = field(default="quads")
+    flat: Array = field(default_factory=lambda: np.zeros(0, bool))
+    source: Array = field(default_factory=lambda: np.zeros((0, 3)))
+
+    def locate_input(self, side: int, points: Array) -> tuple[NDArray[np.intp], Array, Array, Array]:
+        """:meth:`locate` for points of *input* side ``side`` (the same unless the loop was split):
+        each point goes to the nearest of the fill sides that side was split into."""
+        rows = np.flatnonzero(self.source[:, 0] == side) if len(self.source) else np.array([side])
+        best = self.locate(int(rows[0]), points)
+        for r in rows[1:]:
+            cand = self.locate(int(r), points)
+            take = cand[3] < best[3]
+            best = tuple(np.where(take, c, b) for c, b in zip(cand, best))  # type: ignore[assignment]
+        return best[0].astype(np.intp), best[1], best[2], best[3]
+
+    def locate(self, side: int, points: Array) -> tuple[NDArray[np.intp], Array, Array, Array]:
+        """Which patch, at which ``(u, v)``, carries the points ``(m, 3)`` of side ``side``.
+
+        The side parameter of each point comes from :func:`closest_parameters` (vectorised); patch
+        ``side`` covers ``[0, split]`` of the side on its ``v = 0`` edge, patch ``side + 1`` the rest
+        on its ``u = 0`` edge (reversed).
+
+        Returns
+        -------
+        patch : ndarray of intp, shape (m,)
+        u, v : ndarray, shape (m,)
+        distance : ndarray, shape (m,)
+            Distance of each point from the side curve (the caller judges it).
+        """
+        n = len(self.patches)
+        s, dist = closest_parameters(self.sides[side].curve, points)
+        sp = float(self.split[side])
+        first = s <= sp
+        patch = np.where(first, side, (side + 1) % n)
+        u = np.where(first, s / sp, 0.0)
+        v = np.where(first, 0.0, (1.0 - s) / (1.0 - sp))
+        return patch.astype(np.intp), u, v, dist
+
+
+@dataclass(frozen=True)
+class FillQuality:
+    """Dense measurements of a fill (:func:`.nsided_measure.measure_fill`).
+
+    Attributes
+    ----------
+    boundary_gap : ndarray, shape (n,)
+        Largest distance between the fill and side ``i`` (model units).
+    boundary_angle : ndarray, shape (n,)
+        Largest angle (degrees) between the fill's and the neighbour's tangent planes along side ``i``.
+    internal_gap, internal_angle : ndarray, shape (n,)
+        The same between patches ``i`` and ``i+1`` along internal edge ``i``.
+    center_angle : float
+        Largest angle (degrees) between the patches' normals at the centre.
+    folds : ndarray of intp, shape (n,)
+        Per patch, the neighbouring pairs of a 41 x 41 parameter grid whose normals ``S_u x S_v``
+        point in opposite directions: a fold (the patch turning back over itself, as the central
+        split does on long curved holes such as a crescent or a helical strip). 0 for a sound fill.
+    """
+
+    boundary_gap: Array
+    boundary_angle: Array
+    internal_gap: Array
+    internal_angle: Array
+    center_angle: float
+    folds: NDArray[np.intp] = field(default_factory=lambda: np.zeros(0, np.intp))
+
+
+def side_from_surface(surface: BSplineSurface, edge: str, reverse: bool = False) -> HoleSide:
+    """The hole side along one iso-boundary of a neighbour surface, with its exact cross derivative.
+
+    Parameters
+    ----------
+    surface : BSplineSurface
+        The neighbour (3-D, polynomial or rational; unclamped knots are clamped first).
+    edge : {'u0', 'u1', 'v0', 'v1'}
+        Which boundary lies on the hole: ``'v0'`` is the curve ``S(u, v_min)``, etc.
+    reverse : bool
+        Reverse the curve (and field) so that the side runs the right way around the loop.
+
+    Returns
+    -------
+    HoleSide
+        The boundary curve (the row of poles, bit-exact) and the derivative across it pointing into
+        the surface (homogeneous for a rational surface), The NURBS Book eq. (3.17) applied to the
+        first two rows of homogeneous poles.
+    """
+    if not isinstance(surface, BSplineSurface):
+        raise InvalidGeometryError(f"surface: expected a BSplineSurface, got {type(surface).__name__}")
+    if edge not in ("u0", "u1", "v0", "v1"):
+        raise InvalidGeometryError(f"edge: expected one of 'u0', 'u1', 'v0', 'v1', got {edge!r}")
+    if surface.dim != 3:
+        raise InvalidGeometryError(f"surface: expected 3-D control points, got dimension {surface.dim}")
+    s = surface.clamp()
+    H = s.homogeneous_points
+    if edge[0] == "u":  # make the boundary direction the first index
+        H = np.swapaxes(H, 0, 1)
+        (q, p), (Kc, Kb) = s.degree, s.knots
+    else:
+        (p, q), (Kb, Kc) = s.degree, s.knots
+    nc = H.shape[1]
+    if edge[1] == "0":
+        row, cross = H[:, 0], q / (Kc[q + 1] - Kc[1]) * (H[:, 1] - H[:, 0])
+    else:
+        row, cross = H[:, -1], q / (Kc[nc + q - 1] - Kc[nc - 1]) * (H[:, -2] - H[:, -1])
+    if s.is_rational:
+        curve = BSplineCurve(p, Kb, row[:, :3] / row[:, 3:], row[:, 3])
+    else:
+        curve = BSplineCurve(p, Kb, row)
+    X = BSplineCurve(p, Kb, cross)
+    if reverse:
+        curve, X = curve.reverse(), X.reverse()
+    return HoleSide(curve, X)
