@@ -286,8 +286,8 @@ def mean_plane(loop: Array, normals: Array) -> tuple[Array, Array, Array, Array]
 def turns_inward(loop: Array, normals: Array) -> bool:
     """Whether the cross fields point out of the hole, judged globally: the neighbours' normals
     ``B' x X`` (n, 3) and the loop (m, 3) projected into the mean plane must turn the other way
-    (negative signed area about the mean normal). Only then may :func:`occsurf.algorithms.topology.nsided._centre` move the centre or
-    turn the internal edges; a flipped field is left for :func:`occsurf.algorithms.topology.nsided._check_inward` to refuse."""
+    (negative signed area about the mean normal). Only then may :func:`occsurf.algorithms.topology.nsided_centre.centre` move the centre or
+    turn the internal edges; a flipped field is left for :func:`occsurf.algorithms.topology.nsided_corners.check_inward` to refuse."""
     o, nh, e1, e2 = mean_plane(loop, normals)
     if np.linalg.norm(normals.mean(0)) < 0.3:
         return False  # no trustworthy mean plane: no fallback
