@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -102,6 +102,11 @@ class RefillReport:
     folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; see FillQuality.folds)
     method: str | None = None  # 'central' (fill_hole's n patches), 'plate' (one trimmed plate, fill_plate) or 'wrap' (a plate about an axis, fill_wrapped_plate)
     occ: dict[str, dict[str, Any]] = field(default_factory=dict)
+    if TYPE_CHECKING:  # set on a filled report for refill_model and the pictures: plain attributes at run
+        # time, not dataclass fields (asdict, the JSON, leaves them out); declared for the type checker
+        _fill_faces: list[Any] = field(init=False)  # the fill's OCC faces
+        _removed: list[Any] = field(init=False)  # the removed faces
+        _neighbours: list[Any] = field(init=False)  # the hole's neighbours, each once
 
 
 def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool = True, check: bool = True,
@@ -206,7 +211,7 @@ def refill_model(shape: Any, faces: list[int], *, compare_occ: bool = True) -> t
         return reports, None
     removed = sorted({i for r in filled for i in r.faces})
     result, valid = sew_in_checked(model, removed, [f for r in filled for f in r._fill_faces],
-                                    max(r.g0 for r in filled))
+                                    max(cast(float, r.g0) for r in filled))  # set on every filled report
     trip = round_trip(result, len(model_faces(result)))
     for r in filled:
         r.valid, r.step_round_trip = valid, trip

@@ -24,7 +24,7 @@ from OCP.TopoDS import TopoDS
 
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
-from occsurf.algorithms.topology.nsided import fill_folds, fill_hole
+from occsurf.algorithms.topology.nsided import HoleFill, fill_folds, fill_hole
 from occsurf.algorithms.topology.plate_fill import PlateFill
 
 from .. import _occ
@@ -65,11 +65,13 @@ def occ_filling(edges: list[Any], nbs: list[Any], g1: list[bool], params: dict[s
 
 def _measure(edges: list[Any], nbs: list[Any], g1: list[bool], surfs: list[Any], locate: Any = None,
              samples: int = ASSESS_SAMPLES) -> tuple[list[float], list[float | None]]:
-    s0, s1 = [], []
+    s0: list[float] = []
+    s1: list[float | None] = []
     for i, (e, f, t) in enumerate(zip(edges, nbs, g1)):
         loc = None if locate is None else locate(i)
         a, b = assess_joint(e, f, surfs, samples, locate=loc)
-        s0.append(a), s1.append(b if t else None)
+        s0.append(a)
+        s1.append(b if t else None)
     return s0, s1
 
 
@@ -100,22 +102,25 @@ def _our_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, 
     """Our fill of the hole, as OCC faces, measured: (faces, g1 flags, fit angles, side G0, side G1,
     the HoleFill or PlateFill, the side of each edge). ``method``: ``'central'`` (:func:`fill_hole`)
     or ``'plate'`` (:func:`fill_plate`: G1 asked on a side when any of its edges asks it, G0 to
-    ``FILL_FIT_G0 * size``, at most half ``SEW_TOLERANCE``); ``prepared``: :func:`refill_sides`' result for these arguments."""
+    ``FILL_FIT_G0 * size``, at most ``FILL_PLATE_SEW_SHARE`` (half) of ``SEW_TOLERANCE``); ``prepared``: :func:`refill_sides`' result for these arguments."""
     sides, side_of_edge, g1, fit = prepared or refill_sides(edges, nbs, owners, size, follow)
+    fill: PlateFill | HoleFill
     if method == "plate":
         flags = [any(g1[k] for k in range(len(edges)) if side_of_edge[k] == j) for j in range(len(sides))]
         # G0 target: the issue's 1e-7 of the model size, but at most half the sewing tolerance (the
         # face must sew in; plate_face refuses beyond SEW_TOLERANCE)
-        fill, occ_faces = plate_fill_faces(sides, flags, min(tolerances.FILL_FIT_G0 * size, 0.5 * SEW_TOLERANCE),
+        g0_tol = min(tolerances.FILL_FIT_G0 * size, tolerances.FILL_PLATE_SEW_SHARE * SEW_TOLERANCE)
+        fill, occ_faces = plate_fill_faces(sides, flags, g0_tol,
                                            gap=max(BRep_Tool.Tolerance_s(e) for e in edges))
     elif method == "wrap":  # a plate in cylindrical coordinates about the neighbours' (or a fitted) axis
         flags = [any(g1[k] for k in range(len(edges)) if side_of_edge[k] == j) for j in range(len(sides))]
-        fill, occ_faces = wrapped_fill_faces(sides, flags, min(tolerances.FILL_FIT_G0 * size, 0.5 * SEW_TOLERANCE),
+        g0_tol = min(tolerances.FILL_FIT_G0 * size, tolerances.FILL_PLATE_SEW_SHARE * SEW_TOLERANCE)
+        fill, occ_faces = wrapped_fill_faces(sides, flags, g0_tol,
                                              gap=max(BRep_Tool.Tolerance_s(e) for e in edges),
                                              axes=revolution_axes(nbs))
     else:
         fill = fill_hole(sides)
-        occ_faces = [make_face(p, 1e-7) for p in fill.patches]
+        occ_faces = [make_face(p, tolerances.FILL_PATCH_FACE_TOL) for p in fill.patches]
     surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
 
     def locate(i: int) -> Any:
@@ -162,14 +167,14 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
             last_err = err
             continue
         score = _score(cand, size, etol)  # once per candidate: it counts folds on a grid of every patch
-        if best is None or score < best_score:
+        if best_score is None or score < best_score:  # best and best_score are set together
             best, best_score = cand, score
     # the plate where the central split refuses, folds or misses an issue target; the wrapped plate
     # (a hole winding around an axis) where neither gives a fold-free fill
     errors = {}
-    for method, wanted in (("plate", lambda: best is None or best_score[0] or best_score[1] > 1.0),
-                           ("wrap", lambda: best is None or best_score[0])):
-        if not wanted():
+    for method in ("plate", "wrap"):  # judged on the best fill so far (a plate that won counts for the wrap)
+        wanted = best_score is None or best_score[0] or (method == "plate" and best_score[1] > 1.0)
+        if not wanted:
             continue
         for follow, prep in prepared.items():
             try:
@@ -178,12 +183,15 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
                 errors[method] = err
                 continue
             score = _score(cand, size, etol)
-            if best is None or _plate_wins(score, best_score):
+            if best_score is None or _plate_wins(score, best_score):
                 best, best_score = cand, score
     plate_err, wrap_err = errors.get("plate"), errors.get("wrap")
     if best is None:
         if plate_err is None or last_err is None:
-            raise last_err or plate_err
+            first = last_err or plate_err
+            assert first is not None  # no fill: the central split failed on each variant (last_err)
+            raise first
+        assert wrap_err is not None  # no fill: the wrapped plate was tried wherever the plate was
         raise InvalidGeometryError(f"central split: {one_line(last_err, expected=(OccsurfError,))}; "
                                    f"plate: {one_line(plate_err, expected=(OccsurfError,))}; "
                                    f"wrapped plate: {one_line(wrap_err, expected=(OccsurfError,))}") from plate_err

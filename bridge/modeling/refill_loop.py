@@ -31,6 +31,7 @@ from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Shell
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
+from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError
 
 from .. import _occ
@@ -91,7 +92,7 @@ class SewnModel:
 
     def index_of(self, face: Any) -> int | None:
         if not hasattr(self, "_lookup"):
-            self._lookup = {}
+            self._lookup: dict[Any, list[int]] = {}  # TShape -> indices of the faces on it
             for k, f in enumerate(self.faces):
                 self._lookup.setdefault(f.TShape(), []).append(k)
         for k in self._lookup.get(face.TShape(), []):
@@ -124,7 +125,9 @@ def hole_loop(model: SewnModel, removed: list[int]) -> tuple[list[Any], list[Any
     if len(wires) != 1:
         raise InvalidGeometryError(f"removing the faces leaves {len(wires)} loops (not a disk-like hole)")
     removed_faces = [model.faces[i] for i in removed]
-    edges, nbs, owners = [], [], []
+    edges: list[Any] = []
+    nbs: list[Any] = []
+    owners: list[Any] = []
     we = BRepTools_WireExplorer(wires[0])
     while we.More():
         e = we.Current()
@@ -134,14 +137,20 @@ def hole_loop(model: SewnModel, removed: list[int]) -> tuple[list[Any], list[Any
         if not nb:
             raise InvalidGeometryError("a hole edge bounds no other face: the removed faces reach a free boundary "
                                        "of the model (the hole is not closed)")
-        edges.append(e), nbs.append(nb[0]), owners.append(own[0] if own else None)
+        edges.append(e)
+        nbs.append(nb[0])
+        owners.append(own[0] if own else None)
         we.Next()
     return edges, nbs, owners
 
 
 def edge_params(edge: Any, face: Any, k: int) -> np.ndarray:
+    """Parameters of ``edge`` on ``face``'s p-curve: ``k`` uniform ones and, at each end,
+    ``FILL_EDGE_END_SAMPLES`` more at geometric fractions of the range from ``FILL_EDGE_END_NEAREST``
+    to ``FILL_EDGE_END_FARTHEST`` (sorted, each once)."""
     a, b = BRep_Tool.Range_s(edge, face)
-    ends = np.geomspace(1e-4, 5e-2, 8)
+    ends = np.geomspace(tolerances.FILL_EDGE_END_NEAREST, tolerances.FILL_EDGE_END_FARTHEST,
+                        int(tolerances.FILL_EDGE_END_SAMPLES))
     f = np.unique(np.r_[np.linspace(0, 1, k), ends, 1 - ends])
     return a + f * (b - a)
 
@@ -151,30 +160,37 @@ def normals_on(edge: Any, face: Any, ts: np.ndarray) -> tuple[np.ndarray, np.nda
     s = BRep_Tool.Surface_s(face)
     pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
     sign = -1.0 if face.Orientation() == TopAbs_REVERSED else 1.0
-    pts, nrm, uvs = [], [], []
+    pts: list[Any] = []
+    nrm: list[np.ndarray] = []
+    uvs: list[Any] = []
     p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
     for t in ts:
         uv = pc.Value(float(t))
         s.D1(uv.X(), uv.Y(), p, du, dv)
         n = np.cross(du.Coord(), dv.Coord())
-        if np.linalg.norm(n) <= 1e-12 * max(du.Magnitude() * dv.Magnitude(), 1e-300) or not np.all(np.isfinite(n)):
-            pr = GeomLProp_SLProps(s, uv.X(), uv.Y(), 1, 1e-9)
+        if (np.linalg.norm(n) <= tolerances.FILL_EDGE_NORMAL_DEGENERATE * max(du.Magnitude() * dv.Magnitude(), 1e-300)
+                or not np.all(np.isfinite(n))):
+            pr = GeomLProp_SLProps(s, uv.X(), uv.Y(), 1, tolerances.FILL_EDGE_NORMAL_RESOLUTION)
             n = np.array(pr.Normal().Coord()) if pr.IsNormalDefined() else np.full(3, np.nan)
-        pts.append(p.Coord()), nrm.append(n), uvs.append(uv)
+        pts.append(p.Coord())
+        nrm.append(n)
+        uvs.append(uv)
     N = np.array(nrm) * sign
     good = np.all(np.isfinite(N), axis=1) & (np.linalg.norm(N, axis=1) > 0)
-    if good.sum() < 8:
+    if good.sum() < int(tolerances.FILL_EDGE_MIN_NORMALS):
         raise InvalidGeometryError("the neighbour's normal is undefined along a hole edge")
     return np.array(pts)[good], N[good] / np.linalg.norm(N[good], axis=1, keepdims=True), [u for u, g in zip(uvs, good) if g]
 
 
 def joint_angle(edge: Any, f1: Any, f2: Any) -> float:
-    """Largest angle (degrees) between the two faces' normals along the edge (7 samples)."""
+    """Largest angle (degrees) between the two faces' normals along the edge (``FILL_JOINT_SAMPLES``
+    samples); 90 where a normal is undefined (a sharp edge as far as the fill is concerned)."""
     a1, b1 = BRep_Tool.Range_s(edge, f1)
     a2, b2 = BRep_Tool.Range_s(edge, f2)
+    k = int(tolerances.FILL_JOINT_SAMPLES)
     try:
-        _, n1, _ = normals_on(edge, f1, np.linspace(a1, b1, 9))
-        _, n2, _ = normals_on(edge, f2, np.linspace(a2, b2, 9))
+        _, n1, _ = normals_on(edge, f1, np.linspace(a1, b1, k))
+        _, n2, _ = normals_on(edge, f2, np.linspace(a2, b2, k))
     except InvalidGeometryError:
         return 90.0
     if len(n1) != len(n2):  # a normal undefined on one side only (a pole): judge it sharp

@@ -20,6 +20,8 @@ from OCP.IFSelect import IFSelect_ReturnStatus
 from OCP.STEPControl import STEPControl_Reader, STEPControl_StepModelType, STEPControl_Writer
 from OCP.TopoDS import TopoDS, TopoDS_Shell
 
+from occsurf.algorithms import tolerances
+
 from .. import _occ
 from .joints import SEW_TOLERANCE, edge_face_map
 from .refill_loop import SewnModel, hole_gap, model_faces
@@ -54,8 +56,8 @@ def _free_edge_count(shape: Any) -> int:
 def sew_in_checked(model: SewnModel, removed: list[int], new_faces: list[Any], gap: float = 0.0) -> tuple[Any, bool]:
     """:func:`_sew_in` at its tolerance, and whether ``BRepCheck_Analyzer`` finds the result valid.
 
-    Where it does not, the sewing is redone at half that tolerance, a quarter, ... (six times, never
-    below the fill's own G0), and the first valid result that leaves no more free edges is kept:
+    Where it does not, the sewing is redone at half that tolerance, a quarter, ...
+    (``FILL_RESEW_HALVINGS``, 6, times, never below the fill's own G0), and the first valid result that leaves no more free edges is kept:
     sewing at 1.4e-5 merged a corner of bearing face 208 (a neighbour of pairs [79, 84], [79, 197],
     [79, 199]) into a self-intersecting wire; at 7.1e-6 the same fills sew in valid, with the
     model's own 25 free edges (at 1e-6 three fill edges stay free). The hole's edges declare up to
@@ -65,7 +67,7 @@ def sew_in_checked(model: SewnModel, removed: list[int], new_faces: list[Any], g
     if BRepCheck_Analyzer(shape).IsValid():
         return shape, True
     free = _free_edge_count(shape)
-    for _ in range(6):
+    for _ in range(int(tolerances.FILL_RESEW_HALVINGS)):
         tol *= 0.5
         if tol <= float(gap):
             break

@@ -13,7 +13,7 @@ them (:func:`.refill_traces.follow_traces`); a side of uneven parameter speed re
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -50,7 +50,7 @@ def _oriented_curves(edges: list[Any]) -> list[Any]:
     chain). Deciding each curve by its next neighbour alone cannot work on a two-edge loop (a line
     and an arc: both ends of each touch the other), where both curves kept their direction and the
     sides were mm off their traces (screw face 24)."""
-    curves = [from_occ(e) for e in edges]
+    curves = [cast(BSplineCurve, from_occ(e)) for e in edges]  # an edge's curve
     n = len(curves)
     ends = [(c.evaluate(c.domain[0]), c.evaluate(c.domain[1])) for c in curves]
     a0, a1 = ends[0]
@@ -111,25 +111,31 @@ def _groups(curves: list[Any]) -> list[list[int]]:
 def _merged_curve(curves: list[Any], size: float) -> tuple[Any, float]:
     """One cubic through a chain of tangent-continuous curves, aiming at FILL_FIT_G0 * size, and
     its largest distance from their samples (:data:`TRACE_SAMPLES_PER_POLE` per pole of each, at
-    least 121; up to ``FILL_FIT_MAX_SPANS`` knot spans per curve). The M6 screw's thread root, 8
+    least ``FILL_MERGE_MIN_SAMPLES``, 121; up to ``FILL_FIT_MAX_SPANS`` knot spans per curve). The M6 screw's thread root, 8
     helix turns of 51..65 poles each, was 1e-4 off with 121 samples and 256 spans for all of them."""
     joined = _joined(curves, tolerances.FILL_FIT_G0 * size)
     if joined is not None:
         return joined, 0.0
-    pts, par, s0 = [], [], 0.0
+    pts: list[np.ndarray] = []
+    par: list[np.ndarray] = []
+    s0 = 0.0
     for c in curves:
-        t = np.linspace(*c.domain, max(121, TRACE_SAMPLES_PER_POLE * len(c.control_points)))
+        lo, hi = c.domain
+        count = max(int(tolerances.FILL_MERGE_MIN_SAMPLES), TRACE_SAMPLES_PER_POLE * len(c.control_points))
+        t = np.linspace(lo, hi, count)
         p = c.evaluate(t)
         arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
         keep = slice(1, None) if pts else slice(None)
-        pts.append(p[keep]), par.append(s0 + arc[keep])
+        pts.append(p[keep])
+        par.append(s0 + arc[keep])
         s0 += arc[-1]
     return fit_boundary(np.concatenate(par), np.concatenate(pts), tolerances.FILL_FIT_G0 * size,
-                        max_spans=tolerances.FILL_FIT_MAX_SPANS * len(curves))
+                        max_spans=int(tolerances.FILL_FIT_MAX_SPANS) * len(curves))
 
 
 def _joined(curves: list[Any], tol: float) -> Any | None:
-    """A chain of curves as one B-spline, exactly (None when two do not meet within ``1e-3 * tol``).
+    """A chain of curves as one B-spline, exactly (None when two do not meet within ``FILL_JOIN_GAP * tol``,
+    ``1e-3 * tol``).
 
     Each is raised to the highest degree ``p`` and mapped to a parameter interval as long as its arc
     length (so the speed of the whole is as even as its pieces'); rational pieces keep their
@@ -141,11 +147,12 @@ def _joined(curves: list[Any], tol: float) -> Any | None:
     p = max(c.degree for c in curves)
     parts = [c.elevate_degree(p - c.degree) if c.degree < p else c for c in curves]
     for a, b in zip(parts, parts[1:]):
-        if np.linalg.norm(a.evaluate(a.domain[1]) - b.evaluate(b.domain[0])) > 1e-3 * tol:
+        if np.linalg.norm(a.evaluate(a.domain[1]) - b.evaluate(b.domain[0])) > tolerances.FILL_JOIN_GAP * tol:
             return None
     lengths = []
     for c in parts:
-        P = c.evaluate(np.linspace(*c.domain, 257))
+        lo, hi = c.domain
+        P = c.evaluate(np.linspace(lo, hi, int(tolerances.FILL_JOIN_LENGTH_SAMPLES)))
         lengths.append(float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum()) or 1.0)
     bounds = np.r_[0.0, np.cumsum(lengths)] / sum(lengths)
     parts = [c.reparametrize(float(lo), float(hi)) for c, lo, hi in zip(parts, bounds[:-1], bounds[1:])]
@@ -157,7 +164,8 @@ def _joined(curves: list[Any], tol: float) -> Any | None:
         w = c.weights if c.is_rational else np.ones(len(c.control_points))
         w = w * (weights[-1][-1] / w[0])
         knots.append(c.knots[p + 1:-1] if c is not parts[-1] else c.knots[p + 1:])
-        poles.append(c.control_points[1:]), weights.append(w[1:])
+        poles.append(c.control_points[1:])
+        weights.append(w[1:])
     if len(parts) == 1:
         knots = [parts[0].knots]
     K = np.concatenate(knots)
@@ -168,8 +176,9 @@ def _even_speed(curve: Any, tol: float, ratio: float = EVEN_SPEED_RATIO) -> Any:
     """``curve`` re-fitted as a cubic of its arc length where its speed is uneven (course §7-2,
     chord-length/arc-length parametrisation; least squares :func:`fit_boundary`).
 
-    The arc length comes from 5-point Gauss-Legendre on the speed between dense samples (at least
-    16 per knot span); the cubic, on ``[0, 1]``, interpolates both ends exactly (the sides still
+    The arc length comes from ``FILL_SPEED_GAUSS_POINTS``-point (5) Gauss-Legendre on the speed between
+    dense samples (at least ``FILL_SPEED_SAMPLES``, 1024, and ``FILL_SPEED_SAMPLES_PER_SPAN``, 16, per
+    knot span); the cubic, on ``[0, 1]``, interpolates both ends exactly (the sides still
     meet) and is accepted only when it lies within ``tol`` of the curve at the samples *and*
     half-way between them (compared at equal arc length: a parametric distance, which bounds the
     geometric one). Otherwise, or when the speed varies by at most ``ratio``, the curve is
@@ -177,16 +186,17 @@ def _even_speed(curve: Any, tol: float, ratio: float = EVEN_SPEED_RATIO) -> Any:
     """
     lo, hi = curve.domain
     spans = max(int(np.unique(curve.knots).size) - 1, 1)
-    t = np.unique(np.r_[np.linspace(lo, hi, max(1024, 16 * spans) + 1), curve.knots[(curve.knots > lo) & (curve.knots < hi)]])
+    count = max(int(tolerances.FILL_SPEED_SAMPLES), int(tolerances.FILL_SPEED_SAMPLES_PER_SPAN) * spans)
+    t = np.unique(np.r_[np.linspace(lo, hi, count + 1), curve.knots[(curve.knots > lo) & (curve.knots < hi)]])
     speed = np.linalg.norm(curve.derivatives(t, 1)[:, 1], axis=1)
     if speed.max() <= ratio * speed.min():
         return curve
-    x, w = np.polynomial.legendre.leggauss(5)
+    x, w = np.polynomial.legendre.leggauss(int(tolerances.FILL_SPEED_GAUSS_POINTS))
     h = 0.5 * np.diff(t)
     q = (0.5 * (t[:-1] + t[1:]))[:, None] + h[:, None] * x[None, :]
     dq = np.linalg.norm(curve.derivatives(q.ravel(), 1)[:, 1], axis=1).reshape(q.shape)
     arc = np.r_[0.0, np.cumsum(h * (dq @ w))]
-    keep = np.r_[True, np.diff(arc) > 1e-14 * arc[-1]]  # a zero-speed stretch adds no sample
+    keep = np.r_[True, np.diff(arc) > tolerances.FILL_SPEED_ZERO * arc[-1]]  # a zero-speed stretch adds no sample
     s, P = arc[keep] / arc[-1], curve.evaluate(t[keep])
     try:
         fit, err = fit_boundary(s, P, tol)
@@ -243,9 +253,10 @@ def _corner_treatment(curves: list[Any], fields: list[tuple[np.ndarray, np.ndarr
         ref = 0.5 * (N[-1] + fields[(i + 1) % n][1][0])
         end = corner_normals(t_end[i], t_start[(i + 1) % n], ref)[0]
         off = max(_angle(N[0], start), _angle(N[-1], end))
-        if off > 1e-6:
-            N = blend_normals((s - lo) / (hi - lo), N, start if _angle(N[0], start) > 1e-6 else N[0],
-                              end if _angle(N[-1], end) > 1e-6 else N[-1], tolerances.FILL_CORNER_BLEND)
+        tol_deg = tolerances.FILL_CORNER_NORMAL_DEG
+        if off > tol_deg:
+            N = blend_normals((s - lo) / (hi - lo), N, start if _angle(N[0], start) > tol_deg else N[0],
+                              end if _angle(N[-1], end) > tol_deg else N[-1], tolerances.FILL_CORNER_BLEND)
         out.append((s, N))
     return curves, out
 
@@ -280,30 +291,35 @@ def refill_sides(edges: list[Any], nbs: list[Any], owners: list[Any], size: floa
     order = [k for group in groups for k in group]
     side_of_edge = [side_of_edge[order.index(k)] for k in range(len(edges))]
     tol = tolerances.FILL_FIT_G0 * size
-    bounds, traces = [], []
+    bounds: list[Any] = []
+    traces: list[list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = []
     for group in groups:  # 1. the side curves: exact where the edge lies on its neighbour, else fitted
         c = curves[group[0]] if len(group) == 1 else _merged_curve([curves[k] for k in group], size)[0]
-        bounds.append(c), traces.append([trace(edges[k], nbs[k], c) for k in group])
+        bounds.append(c)
+        traces.append([trace(edges[k], nbs[k], c) for k in group])
     if follow_neighbour:
         bounds = follow_traces(bounds, groups, curves, traces, tol, lambda k, c, n: trace(edges[k], nbs[k], c, n))
     bounds = [_even_speed(c, tol) for c in _snap_ends(bounds)]  # uneven speed: by arc length, within tol
-    sides, fit, g1 = [], [], [False] * len(edges)
+    g1 = [False] * len(edges)
     fields = []
     for group, c in zip(groups, bounds):  # 2. the neighbours' (or the removed faces') normals
         P_all, N_all = [], []
         for k in group:
             P, N, g1[k] = edge_normals(edges[k], nbs[k], owners[k], c)
-            P_all.append(P), N_all.append(N)
+            P_all.append(P)
+            N_all.append(N)
         P, N = np.concatenate(P_all), np.concatenate(N_all)
         s, _ = closest_parameters(c, P)
         s = unwrap_seam(c, s, [len(p) for p in P_all])
-        order = np.argsort(s, kind="stable")
-        fields.append((s[order], N[order]))
+        by_s = np.argsort(s, kind="stable")
+        fields.append((s[by_s], N[by_s]))
     bounds, fields = _corner_treatment(bounds, fields, [(g1[g[0]], g1[g[-1]]) for g in groups], tol)
-    sides, fit = [], []
+    sides: list[Any] = []
+    fit: list[float] = []
     for c, (s, N) in zip(bounds, fields):  # 3. the cross fields
         res = side_from_normals(c, s, N)
-        sides.append(res.side), fit.append(res.angle)
+        sides.append(res.side)
+        fit.append(res.angle)
     return sides, side_of_edge, g1, fit
 
 

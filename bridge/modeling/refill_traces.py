@@ -55,9 +55,11 @@ def _side_of(face: Any, uv: Any, direction: np.ndarray) -> int:
     scale = np.linalg.norm(d)
     if scale == 0:
         return 1
-    for eps in (1e-4, 1e-3, 1e-2):
+    growth = tolerances.FILL_SIDE_STEP_GROWTH
+    for k in range(int(tolerances.FILL_SIDE_STEP_TRIES)):  # 1e-4, 1e-3, 1e-2 by default
+        eps = tolerances.FILL_SIDE_STEP * growth ** k
         q = gp_Pnt2d(uv.X() + eps * d[0] / scale, uv.Y() + eps * d[1] / scale)
-        st = BRepClass_FaceClassifier(face, q, 1e-9).State()
+        st = BRepClass_FaceClassifier(face, q, tolerances.FILL_SIDE_CLASSIFY_TOL).State()
         if st == TopAbs_IN:
             return 1
         if st == TopAbs_OUT:
@@ -108,10 +110,11 @@ def _along(trace: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
 
 
 def _drop_repeats(P: np.ndarray) -> np.ndarray:
-    """``P`` (m, 3) without points closer than 1e-12 of the polyline's length to the one before
-    (the parameters of :func:`fit_boundary` must increase); the first and last points stay."""
+    """``P`` (m, 3) without points closer than ``FILL_TRACE_REPEAT`` (1e-12) of the polyline's length
+    to the one before (the parameters of :func:`fit_boundary` must increase); the first and last
+    points stay."""
     step = np.linalg.norm(np.diff(P, axis=0), axis=1)
-    eps = 1e-12 * max(float(step.sum()), 1e-300)
+    eps = tolerances.FILL_TRACE_REPEAT * max(float(step.sum()), 1e-300)
     keep = np.r_[True, step > eps]
     keep[-1] = True
     idx = np.flatnonzero(keep)
@@ -140,7 +143,7 @@ def _corner_point(p0: np.ndarray, t0: np.ndarray, p1: np.ndarray, t1: np.ndarray
     d = p1 - p0
     cands = [(max(0.0, float(d @ t0)), 0.0), (0.0, max(0.0, float(d @ t1))), (0.0, 0.0)]
     c = float(t0 @ t1)
-    if 1.0 - c * c > 1e-6:  # not parallel: a corner between sides
+    if 1.0 - c * c > tolerances.FILL_TRACE_PARALLEL:  # not parallel: a corner between sides
         a, b = np.linalg.solve(np.array([[1.0, c], [c, 1.0]]), np.array([d @ t0, d @ t1]))
         if a >= 0 and b >= 0:
             cands.append((float(a), float(b)))
@@ -246,7 +249,7 @@ def follow_traces(bounds: list[Any], groups: list[list[int]], curves: list[Any],
         if ends <= tol and max(float(d.max()) for _, _, d in tr) <= tol:
             out.append(c)
             continue
-        cap = tolerances.FILL_FIT_MAX_SPANS * len(g)
+        cap = int(tolerances.FILL_FIT_MAX_SPANS) * len(g)
         while True:
             pieces = [_pin_end(_pin_end(P[k], joint[k], tan[k][1])[::-1], joint[prv[k]], -tan[k][0])[::-1] for k in g]
             fit, dev = _fit_points(np.concatenate(pieces), tol, cap)
@@ -255,7 +258,8 @@ def follow_traces(bounds: list[Any], groups: list[list[int]], curves: list[Any],
             spans, n = int(np.unique(fit.knots).size) - 1, {k: len(P[k]) for k in g}
             if retrace is None or spans >= cap or all(v >= TRACE_MAX_RESAMPLED for v in n.values()):
                 break
-            P.update({k: _along(retrace(k, c, min(4 * n[k], TRACE_MAX_RESAMPLED))) for k in g})
+            grow = int(tolerances.FILL_TRACE_RESAMPLE_FACTOR)
+            P.update({k: _along(retrace(k, c, min(grow * n[k], TRACE_MAX_RESAMPLED))) for k in g})
         if dev > tol:  # never silently: the closer of the fit and the model's edge curve, with a warning
             import warnings
 
@@ -276,8 +280,8 @@ def unwrap_seam(curve: Any, s: np.ndarray, counts: list[int]) -> np.ndarray:
     (samples come ordered along each edge, ``counts`` per edge), so the fitted field sees the normals
     at the seam at both ends of the side, not swapped."""
     lo, hi = curve.domain
-    if len(counts) != 1 or np.linalg.norm(curve.evaluate(lo) - curve.evaluate(hi)) > 1e-9 * max(1.0, float(
-            np.abs(curve.control_points).max())):
+    if len(counts) != 1 or np.linalg.norm(curve.evaluate(lo) - curve.evaluate(hi)) > tolerances.FILL_SEAM_TOL * max(
+            1.0, float(np.abs(curve.control_points).max())):
         return s
     m = len(s)
     mid = s[m // 4: 3 * m // 4]
@@ -285,12 +289,13 @@ def unwrap_seam(curve: Any, s: np.ndarray, counts: list[int]) -> np.ndarray:
     span = hi - lo
     head, tail = np.arange(m) < m // 2, np.arange(m) >= m // 2
     s = s.copy()
+    w = tolerances.FILL_SEAM_WINDOW  # 1 - 0.25 is 0.75 exactly
     if rising:  # the first samples belong near lo, the last near hi
-        s[head & (s > lo + 0.75 * span)] = lo
-        s[tail & (s < lo + 0.25 * span)] = hi
+        s[head & (s > lo + (1 - w) * span)] = lo
+        s[tail & (s < lo + w * span)] = hi
     else:
-        s[head & (s < lo + 0.25 * span)] = hi
-        s[tail & (s > lo + 0.75 * span)] = lo
+        s[head & (s < lo + w * span)] = hi
+        s[tail & (s > lo + (1 - w) * span)] = lo
     return s
 
 

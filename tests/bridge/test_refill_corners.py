@@ -1,4 +1,4 @@
-"""G1 at the corners of refilled real holes (bridge/modeling/refill.py, issue 12).
+"""G1 at the corners of refilled real holes (bridge/modeling/refill_sides.py, issue 12).
 
 Two causes made our G1 worse than OCC's MakeFilling on bearing holes (faces 160, 172, 176, 181,
 199, 207: 0.08-1.9 deg against OCC's 0.02-1.7), both at hole corners:

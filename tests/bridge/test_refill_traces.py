@@ -1,4 +1,4 @@
-"""G0 of refilled real holes: the side curves that follow the neighbours' traces (bridge/modeling/refill.py, issue 12).
+"""G0 of refilled real holes: the side curves that follow the neighbours' traces (bridge/modeling/refill_traces.py, issue 12).
 
 Our G0 was worse than OCC's MakeFilling on bearing holes (faces 5, 30, 53, 170, 175, 185, 188:
 up to 4.7e-6 against OCC's 3e-8 .. 3e-6), always on one or two sides, at their corners. The
