@@ -367,6 +367,66 @@ _DEFAULTS: dict[str, float] = {
     "FILL_PLATE_ITERATIONS": 6,
     # ... most knot spans per direction of the plate (bisected where samples miss the targets).
     "FILL_PLATE_MAX_SPANS": 128,
+    # Refill of a model's hole (occsurf.bridge.modeling.refill_*). Along a hole edge the neighbour is
+    # sampled at uniform parameters plus FILL_EDGE_END_SAMPLES clustered at each end, at fractions
+    # of the edge's range from FILL_EDGE_END_NEAREST to FILL_EDGE_END_FARTHEST (geometric) ...
+    "FILL_EDGE_END_SAMPLES": 8,
+    "FILL_EDGE_END_NEAREST": 1e-4,
+    "FILL_EDGE_END_FARTHEST": 5e-2,
+    # ... where |S_u x S_v| is at most this times |S_u| |S_v| (the sine of the angle between the
+    # partials: a pole) the normal is OCC's limit normal (GeomLProp_SLProps at this resolution) ...
+    "FILL_EDGE_NORMAL_DEGENERATE": 1e-12,
+    "FILL_EDGE_NORMAL_RESOLUTION": 1e-9,
+    # ... and an edge with fewer samples of a defined normal is refused.
+    "FILL_EDGE_MIN_NORMALS": 8,
+    # Samples along an edge at which the angle between its two faces is taken (refill_loop.joint_angle).
+    "FILL_JOINT_SAMPLES": 9,
+    # Which side of a face a 3-D direction points to: a step of this length in the face's (u, v)
+    # along it, classified with BRepClass_FaceClassifier at FILL_SIDE_CLASSIFY_TOL; on the face's
+    # boundary, up to FILL_SIDE_STEP_TRIES steps, each FILL_SIDE_STEP_GROWTH times the one before.
+    "FILL_SIDE_STEP": 1e-4,
+    "FILL_SIDE_STEP_GROWTH": 10,
+    "FILL_SIDE_STEP_TRIES": 3,
+    "FILL_SIDE_CLASSIFY_TOL": 1e-9,
+    # A neighbour's trace drops points closer than this (relative to the polyline's length) to the
+    # one before: the chord-length parameters of the side's fit must increase.
+    "FILL_TRACE_REPEAT": 1e-12,
+    # Two traces' end tangents are parallel (a flat joint inside a side, not a corner) when the
+    # square of the sine of their angle is at most this (refill_traces._corner_point).
+    "FILL_TRACE_PARALLEL": 1e-6,
+    # A side's fit short of samples asks for this many times as many per round (refill_traces.follow_traces).
+    "FILL_TRACE_RESAMPLE_FACTOR": 4,
+    # A side is closed (a round hole: its samples at the seam are put on the right end) when its
+    # ends meet within this, relative to its largest control point coordinate (at least 1).
+    "FILL_SEAM_TOL": 1e-9,
+    # ... a sample in the first half of the edge that lies in the last FILL_SEAM_WINDOW of the side's
+    # domain belongs at its start, and conversely.
+    "FILL_SEAM_WINDOW": 0.25,
+    # Edges merged into one side that cannot be joined exactly are fitted through samples of each:
+    # TRACE_SAMPLES_PER_POLE per pole, at least this many ...
+    "FILL_MERGE_MIN_SAMPLES": 121,
+    # ... they are joined exactly (one B-spline) when consecutive ones meet within this fraction of
+    # the G0 target; each piece's arc length, which sets its parameter interval, from this many samples.
+    "FILL_JOIN_GAP": 1e-3,
+    "FILL_JOIN_LENGTH_SAMPLES": 257,
+    # A side of uneven speed (refill_sides._even_speed): its speed sampled at least this many times,
+    # and FILL_SPEED_SAMPLES_PER_SPAN per knot span; its arc length by Gauss-Legendre with this many
+    # points between samples; a stretch adding less than FILL_SPEED_ZERO of the length adds no sample.
+    "FILL_SPEED_SAMPLES": 1024,
+    "FILL_SPEED_SAMPLES_PER_SPAN": 16,
+    "FILL_SPEED_GAUSS_POINTS": 5,
+    "FILL_SPEED_ZERO": 1e-14,
+    # A side's normal at a hole corner more than this many degrees out of the corner's plane is
+    # turned into it (refill_sides._corner_treatment).
+    "FILL_CORNER_NORMAL_DEG": 1e-6,
+    # Tolerance of the OCC faces made of the central split's patches (make_face).
+    "FILL_PATCH_FACE_TOL": 1e-7,
+    # The plates' G0 target is FILL_FIT_G0 * size, but at most this fraction of the sewing tolerance
+    # (the face must sew in; plate_face refuses beyond SEW_TOLERANCE).
+    "FILL_PLATE_SEW_SHARE": 0.5,
+    # A filled model that sews in invalid is sewn again at half the tolerance, up to this many times
+    # (never below the fill's own G0).
+    "FILL_RESEW_HALVINGS": 6,
     # ---- quality (course ch. 9, 11-2) ----------------------------------------------------------
     # A point is flat (curvature_map kind "radius" is inf) when max(|k1|, |k2|) * size is at most
     # this; size is the diagonal of the sampled points' bounding box (scale-free).

@@ -77,14 +77,15 @@ def test_reflex_fill_is_close_to_the_dome_it_was_cut_from(reflex) -> None:
 def test_filled_model_is_valid_sewn_and_round_trips_through_step(reflex) -> None:
     from OCP.BRepCheck import BRepCheck_Analyzer
 
-    from occsurf.bridge.modeling.refill import _round_trip, model_faces
+    from occsurf.bridge.modeling.refill_loop import model_faces
+    from occsurf.bridge.modeling.refill_sewing import round_trip
 
     _, res = reflex
     assert BRepCheck_Analyzer(res.shape).IsValid()
     assert res.free_loops_after == 1  # the ring's outer boundary only: the plate sewed in along every edge
     n = len(model_faces(res.shape))
     assert n == 5 + 1
-    assert _round_trip(res.shape, n)  # written to STEP and read back with every face
+    assert round_trip(res.shape, n)  # written to STEP and read back with every face
 
 
 def test_plate_face_refuses_a_fill_that_would_not_sew(reflex) -> None:
@@ -103,11 +104,11 @@ def test_plate_face_refuses_a_fill_that_would_not_sew(reflex) -> None:
 def test_refill_falls_back_to_the_plate_where_the_central_split_refuses(monkeypatch) -> None:
     from OCP.IGESControl import IGESControl_Reader
 
-    from occsurf.bridge.modeling import refill
+    from occsurf.bridge.modeling import refill, refill_candidates
 
     def refuse(sides):
         raise InvalidGeometryError("refused for the test")
-    monkeypatch.setattr(refill, "fill_hole", refuse)
+    monkeypatch.setattr(refill_candidates, "fill_hole", refuse)  # where _our_fill looks it up
     r = IGESControl_Reader()
     assert int(r.ReadFile(str(LENS))) == 1
     r.TransferRoots()

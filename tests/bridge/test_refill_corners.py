@@ -1,4 +1,4 @@
-"""G1 at the corners of refilled real holes (bridge/modeling/refill.py, issue 12).
+"""G1 at the corners of refilled real holes (bridge/modeling/refill_sides.py, issue 12).
 
 Two causes made our G1 worse than OCC's MakeFilling on bearing holes (faces 160, 172, 176, 181,
 199, 207: 0.08-1.9 deg against OCC's 0.02-1.7), both at hole corners:
@@ -21,7 +21,7 @@ Tolerances: the snap moves two poles by the same vector, so the end tangent keep
 round-off (1e-9 deg bound for legs of 1e-5 and coordinates of 1) and the ends meet exactly. On the
 bearing (skipped where ../shared/realdata is absent) our fill is judged against OCC's
 BRepOffsetAPI_MakeFilling with cadquery's defaults on the same hole, measured the same way
-(LocalAnalysis_SurfaceContinuity, refill._measure): no worse in G0 and in G1, and no fold.
+(LocalAnalysis_SurfaceContinuity, refill_candidates._measure): no worse in G0 and in G1, and no fold.
 Measured (ours / OCC default): face 199 G1 0.015 / 1.73 deg (before 1.92), face 207 0.0025 /
 0.017 deg (before 0.082).
 """
@@ -43,7 +43,7 @@ def _tangent(c: BSplineCurve, end: int) -> np.ndarray:
 
 
 def test_snapping_the_corners_keeps_the_end_tangents() -> None:
-    from occsurf.bridge.modeling.refill import _snap_ends
+    from occsurf.bridge.modeling.refill_sides import _snap_ends
 
     u = np.linspace(0.0, 1.0, 9)
     knots = np.r_[0, 0, 0, 0, 1e-5, 2e-5, 0.25, 0.5, 0.75, 1, 1, 1, 1]  # short first spans: legs ~1e-5
@@ -109,7 +109,7 @@ def _cylinder_hole(delta: float):
 def test_an_incompatible_corner_costs_its_angle_and_only_near_it(delta_deg) -> None:
     from occsurf.algorithms import tolerances
     from occsurf.algorithms.topology.nsided_sides import plane_angle, side_from_normals
-    from occsurf.bridge.modeling.refill import _corner_treatment
+    from occsurf.bridge.modeling.refill_sides import _corner_treatment
 
     curves, fields = _cylinder_hole(np.radians(delta_deg))
     _, treated = _corner_treatment(curves, fields)

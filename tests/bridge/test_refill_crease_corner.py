@@ -5,7 +5,7 @@ G0 side's tangent leaves the G1 neighbour's plane by ``alpha``, no fill through 
 closer than ``alpha`` to that neighbour at the corner point (the lower bound); the M6 screw's faces
 [22, 23] and [23, 26] lost 0.767 deg there (the G0 side's tangent 0.765 deg out of the cylinder's
 plane: the original model's own crease), OCC's MakeFilling 0.70 / 0.67 by missing the boundary by
-2e-3. G0 asks position only: ``refill._corner_treatment`` now turns the G0 side's end tangent into
+2e-3. G0 asks position only: ``refill_sides._corner_treatment`` now turns the G0 side's end tangent into
 the neighbour's plane within a stretch where the side moves by at most
 ``FILL_CORNER_TURN_G0 * FILL_FIT_G0 * size`` (:func:`turn_end_tangent`), and the G1 side keeps
 its neighbour's normals up to the corner.
@@ -41,7 +41,7 @@ def _crease_hole(alpha_deg: float) -> tuple[list[BSplineCurve], list[tuple[np.nd
     h = np.tan(np.radians(alpha_deg))
     V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, h], [0, 1, 0]], float)
     curves = [BSplineCurve(1, np.r_[0, 0, 1, 1], np.array([V[k], V[(k + 1) % 4]])) for k in range(4)]
-    ends = np.geomspace(1e-4, 5e-2, 8)  # as refill samples a hole edge (_edge_params)
+    ends = np.geomspace(1e-4, 5e-2, 8)  # as refill samples a hole edge (edge_params)
     s = np.unique(np.r_[np.linspace(0, 1, 81), ends, 1 - ends])
     fields = []
     for k, c in enumerate(curves):
@@ -55,7 +55,7 @@ def _crease_hole(alpha_deg: float) -> tuple[list[BSplineCurve], list[tuple[np.nd
 
 
 def _fill_angles_on_side0(curves, fields, g1, tol):
-    from occsurf.bridge.modeling.refill import _corner_treatment
+    from occsurf.bridge.modeling.refill_sides import _corner_treatment
 
     turned, treated = _corner_treatment(curves, fields, g1, tol)
     fill = fill_hole([side_from_normals(c, s, N).side for c, (s, N) in zip(turned, treated)])

@@ -1,6 +1,6 @@
 """Folds of refilled holes (issue 12): side curves of uneven speed, and the fold count of a trimmed fill.
 
-* ``refill._even_speed``: a side whose parameter speed varies by more than ``EVEN_SPEED_RATIO`` is
+* ``refill_sides._even_speed``: a side whose parameter speed varies by more than ``EVEN_SPEED_RATIO`` is
   re-fitted as a cubic of its arc length. Closed-form holes: planar slivers 6 x 1 (z = 0, in-plane
   cross fields: the exact fill is the plane) with one long side crawling at one end (speed ratio
   e^3 = 20; the M6 screw's thread edges have 13.5 and 13.9), a cubic of 131 poles, re-fitted to a
@@ -28,7 +28,7 @@ from occsurf.algorithms.kernel.surface import BSplineSurface
 from occsurf.algorithms.kernel.trimmed import TrimmedSurface
 from occsurf.algorithms.topology.nsided import HoleSide, closest_parameters, count_folds, fill_folds, fill_hole
 from occsurf.algorithms.topology.nsided_sides import fit_boundary, side_from_normals
-from occsurf.bridge.modeling.refill import EVEN_SPEED_RATIO, _even_speed
+from occsurf.bridge.modeling.refill_sides import EVEN_SPEED_RATIO, _even_speed
 
 
 def _line(a, b) -> BSplineCurve:

@@ -1,4 +1,4 @@
-"""Sides merged at flat corners are joined exactly (:func:`occsurf.bridge.modeling.refill._joined`).
+"""Sides merged at flat corners are joined exactly (:func:`occsurf.bridge.modeling.refill_sides._joined`).
 
 A hole side made of several tangent-continuous edges (a flat corner, merged into one side) used to be
 one cubic fitted through them: bearing pair [9, 24] kept two such sides 4.1e-9 off the exact arcs
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from occsurf.algorithms.kernel.curve import BSplineCurve
-from occsurf.bridge.modeling.refill import _joined
+from occsurf.bridge.modeling.refill_sides import _joined
 
 W = np.sqrt(0.5)
 

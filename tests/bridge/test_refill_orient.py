@@ -1,5 +1,5 @@
 """The hole's edge curves are oriented head to tail, also on a loop of two edges
-(:func:`occsurf.bridge.modeling.refill._oriented_curves`).
+(:func:`occsurf.bridge.modeling.refill_sides._oriented_curves`).
 
 A half disk's boundary is a segment and an arc, both running from (-1, 0, 0) to (1, 0, 0): each end of
 one touches an end of the other, so a curve cannot be oriented by its next neighbour alone (both
@@ -14,7 +14,7 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
 from OCP.GC import GC_MakeArcOfCircle
 from OCP.gp import gp_Pnt
 
-from occsurf.bridge.modeling.refill import _oriented_curves
+from occsurf.bridge.modeling.refill_sides import _oriented_curves
 
 
 def _edges(points: list[tuple[float, float, float]], arc_via: tuple[float, float, float] | None):

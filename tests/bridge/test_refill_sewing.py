@@ -1,5 +1,5 @@
 """Sewing a fill into a model whose hole edges carry a tolerance larger than ``SEW_TOLERANCE``
-(bridge/modeling/refill._sew_in, plate.plate_face; issue 12: "the filled model must be a valid,
+(bridge/modeling/refill_sewing._sew_in, plate.plate_face; issue 12: "the filled model must be a valid,
 sewn shell").
 
 Real case: linkrods' faces 17/19 meet their neighbours with edge tolerances up to 8.7e-5 (the
@@ -35,7 +35,7 @@ from OCP.TopExp import TopExp_Explorer
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.kernel.surface import BSplineSurface
 from occsurf.bridge.conversion.splines import make_face
-from occsurf.bridge.modeling import refill
+from occsurf.bridge.modeling import refill, refill_sewing
 from occsurf.bridge.modeling.fill import sew_faces
 from occsurf.bridge.modeling.joints import SEW_TOLERANCE
 from occsurf.bridge.modeling.plate import plate_face
@@ -92,10 +92,10 @@ def test_the_model_declares_a_gap_beyond_the_sewing_tolerance(gapped) -> None:
 def test_fill_off_by_the_model_gap_sews_in_valid_and_closed(gapped, monkeypatch) -> None:
     ring, model, centre = gapped
     fill = make_face(_centre(ring, -DELTA), 1e-7)
-    shape = refill._sew_in(model, [centre], [fill], gap=DELTA)
+    shape = refill_sewing._sew_in(model, [centre], [fill], gap=DELTA)
     assert _free_edges(shape) == 4 and BRepCheck_Analyzer(shape).IsValid()
-    monkeypatch.setattr(refill, "SEW_GAP_FACTOR", 0.0)  # the tolerance of before: SEW_TOLERANCE alone
-    before = refill._sew_in(model, [centre], [fill], gap=DELTA)
+    monkeypatch.setattr(refill_sewing, "SEW_GAP_FACTOR", 0.0)  # the tolerance of before: SEW_TOLERANCE alone
+    before = refill_sewing._sew_in(model, [centre], [fill], gap=DELTA)
     assert _free_edges(before) > 4  # the hole stayed open
 
 
@@ -106,8 +106,8 @@ def test_refill_of_the_gapped_hole_is_valid_and_closed(gapped, monkeypatch) -> N
     assert rep.valid and rep.step_round_trip
     assert _free_edges(shape) == 4
     assert rep.g0 <= 2 * DELTA  # the fill lies within the model's own gap of its neighbours
-    monkeypatch.setattr(refill, "SEW_GAP_FACTOR", 0.0)  # before: sewn at SEW_TOLERANCE, the hole stayed open
-    assert _free_edges(refill._sew_in(model, [centre], rep._fill_faces, rep.g0)) > 4
+    monkeypatch.setattr(refill_sewing, "SEW_GAP_FACTOR", 0.0)  # before: sewn at SEW_TOLERANCE, the hole stayed open
+    assert _free_edges(refill_sewing._sew_in(model, [centre], rep._fill_faces, rep.g0)) > 4
 
 
 def test_plate_face_accepts_a_miss_within_the_hole_edges_tolerance() -> None:
@@ -132,7 +132,7 @@ def test_a_fill_that_sews_in_invalid_is_sewn_again_lower(bearing) -> None:
     model's own free edges only), where before it reported the filled model invalid."""
     rep, shape = refill.refill_faces(bearing, [79, 84], compare_occ=False)
     assert rep.status == "filled" and rep.valid and rep.step_round_trip, rep.reason
-    at_first = refill._sew_in(bearing, rep.faces, rep._fill_faces, rep.g0)
+    at_first = refill_sewing._sew_in(bearing, rep.faces, rep._fill_faces, rep.g0)
     assert not BRepCheck_Analyzer(at_first).IsValid()  # the cause, as measured
     assert BRepCheck_Analyzer(shape).IsValid()
-    assert refill._free_edge_count(shape) == refill._free_edge_count(bearing.shape)
+    assert refill_sewing._free_edge_count(shape) == refill_sewing._free_edge_count(bearing.shape)

@@ -1,4 +1,4 @@
-"""G0 of refilled real holes: the side curves that follow the neighbours' traces (bridge/modeling/refill.py, issue 12).
+"""G0 of refilled real holes: the side curves that follow the neighbours' traces (bridge/modeling/refill_traces.py, issue 12).
 
 Our G0 was worse than OCC's MakeFilling on bearing holes (faces 5, 30, 53, 170, 175, 185, 188:
 up to 4.7e-6 against OCC's 3e-8 .. 3e-6), always on one or two sides, at their corners. The
@@ -22,7 +22,7 @@ neighbours' traces where they do, but:
   behind its end along the end tangent: the last half turn. The fit met its tolerance at those 55
   samples per turn and went 2 mm inside the thread between them. Now only the tail is cut;
   :func:`_fit_points` also measures half-way between samples (against the cubic through the four
-  around them), and :func:`_follow_traces` asks for denser traces where the fit is short of
+  around them), and :func:`follow_traces` asks for denser traces where the fit is short of
   samples (linkrods face 20: 336 -> ~5400 per edge, 15 tol -> 0.97 tol) and refuses a side that
   still misses its tolerance, instead of returning it.
 
@@ -35,7 +35,7 @@ Tolerances: the synthetic corners are exact up to round-off (coordinates ~0.1: 1
 optimality of the corner is checked against an independent bounded minimiser (L-BFGS-B; 1e-15,
 some 70 ulps of the coordinates). On the bearing (skipped where ../shared/realdata is absent) our fill is judged
 against OCC's BRepOffsetAPI_MakeFilling with cadquery's defaults on the same hole, measured the
-same way (LocalAnalysis_SurfaceContinuity, refill._measure). Measured (ours before / after / OCC
+same way (LocalAnalysis_SurfaceContinuity, refill_candidates._measure). Measured (ours before / after / OCC
 default G0): face 5 2.3e-6 / 5.5e-9 / 3.0e-6, face 170 4.4e-6 / 1.2e-8 / 3.3e-8, face 188 8.6e-7 /
 1.6e-8 / 8.3e-8.
 """
@@ -50,7 +50,7 @@ from scipy.optimize import minimize
 
 from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.nsided import closest_parameters
-from occsurf.bridge.modeling.refill import _along, _corner_point, _drop_repeats, _fit_points, _pin_end
+from occsurf.bridge.modeling.refill_traces import _along, _corner_point, _drop_repeats, _fit_points, _pin_end
 
 
 def _ray_distance(x: np.ndarray, p: np.ndarray, t: np.ndarray) -> float:
@@ -143,7 +143,7 @@ def test_pinning_a_trace_end_moves_it_across_gently() -> None:
     lateral = Q[:, 1]
     assert lateral.max() <= 2e-6 * (1 + 1e-12) and np.all(np.diff(lateral) >= -1e-21)  # monotone, at most the move
     slope = np.abs(np.diff(lateral) / np.diff(Q[:, 0])).max()
-    from occsurf.bridge.modeling.refill import CORNER_SLOPE
+    from occsurf.bridge.modeling.refill_traces import CORNER_SLOPE
     # spread over 2e-6 / CORNER_SLOPE = 0.02; the smoothstep's steepest slope is 15/8 of its mean
     assert slope <= 1.875 * CORNER_SLOPE * (1 + 1e-6)
     assert np.all(lateral[Q[:, 0] < 0.1 - 0.02 - 1e-12] == 0.0)  # nothing moves farther from the end
@@ -248,14 +248,14 @@ def test_a_fit_that_swings_between_its_samples_is_reported() -> None:
 
 
 def test_a_long_helix_side_of_several_edges_follows_its_traces() -> None:
-    from occsurf.bridge.modeling.refill import _follow_traces
+    from occsurf.bridge.modeling.refill_traces import follow_traces
 
     bounds, groups, curves, traces, trace = _helix_side(257)  # 257 samples per turn: too few for tol
     with pytest.warns(RuntimeWarning, match=r"side 0: .* stays .* off them .*; kept \(the model's edge curve is"):
-        kept = _follow_traces(bounds, groups, curves, traces, HELIX_TOL)[0]  # no way to ask for more
+        kept = follow_traces(bounds, groups, curves, traces, HELIX_TOL)[0]  # no way to ask for more
     miss = closest_parameters(kept, _helix(np.linspace(0, 2 * np.pi, 5001), HELIX_R + HELIX_OFF))[1].max()
     assert HELIX_TOL < miss < 1e-4  # what the warning says: beyond tol, closer than the edge curve
-    side = _follow_traces(bounds, groups, curves, traces, HELIX_TOL, trace)[0]  # more samples asked
+    side = follow_traces(bounds, groups, curves, traces, HELIX_TOL, trace)[0]  # more samples asked
     th = np.linspace(0, 2 * np.pi * HELIX_TURNS, 40001)
     truth = _helix(th, HELIX_R + HELIX_OFF)
     # within tol of the neighbours' traces (checked on 5000 points per turn, 8 x denser than the
@@ -272,14 +272,15 @@ def test_screw_thread_sides_lie_on_their_neighbours(screw) -> None:
     axis; ~10 s more to check here, so /work/tools/probe_screw2.py checks it)."""
     face = 8
     from occsurf.algorithms import tolerances
-    from occsurf.bridge.modeling.refill import _edge_params, _hole_loop, _normals_on, refill_sides
+    from occsurf.bridge.modeling.refill_loop import edge_params, hole_loop, normals_on
+    from occsurf.bridge.modeling.refill_sides import refill_sides
 
-    edges, nbs, owners = _hole_loop(screw, [face])
+    edges, nbs, owners = hole_loop(screw, [face])
     sides, side_of_edge, _, _ = refill_sides(edges, nbs, owners, screw.size, True)
     tol = tolerances.FILL_FIT_G0 * screw.size
     worst = np.zeros(len(sides))
     for k, (e, nb) in enumerate(zip(edges, nbs)):
-        P, _, _ = _normals_on(e, nb, _edge_params(e, nb, 1001))
+        P, _, _ = normals_on(e, nb, edge_params(e, nb, 1001))
         c = sides[side_of_edge[k]].curve
         worst[side_of_edge[k]] = max(worst[side_of_edge[k]], closest_parameters(c, P)[1].max())
     assert worst.max() <= tol, worst
@@ -288,9 +289,9 @@ def test_screw_thread_sides_lie_on_their_neighbours(screw) -> None:
 def test_a_fit_farther_than_the_edge_curve_gives_way_to_it() -> None:
     # 24 samples per turn: the cubic cannot follow the helix (spans of a third of a turn); the
     # model's edge curve (1e-4 + 2e-5 off the traces) is closer, and is returned with a warning
-    from occsurf.bridge.modeling.refill import _follow_traces
+    from occsurf.bridge.modeling.refill_traces import follow_traces
 
     bounds, groups, curves, traces, _ = _helix_side(24)
     with pytest.warns(RuntimeWarning, match="the model's edge curve .* is used instead"):
-        side = _follow_traces(bounds, groups, curves, traces, HELIX_TOL)[0]
+        side = follow_traces(bounds, groups, curves, traces, HELIX_TOL)[0]
     assert side is bounds[0]

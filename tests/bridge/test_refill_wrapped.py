@@ -25,9 +25,9 @@ def crest(screw):
 
 def test_neighbour_axes_hold_the_screw_axis(screw) -> None:
     from occsurf.bridge.modeling.plate import revolution_axes
-    from occsurf.bridge.modeling.refill import _hole_loop
+    from occsurf.bridge.modeling.refill_loop import hole_loop
 
-    _, nbs, _ = _hole_loop(screw, [9])
+    _, nbs, _ = hole_loop(screw, [9])
     axes = revolution_axes(nbs)
     assert any(abs(abs(a[2]) - 1) < 1e-12 and np.hypot(*c[:2]) < 1e-9 for c, a in axes)
 
@@ -104,11 +104,11 @@ def test_a_refusal_names_the_crease_between_removed_faces(screw, bearing) -> Non
     removed together, no fill comes within 6e-4 of the boundary where the crease ends on it (OCC's
     filler fails too), and the refusal says so. The bearing's fillet pair [4, 166] meets
     tangentially: no crease."""
-    from occsurf.bridge.modeling.refill import _crease_note, _inner_creases
+    from occsurf.bridge.modeling.refill_loop import _inner_creases, crease_note
 
     creases = _inner_creases(screw, [8, 9])
     assert len(creases) == 1 and abs(creases[0][0] - 60.0) < 0.5
     assert abs(np.hypot(*creases[0][1][:2]) - 3.0) < 0.1  # on the crest's radius
-    assert "sharpest at 60.1 deg" in _crease_note(screw, [8, 9])
-    assert _inner_creases(bearing, [4, 166]) == [] and _crease_note(bearing, [4, 166]) == ""
-    assert _crease_note(screw, [9]) == ""  # a single face has no inner edge
+    assert "sharpest at 60.1 deg" in crease_note(screw, [8, 9])
+    assert _inner_creases(bearing, [4, 166]) == [] and crease_note(bearing, [4, 166]) == ""
+    assert crease_note(screw, [9]) == ""  # a single face has no inner edge
