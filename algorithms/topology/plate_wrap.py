@@ -310,7 +310,7 @@ def fitted_axes(points: ArrayLike, normals: ArrayLike | None = None) -> list[tup
 def _layout(curve: BSplineCurve, spans: int) -> tuple[Array, Array]:
     """Knots (cubic, clamped) and samples for fitting a function of ``curve``'s parameter: about
     ``spans`` uniform spans spread over the pieces between the curve's knots of continuity C1 or
-    lower (a side joined from several edges has C0 knots: :func:`occsurf.bridge.modeling.refill._joined`),
+    lower (a side joined from several edges has C0 knots: :func:`occsurf.bridge.modeling.refill_sides._joined`),
     which become triple knots (C0) of the fit, three samples per span."""
     p = curve.degree
     k, mult = np.unique(curve.knots, return_counts=True)

@@ -39,7 +39,7 @@ def plate_face(fill: PlateFill, tol: float | None = None, gap: float = 0.0) -> A
     gap : float
         The hole edges' own tolerance (model units; the model declares its faces meet within it):
         the fill may miss the boundary by that much (it is sewn in at a tolerance covering it,
-        :func:`occsurf.bridge.modeling.refill._sew_in`).
+        :func:`occsurf.bridge.modeling.refill_sewing._sew_in`).
 
     Raises
     ------
