@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -165,6 +165,10 @@ class Point(_Kind):
 
     _kind: ClassVar[str] = "point"
 
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float array
+
+        def __init__(self, coords: ArrayLike) -> None: ...
+
     def __radd__(self, other: object) -> Point:
         return self._combine(other, "+", self._ADD, np.add, True)
 
@@ -189,6 +193,10 @@ class Vector(_Linear):
     """
 
     _kind: ClassVar[str] = "vector"
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float array
+
+        def __init__(self, coords: ArrayLike) -> None: ...
 
     def dot(self, other: Vector | Normal) -> Array:
         """Euclidean inner product (or the pairing with a :class:`Normal`), shape ``(...)``."""
@@ -227,6 +235,10 @@ class Normal(_Linear):
     """
 
     _kind: ClassVar[str] = "normal"
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float array
+
+        def __init__(self, coords: ArrayLike) -> None: ...
 
     @classmethod
     def from_tangents(cls, a: Vector, b: Vector) -> Normal:
