@@ -17,7 +17,7 @@ import math
 import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -328,9 +328,22 @@ class LightingSetup:
     """
 
     lights: tuple[WarnLight, ...] = ()
-    ambient: Any = 0.05
+    if TYPE_CHECKING:  # as stored by __post_init__
+        ambient: tuple[float, float, float] = (0.05, 0.05, 0.05)
+    else:
+        ambient: Any = 0.05
     material: Material = field(default_factory=Material)
     two_sided: bool = True
+
+    if TYPE_CHECKING:  # the generated __init__ takes any of these; __post_init__ stores tuples
+
+        def __init__(
+            self,
+            lights: Sequence[WarnLight] = (),
+            ambient: float | Sequence[float] = 0.05,
+            material: Material = ...,
+            two_sided: bool = True,
+        ) -> None: ...
 
     def __post_init__(self) -> None:
         put = object.__setattr__
