@@ -58,8 +58,8 @@ def vectors(value: ArrayLike, name: str, *, allow_nan: bool = False) -> Array:
 
 def positive(value: object, name: str) -> float:
     """A positive finite real number."""
-    ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and np.isfinite(float(value)) and float(value) > 0
-    if not ok:
+    if not (isinstance(value, numbers.Real) and not isinstance(value, bool) and np.isfinite(float(value))
+            and float(value) > 0):
         raise InvalidGeometryError(f"{name}: expected a positive finite number, got {value!r}")
     return float(value)
 

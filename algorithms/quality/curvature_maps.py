@@ -16,6 +16,7 @@ with NaN values; they are never coloured silently.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -152,19 +153,21 @@ class CurvatureMap:
         return (float(v.min()), float(v.max())) if v.size else (float("nan"), float("nan"))
 
 
-def _block_curvatures(D: Array) -> tuple[Array, ...]:
+def _block_curvatures(D: Array) -> _kernels.GridCurvatures:
     """Points, normals, k1, k2, K, H and ok of a block of partials, in row blocks kept in cache."""
     m, n = D.shape[:2]
-    out = [np.empty((m, n, 3)), np.empty((m, n, 3))] + [np.empty((m, n)) for _ in range(4)] + [np.empty((m, n), bool)]
+    P, Nrm = np.empty((m, n, 3)), np.empty((m, n, 3))
+    k1, k2, K, H = (np.empty((m, n)) for _ in range(4))
+    ok = np.empty((m, n), bool)
     rows = max(1, _BLOCK_POINTS // max(n, 1))
     for i in range(0, m, rows):
         sl = slice(i, i + rows)
         c = curvatures_from_derivatives(D[sl])
-        out[0][sl] = D[sl, :, 0, 0, :]
-        out[1][sl] = c.normal
-        out[2][sl], out[3][sl], out[4][sl], out[5][sl] = c.k1, c.k2, c.gaussian, c.mean
-        out[6][sl] = np.isfinite(c.normal[..., 0])
-    return tuple(out)
+        P[sl] = D[sl, :, 0, 0, :]
+        Nrm[sl] = c.normal
+        k1[sl], k2[sl], K[sl], H[sl] = c.k1, c.k2, c.gaussian, c.mean
+        ok[sl] = np.isfinite(c.normal[..., 0])
+    return P, Nrm, k1, k2, K, H, ok
 
 
 def curvature_map(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, kind: str = "mean", *,
@@ -230,7 +233,7 @@ def map_from_partials(s: Any, g: GridPartials, kind: str, mask: NDArray[np.bool_
 
 
 def _assemble(s: Any, a: Array, b: Array, m: NDArray[np.bool_] | None, kind: str, inside: NDArray[np.bool_],
-              parts: tuple[Array, ...]) -> CurvatureMap:
+              parts: _kernels.GridCurvatures) -> CurvatureMap:
     P, Nrm, k1, k2, K, H, ok = parts
     degenerate = inside & ~ok
     if np.any(degenerate):
@@ -285,9 +288,9 @@ class ColorScale:
         return np.linspace(self.lo, self.hi, int(n))
 
 
-def _percentile(p: object) -> tuple[float, float]:
+def _percentile(p: Iterable[float]) -> tuple[float, float]:
     try:
-        a, b = (float(x) for x in p)  # type: ignore[union-attr]
+        a, b = (float(x) for x in p)
     except (TypeError, ValueError):
         raise InvalidGeometryError(f"percentile: expected a pair (low, high), got {p!r}") from None
     if not 0.0 <= a < b <= 100.0:

@@ -76,7 +76,7 @@ class Flag:
                 "suggestion": self.suggestion}
 
 
-def _flag(kind: str, cm: CurvatureMap, i: int, j: int, value: float, count: int) -> Flag:
+def _flag(kind: str, cm: CurvatureMap, i: int | np.integer, j: int | np.integer, value: float, count: int) -> Flag:
     return Flag(kind=kind, location=cm.points[i, j].copy(), uv=np.array([cm.us[i], cm.vs[j]]), value=float(value),
                 suggestion=SUGGESTIONS[kind], count=int(count))
 
@@ -170,7 +170,8 @@ def _spikes(cm: CurvatureMap, size: float) -> list[Flag]:
     return [_flag("curvature_spike", cm, i, j, q, 1) for i, j, q in zip(ci[keep], cj[keep], ratio[keep])]
 
 
-def _apex_ratio(cm: CurvatureMap, A: Array, valid: NDArray[np.bool_], ci: Array, cj: Array, r: int) -> Array:
+def _apex_ratio(cm: CurvatureMap, A: Array, valid: NDArray[np.bool_], ci: NDArray[np.intp], cj: NDArray[np.intp],
+                r: int) -> Array:
     """The spike ratio of candidates next to a cone apex, with the apex's own growth taken out.
 
     Near the apex ``X0`` of a true cone (every tangent plane passes through the apex:

@@ -44,6 +44,7 @@ from .combs import Comb, _finish
 __all__ = ["Section", "SectionCurve", "plane_sections", "axial_sections"]
 
 MaskFn = Callable[[Array, Array], NDArray[np.bool_]]
+Ints = NDArray[np.intp]
 
 
 @dataclass(frozen=True)
@@ -146,7 +147,7 @@ def _grid(s: Any) -> tuple[Array, Array]:
 
 
 # ------------------------------------------------------------------------------ marching squares
-def _march(h: Array) -> tuple[Array, Array, Array, Array]:
+def _march(h: Array) -> tuple[Ints, Ints, Ints, int, Ints]:
     """Oriented zero-crossing segments of ``h`` (k, mu, mv), all planes at once.
 
     Returns ``(plane, src_edge, dst_edge, n_u_edges, cell)`` (``cell = i * (mv - 1) + j``): edge ids ``< n_u_edges`` lie along u
@@ -185,7 +186,7 @@ def _march(h: Array) -> tuple[Array, Array, Array, Array]:
     return np.concatenate(planes), np.concatenate(srcs), np.concatenate(dsts), nu_e, np.concatenate(cells)
 
 
-def _edge_ends(edges: Array, plane: Array, h: Array, us: Array, vs: Array, nu_e: int) -> tuple[Array, Array, Array]:
+def _edge_ends(edges: Ints, plane: Ints, h: Array, us: Array, vs: Array, nu_e: int) -> tuple[Array, Array, Array]:
     """End parameters ``(n, 2)`` of each grid edge and the linear-interpolation zero ``t`` on it."""
     mv = vs.size
     along_u = edges < nu_e
@@ -257,7 +258,7 @@ def _newton(s: Any, uv: Array, o: Array, n: Array, tol: float) -> tuple[Array, N
     return uv, done
 
 
-def _to_trim(s: Any, keep: Callable[[Array, Array, Array], NDArray[np.bool_]], uv_in: Array, uv_out: Array, o: Array,
+def _to_trim(s: Any, keep: Callable[[Array, Array, Ints], NDArray[np.bool_]], uv_in: Array, uv_out: Array, o: Array,
              n: Array, tol_h: float) -> Array:
     """March each cut from its last point inside the trim (``uv_in``) to the trim boundary, towards
     its next point outside (``uv_out``; both on the intersection): bisection along the cut, every
@@ -284,7 +285,7 @@ def _to_trim(s: Any, keep: Callable[[Array, Array, Array], NDArray[np.bool_]], u
 
 
 # -------------------------------------------------------------------------------------- chaining
-def _order_chains(src: Array, dst: Array) -> list[tuple[Array, bool]]:
+def _order_chains(src: Ints, dst: Ints) -> list[tuple[Ints, bool]]:
     """Oriented segments ``src -> dst`` (node ids 0..N-1, each node at most one in and one out)
     ordered into chains by pointer doubling. Returns ``[(nodes, closed), ...]``."""
     N = int(max(src.max(), dst.max())) + 1
@@ -317,7 +318,7 @@ def _order_chains(src: Array, dst: Array) -> list[tuple[Array, bool]]:
     return [(part, bool(closed[lab[part[0]]])) for part in np.split(nodes, cuts)]
 
 
-def _rank(nxt: Array) -> Array:
+def _rank(nxt: Ints) -> NDArray[np.int64]:
     """Number of steps from each node to the end of its (acyclic) chain: list ranking by pointer
     doubling (Wyllie), ``log2`` of the longest chain synchronous NumPy steps."""
     dist = (nxt >= 0).astype(np.int64)
@@ -408,12 +409,12 @@ def _refine_inflections(s: Any, uv_a: Array, uv_b: Array, ka: Array, kb: Array, 
 class _Piece:
     points: Array
     uv: Array
-    face: Array
+    face: Ints
     closed: bool
 
 
 def _face_pieces(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half: Array | None,
-                 tol_h: float) -> tuple[list[list[_Piece]], Array]:
+                 tol_h: float) -> tuple[list[list[_Piece]], NDArray[np.int64]]:
     """Polylines of face ``fi`` for every plane, and the count of unconverged seeds per plane.
 
     Planes that miss the convex hull of the face's control net (the surface lies inside it for
@@ -436,7 +437,7 @@ def _face_pieces(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half
 
 
 def _face_pieces_of(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half: Array | None,
-                    tol_h: float) -> tuple[list[list[_Piece]], Array]:
+                    tol_h: float) -> tuple[list[list[_Piece]], NDArray[np.int64]]:
     k = O.shape[0]
     us, vs = _grid(s)
     P = s.evaluate_grid(us, vs)
@@ -474,7 +475,7 @@ def _face_pieces_of(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, h
         inner, outer = np.where(a_in, a[ci], b[ci]), np.where(a_in, b[ci], a[ci])
         pl = node_plane[inner]
 
-        def keep(uv_: Array, X_: Array, i: Array) -> NDArray[np.bool_]:
+        def keep(uv_: Array, X_: Array, i: Ints) -> NDArray[np.bool_]:
             k = np.ones(uv_.shape[0], bool) if mask is None else np.asarray(mask(uv_[:, 0], uv_[:, 1]), bool)
             return k if half is None else k & (dot(X_ - O[pl[i]], half[pl[i]]) >= -tol_h)
 
@@ -533,12 +534,12 @@ class _Curve:
     plane: int
     points: Array
     uv: Array
-    face: Array
+    face: Ints
     closed: bool
     ks: Array
     tangent: Array
     hint: Array
-    brackets: tuple[Array, Array]  # sample pairs (cur, nxt) on one face with opposite curvature signs
+    brackets: tuple[Ints, Ints]  # sample pairs (cur, nxt) on one face with opposite curvature signs
     inflections: list[Array] = field(default_factory=list)
 
 
@@ -576,7 +577,7 @@ def _refine_all(curves: list[_Curve], faces: list[tuple[Any, MaskFn | None]], O:
         mine = [r for r in rows if r[1] == fi]
         s = faces[fi][0]
         (u0, u1), (v0, v1) = s.domain
-        cat = lambda f: np.concatenate([f(curves[ci], a, b) for ci, _, a, b in mine])  # noqa: E731
+        cat = lambda f: np.concatenate([f(curves[ci], a, b) for ci, _, a, b in mine])  # noqa: E731, B023 - used in this iteration only
         owner = np.concatenate([np.full(a.size, ci) for ci, _, a, _b in mine])
         X = _refine_inflections(
             s, cat(lambda c, a, b: c.uv[a]), cat(lambda c, a, b: c.uv[b]), cat(lambda c, a, b: c.ks[a]),
@@ -604,7 +605,7 @@ def _section_curve(c: _Curve, m: Array, fit: bool, scale: float | None) -> Secti
 def _sections(faces: object, O: Array, Nm: Array, offsets: Array, half: Array | None, tol: float | None,
               fit: bool, scale: float | None) -> list[Section]:
     fl = _faces(faces)
-    grids = [f[0].evaluate_grid(*[np.linspace(*d, 9) for d in f[0].domain]) for f in fl]
+    grids = [f[0].evaluate_grid(*[np.linspace(d0, d1, 9) for d0, d1 in f[0].domain]) for f in fl]
     allp = np.concatenate([g.reshape(-1, 3) for g in grids])
     size = max(float(np.linalg.norm(np.ptp(allp, axis=0))), np.finfo(float).tiny)
     tol_h = tolerances.QUALITY_SECTION_TOL * size if tol is None else positive(tol, "tol")
