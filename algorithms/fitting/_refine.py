@@ -87,7 +87,7 @@ class FitSummary:
         return int(self.hierarchy.pole_counts()["stored"])
 
 
-def check_tol_levels(tol: Any, max_levels: Any) -> tuple[float, int]:
+def check_tol_levels(tol: float, max_levels: int | None) -> tuple[float, int]:
     """``tol`` as a positive float and the deepest overlay level (default
     :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MAX_LEVELS`); :class:`ParameterError` naming
     the argument otherwise."""

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import copy as _copy
 import reprlib
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Self
 
@@ -507,7 +508,7 @@ class Hierarchy:
         node.offsets = o.copy()
         self._update(node, reference=False)
 
-    def set_offset(self, overlay: Overlay | int, index: Any, offset: ArrayLike) -> None:
+    def set_offset(self, overlay: Overlay | int, index: int | Sequence[int], offset: ArrayLike) -> None:
         """Set one stored offset of ``overlay`` (in place), e.g. ``(0, 0, h)``: height ``h`` along
         the parent's normal with the frame mapping."""
         node = self._node(overlay)
@@ -652,7 +653,7 @@ class Hierarchy:
                 raise InvalidGeometryError(f"from_dict: overlay {ident}: its knots do not reproduce")
 
 
-def check_format(data: Any, kind: str) -> None:
+def check_format(data: object, kind: str) -> None:
     """Reject dicts of another type or a newer format version."""
     if not isinstance(data, dict) or data.get("type") != kind:
         raise InvalidGeometryError(f"from_dict: expected a dict with type {kind!r}, got "

@@ -46,6 +46,9 @@ from ._common import FORMAT_VERSION
 from .curve import BSplineCurve
 from .surface import BSplineSurface
 
+if TYPE_CHECKING:
+    from ..geometry.differential import SurfaceCurvatures
+
 __all__ = ["TrimmedSurface", "INSIDE", "ON", "OUTSIDE", "classify_points"]
 
 Array = NDArray[np.float64]
@@ -330,7 +333,7 @@ class TrimmedSurface:
             n = np.where(ln > 0, n / ln, np.nan)
         return -n if self.reversed else n
 
-    def curvatures(self, u: ArrayLike, v: ArrayLike, *, outside: Outside = "raise") -> Any:
+    def curvatures(self, u: ArrayLike, v: ArrayLike, *, outside: Outside = "raise") -> SurfaceCurvatures:
         """Principal, Gaussian and mean curvatures on the face (course §6-8 .. §6-12).
 
         As :func:`occsurf.algorithms.surface_curvatures` of :attr:`surface` (signs against

@@ -22,13 +22,16 @@ from __future__ import annotations
 
 import math
 import threading
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .. import _numba_kernels as _nk
 from .. import tolerances
+
+if TYPE_CHECKING:
+    from .model import LightingSetup
 
 __all__ = ["pack_lights", "shade_points"]
 
@@ -41,7 +44,7 @@ _CONC, _HAS_CONE, _THETA, _DELTA, _COS_OUT, _COS_IN, _FALL_K, _D0 = 24, 25, 26, 
 _WIDTH = 32
 
 
-def pack_lights(setup: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def pack_lights(setup: LightingSetup) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(table (k, 32), ckd (k, 3), cks (k, 3))``: the lights of a validated setup as numbers,
     with ``c_j * k_d * C_d`` and ``c_j * k_s * C_s`` per channel (Python floats, as the reference)."""
     mat = setup.material

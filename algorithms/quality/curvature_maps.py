@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -29,7 +28,18 @@ from ..geometry.differential import curvatures_from_derivatives
 from ..kernel.surface import BSplineSurface
 from ..topology.spatch import SPatch
 from . import _kernels
-from ._common import Array, GridPartials, check_mask, grid_axes, grid_partials, nudged_normals, surface_of, trim_mask
+from ._common import (
+    Array,
+    Evaluable,
+    GridPartials,
+    QualitySurface,
+    check_mask,
+    grid_axes,
+    grid_partials,
+    nudged_normals,
+    surface_of,
+    trim_mask,
+)
 
 __all__ = ["KINDS", "SCALE_MODES", "CurvatureMap", "ColorScale", "curvature_map", "curvature_values", "color_scale"]
 
@@ -170,7 +180,7 @@ def _block_curvatures(D: Array) -> _kernels.GridCurvatures:
     return P, Nrm, k1, k2, K, H, ok
 
 
-def curvature_map(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, kind: str = "mean", *,
+def curvature_map(surface: QualitySurface, us: ArrayLike | int, vs: ArrayLike | int, kind: str = "mean", *,
                   mask: ArrayLike | None = None, patch: int | None = None) -> CurvatureMap:
     """Curvature map of a surface on the grid ``us x vs`` (course §9-5 .. §9-13).
 
@@ -226,13 +236,13 @@ def curvature_map(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, kind: 
     return _assemble(s, a, b, m, kind, inside, (P, Nrm, k1, k2, K, H, ok))
 
 
-def map_from_partials(s: Any, g: GridPartials, kind: str, mask: NDArray[np.bool_] | None) -> CurvatureMap:
+def map_from_partials(s: Evaluable, g: GridPartials, kind: str, mask: NDArray[np.bool_] | None) -> CurvatureMap:
     """A :class:`CurvatureMap` from grid partials already computed (trusted arguments; shared with
     :func:`~occsurf.algorithms.quality.face_flags`, which needs the partials too)."""
     return _assemble(s, g.us, g.vs, mask, kind, g.inside, _block_curvatures(g.D))
 
 
-def _assemble(s: Any, a: Array, b: Array, m: NDArray[np.bool_] | None, kind: str, inside: NDArray[np.bool_],
+def _assemble(s: Evaluable, a: Array, b: Array, m: NDArray[np.bool_] | None, kind: str, inside: NDArray[np.bool_],
               parts: _kernels.GridCurvatures) -> CurvatureMap:
     P, Nrm, k1, k2, K, H, ok = parts
     degenerate = inside & ~ok

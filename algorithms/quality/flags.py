@@ -17,7 +17,7 @@ from scipy import ndimage
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ._common import Array, check_mask, grid_axes, grid_partials, surface_of, trim_mask
+from ._common import Array, QualitySurface, check_mask, grid_axes, grid_partials, surface_of, trim_mask
 from .curvature_maps import CurvatureMap, map_from_partials
 
 __all__ = ["FLAG_KINDS", "Flag", "face_flags"]
@@ -231,7 +231,7 @@ def _degenerate(cm: CurvatureMap, D: Array) -> tuple[list[Flag], NDArray[np.bool
     return out + flags, near
 
 
-def face_flags(surface: Any, *, mask: ArrayLike | None = None, thresholds: Mapping[str, float] | None = None,
+def face_flags(surface: QualitySurface, *, mask: ArrayLike | None = None, thresholds: Mapping[str, float] | None = None,
                us: ArrayLike | int = 64, vs: ArrayLike | int = 64, patch: int | None = None) -> list[Flag]:
     """Problem areas of one face: wiggles, flat spots, curvature spikes, near-degenerate normals,
     ill-parametrisation; each with a suggested occsurf correction.
