@@ -31,6 +31,7 @@ import threading
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from . import tolerances
 
@@ -52,7 +53,11 @@ def span_bounds(knots: np.ndarray, degree: int, n_poles: int) -> tuple[int, int]
 
 # ---------------------------------------------------------------------------------------------
 # Kernel sources. Plain Python functions; :func:`_load` compiles them with numba. They call each
-# other through module globals, which :func:`_load` rebinds to the compiled dispatchers.
+# other through module globals, which :func:`_load` rebinds to the compiled dispatchers. The
+# annotations are for the type checker only (numba infers types from the arguments).
+
+_F = NDArray[np.float64]
+_I = NDArray[np.int64]
 
 
 def span_table(knots: np.ndarray, degree: int, n_poles: int) -> tuple[int, int, np.ndarray, float, float]:
@@ -75,7 +80,9 @@ def span_table(knots: np.ndarray, degree: int, n_poles: int) -> tuple[int, int, 
     return first, last, table, x0, scale
 
 
-def _span(knots, first, last, table, x0, scale, x):  # pragma: no cover - compiled
+def _span(  # pragma: no cover - compiled
+    knots: _F, first: int, last: int, table: _I, x0: float, scale: float, x: float,
+) -> int:
     """Largest ``s`` in ``[first, last]`` with ``knots[s] <= x`` (A2.1 via :func:`span_table`)."""
     nb = table.shape[0] - 1
     f = (x - x0) * scale
@@ -98,7 +105,7 @@ def _span(knots, first, last, table, x0, scale, x):  # pragma: no cover - compil
     return lo
 
 
-def _basis(knots, p, s, x, N, left, right):  # pragma: no cover - compiled
+def _basis(knots: _F, p: int, s: int, x: float, N: _F, left: _F, right: _F) -> None:  # pragma: no cover - compiled
     """The ``p + 1`` non-zero basis functions at ``x`` in span ``s`` (A2.2) into ``N``."""
     N[0] = 1.0
     for j in range(1, p + 1):
@@ -112,7 +119,9 @@ def _basis(knots, p, s, x, N, left, right):  # pragma: no cover - compiled
         N[j] = saved
 
 
-def _basis_ders(knots, p, s, x, order, ders, Nt, inv, left, right):  # pragma: no cover - compiled
+def _basis_ders(  # pragma: no cover - compiled
+    knots: _F, p: int, s: int, x: float, order: int, ders: _F, Nt: _F, inv: _F, left: _F, right: _F,
+) -> None:
     """Basis functions and derivatives up to ``order`` into ``ders`` (order+1, p+1).
 
     The triangle of A2.2 keeps every degree (``Nt[j, :j+1]``, degree ``j``); the k-th derivative
@@ -159,7 +168,7 @@ def _basis_ders(knots, p, s, x, order, ders, Nt, inv, left, right):  # pragma: n
             ders[k, d] = fd * prev
 
 
-def _binomials(n):  # pragma: no cover - compiled
+def _binomials(n: int) -> _F:  # pragma: no cover - compiled
     """Pascal's triangle ``B[k, i] = C(k, i)`` for ``0 <= i <= k < n`` as floats."""
     B = np.zeros((n, n))
     for k in range(n):
@@ -169,7 +178,7 @@ def _binomials(n):  # pragma: no cover - compiled
     return B
 
 
-def _curve_quotient(h, binom, out, m):  # pragma: no cover - compiled
+def _curve_quotient(h: _F, binom: _F, out: _F, m: int) -> None:  # pragma: no cover - compiled
     """A4.2 on one point: homogeneous ``h`` (r+1, d+1) to Cartesian ``out[m]`` (r+1, d)."""
     r1 = h.shape[0]
     dw = h.shape[1] - 1
@@ -185,7 +194,7 @@ def _curve_quotient(h, binom, out, m):  # pragma: no cover - compiled
             out[m, k, c] *= inv_w
 
 
-def _quotient_plan(r1):  # pragma: no cover - compiled
+def _quotient_plan(r1: int) -> tuple[_I, _I, _I, _F]:  # pragma: no cover - compiled
     """The terms of A4.4 for partials up to ``r1 - 1``, flattened for :func:`_surface_quotient`.
 
     Partial ``e = k * r1 + l`` takes terms ``start[e] .. start[e+1]``; term ``t`` subtracts
@@ -214,7 +223,9 @@ def _quotient_plan(r1):  # pragma: no cover - compiled
     return start, src, wi, coef
 
 
-def _surface_quotient(h, start, src, wi, coef, o, out, m):  # pragma: no cover - compiled
+def _surface_quotient(  # pragma: no cover - compiled
+    h: _F, start: _I, src: _I, wi: _I, coef: _F, o: _F, out: _F, m: int,
+) -> None:
     """A4.4 on one point: homogeneous ``h`` (E, d+1) to Cartesian ``out[m]`` (E, d), E = (r+1)^2.
 
     ``o`` (E, d) is scratch; the terms come from :func:`_quotient_plan`. The same operations in
@@ -253,7 +264,9 @@ def _surface_quotient(h, start, src, wi, coef, o, out, m):  # pragma: no cover -
                 out[m, e, c] = o[e, c]
 
 
-def curve_points(t, p, first, last, table, x0, scale, H, u, rational, out):  # pragma: no cover
+def curve_points(  # pragma: no cover
+    t: _F, p: int, first: int, last: int, table: _I, x0: float, scale: float, H: _F, u: _F, rational: bool, out: _F,
+) -> None:
     """Curve points: ``H`` (n, k) homogeneous poles, ``u`` (m,), ``out`` (m, d)."""
     k = H.shape[1]
     N = np.empty(p + 1)
@@ -273,7 +286,10 @@ def curve_points(t, p, first, last, table, x0, scale, H, u, rational, out):  # p
         _store_point(acc, rational, out, m)
 
 
-def curve_derivatives(t, p, first, last, table, x0, scale, H, u, order, rational, out):  # pragma: no cover
+def curve_derivatives(  # pragma: no cover
+    t: _F, p: int, first: int, last: int, table: _I, x0: float, scale: float, H: _F, u: _F, order: int,
+    rational: bool, out: _F,
+) -> None:
     """Curve derivatives up to ``order``: ``out`` (m, order+1, d)."""
     k = H.shape[1]
     r1 = order + 1
@@ -303,7 +319,7 @@ def curve_derivatives(t, p, first, last, table, x0, scale, H, u, order, rational
                     out[m, i, c] = h[i, c]
 
 
-def _store_point(acc, rational, out, m):  # pragma: no cover - compiled
+def _store_point(acc: _F, rational: bool, out: _F, m: int) -> None:  # pragma: no cover - compiled
     """Homogeneous point ``acc`` (d+1,) (or Cartesian (d,)) to Cartesian ``out[m]`` (d,)."""
     d = out.shape[1]
     if rational:
@@ -314,7 +330,9 @@ def _store_point(acc, rational, out, m):  # pragma: no cover - compiled
             out[m, c] = acc[c]
 
 
-def _net_point(Hf, base, rowstride, k, Nu, Nv, acc):  # pragma: no cover - compiled
+def _net_point(  # pragma: no cover - compiled
+    Hf: _F, base: np.uint64, rowstride: np.uint64, k: int, Nu: _F, Nv: _F, acc: _F,
+) -> None:
     """``acc[:k] = sum_a Nu[a] sum_b Nv[b] H[r0 + a, c0 + b, :]`` (scalar accumulators).
 
     ``Hf`` is the flat net, ``base`` the flat offset of ``H[r0, c0, 0]`` and ``rowstride`` that
@@ -364,7 +382,11 @@ def _net_point(Hf, base, rowstride, k, Nu, Nv, acc):  # pragma: no cover - compi
             acc[e3] = a3
 
 
-def surface_points(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, u, v, rational, out):  # pragma: no cover
+def surface_points(  # pragma: no cover
+    U: _F, p: int, fu: int, lu: int, tu: _I, u0: float, cu: float,
+    V: _F, q: int, fv: int, lv: int, tv: _I, v0: float, cv: float,
+    H: _F, u: _F, v: _F, rational: bool, out: _F,
+) -> None:
     """Surface points: ``H`` (n_u, n_v, k) homogeneous net, ``u, v`` (m,), ``out`` (m, d).
 
     ``fu, lu, tu, u0, cu`` (and the same for v) are :func:`span_table`. Per point: the spans and
@@ -393,7 +415,9 @@ def surface_points(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, u, v, 
         _store_point(acc, rational, out, m)
 
 
-def _tensor_partials(H, r0, c0, Du, Dv, T, O, m):  # pragma: no cover - compiled
+def _tensor_partials(  # pragma: no cover - compiled
+    H: _F, r0: int, c0: int, Du: _F, Dv: _F, T: _F, O: _F, m: int,
+) -> None:
     """``O[m, i, j, :] = sum_{a,b} Du[i, a] Dv[j, b] H[r0 + a, c0 + b, :]`` (v first, via ``T``).
 
     Scalar accumulators over the coordinates (three at a time for k = 3, else four at a time,
@@ -470,7 +494,11 @@ def _tensor_partials(H, r0, c0, Du, Dv, T, O, m):  # pragma: no cover - compiled
                 O[m, i, j, e3] = t3
 
 
-def surface_derivatives(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, u, v, order, rational, out):  # pragma: no cover
+def surface_derivatives(  # pragma: no cover
+    U: _F, p: int, fu: int, lu: int, tu: _I, u0: float, cu: float,
+    V: _F, q: int, fv: int, lv: int, tv: _I, v0: float, cv: float,
+    H: _F, u: _F, v: _F, order: int, rational: bool, out: _F,
+) -> None:
     """All partials ``d^{i+j}/du^i dv^j`` with ``i, j <= order``: ``out`` (m, order+1, order+1, d)."""
     k = H.shape[2]
     r1 = order + 1
@@ -501,7 +529,9 @@ def surface_derivatives(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, u
             _tensor_partials(H, su - p, sv - q, Du, Dv, T, out, m)
 
 
-def _band_point(Du, a, s0, p, G, b, O, oa, ob):  # pragma: no cover - compiled
+def _band_point(  # pragma: no cover - compiled
+    Du: _F, a: int, s0: int, p: int, G: _F, b: int, O: _F, oa: int, ob: int,
+) -> None:
     """``O[oa, ob, i, x] = sum_t Du[a, i, t] G[s0 + t, b, x]`` for all i, x (unrolled by four)."""
     r1 = Du.shape[1]
     X = G.shape[2]
@@ -532,7 +562,7 @@ def _band_point(Du, a, s0, p, G, b, O, oa, ob):  # pragma: no cover - compiled
                             O[oa, ob, i, x] += d * G[s0 + t, b, x]
 
 
-def grid_partials(Du, su, p, G, out):  # pragma: no cover - compiled
+def grid_partials(Du: _F, su: _I, p: int, G: _F, out: _F) -> None:  # pragma: no cover - compiled
     """Second (u) stage of grid partials, polynomial case.
 
     ``Du`` (m_u, r+1, p+1) basis derivatives, ``su`` their spans, ``G`` (n_u, m_v, X) the net
@@ -545,7 +575,7 @@ def grid_partials(Du, su, p, G, out):  # pragma: no cover - compiled
             _band_point(Du, a, s0, p, G, b, out, a, b)
 
 
-def grid_partials_rational(Du, su, p, G, k, out):  # pragma: no cover - compiled
+def grid_partials_rational(Du: _F, su: _I, p: int, G: _F, k: int, out: _F) -> None:  # pragma: no cover - compiled
     """:func:`grid_partials` fused with the quotient rule (A4.4).
 
     ``out`` (m_u * m_v, r+1, r+1, k-1): the grid partials with the two grid axes flattened.
@@ -597,8 +627,8 @@ def _load() -> dict[str, Any] | None:
         try:
             import numba
         except Exception:  # noqa: BLE001 - numba missing or broken: NumPy paths
-            numba = None
-        if numba is not None:
+            pass
+        else:
             g = globals()
             # Helpers first: kernels resolve them as globals when they compile.
             for name in _HELPERS:  # inlined into the kernels: a call per point costs ~20 ns

@@ -110,7 +110,7 @@ def check_uv(u: ArrayLike, v: ArrayLike, domain: tuple[tuple[float, float], tupl
     return a.reshape(-1), b.reshape(-1), a.shape
 
 
-def check_parameter(u: object, lo: float, hi: float, name: str = "u") -> float:
+def check_parameter(u: ArrayLike, lo: float, hi: float, name: str = "u") -> float:
     """One finite parameter inside ``[lo, hi]`` (:func:`check_parameters` for a scalar)."""
     a = check_parameters(u, lo, hi, name)
     if a.ndim != 0:

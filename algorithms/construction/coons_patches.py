@@ -181,6 +181,8 @@ def _scale_loop_weights(cc: list[BSplineCurve]) -> list[BSplineCurve] | None:
     ``cc`` = bottom, right, top, left (clamped, rational). Returns ``None`` if impossible.
     """
     b, r, t, l = (c.weights for c in cc)
+    if b is None or r is None or t is None or l is None:
+        raise ValueError("_scale_loop_weights: expected rational boundaries")
     s_b = 1.0
     s_l = b[0] / l[0]
     s_r = b[-1] / r[0]
@@ -188,7 +190,7 @@ def _scale_loop_weights(cc: list[BSplineCurve]) -> list[BSplineCurve] | None:
     if abs(s_t * t[-1] - s_r * r[-1]) > tolerances.HOMOGENEOUS_WEIGHT_RTOL * max(s_t * t[-1], s_r * r[-1]):
         return None
     scales = (s_b, s_r, s_t, s_l)
-    return [BSplineCurve._trusted(c.degree, c.knots, c.control_points, c.weights * s) for c, s in zip(cc, scales)]
+    return [BSplineCurve._trusted(c.degree, c.knots, c.control_points, w * s) for c, w, s in zip(cc, (b, r, t, l), scales)]
 
 
 # ------------------------------------------------------------------------------------ Coons
@@ -368,7 +370,8 @@ def _homogeneous_coons_net(b: BSplineCurve, r: BSplineCurve, t: BSplineCurve, l:
     scaled = _scale_loop_weights([b, r, t, l])
     if scaled is None:
         return None
-    deg, kn, H = _coons_net(*scaled, blend, True)
+    sb, sr, st, sl = scaled
+    deg, kn, H = _coons_net(sb, sr, st, sl, blend, True)
     return (deg, kn, H) if np.all(H[..., -1] > 0) else None
 
 

@@ -172,7 +172,7 @@ def ruled(c1: BSplineCurve, c2: BSplineCurve) -> BSplineSurface:
     b = _check_curve(c2, "c2")
     ca, cb = make_compatible([a, b])
     P = np.stack([ca.control_points, cb.control_points], axis=1)
-    W = None if ca.weights is None else np.stack([ca.weights, cb.weights], axis=1)
+    W = None if ca.weights is None or cb.weights is None else np.stack([ca.weights, cb.weights], axis=1)  # both or neither
     return BSplineSurface._trusted((ca.degree, 1), (ca.knots.copy(), np.array([0.0, 0.0, 1.0, 1.0])), P, W)
 
 

@@ -69,7 +69,7 @@ def network_parameters(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSpl
     sb = [_samples(b) for b in B]
     pa = [a.evaluate(x) for a, x in zip(A, sa)]
     pb = [b.evaluate(x) for b, x in zip(B, sb)]
-    K = tolerances.GORDON_STARTS
+    K = int(tolerances.GORDON_STARTS)
     s = np.empty((m, n, K))
     t = np.empty((m, n, K))
     trees = [cKDTree(p) for p in pb]  # nearest v-curve sample of every u-curve sample: O(N log N) a pair
@@ -79,7 +79,7 @@ def network_parameters(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSpl
             best = np.argpartition(dd, K - 1)[:K] if dd.shape[0] > K else np.arange(dd.shape[0])
             best = np.r_[best, np.full(K - best.shape[0], best[0])]
             s[i, j], t[i, j] = sa[i][best], sb[j][near[best]]
-    for _ in range(tolerances.GORDON_NEWTON_STEPS):
+    for _ in range(int(tolerances.GORDON_NEWTON_STEPS)):
         Da = np.stack([a.derivatives(s[i], 1) for i, a in enumerate(A)])  # (m, n, K, 2, d)
         Db = np.stack([b.derivatives(t[:, j], 1) for j, b in enumerate(B)], axis=1)
         F = Da[..., 0, :] - Db[..., 0, :]
@@ -215,6 +215,8 @@ def gordon(u_curves: Sequence[BSplineCurve], v_curves: Sequence[BSplineCurve], *
         A, B, tol = _polynomial_network(A, B, tol, atol)
         net = _gordon_net(A, B, params, (pu, qv), cross_knots, tol, False)
         rational = False
+        if net is None:  # only a rational network can lack a net
+            raise RuntimeError("gordon_surface: no net for the polynomial approximation of the network")
     return surface_from_net(*net, rational, "gordon")
 
 
@@ -256,9 +258,10 @@ def _gordon_net(A: list[BSplineCurve], B: list[BSplineCurve], params: tuple[Arra
     up, vp = _network_params(A, B, *params, udom, vdom, tol)
     Q = _crossing_points(A, B, up, vp, tol)  # checks that the network is consistent
     if rational:
-        Q = _homogeneous_crossing_points(A, B, up, vp)  # the same points, in homogeneous space
-        if Q is None:
+        Qh = _homogeneous_crossing_points(A, B, up, vp)  # the same points, in homogeneous space
+        if Qh is None:
             return None  # the curves do not meet in homogeneous space
+        Q = Qh
     Ku = _cross_or_default(cross_knots[0], up, pu, udom, "cross_knots[0]")
     Kv = _cross_or_default(cross_knots[1], vp, qv, vdom, "cross_knots[1]")
     terms = _gordon_terms(A, B, (up, vp), Q, degrees, (Ku, Kv), rational)
@@ -341,10 +344,11 @@ def _cross_or_default(kn: ArrayLike | None, params: Array, p: int, domain: tuple
     return t
 
 
-def _network_params(A: list[BSplineCurve], B: list[BSplineCurve], u_params, v_params,
-                    udom: tuple[float, float], vdom: tuple[float, float], tol: float) -> tuple[Array, Array]:
+def _network_params(A: list[BSplineCurve], B: list[BSplineCurve], u_params: ArrayLike | None,
+                    v_params: ArrayLike | None, udom: tuple[float, float], vdom: tuple[float, float],
+                    tol: float) -> tuple[Array, Array]:
     m, n = len(A), len(B)
-    given = []
+    given: list[Array | None] = []
     for x, count, dom, name, what in ((u_params, n, udom, "u_params", "one per v-curve, in order of increasing u"),
                                       (v_params, m, vdom, "v_params", "one per u-curve, in order of increasing v")):
         if x is None:

@@ -67,7 +67,7 @@ from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError, ToleranceError
 from ..fitting.interpolation import interpolate_values
-from ..geometry.differential import curve_frenet, rotation_minimizing_frames
+from ..geometry.differential import Frames, curve_frenet, rotation_minimizing_frames
 from ..kernel.basis import greville
 from ..kernel.curve import BSplineCurve
 from ..kernel.knots import distinct_knots
@@ -148,7 +148,7 @@ def _law(law: Law, name: str, default: float, nonnegative: bool) -> Callable[[Ar
         law = default
     if not callable(law):
         try:
-            c = float(law)  # type: ignore[arg-type]
+            c = float(law)
         except (TypeError, ValueError) as err:
             raise InvalidGeometryError(f"{name}: expected a number or a callable of t in [0, 1], got {law!r}") from err
         if not math.isfinite(c) or (nonnegative and c < 0):
@@ -196,7 +196,7 @@ class _FrameField:
         if kind == "rmf":
             brk = distinct_knots(path.knots)[0]
             brk = brk[(brk >= v0) & (brk <= v1)]
-            steps = np.linspace(0.0, 1.0, tolerances.SWEEP_RMF_STEPS + 1)[:-1]
+            steps = np.linspace(0.0, 1.0, int(tolerances.SWEEP_RMF_STEPS) + 1)[:-1]
             grid = np.concatenate([a + (b - a) * steps for a, b in zip(brk[:-1], brk[1:]) if b > a] + [[v1]])
             fr = _path_frames(path, grid)
             self.grid, self.x, self.t, self.r = grid, fr.point, fr.tangent, fr.normal
@@ -248,7 +248,7 @@ class _FrameField:
         return np.stack([t, r, np.cross(t, r)], axis=-1)
 
 
-def _path_frames(path: BSplineCurve, v: Array):
+def _path_frames(path: BSplineCurve, v: Array) -> Frames:
     """:func:`rotation_minimizing_frames` with its errors naming the ``path`` argument."""
     try:
         return rotation_minimizing_frames(path, v)
@@ -342,7 +342,7 @@ def _initial_knots(path: BSplineCurve, frame: str, q: int) -> Array:
     cont = np.maximum(path.degree - mults[inside] - loss, 0)
     mult = np.clip(q - cont, 1, q)
     parts = [np.full(q + 1, v0)]
-    f = np.linspace(0, 1, tolerances.SWEEP_INITIAL_PIECES + 1)[1:-1]
+    f = np.linspace(0, 1, int(tolerances.SWEEP_INITIAL_PIECES) + 1)[1:-1]
     for k, (a, b) in enumerate(zip(brk[:-1], brk[1:])):
         parts.append(a + (b - a) * f)
         if k < mult.shape[0]:

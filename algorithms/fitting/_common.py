@@ -8,7 +8,7 @@ Statistical Science 11 (1996) 89-121.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
@@ -17,6 +17,10 @@ from numpy.typing import NDArray
 from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..kernel.basis import basis_derivatives, find_span
+
+if TYPE_CHECKING:
+    from ..hierarchical.surface import HierarchicalSurface
+    from ..kernel.surface import BSplineSurface
 
 __all__ = ["sparse_collocation", "difference_penalty", "project_points", "clamped_uniform_knots"]
 
@@ -55,7 +59,7 @@ def clamped_uniform_knots(lo: float, hi: float, n: int, degree: int) -> Array:
     return np.concatenate((np.full(degree + 1, lo), inner, np.full(degree + 1, hi)))
 
 
-def project_points(surface: Any, points: Array, u: Array, v: Array, *, max_iter: int | None = None,
+def project_points(surface: BSplineSurface | HierarchicalSurface, points: Array, u: Array, v: Array, *, max_iter: int | None = None,
                    initial: Array | None = None) -> tuple[Array, Array, Array]:
     """Foot points of ``points`` on ``surface`` by damped Newton from ``(u, v)`` (vectorised).
 

@@ -30,6 +30,8 @@ smoothing splines", Comm. Statist. Simul. Comput. 19 (1990) 433-450.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -39,6 +41,9 @@ from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..manipulation.linalg import ConstraintError
 from ._common import difference_penalty
+
+if TYPE_CHECKING:
+    from .gridded import _Rows
 
 __all__ = ["SparseGrid", "sparse_rows", "kronecker_penalty"]
 
@@ -60,9 +65,11 @@ def kronecker_penalty(A: Array, B: Array) -> sp.csr_matrix:
     return (sp.kron(Ru, Gv) + sp.kron(Gu, Rv)).tocsr()
 
 
-def sparse_rows(rows, Nu: int, Nv: int, d: int) -> tuple[sp.csr_matrix, Array, list[str]]:
+def sparse_rows(rows: _Rows, Nu: int, Nv: int, d: int) -> tuple[sp.csr_matrix, Array, list[str]]:
     """Every constraint as sparse rows on the stacked vector ``[vec(P_0), ..., vec(P_{d-1})]``."""
-    blocks, targets, labels = [], [], []
+    blocks: list[sp.csr_matrix] = []
+    targets: list[Array] = []
+    labels: list[str] = []
     size = Nu * Nv
     seen: dict[tuple[int, int, int], float] = {}
 
@@ -115,7 +122,7 @@ class SparseGrid:
         The constraints.
     """
 
-    def __init__(self, A: Array, B: Array, Q: Array, rows) -> None:
+    def __init__(self, A: Array, B: Array, Q: Array, rows: _Rows) -> None:
         m, n, d = Q.shape
         self.valid = ~np.isnan(Q).any(axis=2)
         if not self.valid.any():
@@ -133,14 +140,14 @@ class SparseGrid:
     def unknowns(self) -> int:
         return self.d * self.Nu * self.Nv
 
-    def _factor(self, lam: float):
+    def _factor(self, lam: float) -> spla.SuperLU:
         N1 = (self.G + lam * self.pen).tocsc()
         if not self.C.shape[0]:
             return spla.splu(N1)
         N = sp.block_diag([N1] * self.d, format="csc")
         return spla.splu(sp.bmat([[N, self.C.T], [self.C, None]], format="csc"))
 
-    def _solve(self, lu, rhs: Array) -> Array:
+    def _solve(self, lu: spla.SuperLU, rhs: Array) -> Array:
         """Pole-space part of the solution for stacked right-hand sides ``rhs`` (d N_u N_v, ...)."""
         n1 = self.Nu * self.Nv
         if not self.C.shape[0]:
@@ -173,7 +180,7 @@ class SparseGrid:
         n1 = self.Nu * self.Nv
         return np.stack([self.K @ x[c * n1:(c + 1) * n1] for c in range(self.d)], -1)
 
-    def trace(self, lam: float, lu=None) -> float:
+    def trace(self, lam: float, lu: spla.SuperLU | None = None) -> float:
         """``tr H`` of the influence matrix at λ: exact up to FIT_GCV_EXACT_TRACE unknowns, else
         Hutchinson's estimate (module notes)."""
         lu = self._factor(lam) if lu is None else lu
@@ -197,7 +204,7 @@ class SparseGrid:
         est = float(np.mean(np.sum(Z * KX, axis=0)))
         return self.d * est if homog else est
 
-    def _solve_homogeneous(self, lu, rhs: Array) -> Array:
+    def _solve_homogeneous(self, lu: spla.SuperLU, rhs: Array) -> Array:
         """The KKT solve with zero constraint targets (the influence of the data alone)."""
         pad = np.zeros((self.C.shape[0], rhs.shape[1]))
         return lu.solve(np.concatenate([rhs, pad]))[: self.unknowns]

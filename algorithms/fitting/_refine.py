@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import scipy.ndimage as ndi
@@ -35,6 +35,9 @@ from ..kernel.surface import BSplineSurface
 
 Array = NDArray[np.float64]
 Region = tuple[tuple[float, float], tuple[float, float]]
+#: Per datum its owner (:func:`owner`): the nodes (None: the base), the owner index per datum, the levels.
+Owners = tuple[list[Overlay | None], NDArray[np.int_], NDArray[np.int_]]
+_Fit = TypeVar("_Fit")  # an adaptive fit's base fit (grow_base passes it through)
 
 
 @dataclass(frozen=True)
@@ -84,7 +87,7 @@ class FitSummary:
         return int(self.hierarchy.pole_counts()["stored"])
 
 
-def check_tol_levels(tol: Any, max_levels: Any) -> tuple[float, int]:
+def check_tol_levels(tol: float, max_levels: int | None) -> tuple[float, int]:
     """``tol`` as a positive float and the deepest overlay level (default
     :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MAX_LEVELS`); :class:`ParameterError` naming
     the argument otherwise."""
@@ -106,7 +109,7 @@ def stats(dist: Array) -> tuple[float, float]:
     return float(e.max()), float(np.sqrt(np.mean(e ** 2)))
 
 
-def boxes(marks: Array) -> list[tuple[int, int, int, int]]:
+def boxes(marks: NDArray[np.bool_]) -> list[tuple[int, int, int, int]]:
     """Bounding boxes (i0, i1, j0, j1), end-exclusive, of the connected groups of ``marks``, merged
     until no two overlap."""
     lab, _ = ndi.label(marks, structure=np.ones((3, 3)))
@@ -127,7 +130,7 @@ def boxes(marks: Array) -> list[tuple[int, int, int, int]]:
     return out
 
 
-def span_index(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, Array]:
+def span_index(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, NDArray[np.intp]]:
     """Distinct knots ``k`` of ``[lo, hi]`` and the span index of each parameter (-1 outside; the
     last knot belongs to the last span)."""
     k = np.unique(knots[(knots >= lo) & (knots <= hi)])
@@ -137,7 +140,7 @@ def span_index(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, Arr
     return k, idx
 
 
-def rectangles(marks: Array, ku: Array, kv: Array) -> list[Region]:
+def rectangles(marks: NDArray[np.bool_], ku: Array, kv: Array) -> list[Region]:
     """The marked spans (``marks``, shape (len(ku) - 1, len(kv) - 1)) grown by
     :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MARGIN` spans, each connected group covered by
     one rectangle (overlapping ones merged), as parameter ranges (u_range, v_range)."""
@@ -149,16 +152,17 @@ def rectangles(marks: Array, ku: Array, kv: Array) -> list[Region]:
     return [((float(ku[i0]), float(ku[i1])), (float(kv[j0]), float(kv[j1]))) for i0, i1, j0, j1 in boxes(marks)]
 
 
-def owner(hs: HierarchicalSurface, shape: tuple[int, ...], where: Callable[[Region], Any]
-          ) -> tuple[list[Overlay | None], Array, Array]:
+def owner(hs: HierarchicalSurface, shape: tuple[int, ...], where: Callable[[tuple[tuple[float, float], ...]], Any]
+          ) -> Owners:
     """Per datum, the deepest node whose region holds it: the nodes (base first, then the overlays
     by level), an index array of ``shape`` into them (0 = the base) and the nodes' levels.
     ``where(region)`` indexes the data inside a region."""
-    nodes: list[Overlay | None] = [None] + sorted(hs.overlays, key=lambda o: o.level)
+    overlays = sorted(hs.overlays, key=lambda o: o.level)
+    nodes: list[Overlay | None] = [None, *overlays]
     own = np.zeros(shape, int)
-    for k, ov in enumerate(nodes[1:], 1):
+    for k, ov in enumerate(overlays, 1):
         own[where(ov.region)] = k
-    return nodes, own, np.array([0] + [o.level for o in nodes[1:]])
+    return nodes, own, np.array([0] + [o.level for o in overlays])
 
 
 def support(ov: Overlay, degree: tuple[int, int]) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -218,10 +222,10 @@ class OverlayFitter:
 
 
 def grow_base(poles: tuple[int, int], deg: tuple[int, int], caps: tuple[int, int], tol: float,
-              candidate: Callable[[tuple[int, int]], tuple[Any, float]],
-              measure: Callable[[Any], tuple[Array, Array]],
-              regions: Callable[[Any, Array], tuple[HierarchicalSurface, list[Region]]],
-              progress: Callable[[str], None] | None) -> tuple[Any, Array]:
+              candidate: Callable[[tuple[int, int]], tuple[_Fit, float]],
+              measure: Callable[[_Fit], tuple[Array, Array]],
+              regions: Callable[[_Fit, NDArray[np.bool_]], tuple[HierarchicalSurface, list[Region]]],
+              progress: Callable[[str], None] | None) -> tuple[_Fit, Array]:
     """The base fit, its spans multiplied by 1.5 while the places to refine cover more than
     :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MAX_COVER` of it (when the error is
     everywhere, uniform refinement is the cheaper hierarchy: no overlay overhead).
@@ -259,24 +263,29 @@ def grow_base(poles: tuple[int, int], deg: tuple[int, int], caps: tuple[int, int
         hs, rects = regions(fit, flagged)
         (u0, u1), (v0, v1) = hs.domain
         cover = sum((b - a) * (d - c) for (a, b), (c, d) in rects) / ((u1 - u0) * (v1 - v0))
-        grown = [min(p + int(np.ceil(1.5 * (k - p))), cnt) for k, p, cnt in zip(poles, deg, caps)]
-        options = {tuple(grown), (grown[0], poles[1]), (poles[0], grown[1])} - {tuple(poles)}
+        gu, gv = (min(p + int(np.ceil(1.5 * (k - p))), cnt) for k, p, cnt in zip(poles, deg, caps))
+        grown = (gu, gv)
+        options = {grown, (gu, poles[1]), (poles[0], gv)} - {poles}
         if cover <= float(tolerances.FIT_ADAPTIVE_MAX_COVER) or not options:
             return fit, dist
-        best, score, tried = None, np.inf, {}
+        best: tuple[tuple[int, int], tuple[_Fit, float]] | None = None
+        score = np.inf
+        tried: dict[tuple[int, int], tuple[_Fit, float]] = {}
         for cand in sorted(options):
             trial = tried[cand] = candidate(cand)
             gain = np.log(max(trial[1], 1e-300) / max(estimate, 1e-300)) / np.log(np.prod(cand) / np.prod(poles))
             if gain < score:
                 best, score = (cand, trial), gain
-        if score > -0.1 and tuple(grown) in tried:  # no direction helps on its own yet: grow both
-            best = (tuple(grown), tried[tuple(grown)])
+        if score > -0.1 and grown in tried:  # no direction helps on its own yet: grow both
+            best = (grown, tried[grown])
+        if best is None:  # grown is a candidate whenever there is one (it differs from poles then)
+            raise RuntimeError("grow_base: no candidate base was chosen")
         poles, (fit, estimate) = best
 
 
 def refine(hs: HierarchicalSurface, fitter: OverlayFitter, dist: Array, tol: float, depth_max: int, *,
-           error: Callable[[Array], Array], owners: Callable[[HierarchicalSurface], tuple],
-           regions: Callable[[Overlay | None, Array], list[Region]], measure: Callable[[BSplineSurface], Array],
+           error: Callable[[Array], Array], owners: Callable[[HierarchicalSurface], Owners],
+           regions: Callable[[Overlay | None, NDArray[np.bool_]], list[Region]], measure: Callable[[BSplineSurface], Array],
            progress: Callable[[str], None] | None) -> Array:
     """The refinement rounds (course §7-10), in place on ``hs``; returns the last measured distances.
 

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
@@ -58,6 +59,8 @@ from ._refine import (
     FitSummary,
     LevelReport,
     OverlayFitter,
+    Owners,
+    Region,
     check_tol_levels,
     grow_base,
     level_reports,
@@ -102,11 +105,11 @@ class AdaptiveFit(FitSummary):
     v_params: Array
     tol: float
     converged: bool
-    level_surfaces: tuple = ()
-    level_distances: tuple = ()
+    level_surfaces: tuple[BSplineSurface, ...] = ()
+    level_distances: tuple[Array, ...] = ()
 
 
-def measure_grid(surface, points: Array, u: Array, v: Array, *, above: float | None = None) -> Array:
+def measure_grid(surface: BSplineSurface, points: Array, u: Array, v: Array, *, above: float | None = None) -> Array:
     """Distance of every grid point ``points[i, j]`` (shape (m, n, 3), NaN = missing) to ``surface``,
     by projection from ``(u_i, v_j)`` (:func:`~._common.project_points`). Shape (m, n).
 
@@ -135,7 +138,7 @@ def measure_grid(surface, points: Array, u: Array, v: Array, *, above: float | N
     return out
 
 
-def normal_deviation(surface, points: Array, u: Array, v: Array) -> Array:
+def normal_deviation(surface: BSplineSurface, points: Array, u: Array, v: Array) -> Array:
     """``|(Q - S(u, v)) . N(u, v)|`` on the grid, shape (m, n) (NaN on missing cells): the
     first-order distance of each point to the surface (the deviation along the normal; exact for
     a plane). Cheap (tensor-product partials), used to compare candidate fits, never reported."""
@@ -145,7 +148,7 @@ def normal_deviation(surface, points: Array, u: Array, v: Array) -> Array:
     return np.abs(np.einsum("ijk,ijk->ij", points - D[:, :, 0, 0], N))
 
 
-def boundary_error(surface, points: Array, u: Array, v: Array, dist: Array) -> Array:
+def boundary_error(surface: BSplineSurface, points: Array, u: Array, v: Array, dist: Array) -> Array:
     """``dist`` with the four boundary rows raised to the deviation at the data parameters,
     ``|Q - S(u, v)|``: a fit whose border slides along the surface (a flared corner) is near every
     data point, so the distance misses it, but its border is that far from the data's border."""
@@ -158,7 +161,7 @@ def boundary_error(surface, points: Array, u: Array, v: Array, dist: Array) -> A
     return e
 
 
-def _cells(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, Array, Array]:
+def _cells(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, NDArray[np.intp], NDArray[np.intp]]:
     """Distinct knots ``k`` of ``[lo, hi]``, the span index of each parameter (-1 outside) and
     the number of data parameters per span."""
     k, idx = span_index(knots, lo, hi, x)
@@ -166,14 +169,14 @@ def _cells(knots: Array, lo: float, hi: float, x: Array) -> tuple[Array, Array, 
     return k, idx, counts
 
 
-def _owner(hs: HierarchicalSurface, u: Array, v: Array) -> tuple[list[Overlay | None], Array, Array]:
+def _owner(hs: HierarchicalSurface, u: Array, v: Array) -> Owners:
     """Per data row/column pair, the deepest node whose region holds it: returns the nodes and
     an (m, n) index into them (0 = the base)."""
     return owner(hs, (u.size, v.size), lambda r: np.ix_((u >= r[0][0]) & (u <= r[0][1]),
                                                          (v >= r[1][0]) & (v <= r[1][1])))
 
 
-def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u: Array, v: Array
+def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: NDArray[np.bool_], u: Array, v: Array
              ) -> list[tuple[tuple[float, float], tuple[float, float]]]:
     """The rectangles (u_range, v_range) to refine inside ``parent`` (its knot spans holding a
     flagged point, grown by the margin, grouped and merged)."""
@@ -200,14 +203,15 @@ class _Fitter(OverlayFitter):
     """The hierarchy under construction (:class:`~._refine.OverlayFitter`) on a grid of data
     ``P3`` (m, n, 3): per overlay, the data rows/columns in its support and its B-spline blocks."""
 
-    def __init__(self, hs: HierarchicalSurface, P3: Array, u: Array, v: Array, heights: bool, refit_base) -> None:
+    def __init__(self, hs: HierarchicalSurface, P3: Array, u: Array, v: Array, heights: bool,
+                 refit_base: Callable[[Array], BSplineSurface] | None) -> None:
         super().__init__(hs, P3, u, v, refit_base)
         self.heights = heights
 
     def evaluate(self, surface: BSplineSurface) -> Array:
         return surface.evaluate_grid(self.u, self.v)
 
-    def _operators(self, ov: Overlay) -> tuple[Array, Array, Array, Array]:
+    def _operators(self, ov: Overlay) -> tuple[NDArray[np.intp], NDArray[np.intp], Array, Array]:
         if ov.id not in self.ops:
             p, q = self.hs.degree
             ku, kv = ov.knots
@@ -256,8 +260,8 @@ def _level_reports(hs: HierarchicalSurface, P3: Array, u: Array, v: Array
     return level_reports(hs, lambda flat: measure_grid(flat, P3, u, v))
 
 
-def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, int], tol: float, opts: dict,
-               progress) -> tuple[GridFit, Array, Array]:
+def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, int], tol: float,
+               opts: dict[str, Any], progress: Callable[[str], None] | None) -> tuple[GridFit, Array, Array]:
     """The base fit, its spans multiplied by 1.5 while the places to refine cover more than
     :data:`~occsurf.algorithms.tolerances.FIT_ADAPTIVE_MAX_COVER` of it (when the error is
     everywhere, uniform refinement is the cheaper hierarchy: no overlay overhead).
@@ -272,19 +276,19 @@ def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, 
     m, n = Q.shape[:2]
     data = Q[..., 0] if heights else Q
 
-    def candidate(poles_):
+    def candidate(poles_: tuple[int, int]) -> tuple[tuple[GridFit, Array], float]:
         base_ = fit_grid(data, poles_, deg, **opts)
         u_, v_ = base_.u_params, base_.v_params
         P3_ = np.stack(np.broadcast_arrays(u_[:, None], v_[None, :], Q[..., 0]), -1) if heights else Q
         est = normal_deviation(base_.surface, P3_, u_, v_)
         return (base_, P3_), float(np.nanmax(boundary_error(base_.surface, P3_, u_, v_, est)))
 
-    def measured(fit):
+    def measured(fit: tuple[GridFit, Array]) -> tuple[Array, Array]:
         (base_, P3_), u_, v_ = fit, fit[0].u_params, fit[0].v_params
         dist_ = measure_grid(base_.surface, P3_, u_, v_, above=tol)
         return dist_, boundary_error(base_.surface, P3_, u_, v_, dist_)
 
-    def regions(fit, flagged):
+    def regions(fit: tuple[GridFit, Array], flagged: NDArray[np.bool_]) -> tuple[HierarchicalSurface, list[Region]]:
         hs = HierarchicalSurface(fit[0].surface, "frame")
         return hs, _regions(hs, None, flagged, fit[0].u_params, fit[0].v_params)
 
@@ -340,13 +344,13 @@ def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3,
     pu, pv = _pair_of(degree, "degree")
     if base_poles is None:
         base_poles = (min(pu + 5, m), min(pv + 5, n))
-    opts = dict(x=xs if heights else None, y=ys if heights else None, u_params=u_params, v_params=v_params,
+    opts: dict[str, Any] = dict(x=xs if heights else None, y=ys if heights else None, u_params=u_params, v_params=v_params,
                 method=method, smoothing=smoothing, fix_boundary=fix_boundary)
     base, P3, dist = _grow_base(Q, heights, _pair_of(base_poles, "base_poles"), (pu, pv), tol, opts, progress)
     u, v = base.u_params, base.v_params
     knots = base.surface.knots
 
-    def refit_base(target: Array):
+    def refit_base(target: Array) -> BSplineSurface:
         data_ = target[..., 2] if heights else target
         o = dict(opts, u_params=u, v_params=v, x=None, y=None)
         return fit_grid(data_, base.surface.n_poles, (pu, pv), knots=knots, **o).surface

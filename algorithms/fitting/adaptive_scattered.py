@@ -54,6 +54,8 @@ from ._refine import (
     FitSummary,
     LevelReport,
     OverlayFitter,
+    Owners,
+    Region,
     check_tol_levels,
     grow_base,
     level_reports,
@@ -102,11 +104,11 @@ class ScatteredAdaptiveFit(FitSummary):
     v: Array
     tol: float
     converged: bool
-    level_surfaces: tuple = ()
-    level_distances: tuple = ()
+    level_surfaces: tuple[BSplineSurface, ...] = ()
+    level_distances: tuple[Array, ...] = ()
 
 
-def measure_points(surface, X: Array, u: Array, v: Array, *, above: float | None = None) -> Array:
+def measure_points(surface: BSplineSurface, X: Array, u: Array, v: Array, *, above: float | None = None) -> Array:
     """Distance of every point ``X[k]`` to ``surface`` by projection from ``(u_k, v_k)``
     (:func:`~._common.project_points`), shape (k,). With ``above`` only the points whose deviation
     at their parameters exceeds it are projected; the others keep that deviation, an upper bound
@@ -121,7 +123,7 @@ def measure_points(surface, X: Array, u: Array, v: Array, *, above: float | None
     return out
 
 
-def normal_deviation(surface, X: Array, u: Array, v: Array) -> Array:
+def normal_deviation(surface: BSplineSurface, X: Array, u: Array, v: Array) -> Array:
     """``|(X_k - S(u_k, v_k)) . N(u_k, v_k)|``, shape (k,): the first-order distance (exact for a
     plane), cheap; used to compare candidate base fits, never reported."""
     D = surface.derivatives(u, v, 1)
@@ -172,11 +174,11 @@ class _ScatteredFitter(OverlayFitter):
     def evaluate(self, surface: BSplineSurface) -> Array:
         return surface.evaluate(self.u, self.v)  # one spline: the compiled kernel
 
-    def operators(self, ov: Overlay) -> tuple[Array, sp.csr_matrix, object]:
+    def operators(self, ov: Overlay) -> tuple[NDArray[np.intp], sp.csr_matrix, spla.SuperLU]:
         if ov.id not in self.ops:
             su, sv = support(ov, self.hs.degree)
             idx = np.flatnonzero((self.u >= su[0]) & (self.u <= su[1]) & (self.v >= sv[0]) & (self.v <= sv[1]))
-            A = block_collocation(ov.knots, self.hs.degree, ov.vertices, self.u[idx], self.v[idx])
+            A = block_collocation((ov.knots[0], ov.knots[1]), self.hs.degree, ov.vertices, self.u[idx], self.v[idx])
             G = (A.T @ A).tocsc()
             ridge = float(tolerances.FIT_OVERLAY_RCOND) ** 2 * max(float(G.diagonal().max(initial=0.0)), 1e-300)
             lu = spla.splu((G + ridge * sp.identity(G.shape[0], format="csc")).tocsc())
@@ -196,14 +198,14 @@ class _ScatteredFitter(OverlayFitter):
         resid[idx] = R - A @ delta
 
 
-def _owner(hs: HierarchicalSurface, u: Array, v: Array) -> tuple[list[Overlay | None], Array, Array]:
+def _owner(hs: HierarchicalSurface, u: Array, v: Array) -> Owners:
     """Per point, the deepest node whose region holds it: the nodes, a (k,) index into them
     (0 = the base) and the nodes' levels."""
     return owner(hs, u.shape, lambda r: (u >= r[0][0]) & (u <= r[0][1]) & (v >= r[1][0]) & (v <= r[1][1]))
 
 
 
-def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u: Array, v: Array
+def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: NDArray[np.bool_], u: Array, v: Array
              ) -> list[tuple[tuple[float, float], tuple[float, float]]]:
     """Rectangles (u_range, v_range) to refine inside ``parent``: its knot spans holding a flagged
     point and at least FIT_ADAPTIVE_SPAN_POINTS points, grown by the margin, grouped and merged."""
@@ -222,22 +224,22 @@ def _regions(hs: HierarchicalSurface, parent: Overlay | None, flagged: Array, u:
 
 
 def _grow_base(X: Array, u: Array, v: Array, poles: tuple[int, int], deg: tuple[int, int], tol: float, lam: float,
-               progress) -> tuple[BSplineSurface, Array]:
+               progress: Callable[[str], None] | None) -> tuple[BSplineSurface, Array]:
     """The base fit, its spans multiplied by 1.5 while the regions to refine cover more than
     FIT_ADAPTIVE_MAX_COVER of the domain; each step grows u, v or both, whichever lowers the
     error most per added pole (:func:`~._refine.grow_base`: candidates compared by the
     first-order :func:`normal_deviation`, the chosen base measured)."""
     cap = max(deg[0] + 1, deg[1] + 1, int(np.sqrt(X.shape[0] / 2)))
 
-    def candidate(poles_):
+    def candidate(poles_: tuple[int, int]) -> tuple[BSplineSurface, float]:
         f = fit_scattered(X, poles_, deg, params=np.c_[u, v], smoothing=lam, measure=False)
         return f.surface, float(normal_deviation(f.surface, X, u, v).max())
 
-    def measured(surf):
+    def measured(surf: BSplineSurface) -> tuple[Array, Array]:
         dist = measure_points(surf, X, u, v, above=tol)
         return dist, dist
 
-    def regions(surf, flagged):
+    def regions(surf: BSplineSurface, flagged: NDArray[np.bool_]) -> tuple[HierarchicalSurface, list[Region]]:
         hs = HierarchicalSurface(surf, "frame")
         return hs, _regions(hs, None, flagged, u, v)
 
@@ -276,7 +278,8 @@ def _corrected(X: Array, u: Array, v: Array, poles: tuple[int, int], deg: tuple[
     return a, b
 
 
-def _parameters(X: Array, params, base, corrections: int) -> tuple[Array, Array]:
+def _parameters(X: Array, params: ArrayLike | None, base: BSplineSurface | None, corrections: int
+                ) -> tuple[Array, Array]:
     if params is not None:
         uv = V.as_finite_array(params, "params")
         if uv.shape != (X.shape[0], 2):

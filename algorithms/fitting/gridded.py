@@ -44,7 +44,7 @@ Course notes C25 (SIGGRAPH 1991) §7-4 Kronecker products, §7-5, §7-7 constrai
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -205,9 +205,12 @@ def _grid_data(data: ArrayLike, x: ArrayLike | None, y: ArrayLike | None) -> tup
     return Q, heights, xs, ys
 
 
-def _params(Q: Array, heights: bool, xs, ys, u_params, v_params, method: str) -> tuple[Array, Array]:
+def _params(Q: Array, heights: bool, xs: Array | None, ys: Array | None, u_params: ArrayLike | None,
+            v_params: ArrayLike | None, method: str) -> tuple[Array, Array]:
     m, n = Q.shape[:2]
     if heights:
+        if xs is None or ys is None:  # _data gives height data its grid coordinates
+            raise InvalidGeometryError("x, y: height data needs grid coordinates")
         u = xs if u_params is None else V.as_finite_array(u_params, "u_params", ndim=1)
         v = ys if v_params is None else V.as_finite_array(v_params, "v_params", ndim=1)
     else:
@@ -221,7 +224,7 @@ def _params(Q: Array, heights: bool, xs, ys, u_params, v_params, method: str) ->
     return u, v
 
 
-def _knots(params: Array, n: int, p: int, knots, name: str) -> Array:
+def _knots(params: Array, n: int, p: int, knots: ArrayLike | None, name: str) -> Array:
     m = params.shape[0]
     if knots is None:
         if not p + 1 <= n <= m:
@@ -275,11 +278,11 @@ class _Coordinate:
     reduced directions (null-space method, course §3-12)."""
 
     def __init__(self, A: Array, B: Array, cu: tuple[Array, Array] | None, cv: tuple[Array, Array] | None,
-                 cache: dict) -> None:
+                 cache: dict[tuple[bytes | None, ...], tuple[_Direction, _Direction]]) -> None:
         Nu, Nv = A.shape[1], B.shape[1]
         Pc = np.zeros((Nu, Nv))
-        Zs = []
-        Fs = []
+        Zs: list[Array | None] = []
+        Fs: list[ConstraintFactor | None] = []
         for C in (cu, cv):
             if C is None or C[0].shape[0] == 0:
                 Zs.append(None)
@@ -288,11 +291,12 @@ class _Coordinate:
             F = ConstraintFactor(C[0], full=True)
             Zs.append(F.null_basis)
             Fs.append(F)
-        if Fs[1] is not None:  # P Cv^T = Dv, i.e. Cv P^T = Dv^T (the targets, kv x Nu)
-            Pc = Fs[1].solve(cv[1]).T
-        if Fs[0] is not None:  # then Cu P = Du without disturbing the columns: Pc += Ku (Du - Cu Pc)
-            Pc = Pc + Fs[0].solve(cu[1] - cu[0] @ Pc)
-        if Fs[1] is not None and Fs[0] is not None:
+        Fu, Fv = Fs  # a factor exactly where the direction has constraints
+        if Fv is not None and cv is not None:  # P Cv^T = Dv, i.e. Cv P^T = Dv^T (the targets, kv x Nu)
+            Pc = Fv.solve(cv[1]).T
+        if Fu is not None and cu is not None:  # then Cu P = Du without disturbing the columns: Pc += Ku (Du - Cu Pc)
+            Pc = Pc + Fu.solve(cu[1] - cu[0] @ Pc)
+        if Fv is not None and Fu is not None and cu is not None and cv is not None:
             gap = float(np.abs(cv[0] @ Pc.T - cv[1]).max())
             scale = max(1.0, float(np.abs(cv[1]).max()), float(np.abs(cu[1]).max()))
             if gap > tolerances.CONSISTENCY_RTOL * scale:
@@ -326,7 +330,7 @@ class _Coordinate:
         return self.Pc + self.du.expand(self.dv.expand(Y, 1), 0)
 
 
-def choose_smoothing(score) -> tuple[float, float]:
+def choose_smoothing(score: Callable[[float], float]) -> tuple[float, float]:
     """λ minimising ``score(λ)`` (GCV): a scan of log10 λ over [FIT_GCV_MIN_LOG10, FIT_GCV_MAX_LOG10]
     (27 values), then Brent's bounded search between the neighbours of the best; returns
     ``(λ, score)``."""
@@ -384,7 +388,7 @@ class _Space:
         Nu, Nv = self.n
         return [np.broadcast_to(gu[:, None], (Nu, Nv)), np.broadcast_to(gv[None, :], (Nu, Nv))]
 
-    def free(self, vec: Array, name: str) -> Array:
+    def free(self, vec: ArrayLike, name: str) -> Array:
         """The free coordinates of a 3-D (or d-D) point: z of a height grid."""
         a = V.as_finite_array(vec, name, ndim=1)
         if self.heights:
@@ -402,7 +406,7 @@ def _side_axis(side: str) -> tuple[int, int]:
 
 
 def _curve_poles(space: _Space, curve: BSplineCurve, ax_along: int, name: str) -> Array:
-    p, t, n = space.deg[ax_along], space.knots[ax_along], space.n[ax_along]
+    p, t = space.deg[ax_along], space.knots[ax_along]
     if not isinstance(curve, BSplineCurve) or curve.is_rational:
         raise InvalidGeometryError(f"{name}: expected a non-rational BSplineCurve, got {type(curve).__name__}")
     if curve.degree != p:
@@ -485,7 +489,10 @@ def _pointwise(space: _Space, c: Constraint, rows: _Rows, k: int) -> None:
         for co in range(space.d):
             w = np.zeros(space.d)
             w[co] = 1.0
-            rows.alpha.append(a), rows.beta.append(b), rows.w.append(w), rows.target.append(float(pt[co]))
+            rows.alpha.append(a)
+            rows.beta.append(b)
+            rows.w.append(w)
+            rows.target.append(float(pt[co]))
             rows.labels.append(f"constraints[{k}] (point at u={c.u:g}, v={c.v:g}, coordinate {co})")
     elif isinstance(c, TangentPlane):
         side = _side(c.side)
@@ -507,7 +514,10 @@ def _pointwise(space: _Space, c: Constraint, rows: _Rows, k: int) -> None:
                 w = nv[2:3].copy()
             else:
                 w = nv.copy()
-            rows.alpha.append(a), rows.beta.append(b), rows.w.append(w), rows.target.append(tgt)
+            rows.alpha.append(a)
+            rows.beta.append(b)
+            rows.w.append(w)
+            rows.target.append(tgt)
             rows.labels.append(f"constraints[{k}] (tangent plane on side {side} at {s:g})")
 
 
@@ -649,8 +659,10 @@ class _Kronecker:
 
 
 # ----------------------------------------------------------------------------- entry point
-def _pair_of(x, name: str) -> tuple:
-    if isinstance(x, (int, np.integer)) and not isinstance(x, bool):
+def _pair_of(x: int | Sequence[int], name: str) -> tuple[int, int]:
+    if isinstance(x, bool):  # (unpacking a bool fails: the message below)
+        raise InvalidGeometryError(f"{name}: expected an integer or a pair, got {x!r}")
+    if isinstance(x, (int, np.integer)):
         return int(x), int(x)
     try:
         a, b = x

@@ -13,6 +13,7 @@ to every coordinate (and, for surfaces and lofts, to every row) in one matrix pr
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any, TypeVar, cast, overload
 
 import numpy as np
 import scipy.linalg
@@ -40,6 +41,7 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
+_T = TypeVar("_T")
 
 _METHODS = ("centripetal", "chord", "uniform")
 
@@ -301,7 +303,7 @@ def _lsq_operator(params: Array, degree: int, knots: Array, n: int) -> Array:
     if n == m:
         B = _collocation(params, degree, knots, n)
         _check_sw(B, "params")
-        return np.linalg.solve(B, np.eye(m))
+        return cast(Array, np.linalg.solve(B, np.eye(m)))  # numpy's stubs type linalg of float64 as floating[Any]
     N = _collocation(params, degree, knots, n)
     A = N[1:-1, 1:-1]  # interior data against interior poles
     S = np.zeros((m - 2, m))
@@ -406,7 +408,11 @@ def fit_curve(points: ArrayLike, n_poles: int, degree: int = 3, *, params: Array
 
 
 # ----------------------------------------------------------------------------- surfaces
-def _pair(x, name: str):
+@overload
+def _pair(x: None, name: str) -> tuple[None, None]: ...
+@overload
+def _pair(x: tuple[_T, _T], name: str) -> tuple[_T, _T]: ...
+def _pair(x: Any, name: str) -> tuple[Any, Any]:
     if x is None:
         return None, None
     try:
@@ -416,7 +422,9 @@ def _pair(x, name: str):
     return a, b
 
 
-def _surface_fit(points: ArrayLike, degree, u_params, v_params, method, knots, n_poles) -> BSplineSurface:
+def _surface_fit(points: ArrayLike, degree: int | tuple[int, int], u_params: ArrayLike | None,
+                 v_params: ArrayLike | None, method: str, knots: tuple[ArrayLike | None, ArrayLike | None] | None,
+                 n_poles: tuple[int, int] | None) -> BSplineSurface:
     Q = _points(points, 3)
     m, k = Q.shape[:2]
     if isinstance(degree, (int, np.integer)):
@@ -523,7 +531,12 @@ def loft(curves: Sequence[BSplineCurve], degree: int = 3, *, params: ArrayLike |
     v = parametrize(P, method) if params is None else _check_params(params, K, "params")
     tv = averaged_knots(v, q)
     if rational:
-        H = np.stack([to_homogeneous(c.control_points, c.weights) for c in cc])
+        sections = []
+        for c in cc:
+            if c.weights is None:  # make_compatible makes every section rational if one is
+                raise InvalidGeometryError("curves: rational and polynomial sections were not made compatible")
+            sections.append(to_homogeneous(c.control_points, c.weights))
+        H = np.stack(sections)
         X = interpolate_values(v, H, q, tv)
         if np.any(X[..., -1] <= 0):
             raise InvalidGeometryError(

@@ -71,7 +71,7 @@ class ScatteredFit:
 
 
 def _local(knots: tuple[Array, Array], degree: tuple[int, int], n_poles: tuple[int, int], u: Array, v: Array
-           ) -> tuple[Array, Array, Array]:
+           ) -> tuple[Array, NDArray[np.intp], NDArray[np.intp]]:
     """Per point its ``(p+1)(q+1)`` non-zero basis products, their pole columns and its cell id."""
     (tu, tv), (p, q), (nu, nv) = knots, degree, n_poles
     su, sv = find_span(tu, p, nu, u), find_span(tv, q, nv, v)
@@ -226,10 +226,10 @@ def fit_scattered(points: ArrayLike, n_poles: int | tuple[int, int], degree: int
         tu = V.check_knots(knots[0], p, nu, "knots[0]")
         tv = V.check_knots(knots[1], q, nv, "knots[1]")
     u, v = np.clip(u, tu[p], tu[nu]), np.clip(v, tv[q], tv[nv])
-    surf = None
-    for step in range(steps + 1):
-        if step:
-            u, v, _ = project_points(surf, X, u, v)
+    G, rhs = _normal_equations((tu, tv), (p, q), (nu, nv), u, v, X)
+    surf = BSplineSurface((p, q), (tu, tv), _solve(G, rhs, (nu, nv), lam))
+    for _step in range(steps):  # parameter correction: project, fit again
+        u, v, _ = project_points(surf, X, u, v)
         G, rhs = _normal_equations((tu, tv), (p, q), (nu, nv), u, v, X)
         surf = BSplineSurface((p, q), (tu, tv), _solve(G, rhs, (nu, nv), lam))
     if measure:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numbers
 from dataclasses import dataclass
-from typing import Any, ClassVar, TypeVar
+from typing import Any, ClassVar, NoReturn, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -229,7 +229,7 @@ class Element:
         raise TypeError(f"the truth value of a {self._kind} is ambiguous")
 
     # Forbidden operations shared by all kinds; subclasses override what is allowed.
-    def _forbid(self, op: str, other: object, reflected: bool = False) -> Any:
+    def _forbid(self, op: str, other: object, reflected: bool = False) -> NoReturn:
         a, b = kind_of(other), self._kind
         left, right = (a, b) if reflected else (b, a)
         raise TypeError(

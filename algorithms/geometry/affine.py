@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -100,19 +100,19 @@ class _Linear(_Kind):
     """Scaling, division by a scalar, negation, length, normalisation and the pairing ``dot``,
     shared by the two vector spaces (vectors and normals); each result keeps the operand's type."""
 
-    def _times(self, other: object, reflected: bool) -> Any:
+    def _times(self, other: object, reflected: bool) -> Self:
         s = as_scalar(other)
         if s is None:
             return self._forbid("*", other, reflected)
         return type(self)._trusted(_scale(self.coords, s, "scalar"))
 
-    def __mul__(self, other: object) -> Any:
+    def __mul__(self, other: object) -> Self:
         return self._times(other, False)
 
-    def __rmul__(self, other: object) -> Any:
+    def __rmul__(self, other: object) -> Self:
         return self._times(other, True)
 
-    def __truediv__(self, other: object) -> Any:
+    def __truediv__(self, other: object) -> Self:
         s = as_scalar(other)
         if s is None:
             return self._forbid("/", other)
@@ -120,10 +120,10 @@ class _Linear(_Kind):
             raise InvalidGeometryError("scalar: division by zero")
         return type(self)._trusted(_scale(self.coords, 1.0 / s, "scalar"))
 
-    def __neg__(self) -> Any:
+    def __neg__(self) -> Self:
         return type(self)._trusted(-self.coords)
 
-    def __pos__(self) -> Any:
+    def __pos__(self) -> Self:
         return self
 
     def _pairing(self, other: object, kinds: tuple, hint: str) -> Array:
@@ -136,7 +136,7 @@ class _Linear(_Kind):
         """Euclidean length, shape ``(...)``."""
         return np.linalg.norm(self.coords, axis=-1)
 
-    def normalized(self) -> Any:
+    def normalized(self) -> Self:
         """Unit elements of the same kind; raises :class:`InvalidGeometryError` if any is zero."""
         return type(self)._trusted(unit(self.coords, self._kind))
 
@@ -165,6 +165,10 @@ class Point(_Kind):
 
     _kind: ClassVar[str] = "point"
 
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float array
+
+        def __init__(self, coords: ArrayLike) -> None: ...
+
     def __radd__(self, other: object) -> Point:
         return self._combine(other, "+", self._ADD, np.add, True)
 
@@ -189,6 +193,10 @@ class Vector(_Linear):
     """
 
     _kind: ClassVar[str] = "vector"
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float array
+
+        def __init__(self, coords: ArrayLike) -> None: ...
 
     def dot(self, other: Vector | Normal) -> Array:
         """Euclidean inner product (or the pairing with a :class:`Normal`), shape ``(...)``."""
@@ -227,6 +235,10 @@ class Normal(_Linear):
     """
 
     _kind: ClassVar[str] = "normal"
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float array
+
+        def __init__(self, coords: ArrayLike) -> None: ...
 
     @classmethod
     def from_tangents(cls, a: Vector, b: Vector) -> Normal:

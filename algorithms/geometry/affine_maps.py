@@ -10,7 +10,7 @@ exports both modules' public names.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Literal, Union
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -25,10 +25,10 @@ from .affine import Normal, Point, Vector
 __all__ = ["Frame", "AffineMap", "ProjectiveMap"]
 
 Array = NDArray[np.float64]
-Spline = Union[BSplineCurve, BSplineSurface]
+Spline = BSplineCurve | BSplineSurface
 
 # ---------------------------------------------------------------------------------------- frames
-_Kind = Union[type[Point], type[Vector], type[Normal], Literal["point", "vector", "normal"]]
+_Kind = type[Point] | type[Vector] | type[Normal] | Literal["point", "vector", "normal"]
 _KINDS: dict[str, type[Element]] = {"point": Point, "vector": Vector, "normal": Normal}
 
 
@@ -56,6 +56,10 @@ class Frame:
     origin: Point
     basis: Array
     _inverse: Array = field(init=False, repr=False)
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a Point and an array
+
+        def __init__(self, origin: Point | ArrayLike, basis: ArrayLike) -> None: ...
 
     def __post_init__(self) -> None:
         o = self.origin
@@ -181,7 +185,12 @@ class AffineMap:
     """
 
     matrix: Array
-    translation: Array | None = None
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores arrays (t = 0 for None)
+        translation: Array
+
+        def __init__(self, matrix: ArrayLike, translation: ArrayLike | None = None) -> None: ...
+    else:
+        translation: Array | None = None
 
     def __post_init__(self) -> None:
         M = as_matrix(self.matrix, "matrix")
@@ -196,7 +205,7 @@ class AffineMap:
         object.__setattr__(self, "translation", readonly(t))
 
     @classmethod
-    def _trusted(cls, matrix: Array, translation: Array) -> AffineMap:
+    def _trusted(cls, matrix: ArrayLike, translation: ArrayLike) -> AffineMap:
         obj = object.__new__(cls)
         object.__setattr__(obj, "matrix", readonly(matrix))
         object.__setattr__(obj, "translation", readonly(translation))
@@ -235,7 +244,7 @@ class AffineMap:
         H[:d, :d], H[:d, d] = self.matrix, self.translation
         return H
 
-    def _normal_matrix(self) -> Array:
+    def _normal_matrix(self) -> NDArray[np.floating]:
         check_invertible(self.matrix, "matrix", tolerances.MAX_CONDITION)
         return np.linalg.inv(self.matrix).T
 
@@ -326,6 +335,10 @@ class ProjectiveMap:
     """
 
     matrix: Array
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float array
+
+        def __init__(self, matrix: ArrayLike) -> None: ...
 
     def __post_init__(self) -> None:
         H = as_matrix(self.matrix, "matrix")
@@ -425,6 +438,8 @@ class ProjectiveMap:
             )
         new_P = h[..., :-1] / h[..., -1:]
         new_weights = None if spline.weights is None and np.all(new_w == 1.0) else new_w
+        if isinstance(spline, BSplineCurve):
+            return type(spline)._trusted(spline.degree, spline.knots, new_P, new_weights)
         return type(spline)._trusted(spline.degree, spline.knots, new_P, new_weights)
 
     def __matmul__(self, other: object) -> ProjectiveMap:

@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -136,12 +137,12 @@ def _norm(a: Array) -> Array:
     return np.linalg.norm(a, axis=-1)
 
 
-def _safe_div(num: Array, den: Array, ok: Array) -> Array:
+def _safe_div(num: Array, den: Array, ok: NDArray[np.bool_]) -> Array:
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(ok, num / np.where(ok, den, 1.0), np.nan)
 
 
-def _frenet_parts(D: Array) -> dict[str, Array]:
+def _frenet_parts(D: Array) -> dict[str, NDArray[Any]]:  # float and bool arrays
     d1, d2 = D[..., 1, :], D[..., 2, :]
     a = np.cross(d1, d2)
     s = _norm(d1)
@@ -448,7 +449,7 @@ def _forms(surface: BSplineSurface, u: ArrayLike, v: ArrayLike) -> dict[str, Arr
     return _forms_of(surface.derivatives(u, v, 2))
 
 
-def _forms_of(D: Array) -> dict[str, Array]:
+def _forms_of(D: Array) -> dict[str, NDArray[Any]]:  # float and bool arrays
     """First and second fundamental forms from partials ``D`` of shape S + (>=3, >=3, 3)."""
     su, sv = D[..., 1, 0, :], D[..., 0, 1, :]
     cr = np.cross(su, sv)

@@ -33,8 +33,9 @@ from __future__ import annotations
 
 import copy as _copy
 import reprlib
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -135,6 +136,42 @@ class Node:
         self.version = 0
         self.blk: tuple[slice, ...] = ()
 
+    # Typed views of the fields that only some nodes have, or that are set after construction.
+    @property
+    def overlay(self) -> Overlay:
+        """The handle of an overlay node (the base has none)."""
+        if self.handle is None:
+            raise InvalidGeometryError("the base is not an overlay")
+        return self.handle
+
+    @property
+    def up(self) -> Node:
+        """The parent node of an overlay (the base has none)."""
+        if self.parent is None:
+            raise InvalidGeometryError("the base has no parent")
+        return self.parent
+
+    @property
+    def net(self) -> Array:
+        """``H``: the homogeneous level net (set when the node is built)."""
+        if self.H is None:
+            raise RuntimeError("hierarchy node: the level net is not built yet")
+        return self.H
+
+    @property
+    def reference(self) -> Array:
+        """``R``: the parent's net refined to this overlay's knots (overlays only)."""
+        if self.R is None:
+            raise RuntimeError("hierarchy node: the reference net is not built yet (or this is the base)")
+        return self.R
+
+    @property
+    def stored_offsets(self) -> Array:
+        """The overlay's stored offsets (overlays only)."""
+        if self.offsets is None:
+            raise InvalidGeometryError("the base stores control points, not offsets")
+        return self.offsets
+
 
 def support_mask(x: Array, lo: float, hi: float, end: float) -> NDArray[np.bool_]:
     """Parameters ``x`` where an overlay on ``[lo, hi]`` contributes: ``[lo, hi)``, or ``[lo, hi]`` when
@@ -177,6 +214,7 @@ class Hierarchy:
 
     _npar: int = 0
     _kind: str = ""
+    _grid_cache: dict[str, Any] | None  # the surface's grid-evaluation cache (copy() resets it)
 
     # ------------------------------------------------------------------ construction
     def _init(self, base: Any, offsets: str | OffsetMapping) -> None:
@@ -225,7 +263,7 @@ class Hierarchy:
     @property
     def overlays(self) -> list[Overlay]:
         """The overlay handles in creation order (parents before children)."""
-        return [n.handle for n in self._nodes.values()]
+        return [n.overlay for n in self._nodes.values()]
 
     @property
     def offset_mapping(self) -> OffsetMapping:
@@ -242,11 +280,11 @@ class Hierarchy:
     @property
     def depth(self) -> int:
         """The deepest overlay level (0 without overlays)."""
-        return max((n.handle.level for n in self._nodes.values()), default=0)
+        return max((n.overlay.level for n in self._nodes.values()), default=0)
 
     def children(self, overlay: Overlay | int | None = None) -> list[Overlay]:
         """The overlays directly below ``overlay`` (``None``: the base)."""
-        return [c.handle for c in self._node(overlay).children]
+        return [c.overlay for c in self._node(overlay).children]
 
     # ------------------------------------------------------------------ level splines
     def _spline_from_h(self, knots: tuple[Array, ...], H: Array) -> Any:
@@ -256,7 +294,7 @@ class Hierarchy:
 
     def _level(self, node: Node) -> Any:
         if node.level_spline is None:
-            node.level_spline = self._spline_from_h(self._knots_of(node), node.H)
+            node.level_spline = self._spline_from_h(self._knots_of(node), node.net)
         return node.level_spline
 
     # ------------------------------------------------------------------ adding overlays
@@ -355,11 +393,11 @@ class Hierarchy:
     def _update(self, node: Node, recurse: bool = True, *, reference: bool = True) -> None:
         """Rebuild ``node`` (reference net and frames too if ``reference``), then its subtree."""
         if reference:
-            node.R = _refine_net(node.parent.H, node.T)
-            node.frames = (self._frames_of(self._level(node.parent), node.handle.reference_parameters)
+            node.R = _refine_net(node.up.net, node.T)
+            node.frames = (self._frames_of(self._level(node.up), node.overlay.reference_parameters)
                            if self._mapping.uses_frames else None)
-        D = self._displacements(node, node.offsets, node.frames)
-        H = node.R.copy()
+        D = self._displacements(node, node.stored_offsets, node.frames)
+        H = node.reference.copy()
         if self._rational:
             W = H[node.blk + (slice(-1, None),)]
             WD = W * D
@@ -378,7 +416,7 @@ class Hierarchy:
     def _build_delta(self, node: Node, WD: Array) -> None:
         """The delta spline of ``node``: its weighted displacements padded by ``degree`` zero
         vertices on each side, on the matching stretch of its knots (domain = support)."""
-        h = node.handle
+        h = node.overlay
         knots, sl, shape = [], [], []
         for ax, (i0, i1) in enumerate(h.vertices):
             p = self._deg[ax]
@@ -399,7 +437,7 @@ class Hierarchy:
 
     # ------------------------------------------------------------------ edits
     def _index(self, node: Node, index: Any) -> tuple[int, ...]:
-        shape = node.offsets.shape[:-1] if node.handle is not None else node.H.shape[:-1]
+        shape = node.stored_offsets.shape[:-1] if node.handle is not None else node.net.shape[:-1]
         idx = (index,) if self._npar == 1 and not isinstance(index, (tuple, list)) else tuple(index) if isinstance(index, (tuple, list)) else None
         if idx is None or len(idx) != self._npar or any(isinstance(i, bool) or not isinstance(i, (int, np.integer)) for i in idx):
             raise InvalidGeometryError(f"index: expected {'(i, j)' if self._npar == 2 else 'an integer i'}, got {index!r}")
@@ -430,10 +468,10 @@ class Hierarchy:
             return
         F = None if node.frames is None else node.frames[idx]
         d = self._dim
-        cur = self._displacements(node, node.offsets[idx], F)
+        cur = self._displacements(node, node.stored_offsets[idx], F)
         Fm = None if F is None else F.reshape(-1, d, d)
         new = np.asarray(self._mapping.inverse((cur + disp).reshape(-1, d), Fm), float)
-        node.offsets[idx] = new.reshape(cur.shape)
+        node.stored_offsets[idx] = new.reshape(cur.shape)
         self._update(node, reference=False)
 
     def _set_base(self, base: Any) -> None:
@@ -443,7 +481,7 @@ class Hierarchy:
 
     def _snapshot(self, node: Node) -> Any:
         """What an edit of ``node``'s own vertices changes, for :meth:`_restore`."""
-        return self._level(node) if node.handle is None else node.offsets.copy()
+        return self._level(node) if node.handle is None else node.stored_offsets.copy()
 
     def _restore(self, node: Node, saved: Any) -> None:
         """Undo edits of ``node``'s vertices made since :meth:`_snapshot` (a failed drag leaves nothing)."""
@@ -465,19 +503,19 @@ class Hierarchy:
         if node.handle is None:
             raise InvalidGeometryError("overlay: the base stores control points, not offsets; use move_vertex")
         o = V.as_finite_array(offsets, "offsets")
-        if o.shape != node.offsets.shape:
-            raise InvalidGeometryError(f"offsets: expected shape {node.offsets.shape}, got {o.shape}")
+        if o.shape != node.stored_offsets.shape:
+            raise InvalidGeometryError(f"offsets: expected shape {node.stored_offsets.shape}, got {o.shape}")
         node.offsets = o.copy()
         self._update(node, reference=False)
 
-    def set_offset(self, overlay: Overlay | int, index: Any, offset: ArrayLike) -> None:
+    def set_offset(self, overlay: Overlay | int, index: int | Sequence[int], offset: ArrayLike) -> None:
         """Set one stored offset of ``overlay`` (in place), e.g. ``(0, 0, h)``: height ``h`` along
         the parent's normal with the frame mapping."""
         node = self._node(overlay)
         if node.handle is None:
             raise InvalidGeometryError("overlay: the base stores control points, not offsets; use move_vertex")
         idx = self._index(node, index)
-        node.offsets[idx] = self._vector(offset, "offset")
+        node.stored_offsets[idx] = self._vector(offset, "offset")
         self._update(node, reference=False)
 
     def offsets(self, overlay: Overlay | int) -> Array:
@@ -485,9 +523,9 @@ class Hierarchy:
         node = self._node(overlay)
         if node.handle is None:
             raise InvalidGeometryError("overlay: the base has no offsets")
-        return node.offsets.copy()
+        return node.stored_offsets.copy()
 
-    def reference_frames(self, overlay: Overlay | int) -> Array:
+    def reference_frames(self, overlay: Overlay | int) -> Array | None:
         """The parent's frames at the overlay's reference parameters, ``shape + (d, d)`` (columns are
         the axes); ``None`` for a mapping that uses no frames."""
         node = self._node(overlay)
@@ -499,22 +537,22 @@ class Hierarchy:
         """World positions of the overlay's control vertices (reference + displacement), shape
         ``overlay.shape + (d,)``; of the base net for ``None``."""
         node = self._node(overlay)
-        H = node.H if node.handle is None else node.H[node.blk]
+        H = node.net if node.handle is None else node.net[node.blk]
         return H[..., :-1] / H[..., -1:] if self._rational else H.copy()
 
     # ------------------------------------------------------------------ flatten
     def _flat_h(self) -> tuple[tuple[Array, ...], Array]:
         """Knots of the common refinement and the exact homogeneous net there."""
         nodes = list(self._nodes.values())
-        knots = tuple(_union_knots([self._knots_of(self._root)[ax]] + [n.handle.knots[ax] for n in nodes])
+        knots = tuple(_union_knots([self._knots_of(self._root)[ax]] + [n.overlay.knots[ax] for n in nodes])
                       for ax in range(self._npar))
         base_kn = self._knots_of(self._root)
-        H = _refine_net(self._root.H, tuple(refinement_matrix(base_kn[ax], self._deg[ax], knots[ax])
+        H = _refine_net(self._root.net, tuple(refinement_matrix(base_kn[ax], self._deg[ax], knots[ax])
                                             for ax in range(self._npar)))
         d = self._dim
         for n in nodes:
-            WD = (n.H - n.R)[n.blk][..., :d]
-            Ts = tuple(refinement_matrix(n.handle.knots[ax], self._deg[ax], knots[ax])[:, n.blk[ax]]
+            WD = (n.net - n.reference)[n.blk][..., :d]
+            Ts = tuple(refinement_matrix(n.overlay.knots[ax], self._deg[ax], knots[ax])[:, n.blk[ax]]
                        for ax in range(self._npar))
             H[..., :d] += _refine_net(WD, Ts)
         return knots, H
@@ -528,16 +566,16 @@ class Hierarchy:
             ``base`` (base poles), ``offsets`` (stored overlay offsets), ``stored`` (their sum),
             ``flat`` (poles of :meth:`flatten`'s single spline).
         """
-        base = int(np.prod(self._root.H.shape[:-1]))
-        offs = sum(int(np.prod(n.offsets.shape[:-1])) for n in self._nodes.values())
+        base = int(np.prod(self._root.net.shape[:-1]))
+        offs = sum(int(np.prod(n.stored_offsets.shape[:-1])) for n in self._nodes.values())
         knots = [
-            _union_knots([self._knots_of(self._root)[ax]] + [n.handle.knots[ax] for n in self._nodes.values()])
+            _union_knots([self._knots_of(self._root)[ax]] + [n.overlay.knots[ax] for n in self._nodes.values()])
             for ax in range(self._npar)]
         flat = int(np.prod([k.shape[0] - p - 1 for k, p in zip(knots, self._deg)]))
         return {"base": base, "offsets": offs, "stored": base + offs, "flat": flat}
 
     # ------------------------------------------------------------------ copy, storage
-    def copy(self):
+    def copy(self) -> Self:
         """An independent copy (handles stay valid for the copy: they are shared, immutable)."""
         new = _copy.copy(self)
         memo: dict[int, Node] = {}
@@ -565,11 +603,11 @@ class Hierarchy:
             "base": self._root.level_spline.to_dict(),
             "overlays": [
                 {
-                    "id": n.handle.id,
-                    "parent": n.handle.parent,
-                    "region": [list(r) for r in n.handle.region],
-                    "inserted_knots": [k.tolist() for k in n.handle.inserted],
-                    "offsets": n.offsets.tolist(),
+                    "id": n.overlay.id,
+                    "parent": n.overlay.parent,
+                    "region": [list(r) for r in n.overlay.region],
+                    "inserted_knots": [k.tolist() for k in n.overlay.inserted],
+                    "offsets": n.stored_offsets.tolist(),
                 }
                 for n in self._nodes.values()
             ],
@@ -606,16 +644,16 @@ class Hierarchy:
                 raise type(err)(f"from_dict: overlay {ident}: {err}") from err
             node = self._nodes[ident]
             o = V.as_finite_array(offs, f"overlays[{k}].offsets")
-            if o.shape != node.offsets.shape:
+            if o.shape != node.stored_offsets.shape:
                 raise InvalidGeometryError(f"from_dict: overlay {ident}: offsets of shape {o.shape}, expected "
-                                           f"{node.offsets.shape}")
+                                           f"{node.stored_offsets.shape}")
             node.offsets = o
             self._update(node, recurse=False, reference=False)
             if not all(np.array_equal(a, b) for a, b in zip(h.inserted, [np.asarray(x, float) for x in ins])):
                 raise InvalidGeometryError(f"from_dict: overlay {ident}: its knots do not reproduce")
 
 
-def check_format(data: Any, kind: str) -> None:
+def check_format(data: object, kind: str) -> None:
     """Reject dicts of another type or a newer format version."""
     if not isinstance(data, dict) or data.get("type") != kind:
         raise InvalidGeometryError(f"from_dict: expected a dict with type {kind!r}, got "

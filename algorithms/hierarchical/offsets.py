@@ -112,10 +112,14 @@ class OffsetMapping:
 
 
 def _frame_forward(offsets: Array, frames: Array | None) -> Array:
+    if frames is None:  # the hierarchy computes them for a mapping that uses_frames
+        raise InvalidGeometryError("the frame offset mapping needs the parent's frames")
     return np.einsum("mij,mj->mi", frames, offsets)
 
 
 def _frame_inverse(displacements: Array, frames: Array | None) -> Array:
+    if frames is None:  # the hierarchy computes them for a mapping that uses_frames
+        raise InvalidGeometryError("the frame offset mapping needs the parent's frames")
     return np.einsum("mji,mj->mi", frames, displacements)  # orthonormal: F^-1 = F^T
 
 

@@ -204,7 +204,7 @@ class HierarchicalSurface(Hierarchy):
         if (not isinstance(base, BSplineSurface) or base.degree != cur.degree or base.n_poles != cur.n_poles
                 or not all(np.array_equal(a, b) for a, b in zip(base.knots, cur.knots))
                 or (base.weights is None) != (cur.weights is None)
-                or (base.weights is not None and not np.array_equal(base.weights, cur.weights))
+                or (base.weights is not None and cur.weights is not None and not np.array_equal(base.weights, cur.weights))
                 or base.dim != cur.dim):
             raise InvalidGeometryError("base: expected a BSplineSurface with the current base's degrees, knots, "
                                        "weights and dimension (only the poles may change)")
@@ -243,10 +243,10 @@ class HierarchicalSurface(Hierarchy):
         if no overlay does (course §5-30: the level an arbitrary surface position is edited at)."""
         best: Node | None = None
         for n in self._nodes.values():
-            (a, b), (c, d) = n.handle.region
-            if a <= u <= b and c <= v <= d and (best is None or n.handle.level >= best.handle.level):
+            (a, b), (c, d) = n.overlay.region
+            if a <= u <= b and c <= v <= d and (best is None or n.overlay.level >= best.overlay.level):
                 best = n
-        return None if best is None else best.handle
+        return None if best is None else best.overlay
 
     def drag_point(self, u: float, v: float, target: ArrayLike, *, overlay: Overlay | int | str | None = None,
                    tol: float | None = None) -> None:
@@ -289,7 +289,7 @@ class HierarchicalSurface(Hierarchy):
         node = self._node(overlay)
         tol = tolerances.EDIT_POINT_RTOL * max(1.0, float(np.abs(tgt).max())) if tol is None else float(tol)
         max_iter = int(tolerances.EDIT_POINT_MAX_ITER)
-        window = None if node.handle is None else node.handle.vertices
+        window = None if node.handle is None else (node.handle.vertices[0], node.handle.vertices[1])
         saved = self._snapshot(node)
         res = np.inf
         for _ in range(max_iter):
@@ -322,7 +322,8 @@ class HierarchicalSurface(Hierarchy):
         return self._base_h_cache
 
     def _uv(self, u: ArrayLike, v: ArrayLike) -> tuple[Array, Array, tuple[int, ...]]:
-        return V.check_uv(u, v, self._domain)
+        du, dv = self._domain
+        return V.check_uv(u, v, (du, dv))
 
     def _scattered_h(self, a: Array, b: Array, order: int) -> Array:
         """Homogeneous partials ``(m, r+1, r+1, k)`` at scattered parameters."""

@@ -174,7 +174,7 @@ def conic_from_shoulder(p0: ArrayLike, p1: ArrayLike, p2: ArrayLike, shoulder: f
     P0, P1, P2 = (V.as_finite_array(p, n, ndim=1) for p, n in ((p0, "p0"), (p1, "p1"), (p2, "p2")))
     M = 0.5 * (P0 + P2)
     if np.ndim(shoulder) == 0:
-        s = float(shoulder)
+        s = float(np.asarray(shoulder))
     else:
         S = V.as_finite_array(shoulder, "shoulder", ndim=1)
         d = P1 - M

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import partial
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -85,6 +86,12 @@ class BSplineCurve(HomogeneousPoles, ControlPointValue):
     control_points: Array
     weights: Array | None = None
     _hpoles: Array = field(init=False, repr=False, compare=False)
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores float arrays
+
+        def __init__(
+            self, degree: int, knots: ArrayLike, control_points: ArrayLike, weights: ArrayLike | None = None
+        ) -> None: ...
 
     def __post_init__(self) -> None:
         p = V.as_degree(self.degree)

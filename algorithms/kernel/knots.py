@@ -14,6 +14,8 @@ A5.1 (insertion), A5.8 (removal), A5.6 (decomposition into Bézier segments).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -102,8 +104,8 @@ def insert_knot_boehm(knots: Array, degree: int, poles: Array, u: float, times: 
         R[: p - j - s + 1] = alpha * R[1 : p - j - s + 2] + (1.0 - alpha) * R[: p - j - s + 1]
         Q[L] = R[0]
         Q[k + r - j - s] = R[p - j - s]
-    for i in range(L + 1, k - s):
-        Q[i] = R[i - L]
+    for jj in range(L + 1, k - s):
+        Q[jj] = R[jj - L]
     return new_knots, Q
 
 
@@ -188,7 +190,7 @@ def merge_knots(knots: Array, extra: Array) -> Array:
 
 
 def remove_knot_lsq(
-    knots: Array, degree: int, poles: Array, u: float, times: int, deviation
+    knots: Array, degree: int, poles: Array, u: float, times: int, deviation: Callable[[Array, Array], float]
 ) -> tuple[Array, Array, float]:
     """Remove ``times`` copies of the knot ``u``; the new poles are the least-squares solution.
 

@@ -7,10 +7,10 @@ Every knot operation is the curve kernel applied to the net's rows or columns at
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -106,6 +106,16 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
     weights: Array | None = None
     _hpoles: Array = field(init=False, repr=False, compare=False)
 
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores float arrays
+
+        def __init__(
+            self,
+            degree: Sequence[int],
+            knots: Sequence[ArrayLike],
+            control_points: ArrayLike,
+            weights: ArrayLike | None = None,
+        ) -> None: ...
+
     def __post_init__(self) -> None:
         deg = self.degree
         if not isinstance(deg, (tuple, list)) or len(deg) != 2:
@@ -129,20 +139,22 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
         V.check_homogeneous(P, w)
         self._set((p, q), (U, Vk), P, w)
 
-    def _set(self, deg: tuple[int, int], kn: tuple[Array, Array], P: Array, w: Array | None) -> None:
+    def _set(self, deg: Sequence[int], kn: Sequence[Array], P: Array, w: Array | None) -> None:
         object.__setattr__(self, "degree", (int(deg[0]), int(deg[1])))
         object.__setattr__(self, "knots", (V.readonly(kn[0]), V.readonly(kn[1])))
         self._set_poles(P, w)
 
     @classmethod
-    def _trusted(cls, degree, knots, control_points, weights=None) -> BSplineSurface:
+    def _trusted(
+        cls, degree: Sequence[int], knots: Sequence[ArrayLike], control_points: ArrayLike, weights: ArrayLike | None = None
+    ) -> BSplineSurface:
         """Fast constructor for internal results that are valid by construction (no checks)."""
         obj = object.__new__(cls)
         obj._set(degree, (np.asarray(knots[0], float), np.asarray(knots[1], float)),
                  np.asarray(control_points, float), None if weights is None else np.asarray(weights, float))
         return obj
 
-    def _rebuild(self, degree, knots, hpoles: Array) -> BSplineSurface:
+    def _rebuild(self, degree: Sequence[int], knots: Sequence[Array], hpoles: Array) -> BSplineSurface:
         return BSplineSurface._from_homogeneous(degree, knots, hpoles, self.is_rational)
 
     # ------------------------------------------------------------------ properties
@@ -296,7 +308,7 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
         R = band_product(Dv, sv, self.degree[1], Ht)  # (m_v, r+1, n_u * k): [b, j, I, c]
         return np.ascontiguousarray(R.reshape(b.shape[0], order + 1, nu, k).transpose(2, 0, 1, 3))
 
-    def _grid_u(self, su: NDArray[np.intp], Du: Array, G: Array, sel: slice | NDArray[np.intp]) -> Array:
+    def _grid_u(self, su: int, Du: Array, G: Array, sel: slice | NDArray[np.intp]) -> Array:
         """Homogeneous partials ``(g, m_v, r+1, r+1, k)`` of the grid rows ``sel`` sharing one u-span.
 
         ``G`` is :meth:`_grid_v`; rows of ``sel`` must all lie in the u-span ``su``.

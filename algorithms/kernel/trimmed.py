@@ -32,8 +32,9 @@ Conventions
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -44,6 +45,9 @@ from ..errors import InvalidGeometryError, ParameterError
 from ._common import FORMAT_VERSION
 from .curve import BSplineCurve
 from .surface import BSplineSurface
+
+if TYPE_CHECKING:
+    from ..geometry.differential import SurfaceCurvatures
 
 __all__ = ["TrimmedSurface", "INSIDE", "ON", "OUTSIDE", "classify_points"]
 
@@ -112,6 +116,16 @@ class TrimmedSurface:
     reversed: bool = False
     _cache: dict[Any, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
+    if TYPE_CHECKING:  # the generated __init__ takes any sequences; __post_init__ stores tuples
+
+        def __init__(
+            self,
+            surface: BSplineSurface,
+            outer: Sequence[BSplineCurve],
+            inner: Sequence[Sequence[BSplineCurve]] = (),
+            reversed: bool = False,
+        ) -> None: ...
+
     def __post_init__(self) -> None:
         if not isinstance(self.surface, BSplineSurface):
             raise InvalidGeometryError(f"surface: expected a BSplineSurface, got {type(self.surface).__name__}")
@@ -149,7 +163,8 @@ class TrimmedSurface:
         lo, hi = np.array([u0, v0]) - gap_tol, np.array([u1, v1]) + gap_tol
         for j, c in enumerate(loop):
             if np.any(c.control_points.min(axis=0) < lo) or np.any(c.control_points.max(axis=0) > hi):
-                pts = c.evaluate(np.linspace(*c.domain, 65))
+                c0, c1 = c.domain
+                pts = c.evaluate(np.linspace(c0, c1, 65))
                 if np.any(pts < lo) or np.any(pts > hi):
                     raise InvalidGeometryError(
                         f"{name}[{j}]: the p-curve leaves the surface's domain [{u0!r}, {u1!r}] x [{v0!r}, {v1!r}]")
@@ -318,7 +333,7 @@ class TrimmedSurface:
             n = np.where(ln > 0, n / ln, np.nan)
         return -n if self.reversed else n
 
-    def curvatures(self, u: ArrayLike, v: ArrayLike, *, outside: Outside = "raise") -> Any:
+    def curvatures(self, u: ArrayLike, v: ArrayLike, *, outside: Outside = "raise") -> SurfaceCurvatures:
         """Principal, Gaussian and mean curvatures on the face (course §6-8 .. §6-12).
 
         As :func:`occsurf.algorithms.surface_curvatures` of :attr:`surface` (signs against

@@ -22,12 +22,16 @@ from __future__ import annotations
 
 import math
 import threading
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .. import _numba_kernels as _nk
 from .. import tolerances
+
+if TYPE_CHECKING:
+    from .model import LightingSetup
 
 __all__ = ["pack_lights", "shade_points"]
 
@@ -40,7 +44,7 @@ _CONC, _HAS_CONE, _THETA, _DELTA, _COS_OUT, _COS_IN, _FALL_K, _D0 = 24, 25, 26, 
 _WIDTH = 32
 
 
-def pack_lights(setup: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def pack_lights(setup: LightingSetup) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(table (k, 32), ckd (k, 3), cks (k, 3))``: the lights of a validated setup as numbers,
     with ``c_j * k_d * C_d`` and ``c_j * k_s * C_s`` per channel (Python floats, as the reference)."""
     mat = setup.material
@@ -81,12 +85,13 @@ def pack_lights(setup: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 # over one scratch array per quantity were not vectorised; a transposed copy of the whole input
 # (as the NumPy path makes) cost a third of the time.
 _CHUNK = 256
+_F = NDArray[np.float64]  # the annotations are for the type checker only (numba infers from the arguments)
 (_S_NX, _S_NY, _S_NZ, _S_VX, _S_VY, _S_VZ, _S_NV, _S_R, _S_G, _S_B, _S_LX, _S_LY, _S_LZ, _S_D, _S_NL, _S_CG, _S_F,
  _S_RV, _S_W, _S_W2, _S_BAD, _S_PX, _S_PY, _S_PZ) = (k * _CHUNK for k in range(24))
 _S_ROWS = 24
 
 
-def _ipow_into(S, x, s, o, b, n):  # pragma: no cover - compiled
+def _ipow_into(S: _F, x: int, s: float, o: int, b: int, n: int) -> None:  # pragma: no cover - compiled
     """``S[o:o+n] = S[x:x+n] ** s`` for values >= 0: integer ``s`` up to 4096 by repeated squaring
     as :func:`.shading._ipow` (the same products in the same order; ``1.0 * x`` is ``x``), else
     ``pow``. ``b`` is a scratch row."""
@@ -112,12 +117,12 @@ def _ipow_into(S, x, s, o, b, n):  # pragma: no cover - compiled
         S[o + i] = S[x + i] ** s
 
 
-def _smooth(t):  # pragma: no cover - compiled
+def _smooth(t: float) -> float:  # pragma: no cover - compiled
     t = min(max(t, 0.0), 1.0)
     return t * t * (3.0 - 2.0 * t)
 
 
-def _light_into(T, j, n, S, specular, shininess):  # pragma: no cover - compiled
+def _light_into(T: _F, j: int, n: int, S: _F, specular: bool, shininess: float) -> None:  # pragma: no cover - compiled
     """Light ``j`` on points ``s .. s+n``: rows NL (N.L), F (Warn's factor), RV (the Phong term
     before the factor), as ``shading._toward_light`` and ``shading._shade_block``."""
     directional = T[j, _DIRECTIONAL] != 0.0
@@ -172,7 +177,7 @@ def _light_into(T, j, n, S, specular, shininess):  # pragma: no cover - compiled
                 S[_S_RV + i] = 1.0 if S[_S_NL + i] > 0.0 else 0.0
 
 
-def _cone_into(T, j, S, n):  # pragma: no cover - compiled
+def _cone_into(T: _F, j: int, S: _F, n: int) -> None:  # pragma: no cover - compiled
     """Row F times the cone of light ``j`` (as ``shading._cone``): a step at the angle, or the
     smoothstep over the soft edge, whose ``acos`` is taken on the edge only (1 inside, 0 outside)."""
     delta = T[j, _DELTA]
@@ -191,7 +196,7 @@ def _cone_into(T, j, S, n):  # pragma: no cover - compiled
         S[_S_F + i] = S[_S_F + i] * S[_S_W + i]
 
 
-def _flaps_into(T, j, n, ox, oy, oz, S):  # pragma: no cover - compiled
+def _flaps_into(T: _F, j: int, n: int, ox: float, oy: float, oz: float, S: _F) -> None:  # pragma: no cover - compiled
     """Row F times the flaps of light ``j`` (as ``shading._flap_mask``, in its order: the mask of
     all axes first, 1 inside, 0 outside, the smoothstep over a soft edge; a directional light's
     origin is the model's)."""
@@ -219,7 +224,9 @@ def _flaps_into(T, j, n, ox, oy, oz, S):  # pragma: no cover - compiled
         S[_S_F + i] = S[_S_F + i] * S[_S_W + i]
 
 
-def _eye_into(P, N, E, one_eye, two_sided, normal_zero, amb, s, n, S):  # pragma: no cover - compiled
+def _eye_into(  # pragma: no cover - compiled
+    P: _F, N: _F, E: _F, one_eye: bool, two_sided: bool, normal_zero: float, amb: _F, s: int, n: int, S: _F,
+) -> None:
     """Rows P (the chunk's points, component-major), N (unit, turned to the eye when two-sided),
     V, N.V, the ambient colour and BAD (a normal too short to be made unit), as the start of
     ``shading._shade_block``. ``P``, ``N`` and ``E`` are point-major ``(m, 3)`` (``E`` ``(1, 3)``
@@ -253,8 +260,10 @@ def _eye_into(P, N, E, one_eye, two_sided, normal_zero, amb, s, n, S):  # pragma
         S[_S_R + i], S[_S_G + i], S[_S_B + i] = a0, a1, a2
 
 
-def _shade(P, N, E, one_eye, start, stop, lights, ckd, cks, amb, two_sided, specular, shininess, normal_zero,
-           out):  # pragma: no cover - compiled
+def _shade(  # pragma: no cover - compiled
+    P: _F, N: _F, E: _F, one_eye: bool, start: int, stop: int, lights: _F, ckd: _F, cks: _F, amb: _F,
+    two_sided: bool, specular: bool, shininess: float, normal_zero: float, out: _F,
+) -> None:
     """``out[i] = `` Warn's colour of point ``i`` for ``start <= i < stop``; ``P``, ``N``, ``out``
     point-major ``(m, 3)``, ``E`` ``(1, 3)`` (``one_eye``) or ``(m, 3)``."""
     S = np.empty(_S_ROWS * _CHUNK)

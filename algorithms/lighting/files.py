@@ -135,8 +135,9 @@ def setup_to_dict(setup: LightingSetup) -> dict[str, Any]:
         d["concentration"] = light.concentration
         if light.cone_angle_deg is not None:
             d["cone"] = {"angle_deg": light.cone_angle_deg, "edge_deg": light.cone_edge_deg}
-        flaps = {axis: [_bound(lo), _bound(hi)] for axis, (lo, hi) in zip("xyz", light.flaps)
-                 if not (math.isinf(lo) and math.isinf(hi))}
+        flaps: dict[str, list[float | None] | float] = {
+            axis: [_bound(lo), _bound(hi)] for axis, (lo, hi) in zip("xyz", light.flaps)
+            if not (math.isinf(lo) and math.isinf(hi))}
         if flaps:
             d["flaps"] = flaps
             if light.flap_edge:

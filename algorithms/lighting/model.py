@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -82,7 +82,14 @@ def _color(value: Any, name: str) -> tuple[float, float, float]:
     return c
 
 
-def _flaps(value: Any, name: str) -> tuple[tuple[float, float], tuple[float, float], tuple[float, float]]:
+#: Flaps as stored: per axis x, y, z of the light's frame ``(lo, hi)``, ``-inf``/``inf`` for an open side.
+Flaps = tuple[tuple[float, float], tuple[float, float], tuple[float, float]]
+#: Flaps as :class:`WarnLight` takes them: ``{"x": [lo, hi], ...}`` (any subset, ``None`` for an open
+#: side) or three pairs (``None`` for an open axis); ``None``: no flaps.
+FlapsInput = Mapping[str, Sequence[float | None] | None] | Sequence[Sequence[float | None] | None] | None
+
+
+def _flaps(value: Any, name: str) -> Flaps:
     """``{"x": [lo, hi], "y": ..., "z": ...}`` (any subset; ``None`` for an open side) or three pairs."""
     if value is None:
         return ((-_INF, _INF),) * 3
@@ -181,11 +188,32 @@ class WarnLight:
     concentration: float = 0.0
     cone_angle_deg: float | None = None
     cone_edge_deg: float = 0.0
-    flaps: Any = None
+    if TYPE_CHECKING:  # as stored by __post_init__ (open sides +-inf)
+        flaps: Flaps = ((-_INF, _INF), (-_INF, _INF), (-_INF, _INF))
+    else:
+        flaps: Any = None
     flap_edge: float = 0.0
     falloff: str = "none"
     falloff_distance: float | None = None
     name: str = ""
+
+    if TYPE_CHECKING:  # the generated __init__ takes sequences and the flap forms; __post_init__ normalises them
+
+        def __init__(
+            self,
+            position: Sequence[float] | None,
+            direction: Sequence[float],
+            color: Sequence[float] = (1.0, 1.0, 1.0),
+            intensity: float = 1.0,
+            concentration: float = 0.0,
+            cone_angle_deg: float | None = None,
+            cone_edge_deg: float = 0.0,
+            flaps: FlapsInput = None,
+            flap_edge: float = 0.0,
+            falloff: str = "none",
+            falloff_distance: float | None = None,
+            name: str = "",
+        ) -> None: ...
 
     def __post_init__(self) -> None:
         self._check("light")
@@ -328,9 +356,22 @@ class LightingSetup:
     """
 
     lights: tuple[WarnLight, ...] = ()
-    ambient: Any = 0.05
+    if TYPE_CHECKING:  # as stored by __post_init__
+        ambient: tuple[float, float, float] = (0.05, 0.05, 0.05)
+    else:
+        ambient: Any = 0.05
     material: Material = field(default_factory=Material)
     two_sided: bool = True
+
+    if TYPE_CHECKING:  # the generated __init__ takes any of these; __post_init__ stores tuples
+
+        def __init__(
+            self,
+            lights: Sequence[WarnLight] = (),
+            ambient: float | Sequence[float] = 0.05,
+            material: Material = ...,
+            two_sided: bool = True,
+        ) -> None: ...
 
     def __post_init__(self) -> None:
         put = object.__setattr__

@@ -68,7 +68,7 @@ def _setup(lights: LightingSetup | WarnLight | Sequence[WarnLight], material: Ma
         setup = LightingSetup(lights=(lights,))
     else:
         setup = LightingSetup(lights=tuple(lights) if isinstance(lights, (list, tuple)) else lights, ambient=0.0)
-    changes = {}
+    changes: dict[str, Any] = {}
     if material is not None:
         changes["material"] = material
     if ambient is not None:
@@ -81,7 +81,7 @@ def _setup(lights: LightingSetup | WarnLight | Sequence[WarnLight], material: Ma
 def shade(points: ArrayLike, normals: ArrayLike, view_point: ArrayLike,
           lights: LightingSetup | WarnLight | Sequence[WarnLight], material: Material | None = None, *,
           ambient: ArrayLike | None = None, two_sided: bool | None = None,
-          dtype: type = np.float64) -> NDArray[np.floating]:
+          dtype: type[np.floating] = np.float64) -> NDArray[np.floating]:
     """Shade surface points with Warn's lights (course ch. 10): the NumPy reference model.
 
     Parameters
@@ -133,7 +133,7 @@ def shade(points: ArrayLike, normals: ArrayLike, view_point: ArrayLike,
         raise InvalidGeometryError(f"dtype: expected numpy.float64 or numpy.float32, got {dtype!r}")
     P = _as_points(points, "points")
     N = _as_points(normals, "normals")
-    E = _as_points(view_point, "view_point")
+    E: NDArray[np.floating] = _as_points(view_point, "view_point")
     try:
         shape = np.broadcast_shapes(P.shape, N.shape, E.shape)
     except ValueError:
@@ -184,7 +184,7 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 
 
 def _shade_compiled(kern: Any, P: np.ndarray, N: np.ndarray, E: np.ndarray, shape: tuple[int, ...],
-                    single_eye: bool, setup: LightingSetup, dtype: type) -> np.ndarray | None:
+                    single_eye: bool, setup: LightingSetup, dtype: type[np.floating]) -> np.ndarray | None:
     """``(m, 3)`` colours by the numba kernel of :mod:`._kernels` (float64 arithmetic, stored as
     ``dtype``), or None when the kernel fails (the caller then takes the NumPy path)."""
     # Point-major as given (no copy of a contiguous float64 input): the kernel copies each chunk

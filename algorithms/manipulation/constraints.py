@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numbers
 from dataclasses import dataclass
-from typing import Union
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg as sla
@@ -66,7 +66,11 @@ class Position:
     """
 
     u: float
-    point: ArrayLike
+    point: Array
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float array
+
+        def __init__(self, u: float, point: ArrayLike) -> None: ...
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "u", as_parameter(self.u, "Position"))
@@ -100,9 +104,15 @@ class Tangent:
     """
 
     u: float
-    vector: ArrayLike
+    vector: Array
     direction_only: bool = False
     magnitude_only: bool = False
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float array
+
+        def __init__(
+            self, u: float, vector: ArrayLike, direction_only: bool = False, magnitude_only: bool = False
+        ) -> None: ...
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "u", as_parameter(self.u, "Tangent"))
@@ -138,7 +148,11 @@ class Derivative:
 
     u: float
     order: int
-    vector: ArrayLike
+    vector: Array
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float array
+
+        def __init__(self, u: float, order: int, vector: ArrayLike) -> None: ...
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "u", as_parameter(self.u, "Derivative"))
@@ -171,13 +185,17 @@ class Curvature:
     """
 
     u: float
-    value: ArrayLike
+    value: float | Array
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like; __post_init__ stores a float or a float array
+
+        def __init__(self, u: float, value: ArrayLike) -> None: ...
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "u", as_parameter(self.u, "Curvature"))
         if np.ndim(self.value) == 0:
             try:
-                r = float(self.value)  # type: ignore[arg-type]
+                r = float(self.value)
             except (TypeError, ValueError) as err:
                 raise InvalidGeometryError(f"Curvature.value: expected a radius or a vector, got {self.value!r}") from err
             if np.isnan(r) or r == 0:
@@ -199,7 +217,7 @@ class Curvature:
         return f"Curvature(u={self.u:.6g}, value={v})"
 
 
-Constraint = Union[Position, Tangent, Derivative, Curvature]
+Constraint = Position | Tangent | Derivative | Curvature
 
 
 # ============================================================================ internal rows
@@ -211,15 +229,15 @@ class Rows:
     """
 
     index: int
-    source: object
+    source: Constraint
     u: float
     linear: bool
     names: list[str]
     scale: float
     kind: str
-    order: int = 0
-    M: Array | None = None      # linear: F = M @ D[order] - target
-    target: Array | None = None
+    order: int
+    M: Array | None  # linear: F = M @ D[order] - target
+    target: Array
 
     @property
     def size(self) -> int:
@@ -261,6 +279,8 @@ class Rows:
     def residual(self, D: Array, K: int) -> tuple[Array, Array]:
         d = D.shape[-1]
         if self.linear:
+            if self.M is None:  # bind gives every linear row its matrix
+                raise ValueError(f"{self.label}: a linear row needs its matrix M")
             F = self.M @ D[self.order] - self.target
             dF = np.zeros((self.size, K + 1, d))
             dF[:, self.order, :] = self.M
@@ -362,7 +382,7 @@ def bind(c: object, i: int, dim: int, degree: int, domain: tuple[float, float]) 
             raise InvalidGeometryError(f"constraints[{i}].{what}: expected shape ({dim},) for a {dim}-D curve, got {v.shape}")
         return v
 
-    def scale(v) -> float:
+    def scale(v: ArrayLike) -> float:
         return max(1.0, float(np.max(np.abs(v))) if np.size(v) else 0.0)
 
     if isinstance(c, Position):
@@ -407,9 +427,9 @@ def bind(c: object, i: int, dim: int, degree: int, domain: tuple[float, float]) 
                          np.zeros(dim))
         return Rows(i, c, u, False, [f"{label} [|kappa|]"], scale(1.0 / r), "curvature_radius", 2, None,
                      np.array([1.0 / r]))
-    k = vec(np.asarray(c.value), "value")
-    return Rows(i, c, u, False, [f"{label} [kappa {_AXES[j] if dim <= 4 else j}]" for j in range(dim)], scale(k),
-                 "curvature", 2, None, k)
+    kv = vec(np.asarray(c.value), "value")
+    return Rows(i, c, u, False, [f"{label} [kappa {_AXES[j] if dim <= 4 else j}]" for j in range(dim)], scale(kv),
+                 "curvature", 2, None, kv)
 
 
 # ============================================================================ shared validation

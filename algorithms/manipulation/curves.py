@@ -122,7 +122,7 @@ def _reraise(err: ConstraintError, owner: Array, rows: Sequence[Rows], extra: st
     return ConstraintError(f"{err}{extra}", [rows[k].index for k in idx], [rows[k].label for k in idx])
 
 
-def _describe(idx: Array) -> str:
+def _describe(idx: NDArray[np.intp]) -> str:
     if idx.size and idx[-1] - idx[0] + 1 == idx.size:
         return f"{idx[0]}..{idx[-1]}"
     return ", ".join(str(int(i)) for i in idx[:12]) + (" ..." if idx.size > 12 else "")
@@ -140,7 +140,7 @@ class _Problem:
         if isinstance(constraints, (Position, Tangent, Derivative, Curvature)):
             constraints = [constraints]
         try:
-            constraints = list(constraints)  # type: ignore[arg-type]
+            constraints = list(constraints)
         except TypeError as err:
             raise InvalidGeometryError(
                 f"constraints: expected a sequence of constraints, got {type(constraints).__name__}") from err
@@ -260,6 +260,8 @@ def _solve(prob: _Problem, tol: float, max_iter: int) -> Array:
     if not nl:
         return y_c
     Z = fac.null_basis
+    if Z is None:  # full=True (nl is not empty) computes it
+        raise RuntimeError("constrain: the constraint factor has no null-space basis")
     y, merit, t, used = _continuation(prob, y_c, Z, tol, max_iter)
     if merit <= tol:
         return y
@@ -304,7 +306,7 @@ def _slsqp(prob: _Problem, y_c: Array, Z: Array, tol: float, max_iter: int) -> t
     F, J = prob.system(nl, prob.derivs(y))
     lam = -lstsq((J @ Z).T, Z.T @ y).x
     ok, y_new, _, _ = _newton_kkt(prob, y, lam, Z, np.zeros(scales.size), scales, tol,
-                                  tolerances.DRAG_NEWTON_STEPS)
+                                  int(tolerances.DRAG_NEWTON_STEPS))
     if ok:
         y = y_new
     with np.errstate(all="ignore"):
@@ -323,7 +325,7 @@ def _continuation(prob: _Problem, y_c: Array, Z: Array, tol: float, max_iter: in
     while t < 1.0 and used < max_iter and Z.shape[1]:
         t_new = min(1.0, t + dt)
         ok, y_new, lam_new, steps = _newton_kkt(prob, y, lam, Z, (1.0 - t_new) * F0, scales, tol,
-                                                min(tolerances.DRAG_NEWTON_STEPS, max_iter - used))
+                                                min(int(tolerances.DRAG_NEWTON_STEPS), max_iter - used))
         used += steps
         if ok:
             t, y, lam, dt = t_new, y_new, lam_new, 2.0 * dt
@@ -377,16 +379,18 @@ def _diagnose(prob: _Problem, y: Array) -> None:
         raise _reraise(err, prob.owners_of(order), prob.rows, prob.extra) from err
 
 
-def _reversed_directions(prob: _Problem, y: Array) -> list[int]:
-    """Direction-only tangents that ended reversed or cancelled (their speed must be kept)."""
+def _reversed_directions(prob: _Problem, y: Array) -> list[tuple[int, Tangent]]:
+    """Direction-only tangents that ended reversed or cancelled (their speed must be kept), with
+    their row numbers."""
     D = prob.derivs(y)
     bad = []
     for k, r in enumerate(prob.rows):
-        if r.kind == "direction":
-            e = r.source.vector / np.linalg.norm(r.source.vector)
+        src = r.source
+        if r.kind == "direction" and isinstance(src, Tangent):  # bind makes direction rows of tangents only
+            e = src.vector / np.linalg.norm(src.vector)
             a = D[k, 1]
             if not e @ a > 1e-9 * max(np.linalg.norm(prob.D0[k, 1]), np.linalg.norm(a), np.finfo(float).tiny):
-                bad.append(k)
+                bad.append((k, src))
     return bad
 
 
@@ -476,14 +480,13 @@ def constrain(curve: BSplineCurve, constraints: Sequence[Constraint] | Constrain
     tol = tolerances.NEWTON_TOL if tol is None else float(tol)
     if not tol > 0:
         raise InvalidGeometryError(f"tol: expected > 0, got {tol!r}")
-    max_iter = tolerances.DRAG_MAX_ITERATIONS if max_iter is None else V.check_times(max_iter, "max_iter")
+    max_iter = int(tolerances.DRAG_MAX_ITERATIONS) if max_iter is None else V.check_times(max_iter, "max_iter")
     prob = _Problem(curve, constraints, movable, weights)
     y = _solve(prob, tol, max_iter)
     bad = _reversed_directions(prob, y)
     if bad:
         fixed = [r.source for r in prob.rows]
-        for k in bad:
-            src = fixed[k]
+        for k, src in bad:
             speed = float(np.linalg.norm(prob.D0[k, 1]))
             if not speed > 0:
                 raise ConstraintError(f"{prob.rows[k].label}: the tangent vanishes at u="

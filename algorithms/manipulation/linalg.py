@@ -38,8 +38,8 @@ Comput. 33 (2011).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any, NamedTuple
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any, NamedTuple, TypeVar, overload
 
 import numpy as np
 import scipy.linalg as sla
@@ -64,6 +64,7 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
+_M = TypeVar("_M")  # a dense Array or a SciPy sparse matrix (SciPy ships no type stubs: Any)
 
 
 class ConstraintError(InvalidGeometryError):
@@ -77,7 +78,7 @@ class ConstraintError(InvalidGeometryError):
         Their labels (``"row 3"`` when the caller gave none).
     """
 
-    def __init__(self, message: str, rows: Sequence[int] = (), labels: Sequence[str] = ()) -> None:
+    def __init__(self, message: str, rows: Iterable[int] = (), labels: Sequence[str] = ()) -> None:
         super().__init__(message)
         self.rows = tuple(int(r) for r in rows)
         self.labels = tuple(labels)
@@ -145,6 +146,10 @@ def _per_row(x: Array, s: Array) -> Array:
     return s if x.ndim == 1 else s[:, None]
 
 
+@overload
+def _weighted_rows(A: Array, b: Array, w: Array | None) -> tuple[Array, Array]: ...
+@overload
+def _weighted_rows(A: Any, b: Array, w: Array | None) -> tuple[Any, Array]: ...
 def _weighted_rows(A: Any, b: Array, w: Array | None) -> tuple[Any, Array]:
     """``W^(1/2) A`` and ``W^(1/2) b`` for row weights ``w`` (``A`` dense or sparse; unchanged if
     ``w`` is None)."""
@@ -156,7 +161,7 @@ def _weighted_rows(A: Any, b: Array, w: Array | None) -> tuple[Any, Array]:
 
 
 def _constrained_system(A: Any, b: ArrayLike, C: Any, d: ArrayLike, weights: ArrayLike | None,
-                        as_matrix: Any) -> tuple[Any, Array, Any, Array, Array | None]:
+                        as_matrix: Callable[[Any, str], _M]) -> tuple[_M, Array, _M, Array, Array | None]:
     """Validated inputs of a constrained least-squares problem (dense or sparse by ``as_matrix``):
     ``A`` and ``C`` with as many columns, ``b`` and ``d`` with as many right-hand sides, row weights."""
     A = as_matrix(A, "A")
@@ -468,14 +473,14 @@ def constrained_lstsq(A: ArrayLike, b: ArrayLike, C: ArrayLike, d: ArrayLike, we
     InvalidGeometryError
         Shapes or values that do not fit.
     """
-    A, b, C, d, w = _constrained_system(A, b, C, d, weights, _matrix)
-    F = ConstraintFactor(C, labels, full=True)
-    xc = F.solve(d, tol=tol)
+    Am, bv, Cm, dv, w = _constrained_system(A, b, C, d, weights, _matrix)
+    F = ConstraintFactor(Cm, labels, full=True)
+    xc = F.solve(dv, tol=tol)
     Z = F.null_basis
-    if Z is None or Z.shape[1] == 0 or A.shape[0] == 0:
+    if Z is None or Z.shape[1] == 0 or Am.shape[0] == 0:
         return xc
-    r = b - A @ xc
-    z = lstsq(A @ Z, r, w, rcond=rcond).x
+    r = bv - Am @ xc
+    z = lstsq(Am @ Z, r, w, rcond=rcond).x
     return xc + Z @ z
 
 
@@ -518,22 +523,22 @@ def sparse_lstsq(A: object, b: ArrayLike, weights: ArrayLike | None = None, *, t
     ConvergenceError
         LSMR hit ``maxiter`` or the condition-number limit before converging.
     """
-    A = _sparse(A, "A")
-    b = _rhs(b, A.shape[0], "b")
-    A, b = _weighted_rows(A, b, _positive(weights, A.shape[0], "weights"))
+    Asp = _sparse(A, "A")
+    rhs = _rhs(b, Asp.shape[0], "b")
+    Asp, rhs = _weighted_rows(Asp, rhs, _positive(weights, Asp.shape[0], "weights"))
     t = tolerances.SPARSE_TOL if tol is None else float(tol)
-    it = 10 * A.shape[1] if maxiter is None else int(maxiter)
-    B = b.reshape(b.shape[0], -1)
-    X = np.empty((A.shape[1], B.shape[1]))
+    it = 10 * Asp.shape[1] if maxiter is None else int(maxiter)
+    B = rhs.reshape(rhs.shape[0], -1)
+    X = np.empty((Asp.shape[1], B.shape[1]))
     for k in range(B.shape[1]):  # one Krylov run per right-hand side
-        out = spla.lsmr(A, B[:, k], atol=t, btol=t, conlim=1e12, maxiter=it)
+        out = spla.lsmr(Asp, B[:, k], atol=t, btol=t, conlim=1e12, maxiter=it)
         if out[1] in (3, 6, 7):
             raise ConvergenceError(
                 f"sparse_lstsq: LSMR stopped without converging (istop={out[1]}, {out[2]} iterations, "
                 f"residual {out[3]:.3g}); raise maxiter or loosen tol"
             )
         X[:, k] = out[0]
-    return X[:, 0] if b.ndim == 1 else X
+    return X[:, 0] if rhs.ndim == 1 else X
 
 
 def _splu_solve(K: sp.spmatrix, rhs: Array, what: str) -> Array:
@@ -598,24 +603,25 @@ def sparse_min_norm_solve(C: object, d: ArrayLike, weights: ArrayLike | None = N
     ConstraintError
         Dependent (consistent or not) rows; conflicting rows are named.
     """
-    C = _sparse(C, "C")
-    m, n = C.shape
+    Csp = _sparse(C, "C")
+    m, n = Csp.shape
     d = _rhs(d, m, "d")
     w = _positive(weights, n, "weights")
     W = sp.identity(n, format="csr") if w is None else sp.diags(w, format="csr")
-    K = sp.bmat([[W, C.T], [C, sp.csr_matrix((m, m))]], format="csc")
+    K = sp.bmat([[W, Csp.T], [Csp, sp.csr_matrix((m, m))]], format="csc")
     rhs = np.concatenate([np.zeros((n,) + d.shape[1:]), d])
     try:
         sol = _splu_solve(K, rhs, "sparse_min_norm_solve")
     except ConstraintError:
-        _diagnose_sparse(C, d, labels, "sparse_min_norm_solve")
+        _diagnose_sparse(Csp, d, labels, "sparse_min_norm_solve")
         raise
     x = sol[:n]
-    _check_residual(C, x, d, tol, labels, "sparse_min_norm_solve")
+    _check_residual(Csp, x, d, tol, labels, "sparse_min_norm_solve")
     return x
 
 
-def _check_residual(C: sp.csr_matrix, x: Array, d: Array, tol: float | None, labels, what: str) -> None:
+def _check_residual(C: sp.csr_matrix, x: Array, d: Array, tol: float | None, labels: Sequence[str] | None,
+                    what: str) -> None:
     res = np.abs(C @ x - d).reshape(d.shape[0], -1).max(axis=1)
     rtol = tolerances.CONSISTENCY_RTOL if tol is None else float(tol)
     t = rtol * max(1.0, float(np.abs(d).max()) if d.size else 0.0)
@@ -668,21 +674,21 @@ def sparse_constrained_lstsq(A: object, b: ArrayLike, C: object, d: ArrayLike, w
     ConstraintError
         Dependent or conflicting constraints (named), or a solution that is not unique.
     """
-    A, b, C, d, w = _constrained_system(A, b, C, d, weights, _sparse)
-    (p, n), m = A.shape, C.shape[0]
+    Asp, b, Csp, d, w = _constrained_system(A, b, C, d, weights, _sparse)
+    (p, n), m = Asp.shape, Csp.shape[0]
     Winv = sp.identity(p, format="csr") if w is None else sp.diags(1.0 / w, format="csr")
     K = sp.bmat([
-        [Winv, None, A],
-        [None, sp.csr_matrix((m, m)), C],
-        [A.T, C.T, sp.csr_matrix((n, n))],
+        [Winv, None, Asp],
+        [None, sp.csr_matrix((m, m)), Csp],
+        [Asp.T, Csp.T, sp.csr_matrix((n, n))],
     ], format="csc")
     rhs = np.concatenate([b, d, np.zeros((n,) + b.shape[1:])])
     try:
         sol = _splu_solve(K, rhs, "sparse_constrained_lstsq")
     except ConstraintError as err:
-        _diagnose_sparse(C, d, labels, "sparse_constrained_lstsq")
+        _diagnose_sparse(Csp, d, labels, "sparse_constrained_lstsq")
         raise ConstraintError(f"{err}; the constraints are independent, so [A; C] is rank deficient and the "
                               "minimiser is not unique: use constrained_lstsq for the minimum-norm one") from err
     x = sol[p + m:]
-    _check_residual(C, x, d, tol, labels, "sparse_constrained_lstsq")
+    _check_residual(Csp, x, d, tol, labels, "sparse_constrained_lstsq")
     return x

@@ -57,7 +57,8 @@ def _surface_basis_rows(surface: BSplineSurface, u: float, v: float) -> Array:
     return G.reshape(3, nu * nv)
 
 
-def _window_ranges(window: object, n_poles: tuple[int, int]) -> tuple[tuple[int, int], tuple[int, int]]:
+def _window_ranges(window: tuple[tuple[int, int], tuple[int, int]] | None,
+                   n_poles: tuple[int, int]) -> tuple[tuple[int, int], tuple[int, int]]:
     """Validated inclusive pole ranges ``((i1, i2), (j1, j2))`` of ``window``; the whole net if ``None``.
 
     Parameters
@@ -120,7 +121,7 @@ def _active_poles(G: Array, n_poles: tuple[int, int], ranges: tuple[tuple[int, i
     mask = np.zeros(n_poles, bool)
     mask[i1:i2 + 1, j1:j2 + 1] = True
     mov = np.nonzero(mask.ravel())[0]
-    acts = np.any(G[np.ix_(rows, mov)] != 0.0, axis=0)
+    acts = np.any(G[np.ix_(np.asarray(rows, dtype=np.intp), mov)] != 0.0, axis=0)
     if not np.any(acts):
         raise ConstraintError(f"drag_surface_point: no pole of the window (({i1}, {i2}), ({j1}, {j2})) acts at {label}")
     return mov[acts]
@@ -168,7 +169,9 @@ def _edit_conditions(Ga: Array, inv_sw: Array, D0: Array, target: ArrayLike | No
     """
     d = D0.shape[1]
     I = np.eye(d)
-    blocks, rhs, names = [], [], []
+    blocks: list[Array] = []
+    rhs: list[Array] = []
+    names: list[str] = []
 
     def add(k: int, M: Array, r: Array, what: str) -> None:
         blocks.append(np.kron(Ga[k] * inv_sw, M))  # rows acting on vec(dP) (pole-major)

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import numbers
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -22,6 +21,10 @@ from ..topology.spatch import SPatch, domain_vertices
 Array = NDArray[np.float64]
 
 SURFACE_KINDS = "BSplineSurface, TrimmedSurface, HierarchicalSurface, SPatch or GeneralizedSurface (with patch=)"
+#: The surfaces the quality functions take (:data:`SURFACE_KINDS`).
+QualitySurface = BSplineSurface | TrimmedSurface | HierarchicalSurface | SPatch | GeneralizedSurface
+#: What they evaluate (:func:`surface_of`): a trimmed surface's surface, a generalized surface's patch.
+Evaluable = BSplineSurface | HierarchicalSurface | SPatch
 
 
 def dot(a: Array, b: Array) -> Array:
@@ -58,8 +61,8 @@ def vectors(value: ArrayLike, name: str, *, allow_nan: bool = False) -> Array:
 
 def positive(value: object, name: str) -> float:
     """A positive finite real number."""
-    ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and np.isfinite(float(value)) and float(value) > 0
-    if not ok:
+    if not (isinstance(value, numbers.Real) and not isinstance(value, bool) and np.isfinite(float(value))
+            and float(value) > 0):
         raise InvalidGeometryError(f"{name}: expected a positive finite number, got {value!r}")
     return float(value)
 
@@ -83,7 +86,7 @@ class GridPartials:
     vs: Array
 
 
-def surface_of(surface: Any, patch: int | None) -> Any:
+def surface_of(surface: QualitySurface, patch: int | None) -> Evaluable:
     """The evaluable surface: a :class:`GeneralizedSurface` needs ``patch``; a
     :class:`TrimmedSurface` gives its surface (its trims go through :func:`trim_mask`)."""
     if isinstance(surface, TrimmedSurface):
@@ -105,7 +108,7 @@ def surface_of(surface: Any, patch: int | None) -> Any:
     return surface
 
 
-def domain_of(surface: Any) -> tuple[tuple[float, float], tuple[float, float]]:
+def domain_of(surface: Evaluable) -> tuple[tuple[float, float], tuple[float, float]]:
     """Parameter box: the domain of a tensor-product surface, the bounding box of an S-patch's
     regular n-gon domain."""
     if isinstance(surface, SPatch):
@@ -127,7 +130,7 @@ def grid_axis(x: ArrayLike | int, lo: float, hi: float, name: str) -> Array:
     return a
 
 
-def grid_axes(surface: Any, us: ArrayLike | int, vs: ArrayLike | int) -> tuple[Array, Array]:
+def grid_axes(surface: Evaluable, us: ArrayLike | int, vs: ArrayLike | int) -> tuple[Array, Array]:
     """Grid parameters of ``surface``: inside the domain of a tensor-product surface; any finite
     domain coordinates for an S-patch (points outside its n-gon are masked, not rejected)."""
     (u0, u1), (v0, v1) = domain_of(surface)
@@ -145,7 +148,7 @@ def grid_axes(surface: Any, us: ArrayLike | int, vs: ArrayLike | int) -> tuple[A
     return grid_axis(us, u0, u1, "us"), grid_axis(vs, v0, v1, "vs")
 
 
-def trim_mask(surface: Any, us: Array, vs: Array, mask: NDArray[np.bool_] | None) -> NDArray[np.bool_] | None:
+def trim_mask(surface: QualitySurface, us: Array, vs: Array, mask: NDArray[np.bool_] | None) -> NDArray[np.bool_] | None:
     """``mask`` and, for a :class:`TrimmedSurface`, its classification of the grid ``us x vs``
     (points on the face, boundary included: :meth:`TrimmedSurface.contains`); ``mask`` itself for
     any other surface."""
@@ -172,7 +175,7 @@ def inside_polygon(x: Array, y: Array, P: Array) -> NDArray[np.bool_]:
     return np.all(cross >= -1e-12 * scale * scale, axis=-1)
 
 
-def grid_partials(surface: Any, us: Array, vs: Array, mask: NDArray[np.bool_] | None) -> GridPartials:
+def grid_partials(surface: Evaluable, us: Array, vs: Array, mask: NDArray[np.bool_] | None) -> GridPartials:
     """Partials up to order 2 on the grid ``us x vs`` by the surface's own evaluator.
 
     Tensor-product surfaces use ``derivatives_grid`` (two banded products); an S-patch, whose
@@ -195,7 +198,7 @@ def grid_partials(surface: Any, us: Array, vs: Array, mask: NDArray[np.bool_] | 
     return GridPartials(D, inside, us, vs)
 
 
-def nudged_normals(surface: Any, uv: Array) -> Array:
+def nudged_normals(surface: Evaluable, uv: Array) -> Array:
     """Normals at degenerate parameters ``uv`` (k, 2) taken a little way into the domain.
 
     At a pole or a collapsed edge ``S_u x S_v`` vanishes; the limit normal is the normal at a

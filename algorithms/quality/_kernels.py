@@ -17,20 +17,30 @@ from __future__ import annotations
 
 import math
 import threading
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .. import _numba_kernels as _nk
 from .. import tolerances
+
+if TYPE_CHECKING:
+    from ..kernel.surface import BSplineSurface
 
 __all__ = ["grid_curvatures"]
 
 _lock = threading.Lock()
 _state: dict[str, Any] = {"loaded": False, "kernel": None}
+_F = NDArray[np.float64]  # the kernel's annotations are for the type checker only (numba infers from the arguments)
+#: ``(points, normals, k1, k2, K, H, ok)`` on a grid: float arrays and the boolean ``ok``.
+GridCurvatures = tuple[_F, _F, _F, _F, _F, _F, NDArray[np.bool_]]
 
 
-def _curvature_grid(Du, su, p, G3, k, rational, normal_zero, P, Nrm, K1, K2, GK, MH, OK):  # pragma: no cover
+def _curvature_grid(  # pragma: no cover
+    Du: _F, su: NDArray[np.int64], p: int, G3: _F, k: int, rational: bool, normal_zero: float,
+    P: _F, Nrm: _F, K1: _F, K2: _F, GK: _F, MH: _F, OK: NDArray[np.bool_],
+) -> None:
     mu = Du.shape[0]
     mv = G3.shape[1]
     T = np.empty((3, 12))  # [k, l * kk + c]: homogeneous partials of one point
@@ -128,7 +138,7 @@ def _load() -> Any:
         return _state["kernel"]
 
 
-def grid_curvatures(surface: Any, us: np.ndarray, vs: np.ndarray) -> tuple[np.ndarray, ...] | None:
+def grid_curvatures(surface: BSplineSurface, us: np.ndarray, vs: np.ndarray) -> GridCurvatures | None:
     """``(points, normals, k1, k2, K, H, ok)`` on the grid by the fused kernel, or None (use NumPy).
 
     ``surface`` must be a 3-D :class:`~occsurf.algorithms.kernel.surface.BSplineSurface`; ``us``,

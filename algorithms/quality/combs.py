@@ -249,7 +249,7 @@ def _sampled_comb(c: SampledCurve, scale: float | None, plane_normal: ArrayLike 
     m = _plane_of(3, plane_normal)
     kappa, ks, spine = signed_curvature(d1, d2, m)
     infl_t, infl_p = np.empty(0), np.empty((0, 3))
-    if m is not None:
+    if m is not None and ks is not None:  # ks (the signed curvature) is None exactly when m is
         zero = tolerances.CURVATURE_ZERO * float(np.nanmax(kappa, initial=0.0))
         if c.derivatives is not None:
             exact = c.derivatives

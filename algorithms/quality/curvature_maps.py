@@ -16,8 +16,8 @@ with NaN values; they are never coloured silently.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,7 +28,18 @@ from ..geometry.differential import curvatures_from_derivatives
 from ..kernel.surface import BSplineSurface
 from ..topology.spatch import SPatch
 from . import _kernels
-from ._common import Array, GridPartials, check_mask, grid_axes, grid_partials, nudged_normals, surface_of, trim_mask
+from ._common import (
+    Array,
+    Evaluable,
+    GridPartials,
+    QualitySurface,
+    check_mask,
+    grid_axes,
+    grid_partials,
+    nudged_normals,
+    surface_of,
+    trim_mask,
+)
 
 __all__ = ["KINDS", "SCALE_MODES", "CurvatureMap", "ColorScale", "curvature_map", "curvature_values", "color_scale"]
 
@@ -152,22 +163,24 @@ class CurvatureMap:
         return (float(v.min()), float(v.max())) if v.size else (float("nan"), float("nan"))
 
 
-def _block_curvatures(D: Array) -> tuple[Array, ...]:
+def _block_curvatures(D: Array) -> _kernels.GridCurvatures:
     """Points, normals, k1, k2, K, H and ok of a block of partials, in row blocks kept in cache."""
     m, n = D.shape[:2]
-    out = [np.empty((m, n, 3)), np.empty((m, n, 3))] + [np.empty((m, n)) for _ in range(4)] + [np.empty((m, n), bool)]
+    P, Nrm = np.empty((m, n, 3)), np.empty((m, n, 3))
+    k1, k2, K, H = (np.empty((m, n)) for _ in range(4))
+    ok = np.empty((m, n), bool)
     rows = max(1, _BLOCK_POINTS // max(n, 1))
     for i in range(0, m, rows):
         sl = slice(i, i + rows)
         c = curvatures_from_derivatives(D[sl])
-        out[0][sl] = D[sl, :, 0, 0, :]
-        out[1][sl] = c.normal
-        out[2][sl], out[3][sl], out[4][sl], out[5][sl] = c.k1, c.k2, c.gaussian, c.mean
-        out[6][sl] = np.isfinite(c.normal[..., 0])
-    return tuple(out)
+        P[sl] = D[sl, :, 0, 0, :]
+        Nrm[sl] = c.normal
+        k1[sl], k2[sl], K[sl], H[sl] = c.k1, c.k2, c.gaussian, c.mean
+        ok[sl] = np.isfinite(c.normal[..., 0])
+    return P, Nrm, k1, k2, K, H, ok
 
 
-def curvature_map(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, kind: str = "mean", *,
+def curvature_map(surface: QualitySurface, us: ArrayLike | int, vs: ArrayLike | int, kind: str = "mean", *,
                   mask: ArrayLike | None = None, patch: int | None = None) -> CurvatureMap:
     """Curvature map of a surface on the grid ``us x vs`` (course §9-5 .. §9-13).
 
@@ -223,14 +236,14 @@ def curvature_map(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, kind: 
     return _assemble(s, a, b, m, kind, inside, (P, Nrm, k1, k2, K, H, ok))
 
 
-def map_from_partials(s: Any, g: GridPartials, kind: str, mask: NDArray[np.bool_] | None) -> CurvatureMap:
+def map_from_partials(s: Evaluable, g: GridPartials, kind: str, mask: NDArray[np.bool_] | None) -> CurvatureMap:
     """A :class:`CurvatureMap` from grid partials already computed (trusted arguments; shared with
     :func:`~occsurf.algorithms.quality.face_flags`, which needs the partials too)."""
     return _assemble(s, g.us, g.vs, mask, kind, g.inside, _block_curvatures(g.D))
 
 
-def _assemble(s: Any, a: Array, b: Array, m: NDArray[np.bool_] | None, kind: str, inside: NDArray[np.bool_],
-              parts: tuple[Array, ...]) -> CurvatureMap:
+def _assemble(s: Evaluable, a: Array, b: Array, m: NDArray[np.bool_] | None, kind: str, inside: NDArray[np.bool_],
+              parts: _kernels.GridCurvatures) -> CurvatureMap:
     P, Nrm, k1, k2, K, H, ok = parts
     degenerate = inside & ~ok
     if np.any(degenerate):
@@ -285,9 +298,9 @@ class ColorScale:
         return np.linspace(self.lo, self.hi, int(n))
 
 
-def _percentile(p: object) -> tuple[float, float]:
+def _percentile(p: Iterable[float]) -> tuple[float, float]:
     try:
-        a, b = (float(x) for x in p)  # type: ignore[union-attr]
+        a, b = (float(x) for x in p)
     except (TypeError, ValueError):
         raise InvalidGeometryError(f"percentile: expected a pair (low, high), got {p!r}") from None
     if not 0.0 <= a < b <= 100.0:

@@ -17,7 +17,7 @@ from scipy import ndimage
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ._common import Array, check_mask, grid_axes, grid_partials, surface_of, trim_mask
+from ._common import Array, QualitySurface, check_mask, grid_axes, grid_partials, surface_of, trim_mask
 from .curvature_maps import CurvatureMap, map_from_partials
 
 __all__ = ["FLAG_KINDS", "Flag", "face_flags"]
@@ -76,7 +76,7 @@ class Flag:
                 "suggestion": self.suggestion}
 
 
-def _flag(kind: str, cm: CurvatureMap, i: int, j: int, value: float, count: int) -> Flag:
+def _flag(kind: str, cm: CurvatureMap, i: int | np.integer, j: int | np.integer, value: float, count: int) -> Flag:
     return Flag(kind=kind, location=cm.points[i, j].copy(), uv=np.array([cm.us[i], cm.vs[j]]), value=float(value),
                 suggestion=SUGGESTIONS[kind], count=int(count))
 
@@ -170,7 +170,8 @@ def _spikes(cm: CurvatureMap, size: float) -> list[Flag]:
     return [_flag("curvature_spike", cm, i, j, q, 1) for i, j, q in zip(ci[keep], cj[keep], ratio[keep])]
 
 
-def _apex_ratio(cm: CurvatureMap, A: Array, valid: NDArray[np.bool_], ci: Array, cj: Array, r: int) -> Array:
+def _apex_ratio(cm: CurvatureMap, A: Array, valid: NDArray[np.bool_], ci: NDArray[np.intp], cj: NDArray[np.intp],
+                r: int) -> Array:
     """The spike ratio of candidates next to a cone apex, with the apex's own growth taken out.
 
     Near the apex ``X0`` of a true cone (every tangent plane passes through the apex:
@@ -230,7 +231,7 @@ def _degenerate(cm: CurvatureMap, D: Array) -> tuple[list[Flag], NDArray[np.bool
     return out + flags, near
 
 
-def face_flags(surface: Any, *, mask: ArrayLike | None = None, thresholds: Mapping[str, float] | None = None,
+def face_flags(surface: QualitySurface, *, mask: ArrayLike | None = None, thresholds: Mapping[str, float] | None = None,
                us: ArrayLike | int = 64, vs: ArrayLike | int = 64, patch: int | None = None) -> list[Flag]:
     """Problem areas of one face: wiggles, flat spots, curvature spikes, near-degenerate normals,
     ill-parametrisation; each with a suggested occsurf correction.

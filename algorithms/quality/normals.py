@@ -3,8 +3,6 @@ faces, and the draft-angle map of mould making."""
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -12,6 +10,7 @@ from .. import tolerances
 from ..errors import InvalidGeometryError
 from ._common import (
     Array,
+    QualitySurface,
     check_mask,
     dot,
     grid_axes,
@@ -86,7 +85,7 @@ def classify_draft(angles: ArrayLike, min_draft: float | None = None) -> NDArray
     return out
 
 
-def normal_hedgehog(surface: Any, us: ArrayLike | int, vs: ArrayLike | int, length: float | None = None, *,
+def normal_hedgehog(surface: QualitySurface, us: ArrayLike | int, vs: ArrayLike | int, length: float | None = None, *,
                     mask: ArrayLike | None = None, patch: int | None = None) -> tuple[Array, Array]:
     """Normal vectors drawn as spines (a "hedgehog") on the grid ``us x vs``.
 

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -44,6 +43,10 @@ from .combs import Comb, _finish
 __all__ = ["Section", "SectionCurve", "plane_sections", "axial_sections"]
 
 MaskFn = Callable[[Array, Array], NDArray[np.bool_]]
+Ints = NDArray[np.intp]
+#: A surface the sections cut, and a face as given: the surface or ``(surface, mask)``.
+Face = BSplineSurface | HierarchicalSurface
+SectionFace = Face | tuple[Face, MaskFn | None]
 
 
 @dataclass(frozen=True)
@@ -116,7 +119,7 @@ class Section:
 
 
 # ----------------------------------------------------------------------------------- input checks
-def _faces(faces: object) -> list[tuple[Any, MaskFn | None]]:
+def _faces(faces: object) -> list[tuple[Face, MaskFn | None]]:
     if isinstance(faces, (BSplineSurface, HierarchicalSurface)) or not isinstance(faces, Sequence):
         raise InvalidGeometryError("faces: expected a list of surfaces or (surface, mask) pairs")
     out = []
@@ -132,7 +135,7 @@ def _faces(faces: object) -> list[tuple[Any, MaskFn | None]]:
     return out
 
 
-def _grid(s: Any) -> tuple[Array, Array]:
+def _grid(s: Face) -> tuple[Array, Array]:
     (u0, u1), (v0, v1) = s.domain
     base = s.base if isinstance(s, HierarchicalSurface) else s
     out = []
@@ -146,7 +149,7 @@ def _grid(s: Any) -> tuple[Array, Array]:
 
 
 # ------------------------------------------------------------------------------ marching squares
-def _march(h: Array) -> tuple[Array, Array, Array, Array]:
+def _march(h: Array) -> tuple[Ints, Ints, Ints, int, Ints]:
     """Oriented zero-crossing segments of ``h`` (k, mu, mv), all planes at once.
 
     Returns ``(plane, src_edge, dst_edge, n_u_edges, cell)`` (``cell = i * (mv - 1) + j``): edge ids ``< n_u_edges`` lie along u
@@ -185,7 +188,7 @@ def _march(h: Array) -> tuple[Array, Array, Array, Array]:
     return np.concatenate(planes), np.concatenate(srcs), np.concatenate(dsts), nu_e, np.concatenate(cells)
 
 
-def _edge_ends(edges: Array, plane: Array, h: Array, us: Array, vs: Array, nu_e: int) -> tuple[Array, Array, Array]:
+def _edge_ends(edges: Ints, plane: Ints, h: Array, us: Array, vs: Array, nu_e: int) -> tuple[Array, Array, Array]:
     """End parameters ``(n, 2)`` of each grid edge and the linear-interpolation zero ``t`` on it."""
     mv = vs.size
     along_u = edges < nu_e
@@ -198,7 +201,7 @@ def _edge_ends(edges: Array, plane: Array, h: Array, us: Array, vs: Array, nu_e:
     return np.stack((us[i], vs[j]), -1), np.stack((us[i2], vs[j2]), -1), t
 
 
-def _on_edge(s: Any, uv0: Array, uv1: Array, t: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
+def _on_edge(s: Face, uv0: Array, uv1: Array, t: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
     """The zero of ``h = (S - o) . n`` on each grid edge ``uv0 -> uv1`` (bracketed: ``h`` changes
     sign along it), by Newton's method safeguarded with bisection, all edges at once; converges
     whenever the seed is real. Returns ``(uv, converged)``."""
@@ -233,7 +236,7 @@ def _on_edge(s: Any, uv0: Array, uv1: Array, t: Array, o: Array, n: Array, tol: 
     return uv, conv
 
 
-def _newton(s: Any, uv: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
+def _newton(s: Face, uv: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
     """Refine ``uv`` (p, 2) onto ``(S - o) . n = 0`` (o, n per point); returns (uv, converged)."""
     (u0, u1), (v0, v1) = s.domain
     uv = uv.copy()
@@ -257,7 +260,7 @@ def _newton(s: Any, uv: Array, o: Array, n: Array, tol: float) -> tuple[Array, N
     return uv, done
 
 
-def _to_trim(s: Any, keep: Callable[[Array, Array, Array], NDArray[np.bool_]], uv_in: Array, uv_out: Array, o: Array,
+def _to_trim(s: Face, keep: Callable[[Array, Array, Ints], NDArray[np.bool_]], uv_in: Array, uv_out: Array, o: Array,
              n: Array, tol_h: float) -> Array:
     """March each cut from its last point inside the trim (``uv_in``) to the trim boundary, towards
     its next point outside (``uv_out``; both on the intersection): bisection along the cut, every
@@ -284,7 +287,7 @@ def _to_trim(s: Any, keep: Callable[[Array, Array, Array], NDArray[np.bool_]], u
 
 
 # -------------------------------------------------------------------------------------- chaining
-def _order_chains(src: Array, dst: Array) -> list[tuple[Array, bool]]:
+def _order_chains(src: Ints, dst: Ints) -> list[tuple[Ints, bool]]:
     """Oriented segments ``src -> dst`` (node ids 0..N-1, each node at most one in and one out)
     ordered into chains by pointer doubling. Returns ``[(nodes, closed), ...]``."""
     N = int(max(src.max(), dst.max())) + 1
@@ -317,7 +320,7 @@ def _order_chains(src: Array, dst: Array) -> list[tuple[Array, bool]]:
     return [(part, bool(closed[lab[part[0]]])) for part in np.split(nodes, cuts)]
 
 
-def _rank(nxt: Array) -> Array:
+def _rank(nxt: Ints) -> NDArray[np.int64]:
     """Number of steps from each node to the end of its (acyclic) chain: list ranking by pointer
     doubling (Wyllie), ``log2`` of the longest chain synchronous NumPy steps."""
     dist = (nxt >= 0).astype(np.int64)
@@ -334,7 +337,7 @@ def _rank(nxt: Array) -> Array:
 
 
 # ------------------------------------------------------------------------- curvature on the cut
-def _cut_curvature(s: Any, uv: Array, m: Array, tangent_hint: Array) -> tuple[Array, Array, Array]:
+def _cut_curvature(s: Face, uv: Array, m: Array, tangent_hint: Array) -> tuple[Array, Array, Array]:
     """Signed curvature of the intersection with the plane of normal ``m`` (per point), the unit
     tangent oriented along ``tangent_hint`` and the points. Meusnier: ``kappa_s = k_n(t) / (N_c . n_s)``."""
     D = s.derivatives(uv[:, 0], uv[:, 1], 2)
@@ -369,7 +372,7 @@ def _tangent_hints(P: Array, closed: bool) -> Array:
     return g
 
 
-def _refine_inflections(s: Any, uv_a: Array, uv_b: Array, ka: Array, kb: Array, o: Array, m: Array, hint: Array,
+def _refine_inflections(s: Face, uv_a: Array, uv_b: Array, ka: Array, kb: Array, o: Array, m: Array, hint: Array,
                         tol_uv: float, tol_h: float) -> Array:
     """Zeros of the signed curvature on the exact cut between samples of opposite sign: the
     Illinois variant of regula falsi on the fraction ``c`` of the bracket (each trial point projected
@@ -408,12 +411,12 @@ def _refine_inflections(s: Any, uv_a: Array, uv_b: Array, ka: Array, kb: Array, 
 class _Piece:
     points: Array
     uv: Array
-    face: Array
+    face: Ints
     closed: bool
 
 
-def _face_pieces(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half: Array | None,
-                 tol_h: float) -> tuple[list[list[_Piece]], Array]:
+def _face_pieces(fi: int, s: Face, mask: MaskFn | None, O: Array, Nm: Array, half: Array | None,
+                 tol_h: float) -> tuple[list[list[_Piece]], NDArray[np.int64]]:
     """Polylines of face ``fi`` for every plane, and the count of unconverged seeds per plane.
 
     Planes that miss the convex hull of the face's control net (the surface lies inside it for
@@ -435,8 +438,8 @@ def _face_pieces(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half
     return pieces_all, bad_all
 
 
-def _face_pieces_of(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, half: Array | None,
-                    tol_h: float) -> tuple[list[list[_Piece]], Array]:
+def _face_pieces_of(fi: int, s: Face, mask: MaskFn | None, O: Array, Nm: Array, half: Array | None,
+                    tol_h: float) -> tuple[list[list[_Piece]], NDArray[np.int64]]:
     k = O.shape[0]
     us, vs = _grid(s)
     P = s.evaluate_grid(us, vs)
@@ -474,7 +477,7 @@ def _face_pieces_of(fi: int, s: Any, mask: MaskFn | None, O: Array, Nm: Array, h
         inner, outer = np.where(a_in, a[ci], b[ci]), np.where(a_in, b[ci], a[ci])
         pl = node_plane[inner]
 
-        def keep(uv_: Array, X_: Array, i: Array) -> NDArray[np.bool_]:
+        def keep(uv_: Array, X_: Array, i: Ints) -> NDArray[np.bool_]:
             k = np.ones(uv_.shape[0], bool) if mask is None else np.asarray(mask(uv_[:, 0], uv_[:, 1]), bool)
             return k if half is None else k & (dot(X_ - O[pl[i]], half[pl[i]]) >= -tol_h)
 
@@ -533,16 +536,16 @@ class _Curve:
     plane: int
     points: Array
     uv: Array
-    face: Array
+    face: Ints
     closed: bool
     ks: Array
     tangent: Array
     hint: Array
-    brackets: tuple[Array, Array]  # sample pairs (cur, nxt) on one face with opposite curvature signs
+    brackets: tuple[Ints, Ints]  # sample pairs (cur, nxt) on one face with opposite curvature signs
     inflections: list[Array] = field(default_factory=list)
 
 
-def _curve(plane: int, piece: _Piece, faces: list[tuple[Any, MaskFn | None]], m: Array, size: float,
+def _curve(plane: int, piece: _Piece, faces: list[tuple[Face, MaskFn | None]], m: Array, size: float,
            tol_h: float) -> _Curve:
     P, uv, face = piece.points, piece.uv, piece.face
     # a crossing through a grid vertex is found on two grid edges: keep one of coincident points
@@ -568,7 +571,7 @@ def _curve(plane: int, piece: _Piece, faces: list[tuple[Any, MaskFn | None]], m:
     return c
 
 
-def _refine_all(curves: list[_Curve], faces: list[tuple[Any, MaskFn | None]], O: Array, Nm: Array, tol_h: float) -> None:
+def _refine_all(curves: list[_Curve], faces: list[tuple[Face, MaskFn | None]], O: Array, Nm: Array, tol_h: float) -> None:
     """Refine the inflection brackets of every curve of every plane, one batch per face."""
     rows = [(ci, fi, a, b) for ci, c in enumerate(curves) for fi in np.unique(c.face[c.brackets[0]])
             for a, b in [(c.brackets[0][c.face[c.brackets[0]] == fi], c.brackets[1][c.face[c.brackets[0]] == fi])]]
@@ -576,7 +579,7 @@ def _refine_all(curves: list[_Curve], faces: list[tuple[Any, MaskFn | None]], O:
         mine = [r for r in rows if r[1] == fi]
         s = faces[fi][0]
         (u0, u1), (v0, v1) = s.domain
-        cat = lambda f: np.concatenate([f(curves[ci], a, b) for ci, _, a, b in mine])  # noqa: E731
+        cat = lambda f: np.concatenate([f(curves[ci], a, b) for ci, _, a, b in mine])  # noqa: E731, B023 - used in this iteration only
         owner = np.concatenate([np.full(a.size, ci) for ci, _, a, _b in mine])
         X = _refine_inflections(
             s, cat(lambda c, a, b: c.uv[a]), cat(lambda c, a, b: c.uv[b]), cat(lambda c, a, b: c.ks[a]),
@@ -604,7 +607,7 @@ def _section_curve(c: _Curve, m: Array, fit: bool, scale: float | None) -> Secti
 def _sections(faces: object, O: Array, Nm: Array, offsets: Array, half: Array | None, tol: float | None,
               fit: bool, scale: float | None) -> list[Section]:
     fl = _faces(faces)
-    grids = [f[0].evaluate_grid(*[np.linspace(*d, 9) for d in f[0].domain]) for f in fl]
+    grids = [f[0].evaluate_grid(*[np.linspace(d0, d1, 9) for d0, d1 in f[0].domain]) for f in fl]
     allp = np.concatenate([g.reshape(-1, 3) for g in grids])
     size = max(float(np.linalg.norm(np.ptp(allp, axis=0))), np.finfo(float).tiny)
     tol_h = tolerances.QUALITY_SECTION_TOL * size if tol is None else positive(tol, "tol")
@@ -639,7 +642,7 @@ def _cut_family(point: ArrayLike, point_name: str, direction: ArrayLike, directi
     return o, d, v
 
 
-def plane_sections(faces: Sequence[Any], origin: ArrayLike, normal: ArrayLike, offsets: ArrayLike, *,
+def plane_sections(faces: Sequence[SectionFace], origin: ArrayLike, normal: ArrayLike, offsets: ArrayLike, *,
                    tol: float | None = None, fit: bool = False, scale: float | None = None) -> list[Section]:
     """Cut faces with the parallel planes ``(x - origin - offset * normal) . normal = 0``.
 
@@ -671,7 +674,7 @@ def plane_sections(faces: Sequence[Any], origin: ArrayLike, normal: ArrayLike, o
     return _sections(faces, O, np.broadcast_to(n, O.shape).copy(), off, None, tol, fit, scale)
 
 
-def axial_sections(faces: Sequence[Any], axis_origin: ArrayLike, axis_direction: ArrayLike, angles: ArrayLike, *,
+def axial_sections(faces: Sequence[SectionFace], axis_origin: ArrayLike, axis_direction: ArrayLike, angles: ArrayLike, *,
                    tol: float | None = None, fit: bool = False, scale: float | None = None) -> list[Section]:
     """Cut faces with half-planes through an axis (meridian sections of a turned or revolved part).
 

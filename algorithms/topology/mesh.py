@@ -26,6 +26,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -68,6 +69,10 @@ class Mesh:
     _next: dict[tuple[int, int], int] = field(init=False, repr=False)  # directed edge -> face
     _fans: tuple[tuple[int, ...], ...] = field(init=False, repr=False)
     _boundary_vertex: NDArray[np.bool_] = field(init=False, repr=False)
+
+    if TYPE_CHECKING:  # the generated __init__ takes array_like / nested sequences; __post_init__ stores these
+
+        def __init__(self, vertices: ArrayLike, faces: Sequence[Sequence[int]] | NDArray[np.integer]) -> None: ...
 
     def __post_init__(self) -> None:
         P = V.as_finite_array(self.vertices, "vertices", ndim=2)
@@ -371,7 +376,7 @@ def doo_sabin(mesh: Mesh) -> Mesh:
     """
     P = mesh.vertices
     corner: dict[tuple[int, int], int] = {}  # (face, old vertex) -> new vertex
-    pts = []
+    pts: list[Array] = []
     for fi, f in enumerate(mesh.faces):
         k = len(f)
         i = np.arange(k)
@@ -492,7 +497,7 @@ def write_obj(mesh: Mesh, path: str | os.PathLike[str], *, comment: str | None =
     if not isinstance(mesh, Mesh):
         raise InvalidGeometryError(f"mesh: expected a Mesh, got {type(mesh).__name__}")
     p = Path(path)
-    out = []
+    out: list[str] = []
     if comment:
         out.extend(f"# {c}" for c in comment.splitlines())
     out.extend(f"v {x!r} {y!r} {z!r}" for x, y, z in mesh.vertices.tolist())

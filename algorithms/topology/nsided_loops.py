@@ -155,8 +155,8 @@ def _closest_pairs(curves: list[BSplineCurve], sa: NDArray[np.intp], sb: NDArray
     ta, tb, distance : ndarray, shape (m,)
     """
     (la, ha), (lb, hb) = stretch_a, stretch_b
-    for r in range(4):
-        first = r == 0
+    for it in range(4):
+        first = it == 0
         tb = _project(curves, sb, _side_derivatives(curves, sa, ta, 0)[:, 0], lb, hb, None if first else tb)
         ta = _project(curves, sa, _side_derivatives(curves, sb, tb, 0)[:, 0], la, ha, None if first else ta)
     dist = np.linalg.norm(_side_derivatives(curves, sa, ta, 0)[:, 0] - _side_derivatives(curves, sb, tb, 0)[:, 0],

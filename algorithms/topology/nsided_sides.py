@@ -240,8 +240,8 @@ def smoothstep(x: ArrayLike) -> Array:
     """The C2 smoothstep ``x^3 (10 - 15 x + 6 x^2)`` of ``x`` clipped to [0, 1] (0 and 1 with vanishing
     first and second derivatives at both ends): the blend of :func:`blend_normals` and of refill's
     corner pinning (``refill_traces._pin_end``)."""
-    x = np.clip(np.asarray(x, float), 0.0, 1.0)
-    return x ** 3 * (10 - 15 * x + 6 * x * x)
+    t = np.clip(np.asarray(x, float), 0.0, 1.0)
+    return t ** 3 * (10 - 15 * t + 6 * t * t)
 
 
 def blend_normals(s: ArrayLike, normals: ArrayLike, start: ArrayLike, end: ArrayLike, span: float) -> Array:

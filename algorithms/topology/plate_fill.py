@@ -181,7 +181,8 @@ def _params(curve: BSplineCurve, count: int) -> Array:
     return np.r_[t, k[-1]]
 
 
-def _validate(sides: Sequence[HoleSide], g1: Sequence[bool] | None) -> tuple[list[HoleSide], NDArray[np.bool_]]:
+def _validate(sides: Sequence[HoleSide],
+              g1: Sequence[bool] | NDArray[np.bool_] | None) -> tuple[list[HoleSide], NDArray[np.bool_]]:
     sides = list(sides)
     if len(sides) < 1:
         raise InvalidGeometryError("sides: expected at least one HoleSide, got none")
@@ -417,7 +418,7 @@ def _angle(gu: Array, gv: Array, m: Array) -> Array:
     return np.degrees(np.arctan2(s, c))
 
 
-def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g0_tol: float | None = None,
+def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.bool_] | None = None, g0_tol: float | None = None,
                angle_tol: float | None = None, max_spans: int | None = None, size: float | None = None,
                normal: ArrayLike | None = None) -> PlateFill:
     """Fill a hole with one trimmed thin-plate height field (see the module; course §8-3, GeomPlate).
@@ -550,6 +551,8 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | None = None, g
             if ku2.size == ku.size and kv2.size == kv.size:
                 break
             ku, kv = ku2, kv2
+    if best is None:  # the first stage of the first pass always sets it
+        raise RuntimeError("fill_plate: no stage was fitted")
     score, c, ku, kv, g0_side, g1_side, _ = best
     met = score <= 1.0
     surf, trimmed = _build(c, ku, kv, p, o, e1, e2, N, L, sides)

@@ -54,7 +54,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import make_lsq_spline
 from scipy.optimize import least_squares
 
@@ -108,6 +108,8 @@ class WrappedPlateFill(PlateFill):
         """Plate parameters of ``points`` lying near side ``side`` at its parameters ``t`` (the turn
         of ``theta`` is the one of the unrolled side there)."""
         X = _unroll(points, self.axis_point, self.axis, self.ref, self.radius)
+        if self.unrolled is None:  # fill_wrapped_plate always sets it (None is only the dataclass default)
+            raise ValueError("WrappedPlateFill: no unrolled plate to map points through")
         xref = self.unrolled.sides[side].curve.evaluate(t)[:, 0]
         turn = 2 * np.pi * self.radius
         X[:, 0] += np.round((xref - X[:, 0]) / turn) * turn
@@ -379,6 +381,8 @@ def _one_axis(sides: list[HoleSide], flags: Array, c: Array, a: Array, g0_tol: f
         us = _unrolled_side(s, c, a, e1, r0, x_end, 0.05 * g0_tol / stretch)
         usides.append(us)
         x_end = float(us.curve.evaluate(us.curve.domain[1])[0])
+    if x_end is None:  # _validate takes at least one side
+        raise InvalidGeometryError("sides: expected at least one HoleSide, got none")
     x_first = float(usides[0].curve.evaluate(usides[0].curve.domain[0])[0])
     winding = (x_end - x_first) / (2 * np.pi * r0)
     if abs(winding) > 0.25:
@@ -532,7 +536,7 @@ def _measure(fill: WrappedPlateFill, per_span: int = 16) -> tuple[Array, Array]:
 
 
 def fill_wrapped_plate(sides: Sequence[HoleSide], *, axes: Sequence[tuple[ArrayLike, ArrayLike]] = (),
-                       g1: Sequence[bool] | None = None, g0_tol: float | None = None,
+                       g1: Sequence[bool] | NDArray[np.bool_] | None = None, g0_tol: float | None = None,
                        angle_tol: float | None = None, max_spans: int | None = None,
                        size: float | None = None) -> WrappedPlateFill:
     """Fill a hole that winds around an axis (a thread strip) with a plate in cylindrical

@@ -53,7 +53,7 @@ import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from math import comb, factorial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -343,10 +343,10 @@ def _bernstein_levels(lam: Array, n: int, depth: int, lowest: int = 0, monomials
         powers[:, e] = powers[:, e - 1] * lam
     M = [powers[n - 1, e][None] for e in range(depth + 1)]  # coordinate n-1 alone
     for s in range(n - 2, -1, -1):
-        M_new = []
+        M_new: list[Array] = []
         for e in range(depth + 1):
             if s == 0 and e < lowest:
-                M_new.append(None)
+                M_new.append(np.empty((0, N)))  # a placeholder: levels below lowest are not returned
                 continue
             blocks = [M[e - i] for i in range(e, -1, -1)]
             out = np.empty((sum(b.shape[0] for b in blocks), N))
@@ -426,6 +426,16 @@ class SPatch(ControlPointValue):
     weights: Array | None = None
     indices: NDArray[np.intp] = field(init=False, repr=False)
     _hpoles: Array = field(init=False, repr=False)
+
+    if TYPE_CHECKING:  # the generated __init__ takes mappings or array_like; __post_init__ stores arrays
+
+        def __init__(
+            self,
+            sides: int,
+            depth: int,
+            control_points: Mapping[tuple[int, ...], ArrayLike] | ArrayLike,
+            weights: Mapping[tuple[int, ...], float] | ArrayLike | None = None,
+        ) -> None: ...
 
     def __post_init__(self) -> None:
         n = _check_sides(self.sides)

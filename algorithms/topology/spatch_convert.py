@@ -236,8 +236,8 @@ def _reduce_axis(C: Array, axis: int, rtol: float) -> Array | None:
         B[i] = (C[i + 1] - (1 - a) * B[i + 1]) / a
     E = np.empty_like(C)
     E[0], E[p] = B[0], B[p - 1]
-    i = np.arange(1, p).reshape((-1,) + (1,) * (C.ndim - 1))
-    E[1:p] = (i / p) * B[:-1] + (1 - i / p) * B[1:]
+    ii = np.arange(1, p).reshape((-1,) + (1,) * (C.ndim - 1))
+    E[1:p] = (ii / p) * B[:-1] + (1 - ii / p) * B[1:]
     scale = float(np.max(np.abs(C)))
     if float(np.max(np.abs(E - C))) > rtol * scale:
         return None
@@ -273,7 +273,7 @@ def _uniform_knots(n_poles: int, p: int) -> Array:
 def _fit_piece(patch: SPatch, k: int, tol: float, p: int) -> tuple[BSplineSurface, float]:
     """Least-squares bi-``p`` B-spline of piece ``k``, refined until within ``tol`` (measured)."""
     n_poles = p + 1
-    check = _check_params(tolerances.SPATCH_CHECK_SAMPLES * 2)
+    check = _check_params(int(tolerances.SPATCH_CHECK_SAMPLES) * 2)
     sc, tc = np.meshgrid(check, check, indexing="ij")
     ref = patch.evaluate(piece_domain_points(patch.sides, k, sc, tc))
     while True:
@@ -288,7 +288,7 @@ def _fit_piece(patch: SPatch, k: int, tol: float, p: int) -> tuple[BSplineSurfac
         dev = float(np.max(np.linalg.norm(surf.evaluate(sc, tc) - ref, axis=-1)))
         if dev <= tol:
             return surf, dev
-        max_poles = tolerances.SPATCH_APPROX_MAX_POLES
+        max_poles = int(tolerances.SPATCH_APPROX_MAX_POLES)
         if n_poles >= max_poles:
             raise ToleranceError(
                 f"spatch_to_surfaces: piece {k} of the S-patch could not be approximated within tol={tol:.3g} "
@@ -362,12 +362,12 @@ def convert_spatch(patch: SPatch, *, tol: float | None = None, reduce: bool = Tr
                 C = R
             surfaces.append(_bezier_surface(C, patch.is_rational))
         exact = True
-        params = np.linspace(0.0, 1.0, tolerances.SPATCH_CHECK_SAMPLES)
+        params = np.linspace(0.0, 1.0, int(tolerances.SPATCH_CHECK_SAMPLES))
     else:
         method, exact = "lsq-fit", False
         for k in range(n):
-            surfaces.append(_fit_piece(patch, k, tol_abs, tolerances.SPATCH_APPROX_DEGREE)[0])
-        params = _check_params(tolerances.SPATCH_CHECK_SAMPLES * 2)
+            surfaces.append(_fit_piece(patch, k, tol_abs, int(tolerances.SPATCH_APPROX_DEGREE))[0])
+        params = _check_params(int(tolerances.SPATCH_CHECK_SAMPLES) * 2)
     S, T = np.meshgrid(params, params, indexing="ij")
     dev = 0.0
     for k, surf in enumerate(surfaces):
