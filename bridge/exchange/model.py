@@ -102,8 +102,9 @@ class _LazyTrimmed:
         self._value: Any = self._PENDING
 
     def value(self) -> Any:
-        if self._value is self._PENDING:
-            self._value = _build_trimmed(*self._args)
+        args = self._args
+        if args is not None:  # None: built already (the value is set before the arguments are dropped)
+            self._value = _build_trimmed(*args)
             self._args = None  # the OCC objects are no longer needed here
         return self._value
 
