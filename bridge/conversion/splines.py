@@ -204,7 +204,8 @@ def _surface_to_occ(s: BSplineSurface) -> Geom_BSplineSurface:
 
 # ================================================================================= OCC -> ours
 def from_occ(obj: Any, bounds: tuple[float, ...] | None = None, *, tol: float | None = None,
-             trims: bool = True) -> BSplineCurve | BSplineSurface | TrimmedSurface | list[Any]:
+             trims: bool = True
+             ) -> BSplineCurve | BSplineSurface | TrimmedSurface | list[BSplineCurve | BSplineSurface | TrimmedSurface]:
     """Our B-spline equivalent of an OCC curve, surface, edge or face.
 
     Parameters
@@ -266,7 +267,8 @@ def from_occ(obj: Any, bounds: tuple[float, ...] | None = None, *, tol: float | 
     )
 
 
-def _from_container(shape: TopoDS_Shape, bounds: Any, tol: float, trims: bool) -> list[Any]:
+def _from_container(shape: TopoDS_Shape, bounds: Any, tol: float, trims: bool
+                    ) -> list[BSplineCurve | BSplineSurface | TrimmedSurface]:
     """Every face of a shell, solid or compound converted (its edges if it has no face)."""
     if bounds is not None:
         raise InvalidGeometryError("bounds: applies to one face or edge; got a shape holding several "
@@ -276,7 +278,7 @@ def _from_container(shape: TopoDS_Shape, bounds: Any, tol: float, trims: bool) -
     TopExp.MapShapes_s(shape, kind, items)
     if items.Extent() == 0:
         raise InvalidGeometryError("from_occ: the shape holds no faces and no edges")
-    return [from_occ(items.FindKey(i), tol=tol, trims=trims) for i in range(1, items.Extent() + 1)]
+    return [_from_shape(items.FindKey(i), None, tol, trims) for i in range(1, items.Extent() + 1)]
 
 
 def is_reversed(shape: Any) -> bool:

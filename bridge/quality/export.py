@@ -26,6 +26,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     import build123d as bd
+    from vtkmodules.vtkCommonDataModel import vtkPolyData
 
     from .report import FaceField, QualityReport
 
@@ -76,7 +77,7 @@ class ColoredMesh:
         atomic_write(path, head + vert.tobytes() + face.tobytes())
         return path
 
-    def to_vtk(self) -> Any:
+    def to_vtk(self) -> vtkPolyData:
         """vtkPolyData with the colours as its point scalars (name ``'rgb'``) and the values as ``indicator``."""
         from vtkmodules.util.numpy_support import numpy_to_vtk
 

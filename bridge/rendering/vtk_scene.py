@@ -36,7 +36,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from vtkmodules.vtkRenderingCore import vtkRenderWindow
+    from vtkmodules.vtkCommonDataModel import vtkPolyData
+    from vtkmodules.vtkCommonMath import vtkMatrix4x4
+    from vtkmodules.vtkRenderingCore import vtkCamera, vtkRenderer, vtkRenderWindow
 
 __all__ = ["Scene", "CAMERAS", "VIEWS", "VIEW_ANGLE", "Camera", "fit_camera", "apply_camera", "window",
            "new_window", "read_pixels", "COLORMAPS", "colormap_rgb", "render_available"]
@@ -315,7 +317,7 @@ def _fit_by_view_angle(direction: np.ndarray, up: np.ndarray, centre: np.ndarray
     return Camera(position=tuple(position), target=tuple(target), up=tuple(up), view_angle=VIEW_ANGLE / (zoom / need))
 
 
-def apply_camera(renderer: Any, camera: Camera, clip_bounds: Sequence[float] | None = None) -> Any:
+def apply_camera(renderer: vtkRenderer, camera: Camera, clip_bounds: Sequence[float] | None = None) -> vtkCamera:
     """Put ``camera`` on ``renderer``'s active VTK camera (view-up orthogonalised) and fit the
     clipping range to ``clip_bounds`` ``[x0, x1, y0, y1, z0, z1]`` (default: every visible prop);
     returns the VTK camera."""
@@ -332,12 +334,12 @@ def apply_camera(renderer: Any, camera: Camera, clip_bounds: Sequence[float] | N
     return cam
 
 
-def vtk_matrix(m: Any) -> np.ndarray:
+def vtk_matrix(m: vtkMatrix4x4) -> np.ndarray:
     """A ``vtkMatrix4x4`` as a ``(4, 4)`` array."""
     return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
 
 
-def _polydata(points: np.ndarray, cells: np.ndarray | Sequence[np.ndarray], kind: str) -> Any:
+def _polydata(points: np.ndarray, cells: np.ndarray | Sequence[np.ndarray], kind: str) -> vtkPolyData:
     """vtkPolyData from points ``(n, 3)`` and cells (triangles ``(m, 3)`` or polylines of indices)."""
     from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
     from vtkmodules.vtkCommonCore import vtkPoints
