@@ -151,6 +151,9 @@ class Thresholds:
         return replace(self, **changes)
 
 
+#: CATIA's relative curvature jump (percent): also what tells G1 from G2 in a report when the
+#: thresholds do not check relative jumps (``g2_rel=None``).
+_CATIA_G2_REL = 2.0
 #: ``'catia'``: CATIA V5 Connect Checker's defaults (G0 0.001 mm, G1 0.01 deg, G2 2 %).
 #: ``'class-a'``: visible automotive/consumer surfaces: half CATIA's angle and curvature jumps
 #: (0.005 deg, 1 %), as class-A reviews ask for joints that look seamless in highlight lines, and a
@@ -159,9 +162,6 @@ class Thresholds:
 #: 10-digit round-off on metre-sized parts), 0.5 deg tangency (below what shows on a part; also
 #: NX's default angle tolerance), no curvature check (a fillet meets its plane with a 100 %
 #: curvature jump by design), creases from 5 deg on.
-#: CATIA's relative curvature jump (percent): also what tells G1 from G2 in a report when the
-#: thresholds do not check relative jumps (``g2_rel=None``).
-_CATIA_G2_REL = 2.0
 PRESETS: dict[str, Thresholds] = {
     "catia": Thresholds(0.001, 0.01, _CATIA_G2_REL, None, None, 0.5, "catia"),
     "class-a": Thresholds(0.001, 0.005, 1.0, None, 1e-3, 0.5, "class-a"),
