@@ -25,6 +25,7 @@ from __future__ import annotations
 import contextlib
 import threading
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -78,7 +79,7 @@ def silence_messages() -> None:
 
 _QUIET_LOCK = threading.Lock()
 _quiet_depth = 0
-_quiet_saved: list[tuple[object, object]] = []
+_quiet_saved: list[tuple[Any, Any]] = []  # (OCC Message_Printer, Message_Gravity)
 
 
 @contextlib.contextmanager
@@ -206,28 +207,28 @@ def pnt_array2(points: ArrayLike) -> TColgp_Array2OfPnt:
     return arr
 
 
-def from_real_array(arr) -> Array:
+def from_real_array(arr: Any) -> Array:
     """A 1-D OCC real array (``Array1``/``HArray1``, any lower bound) as an ndarray ``(n,)``."""
     return np.array([arr.Value(i) for i in range(arr.Lower(), arr.Upper() + 1)], dtype=float)
 
 
-def from_int_array(arr) -> NDArray[np.intp]:
+def from_int_array(arr: Any) -> NDArray[np.intp]:
     """A 1-D OCC integer array as an ndarray ``(n,)``."""
     return np.array([arr.Value(i) for i in range(arr.Lower(), arr.Upper() + 1)], dtype=np.intp)
 
 
-def from_real_array2(arr) -> Array:
+def from_real_array2(arr: Any) -> Array:
     """A 2-D OCC real array as an ndarray ``(rows, cols)``."""
     r0, r1, c0, c1 = arr.LowerRow(), arr.UpperRow(), arr.LowerCol(), arr.UpperCol()
     return np.array([[arr.Value(i, j) for j in range(c0, c1 + 1)] for i in range(r0, r1 + 1)], dtype=float)
 
 
-def from_pnt_array(arr) -> Array:
+def from_pnt_array(arr: Any) -> Array:
     """A 1-D OCC point array as an ndarray ``(n, 3)``."""
     return np.array([arr.Value(i).Coord() for i in range(arr.Lower(), arr.Upper() + 1)], dtype=float)
 
 
-def from_pnt_array2(arr) -> Array:
+def from_pnt_array2(arr: Any) -> Array:
     """A 2-D OCC point array as an ndarray ``(rows, cols, 3)``."""
     r0, r1, c0, c1 = arr.LowerRow(), arr.UpperRow(), arr.LowerCol(), arr.UpperCol()
     return np.array([[arr.Value(i, j).Coord() for j in range(c0, c1 + 1)] for i in range(r0, r1 + 1)],
@@ -302,7 +303,7 @@ def knots_to_occ(knots: ArrayLike, degree: int, name: str = "knots") -> tuple[TC
     return real_array(vals), int_array(mults)
 
 
-def knots_from_occ(occ_knots, occ_mults) -> Array:
+def knots_from_occ(occ_knots: Any, occ_mults: Any) -> Array:
     """The full knot vector (shape ``(sum(mults),)``) from OCC's distinct knots and multiplicities.
 
     For a non-periodic spline this equals OCC's ``KnotSequence()``; periodic splines use

@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface
 from occsurf.algorithms.construction import coons, coons_bicubic, gordon
@@ -21,7 +22,7 @@ from ._common import output_folder
 __all__ = ["render_curvenet_demo", "demo_boundaries", "demo_network"]
 
 
-def _curve(points, degree: int = 3) -> BSplineCurve:
+def _curve(points: ArrayLike, degree: int = 3) -> BSplineCurve:
     P = np.asarray(points, float)
     n = P.shape[0]
     inner = np.linspace(0, 1, n - degree + 1)[1:-1]
@@ -56,10 +57,11 @@ def demo_network(nu: int = 4, nv: int = 5) -> tuple[list[BSplineCurve], list[BSp
     return u_curves, v_curves, F
 
 
-def _cross_derivatives(bottom, right, top, left, amount: float = 1.5):
+def _cross_derivatives(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BSplineCurve,
+                       amount: float = 1.5) -> tuple[BSplineCurve, BSplineCurve, BSplineCurve, BSplineCurve]:
     """Cross-boundary derivative curves (d/dv along bottom and top, d/du along left and right) with a bump, compatible
     at the corners with the boundary tangents (so the bicubic Coons patch is exact)."""
-    def blend(tangent_start, tangent_end, c: BSplineCurve, lift: float) -> BSplineCurve:
+    def blend(tangent_start: np.ndarray, tangent_end: np.ndarray, c: BSplineCurve, lift: float) -> BSplineCurve:
         # linear blend of the corner tangents plus an upward bump vanishing at both ends
         t = np.linspace(0, 1, c.n_poles)[:, None]
         bump = np.sin(np.pi * t) * np.array([0, 0, lift])

@@ -10,6 +10,7 @@ and as a PNG, plus the filled model as STEP.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 from occsurf.bridge.conversion.splines import make_face
@@ -23,7 +24,7 @@ from ._common import output_folder
 __all__ = ["render_fill_demo"]
 
 
-def _table_png(path: Path, rows: list[tuple[str, ...]], title: str) -> Path:
+def _table_png(path: Path, rows: Sequence[tuple[str, ...]], title: str) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 

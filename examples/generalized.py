@@ -37,44 +37,45 @@ def demo_dome() -> Mesh:
     of 10 quads. Its pentagon and the valence-3 corners of the top stay interior, so the
     Catmull–Clark step leaves interior vertices of valence 3 and 5."""
     rings = ((5, 1.0, 1.9, 0.0), (5, 1.6, 0.9, 0.0), (10, 2.6, 0.0, 0.45))  # count, radius, height, wave
-    verts, start = [], []
+    verts: list[tuple[float, float, float]] = []
+    start: list[int] = []
     for r, (n, rad, h, wave) in enumerate(rings):
         start.append(len(verts))
         for i in range(n):
             a = 2 * np.pi * i / n + (np.pi / 5 if r == 2 else 0.0)
             verts.append((rad * np.cos(a) * (1 + 0.08 * np.cos(2 * a)), rad * np.sin(a), h + wave * np.sin(2.5 * a)))
     s0, s1, s2 = start
-    faces = [list(range(s0, s0 + 5))]
+    faces: list[tuple[int, ...]] = [tuple(range(s0, s0 + 5))]
     for i in range(5):
         j = (i + 1) % 5
-        faces.append([s0 + j, s0 + i, s1 + i, s1 + j])
-        faces.append([s1 + j, s1 + i, s2 + 2 * i, s2 + 2 * i + 1])
-        faces.append([s1 + j, s2 + 2 * i + 1, s2 + (2 * i + 2) % 10])
-    return Mesh(np.array(verts), faces)
+        faces.append((s0 + j, s0 + i, s1 + i, s1 + j))
+        faces.append((s1 + j, s1 + i, s2 + 2 * i, s2 + 2 * i + 1))
+        faces.append((s1 + j, s2 + 2 * i + 1, s2 + (2 * i + 2) % 10))
+    return Mesh(np.array(verts), tuple(faces))
 
 
 def demo_frame() -> Mesh:
     """A square picture frame (genus 1) of 32 quads: outer corners of valence 3, hole corners of
     valence 5; slightly twisted so that it is not symmetric."""
     vid: dict[tuple[int, int, int], int] = {}
-    pts = []
+    pts: list[tuple[float, float, float]] = []
     for z in (0, 1):
         for i in range(4):
             for j in range(4):
                 vid[(i, j, z)] = len(pts)
                 pts.append((i + 0.15 * z * (j - 1.5), j, 0.8 * z + 0.1 * np.sin(i + j)))
-    F = []
+    F: list[tuple[int, ...]] = []
     for i in range(3):
         for j in range(3):
             if (i, j) != (1, 1):
-                F.append([vid[(i, j, 1)], vid[(i + 1, j, 1)], vid[(i + 1, j + 1, 1)], vid[(i, j + 1, 1)]])
-                F.append([vid[(i, j, 0)], vid[(i, j + 1, 0)], vid[(i + 1, j + 1, 0)], vid[(i + 1, j, 0)]])
+                F.append((vid[(i, j, 1)], vid[(i + 1, j, 1)], vid[(i + 1, j + 1, 1)], vid[(i, j + 1, 1)]))
+                F.append((vid[(i, j, 0)], vid[(i, j + 1, 0)], vid[(i + 1, j + 1, 0)], vid[(i + 1, j, 0)]))
     outer = [(i, 0) for i in range(3)] + [(3, j) for j in range(3)] + [(i, 3) for i in range(3, 0, -1)] + [(0, j) for j in range(3, 0, -1)]
     hole = [(1, 1), (1, 2), (2, 2), (2, 1)]
     for loop in (outer, hole):
         for a, b in zip(loop, loop[1:] + loop[:1]):
-            F.append([vid[a + (0,)], vid[b + (0,)], vid[b + (1,)], vid[a + (1,)]])
-    return Mesh(np.array(pts, float), F)
+            F.append((vid[a + (0,)], vid[b + (0,)], vid[b + (1,)], vid[a + (1,)]))
+    return Mesh(np.array(pts, float), tuple(F))
 
 
 # ------------------------------------------------------------------------------------- drawing

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from occsurf.algorithms import BSplineCurve, circle, ellipse
+from occsurf.algorithms import BSplineCurve, BSplineSurface, circle, ellipse
 from occsurf.algorithms.construction.generation import extrude, revolve, rotational_sweep, ruled, translational_sweep
 from occsurf.algorithms.construction.sweeping import sweep
 from occsurf.algorithms.fitting.interpolation import interpolate_curve
@@ -26,9 +26,9 @@ __all__ = ["render_generation_demo", "demo_surfaces"]
 
 def _vase_profile() -> BSplineCurve:
     """A rational cubic profile in the xz half-plane (a vase outline)."""
-    P = [[1.0, 0, 0], [2.2, 0, 0.8], [0.8, 0, 2.0], [0.7, 0, 3.0], [1.6, 0, 4.0], [1.2, 0, 4.6]]
+    P = np.array([[1.0, 0, 0], [2.2, 0, 0.8], [0.8, 0, 2.0], [0.7, 0, 3.0], [1.6, 0, 4.0], [1.2, 0, 4.6]])
     t = np.r_[[0.0] * 4, [1 / 3, 2 / 3], [1.0] * 4]
-    return BSplineCurve(3, t, P, [1, 1.5, 1, 1, 2, 1])
+    return BSplineCurve(3, t, P, np.array([1, 1.5, 1, 1, 2, 1]))
 
 
 def _wave(y: float, z: float, amp: float) -> BSplineCurve:
@@ -36,13 +36,14 @@ def _wave(y: float, z: float, amp: float) -> BSplineCurve:
     return interpolate_curve(np.c_[x, y + amp * np.sin(x), z + 0.4 * np.cos(1.3 * x)])
 
 
-def demo_surfaces() -> dict[str, tuple[object, list, str]]:
+def demo_surfaces() -> dict[str, tuple[BSplineSurface, list[BSplineCurve], str]]:
     """name -> (surface, input curves, caption)."""
-    out: dict[str, tuple[object, list, str]] = {}
+    out: dict[str, tuple[BSplineSurface, list[BSplineCurve], str]] = {}
     c = _wave(0, 0, 0.6)
     out["extrude"] = (extrude(c, [0.5, 1.0, 3.0]), [c],
                       "extrude(curve, d): S(u, v) = C(u) + v d")
-    c1, c2 = _wave(0, 0, 0.8), BSplineCurve(2, [0, 0, 0, 1, 1, 1], [[0, 3, 2], [3, 5, 4], [6, 3, 1.5]])
+    c1, c2 = _wave(0, 0, 0.8), BSplineCurve(2, np.array([0, 0, 0, 1, 1, 1.0]),
+                                               np.array([[0, 3, 2], [3, 5, 4], [6, 3, 1.5]]))
     out["ruled"] = (ruled(c1, c2), [c1, c2], "ruled(c1, c2): straight rulings between compatible curves")
     prof = _vase_profile()
     out["revolve_full"] = (revolve(prof, [0, 0, 0], [0, 0, 1]), [prof],
@@ -53,7 +54,7 @@ def demo_surfaces() -> dict[str, tuple[object, list, str]]:
     sec = circle([0, 0, 0], 0.8, normal=[0, 0, 1])
     out["translational_sweep"] = (translational_sweep(sec, path), [sec, path],
                                   "translational_sweep: P(u) + Q(v) - Q(v0), exact")
-    prof2 = BSplineCurve(2, [0, 0, 0, 1, 1, 1], [[1.0, 0, 0], [1.8, 0, 1.2], [1.0, 0, 2.0]])
+    prof2 = BSplineCurve(2, np.array([0, 0, 0, 1, 1, 1.0]), np.array([[1.0, 0, 0], [1.8, 0, 1.2], [1.0, 0, 2.0]]))
     traj = ellipse([0, 0, -0.3], 1.4, 0.75)  # only its shape relative to the start point matters
     out["rotational_sweep"] = (rotational_sweep(prof2, traj), [prof2, traj],
                                "rotational_sweep: profile swung along an ellipse (Woodward)")
@@ -64,8 +65,8 @@ def demo_surfaces() -> dict[str, tuple[object, list, str]]:
     n0 = np.cross(t0, [0, 0, 1.0])
     n0 /= np.linalg.norm(n0)
     square = BSplineCurve(1, np.r_[0, 0, np.linspace(0, 1, 5)[1:-1], 1, 1],
-                          [p0 + (0.7 * a * n0 + 0.15 * b * np.cross(t0, n0)) for a, b in
-                           [(1, 1), (-1, 1), (-1, -1), (1, -1), (1, 1)]])
+                          np.array([p0 + (0.7 * a * n0 + 0.15 * b * np.cross(t0, n0)) for a, b in
+                                    [(1, 1), (-1, 1), (-1, -1), (1, -1), (1, 1)]]))
     rep = sweep(square, helix, frame="rmf", twist=lambda t: np.pi * t, scale=lambda t: 1 + 0.8 * t,
                 tol=1e-5, return_report=True)
     out["sweep_twist_scale"] = (rep.surface, [square, helix],

@@ -14,6 +14,7 @@ matplotlib is imported here, in ``bridge``; figures use the Agg canvas (no displ
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -22,6 +23,14 @@ from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 from occsurf.bridge.exchange.files import write_figure
 
 from ._common import label_axes, output_folder, script
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.colors import Normalize
+    from matplotlib.figure import Figure
+
+#: A panel's data: the points (m, m, 3), their unit normals and the detail height above the base.
+PanelData = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 __all__ = ["render_hierarchical_demo", "demo_hierarchy"]
 
@@ -107,7 +116,8 @@ def _sample(hs: HierarchicalSurface, lo: float = 0.0, hi: float = 1.0, res: int 
     return P, np.nan_to_num(n, nan=0.0), h
 
 
-def _panel(fig, pos, data, norm, title, limits, view=(30, -62)):
+def _panel(fig: Figure, pos: tuple[int, int, int], data: PanelData, norm: Normalize, title: str,
+           limits: tuple[np.ndarray, np.ndarray], view: tuple[float, float] = (30, -62)) -> Axes:
     from matplotlib import cm
 
     P, n, h = data
@@ -127,7 +137,8 @@ def _panel(fig, pos, data, norm, title, limits, view=(30, -62)):
     return ax
 
 
-def _render(path: Path, panels: list[tuple[tuple, str]], suptitle: str, view=(30, -62), ncols=3) -> None:
+def _render(path: Path, panels: list[tuple[PanelData, str]], suptitle: str, view: tuple[float, float] = (30, -62),
+            ncols: int = 3) -> None:
     from matplotlib import cm
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.colors import TwoSlopeNorm
@@ -210,9 +221,11 @@ def _render_profiles(path: Path, before: HierarchicalSurface, after: Hierarchica
     for k, u in enumerate(u_values):
         ax = fig.add_subplot(1, len(u_values), k + 1)
         uu = np.full_like(vs, u)
-        for hs, style, label in ((before, dict(color="0.45", lw=1.6), "before the edit"),
-                                 (after, dict(color="#1f5fbf", lw=2.2), "after, offset referencing"),
-                                 (after_add, dict(color="#e07b00", lw=1.8, ls="--"), "after, additive offsets")):
+        curves: list[tuple[HierarchicalSurface, dict[str, Any], str]] = [
+            (before, dict(color="0.45", lw=1.6), "before the edit"),
+            (after, dict(color="#1f5fbf", lw=2.2), "after, offset referencing"),
+            (after_add, dict(color="#e07b00", lw=1.8, ls="--"), "after, additive offsets")]
+        for hs, style, label in curves:
             P = hs.evaluate(uu, vs)
             ax.plot(P[:, 1], P[:, 2], label=label, **style)
         Bb, Ba = before.base.evaluate(uu, vs), after.base.evaluate(uu, vs)

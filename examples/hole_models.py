@@ -16,6 +16,7 @@ bump vanish only to first order at the lateral edges: the faces are then only G1
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,7 +54,7 @@ def base_surface(rational: bool) -> BSplineSurface:
     return BSplineSurface((3, 3), (k, k), np.stack([X, Y, Z], -1))
 
 
-def represent_grid(fn, degree: tuple[int, int], knots: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+def represent_grid(fn: Callable[[np.ndarray, np.ndarray], np.ndarray], degree: tuple[int, int], knots: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     """Poles of the tensor spline equal to ``fn(s, t) -> (m, k, d)`` on a grid (exact collocation)."""
     xs = [greville(knots[d], degree[d]) for d in range(2)]
     N = [basis_matrix(knots[d], degree[d], len(xs[d]), xs[d])[0] for d in range(2)]
@@ -76,7 +77,8 @@ def _bump(order: int) -> BSplineCurve:
 
 
 def ring_model(n: int, *, rational: bool = False, bump: float = 0.6, bump_order: int = 2,
-               radius: float = 0.22, width: float = 0.16, center=(0.5, 0.5), jitter: float = 0.12,
+               radius: float = 0.22, width: float = 0.16, center: tuple[float, float] = (0.5, 0.5),
+               jitter: float = 0.12,
                base: BSplineSurface | None = None, polygon: np.ndarray | None = None) -> RingModel:
     """An n-sided hole with its ring of n neighbour faces (see the module docstring)."""
     G = base_surface(rational) if base is None else base
@@ -94,18 +96,20 @@ def ring_model(n: int, *, rational: bool = False, bump: float = 0.6, bump_order:
     p, q = G.degree
     dg = p + q
     phi = _bump(bump_order) if bump else None
-    faces, sides = [], []
+    faces: list[BSplineSurface] = []
+    sides: list[HoleSide] = []
     for i in range(n):
         a, b = hole[i], hole[(i + 1) % n]
         A, B = outer[i], outer[(i + 1) % n]
         amp = bump * (0.6 + 0.4 * math.cos(1.3 * i)) if bump else 0.0
 
-        def fn(s, t, a=a, b=b, A=A, B=B, amp=amp):
+        def fn(s: np.ndarray, t: np.ndarray, a: np.ndarray = a, b: np.ndarray = b, A: np.ndarray = A,
+               B: np.ndarray = B, amp: float = amp) -> np.ndarray:
             S, T = np.meshgrid(s, t, indexing="ij")
             x = ((1 - T) * ((1 - S) * a[0] + S * b[0]) + T * ((1 - S) * A[0] + S * B[0]))
             y = ((1 - T) * ((1 - S) * a[1] + S * b[1]) + T * ((1 - S) * A[1] + S * B[1]))
             H = GH.evaluate(x, y)
-            if amp:  # in homogeneous coordinates for a rational base: z moves by amp phi psi / w
+            if amp and phi is not None:  # homogeneous coordinates for a rational base: z moves by amp phi psi / w
                 H[..., 2] += amp * phi.evaluate(S)[..., 0] * (1.0 - T)
             return H
 

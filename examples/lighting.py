@@ -90,7 +90,7 @@ def render_lighting_demo(out_dir: Path) -> list[Path]:
     for stem, (caption, setup) in demo_setups().items():
         img = render_lit(mesh.points, mesh.triangles, setup, normals=mesh.normals, size=SIZE, camera=camera)
         files.append(write_png(out_dir / f"{stem}.png", img))
-        tile = Image.fromarray(img.rgb).resize((SIZE[0] // 2, SIZE[1] // 2), Image.LANCZOS)
+        tile = Image.fromarray(img.rgb).resize((SIZE[0] // 2, SIZE[1] // 2), Image.Resampling.LANCZOS)
         ImageDraw.Draw(tile).text((12, 10), caption, fill=(235, 235, 235))
         tiles.append(tile)
     w, h = tiles[0].size

@@ -13,6 +13,7 @@ object-oriented API with the Agg canvas (no pyplot state, no display needed).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,9 @@ from occsurf.algorithms import (
 from occsurf.bridge.exchange.files import write_figure
 
 from ._common import label_axes, output_folder, script
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["render_manipulation_demo", "demo_curve", "demo_surface"]
 
@@ -66,7 +70,7 @@ def _curvature_vectors(c: BSplineCurve, u: np.ndarray) -> tuple[np.ndarray, np.n
     return D[:, 0], kappa
 
 
-def _comb(ax, c: BSplineCurve, color: str, scale: float, alpha: float = 1.0, label: str | None = None) -> None:
+def _comb(ax: Axes, c: BSplineCurve, color: str, scale: float, alpha: float = 1.0, label: str | None = None) -> None:
     """Curvature comb: hairs along ``-kappa`` (outside the bend), length ``scale * |kappa|``."""
     u = np.linspace(*c.domain, 161)
     P, k = _curvature_vectors(c, u)
@@ -74,11 +78,11 @@ def _comb(ax, c: BSplineCurve, color: str, scale: float, alpha: float = 1.0, lab
     segs = np.stack([P[:, :2], tips[:, :2]], 1)
     from matplotlib.collections import LineCollection
 
-    ax.add_collection(LineCollection(segs, colors=color, linewidths=0.6, alpha=0.6 * alpha))
+    ax.add_collection(LineCollection(list(segs), colors=color, linewidths=0.6, alpha=0.6 * alpha))
     ax.plot(tips[:, 0], tips[:, 1], color=color, lw=0.9, alpha=alpha, label=label)
 
 
-def _curve_panel(ax, before: BSplineCurve, after: BSplineCurve, title: str, comb_scale: float) -> None:
+def _curve_panel(ax: Axes, before: BSplineCurve, after: BSplineCurve, title: str, comb_scale: float) -> None:
     u = np.linspace(*before.domain, 400)
     pb, pa = before.evaluate(u), after.evaluate(u)
     _comb(ax, before, BEFORE, comb_scale, alpha=0.5)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import re
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
@@ -33,6 +34,9 @@ from occsurf.bridge.exchange.step_iges import write_step  # noqa: E402
 from occsurf.bridge.modeling.fill import sew_faces  # noqa: E402
 from occsurf.examples.hole_models import ring_model  # noqa: E402
 
+if TYPE_CHECKING:
+    from OCP.TopoDS import TopoDS_Shape
+
 FIXED_STEP_TIME = "2000-01-01T00:00:00"
 LAYOUT = {
     "dome_holes.step": (False, [(3, (0.27, 0.27)), (4, (0.73, 0.27)), (5, (0.27, 0.73)), (6, (0.73, 0.73))]),
@@ -40,7 +44,7 @@ LAYOUT = {
 }
 
 
-def build(rational: bool, holes) -> object:
+def build(rational: bool, holes: list[tuple[int, tuple[float, float]]]) -> TopoDS_Shape:
     faces = []
     for n, c in holes:
         m = ring_model(n, rational=rational, center=c, radius=0.1, width=0.08, bump=0.3)

@@ -27,6 +27,7 @@ import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))  # run from a source checkout without installing
@@ -35,6 +36,10 @@ import numpy as np  # noqa: E402
 
 from occsurf.algorithms import BSplineSurface, circle  # noqa: E402
 
+if TYPE_CHECKING:
+    import build123d as bd
+    import cadquery as cq
+
 #: Written into every file instead of the wall-clock time, so rebuilding changes nothing.
 FIXED_STEP_TIME = "2000-01-01T00:00:00"
 FIXED_IGES_DATE = {15: "20000101.000000", 13: "000101.000000"}
@@ -42,7 +47,7 @@ MAX_BYTES = 300_000
 
 
 # ------------------------------------------------------------------------------------- models
-def loft_body():
+def loft_body() -> bd.Solid:
     """A solid lofted through three different closed sections (free-form sides)."""
     import build123d as bd
 
@@ -52,7 +57,7 @@ def loft_body():
     return bd.Solid.make_loft([bottom, middle, top])
 
 
-def swept_tube():
+def swept_tube() -> bd.Solid:
     """A closed, lobed section swept along a 3-D spline: OCC gives a B-spline periodic around the tube.
 
     The section is a periodic cubic spline through 9 points of a three-lobed curve. (A circular
@@ -85,11 +90,13 @@ def nurbs_torus(major: float = 10.0, minor: float = 3.0) -> BSplineSurface:
     P[..., 0] = c[:, None, 0] * x[None, :]
     P[..., 1] = c[:, None, 1] * x[None, :]
     P[..., 2] = z[None, :]
+    if unit.weights is None or section.weights is None:
+        raise RuntimeError("nurbs_torus: circle() gave a non-rational circle")
     W = np.outer(unit.weights, section.weights)
     return BSplineSurface((2, 2), (unit.knots, section.knots), P, W)
 
 
-def periodic_vase():
+def periodic_vase() -> bd.Face:
     """A bicubic surface interpolating a closed grid of points, periodic in u (OCC's interpolator)."""
     import build123d as bd
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
@@ -122,10 +129,10 @@ def bicubic_patch() -> BSplineSurface:
     nu, nv = len(U) - 4, len(V) - 4
     i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
     P = np.stack([8.0 * i, 6.0 * j, 3.0 * np.sin(1.3 * i) * np.cos(0.9 * j)], axis=-1)
-    return BSplineSurface((3, 3), (U, V), P.astype(float))
+    return BSplineSurface((3, 3), (np.array(U, float), np.array(V, float)), P.astype(float))
 
 
-def filleted_block():
+def filleted_block() -> cq.Workplane:
     """A cadquery block with rounded edges: planes, cylinders and spheres (analytic faces)."""
     import cadquery as cq
 

@@ -101,8 +101,9 @@ class Reader:
         msg = self._read_message(time.monotonic() + STARTUP_TIMEOUT)
         if msg is None or "ready" not in msg:
             code = self.stop()
+            err = self._last_err()
             raise RuntimeError(f"the reader process did not start ({describe_exit(code) if code is not None else 'no reply'}"
-                               f"{': ' + self._last_err() if self._last_err() else ''})")
+                               f"{': ' + err if err else ''})")
 
     def stop(self) -> int | None:
         """Kill the reader (if any); returns its exit status."""
@@ -113,8 +114,9 @@ class Reader:
             proc.kill()
         code = proc.wait()
         for fh in (proc.stdin, proc.stdout):
-            with contextlib.suppress(OSError):
-                fh.close()
+            if fh is not None:  # both are pipes (Popen(stdin=PIPE, stdout=PIPE))
+                with contextlib.suppress(OSError):
+                    fh.close()
         return code
 
     @property

@@ -24,6 +24,7 @@ import os
 import tempfile
 import time
 import uuid
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -143,7 +144,7 @@ class ResultStore:
         return {h: s for h, s in zip(t.column("sha256").to_pylist(), t.column("status").to_pylist()) if h}
 
     # ------------------------------------------------------------------------------ writing
-    def add(self, file_row: dict[str, Any], face_rows: list[dict[str, Any]] = ()) -> None:
+    def add(self, file_row: dict[str, Any], face_rows: Sequence[dict[str, Any]] = ()) -> None:
         """Buffer one file's rows; writes a part when the buffer is due."""
         self._files.append(file_row)
         self._faces.extend(f if "sha256" in f else {**f, "sha256": file_row.get("sha256")} for f in face_rows)

@@ -14,8 +14,9 @@ import json
 import math
 import time
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pyarrow as pa
@@ -23,6 +24,9 @@ import pyarrow.compute as pc
 
 from ..exchange.files import atomic_write
 from .store import read_faces, read_files
+
+if TYPE_CHECKING:
+    from .corpus import Entry
 
 __all__ = ["write_summary", "summarize"]
 
@@ -34,7 +38,7 @@ def _finite(x: Any) -> float | None:
 
 
 def summarize(out: str | Path, hashes: list[str], n_input: int | None = None,
-              unreadable: list[Any] = ()) -> dict[str, Any]:
+              unreadable: Sequence[Entry] = ()) -> dict[str, Any]:
     """The summary document (JSON-safe) of the files with content hash in ``hashes``."""
     wanted = pa.array(sorted(set(hashes)), pa.string())
     files = read_files(out)
@@ -150,7 +154,7 @@ def _table(rows: list[dict[str, Any]], cols: list[str]) -> str:
 
 
 def write_summary(out: str | Path, hashes: list[str], n_input: int | None = None,
-                  unreadable: list[Any] = ()) -> dict[str, Any]:
+                  unreadable: Sequence[Entry] = ()) -> dict[str, Any]:
     """Write ``summary.json`` and ``summary.html`` into RESULTS ``out`` (atomically); returns the document."""
     out = Path(out)
     doc = summarize(out, hashes, n_input, unreadable)

@@ -72,7 +72,7 @@ the same arrays. Any other rational spline round-trips bit-exactly.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from OCP.BRep import BRep_Tool
@@ -103,6 +103,10 @@ from occsurf.algorithms.errors import InvalidGeometryError, KernelError, Toleran
 
 from .. import _occ
 from .shapes import as_edge, as_shape, is_shape_like
+
+if TYPE_CHECKING:
+    import build123d as bd
+    import cadquery as cq
 
 __all__ = [
     "FACE_TOLERANCE",
@@ -200,7 +204,8 @@ def _surface_to_occ(s: BSplineSurface) -> Geom_BSplineSurface:
 
 # ================================================================================= OCC -> ours
 def from_occ(obj: Any, bounds: tuple[float, ...] | None = None, *, tol: float | None = None,
-             trims: bool = True) -> BSplineCurve | BSplineSurface | TrimmedSurface | list[Any]:
+             trims: bool = True
+             ) -> BSplineCurve | BSplineSurface | TrimmedSurface | list[BSplineCurve | BSplineSurface | TrimmedSurface]:
     """Our B-spline equivalent of an OCC curve, surface, edge or face.
 
     Parameters
@@ -262,7 +267,8 @@ def from_occ(obj: Any, bounds: tuple[float, ...] | None = None, *, tol: float | 
     )
 
 
-def _from_container(shape: TopoDS_Shape, bounds: Any, tol: float, trims: bool) -> list[Any]:
+def _from_container(shape: TopoDS_Shape, bounds: Any, tol: float, trims: bool
+                    ) -> list[BSplineCurve | BSplineSurface | TrimmedSurface]:
     """Every face of a shell, solid or compound converted (its edges if it has no face)."""
     if bounds is not None:
         raise InvalidGeometryError("bounds: applies to one face or edge; got a shape holding several "
@@ -272,7 +278,7 @@ def _from_container(shape: TopoDS_Shape, bounds: Any, tol: float, trims: bool) -
     TopExp.MapShapes_s(shape, kind, items)
     if items.Extent() == 0:
         raise InvalidGeometryError("from_occ: the shape holds no faces and no edges")
-    return [from_occ(items.FindKey(i), tol=tol, trims=trims) for i in range(1, items.Extent() + 1)]
+    return [_from_shape(items.FindKey(i), None, tol, trims) for i in range(1, items.Extent() + 1)]
 
 
 def is_reversed(shape: Any) -> bool:
@@ -313,7 +319,8 @@ def _check_bounds(bounds: tuple[float, ...] | None, n: int, what: str) -> tuple[
     return b
 
 
-def _from_shape(shape: TopoDS_Shape, bounds, tol: float, trims: bool = True):
+def _from_shape(shape: TopoDS_Shape, bounds: tuple[float, ...] | None, tol: float, trims: bool = True
+                ) -> BSplineCurve | BSplineSurface | TrimmedSurface:
     kind = shape.ShapeType()
     if kind == TopAbs_FACE:
         face = shape if isinstance(shape, TopoDS_Face) else TopoDS.Face_s(shape)
@@ -378,7 +385,7 @@ def snap_periodic_range(a: float, b: float, period: float) -> tuple[float, float
     return float(a), float(b)
 
 
-def _from_geom_curve(occ_curve: Geom_Curve, bounds: tuple[float, float] | None, tol: float) -> BSplineCurve:
+def _from_geom_curve(occ_curve: Geom_Curve, bounds: tuple[float, ...] | None, tol: float) -> BSplineCurve:
     if bounds is None and isinstance(occ_curve, Geom_BSplineCurve):
         return _curve_from_bspline(occ_curve)
     if bounds is None and isinstance(occ_curve, Geom_BezierCurve):
@@ -647,13 +654,13 @@ def make_edge(curve: BSplineCurve | Geom_Curve) -> TopoDS_Edge:
         return me.Edge()
 
 
-def _as_occ(obj: Any, cls: type, name: str) -> Geom_Geometry:
+def _as_occ(obj: Any, cls: type[BSplineCurve] | type[BSplineSurface], name: str) -> Geom_Geometry:
     if not isinstance(obj, cls):
         raise InvalidGeometryError(f"{name}: expected a {cls.__name__} (or an OCC Geom object), got {type(obj).__name__}")
     return to_occ(obj)
 
 
-def to_face(surface: BSplineSurface | TrimmedSurface | Geom_Surface, *, tol: float = FACE_TOLERANCE):
+def to_face(surface: BSplineSurface | TrimmedSurface | Geom_Surface, *, tol: float = FACE_TOLERANCE) -> bd.Face:
     """A build123d ``Face`` bounded by the whole parameter domain of ``surface``, or the trimmed
     face of a :class:`TrimmedSurface` (see :func:`make_face`).
 
@@ -675,21 +682,21 @@ def to_face(surface: BSplineSurface | TrimmedSurface | Geom_Surface, *, tol: flo
     return bd.Face(make_face(surface, tol))
 
 
-def to_edge(curve: BSplineCurve | Geom_Curve):
+def to_edge(curve: BSplineCurve | Geom_Curve) -> bd.Edge:
     """A build123d ``Edge`` over the whole domain of ``curve`` (see :func:`to_face` for errors)."""
     import build123d as bd
 
     return bd.Edge(make_edge(curve))
 
 
-def to_cq_face(surface: BSplineSurface | Geom_Surface, *, tol: float = FACE_TOLERANCE):
+def to_cq_face(surface: BSplineSurface | Geom_Surface, *, tol: float = FACE_TOLERANCE) -> cq.Face:
     """A cadquery ``Face`` bounded by the whole parameter domain of ``surface`` (as :func:`to_face`)."""
     import cadquery as cq
 
     return cq.Face(make_face(surface, tol))
 
 
-def to_cq_edge(curve: BSplineCurve | Geom_Curve):
+def to_cq_edge(curve: BSplineCurve | Geom_Curve) -> cq.Edge:
     """A cadquery ``Edge`` over the whole domain of ``curve`` (as :func:`to_edge`)."""
     import cadquery as cq
 

@@ -96,7 +96,8 @@ def face_from_occ(face: TopoDS_Face, surface: BSplineSurface, occ_surface: Geom_
     """
     fwd = TopoDS.Face_s(face.Oriented(TopAbs_FORWARD))
     outer = BRepTools.OuterWire_s(fwd)
-    wires, outer_index = [], 0
+    wires: list[list[BSplineCurve]] = []
+    outer_index = 0
     exp = TopExp_Explorer(fwd, TopAbs_WIRE)
     while exp.More():
         w = TopoDS.Wire_s(exp.Current())
@@ -192,8 +193,8 @@ def parameter_maps(surface: BSplineSurface, occ_surface: Geom_Surface, uv_box: t
         return False, False
     u0, u1, v0, v1 = uv_box
     g = np.array([0.0, 0.13, 0.41, 0.77, 1.0])
-    uu, vv = np.meshgrid(u0 + g * (u1 - u0), v0 + g[::-1].copy() * (v1 - v0), indexing="ij")
-    uu, vv = uu.ravel(), vv.ravel()
+    uu2, vv2 = np.meshgrid(u0 + g * (u1 - u0), v0 + g[::-1].copy() * (v1 - v0), indexing="ij")
+    uu, vv = uu2.ravel(), vv2.ravel()
     ref = np.array([occ_surface.Value(float(a), float(b)).Coord() for a, b in zip(uu, vv)])
     scale = max(1.0, float(np.ptp(ref, axis=0).max()))
     (su0, su1), (sv0, sv1) = surface.domain
@@ -226,7 +227,7 @@ def _map_pcurve(c: BSplineCurve, maps: tuple[bool, bool], surface: BSplineSurfac
             ends = c.evaluate(np.array(c.domain))
             a = _map_xy(ends, maps, surface)
             a[:, k] = a[0, k]
-            return BSplineCurve(1, [c.domain[0]] * 2 + [c.domain[1]] * 2, a)
+            return BSplineCurve(1, np.array([c.domain[0]] * 2 + [c.domain[1]] * 2), a)
     diag = max(1.0, float(np.hypot(box[1] - box[0], box[3] - box[2])))
     return _refit(c, maps, surface, TRIM_FIT_TOL * diag)
 
@@ -274,10 +275,14 @@ def _refit(c: BSplineCurve, maps: tuple[bool, bool], surface: BSplineSurface, to
             raise KernelError(f"from_occ: a p-curve could not be mapped onto the converted surface within {tol:.3g} "
                               f"(reached {float(err.max()):.3g} with {n} points on one span)")
         n *= 2
-    knots, P = [np.full(p + 1, breaks[0])], []
-    for k, (kn, poles) in enumerate(pieces):  # type: ignore[misc]
-        knots += [kn[p + 1:kn.size - p - 1], np.full(p, b[k])]
-        P.append(poles if k == 0 else poles[1:])
+    knots = [np.full(p + 1, breaks[0])]
+    P: list[np.ndarray] = []
+    for i, piece in enumerate(pieces):
+        if piece is None:  # cannot happen: the loop above ends once every span is fitted, or raises
+            raise AssertionError("_refit: a span was left without its fit")
+        kn, span_poles = piece
+        knots += [kn[p + 1:kn.size - p - 1], np.full(p, b[i])]
+        P.append(span_poles if i == 0 else span_poles[1:])
     knots[-1] = np.full(p + 1, breaks[-1])
     return BSplineCurve(p, np.concatenate(knots), np.concatenate(P))
 
@@ -421,7 +426,8 @@ def _image(surface: BSplineSurface, c: BSplineCurve) -> np.ndarray:
     return surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1))
 
 
-def _seam_pairs(flat, images, degenerate, tol: float) -> dict[tuple[int, int], tuple[int, int]]:
+def _seam_pairs(flat: list[tuple[int, int, BSplineCurve]], images: dict[tuple[int, int], np.ndarray],
+                degenerate: set[tuple[int, int]], tol: float) -> dict[tuple[int, int], tuple[int, int]]:
     """First -> second use of p-curve pairs with one 3-D image traversed both ways (seams).
 
     Candidates are the pairs whose 3-D ends match crosswise (one distance matrix); each is then
@@ -469,8 +475,8 @@ def _junction_vertices(surface: BSplineSurface, loops: tuple[tuple[BSplineCurve,
             root[(i, j)] = (i, j)
             pts[(i, j)] = [xyz[j, 0], xyz[j - 1, 1]]  # this p-curve's start, the previous one's end
         closed = np.linalg.norm(xyz[:, 0] - xyz[:, 1], axis=1) <= near
-        for j in np.flatnonzero(closed):
-            _union(root, (i, int(j)), (i, (int(j) + 1) % len(loop)))
+        for jc in np.flatnonzero(closed):
+            _union(root, (i, int(jc)), (i, (int(jc) + 1) % len(loop)))
     for (i, j), (i2, j2) in seams.items():
         _union(root, (i2, j2), (i, (j + 1) % len(loops[i])))
         _union(root, (i2, (j2 + 1) % len(loops[i2])), (i, j))

@@ -195,15 +195,15 @@ def scan_step(p: Path, data: bytes, broken: dict[int, str] | None = None) -> Ste
     """
     masked = _masked(data)
     m = _DATA.search(masked)
-    end = None
-    for end in _END.finditer(masked):
-        pass
+    ends = list(_END.finditer(masked))
+    end = ends[-1] if ends else None  # the last END-ISO-10303-21;
     if m is None or end is None:
         raise ExchangeError(f"{p}: damaged STEP file (no DATA section)")
     start, stop = m.end(), end.start()
     starts, semis, texts = _records(masked, start, stop)
     ids_list: list[int] = []
     rec_of: list[int] = []
+    body_at: list[int] = []  # per instance: where its record's text after ``#id =`` starts
     types: list[str] = []
     for k, text in enumerate(texts):
         d = _DEF.match(text)
@@ -211,6 +211,7 @@ def scan_step(p: Path, data: bytes, broken: dict[int, str] | None = None) -> Ste
             continue
         ids_list.append(int(d.group(1)))
         rec_of.append(k)
+        body_at.append(d.end())
         types.append(_entity_type(text, d.end()))
     ids = np.asarray(ids_list, dtype=np.int64)
 
@@ -228,8 +229,7 @@ def scan_step(p: Path, data: bytes, broken: dict[int, str] | None = None) -> Ste
                                   "instances defined more than once")
     order = np.argsort(ids, kind="stable")
     sorted_ids = ids[order]
-    refs_per = [[int(x) for x in _REF.findall(texts[rec_of[j]], _DEF.match(texts[rec_of[j]]).end())]
-                for j in range(len(ids))]
+    refs_per = [[int(x) for x in _REF.findall(texts[rec_of[j]], body_at[j])] for j in range(len(ids))]
     lengths = np.fromiter((len(r) for r in refs_per), dtype=np.int64, count=len(refs_per))
     flat = np.fromiter((x for r in refs_per for x in r), dtype=np.int64, count=int(lengths.sum()))
     rows = np.repeat(np.arange(len(ids)), lengths)
@@ -265,6 +265,10 @@ def _transfer_crashes(p: Path, ids: list[int], types: list[str], texts: list[byt
         m = _COORDS.search(texts[j]) if types[j] == "CARTESIAN_POINT" else None
         return None if m is None else len([x for x in m.group(1).split(b",") if x.strip()])
 
+    def dims_of(refs: list[int]) -> set[int]:
+        """The numbers of coordinates of the points among ``refs``."""
+        return {n for r in refs if (k := at.get(r)) is not None and (n := coords(k)) is not None}
+
     def is_curve(j: int) -> bool:
         if types[j] == "complex instance":
             return any(re.search(rb"\b" + t.encode() + rb"\s*\(", texts[j]) for t in STEP_CURVE_TYPES)
@@ -280,7 +284,9 @@ def _transfer_crashes(p: Path, ids: list[int], types: list[str], texts: list[byt
                 raise ExchangeError(f"{p}: damaged STEP file (#{ids[j]} PCURVE: its representation #{ids[d]} holds "
                                     f"#{ids[item]} {types[item]}, not a curve; refused: OCC's reader crashes on "
                                     "such p-curves)")
-            dims = {coords(k) for r in refs_per[item] if (k := at.get(r)) is not None} - {None, 2} if item is not None else set()
+            if item is None:
+                continue
+            dims = dims_of(refs_per[item]) - {2}
             if dims:
                 mixed.append(f"#{ids[j]} PCURVE: its curve #{ids[item]} {types[item]} has points of "
                              f"{' and '.join(map(str, sorted(dims)))} coordinates, not 2 (OCC reads it without a word)")
@@ -290,14 +296,14 @@ def _transfer_crashes(p: Path, ids: list[int], types: list[str], texts: list[byt
                 raise ExchangeError(f"{p}: damaged STEP file (#{ids[j]} VERTEX_POINT: its point #{ids[q]} has {n} "
                                     "coordinates, not 3; refused: OCC's reader crashes on such vertices)")
         elif (word := next((w for w in _SPLINE_WORDS if w in texts[j]), None)) is not None:
-            dims = {coords(k) for r in refs if (k := at.get(r)) is not None} - {None}
+            dims = dims_of(refs)
             if len(dims) > 1:
                 mixed.append(f"#{ids[j]} {word.decode()}: its poles mix points of {' and '.join(map(str, sorted(dims)))} "
                              "coordinates (OCC reads them without a word)")
     return _limited(mixed, "curves with points of the wrong dimension")
 
 
-class _TypeCount(Counter):  # type: ignore[type-arg]
+class _TypeCount(Counter[str]):
     closed_shells: list[int]
     ids: list[int]
 
@@ -397,12 +403,14 @@ def _prune(data: bytes, starts: list[int], semis: list[int], rec_of: list[int], 
         nxt: set[int] = set()
         for j in todo:
             k = rec_of[j]
-            if new_text.get(j, b"") is None:
+            current = new_text.get(j, data[starts[k]:semis[k]])
+            if current is None:  # removed already
                 continue
-            original = data[starts[k]:semis[k]]
-            current = new_text.get(j, original)
             masked_current = _masked(current)
-            body_at = _DEF.match(masked_current).end()
+            d = _DEF.match(masked_current)
+            if d is None:  # cannot happen: the record matched _DEF when read, and cuts leave its ``#id =`` alone
+                raise AssertionError(f"#{ids[j]}: record lost its '#id =' head while pruning")
+            body_at = d.end()
             spans, removed, attr = _remove_refs(masked_current, body_at, gone)
             label = f"#{ids[j]} {types[j]}"
             if spans is None:
@@ -451,7 +459,7 @@ class IgesScan:
     the first directory line ``D<n>`` of every shell entity 514 of form 1)."""
 
     warnings: list[str] = field(default_factory=list)
-    types: Counter = field(default_factory=Counter)  # type: ignore[type-arg]
+    types: Counter[int] = field(default_factory=Counter)
     face_instances: int = 0
     closed_shells: list[int] = field(default_factory=list)
 

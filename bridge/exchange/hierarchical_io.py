@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from occsurf.algorithms import BSplineSurface
+from occsurf.algorithms import BSplineCurve, BSplineSurface
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 from occsurf.algorithms.hierarchical.curve import HierarchicalCurve
 from occsurf.algorithms.hierarchical.offsets import OffsetMapping
@@ -52,7 +52,8 @@ SIDECAR_MATCH_RTOL: float = 1e-9
 
 _SIDECAR_FORMAT = "occsurf-hierarchy-sidecar"
 _SIDECAR_VERSION = 1
-_CLASSES = {"HierarchicalSurface": HierarchicalSurface, "HierarchicalCurve": HierarchicalCurve}
+_CLASSES: dict[str, type[HierarchicalSurface] | type[HierarchicalCurve]] = {
+    "HierarchicalSurface": HierarchicalSurface, "HierarchicalCurve": HierarchicalCurve}
 
 
 def sidecar_path(step_path: str | os.PathLike[str]) -> Path:
@@ -220,8 +221,9 @@ def _read_pair(p: Path, side: Path, isolated: bool = False,
     if isinstance(owner, str) and owner != p.name:
         raise ExchangeError(f"{side}: the hierarchy sidecar of {owner}, not of {p.name}")
     d = data.get("hierarchy")
-    cls = _CLASSES.get(d.get("type") if isinstance(d, dict) else None)
-    if cls is None:
+    kind = d.get("type") if isinstance(d, dict) else None
+    cls = _CLASSES.get(kind) if isinstance(kind, str) else None
+    if cls is None or not isinstance(d, dict):
         raise ExchangeError(f"{side}: the sidecar holds no hierarchical surface or curve")
     try:
         h = cls.from_dict(d)
@@ -234,8 +236,11 @@ def _read_pair(p: Path, side: Path, isolated: bool = False,
     if same:
         return h  # the very file written with this sidecar: no need to parse it
     model = read_step(p, isolated=isolated, timeout=timeout)
-    items = model.faces if cls is HierarchicalSurface else model.edges
-    geo = items[0].surface if cls is HierarchicalSurface and items else (items[0].curve if items else None)
+    geo: BSplineSurface | BSplineCurve | None
+    if cls is HierarchicalSurface:
+        geo = model.faces[0].surface if model.faces else None
+    else:
+        geo = model.edges[0].curve if model.edges else None
     if geo is None:
         raise ExchangeError(f"{p}: no {'face' if cls is HierarchicalSurface else 'edge'} to match the sidecar")
     # Re-saved or edited: the geometry must still be the hierarchy's, on every polynomial piece.

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from occsurf.algorithms import BSplineCurve, BSplineSurface
+from occsurf.algorithms import BSplineCurve, BSplineSurface, TrimmedSurface
 
 from ..messages import one_line
 
@@ -84,7 +84,7 @@ class ImportedFace:
     _trimmed: Any = field(default=None, repr=False, compare=False)  # the value, or a _LazyTrimmed
 
     @property
-    def trimmed(self) -> Any:
+    def trimmed(self) -> TrimmedSurface | None:
         t = self._trimmed
         return t.value() if isinstance(t, _LazyTrimmed) else t
 
@@ -101,9 +101,10 @@ class _LazyTrimmed:
         self._args: tuple[Any, ...] | None = (face, surface, occ_surface)
         self._value: Any = self._PENDING
 
-    def value(self) -> Any:
-        if self._value is self._PENDING:
-            self._value = _build_trimmed(*self._args)
+    def value(self) -> TrimmedSurface | None:
+        args = self._args
+        if args is not None:  # None: built already (the value is set before the arguments are dropped)
+            self._value = _build_trimmed(*args)
             self._args = None  # the OCC objects are no longer needed here
         return self._value
 
@@ -276,7 +277,7 @@ def _import_face(index: int, shape: Any, name: str | None) -> ImportedFace:
     )
 
 
-def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> Any:
+def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> TrimmedSurface | None:
     """:attr:`ImportedFace.trimmed`: the face's loops on ``surface``, ``None`` when it is untrimmed
     or its loops do not convert (the face still has its ``surface``)."""
     from OCP.BRepTools import BRepTools

@@ -456,7 +456,8 @@ def _cq_subshapes(assy: Any, faces: list[ImportedFace], label: str | None, color
     identity = TopLoc_Location()
     proto = None
     if prototype is not None:  # the prototype's faces by TShape (a map of the faces moved to the identity)
-        proto, proto_faces = TopTools_IndexedMapOfShape(), []
+        proto = TopTools_IndexedMapOfShape()
+        proto_faces: list[Any] = []  # TopoDS_Face
         for f in _faces_of(prototype):
             if proto.Add(f.Located(identity)) > len(proto_faces):
                 proto_faces.append(f.Moved(identity))  # a fresh handle, placed as in the prototype
@@ -571,7 +572,7 @@ def _rgba(color: Any) -> RGBA | None:
     if isinstance(occ, Quantity_ColorRGBA):
         return rgba_from_occ(occ)
     values = tuple(float(x) for x in (color.toTuple() if hasattr(color, "toTuple") else tuple(color)))
-    return values if len(values) == 4 else None  # type: ignore[return-value]
+    return values if len(values) == 4 else None
 
 
 def _matrix(location: Any) -> np.ndarray:

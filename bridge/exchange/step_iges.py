@@ -578,9 +578,9 @@ def _convert(p: Path, fmt: str, shape: Any, names: tuple[dict[int, str], dict[in
     faces = []
     for i in range(1, faces_map.Extent() + 1):
         face = _import_face(i - 1, faces_map.FindKey(i), face_names.get(i))
-        attributes = {"color": x.colors.get(i), "layer": x.layers.get(i), "instance": x.instances.get(i)}
-        if any(v is not None for v in attributes.values()):
-            face = replace(face, **attributes)
+        color, layer, instance = x.colors.get(i), x.layers.get(i), x.instances.get(i)
+        if color is not None or layer is not None or instance is not None:
+            face = replace(face, color=color, layer=layer, instance=instance)
         faces.append(face)
     edges = [_import_edge(i - 1, edges_map.FindKey(i), edge_names.get(i)) for i in range(1, edges_map.Extent() + 1)]
     edges = [replace(e, color=x.edge_colors.get(i), layer=x.edge_layers.get(i), instance=x.edge_instances.get(i))

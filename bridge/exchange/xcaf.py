@@ -234,13 +234,13 @@ class XcafData:
     def from_json(cls, doc: dict[str, Any], shapes: Sequence[Any]) -> XcafData:
         def node(d: dict[str, Any]) -> AssemblyNode:
             color = tuple(d["color"]) if d["color"] is not None else None
-            return AssemblyNode(d["name"], color, d["layer"], np.array(d["location"]), d["part"],  # type: ignore[arg-type]
+            return AssemblyNode(d["name"], color, d["layer"], np.array(d["location"]), d["part"],
                                 shapes[d["shape"]], tuple(node(c) for c in d["children"]))
 
         return cls(unit=doc["unit"], unit_scale=float(doc["unit_scale"]),
-                   colors={int(k): tuple(v) for k, v in doc["colors"].items()},  # type: ignore[misc]
+                   colors={int(k): tuple(v) for k, v in doc["colors"].items()},
                    layers={int(k): v for k, v in doc["layers"].items()},
-                   edge_colors={int(k): tuple(v) for k, v in doc["edge_colors"].items()},  # type: ignore[misc]
+                   edge_colors={int(k): tuple(v) for k, v in doc["edge_colors"].items()},
                    edge_layers={int(k): v for k, v in doc["edge_layers"].items()},
                    edge_instances={int(k): v for k, v in doc["edge_instances"].items()},
                    instances={int(k): v for k, v in doc["instances"].items()},

@@ -464,8 +464,8 @@ def build_document(source: Any, name: str, *, flatten: bool = False) -> _Writer:
         _set_name(label, node.name, writer.names)
         _set_color(writer.color_tool, label, node.color)
         _set_layer(writer.layer_tool, label, node.layer)
-        writer.protos[node.part] = label  # type: ignore[index]
-        writer.faces(node.part, node, members)  # type: ignore[arg-type]
+        writer.protos[node.part] = label
+        writer.faces(node.part, node, members)
         writer.edges(label, node.shape, node.shape, model.edges)
     return writer
 

@@ -58,6 +58,7 @@ from occsurf.algorithms.topology.nsided import (
     measure_fill,
     side_from_surface,
 )
+from occsurf.algorithms.topology.plate_fill import PlateFill
 
 from .. import _occ
 from ..conversion.shapes import as_edge, as_face, as_shape
@@ -67,6 +68,7 @@ from .joints import (  # noqa: F401 - re-exported
     ASSESS_END_SAMPLES,
     ASSESS_SAMPLES,
     SEW_TOLERANCE,
+    Locator,
     _edge_samples,
     _local_analysis,
     assess_joint,
@@ -115,7 +117,7 @@ class HoleReport:
 class FillResult:
     shape: Any  # the sewn shell (original faces + fills)
     holes: list[HoleReport]
-    fills: list[HoleFill | None]
+    fills: list[HoleFill | PlateFill | None]  # PlateFill: a plate (or a wrapped plate) where the central split failed
     free_loops_after: int
 
 
@@ -252,6 +254,8 @@ def hole_sides(edges: list[Any], faces: list[Any | None]) -> list[HoleSide]:
             raise InvalidGeometryError(f"edge {k} of the hole has no neighbour face: its tangent plane is unknown")
         e, f = as_edge(e, f"edges[{k}]"), as_face(f, f"faces[{k}]")  # build123d / cadquery objects too
         surf = from_occ(f, BRepTools.UVBounds_s(f))  # the part of the surface the face uses
+        if not isinstance(surf, BSplineSurface):  # a face converted on bounds is its surface
+            raise TypeError(f"from_occ gave a {type(surf).__name__} for face {k}")
         sides.append(_iso_side(surf, _edge_points(e)))
     n = len(sides)
     ends = [(s.curve.evaluate(s.curve.domain[0]), s.curve.evaluate(s.curve.domain[1])) for s in sides]
@@ -295,7 +299,7 @@ def neighbour_face(m: TopTools_IndexedDataMapOfShapeListOfShape, edge: Any) -> A
     return TopoDS.Face_s(lst.First()) if lst.Size() >= 1 else None
 
 
-def _locator(fill: HoleFill, side: int) -> Any:
+def _locator(fill: HoleFill, side: int) -> Locator:
     def locate(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         idx, u, v, _ = fill.locate_input(side, points)  # the distance is judged by OCC's C0Value
         return idx, u, v
@@ -320,7 +324,7 @@ def _model_size(shape: Any) -> float:
 
 
 def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int,
-               rep: HoleReport) -> tuple[HoleFill, list[Any]]:
+               rep: HoleReport) -> tuple[HoleFill | PlateFill, list[Any]]:
     """Fill one loop: exactly from the neighbours' iso-boundaries when every edge is one, else with
     sides fitted to the neighbours along the edges' p-curves (trimming curves; G1 to 0.01 deg,
     :func:`occsurf.bridge.modeling.refill.fitted_fill`). Records the per-edge OCC measurements and
@@ -380,7 +384,7 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
     e2f = edge_face_map(sewn)
     size = _model_size(sewn)
     reports: list[HoleReport] = []
-    fills: list[HoleFill | None] = []
+    fills: list[HoleFill | PlateFill | None] = []
     new_faces: list[Any] = []
     for k, (edges, outer) in enumerate(find_loops(sewn, all_loops)):
         rep = HoleReport(index=k, sides=len(edges), status="outer" if outer else "failed")
@@ -394,7 +398,7 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
             t0 = time.perf_counter()
             fill, occ_faces = _fill_loop(edges, nb, size, samples, rep)
             rep.seconds = time.perf_counter() - t0
-            if rep.method in ("plate", "wrap"):
+            if isinstance(fill, PlateFill):  # rep.method 'plate' or 'wrap'
                 from .plate import plate_quality
 
                 rep.own_g0, rep.own_g1, rep.internal_g1, rep.folds = plate_quality(fill)
@@ -405,7 +409,8 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
                 rep.folds = int(q.folds.sum())
             rep.g0, rep.g1 = max(rep.side_g0), max(rep.side_g1)
             rep.status = "filled"
-            rep._fill_faces, rep._neighbours = occ_faces, _unique(nb)  # for pictures (not serialised)
+            # for pictures; not dataclass fields, so asdict() leaves them out
+            rep._fill_faces, rep._neighbours = occ_faces, _unique(nb)  # type: ignore[attr-defined]
             fills[-1] = fill
             new_faces += occ_faces
         except Exception as err:  # noqa: BLE001 - one hole's failure must not stop the others

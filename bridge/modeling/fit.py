@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -31,6 +31,11 @@ from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError, Param
 from occsurf.algorithms.fitting import fit_adaptive, fit_adaptive_scattered, fit_grid, fit_scattered
 from occsurf.algorithms.fitting.adaptive import measure_grid
 from occsurf.algorithms.hierarchical import HierarchicalSurface
+
+if TYPE_CHECKING:
+    from occsurf.algorithms.hierarchical import Overlay
+
+    from ..rendering.error_maps import ErrorPanel
 
 __all__ = ["FitInput", "FitResult", "read_fit_input", "face_inputs", "fit_input", "write_fit_outputs", "face_deviation",
            "GRID_SUFFIXES", "ROW_SUFFIXES"]
@@ -83,7 +88,7 @@ class FitResult:
     tol: float
     converged: bool
     method: str
-    panels: list[Any] = field(default_factory=list)
+    panels: list[ErrorPanel] = field(default_factory=list)
     face_deviation: float | None = None
 
     def report(self) -> dict[str, Any]:
@@ -121,7 +126,7 @@ def _check_grid_rows(Q: np.ndarray) -> None:
             raise InvalidGeometryError(f"grid {name} {int(np.argmax(full))} has NaN only (no data)")
 
 
-def _read_npy(p: Path, x_range, y_range) -> FitInput:
+def _read_npy(p: Path, x_range: tuple[float, float] | None, y_range: tuple[float, float] | None) -> FitInput:
     try:
         Q = np.load(p, allow_pickle=False)
     except (OSError, ValueError) as err:
@@ -153,7 +158,9 @@ def _parse_rows(p: Path) -> tuple[np.ndarray, np.ndarray, bool]:
         text = p.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as err:
         raise ExchangeError(f"{p}: cannot read as text ({err})") from err
-    rows, lines, header = [], [], False
+    rows: list[list[float]] = []
+    lines: list[int] = []
+    header = False
     width = None
     for no, line in enumerate(text.splitlines(), 1):
         s = line.split("#", 1)[0].strip()
@@ -247,7 +254,8 @@ def _face_input(model: Any, p: Path, k: int, samples: int | None) -> FitInput:
                     f"sampled {mu} x {mv} over its parameter bounds", face=f.occ_surface)
 
 
-def face_inputs(path: str | os.PathLike[str], faces: list[int] | None = None, *, samples: int | None = None):
+def face_inputs(path: str | os.PathLike[str], faces: list[int] | None = None, *, samples: int | None = None
+                ) -> Iterator[tuple[int, FitInput | ExchangeError]]:
     """Every face (or ``faces``) of a STEP/IGES file as :class:`FitInput`, the file read once.
 
     Yields
@@ -266,7 +274,8 @@ def face_inputs(path: str | os.PathLike[str], faces: list[int] | None = None, *,
             yield k, err
 
 
-def read_fit_input(path: str | os.PathLike[str], *, face: int | None = None, x_range=None, y_range=None,
+def read_fit_input(path: str | os.PathLike[str], *, face: int | None = None, x_range: Sequence[float] | None = None,
+                   y_range: Sequence[float] | None = None,
                    samples: int | None = None, strict: bool = False) -> FitInput:
     """Read a data file for fitting (see the module notes for the formats).
 
@@ -335,9 +344,9 @@ def fit_input(inp: FitInput, tol: float, *, ctrl: tuple[int, int] | None = None,
     if inp.kind == "scattered":
         return _fit_scattered(inp, tol, ctrl, degree, smooth, say, max_levels)
     heights = inp.kind == "heights"
-    kw = dict(x=inp.x, y=inp.y) if heights else {}
+    x, y = (inp.x, inp.y) if heights else (None, None)  # None: the functions' defaults (a grid of points)
     if ctrl is not None:
-        fit = fit_grid(inp.data, ctrl, degree, smoothing=smooth, fix_boundary=fix_boundary, **kw)
+        fit = fit_grid(inp.data, ctrl, degree, smoothing=smooth, fix_boundary=fix_boundary, x=x, y=y)
         u, v = fit.u_params, fit.v_params
         P3 = np.stack(np.broadcast_arrays(u[:, None], v[None, :], inp.data), -1) if heights else inp.data
         dist = measure_grid(fit.surface, P3, u, v)
@@ -352,7 +361,7 @@ def fit_input(inp: FitInput, tol: float, *, ctrl: tuple[int, int] | None = None,
         if smooth == "gcv":
             raise ParameterError("--smooth gcv: choose a number for the adaptive fit (gcv needs --ctrl)")
         af = fit_adaptive(inp.data, tol, degree, smoothing=float(smooth), fix_boundary=fix_boundary,
-                          max_levels=max_levels, progress=say, **kw)
+                          max_levels=max_levels, progress=say, x=x, y=y)
         levels = [L.as_dict() for L in af.levels]
         res = FitResult(af.hierarchy, levels, af.max_error, af.rms_error, float(tol), af.converged, "adaptive hierarchical")
         res.panels = [_panel(s, d, af.u_params, af.v_params,
@@ -365,7 +374,8 @@ def fit_input(inp: FitInput, tol: float, *, ctrl: tuple[int, int] | None = None,
     return res
 
 
-def _fit_scattered(inp: FitInput, tol: float, ctrl, degree: int, smooth, say, max_levels: int | None) -> FitResult:
+def _fit_scattered(inp: FitInput, tol: float, ctrl: tuple[int, int] | None, degree: int, smooth: float | str,
+                   say: Callable[[str], None], max_levels: int | None) -> FitResult:
     """Scattered rows: adaptive hierarchical (:func:`~occsurf.algorithms.fitting.fit_adaptive_scattered`,
     two parameter corrections on the base), or plain least squares with ``ctrl`` poles."""
     if smooth == "gcv":
@@ -434,7 +444,7 @@ def _pool(a: np.ndarray, k: int) -> np.ndarray:
     return m[::k, ::k]
 
 
-def _overlay_lines(surface: BSplineSurface, overlays) -> list[np.ndarray]:
+def _overlay_lines(surface: BSplineSurface, overlays: Sequence[Overlay]) -> list[np.ndarray]:
     """The borders of ``overlays`` on ``surface`` as polylines (40 points a side)."""
     lines = []
     t = np.linspace(0, 1, 40)
@@ -446,7 +456,8 @@ def _overlay_lines(surface: BSplineSurface, overlays) -> list[np.ndarray]:
     return lines
 
 
-def _panel(surface: BSplineSurface, dist: np.ndarray, u: np.ndarray, v: np.ndarray, title: str, overlays) -> Any:
+def _panel(surface: BSplineSurface, dist: np.ndarray, u: np.ndarray, v: np.ndarray, title: str,
+           overlays: Sequence[Overlay]) -> ErrorPanel:
     from ..rendering.error_maps import ErrorPanel
 
     k = max(1, int(np.ceil(max(u.size, v.size) / 160)))
@@ -456,7 +467,7 @@ def _panel(surface: BSplineSurface, dist: np.ndarray, u: np.ndarray, v: np.ndarr
 
 
 def _scatter_panel(surface: BSplineSurface, u: np.ndarray, v: np.ndarray, distance: np.ndarray, title: str,
-                   overlays=()) -> Any:
+                   overlays: Sequence[Overlay] = ()) -> ErrorPanel:
     """Scattered data: the surface on an 80 x 80 grid coloured by the largest distance of the
     points whose parameters fall in each cell (grey where no data), overlay borders drawn."""
     from ..rendering.error_maps import ErrorPanel

@@ -8,6 +8,7 @@ of a shape to the faces it bounds.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -37,6 +38,9 @@ ASSESS_END_SAMPLES: int = 16
 #: Tolerance of the projections onto a fill that :func:`assess_joint` makes without ``locate``
 #: (``Precision::Confusion()``, OCC's default for ``GeomAPI_ProjectPointOnSurf``).
 PROJECTION_TOLERANCE: float = 1e-7
+#: What :func:`assess_joint` takes as ``locate``: boundary points ``(m, 3)`` -> the fill's
+#: ``(surface index, u, v)`` of each.
+Locator = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 def _edge_samples(edge: Any, face: Any, samples: int) -> tuple[Any, list[Any], np.ndarray]:
     """The neighbour's surface, its (u, v) at ``samples`` points of ``edge`` (from the p-curve) and
@@ -74,7 +78,7 @@ def _projector(surface: Any) -> Any:
 
 
 def assess_joint(edge: Any, face: Any, fill_surfaces: list[Any], samples: int = ASSESS_SAMPLES,
-                 locate: Any = None) -> tuple[float, float]:
+                 locate: Locator | None = None) -> tuple[float, float]:
     """Max ``C0Value`` gap and ``G1Angle`` (degrees) of OCC's LocalAnalysis (order G1) along ``edge``
     between its neighbour ``face`` and the fill (Geom surfaces ``fill_surfaces``).
 

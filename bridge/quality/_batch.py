@@ -98,10 +98,11 @@ class SurfaceBatch:
         n = len(evaluators)
         self.group = np.full(n, -1, dtype=np.intp)
         self.local = np.full(n, -1, dtype=np.intp)
+        # the faces evaluated from their B-spline, and their splines
+        self._splines = {f: ev.spline for f, ev in enumerate(evaluators) if ev is not None and ev.spline is not None}
         members: dict[tuple[int, int], list[int]] = {}
-        for f, ev in enumerate(evaluators):
-            if ev is not None and ev.spline is not None:
-                members.setdefault(ev.spline.degree, []).append(f)
+        for f, spline in self._splines.items():
+            members.setdefault(spline.degree, []).append(f)
         self.groups: list[dict[str, Any]] = []
         self._kargs: dict[int, tuple] = {}
         self.dom = np.zeros((n, 4))
@@ -112,7 +113,7 @@ class SurfaceBatch:
                 self.dom[f] = (u0, u1, v0, v1)
                 self.per[f] = ev.periodic
         for g, ((p, q), faces) in enumerate(members.items()):
-            splines = [evaluators[f].spline for f in faces]
+            splines = [self._splines[f] for f in faces]
             nu = [s.n_poles[0] for s in splines]
             nv = [s.n_poles[1] for s in splines]
             H = [self._homogeneous(s) for s in splines]
@@ -123,8 +124,8 @@ class SurfaceBatch:
                 "nv": np.array(nv, dtype=np.intp),
                 "H": np.concatenate(H),
                 "H_off": np.cumsum([0] + [len(h) for h in H[:-1]]).astype(np.intp),
-                "uper": np.array([evaluators[f].periodic[0] for f in faces]),
-                "vper": np.array([evaluators[f].periodic[1] for f in faces]),
+                "uper": self.per[faces, 0],
+                "vper": self.per[faces, 1],
                 "rational": any(s.weights is not None for s in splines),
             })
             self.group[faces] = g
@@ -182,7 +183,7 @@ class SurfaceBatch:
             if a == b:
                 continue
             f = int(fs[a])
-            spline = self.evaluators[f].spline
+            spline = self._splines[f]
             args = self._kargs.get(f)
             if args is None:  # span tables and read-only views built once per face
                 args = self._kargs[f] = tuple(nk._readonly(x) for x in spline._kernel_args())
@@ -251,13 +252,14 @@ class CurveBatch:
                 self.origin[i], self.direction[i] = c.line
         self.group = np.full(n, -1, dtype=np.intp)
         self.local = np.full(n, -1, dtype=np.intp)
+        # the p-curves evaluated from their B-spline, and their splines
+        spline_of = {i: c.spline for i, c in enumerate(curves) if c is not None and c.spline is not None}
         members: dict[int, list[int]] = {}
-        for i, c in enumerate(curves):
-            if c is not None and c.spline is not None:
-                members.setdefault(c.spline.degree, []).append(i)
+        for i, spline in spline_of.items():
+            members.setdefault(spline.degree, []).append(i)
         self.groups: list[dict[str, Any]] = []
         for g, (p, ids) in enumerate(members.items()):
-            splines = [curves[i].spline for i in ids]
+            splines = [spline_of[i] for i in ids]
             H = [np.c_[s.control_points * (1.0 if s.weights is None else s.weights[:, None]),
                        np.ones(s.n_poles) if s.weights is None else s.weights] for s in splines]
             self.groups.append({"p": p, "T": _Stack([s.knots for s in splines], p, [s.n_poles for s in splines]),

@@ -98,6 +98,8 @@ def surface_evaluator(occ_surface: Geom_Surface, surface: BSplineSurface | None 
         basis = basis.BasisSurface()
     if isinstance(basis, (Geom_BSplineSurface, Geom_BezierSurface)):
         ours = surface if surface is not None and basis is occ_surface else from_occ(basis)
+        if not isinstance(ours, BSplineSurface):  # from_occ of a Geom B-spline or Bézier surface is one
+            raise TypeError(f"from_occ gave a {type(ours).__name__} for a {type(basis).__name__}")
         periodic = (bool(basis.IsUPeriodic()), bool(basis.IsVPeriodic())) if isinstance(basis, Geom_BSplineSurface) \
             else (False, False)
         return SurfaceEvaluator("bspline", _bspline_fn(ours, basis), occ_surface, ours, periodic)

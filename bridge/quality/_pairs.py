@@ -16,7 +16,7 @@ which a normal flip between the faces is detected.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,6 +28,9 @@ from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from ..messages import one_line
 from ._evaluators import PCurveEvaluator, SurfaceEvaluator, pcurve_evaluator, surface_evaluator
+
+if TYPE_CHECKING:
+    from ._batch import CurveBatch, SurfaceBatch
 
 Array = NDArray[np.float64]
 
@@ -192,12 +195,20 @@ def _side(faces: list[FaceData], fi: int, edge: Any) -> Side:
 
 
 # ------------------------------------------------------------------------------------ geometry
-def _samples(curves: Any, surfaces: Any, fids: NDArray[np.intp], sides: list[Side], n: NDArray[np.intp]
+def _range(side: Side) -> tuple[float, float]:
+    """``(first, last)`` of the side's p-curve (the sides matched here all have one)."""
+    if side.pcurve is None:
+        raise ValueError(f"face {side.face}: this edge has no p-curve on the face")
+    return side.pcurve.first, side.pcurve.last
+
+
+def _samples(curves: CurveBatch, surfaces: SurfaceBatch, fids: NDArray[np.intp], sides: list[Side], n: NDArray[np.intp]
              ) -> tuple[Array, Array, NDArray[np.intp]]:
     """Uniform samples of many edges at once: parameters, 3-D points, owner index."""
     owner = np.repeat(np.arange(len(sides)), n)
-    first = np.array([s.pcurve.first for s in sides])
-    last = np.array([s.pcurve.last for s in sides])
+    ranges = [_range(s) for s in sides]
+    first = np.array([r[0] for r in ranges])
+    last = np.array([r[1] for r in ranges])
     start = np.r_[0, np.cumsum(n)[:-1]]
     frac = (np.arange(owner.size) - start[owner]) / (n[owner] - 1)
     t = first[owner] + (last - first)[owner] * frac
@@ -206,7 +217,7 @@ def _samples(curves: Any, surfaces: Any, fids: NDArray[np.intp], sides: list[Sid
     return t, D[:, 0, 0], owner
 
 
-def project_batch(curves: Any, surfaces: Any, cid: NDArray[np.intp], fid: NDArray[np.intp], lo: Array, hi: Array,
+def project_batch(curves: CurveBatch, surfaces: SurfaceBatch, cid: NDArray[np.intp], fid: NDArray[np.intp], lo: Array, hi: Array,
                   X: Array, s0: Array, iterations: int) -> tuple[Array, Array]:
     """Gauss-Newton projection of points ``X (m, 3)`` onto edge curves ``S_f(pcurve_c(s))``, all at once.
 
@@ -226,7 +237,7 @@ def project_batch(curves: Any, surfaces: Any, cid: NDArray[np.intp], fid: NDArra
     return s, np.linalg.norm(D[:, 0, 0] - X, axis=1)
 
 
-def match_free_edges(faces: list[FaceData], free: list[Side], tol: float, spacing: float, surfaces: Any,
+def match_free_edges(faces: list[FaceData], free: list[Side], tol: float, spacing: float, surfaces: SurfaceBatch,
                      iterations: int = 6) -> list[Pair]:
     """Pair free edges of different faces that coincide within ``tol`` (see the module docstring).
 
@@ -289,8 +300,8 @@ def match_free_edges(faces: list[FaceData], free: list[Side], tol: float, spacin
         seg = dense[start[b]:start[b] + n[b]]
         d2 = ((X[j * K:(j + 1) * K, None, :] - seg[None]) ** 2).sum(axis=2)
         s0[j * K:(j + 1) * K] = t_dense[start[b] + d2.argmin(axis=1)]
-    lo = np.array([usable[b].pcurve.first for b in rb])
-    hi = np.array([usable[b].pcurve.last for b in rb])
+    lo = np.array([_range(usable[b])[0] for b in rb])
+    hi = np.array([_range(usable[b])[1] for b in rb])
     s, dist = project_batch(curves, surfaces, rb, fids[rb], lo, hi, X, s0, iterations)
     dist = dist.reshape(-1, K)
     s = s.reshape(-1, K)

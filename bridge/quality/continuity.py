@@ -151,6 +151,9 @@ class Thresholds:
         return replace(self, **changes)
 
 
+#: CATIA's relative curvature jump (percent): also what tells G1 from G2 in a report when the
+#: thresholds do not check relative jumps (``g2_rel=None``).
+_CATIA_G2_REL = 2.0
 #: ``'catia'``: CATIA V5 Connect Checker's defaults (G0 0.001 mm, G1 0.01 deg, G2 2 %).
 #: ``'class-a'``: visible automotive/consumer surfaces: half CATIA's angle and curvature jumps
 #: (0.005 deg, 1 %), as class-A reviews ask for joints that look seamless in highlight lines, and a
@@ -160,7 +163,7 @@ class Thresholds:
 #: NX's default angle tolerance), no curvature check (a fillet meets its plane with a 100 %
 #: curvature jump by design), creases from 5 deg on.
 PRESETS: dict[str, Thresholds] = {
-    "catia": Thresholds(0.001, 0.01, 2.0, None, None, 0.5, "catia"),
+    "catia": Thresholds(0.001, 0.01, _CATIA_G2_REL, None, None, 0.5, "catia"),
     "class-a": Thresholds(0.001, 0.005, 1.0, None, 1e-3, 0.5, "class-a"),
     "mechanical": Thresholds(0.01, 0.5, None, None, None, 5.0, "mechanical"),
 }
@@ -364,7 +367,7 @@ def _check_args(samples: Any, match_tol: Any) -> tuple[int, float | None]:
 
 def _check_face_pairs(face_pairs: Any, n_faces: int) -> set[tuple[int, int]]:
     try:
-        chosen = {tuple(sorted((int(a), int(b)))) for a, b in face_pairs}
+        chosen = {(min(i, j), max(i, j)) for i, j in ((int(a), int(b)) for a, b in face_pairs)}
     except (TypeError, ValueError) as err:
         raise InvalidGeometryError(f"face_pairs: expected pairs of face indices, got {face_pairs!r}") from err
     bad = sorted(i for pair in chosen for i in pair if not 0 <= i < n_faces)
@@ -419,9 +422,9 @@ def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False,
     """
     samples, match_tol = _check_args(tolerances.CONTINUITY_SAMPLES if samples is None else samples, match_tol)
     thresholds = _thresholds(preset)
-    refine = tolerances.CONTINUITY_REFINE_ITERATIONS if refine is None else refine
-    if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
-        raise InvalidGeometryError(f"refine: expected an integer >= 0, got {refine!r}")
+    iterations = tolerances.CONTINUITY_REFINE_ITERATIONS if refine is None else refine
+    if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
+        raise InvalidGeometryError(f"refine: expected an integer >= 0, got {iterations!r}")
     clock = time.perf_counter()
     try:
         shape, faces = collect_faces(model)
@@ -447,7 +450,7 @@ def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False,
     result.match_tol, result.thresholds = tol, thresholds
     engine = Engine(faces, pairs, g3, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
     t_measure = time.perf_counter()
-    reports, result.points = _measure_all(engine, samples, refine, thresholds)
+    reports, result.points = _measure_all(engine, samples, int(iterations), thresholds)
     t_measure = time.perf_counter() - t_measure
     result.extend(reports)
     matched_free = {id(p.side1) for p in pairs if p.matched == "geometry"} | {id(p.side2) for p in pairs if p.matched == "geometry"}
@@ -528,7 +531,7 @@ def _measure_all(engine: Engine, samples: int, refine: int, th: Thresholds) -> t
     grid = {k: M[k].reshape(n, samples) for k in meas + ["gap"]} if n else {}
     P = M["P"].reshape(n, samples, 3) if n else np.zeros((0, samples, 3))
     best = {}
-    for j, m in enumerate(meas):
+    for m in meas:
         V = np.nan_to_num(grid[m], nan=-np.inf) if n else np.zeros((0, samples))
         i = V.argmax(axis=1) if n else np.zeros(0, dtype=np.intp)
         rows = np.arange(n)
@@ -548,11 +551,11 @@ def _measure_all(engine: Engine, samples: int, refine: int, th: Thresholds) -> t
     row_of = {int(p): r for r, p in enumerate(good)}
     reports, points = [], []
     for idx, p in enumerate(pairs):
-        r = row_of.get(idx)
-        reports.append(_report(engine, idx, p, why[idx], r, best, grid, P, samples, th, meas))
-        points.append(None if r is None else {
-            "t": T[r], "s": M["s"].reshape(n, samples)[r], "uv1": M["uv1"].reshape(n, samples, 2)[r],
-            "uv2": M["uv2"].reshape(n, samples, 2)[r], "P": P[r], **{k: grid[k][r] for k in grid}})
+        row = row_of.get(idx)
+        reports.append(_report(engine, idx, p, why[idx], row, best, grid, P, samples, th, meas))
+        points.append(None if row is None else {
+            "t": T[row], "s": M["s"].reshape(n, samples)[row], "uv1": M["uv1"].reshape(n, samples, 2)[row],
+            "uv2": M["uv2"].reshape(n, samples, 2)[row], "P": P[row], **{k: grid[k][row] for k in grid}})
     return reports, points
 
 
@@ -602,7 +605,7 @@ def _limits(th: Thresholds) -> dict[str, float | None]:
 def _classify(p: Pair, val: dict[str, float], th: Thresholds) -> str:
     if p.seam:
         return "seam"
-    g2_rel = th.g2_rel if th.g2_rel is not None else PRESETS["catia"].g2_rel
+    g2_rel = th.g2_rel if th.g2_rel is not None else _CATIA_G2_REL
     if not val["g0"] <= th.g0:
         return "gap"
     if not val["g1"] < th.sharp_deg:
@@ -617,11 +620,11 @@ def _classify(p: Pair, val: dict[str, float], th: Thresholds) -> str:
 def _worst_measure(val: dict[str, float], th: Thresholds, cls: str) -> str:
     lim = _limits(th)
     if lim["g2_rel"] is None:
-        lim["g2_rel"] = PRESETS["catia"].g2_rel
-    ratios = {m: val[m] / lim[m] for m in val if lim.get(m) and math.isfinite(val[m])}
+        lim["g2_rel"] = _CATIA_G2_REL
+    ratios = {m: val[m] / limit for m in val if (limit := lim.get(m)) and math.isfinite(val[m])}
     if cls in ("gap", "sharp", "G0"):  # curvature is meaningless across a crease
         ratios = {m: r for m, r in ratios.items() if m in ("g0", "g1")}
-    return max(ratios, key=ratios.get) if ratios else "g0"
+    return max(ratios, key=ratios.__getitem__) if ratios else "g0"
 
 
 def check_edges(reports: list[EdgeReport], thresholds: str | Thresholds = "catia") -> list[Violation]:

@@ -25,6 +25,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
+    import build123d as bd
+    from vtkmodules.vtkCommonDataModel import vtkPolyData
+
     from .report import FaceField, QualityReport
 
 __all__ = ["ColoredMesh", "colored_mesh", "as_edges", "section_curves", "reflection_lines"]
@@ -74,7 +77,7 @@ class ColoredMesh:
         atomic_write(path, head + vert.tobytes() + face.tobytes())
         return path
 
-    def to_vtk(self) -> Any:
+    def to_vtk(self) -> vtkPolyData:
         """vtkPolyData with the colours as its point scalars (name ``'rgb'``) and the values as ``indicator``."""
         from vtkmodules.util.numpy_support import numpy_to_vtk
 
@@ -140,13 +143,13 @@ def colored_mesh(source: QualityReport | FaceField | Sequence[FaceField], indica
     return ColoredMesh(points=P, triangles=T, colors=colors, values=V, normals=N, indicator=indicator, lo=lo, hi=hi)
 
 
-def as_edges(polylines: Sequence[np.ndarray], *, smooth: bool = True) -> list[Any]:
+def as_edges(polylines: Sequence[np.ndarray], *, smooth: bool = True) -> list[bd.Edge]:
     """build123d edges through polylines ``(k, 3)``: a spline through the points (``smooth``, for
     section cuts and comb outlines) or straight segments (combs' teeth ``(2, 3)``, reflection-line
     segments). Polylines with fewer than 2 distinct points are skipped."""
     from build123d import Edge, Vector
 
-    out = []
+    out: list[bd.Edge] = []
     for pl in polylines:
         P = np.asarray(pl, float)
         P = P[np.all(np.isfinite(P), axis=1)]
@@ -155,7 +158,7 @@ def as_edges(polylines: Sequence[np.ndarray], *, smooth: bool = True) -> list[An
             P = P[keep]
         if len(P) < 2:
             continue
-        pts = [Vector(*map(float, p)) for p in P]
+        pts: list[bd.VectorLike] = [Vector(*map(float, p)) for p in P]
         if smooth and len(P) >= 3:
             out.append(Edge.make_spline(pts))
         else:

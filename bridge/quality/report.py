@@ -30,8 +30,11 @@ import numpy as np
 from ..messages import error_line
 
 if TYPE_CHECKING:
+    from occsurf.algorithms import BSplineSurface
+
     from ..exchange.step_iges import ImportedFace, ImportedModel
     from ..rendering.tessellation import FaceMesh
+    from .continuity import Thresholds
 
 __all__ = ["FaceQuality", "QualityReport", "FaceField", "check_model", "face_fields", "summarize_model", "DEFAULT_PRESET"]
 
@@ -150,7 +153,7 @@ class QualityReport:
 
     @property
     def worst_g1_deg(self) -> float | None:
-        vals = [e.get("g1_max_deg") for e in self.edges if _finite(e.get("g1_max_deg")) is not None]
+        vals = [v for e in self.edges if (v := _finite(e.get("g1_max_deg"))) is not None]
         return max(vals) if vals else None
 
     def to_json(self) -> dict[str, Any]:
@@ -167,6 +170,17 @@ class QualityReport:
 
 
 # ---------------------------------------------------------------------------------------- fields
+def _surface_of(face: ImportedFace) -> BSplineSurface:
+    """The face's converted surface; :class:`InvalidGeometryError` for a face whose surface did not
+    convert (``face.surface`` is ``None``, ``face.error`` says why)."""
+    if face.surface is None:
+        from occsurf.algorithms.errors import InvalidGeometryError
+
+        raise InvalidGeometryError(f"face {face.index}: no surface to evaluate "
+                                   f"({face.error or 'the surface did not convert'})")
+    return face.surface
+
+
 def face_fields(face: ImportedFace, mesh: FaceMesh, *, view_dir: Sequence[float] = (-1.0, 1.0, -0.8),
                 pull: Sequence[float] = (0.0, 0.0, 1.0), size: float = 1.0) -> FaceField:
     """Per-vertex indicators of one meshed face, by our own exact derivatives (course §9-5..9-13).
@@ -178,7 +192,7 @@ def face_fields(face: ImportedFace, mesh: FaceMesh, *, view_dir: Sequence[float]
     from occsurf.algorithms.geometry.differential import curvatures_from_derivatives
     from occsurf.algorithms.quality import curvature_values, draft_angle, isophotes, zebra
 
-    surf = face.surface
+    surf = _surface_of(face)
     uv = mesh.uv
     c = curvatures_from_derivatives(surf.derivatives(uv[:, 0], uv[:, 1], 2))
     sign = -1.0 if mesh.reversed else 1.0  # curvature sign follows the outward normal of the face
@@ -263,7 +277,8 @@ def _flags_of(face: ImportedFace, mesh: FaceMesh, samples: int) -> list[dict[str
     triangles of OCC's mesh), as JSON dicts."""
     from occsurf.algorithms import quality
 
-    (u0, u1), (v0, v1) = face.surface.domain
+    surface = _surface_of(face)
+    (u0, u1), (v0, v1) = surface.domain
     us, vs = np.linspace(u0, u1, samples), np.linspace(v0, v1, samples)
     grid = np.meshgrid(us, vs, indexing="ij")
     trimmed = getattr(face, "trimmed", None)
@@ -273,7 +288,7 @@ def _flags_of(face: ImportedFace, mesh: FaceMesh, samples: int) -> list[dict[str
         inside = uv_mask(mesh)(*grid) if mesh.source == "brepmesh" else None
     if inside is not None and not inside.any():
         return []
-    return [_flag_json(f) for f in quality.face_flags(face.surface, mask=inside, us=us, vs=vs)]
+    return [_flag_json(f) for f in quality.face_flags(surface, mask=inside, us=us, vs=vs)]
 
 
 def _flag_json(flag: Any) -> dict[str, Any]:
@@ -323,15 +338,15 @@ def _check_face(face: ImportedFace, mesh_of: Callable[[ImportedFace], FaceMesh],
 
 
 # ---------------------------------------------------------------------------------------- edges
-def _thresholds_json(th: Any) -> dict[str, Any]:
-    from dataclasses import asdict, is_dataclass
+def _thresholds_json(th: Thresholds) -> dict[str, Any]:
+    from dataclasses import asdict
 
-    return asdict(th) if is_dataclass(th) else {"value": repr(th)}
+    return asdict(th)
 
 
 # ---------------------------------------------------------------------------------------- entry
 def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, samples: int = 41,
-                preset: str = DEFAULT_PRESET, thresholds: Any = None, edges: bool | str = True, flags: bool = True,
+                preset: str = DEFAULT_PRESET, thresholds: Thresholds | None = None, edges: bool | str = True, flags: bool = True,
                 progress: Callable[[int, int], None] | None = None, skip: Mapping[int, str] | None = None,
                 trace: Callable[[str], None] | None = None, mesh_each: bool = False) -> QualityReport:
     """Assess a model's surfaces: per-face indicators and flags, the edge-continuity table.
@@ -449,14 +464,14 @@ def _mesh(model: ImportedModel, faces: Sequence[ImportedFace], each: bool, note:
     return size
 
 
-def _preset_thresholds(preset: str, thresholds: Any) -> Any:
+def _preset_thresholds(preset: str, thresholds: Thresholds | None) -> Thresholds:
     from . import continuity
 
     return continuity._thresholds(preset if thresholds is None else thresholds)
 
 
 def _add_edges(report: QualityReport, model: ImportedModel, chosen: list[int] | None, preset: str,
-               thresholds: Any) -> None:
+               thresholds: Thresholds | None) -> None:
     """Fill the edge table (:func:`.continuity.edge_continuity`), each face's worst adjacent G1
     angle, and the edges' violations of the thresholds (:func:`.continuity.check_edges`)."""
     from . import continuity
@@ -538,8 +553,8 @@ def summarize_model(model: ImportedModel, *, preset: str = DEFAULT_PRESET, sampl
         faces; ``flags``: every face flag as ``"face N: kind"``; ``failures``: what breaks the preset.
     """
     report = check_model(model, samples=samples, preset=preset)
-    smooth = [e.get("g1_max_deg") for e in report.edges
-              if e.get("classification") in _SMOOTH_CLASSES and _finite(e.get("g1_max_deg")) is not None]
+    smooth = [v for e in report.edges
+              if e.get("classification") in _SMOOTH_CLASSES and (v := _finite(e.get("g1_max_deg"))) is not None]
     flags = [f"face {f.index}: {g['kind']}" for f in report.faces for g in f.flags]
     spikes = sum(1 for f in report.faces for g in f.flags if g["kind"] == "curvature_spike")
     return {"worst_g1_deg": max(smooth) if smooth else None, "curvature_spikes": spikes, "flags": flags,

@@ -107,7 +107,8 @@ def _lookup(lo: float, hi: float) -> Any:
     lut = vtkLookupTable()
     lut.SetNumberOfTableValues(256)
     for i, ti in enumerate(t):
-        lut.SetTableValue(i, *(float(np.interp(ti, x, ctrl[:, c])) for c in range(3)), 1.0)
+        r, g, b = (float(np.interp(ti, x, ctrl[:, c])) for c in range(3))
+        lut.SetTableValue(i, r, g, b, 1.0)
     lut.SetRange(lo, hi)
     lut.SetNanColor(0.7, 0.7, 0.7, 1.0)
     lut.Build()

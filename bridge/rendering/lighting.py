@@ -59,6 +59,8 @@ from .vtk_scene import (
 from .vtk_scene import window as _window
 
 if TYPE_CHECKING:
+    from occsurf.algorithms import BSplineSurface
+
     from ..exchange.step_iges import ImportedModel
 
 __all__ = ["VIEWS", "Camera", "LitImage", "camera_for_view", "render_lit", "render_model_lit", "mesh_of_model",
@@ -131,7 +133,7 @@ def _f(x: float) -> str:
     return f"{float(x):.9e}"
 
 
-def _v3(v: Sequence[float]) -> str:
+def _v3(v: Sequence[float] | np.ndarray) -> str:
     return f"vec3({_f(v[0])}, {_f(v[1])}, {_f(v[2])})"
 
 
@@ -383,7 +385,7 @@ def mesh_of_model(model: ImportedModel) -> tuple[np.ndarray, np.ndarray, np.ndar
     return np.concatenate(pts), np.concatenate(tris), np.concatenate(nrms)
 
 
-def render_surfaces_lit(surfaces: Any, setup: LightingSetup, *, resolution: int = 161, **kw: Any) -> LitImage:
+def render_surfaces_lit(surfaces: BSplineSurface | Sequence[BSplineSurface], setup: LightingSetup, *, resolution: int = 161, **kw: Any) -> LitImage:
     """:func:`render_lit` of one or several :class:`~occsurf.algorithms.BSplineSurface` (each on its
     whole parameter box, a ``resolution x resolution`` grid of exact points and normals)."""
     from occsurf.algorithms import BSplineSurface

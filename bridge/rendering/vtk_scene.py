@@ -31,9 +31,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from vtkmodules.vtkCommonDataModel import vtkPolyData
+    from vtkmodules.vtkCommonMath import vtkMatrix4x4
+    from vtkmodules.vtkRenderingCore import vtkCamera, vtkRenderer, vtkRenderWindow
 
 __all__ = ["Scene", "CAMERAS", "VIEWS", "VIEW_ANGLE", "Camera", "fit_camera", "apply_camera", "window",
            "new_window", "read_pixels", "COLORMAPS", "colormap_rgb", "render_available"]
@@ -139,7 +144,7 @@ def _lut(cmap: str, lo: float, hi: float, stripes: int = 1) -> Any:
     return lut
 
 
-def new_window(width: int, height: int, *, multisamples: int = 0) -> Any:
+def new_window(width: int, height: int, *, multisamples: int = 0) -> vtkRenderWindow:
     """An offscreen render window: EGL (no display needed) when the build has it, else the default.
 
     ``multisamples=0`` (the scene's choice: FXAA on the renderer instead, half the read-back time of
@@ -147,16 +152,15 @@ def new_window(width: int, height: int, *, multisamples: int = 0) -> Any:
     """
     import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (registers the OpenGL factories)
     from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
+    from vtkmodules.vtkRenderingCore import vtkRenderWindow
 
     vtkObject.GlobalWarningDisplayOff()
     vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
     try:
         from vtkmodules.vtkRenderingOpenGL2 import vtkEGLRenderWindow
 
-        win = vtkEGLRenderWindow()
+        win: vtkRenderWindow = vtkEGLRenderWindow()
     except ImportError:
-        from vtkmodules.vtkRenderingCore import vtkRenderWindow
-
         win = vtkRenderWindow()
     win.SetOffScreenRendering(1)
     win.SetSize(int(width), int(height))
@@ -164,10 +168,10 @@ def new_window(width: int, height: int, *, multisamples: int = 0) -> Any:
     return win
 
 
-_WINDOWS: dict[tuple[int, int, int], Any] = {}
+_WINDOWS: dict[tuple[int, int, int], vtkRenderWindow] = {}
 
 
-def window(width: int, height: int, multisamples: int = 0) -> Any:
+def window(width: int, height: int, multisamples: int = 0) -> vtkRenderWindow:
     """The cached offscreen window of this size and multisampling (:func:`new_window`; creating an
     OpenGL context costs ~50 ms per picture). Callers add their renderer, render, read the pixels
     and remove the renderer again."""
@@ -178,7 +182,7 @@ def window(width: int, height: int, multisamples: int = 0) -> Any:
     return win
 
 
-def read_pixels(win: Any, width: int, height: int, *, depth: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
+def read_pixels(win: vtkRenderWindow, width: int, height: int, *, depth: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
     """The back buffer just rendered: RGB ``(height, width, 3)`` uint8 with row 0 at the top, and
     (``depth=True``) the OpenGL depth ``(height, width)`` float32 in [0, 1] (1: background)."""
     from vtkmodules.util.numpy_support import vtk_to_numpy
@@ -253,6 +257,7 @@ def fit_camera(view: str | Sequence[float], lo: Sequence[float], hi: Sequence[fl
     """
     from occsurf.algorithms.errors import InvalidGeometryError
 
+    direction: tuple[float, ...]
     if isinstance(view, str):
         if view not in VIEWS:
             raise InvalidGeometryError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
@@ -312,7 +317,7 @@ def _fit_by_view_angle(direction: np.ndarray, up: np.ndarray, centre: np.ndarray
     return Camera(position=tuple(position), target=tuple(target), up=tuple(up), view_angle=VIEW_ANGLE / (zoom / need))
 
 
-def apply_camera(renderer: Any, camera: Camera, clip_bounds: Sequence[float] | None = None) -> Any:
+def apply_camera(renderer: vtkRenderer, camera: Camera, clip_bounds: Sequence[float] | None = None) -> vtkCamera:
     """Put ``camera`` on ``renderer``'s active VTK camera (view-up orthogonalised) and fit the
     clipping range to ``clip_bounds`` ``[x0, x1, y0, y1, z0, z1]`` (default: every visible prop);
     returns the VTK camera."""
@@ -329,12 +334,12 @@ def apply_camera(renderer: Any, camera: Camera, clip_bounds: Sequence[float] | N
     return cam
 
 
-def vtk_matrix(m: Any) -> np.ndarray:
+def vtk_matrix(m: vtkMatrix4x4) -> np.ndarray:
     """A ``vtkMatrix4x4`` as a ``(4, 4)`` array."""
     return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
 
 
-def _polydata(points: np.ndarray, cells: Sequence[np.ndarray], kind: str) -> Any:
+def _polydata(points: np.ndarray, cells: np.ndarray | Sequence[np.ndarray], kind: str) -> vtkPolyData:
     """vtkPolyData from points ``(n, 3)`` and cells (triangles ``(m, 3)`` or polylines of indices)."""
     from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
     from vtkmodules.vtkCommonCore import vtkPoints
@@ -391,7 +396,7 @@ class Scene:
         self._legend: _Legend | None = None
         self._title: str | None = None
         self._bounds: list[np.ndarray] = []
-        self._lights: list[tuple[tuple[float, float, float], float]] | None = None
+        self._lights: list[tuple[tuple[float, ...], float]] | None = None
 
     # ------------------------------------------------------------------------------ content
     def add_mesh(self, points: np.ndarray, triangles: np.ndarray, *, normals: np.ndarray | None = None,
@@ -612,7 +617,7 @@ class Scene:
         from vtkmodules.vtkRenderingAnnotation import vtkScalarBarActor
         from vtkmodules.vtkRenderingCore import vtkActor2D, vtkLight, vtkTextActor
 
-        for a in list(self._renderer.GetViewProps()):
+        for a in list(self._renderer.GetViewProps()):  # type: ignore[call-overload]  # iterable; its stub lacks __iter__
             if isinstance(a, (vtkScalarBarActor, vtkTextActor)) or type(a) is vtkActor2D:
                 self._renderer.RemoveViewProp(a)
         if self._legend is not None:

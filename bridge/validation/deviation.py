@@ -410,23 +410,20 @@ def roundtrip_deviation(before: BSplineCurve | BSplineSurface, after: BSplineCur
         Not two curves or two surfaces, or dimensions that differ.
     """
     m = _check_samples(samples)
-    curves = isinstance(before, BSplineCurve) and isinstance(after, BSplineCurve)
-    surfaces = isinstance(before, BSplineSurface) and isinstance(after, BSplineSurface)
-    if not (curves or surfaces):
-        raise InvalidGeometryError(
-            f"roundtrip_deviation: expected two BSplineCurves or two BSplineSurfaces, got "
-            f"{type(before).__name__} and {type(after).__name__}"
-        )
-    if before.dim != after.dim:
-        raise InvalidGeometryError(f"roundtrip_deviation: dimensions differ ({before.dim} and {after.dim})")
 
-    if curves:
+    def check_dims() -> None:
+        if before.dim != after.dim:
+            raise InvalidGeometryError(f"roundtrip_deviation: dimensions differ ({before.dim} and {after.dim})")
+
+    if isinstance(before, BSplineCurve) and isinstance(after, BSplineCurve):
+        check_dims()
         kb, ka = [before.knots], [after.knots]
         (b0, b1), (a0, a1) = before.domain, after.domain
         s = np.linspace(0.0, 1.0, m)
         pb = before.evaluate(b0 + s * (b1 - b0))
         pa = after.evaluate(np.clip(a0 + s * (a1 - a0), a0, a1))
-    else:
+    elif isinstance(before, BSplineSurface) and isinstance(after, BSplineSurface):
+        check_dims()
         kb, ka = list(before.knots), list(after.knots)
         s = np.linspace(0.0, 1.0, m)
         grids = []
@@ -434,6 +431,11 @@ def roundtrip_deviation(before: BSplineCurve | BSplineSurface, after: BSplineCur
             (u0, u1), (v0, v1) = obj.domain
             grids.append(obj.evaluate_grid(np.clip(u0 + s * (u1 - u0), u0, u1), np.clip(v0 + s * (v1 - v0), v0, v1)))
         pb, pa = grids
+    else:
+        raise InvalidGeometryError(
+            f"roundtrip_deviation: expected two BSplineCurves or two BSplineSurfaces, got "
+            f"{type(before).__name__} and {type(after).__name__}"
+        )
     max_point = float(np.max(np.linalg.norm(pb - pa, axis=-1)))
 
     same = (

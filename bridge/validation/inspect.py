@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from ..messages import error_line, one_line
@@ -190,27 +190,26 @@ def _inspect_face_guarded(face: ImportedFace, samples: int) -> FaceReport:
 
 def _inspect_face(face: ImportedFace, samples: int) -> FaceReport:
     """The report of one face: its own fields, then (free-form faces) the deviation from OCC's."""
-    common = dict(index=face.index, name=face.name or None, surface_type=face.surface_type,
-                  periodic=(face.u_periodic, face.v_periodic), continuity=face.continuity)
     error = None if face.error is None else one_line(face.error)
+    common = FaceReport(index=face.index, name=face.name or None, surface_type=face.surface_type, degree=None,
+                        poles=None, rational=None, periodic=(face.u_periodic, face.v_periodic),
+                        continuity=face.continuity, max_deviation=None, error=error)
     if face.surface_type not in FREE_FORM:  # analytic or derived: no poles of its own, nothing exact to compare
-        return FaceReport(**common, degree=None, poles=None, rational=None, max_deviation=None, error=error)
+        return common
     surf = face.surface
     if surf is None:
-        return FaceReport(**common, degree=None, poles=None, rational=None, max_deviation=None,
-                          error=error or "the free-form face was not converted")
-    spline = dict(degree=(int(surf.degree[0]), int(surf.degree[1])), poles=(int(surf.n_poles[0]), int(surf.n_poles[1])),
-                  rational=bool(surf.is_rational))
+        return replace(common, error=error or "the free-form face was not converted")
+    spline = replace(common, degree=(int(surf.degree[0]), int(surf.degree[1])),
+                     poles=(int(surf.n_poles[0]), int(surf.n_poles[1])), rational=bool(surf.is_rational))
     try:
         from . import deviation  # looked up at call time: the module's function, not a copy
 
         dev = deviation.surface_deviation(surf, face.occ_surface, samples=samples)
     except Exception as err:  # noqa: BLE001 - one bad face must not hide the others
-        return FaceReport(**common, **spline, max_deviation=None, error=f"deviation not measured: {error_line(err)}")
+        return replace(spline, error=f"deviation not measured: {error_line(err)}")
     max_deviation = _finite_or_none(dev.max_point_rel)
     if max_deviation is None and error is None:
         error = "the deviation is not finite"
-    return FaceReport(**common, **spline, max_deviation=max_deviation,
-                      max_d1_deviation=_finite_or_none(dev.max_d1_rel),
-                      max_d2_deviation=_finite_or_none(dev.max_d2_rel),
-                      max_normal_angle=_finite_or_none(dev.max_normal_angle), error=error)
+    return replace(spline, max_deviation=max_deviation, max_d1_deviation=_finite_or_none(dev.max_d1_rel),
+                   max_d2_deviation=_finite_or_none(dev.max_d2_rel),
+                   max_normal_angle=_finite_or_none(dev.max_normal_angle), error=error)
