@@ -67,3 +67,12 @@ def _restore_sigint() -> None:
 
 
 _restore_sigint()
+
+
+# Worker processes (occsurf.bridge.isolation, the audit reader, the CLI's checker) run test jobs that
+# live in this folder (``tests.bridge.isolation_jobs:...``). occsurf itself is the installed package
+# (the checkout has no ``occsurf/`` folder at its top to shadow it), so the children need the
+# checkout on PYTHONPATH only to import ``tests``; isolation.worker_env keeps what is there.
+_REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+if _REPO not in os.environ.get("PYTHONPATH", "").split(os.pathsep):
+    os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (_REPO, os.environ.get("PYTHONPATH")) if p)
