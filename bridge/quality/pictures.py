@@ -341,7 +341,7 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
                 render_picture([fld], kind, out / name, size=FACE_SIZE, model_size=report.size,
                                flags=_flag_points(report, {row.index}) if kind == "mean" else None,
                                title=f"face {row.index} ({row.type}): {kind}",
-                               sections=(lambda: own[0]) if own else None)
+                               sections=(lambda own=own: own[0]) if own else None)
                 row.pictures[kind] = name
             except Exception as err:  # noqa: BLE001
                 row.notes.append(f"picture {kind} not drawn: {error_line(err)}")

@@ -142,8 +142,9 @@ def _imported_roots(tree: ast.AST) -> list[tuple[int, str, bool]]:
 
 def _problems(path: Path, text: str) -> list[str]:
     allowed = set(sys.stdlib_module_names) | ALLOWED_THIRD_PARTY | {"occsurf"}
-    dynamic = re.compile(r"""(import_module|__import__|find_spec)\s*\(\s*f?["'](%s)\b""" % "|".join(FORBIDDEN))
-    word = re.compile(r"^\s*(import|from)\s+(%s)\b" % "|".join(FORBIDDEN), re.MULTILINE)
+    alternatives = "|".join(FORBIDDEN)
+    dynamic = re.compile(rf"""(import_module|__import__|find_spec)\s*\(\s*f?["']({alternatives})\b""")
+    word = re.compile(rf"^\s*(import|from)\s+({alternatives})\b", re.MULTILINE)
     problems = []
     for lineno, root, guarded in _imported_roots(ast.parse(text, filename=str(path))):
         if root in FORBIDDEN:
@@ -261,7 +262,7 @@ def _occsurf_problems(path: Path, text: str, module: str, is_package: bool) -> l
             problems.append(f"{path}:{ref.line}: imports {hit} ({ref.context} level; bridge and examples "
                             "build on algorithms, not the reverse)")
     names = "|".join(re.escape(p) for p in FORBIDDEN_OCCSURF)
-    dynamic = re.compile(r"""(import_module|__import__|find_spec)\s*\(\s*f?["'](%s)\b""" % names)
+    dynamic = re.compile(rf"""(import_module|__import__|find_spec)\s*\(\s*f?["']({names})\b""")
     for m in dynamic.finditer(text):
         problems.append(f"{path}:{text.count(chr(10), 0, m.start()) + 1}: {m.group(0).strip()}")
     return problems

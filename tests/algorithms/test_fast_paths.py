@@ -183,7 +183,8 @@ def test_two_dimensional_and_high_dimensional_poles(monkeypatch):
             s = BSplineSurface((2, 3), (U, V), rng.uniform(-1, 1, (6, 6, dim)), w)
             u, v = rng.uniform(0, 1, 50), rng.uniform(0, 1, 50)
             g = np.r_[0.0, 0.3, 0.35, 1.0]
-            ref, fast = both_paths(monkeypatch, lambda: (s.evaluate(u, v), s.derivatives(u, v, 2), s.derivatives_grid(g, g, 2)))
+            ref, fast = both_paths(monkeypatch, lambda s=s, u=u, v=v, g=g: (s.evaluate(u, v), s.derivatives(u, v, 2),
+                                                                        s.derivatives_grid(g, g, 2)))
             for a, b, axes in zip(fast, ref, (0, 2, 2)):
                 assert_partials_close(a, b, axes)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -284,8 +285,8 @@ def test_setup_and_material_errors() -> None:
     with pytest.raises(InvalidGeometryError, match="points"):
         shade([[np.nan, 0, 0]], [[0, 0, 1]], [0, 0, 1], [])
     light = WarnLight(position=(0.0, 0.0, 1.0), direction=(0, 0, -1))
-    with pytest.raises(Exception):
-        light.intensity = 2.0  # frozen
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        light.intensity = 2.0  # type: ignore[misc]  # frozen
 
 
 # ---------------------------------------------------------------------------------------- file & presets

@@ -157,7 +157,10 @@ def linear_cases(draw):
     for j in range(draw(st.integers(1, 3))):
         u = (j + draw(st.floats(0.3, 0.7))) / 3  # at least 2 knot spans apart
         kind = draw(st.integers(1, 3))
-        vec = lambda: np.array(draw(st.lists(st.floats(-5, 5), min_size=dim, max_size=dim)))
+
+        def vec() -> np.ndarray:
+            return np.array(draw(st.lists(st.floats(-5, 5), min_size=dim, max_size=dim)))
+
         cons.append(Position(u, c.evaluate(u) + vec()))
         if kind >= 2:
             cons.append(Tangent(u, c.derivatives(u, 1)[1] + vec()))

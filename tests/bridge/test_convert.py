@@ -530,7 +530,7 @@ def test_occ_failure_is_wrapped_as_kernel_error():
 def test_kernel_errors_lets_other_exceptions_through():
     with pytest.raises(ZeroDivisionError):
         with _occ.kernel_errors("testing"):
-            1 / 0
+            _ = 1 / 0
 
 
 def test_knot_vector_helpers_round_trip():

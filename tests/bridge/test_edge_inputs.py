@@ -184,7 +184,7 @@ def test_fill_helpers_take_build123d_and_cadquery_edges_and_faces(open_ball):
     cq_edges, cq_faces = [cq.Edge(e) for e in edges], [cq.Face(f) for f in faces]
     assert [len(loop) for loop, _ in find_loops(shell)] == [len(loop) for loop, _ in find_loops(cq.Shell(shell.wrapped))] == [4]
     m_b3d = edge_face_map(shell)
-    for e, b, c, f in zip(edges, b3d_edges, cq_edges, faces):
+    for _e, b, c, f in zip(edges, b3d_edges, cq_edges, faces):
         assert neighbour_face(m_b3d, b).IsSame(f) and neighbour_face(m_b3d, c).IsSame(f)
     plain = hole_sides(edges, faces)
     for es, fs in ((b3d_edges, b3d_faces), (cq_edges, cq_faces), ([bd.Wire([e]) for e in b3d_edges], b3d_faces)):
