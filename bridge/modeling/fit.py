@@ -214,7 +214,7 @@ def _read_rows(p: Path) -> FitInput:
 
 
 def _read_face(p: Path, face: int | None, samples: int | None, strict: bool = False) -> FitInput:
-    from ..cli._common import read_model
+    from ..exchange.reading import read_model
 
     model = read_model(p, strict=strict)  # strict: a file read around damage is refused
     n = len(model.faces)
@@ -255,7 +255,7 @@ def face_inputs(path: str | os.PathLike[str], faces: list[int] | None = None, *,
     (int, FitInput or ExchangeError)
         The face index and its input, or the reason it cannot be sampled.
     """
-    from ..cli._common import read_model
+    from ..exchange.reading import read_model
 
     p = Path(os.fspath(path))
     model = read_model(p)
@@ -272,7 +272,7 @@ def read_fit_input(path: str | os.PathLike[str], *, face: int | None = None, x_r
 
     A STEP/IGES file read around damage keeps its warnings (``FitInput.warnings``); with ``strict``
     (``occsurf fit --strict``) it is refused instead (ExchangeError, the message of
-    :func:`occsurf.bridge.cli._common.strict_refusal`).
+    :func:`occsurf.bridge.exchange.reading.strict_refusal`).
 
     Raises
     ------
