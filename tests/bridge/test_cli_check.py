@@ -50,7 +50,7 @@ def test_json_and_files(loft_out) -> None:
         for name in f["pictures"].values():
             assert (out / name).stat().st_size > 2000
     # faces numbered as `occsurf inspect` numbers them
-    from occsurf.bridge.cli.inspect import inspect_files
+    from occsurf.bridge.validation.files import inspect_files
 
     (rep,) = inspect_files([str(SAMPLES / "loft.step")], samples=3)
     assert [(f.index, f.surface_type) for f in rep.faces] == [(f["index"], f["type"]) for f in doc["faces"]]
