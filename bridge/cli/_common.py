@@ -278,7 +278,7 @@ def _note_interrupts() -> _SigintSeen:
 
 def output_problem(path: Path) -> str | None:
     """Why ``path`` cannot be written, checked in the command-line process before any work (standard
-    library only; :func:`occsurf.algorithms._files.check_target` applies the same rules again when the
+    library only; :func:`occsurf.bridge.exchange.files.check_target` applies the same rules again when the
     worker writes): ``None`` if it can be."""
     import stat
 

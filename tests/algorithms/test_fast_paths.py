@@ -183,7 +183,7 @@ def test_two_dimensional_and_high_dimensional_poles(monkeypatch):
             s = BSplineSurface((2, 3), (U, V), rng.uniform(-1, 1, (6, 6, dim)), w)
             u, v = rng.uniform(0, 1, 50), rng.uniform(0, 1, 50)
             g = np.r_[0.0, 0.3, 0.35, 1.0]
-            ref, fast = both_paths(monkeypatch, lambda: (s.evaluate(u, v), s.derivatives(u, v, 2), s.derivatives_grid(g, g, 2)))
+            ref, fast = both_paths(monkeypatch, lambda s=s, u=u, v=v, g=g: (s.evaluate(u, v), s.derivatives(u, v, 2), s.derivatives_grid(g, g, 2)))
             for a, b, axes in zip(fast, ref, (0, 2, 2)):
                 assert_partials_close(a, b, axes)
 
@@ -252,12 +252,12 @@ def test_failing_kernel_falls_back_to_numpy_with_a_warning(monkeypatch, with_num
 @needs_numba
 def test_uncachable_kernel_source_still_compiles():
     # numba raises RuntimeError at decoration when no cache directory is usable (here: a
-    # function without a source file); _jit must then compile without the cache.
+    # function without a source file); jit must then compile without the cache.
     import numba
 
     ns: dict = {}
     exec("def twice(x):\n    return 2 * x\n", ns)  # noqa: S102 - no file, so no cache locator
-    f = nk._jit(numba, ns["twice"])
+    f = nk.jit(numba, ns["twice"])
     assert f(21) == 42
 
 
