@@ -532,7 +532,7 @@ def test_audit_store_writes_through_the_atomic_helper(tmp_path, monkeypatch):
 
 
 def test_strict_reading_refuses_a_file_read_around_damage(clean, tmp_path):
-    from occsurf.bridge.cli._common import read_model
+    from occsurf.bridge.exchange.reading import read_model
 
     st = C.StepText.parse(clean["step"].read_bytes())
     face = next(i for i, r in enumerate(st.records) if b"ADVANCED_FACE" in r)
