@@ -295,7 +295,7 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
         R = band_product(Dv, sv, self.degree[1], Ht)  # (m_v, r+1, n_u * k): [b, j, I, c]
         return np.ascontiguousarray(R.reshape(b.shape[0], order + 1, nu, k).transpose(2, 0, 1, 3))
 
-    def _grid_u(self, su: NDArray[np.intp], Du: Array, G: Array, sel: slice | NDArray[np.intp]) -> Array:
+    def _grid_u(self, su: int, Du: Array, G: Array, sel: slice | NDArray[np.intp]) -> Array:
         """Homogeneous partials ``(g, m_v, r+1, r+1, k)`` of the grid rows ``sel`` sharing one u-span.
 
         ``G`` is :meth:`_grid_v`; rows of ``sel`` must all lie in the u-span ``su``.

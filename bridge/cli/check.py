@@ -115,7 +115,7 @@ class _Progress:
     def _run(self) -> None:
         from tqdm import tqdm
 
-        bar = None
+        bar: Any = None
         stage = None
         while not self._stop.wait(0.2):
             try:
@@ -217,7 +217,7 @@ def run(ns: argparse.Namespace) -> int:
         error(why)
         return EXIT_ERROR
     preset = ns.fail_on or "catia"
-    work = [(k, e) for k, e in enumerate(entries) if e[1] is not None]
+    work = [(k, (shown, path, why, name)) for k, (shown, path, why, name) in enumerate(entries) if path is not None]
     folders = {k: out if single else out / e[3] for k, e in work}
     for k in folders:
         why = _check_out(folders[k])

@@ -63,7 +63,7 @@ def _view(meshes: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> np.ndarray
     acc = np.zeros(3)
     for P, T, _ in meshes:
         acc += np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]).sum(0)
-    n = acc / max(np.linalg.norm(acc), 1e-300)
+    n = acc / max(float(np.linalg.norm(acc)), 1e-300)
     if not np.all(np.isfinite(n)) or np.linalg.norm(acc) == 0:
         n = np.array([1.0, -1.0, 0.8]) / np.sqrt(2.64)
     e = np.cross(n, np.eye(3)[int(np.argmin(np.abs(n)))])
@@ -139,9 +139,9 @@ def zebra_before_after(path: str | Path, before: Sequence[Any], neighbours: Sequ
     all_faces = list(before) + list(neighbours) + list(after)
     size = _size(all_faces)
     mesh = {id(f): face_triangles(f, DEFLECTION * size) for f in all_faces}
-    nb = [mesh[id(f)] for f in neighbours if mesh[id(f)] is not None]
-    old = [mesh[id(f)] for f in before if mesh[id(f)] is not None]
-    new = [mesh[id(f)] for f in after if mesh[id(f)] is not None]
+    nb = [m for f in neighbours if (m := mesh[id(f)]) is not None]
+    old = [m for f in before if (m := mesh[id(f)]) is not None]
+    new = [m for f in after if (m := mesh[id(f)]) is not None]
     direction = _view(old + new if (old or new) else nb)
     halves = []
     for meshes, lines, title in ((nb + old, [], label or "before"), (nb + new, _edge_lines(after), after_label or "after")):

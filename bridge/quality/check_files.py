@@ -65,8 +65,9 @@ def collect_files(args: list[str]) -> list[tuple[str, Path | None, str | None, s
         for folder, dirs, _files in os.walk(root, onerror=walk_errors.append):
             dirs.sort()
             found.extend(folder_entries(Path(folder)))
-        for err in walk_errors:
-            out.append((shown_path(err.filename or arg), None, f"cannot read this folder: {err.strerror or err}", ""))
+        for walk_error in walk_errors:
+            out.append((shown_path(walk_error.filename or arg), None,
+                        f"cannot read this folder: {walk_error.strerror or walk_error}", ""))
         found.sort(key=lambda t: (len(t[0].relative_to(root).parts) > 1, str(t[0])))
         if not found and not walk_errors:
             out.append((shown_path(arg), None, f"no STEP/IGES files ({', '.join(SUFFIXES)}) in this folder or below", ""))

@@ -131,7 +131,7 @@ def _f(x: float) -> str:
     return f"{float(x):.9e}"
 
 
-def _v3(v: Sequence[float]) -> str:
+def _v3(v: Sequence[float] | np.ndarray) -> str:
     return f"vec3({_f(v[0])}, {_f(v[1])}, {_f(v[2])})"
 
 
