@@ -3,10 +3,10 @@ rooms cannot fall behind the folders.
 
 * ``lint-imports`` keeps every contract (``occsurf.algorithms`` is pure, nothing imports the command line,
   only ``occsurf demo`` imports the examples, the rooms of the bridge are layered). import-linter finds
-  modules on disk below the package's own folder, and in a source checkout ``occsurf/`` holds only
-  ``__init__.py`` (it adds the repository root to ``occsurf.__path__`` at import, which a static scan does
-  not see), so the test scans a tree of links shaped like the installed package: ``occsurf/algorithms`` ->
-  ``algorithms/`` and so on.
+  modules on disk below the package's own folder, and the repository keeps ``occsurf``'s subpackages in
+  top-level folders (pyproject's package-dir; a source checkout or an editable install maps them at import,
+  which a static scan does not see), so the test scans a tree of links shaped like the installed package:
+  ``occsurf/algorithms`` -> ``algorithms/`` and so on.
 * ``cli-leaf`` and ``examples-leaf`` list their source rooms one by one (import-linter has no "everything
   but"): every top-level module and package of ``occsurf``, of ``occsurf.bridge`` but the command line,
   must be listed, so a new room is covered the day it is added.
@@ -23,9 +23,11 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-CONTRACTS = {c["id"]: c for c in
-             tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["importlinter"]["contracts"]}
-#: The folders that are packages below ``occsurf`` (as pyproject's package-dir maps them).
+PYPROJECT = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))
+CONTRACTS = {c["id"]: c for c in PYPROJECT["tool"]["importlinter"]["contracts"]}
+#: The repository folder of each package (pyproject's package-dir): ``occsurf`` itself, and the code
+#: packages below it (``step_samples`` holds data).
+PACKAGE_DIR = {name: REPO / folder for name, folder in PYPROJECT["tool"]["setuptools"]["package-dir"].items()}
 PACKAGES = ("algorithms", "bridge", "examples")
 
 
@@ -42,8 +44,8 @@ def _rooms(folder: Path, prefix: str) -> set[str]:
 
 def _all_rooms() -> set[str]:
     """``occsurf``'s own modules, its three packages, and every room of ``occsurf.bridge``."""
-    top = _rooms(REPO / "occsurf", "occsurf") | {f"occsurf.{name}" for name in PACKAGES}
-    return (top - {"occsurf.bridge"}) | _rooms(REPO / "bridge", "occsurf.bridge")
+    top = _rooms(PACKAGE_DIR["occsurf"], "occsurf") | {f"occsurf.{name}" for name in PACKAGES}
+    return (top - {"occsurf.bridge"}) | _rooms(PACKAGE_DIR["occsurf.bridge"], "occsurf.bridge")
 
 
 def test_leaf_contracts_list_every_other_room() -> None:
@@ -55,7 +57,8 @@ def test_leaf_contracts_list_every_other_room() -> None:
 
 def test_layers_name_every_room_of_the_bridge_but_the_shared_modules() -> None:
     layered = {name.strip() for layer in CONTRACTS["bridge-layers"]["layers"] for name in layer.split("|")}
-    packages = {r for r in _rooms(REPO / "bridge", "occsurf.bridge") if (REPO / "bridge" / r.rsplit(".", 1)[1]).is_dir()}
+    bridge = PACKAGE_DIR["occsurf.bridge"]
+    packages = {r for r in _rooms(bridge, "occsurf.bridge") if (bridge / r.rsplit(".", 1)[1]).is_dir()}
     assert layered == packages
 
 
@@ -65,11 +68,11 @@ def installed_shape(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("layout")
     pkg = root / "occsurf"
     pkg.mkdir()
-    for f in (REPO / "occsurf").iterdir():
+    for f in PACKAGE_DIR["occsurf"].iterdir():
         if f.suffix == ".py":
             (pkg / f.name).symlink_to(f)
     for name in PACKAGES:
-        (pkg / name).symlink_to(REPO / name, target_is_directory=True)
+        (pkg / name).symlink_to(PACKAGE_DIR[f"occsurf.{name}"], target_is_directory=True)
     return root
 
 
