@@ -2,14 +2,16 @@
 rooms cannot fall behind the folders.
 
 * ``lint-imports`` keeps every contract (``occsurf.algorithms`` is pure, nothing imports the command line,
-  only ``occsurf demo`` imports the examples, the rooms of the bridge are layered). import-linter finds
+  only ``occsurf demo`` imports the examples, the rooms of the bridge are layered, the modules they share
+  import none of them). import-linter finds
   modules on disk below the package's own folder, and the repository keeps ``occsurf``'s subpackages in
   top-level folders (pyproject's package-dir; a source checkout or an editable install maps them at import,
   which a static scan does not see), so the test scans a tree of links shaped like the installed package:
   ``occsurf/algorithms`` -> ``algorithms/`` and so on.
 * ``cli-leaf`` and ``examples-leaf`` list their source rooms one by one (import-linter has no "everything
   but"): every top-level module and package of ``occsurf``, of ``occsurf.bridge`` but the command line,
-  must be listed, so a new room is covered the day it is added.
+  must be listed, so a new room is covered the day it is added; likewise every package of the bridge is
+  a layer, and every module beside them is a shared one.
 """
 
 from __future__ import annotations
@@ -55,11 +57,12 @@ def test_leaf_contracts_list_every_other_room() -> None:
     assert set(CONTRACTS["examples-leaf"]["source_modules"]) == rooms - {"occsurf.bridge.cli", "occsurf.examples"}
 
 
-def test_layers_name_every_room_of_the_bridge_but_the_shared_modules() -> None:
+def test_layers_and_shared_modules_name_every_room_of_the_bridge() -> None:
     layered = {name.strip() for layer in CONTRACTS["bridge-layers"]["layers"] for name in layer.split("|")}
     bridge = PACKAGE_DIR["occsurf.bridge"]
     packages = {r for r in _rooms(bridge, "occsurf.bridge") if (bridge / r.rsplit(".", 1)[1]).is_dir()}
-    assert layered == packages
+    assert layered == packages == set(CONTRACTS["bridge-shared"]["forbidden_modules"])
+    assert set(CONTRACTS["bridge-shared"]["source_modules"]) == _rooms(bridge, "occsurf.bridge") - packages
 
 
 @pytest.fixture(scope="module")
