@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from occsurf.algorithms._files import (
+    TEMP_SUFFIX,
     as_path,
     atomic_write,
     atomic_write_many,
@@ -33,7 +34,7 @@ from occsurf.algorithms.errors import ExchangeError
 
 __all__ = ["load", "check_step_text", "check_iges_text", "target", "atomic_write", "atomic_write_many",
            "check_target", "clean_stale_temps", "file_lock", "default_mode", "write_figure", "write_text",
-           "MAX_FILE_BYTES"]
+           "MAX_FILE_BYTES", "TEMP_SUFFIX"]
 
 #: Largest file :func:`load` reads (bytes): a bigger one is refused before it is read into memory.
 MAX_FILE_BYTES: int = 4 << 30
