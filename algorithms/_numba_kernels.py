@@ -602,7 +602,7 @@ def load() -> dict[str, Any] | None:
         try:
             import numba
         except Exception:  # noqa: BLE001 - numba missing or broken: NumPy paths
-            numba = None  # type: ignore[assignment]
+            numba = None
         if numba is not None:
             g = globals()
             # Helpers first: kernels resolve them as globals when they compile.

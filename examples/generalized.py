@@ -37,8 +37,7 @@ def demo_dome() -> Mesh:
     of 10 quads. Its pentagon and the valence-3 corners of the top stay interior, so the
     Catmull–Clark step leaves interior vertices of valence 3 and 5."""
     rings = ((5, 1.0, 1.9, 0.0), (5, 1.6, 0.9, 0.0), (10, 2.6, 0.0, 0.45))  # count, radius, height, wave
-    verts: list[tuple[float, float, float]] = []
-    start: list[int] = []
+    verts, start = [], []
     for r, (n, rad, h, wave) in enumerate(rings):
         start.append(len(verts))
         for i in range(n):
@@ -51,14 +50,14 @@ def demo_dome() -> Mesh:
         faces.append([s0 + j, s0 + i, s1 + i, s1 + j])
         faces.append([s1 + j, s1 + i, s2 + 2 * i, s2 + 2 * i + 1])
         faces.append([s1 + j, s2 + 2 * i + 1, s2 + (2 * i + 2) % 10])
-    return Mesh(np.array(verts), tuple(map(tuple, faces)))
+    return Mesh(np.array(verts), faces)
 
 
 def demo_frame() -> Mesh:
     """A square picture frame (genus 1) of 32 quads: outer corners of valence 3, hole corners of
     valence 5; slightly twisted so that it is not symmetric."""
     vid: dict[tuple[int, int, int], int] = {}
-    pts: list[tuple[float, float, float]] = []
+    pts = []
     for z in (0, 1):
         for i in range(4):
             for j in range(4):
@@ -75,7 +74,7 @@ def demo_frame() -> Mesh:
     for loop in (outer, hole):
         for a, b in zip(loop, loop[1:] + loop[:1]):
             F.append([vid[a + (0,)], vid[b + (0,)], vid[b + (1,)], vid[a + (1,)]])
-    return Mesh(np.array(pts, float), tuple(map(tuple, F)))
+    return Mesh(np.array(pts, float), F)
 
 
 # ------------------------------------------------------------------------------------- drawing

@@ -105,7 +105,7 @@ def ring_model(n: int, *, rational: bool = False, bump: float = 0.6, bump_order:
             x = ((1 - T) * ((1 - S) * a[0] + S * b[0]) + T * ((1 - S) * A[0] + S * B[0]))
             y = ((1 - T) * ((1 - S) * a[1] + S * b[1]) + T * ((1 - S) * A[1] + S * B[1]))
             H = GH.evaluate(x, y)
-            if amp and phi is not None:  # (phi is set when amp is) in homogeneous coordinates for a rational base: z moves by amp phi psi / w
+            if amp:  # in homogeneous coordinates for a rational base: z moves by amp phi psi / w
                 H[..., 2] += amp * phi.evaluate(S)[..., 0] * (1.0 - T)
             return H
 

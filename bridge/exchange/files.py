@@ -118,15 +118,15 @@ def check_iges_text(p: Path, data: bytes) -> None:
     found = dict.fromkeys("SGDP", 0)
     order = 0
     for number, line in enumerate(lines[:-1], start=1):
-        letter = line[72:73]
-        idx = _IGES_SECTIONS.find(letter) if letter else -1
+        sec = line[72:73]
+        idx = _IGES_SECTIONS.find(sec) if sec else -1
         # a short line, an unknown section letter, or sections out of order
         if idx < order or len(line.rstrip(b"\x00\x1a")) < 80:
             raise ExchangeError(
                 f"{p}: damaged IGES file (line {number} is not an 80-column line of the S, G, D, P sections in order)"
             )
         order = idx
-        found[chr(letter[0])] += 1
+        found[chr(sec[0])] += 1
     if found != declared:
         got = " ".join(f"{k}{v}" for k, v in found.items())
         want = " ".join(f"{k}{v}" for k, v in declared.items())

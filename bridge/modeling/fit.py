@@ -137,7 +137,7 @@ def _read_npy(p: Path, x_range, y_range) -> FitInput:
     if Q.ndim == 2:
         _check_grid_rows(Q)
         xr, yr = x_range or (0.0, 1.0), y_range or (0.0, 1.0)
-        x, y = np.linspace(xr[0], xr[1], Q.shape[0]), np.linspace(yr[0], yr[1], Q.shape[1])
+        x, y = np.linspace(*xr, Q.shape[0]), np.linspace(*yr, Q.shape[1])
         return FitInput("heights", Q, x, y, f"{p.name}: {Q.shape[0]} x {Q.shape[1]} height grid over "
                         f"[{xr[0]:g}, {xr[1]:g}] x [{yr[0]:g}, {yr[1]:g}]")
     raise InvalidGeometryError(f"{p}: expected an (m, n, 3) point grid or (m, n) heights, got shape {Q.shape}")
@@ -153,9 +153,7 @@ def _parse_rows(p: Path) -> tuple[np.ndarray, np.ndarray, bool]:
         text = p.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as err:
         raise ExchangeError(f"{p}: cannot read as text ({err})") from err
-    rows: list[list[float]] = []
-    lines: list[int] = []
-    header = False
+    rows, lines, header = [], [], False
     width = None
     for no, line in enumerate(text.splitlines(), 1):
         s = line.split("#", 1)[0].strip()
@@ -337,7 +335,7 @@ def fit_input(inp: FitInput, tol: float, *, ctrl: tuple[int, int] | None = None,
     if inp.kind == "scattered":
         return _fit_scattered(inp, tol, ctrl, degree, smooth, say, max_levels)
     heights = inp.kind == "heights"
-    kw: dict[str, Any] = dict(x=inp.x, y=inp.y) if heights else {}
+    kw = dict(x=inp.x, y=inp.y) if heights else {}
     if ctrl is not None:
         fit = fit_grid(inp.data, ctrl, degree, smoothing=smooth, fix_boundary=fix_boundary, **kw)
         u, v = fit.u_params, fit.v_params
@@ -436,7 +434,7 @@ def _pool(a: np.ndarray, k: int) -> np.ndarray:
     return m[::k, ::k]
 
 
-def _overlay_lines(surface: BSplineSurface, overlays: Sequence[Any]) -> list[np.ndarray]:
+def _overlay_lines(surface: BSplineSurface, overlays) -> list[np.ndarray]:
     """The borders of ``overlays`` on ``surface`` as polylines (40 points a side)."""
     lines = []
     t = np.linspace(0, 1, 40)

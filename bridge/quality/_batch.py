@@ -25,9 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from occsurf.algorithms.kernel.basis import basis_derivatives
-from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.kernel.rational import curve_quotient_rule, surface_quotient_rule
-from occsurf.algorithms.kernel.surface import BSplineSurface
 
 from ._evaluators import PCurveEvaluator, SurfaceEvaluator
 
@@ -101,13 +99,9 @@ class SurfaceBatch:
         self.group = np.full(n, -1, dtype=np.intp)
         self.local = np.full(n, -1, dtype=np.intp)
         members: dict[tuple[int, int], list[int]] = {}
-        #: The B-spline of each face that has one (the faces of the groups), and its periodic flags.
-        self.splines: dict[int, BSplineSurface] = {}
-        periodic: dict[int, tuple[bool, bool]] = {}
         for f, ev in enumerate(evaluators):
             if ev is not None and ev.spline is not None:
                 members.setdefault(ev.spline.degree, []).append(f)
-                self.splines[f], periodic[f] = ev.spline, ev.periodic
         self.groups: list[dict[str, Any]] = []
         self._kargs: dict[int, tuple] = {}
         self.dom = np.zeros((n, 4))
@@ -118,7 +112,7 @@ class SurfaceBatch:
                 self.dom[f] = (u0, u1, v0, v1)
                 self.per[f] = ev.periodic
         for g, ((p, q), faces) in enumerate(members.items()):
-            splines = [self.splines[f] for f in faces]
+            splines = [evaluators[f].spline for f in faces]
             nu = [s.n_poles[0] for s in splines]
             nv = [s.n_poles[1] for s in splines]
             H = [self._homogeneous(s) for s in splines]
@@ -129,8 +123,8 @@ class SurfaceBatch:
                 "nv": np.array(nv, dtype=np.intp),
                 "H": np.concatenate(H),
                 "H_off": np.cumsum([0] + [len(h) for h in H[:-1]]).astype(np.intp),
-                "uper": np.array([periodic[f][0] for f in faces]),
-                "vper": np.array([periodic[f][1] for f in faces]),
+                "uper": np.array([evaluators[f].periodic[0] for f in faces]),
+                "vper": np.array([evaluators[f].periodic[1] for f in faces]),
                 "rational": any(s.weights is not None for s in splines),
             })
             self.group[faces] = g
@@ -188,7 +182,7 @@ class SurfaceBatch:
             if a == b:
                 continue
             f = int(fs[a])
-            spline = self.splines[f]
+            spline = self.evaluators[f].spline
             args = self._kargs.get(f)
             if args is None:  # span tables and read-only views built once per face
                 args = self._kargs[f] = tuple(nk.readonly(x) for x in nk.surface_args(spline))
@@ -258,14 +252,12 @@ class CurveBatch:
         self.group = np.full(n, -1, dtype=np.intp)
         self.local = np.full(n, -1, dtype=np.intp)
         members: dict[int, list[int]] = {}
-        spline_of: dict[int, BSplineCurve] = {}
         for i, c in enumerate(curves):
             if c is not None and c.spline is not None:
                 members.setdefault(c.spline.degree, []).append(i)
-                spline_of[i] = c.spline
         self.groups: list[dict[str, Any]] = []
         for g, (p, ids) in enumerate(members.items()):
-            splines = [spline_of[i] for i in ids]
+            splines = [curves[i].spline for i in ids]
             H = [np.c_[s.control_points * (1.0 if s.weights is None else s.weights[:, None]),
                        np.ones(s.n_poles) if s.weights is None else s.weights] for s in splines]
             self.groups.append({"p": p, "T": _Stack([s.knots for s in splines], p, [s.n_poles for s in splines]),

@@ -155,7 +155,7 @@ def as_edges(polylines: Sequence[np.ndarray], *, smooth: bool = True) -> list[An
             P = P[keep]
         if len(P) < 2:
             continue
-        pts: list[Any] = [Vector(*map(float, p)) for p in P]
+        pts = [Vector(*map(float, p)) for p in P]
         if smooth and len(P) >= 3:
             out.append(Edge.make_spline(pts))
         else:

@@ -23,7 +23,7 @@ import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -151,7 +151,7 @@ class QualityReport:
     @property
     def worst_g1_deg(self) -> float | None:
         vals = [e.get("g1_max_deg") for e in self.edges if _finite(e.get("g1_max_deg")) is not None]
-        return max(cast(list[float], vals)) if vals else None
+        return max(vals) if vals else None
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -178,7 +178,7 @@ def face_fields(face: ImportedFace, mesh: FaceMesh, *, view_dir: Sequence[float]
     from occsurf.algorithms.geometry.differential import curvatures_from_derivatives
     from occsurf.algorithms.quality import curvature_values, draft_angle, isophotes, zebra
 
-    surf = cast(Any, face.surface)  # typed Optional; a face without one fails below, as before
+    surf = face.surface
     uv = mesh.uv
     c = curvatures_from_derivatives(surf.derivatives(uv[:, 0], uv[:, 1], 2))
     sign = -1.0 if mesh.reversed else 1.0  # curvature sign follows the outward normal of the face
@@ -263,7 +263,7 @@ def _flags_of(face: ImportedFace, mesh: FaceMesh, samples: int) -> list[dict[str
     triangles of OCC's mesh), as JSON dicts."""
     from occsurf.algorithms import quality
 
-    (u0, u1), (v0, v1) = cast(Any, face.surface).domain
+    (u0, u1), (v0, v1) = face.surface.domain
     us, vs = np.linspace(u0, u1, samples), np.linspace(v0, v1, samples)
     grid = np.meshgrid(us, vs, indexing="ij")
     trimmed = getattr(face, "trimmed", None)
@@ -326,7 +326,7 @@ def _check_face(face: ImportedFace, mesh_of: Callable[[ImportedFace], FaceMesh],
 def _thresholds_json(th: Any) -> dict[str, Any]:
     from dataclasses import asdict, is_dataclass
 
-    return asdict(cast(Any, th)) if is_dataclass(th) else {"value": repr(th)}
+    return asdict(th) if is_dataclass(th) else {"value": repr(th)}
 
 
 # ---------------------------------------------------------------------------------------- entry
@@ -542,5 +542,5 @@ def summarize_model(model: ImportedModel, *, preset: str = DEFAULT_PRESET, sampl
               if e.get("classification") in _SMOOTH_CLASSES and _finite(e.get("g1_max_deg")) is not None]
     flags = [f"face {f.index}: {g['kind']}" for f in report.faces for g in f.flags]
     spikes = sum(1 for f in report.faces for g in f.flags if g["kind"] == "curvature_spike")
-    return {"worst_g1_deg": max(cast(list[float], smooth)) if smooth else None, "curvature_spikes": spikes, "flags": flags,
+    return {"worst_g1_deg": max(smooth) if smooth else None, "curvature_spikes": spikes, "flags": flags,
             "failures": list(report.failures)}

@@ -31,7 +31,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 
@@ -150,7 +150,6 @@ def new_window(width: int, height: int, *, multisamples: int = 0) -> Any:
 
     vtkObject.GlobalWarningDisplayOff()
     vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
-    win: Any
     try:
         from vtkmodules.vtkRenderingOpenGL2 import vtkEGLRenderWindow
 
@@ -254,8 +253,6 @@ def fit_camera(view: str | Sequence[float], lo: Sequence[float], hi: Sequence[fl
     """
     from occsurf.algorithms.errors import InvalidGeometryError
 
-    direction: tuple[float, ...]
-    up: tuple[float, ...]
     if isinstance(view, str):
         if view not in VIEWS:
             raise InvalidGeometryError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
@@ -337,7 +334,7 @@ def vtk_matrix(m: Any) -> np.ndarray:
     return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
 
 
-def polydata(points: np.ndarray, cells: np.ndarray | Sequence[np.ndarray], kind: str) -> Any:
+def polydata(points: np.ndarray, cells: Sequence[np.ndarray], kind: str) -> Any:
     """vtkPolyData from points ``(n, 3)`` and cells (triangles ``(m, 3)`` or polylines of indices)."""
     from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
     from vtkmodules.vtkCommonCore import vtkPoints
@@ -573,8 +570,7 @@ class Scene:
     def set_lights(self, lights: Sequence[tuple[tuple[float, float, float], float]] | None) -> None:
         """Directional lights ``[(direction towards the light, intensity), ...]`` fixed to the camera;
         ``None`` keeps VTK's headlight kit."""
-        self._lights = None if lights is None else [(cast(tuple[float, float, float], tuple(d)), float(i))
-                                                     for d, i in lights]
+        self._lights = None if lights is None else [(tuple(d), float(i)) for d, i in lights]
 
     # ------------------------------------------------------------------------------ output
     def render_array(self, *, size: tuple[int, int] = (800, 600), camera: str | Sequence[float] = "iso",
@@ -616,7 +612,7 @@ class Scene:
         from vtkmodules.vtkRenderingAnnotation import vtkScalarBarActor
         from vtkmodules.vtkRenderingCore import vtkActor2D, vtkLight, vtkTextActor
 
-        for a in list(cast(Any, self._renderer.GetViewProps())):
+        for a in list(self._renderer.GetViewProps()):
             if isinstance(a, (vtkScalarBarActor, vtkTextActor)) or type(a) is vtkActor2D:
                 self._renderer.RemoveViewProp(a)
         if self._legend is not None:
