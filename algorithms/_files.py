@@ -34,12 +34,12 @@ import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import BinaryIO, Union
+from typing import BinaryIO
 
 from .errors import ExchangeError
 
 __all__ = ["atomic_write", "atomic_write_many", "check_target", "clean_stale_temps", "file_lock", "default_mode",
-           "TEMP_SUFFIX", "STALE_GRACE_SECONDS"]
+           "as_path", "file_kind", "TEMP_SUFFIX", "STALE_GRACE_SECONDS"]
 
 #: Suffix of the temporary files of :func:`atomic_write` (``.NAME.PID.XXXXXXXX.occsurf-tmp``).
 TEMP_SUFFIX = ".occsurf-tmp"
@@ -49,7 +49,7 @@ STALE_GRACE_SECONDS = 60.0
 
 _TEMP_NAME = re.compile(r"^\..*\.(\d+)\.[A-Za-z0-9_]+" + re.escape(TEMP_SUFFIX) + r"$")
 
-Payload = Union[bytes, bytearray, memoryview, Callable[[BinaryIO], None]]
+Payload = bytes | bytearray | memoryview | Callable[[BinaryIO], None]
 
 
 def default_mode() -> int:
@@ -59,14 +59,18 @@ def default_mode() -> int:
     return 0o666 & ~mask
 
 
-def _as_path(path: str | os.PathLike[str], label: str = "path") -> Path:
+def as_path(path: str | os.PathLike[str], label: str = "path") -> Path:
+    """``path`` as a :class:`~pathlib.Path`; :class:`ExchangeError` naming ``label`` when it is not a
+    str or path-like."""
     try:
         return Path(os.fspath(path))
     except TypeError as err:
         raise ExchangeError(f"{label}: expected a str or path-like, got {type(path).__name__}") from err
 
 
-def _kind(mode: int) -> str:
+def file_kind(mode: int) -> str:
+    """What a file that is not a regular file is, from its ``st_mode``: ``'a character device'``,
+    ``'a block device'``, ``'a FIFO'``, ``'a socket'``, ``'a directory'``, else ``'not a regular file'``."""
     for test, name in ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
                        (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"), (stat.S_ISDIR, "a directory")):
         if test(mode):
@@ -87,7 +91,7 @@ def check_target(path: str | os.PathLike[str], *, replace_readonly: bool = False
         it is read-only and ``replace_readonly`` is false; its folder does not exist. The message names
         the path.
     """
-    p = _as_path(path)
+    p = as_path(path)
     target = p
     try:
         if p.is_symlink():
@@ -101,7 +105,7 @@ def check_target(path: str | os.PathLike[str], *, replace_readonly: bool = False
         raise ExchangeError(f"{p}: cannot write: {err.strerror or err}") from err
     if st is not None:
         if not stat.S_ISREG(st.st_mode):
-            what = "is a directory" if stat.S_ISDIR(st.st_mode) else f"is {_kind(st.st_mode)}"
+            what = "is a directory" if stat.S_ISDIR(st.st_mode) else f"is {file_kind(st.st_mode)}"
             raise ExchangeError(f"{p}: {what}; refusing to replace it with a regular file")
         writable = bool(st.st_mode & 0o222) and os.access(target, os.W_OK)
         if not writable and not replace_readonly:
@@ -263,7 +267,7 @@ def atomic_write_many(items: Sequence[tuple[str | os.PathLike[str], Payload]], *
         no target is modified then (only the renames themselves, one system call each, are not one
         transaction: the lock keeps other occsurf writers out of that window).
     """
-    targets = [(check_target(p, replace_readonly=replace_readonly), _as_path(p), data) for p, data in items]
+    targets = [(check_target(p, replace_readonly=replace_readonly), as_path(p), data) for p, data in items]
     for folder in {t.parent for t, _, _ in targets}:
         clean_stale_temps(folder)
     with file_lock(lock) if lock is not None else contextlib.nullcontext():

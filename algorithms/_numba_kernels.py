@@ -35,7 +35,8 @@ from numpy.typing import NDArray
 
 from . import tolerances
 
-__all__ = ["ENV_DISABLE", "span_bounds", "span_table", "enabled", "applies", "run"]
+__all__ = ["ENV_DISABLE", "span_bounds", "span_table", "surface_args", "enabled", "applies", "run", "load", "loaded",
+           "kernel", "jit", "readonly"]
 
 #: Environment variable that, set to anything but ``""``/``"0"``, forces the NumPy paths.
 ENV_DISABLE = "OCCSURF_NO_NUMBA"
@@ -52,8 +53,8 @@ def span_bounds(knots: np.ndarray, degree: int, n_poles: int) -> tuple[int, int]
 
 
 # ---------------------------------------------------------------------------------------------
-# Kernel sources. Plain Python functions; :func:`_load` compiles them with numba. They call each
-# other through module globals, which :func:`_load` rebinds to the compiled dispatchers. The
+# Kernel sources. Plain Python functions; :func:`load` compiles them with numba. They call each
+# other through module globals, which :func:`load` rebinds to the compiled dispatchers. The
 # annotations are for the type checker only (numba infers types from the arguments).
 
 _F = NDArray[np.float64]
@@ -612,14 +613,18 @@ _KERNELS = (
 # Loading and dispatch.
 
 
-def _jit(numba: Any, fn: Any, **options: Any) -> Any:
+def jit(numba: Any, fn: Any, **options: Any) -> Any:
+    """``fn`` compiled by ``numba.njit`` as every kernel of occsurf is (``nogil``, NumPy's error model,
+    ``options`` added), cached on disk where a cache folder is writable, else per process."""
     try:
         return numba.njit(cache=True, nogil=True, error_model="numpy", **options)(fn)
     except RuntimeError:  # no writable cache location: compile per process instead
         return numba.njit(nogil=True, error_model="numpy", **options)(fn)
 
 
-def _load() -> dict[str, Any] | None:
+def load() -> dict[str, Any] | None:
+    """The compiled kernels by name, or ``None`` without numba: numba is imported and the kernels
+    compiled (or read from the cache) on the first call in a process; later calls return the same."""
     with _lock:
         if _state["loaded"]:
             return _state["kernels"]
@@ -632,19 +637,37 @@ def _load() -> dict[str, Any] | None:
             g = globals()
             # Helpers first: kernels resolve them as globals when they compile.
             for name in _HELPERS:  # inlined into the kernels: a call per point costs ~20 ns
-                g[name] = _jit(numba, g[name], inline="always")
-            kernels = {name: _jit(numba, g[name]) for name in _KERNELS}
+                g[name] = jit(numba, g[name], inline="always")
+            kernels = {name: jit(numba, g[name]) for name in _KERNELS}
         _state["kernels"] = kernels
         _state["loaded"] = True
         return kernels
 
 
-def _readonly(a: Any) -> Any:
+def readonly(a: Any) -> Any:
     """A C-contiguous read-only view (a copy only if ``a`` is not contiguous)."""
     if isinstance(a, np.ndarray):
         a = np.ascontiguousarray(a).view()
         a.flags.writeable = False
     return a
+
+
+def loaded() -> bool:
+    """Whether :func:`load` has run in this process (numba imported, or found missing)."""
+    return bool(_state["loaded"])
+
+
+def kernel(name: str) -> Any | None:
+    """The compiled kernel ``name`` when the kernels are loaded and it has not been dropped (see
+    :func:`run`), else ``None``; never loads numba (:func:`applies` or :func:`load` do)."""
+    return (_state["kernels"] or {}).get(name)
+
+
+def surface_args(surface: Any) -> tuple[Any, ...]:
+    """A :class:`~occsurf.algorithms.kernel.surface.BSplineSurface`'s knots, degrees, span tables
+    (:func:`span_table`) and homogeneous net, as the surface kernels take them before the parameters."""
+    (p, q), (U, Vk), (nu, nv) = surface.degree, surface.knots, surface.n_poles
+    return (U, p, *span_table(U, p, nu), Vk, q, *span_table(Vk, q, nv), surface.homogeneous_points)
 
 
 def enabled() -> bool:
@@ -661,7 +684,7 @@ def applies(n_points: int) -> bool:
     """
     if n_points < tolerances.NUMBA_MIN_POINTS or not enabled():
         return False
-    kernels = _state["kernels"] if _state["loaded"] else _load()
+    kernels = _state["kernels"] if _state["loaded"] else load()
     return kernels is not None
 
 
@@ -676,7 +699,7 @@ def run(name: str, *args: Any) -> bool:
         return False
     # Inputs as read-only views (the output, last, stays writable): one compiled signature per
     # kernel whatever the flags of the caller's arrays, so nothing is compiled twice.
-    args = tuple(_readonly(a) for a in args[:-1]) + args[-1:]
+    args = tuple(readonly(a) for a in args[:-1]) + args[-1:]
     try:
         kernels[name](*args)
     except Exception as err:  # noqa: BLE001

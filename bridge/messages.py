@@ -2,13 +2,18 @@
 
 A message that reaches a user (a table cell, a JSON ``error`` field, a line ``occsurf: PATH: reason``
 on stderr) must fit on one line whatever the exception's text holds (OCC messages often span
-several). Only the standard library is imported here, so the command-line process can use it
+several); :func:`strip_path` drops the leading ``PATH: `` from a message shown beside its path. Only
+the standard library is imported here, so the command-line process can use it
 without loading NumPy or OCC.
 """
 
 from __future__ import annotations
 
-__all__ = ["one_line", "error_line"]
+import contextlib
+import os
+from pathlib import Path
+
+__all__ = ["one_line", "error_line", "strip_path"]
 
 
 def one_line(err: BaseException | str, *, expected: tuple[type[BaseException], ...] = ()) -> str:
@@ -62,3 +67,19 @@ def error_line(err: BaseException | str) -> str:
     except Exception:  # noqa: BLE001 - a broken install must not hide the error being reported
         return one_line(err, expected=(OSError,))
     return one_line(err, expected=(OccsurfError, OSError))
+
+
+def strip_path(message: str, path: str | os.PathLike[str]) -> str:
+    """``message`` without a leading ``PATH: ``: for a caller that shows the path beside the message
+    (a table's file heading, ``occsurf: PATH: reason``). ``path`` is matched as given, resolved and
+    absolute; a message that does not start with it is returned unchanged.
+    """
+    path = Path(path)
+    candidates = {str(path), os.fspath(path)}
+    with contextlib.suppress(OSError):
+        candidates.add(str(path.resolve()))
+        candidates.add(str(path.absolute()))
+    for c in sorted(candidates, key=len, reverse=True):
+        if message.startswith(c + ": "):
+            return message[len(c) + 2 :]
+    return message

@@ -63,7 +63,7 @@ def render_fitting_demo(out_dir: Path) -> list[Path]:
     from occsurf.algorithms.fitting import fit_adaptive
     from occsurf.bridge.exchange.files import write_text
     from occsurf.bridge.exchange.hierarchical_io import write_hierarchical_step
-    from occsurf.bridge.modeling.fit import _panel
+    from occsurf.bridge.modeling.fit import error_panel
     from occsurf.bridge.rendering.error_maps import render_error_maps
 
     out = output_folder(out_dir)
@@ -73,9 +73,9 @@ def render_fitting_demo(out_dir: Path) -> list[Path]:
         x = np.linspace(0.0, 1.0, m)
         Z = f(*np.meshgrid(x, x, indexing="ij"))
         fit = fit_adaptive(Z, TOL)
-        panels = [_panel(s, d, fit.u_params, fit.v_params,
-                         f"level {L.level}: {L.overlays} overlays, {L.control_points} dof, max {L.max_error:.2g}",
-                         [o for o in fit.hierarchy.overlays if o.level == L.level])
+        panels = [error_panel(s, d, fit.u_params, fit.v_params,
+                              f"level {L.level}: {L.overlays} overlays, {L.control_points} dof, max {L.max_error:.2g}",
+                              [o for o in fit.hierarchy.overlays if o.level == L.level])
                   for L, s, d in zip(fit.levels, fit.level_surfaces, fit.level_distances)]
         stored = fit.control_points_total
         uniform, uerr = _uniform_count(Z, x, TOL)
@@ -99,7 +99,7 @@ def _scattered_demo(out: Path, k: int = 30000) -> tuple[Path, str]:
     """A noisy scan-like cloud (k random points over the sharp feature, noise 1e-4) fitted
     adaptively at 2 x TOL; its per-level error picture and one summary line."""
     from occsurf.algorithms.fitting import fit_adaptive_scattered, fit_scattered
-    from occsurf.bridge.modeling.fit import _scatter_panel
+    from occsurf.bridge.modeling.fit import scatter_error_panel
     from occsurf.bridge.rendering.error_maps import render_error_maps
 
     tol = 2 * TOL
@@ -108,8 +108,8 @@ def _scattered_demo(out: Path, k: int = 30000) -> tuple[Path, str]:
     x[:4], y[:4] = [0, 1, 0, 1], [0, 0, 1, 1]
     P = np.c_[x, y, sharp_feature(x, y) + 1e-4 * rng.standard_normal(k)]
     fit = fit_adaptive_scattered(P, tol, params=np.c_[x, y])
-    panels = [_scatter_panel(s, fit.u, fit.v, d, f"level {L.level}: {L.overlays} overlays, {L.control_points} dof, "
-                             f"max {L.max_error:.2g}", [o for o in fit.hierarchy.overlays if o.level == L.level])
+    panels = [scatter_error_panel(s, fit.u, fit.v, d, f"level {L.level}: {L.overlays} overlays, {L.control_points} dof, "
+                                  f"max {L.max_error:.2g}", [o for o in fit.hierarchy.overlays if o.level == L.level])
               for L, s, d in zip(fit.levels, fit.level_surfaces, fit.level_distances)]
     n = 8
     while n < 120 and fit_scattered(P, n, 3, params=np.c_[x, y]).max_error > tol:

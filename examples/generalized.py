@@ -6,7 +6,7 @@ with vertices of valence 3, 4 and 5) and of a genus-1 picture frame, and the gen
 surface of both (one Doo–Sabin step: every vertex of valence 4, faces of 3 to 5 sides), pictures them coloured by mean
 and Gaussian curvature (computed from the S-patches' exact second derivatives) with the control
 mesh overlaid, and writes each surface to STEP as a sewn shell through
-:func:`occsurf.bridge.conversion.spatch_export.write_spatches_step`.
+:func:`occsurf.bridge.exchange.spatch_io.write_spatches_step`.
 
 Rendering: all quads of all patches go into one ``Poly3DCollection`` so matplotlib depth-sorts them
 together (separate ``plot_surface`` calls are painted in call order and show through each other).
@@ -147,7 +147,7 @@ def render_generalized(path: Path, surface: GeneralizedSurface, *, title: str, c
 # ------------------------------------------------------------------------------------- demo
 def render_generalized_demo(out_dir: Path) -> list[Path]:
     """Write the generalized-B-spline pictures and STEP files into ``out_dir``; return their paths."""
-    from occsurf.bridge.conversion.spatch_export import write_spatches_step
+    from occsurf.bridge.exchange.spatch_io import write_spatches_step
 
     out = output_folder(out_dir)
     files: list[Path] = []

@@ -82,7 +82,7 @@ def ring_model(n: int, *, rational: bool = False, bump: float = 0.6, bump_order:
                base: BSplineSurface | None = None, polygon: np.ndarray | None = None) -> RingModel:
     """An n-sided hole with its ring of n neighbour faces (see the module docstring)."""
     G = base_surface(rational) if base is None else base
-    GH = BSplineSurface._trusted(G.degree, G.knots, G.homogeneous_points)
+    GH = BSplineSurface(G.degree, G.knots, G.homogeneous_points)
     k = np.arange(n)
     th = 2 * np.pi * k / n + 0.3
     rr = radius * (1.0 + jitter * np.sin(2.7 * k + 1.0))

@@ -279,7 +279,7 @@ s = BSplineSurface((3, 3), ([0.0] * 4 + [0.5] + [1.0] * 4,) * 2, rng.random((5, 
 u = rng.random(5000)
 with tolerances.override(NUMBA_MIN_POINTS=0):
     values = s.evaluate(u, u[::-1])
-json.dump({"numba_loaded": nk._load() is not None, "values": values.tolist()}, sys.stdout)
+json.dump({"numba_loaded": nk.load() is not None, "values": values.tolist()}, sys.stdout)
 """
 
 

@@ -191,8 +191,7 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
 
     def _kernel_args(self) -> tuple[Any, ...]:
         """Knots, degrees, span bounds and homogeneous net, as the numba kernels take them."""
-        (p, q), (U, Vk), (nu, nv) = self.degree, self.knots, self.n_poles
-        return (U, p, *_nk.span_table(U, p, nu), Vk, q, *_nk.span_table(Vk, q, nv), self._hpoles)
+        return _nk.surface_args(self)
 
     def _scattered(self, u: Array, v: Array, order: int) -> Array:
         """Homogeneous partials ``(m, r+1, r+1, k)`` at scattered points, in bounded-memory chunks.

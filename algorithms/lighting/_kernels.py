@@ -300,8 +300,8 @@ def _load() -> Any:
 
                 g = globals()
                 for name in _HELPERS:
-                    g[name] = _nk._jit(numba, g[name], inline="always")
-                kern = _nk._jit(numba, _shade)
+                    g[name] = _nk.jit(numba, g[name], inline="always")
+                kern = _nk.jit(numba, _shade)
             except Exception:  # noqa: BLE001 - numba missing or broken: NumPy path
                 kern = None
             _state["kernel"] = kern

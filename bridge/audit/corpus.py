@@ -3,7 +3,7 @@
 A PATH is a file, a folder (searched recursively), a glob pattern (``**`` recursive), or a text
 file listing paths (one per line; blank lines and lines starting with ``#`` ignored; relative
 paths are taken from the list file's folder). A file is STEP or IGES by its suffix, else by its
-first bytes (:func:`occsurf.bridge.cli._common.sniff_format`'s rule); any other file given
+first bytes (:func:`occsurf.bridge.exchange.reading.sniff_format`'s rule); any other file given
 directly is read as a list. The content hash keys the results: a renamed file is recognised, a
 changed one is new. Only the standard library is imported here; sniffing a file imports
 :mod:`occsurf.algorithms` (NumPy, SciPy) for its exception classes, as :func:`sniff_format` does.
@@ -19,7 +19,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..cli._common import SUFFIXES, sniff_format
+from ..exchange.reading import SUFFIXES, sniff_format
 
 __all__ = ["CorpusError", "Entry", "expand_paths", "sniff_cad", "sha256_of", "hash_entries"]
 
@@ -43,7 +43,7 @@ class Entry:
 
 def sniff_cad(path: Path) -> str | None:
     """``'step'``, ``'iges'`` or ``None``: by suffix, else by the file's first 200 bytes
-    (:func:`~occsurf.bridge.cli._common.sniff_format`, with ``None`` for unreadable or other files)."""
+    (:func:`~occsurf.bridge.exchange.reading.sniff_format`, with ``None`` for unreadable or other files)."""
     try:
         return sniff_format(path)
     except OSError:  # ExchangeError: unreadable, or neither STEP nor IGES

@@ -37,7 +37,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..messages import error_line
+from ..messages import error_line, strip_path
 
 __all__ = ["CHECKS", "DEFAULT_CHECKS", "QUALITY_HOOK", "PRELOAD", "JOB", "audit_task", "audit_job", "make_item"]
 
@@ -99,7 +99,7 @@ def audit_job(item: dict[str, Any]) -> dict[str, Any]:
     "quality": {...} or None, "error": None or str}``; an unreadable file gives ``error`` set and no
     faces (it is not an exception: the reader stays up).
     """
-    from ..cli._common import read_model, sniff_format, strip_path
+    from ..exchange.reading import read_model, sniff_format
 
     path, checks, samples = Path(item["path"]), set(item["checks"]), int(item["samples"])
     try:

@@ -16,19 +16,20 @@
     occsurf audit PATH... --out RESULTS [--scheduler ADDRESS] [--workers N] [--timeout S] [--resume] [--checks LIST]
     occsurf convert IN OUT [--unit UNIT] [--digits N] [--timeout S] [--strict] [--in-process]
 
-One module per command, each holding its parser and a thin handler that calls the library:
+One module per command, each holding its parser and a thin handler that calls the library (the command
+line is a leaf: nothing outside this package imports it; ``[tool.importlinter]`` in pyproject.toml):
 
 ===============  ==================================================================================
 :mod:`.inspect`  faces of STEP/IGES files, our evaluation against OCC's
-                 (:func:`occsurf.bridge.validation.inspect.inspect_model`)
+                 (:func:`occsurf.bridge.validation.files.inspect_files`)
 :mod:`.fill`     fill the holes of a model (:func:`occsurf.bridge.modeling.fill.fill_model`)
 :mod:`.fit`      fit data to a surface within a tolerance (:func:`occsurf.bridge.modeling.fit.fit_input`)
 :mod:`.render`   a model under Warn's lights to a PNG (:func:`occsurf.bridge.rendering.lighting.render_lit`)
 :mod:`.demo`     the picture gallery (:func:`occsurf.examples.gallery.run_demos`)
 :mod:`.audit`    corpora on Dask, Parquet results (:func:`occsurf.bridge.audit.audit`)
-:mod:`.check`    surface-quality report, page and JSON (:func:`occsurf.bridge.quality.report.check_model`)
+:mod:`.check`    surface-quality report, page and JSON (:func:`occsurf.bridge.quality.check_files.check_file`)
 :mod:`.convert`  STEP <-> IGES keeping structure, names, colours, units (:func:`occsurf.bridge.exchange.convert.convert`)
-:mod:`._common`  exit codes, file arguments, reading a model, tables, one-line errors
+:mod:`._common`  exit codes, file arguments, tables, one-line errors, streamed output
 ===============  ==================================================================================
 
 Errors are one line each on stderr, ``occsurf: PATH: reason``; the exit status is 0 on success and

@@ -1,4 +1,8 @@
-"""What the commands of ``occsurf`` share: exit codes, file arguments, reading a model, tables, messages.
+"""What the commands of ``occsurf`` share: exit codes, file arguments, tables, messages, streamed output.
+
+Finding and reading STEP/IGES inputs (the suffixes, folders expanded, the format of a file, reading a
+model, ``--strict``'s refusal) is library code, :mod:`occsurf.bridge.exchange.reading`, re-exported
+here for the commands; :func:`strip_path` is :mod:`occsurf.bridge.messages`'.
 
 Only the standard library is imported at module level: the command-line process never loads NumPy
 or OCC itself (``occsurf --help`` stays instant); the reading helpers import them when called,
@@ -17,8 +21,21 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..exchange.reading import (
+    IGES_SUFFIXES,
+    STEP_SUFFIXES,
+    SUFFIXES,
+    expand,
+    files_in,
+    folder_entries,
+    read_model,
+    shown_path,
+    sniff_format,
+    strict_refusal,
+)
+from ..messages import strip_path
+
 if TYPE_CHECKING:
-    from ..exchange.step_iges import ImportedModel
     from ..isolation import Outcome
 
 __all__ = [
@@ -34,6 +51,7 @@ __all__ = [
     "worker_failure",
     "find_samples_dir",
     "files_in",
+    "folder_entries",
     "expand",
     "sniff_format",
     "read_model",
@@ -63,9 +81,6 @@ EXIT_ERROR = 2
 #: Stopped by Ctrl-C (128 + SIGINT, as shells report it).
 EXIT_INTERRUPTED = 130
 
-STEP_SUFFIXES = (".step", ".stp")
-IGES_SUFFIXES = (".iges", ".igs")
-SUFFIXES = STEP_SUFFIXES + IGES_SUFFIXES
 SAMPLES_DIR = "step_samples"
 
 
@@ -85,18 +100,6 @@ class OneLineParser(argparse.ArgumentParser):
         command = self.prog.split(" ", 1)[1] if " " in self.prog else ""
         error(f"{command}: {message}" if command else message)
         self.exit(EXIT_ERROR)
-
-
-def strip_path(message: str, path: Path) -> str:
-    """Drop a leading ``PATH: `` from a message: the CLI prints the path itself."""
-    candidates = {str(path), os.fspath(path)}
-    with contextlib.suppress(OSError):
-        candidates.add(str(path.resolve()))
-        candidates.add(str(path.absolute()))
-    for c in sorted(candidates, key=len, reverse=True):
-        if message.startswith(c + ": "):
-            return message[len(c) + 2 :]
-    return message
 
 
 def worker_failure(outcome: Outcome, timeout: float | None, *, task: str, process: str) -> str:
@@ -273,14 +276,9 @@ def _note_interrupts() -> _SigintSeen:
     return _SigintSeen()
 
 
-def shown_path(path: str | os.PathLike[str]) -> str:
-    """A path as it can be printed: bytes that are not UTF-8 shown as ``\\xff`` escapes."""
-    return os.fsencode(path).decode("utf-8", "backslashreplace")
-
-
 def output_problem(path: Path) -> str | None:
     """Why ``path`` cannot be written, checked in the command-line process before any work (standard
-    library only; :func:`occsurf.algorithms._files.check_target` applies the same rules again when the
+    library only; :func:`occsurf.bridge.exchange.files.check_target` applies the same rules again when the
     worker writes): ``None`` if it can be."""
     import stat
 
@@ -315,128 +313,6 @@ def find_samples_dir(cwd: Path | None = None) -> Path | None:
         if candidate.is_dir():
             return candidate
     return None
-
-
-def files_in(folder: Path) -> list[Path]:
-    """The STEP and IGES files of a folder (by suffix), sorted; links that lead nowhere are left out
-    (:func:`folder_entries` reports them)."""
-    return [p for p, err in folder_entries(folder) if err is None]
-
-
-def folder_entries(folder: Path) -> list[tuple[Path, str | None]]:
-    """``(path, None)`` for every STEP/IGES file of a folder (by suffix), sorted, and ``(path, reason)``
-    for every entry with such a suffix that cannot be read as a file: a dangling symlink, a loop of
-    symlinks, a device, FIFO or socket (a symlink to ``/dev/zero`` would read forever)."""
-    import errno
-    import stat
-
-    out: list[tuple[Path, str | None]] = []
-    for p in sorted(folder.iterdir()):
-        if p.suffix.lower() not in SUFFIXES:
-            continue
-        try:
-            st = os.stat(p)
-        except FileNotFoundError:
-            target = os.readlink(p) if p.is_symlink() else "?"
-            out.append((p, f"dangling symbolic link (to {shown_path(target)})"))
-            continue
-        except OSError as err:
-            why = "a loop of symbolic links" if err.errno == errno.ELOOP else f"cannot read: {err.strerror or err}"
-            out.append((p, why))
-            continue
-        if stat.S_ISDIR(st.st_mode):
-            continue  # a folder named like a file is not one
-        if not stat.S_ISREG(st.st_mode):
-            out.append((p, "not a regular file (a device, FIFO or socket); not read"))
-            continue
-        out.append((p, None))
-    return out
-
-
-def expand(args: Sequence[str]) -> list[tuple[str, Path | None, str | None]]:
-    """``(shown path, path or None, error or None)`` for every argument, folders expanded.
-
-    The shown path is printable (:func:`shown_path`); the path is the real one. Links in a folder
-    that lead nowhere are reported as errors, not skipped.
-    """
-    import errno
-
-    out: list[tuple[str, Path | None, str | None]] = []
-    for arg in args:
-        path = Path(arg)
-        shown = shown_path(arg)
-        try:
-            if path.is_dir():
-                entries = folder_entries(path)
-                if not entries:
-                    out.append((shown, None, f"no STEP/IGES files ({', '.join(SUFFIXES)}) in this folder"))
-                out.extend((shown_path(f), f if err is None else None, err) for f, err in entries)
-                continue
-            os.stat(path)
-            out.append((shown, path, None))
-        except FileNotFoundError:
-            why = "dangling symbolic link" if path.is_symlink() else "no such file or directory"
-            out.append((shown, None, why))
-        except OSError as err:  # unreadable folder, name too long, a loop of links...
-            why = "a loop of symbolic links" if err.errno == errno.ELOOP else f"cannot read: {err.strerror or err}"
-            out.append((shown, None, why))
-    return out
-
-
-def sniff_format(path: Path) -> str:
-    """``'step'`` or ``'iges'`` from the suffix, else from the start of the file.
-
-    Raises
-    ------
-    ExchangeError
-        The file cannot be read, or is neither.
-    """
-    from occsurf.algorithms.errors import ExchangeError
-
-    suffix = path.suffix.lower()
-    if suffix in STEP_SUFFIXES:
-        return "step"
-    if suffix in IGES_SUFFIXES:
-        return "iges"
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(200)
-    except OSError as err:
-        raise ExchangeError(f"cannot read: {err.strerror or err}") from err
-    if head.lstrip(b"\xef\xbb\xbf \t\r\n").upper().startswith(b"ISO-10303-21"):
-        return "step"
-    if head.split(b"\n", 1)[0][72:73] == b"S":  # IGES start section: 80 columns, 'S' in column 73
-        return "iges"
-    raise ExchangeError(f"not a STEP or IGES file (suffix {suffix or 'none'!r}, unrecognised header)")
-
-
-def read_model(path: Path, fmt: str | None = None, *, strict: bool = False) -> ImportedModel:
-    """Read a STEP or IGES file (``fmt`` from :func:`sniff_format` unless given).
-
-    ``read_step``/``read_iges`` are looked up on their module at call time. With ``strict`` (a
-    command's ``--strict``) a file read around damage (``ImportedModel.warnings``) is refused.
-
-    Raises
-    ------
-    ExchangeError
-        The file cannot be read; with ``strict``, it has warnings (:func:`strict_refusal`).
-    """
-    from ..exchange import step_iges as exchange
-
-    fmt = sniff_format(path) if fmt is None else fmt
-    model = (exchange.read_step if fmt == "step" else exchange.read_iges)(path)
-    if strict and model.warnings:
-        from occsurf.algorithms.errors import ExchangeError
-
-        raise ExchangeError(f"{path}: {strict_refusal(model.warnings)}")
-    return model
-
-
-def strict_refusal(warnings: Sequence[str]) -> str:
-    """Why ``--strict`` refuses a file: its warning count and the first warning, one line."""
-    first = " ".join(str(warnings[0]).split())
-    more = f" (and {len(warnings) - 1} more)" if len(warnings) > 1 else ""
-    return f"refused by --strict: {len(warnings)} warning{'s' if len(warnings) > 1 else ''}: {first}{more}"
 
 
 def add_strict_option(parser: argparse.ArgumentParser, *, writes: bool = False) -> None:

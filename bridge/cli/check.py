@@ -23,7 +23,10 @@ Crash isolation per face: the worker notes on a file which piece it is working o
 face, the edges, a picture) before each step. When the worker dies (a segmentation fault inside
 OCC), the file is checked again without the piece at fault (a face is reported with ``error``
 naming the crash, the edges or a picture are left out with a warning), up to
-:data:`MAX_RETRIES` times; the report keeps every other face.
+:data:`~occsurf.bridge.quality.check_files.MAX_RETRIES` times; the report keeps every other face.
+
+The per-file work (finding the files, the worker's job, the retries, the pages and JSON) is library code,
+:mod:`occsurf.bridge.quality.check_files`; this module parses the arguments, prints and shows progress.
 
 A model read around damage (see :mod:`occsurf.bridge.exchange.checks`) is checked as read, its warnings in
 the report; ``--strict`` refuses it instead (that file is unreadable: exit status 2, no report for it).
@@ -51,26 +54,24 @@ import os
 import sys
 import tempfile
 import threading
-import time
 from pathlib import Path
 from typing import Any
 
-from ..messages import error_line
+from ..messages import error_line, strip_path
+from ..quality.check_files import collect_files, file_summary, run_checks, write_outputs, write_summary
 from ._common import (
     EXIT_ERROR,
     EXIT_OK,
     InOrder,
     add_strict_option,
     error,
-    strip_path,
     timeout_arg,
     worker_failure,
     write_json_line,
     write_out,
 )
 
-__all__ = ["add_parser", "run", "check_job", "check_file", "collect_files", "file_summary", "PRESET_NAMES", "EXIT_FAILED",
-           "DEFAULT_TIMEOUT", "MAX_RETRIES"]
+__all__ = ["add_parser", "run", "PRESET_NAMES", "EXIT_FAILED", "DEFAULT_TIMEOUT"]
 
 #: Exit status when ``--fail-on`` finds an edge or a face that breaks the preset.
 EXIT_FAILED = 1
@@ -79,101 +80,6 @@ EXIT_FAILED = 1
 PRESET_NAMES = ("catia", "class-a", "mechanical")
 #: Seconds the worker may take for the whole model before it is stopped.
 DEFAULT_TIMEOUT = 1800.0
-#: Times a file is checked again after its worker crashed, each time without the piece at fault.
-MAX_RETRIES = 8
-CHECK_JOB = "occsurf.bridge.cli.check:check_job"
-PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.quality.report", "occsurf.bridge.quality.continuity",
-           "occsurf.bridge.rendering.vtk_scene")
-
-
-# ---------------------------------------------------------------------------------------- worker
-def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, faces: list[int] | None = None,
-               preset: str = "catia", pictures: bool = True, progress: Any = None,
-               skip: dict[str, Any] | None = None, trace: Any = None, strict: bool = False) -> dict[str, Any]:
-    """Read, assess and draw one model; the library side of ``occsurf check`` (in this process).
-
-    Writes the pictures and ``.viewer.json`` (the 3-D view's data) into ``out``; returns
-    ``{"report": report JSON, "pictures": {kind: file}, "viewer": path of the viewer data}``.
-    ``index.html`` and ``report.json`` are written by :func:`write_outputs`.
-
-    ``skip`` leaves out what crashed an earlier attempt: ``{"faces": {index: reason}, "edges":
-    reason, "pictures": {file name: reason}, "mesh_each": bool}``; ``trace(stage)`` is called
-    before each piece of work (see :func:`~occsurf.bridge.quality.report.check_model`).
-    """
-    from ..exchange.files import atomic_write
-    from ..quality.html import viewer_payload
-    from ..quality.pictures import render_report_pictures
-    from ..quality.report import check_model
-    from ._common import read_model, sniff_format
-
-    p = Path(path)
-    skip = skip or {}
-    note = trace if trace is not None else (lambda stage: None)
-    t0 = time.perf_counter()
-    note("read")
-    model = read_model(p, sniff_format(p), strict=strict)  # strict: warnings refuse the file
-    t_read = time.perf_counter() - t0
-    report = check_model(model, faces=faces, preset=preset,
-                         progress=None if progress is None else (lambda k, n: progress("faces", k, n)),
-                         skip={int(k): v for k, v in (skip.get("faces") or {}).items()},
-                         edges=skip.get("edges") or True, trace=note, mesh_each=bool(skip.get("mesh_each")))
-    report.path = str(path)
-    shown: dict[str, str] = {}
-    out = Path(out)
-    if pictures:
-        t1 = time.perf_counter()
-        shown = render_report_pictures(report, out, progress=None if progress is None else
-                                       (lambda k, n: progress("pictures", k, n)),
-                                       skip=skip.get("pictures"), trace=note)
-        report.seconds["pictures"] = time.perf_counter() - t1
-    note("viewer")
-    report.seconds["read"] = t_read
-    report.seconds["total"] = time.perf_counter() - t0
-    viewer = out / ".viewer.json"
-    atomic_write(viewer, json.dumps(viewer_payload(report), allow_nan=False).encode("utf-8"))
-    return {"report": report.to_json(), "pictures": shown, "viewer": str(viewer)}
-
-
-def check_job(item: dict[str, Any]) -> dict[str, Any]:
-    """The worker's job: ``{"path", "out", "faces", "preset", "progress"}`` -> :func:`check_file`'s result."""
-    import numpy as np
-
-    from ..isolation import quiet_native_stdout
-
-    progress_file = item.get("progress")
-    trace_file = item.get("trace")
-
-    def progress(stage: str, k: int, n: int) -> None:
-        if progress_file:
-            with contextlib.suppress(OSError), open(progress_file, "a", encoding="utf-8") as fh:
-                fh.write(f"{stage} {k} {n}\n")
-
-    def trace(stage: str) -> None:
-        if trace_file:  # written through to the kernel before the step: it survives a crash of this process
-            with contextlib.suppress(OSError), open(trace_file, "w", encoding="utf-8") as fh:
-                fh.write(stage)
-
-    with np.errstate(all="ignore"), quiet_native_stdout():
-        return check_file(item["path"], item["out"], faces=item.get("faces"), preset=item.get("preset", "catia"),
-                          pictures=bool(item.get("pictures", True)), progress=progress, skip=item.get("skip"),
-                          trace=trace, strict=bool(item.get("strict")))
-
-
-def write_outputs(out: Path, result: dict[str, Any]) -> None:
-    """``report.json`` and ``index.html`` from the worker's result, atomically; drops the viewer data."""
-    from ..exchange.files import atomic_write
-    from ..quality.html import write_html
-
-    doc = result["report"]
-    atomic_write(out / "report.json", (json.dumps(doc, indent=1, allow_nan=False) + "\n").encode("utf-8"))
-    viewer = Path(result["viewer"])
-    try:
-        payload = json.loads(viewer.read_text("utf-8"))
-    except (OSError, ValueError):
-        payload = {"faces": [], "ranges": {}, "skipped": True, "n_vertices": 0, "size": 1.0}
-    write_html(out / "index.html", doc, payload, result.get("pictures") or {})
-    with contextlib.suppress(OSError):
-        viewer.unlink()
 
 
 # ---------------------------------------------------------------------------------------- parent
@@ -209,7 +115,7 @@ class _Progress:
     def _run(self) -> None:
         from tqdm import tqdm
 
-        bar = None
+        bar: Any = None
         stage = None
         while not self._stop.wait(0.2):
             try:
@@ -253,144 +159,6 @@ def _parse_faces(values: list[str] | None) -> list[int] | None:
                 raise argparse.ArgumentTypeError(f"--faces: expected indices >= 0 and ranges low-high, got {part!r}")
             out.update(range(lo, hi + 1))
     return sorted(out)
-
-
-# ---------------------------------------------------------------------------------------- files
-def collect_files(args: list[str]) -> list[tuple[str, Path | None, str | None, str]]:
-    """``(shown path, path or None, error or None, output folder name)`` for every argument, folders
-    searched recursively (sorted) for STEP/IGES files by suffix.
-
-    The output folder name is the file's path relative to the folder argument (just its name for a
-    file argument), suffix dot made ``_`` (``sub/part.step`` -> ``sub/part_step``), made unique.
-    Links that lead nowhere, devices and unreadable folders are reported as errors, not skipped.
-    """
-    from ._common import SUFFIXES, expand, folder_entries, shown_path
-
-    out: list[tuple[str, Path | None, str | None, str]] = []
-    for arg in args:
-        root = Path(arg)
-        if not root.is_dir():
-            (shown, path, err), = expand([arg])
-            out.append((shown, path, err, root.name.replace(".", "_") or "model"))
-            continue
-        found: list[tuple[Path, str | None]] = []
-        walk_errors: list[OSError] = []
-        for folder, dirs, _files in os.walk(root, onerror=walk_errors.append):
-            dirs.sort()
-            found.extend(folder_entries(Path(folder)))
-        for err in walk_errors:
-            out.append((shown_path(err.filename or arg), None, f"cannot read this folder: {err.strerror or err}", ""))
-        found.sort(key=lambda t: (len(t[0].relative_to(root).parts) > 1, str(t[0])))
-        if not found and not walk_errors:
-            out.append((shown_path(arg), None, f"no STEP/IGES files ({', '.join(SUFFIXES)}) in this folder or below", ""))
-        for f, err in found:
-            rel = f.relative_to(root)
-            out.append((shown_path(f), f if err is None else None, err, str(rel.with_name(rel.name.replace(".", "_")))))
-    seen: dict[str, int] = {}
-    unique = []
-    for shown, path, err, name in out:
-        base = name.replace(os.sep, "/") or "model"
-        seen[base] = seen.get(base, 0) + 1
-        unique.append((shown, path, err, base if seen[base] == 1 else f"{base}-{seen[base]}"))
-    return unique
-
-
-def _smooth_worst(edges: list[dict[str, Any]]) -> dict[str, Any] | None:
-    """The edge with the largest G1 angle among those meant to be tangent-continuous."""
-    from math import isfinite
-
-    smooth = ("gap", "G0", "G1", "G2")
-    cand = [e for e in edges if e.get("classification") in smooth and isinstance(e.get("g1_max_deg"), (int, float))
-            and isfinite(e["g1_max_deg"])]
-    if not cand:
-        return None
-    e = max(cand, key=lambda e: e["g1_max_deg"])
-    return {k: e.get(k) for k in ("faces", "g1_max_deg", "classification", "matched", "midpoint", "worst_point")}
-
-
-def file_summary(shown: str, folder: str | None, doc: dict[str, Any] | None = None, *, error_text: str | None = None,
-                 crashed: dict[str, Any] | None = None, thumbnail: str | None = None) -> dict[str, Any]:
-    """One file's row of the summary ``report.json`` (and of its ``index.html``): ``status`` is
-    ``ok``, ``failed`` (breaks the preset) or ``unreadable`` (``error`` says why); ``crashed_faces``
-    and ``skipped`` name what was left out after a crash of the checker; ``thumbnail`` is a picture
-    of the model relative to the summary's folder."""
-    row: dict[str, Any] = {"path": shown, "report": None if folder is None else f"{folder}/index.html",
-                           "data": None if folder is None else f"{folder}/report.json"}
-    if doc is None:
-        row.update(status="unreadable", error=error_text, n_faces=None, n_edges=None, worst_g1_deg=None,
-                   worst_g1_edge=None, flags={}, n_violations=None, passed=None, crashed_faces=[], skipped=[],
-                   seconds=None, report=None, data=None, thumbnail=None)
-        return row
-    flags: dict[str, int] = {}
-    for f in doc.get("faces") or []:
-        for g in f.get("flags") or []:
-            flags[g["kind"]] = flags.get(g["kind"], 0) + 1
-    crashed = crashed or {}
-    crashed_faces = sorted(int(k) for k in (crashed.get("faces") or {}))
-    skipped = ([f"edges not measured: {crashed['edges']}"] if crashed.get("edges") else []) + [
-        f"picture {k} not drawn: {v}" for k, v in (crashed.get("pictures") or {}).items()]
-    row.update(status="ok" if doc.get("passed", True) else "failed", error=None, n_faces=doc.get("n_faces"),
-               n_edges=doc.get("n_edges"), worst_g1_deg=doc.get("worst_g1_deg"),
-               worst_g1_edge=_smooth_worst(doc.get("edges") or []), flags=dict(sorted(flags.items())),
-               n_violations=len(doc.get("failures") or []), passed=bool(doc.get("passed", True)),
-               crashed_faces=crashed_faces, skipped=skipped, seconds=(doc.get("seconds") or {}).get("total"),
-               thumbnail=None if thumbnail is None or folder is None else f"{folder}/{thumbnail}")
-    return row
-
-
-# ---------------------------------------------------------------------------------------- retries
-def _crash_skip(stage: str, reason: str, skip: dict[str, Any]) -> dict[str, Any] | None:
-    """``skip`` grown by the piece named ``stage`` (what the crashed worker was doing), or ``None``
-    when nothing can be left out (reading the file, or the same piece again)."""
-    new = json.loads(json.dumps(skip))
-    words = stage.split()
-    if stage == "mesh" and not new.get("mesh_each"):
-        new["mesh_each"] = True
-    elif len(words) == 3 and words[:2] == ["mesh", "face"] and words[2].isdigit():
-        new.setdefault("faces", {})[words[2]] = f"not evaluated: OCC's mesher crashed on this face ({reason})"
-    elif len(words) == 2 and words[0] == "face" and words[1].isdigit():
-        new.setdefault("faces", {})[words[1]] = f"not evaluated: checking this face crashed the checker ({reason})"
-    elif stage == "edges" and not new.get("edges"):
-        new["edges"] = f"measuring them crashed the checker ({reason})"
-    elif len(words) == 2 and words[0] == "picture":
-        new.setdefault("pictures", {})[words[1]] = f"drawing it crashed the checker ({reason})"
-    else:
-        return None
-    return None if new == skip else new
-
-
-def _run_all(items: list[dict[str, Any]], ns: argparse.Namespace, report: Any) -> list[Any]:
-    """Run the worker on every item; an item whose worker crashed is run again without the piece
-    at fault (:func:`_crash_skip`), up to :data:`MAX_RETRIES` times. ``report(k, outcome)`` is
-    called with each final outcome; returns them in the order of ``items``."""
-    from ..isolation import CRASHED, run_jobs
-
-    final: dict[int, Any] = {}
-    todo = list(range(len(items)))
-    for attempt in range(MAX_RETRIES + 1):
-        if not todo:
-            break
-        batch = [items[k] for k in todo]
-        again = []
-
-        def settle(o: Any, todo: list[int] = todo, batch: list[dict[str, Any]] = batch) -> None:
-            k = todo[o.index]
-            if o.status == CRASHED and attempt < MAX_RETRIES:
-                try:
-                    stage = Path(batch[o.index]["trace"]).read_text("utf-8").strip()
-                except OSError:
-                    stage = ""
-                grown = _crash_skip(stage, o.exit_reason or "crashed", batch[o.index].get("skip") or {})
-                if grown is not None:
-                    items[k] = dict(items[k], skip=grown)
-                    again.append(k)
-                    return
-            final[k] = o
-            report(k, o)
-
-        run_jobs(CHECK_JOB, batch, timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD, on_outcome=settle)
-        todo = sorted(again)
-    return [final[k] for k in range(len(items))]
 
 
 # ---------------------------------------------------------------------------------------- output
@@ -449,9 +217,9 @@ def run(ns: argparse.Namespace) -> int:
         error(why)
         return EXIT_ERROR
     preset = ns.fail_on or "catia"
-    work = [(k, e) for k, e in enumerate(entries) if e[1] is not None]
+    work = [(k, (shown, path, why, name)) for k, (shown, path, why, name) in enumerate(entries) if path is not None]
     folders = {k: out if single else out / e[3] for k, e in work}
-    for k, e in work:
+    for k in folders:
         why = _check_out(folders[k])
         if why is not None:
             error(why)
@@ -511,13 +279,13 @@ def run(ns: argparse.Namespace) -> int:
             stream.put(k, rows[k])
     try:
         with _Progress(scratch[0], enabled=sys.stderr.isatty() and not (ns.json or ns.jsonl)):
-            _run_all(items, ns, finish)
+            run_checks(items, timeout=ns.timeout, isolate=not ns.in_process, on_outcome=finish)
     finally:
         for f in scratch:
             with contextlib.suppress(OSError):
                 f.unlink()
     if not single:
-        summary = _write_summary(out, [rows[k] for k in sorted(rows)], preset, ns.fail_on)
+        summary = write_summary(out, [rows[k] for k in sorted(rows)], preset, ns.fail_on)
         if ns.json:
             sys.stdout.write(json.dumps(summary, indent=1, allow_nan=False) + "\n")
         elif not ns.jsonl:
@@ -532,21 +300,6 @@ def run(ns: argparse.Namespace) -> int:
     if ns.fail_on and failed:
         return EXIT_FAILED
     return EXIT_OK
-
-
-def _write_summary(out: Path, rows: list[dict[str, Any]], preset: str, fail_on: str | None) -> dict[str, Any]:
-    """The top-level ``report.json`` and ``index.html`` over all files (atomically); returns the JSON."""
-    from ..exchange.files import atomic_write
-    from ..quality.html import write_index_html
-
-    counts: dict[str, int] = {}
-    for r in rows:
-        counts[r["status"]] = counts.get(r["status"], 0) + 1
-    summary = {"n_files": len(rows), "counts": counts, "preset": preset, "fail_on": fail_on,
-               "passed": all(r["status"] == "ok" for r in rows), "files": rows}
-    atomic_write(out / "report.json", (json.dumps(summary, indent=1, allow_nan=False) + "\n").encode("utf-8"))
-    write_index_html(out / "index.html", summary)
-    return summary
 
 
 def add_parser(sub: Any) -> None:

@@ -22,6 +22,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from ..exchange.reading import TARGET_SUFFIXES
 from ._common import EXIT_ERROR, EXIT_OK, add_strict_option, error, output_problem, shown_path, timeout_arg
 
 __all__ = ["add_parser", "run", "DEFAULT_TIMEOUT", "UNITS"]
@@ -31,7 +32,8 @@ DEFAULT_TIMEOUT = 300.0
 #: ``--unit`` choices (the same as :data:`occsurf.bridge.exchange.xcaf.WRITE_UNITS`; kept here so the
 #: command line does not import NumPy to build its parser; a test keeps the two equal).
 UNITS = ("mm", "cm", "m", "km", "um", "inch", "ft", "mi", "mil", "uin")
-_OUT_SUFFIXES = (".step", ".stp", ".p21", ".iges", ".igs")
+#: What an output may be named: :data:`occsurf.bridge.exchange.reading.TARGET_SUFFIXES`, flat.
+_OUT_SUFFIXES = tuple(s for suffixes in TARGET_SUFFIXES.values() for s in suffixes)
 
 
 def run(ns: argparse.Namespace) -> int:

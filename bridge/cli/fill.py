@@ -87,6 +87,7 @@ def fill_job(item: dict[str, Any]) -> dict[str, Any]:
         warnings.simplefilter("ignore")
         from ..exchange import step_iges as exchange
         from ..modeling.fill import fill_model
+        from ..modeling.fill_pictures import hole_pictures
 
         model = read_model(src, strict=bool(item.get("strict")))
         if item.get("faces"):
@@ -98,30 +99,14 @@ def fill_job(item: dict[str, Any]) -> dict[str, Any]:
             exchange.write_step(out, result.shape)
         holes = [asdict(h) for h in result.holes]
         if item.get("pictures", True):
-            _pictures(out, result.holes, holes, lambda r: [])
+            hole_pictures(out, result.holes, holes)
     return {"holes": holes, "free_loops_after": result.free_loops_after,
             "written": filled or nothing_to_do, "warnings": list(model.warnings)}
 
 
-def _pictures(out: Path, reports: list[Any], holes: list[dict[str, Any]], removed: Any) -> None:
-    """Write ``OUT_STEM.holeK.png`` per filled hole (zebra before/after); the path (or why not) goes
-    into the hole's dict as ``picture`` / ``picture_error``."""
-    from ..messages import one_line
-    from ..modeling.fill_pictures import zebra_before_after
-
-    for k, (r, h) in enumerate(zip(reports, holes)):
-        if r.status != "filled" or not hasattr(r, "_fill_faces"):
-            continue
-        try:
-            path = zebra_before_after(out.with_name(f"{out.stem}.hole{k}.png"), removed(r), r._neighbours, r._fill_faces,
-                                      label=f"before (hole {k})", after_label=f"after: occsurf fill, {len(r._fill_faces)} patches")
-            h["picture"] = str(path)
-        except Exception as err:  # noqa: BLE001 - a picture must not cost the fill
-            h["picture"], h["picture_error"] = None, one_line(err)
-
-
 def _refill_job(item: dict[str, Any], model: Any, exchange: Any) -> dict[str, Any]:
     """``--faces``: remove the faces, fill the hole(s) they leave, write the model if any was filled."""
+    from ..modeling.fill_pictures import hole_pictures
     from ..modeling.refill import refill_model
 
     reports, shape = refill_model(model.shape, item["faces"], compare_occ=item["compare_occ"])
@@ -138,7 +123,7 @@ def _refill_job(item: dict[str, Any], model: Any, exchange: Any) -> dict[str, An
                       "occ_g0": d.get("g0"), "occ_g1": d.get("g1"), "occ_tuned": t or None, "folds": r.folds,
                       "method": r.method})
     if shape is not None and item.get("pictures", True):
-        _pictures(Path(item["output"]), reports, holes, lambda r: r._removed)
+        hole_pictures(Path(item["output"]), reports, holes, refill=True)
     return {"holes": holes, "free_loops_after": None, "written": shape is not None, "warnings": list(model.warnings)}
 
 

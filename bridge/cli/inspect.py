@@ -25,27 +25,26 @@ read so far with ``"interrupted": true``; then ``occsurf: interrupted`` on stder
 A closed pipe (``occsurf inspect DIR | head -1``) ends the command quietly (exit status 2).
 
 Each file is read in a worker process (:func:`occsurf.bridge.isolation.run_jobs` with the job
-:func:`inspect_job`): a file that crashes OCC, or takes longer than ``--timeout``, is reported as an
-error and the other files are still read. ``--in-process`` reads in the calling process instead (no
-isolation; handy under a debugger). :func:`inspect_files` is the in-process library entry.
+:func:`occsurf.bridge.validation.files.inspect_job`): a file that crashes OCC, or takes longer than
+``--timeout``, is reported as an error and the other files are still read. ``--in-process`` reads in the
+calling process instead (no isolation; handy under a debugger). The per-file work is library code,
+:mod:`occsurf.bridge.validation.files` (:func:`~occsurf.bridge.validation.files.inspect_files` is the
+in-process entry); this module parses the arguments and prints.
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import io
 import json
 import sys
 import time
-import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
-from ..messages import error_line
-from ..validation.inspect import DEFAULT_SAMPLES, FaceReport
+from ..validation.files import INSPECT_JOB, PRELOAD, FileReport
+from ..validation.inspect import DEFAULT_SAMPLES
 from . import _common
 from ._common import (
     EXIT_ERROR,
@@ -62,9 +61,6 @@ from ._common import (
     fmt_rational,
     format_rows,
     interrupts_held,
-    read_model,
-    sniff_format,
-    strip_path,
     timeout_arg,
     worker_failure,
     write_json_line,
@@ -74,127 +70,16 @@ from ._common import (
 if TYPE_CHECKING:
     from ..isolation import Outcome
 
-__all__ = ["FileReport", "inspect_files", "inspect_job", "add_parser", "add_worker_parser", "run",
-           "DEFAULT_TIMEOUT", "WORKER_COMMAND"]
+__all__ = ["add_parser", "add_worker_parser", "run", "DEFAULT_TIMEOUT", "WORKER_COMMAND"]
 
 #: Seconds one file may take in the reader process before it is killed and reported as timed out
 #: (a hang inside OCC must not hang the command); ``--timeout`` overrides it.
 DEFAULT_TIMEOUT = 300.0
 #: The hidden command that runs the reader loop on ``{"files": [[shown, path], ...], "samples": N}``.
 WORKER_COMMAND = "_inspect-worker"
-#: The job the reader process runs per file, and what it loads before the first file.
-INSPECT_JOB = "occsurf.bridge.cli.inspect:inspect_job"
-PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.validation.deviation")
-
-
-# ---------------------------------------------------------------------------------------- results
-@dataclass
-class FileReport:
-    """One file (or one argument that is not a readable file)."""
-
-    path: str
-    format: str | None = None
-    error: str | None = None
-    faces: list[FaceReport] = field(default_factory=list)
-    warnings: list[str] = field(default_factory=list)
-    seconds: float = 0.0
-    #: The length unit the file declares (``ImportedModel.unit``: 'mm', 'm', 'inch'...); None if unread.
-    unit: str | None = None
-
-    @property
-    def n_free_form(self) -> int:
-        return sum(f.free_form for f in self.faces)
-
-    @property
-    def worst_deviation(self) -> float | None:
-        devs = [f.max_deviation for f in self.faces if f.max_deviation is not None]
-        return max(devs) if devs else None
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "path": self.path,
-            "format": self.format,
-            "unit": self.unit,
-            "error": self.error,
-            "n_faces": len(self.faces),
-            "n_free_form": self.n_free_form,
-            "worst_deviation": self.worst_deviation,
-            "seconds": round(self.seconds, 4),
-            "warnings": list(self.warnings),
-            "faces": [f.to_json() for f in self.faces],
-        }
-
-    @classmethod
-    def from_json(cls, data: dict[str, Any]) -> FileReport:
-        faces = [FaceReport.from_json(face) for face in data.get("faces", ())]
-        return cls(path=data["path"], format=data.get("format"), error=data.get("error"), faces=faces,
-                   warnings=list(data.get("warnings", ())), seconds=float(data.get("seconds", 0.0)),
-                   unit=data.get("unit"))
 
 
 # ---------------------------------------------------------------------------------------- reading
-def _inspect_path(shown: str, path: Path, samples: int) -> FileReport:
-    """Read one file and inspect its faces; never raises for a bad file (``error`` is set)."""
-    import numpy as np
-
-    from ..isolation import quiet_native_stdout
-
-    report = FileReport(path=shown)
-    with contextlib.suppress(Exception):  # load OCC outside the timing (a failure shows up below)
-        from ..exchange import step_iges  # noqa: F401
-        from ..validation import deviation  # noqa: F401
-    t0 = time.perf_counter()
-    try:
-        with warnings.catch_warnings(), np.errstate(all="ignore"), quiet_native_stdout():
-            warnings.simplefilter("ignore")
-            from ..validation.inspect import inspect_model
-
-            report.format = sniff_format(path)
-            model = read_model(path, report.format)
-            report.warnings = [error_line(w) for w in model.warnings]
-            report.unit = model.unit
-            report.faces = inspect_model(model, samples)
-    except Exception as err:  # noqa: BLE001 - report, never crash, never a traceback
-        report.error = strip_path(error_line(err), path)
-    report.seconds = time.perf_counter() - t0
-    return report
-
-
-def inspect_job(item: dict[str, Any]) -> dict[str, Any]:
-    """The reader process's job: ``{"shown", "path", "samples"}`` -> the file's report as JSON.
-
-    Never raises: a failure, even of the report's serialisation, is the file's ``error``.
-    """
-    shown = item["shown"]
-    try:
-        payload = _inspect_path(shown, Path(item["path"]), int(item["samples"])).to_json()
-        json.dumps(payload, allow_nan=False)  # fail here, per file, rather than in the parent
-    except Exception as err:  # noqa: BLE001
-        payload = FileReport(path=shown, error=error_line(err)).to_json()
-    return payload
-
-
-def inspect_files(args: Sequence[str], samples: int = DEFAULT_SAMPLES) -> list[FileReport]:
-    """Inspect every file named in ``args`` (folders expanded), in this process.
-
-    Never raises for a bad file: its report has ``error`` set. (A segmentation fault inside OCC
-    still ends the process; the command line reads files in a worker process instead.)
-
-    Parameters
-    ----------
-    args : sequence of str
-        Files and folders (a folder stands for its STEP/IGES files, sorted).
-    samples : int
-        Grid size of the deviation check.
-
-    Returns
-    -------
-    list of FileReport
-    """
-    return [_inspect_path(shown, path, samples) if path is not None else FileReport(path=shown, error=err)
-            for shown, path, err in expand(args)]
-
-
 def _report_of(shown: str, outcome: Outcome, timeout: float) -> FileReport:
     """A file's report from the reader process's outcome."""
     from ..isolation import ERROR, OK

@@ -65,9 +65,9 @@ def render_job(item: dict[str, Any]) -> dict[str, Any]:
     """
     import numpy as np
 
-    from occsurf.algorithms._files import check_target
     from occsurf.algorithms.lighting import preset, setup_from_dict
 
+    from ..exchange.files import check_target
     from ..isolation import quiet_native_stdout
     from ..rendering.lighting import Camera, camera_for_view, mesh_of_model, render_lit, write_png
 

@@ -8,5 +8,5 @@
   :class:`occsurf.algorithms.TrimmedSurface` (surface + loops of p-curves) for a face that is not
   the natural rectangle of its surface, ``make_face`` / ``to_face`` rebuild the face from it;
 * :mod:`.spatch_export` — S-patches and generalized B-spline surfaces (course ch. 8) as sewn OCC
-  shells and STEP files.
+  shells (their STEP files: :mod:`occsurf.bridge.exchange.spatch_io`).
 """

@@ -1,4 +1,4 @@
-"""S-patches to OpenCascade faces, shells and STEP (course §8-2; issue 4, "Export to OCC and STEP").
+"""S-patches to OpenCascade faces and shells (course §8-2; issue 4, "Export to OCC and STEP").
 
 Each S-patch is split by :func:`occsurf.algorithms.topology.spatch_convert.convert_spatch` into ``sides``
 tensor-product pieces, exact rational Bézier surfaces where the bidegree ``depth * (sides - 2)``
@@ -8,16 +8,14 @@ with ``BRepBuilderAPI_Sewing`` (pieces of one patch share their spokes exactly, 
 patches sew with each other where their boundary curves agree within the sewing tolerance) and the
 result is checked with ``BRepCheck_Analyzer``.
 
-STEP is written through :func:`occsurf.bridge.exchange.step_iges.write_step` (atomic, 17 significant digits, so the
-pieces' poles and weights come back bit-identical) and read through :func:`occsurf.bridge.exchange.step_iges.read_step`.
+The STEP files are :mod:`occsurf.bridge.exchange.spatch_io`'s (:func:`~occsurf.bridge.exchange.spatch_io.write_spatches_step`,
+:func:`~occsurf.bridge.exchange.spatch_io.read_spatches_step`): exchange is the layer above conversion.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -30,16 +28,12 @@ from occsurf.algorithms.topology.spatch import SPatch
 from occsurf.algorithms.topology.spatch_convert import SPatchConversion, convert_spatch
 
 from .. import _occ
-from ..exchange.occ_io import FACE_TOLERANCE
-from ..exchange.step_iges import ImportedModel, read_step, write_step
-from .splines import to_occ
+from .splines import FACE_TOLERANCE, to_occ
 
 __all__ = [
     "SPatchExport",
     "export_spatches",
     "spatch_faces",
-    "write_spatches_step",
-    "read_spatches_step",
     "SEWING_TOLERANCE",
 ]
 
@@ -153,42 +147,3 @@ def export_spatches(patches: SPatch | Sequence[SPatch], *, tol: float | None = N
 def spatch_faces(patches: SPatch | Sequence[SPatch], *, tol: float | None = None) -> TopoDS_Shape:
     """The sewn, checked shape of ``patches`` (a shell when connected); see :func:`export_spatches`."""
     return export_spatches(patches, tol=tol).shape
-
-
-def write_spatches_step(path: str | os.PathLike[str], patches: SPatch | Sequence[SPatch], *,
-                        tol: float | None = None, name: str | None = None) -> Path:
-    """Write S-patches to a STEP file as one sewn shell (atomically; see :func:`occsurf.bridge.exchange.step_iges.write_step`).
-
-    Parameters
-    ----------
-    path : str or path-like
-    patches : SPatch or sequence of SPatch
-    tol : float, optional
-        As in :func:`export_spatches`.
-    name : str, optional
-        Product name written to the file.
-
-    Returns
-    -------
-    pathlib.Path
-
-    Raises
-    ------
-    InvalidGeometryError, ToleranceError, KernelError
-        As :func:`export_spatches`.
-    ExchangeError
-        The file could not be written; no partial file is left behind.
-    """
-    shape = export_spatches(patches, tol=tol).shape
-    return write_step(path, shape, name)
-
-
-def read_spatches_step(path: str | os.PathLike[str]) -> ImportedModel:
-    """Read back a STEP file written by :func:`write_spatches_step` (:func:`occsurf.bridge.exchange.step_iges.read_step`).
-
-    Returns
-    -------
-    ImportedModel
-        One face per piece, each ``surface`` the piece as a :class:`BSplineSurface` (bit-exact).
-    """
-    return read_step(path)

@@ -17,16 +17,15 @@ from __future__ import annotations
 import os
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 
+from .reading import IGES_SUFFIXES, STEP_SUFFIXES, sniff_format, strict_refusal, target_format
+
 __all__ = ["ConversionReport", "convert", "target_format", "source_format", "STEP_SUFFIXES", "IGES_SUFFIXES",
            "COLOR_TOLERANCE", "AREA_RTOL", "POSITION_RTOL", "format_losses", "compare", "face_area", "wire_count", "trim_band"]
 
-STEP_SUFFIXES = (".step", ".stp", ".p21")
-IGES_SUFFIXES = (".iges", ".igs")
 
 #: Largest difference of a colour component (RGBA in [0, 1]) read back that still counts as the same
 #: colour: IGES stores colours as percentages printed with 10 significant digits.
@@ -79,31 +78,19 @@ class ConversionReport:
     seconds: float = 0.0
 
 
-def target_format(path: str | os.PathLike[str]) -> str:
-    """``'step'`` or ``'iges'`` from the target's suffix; :class:`InvalidGeometryError` otherwise."""
-    suffix = Path(os.fspath(path)).suffix.lower()
-    if suffix in STEP_SUFFIXES:
-        return "step"
-    if suffix in IGES_SUFFIXES:
-        return "iges"
-    raise InvalidGeometryError(f"target: expected a file name ending in {', '.join(STEP_SUFFIXES + IGES_SUFFIXES)}, "
-                               f"got {os.fspath(path)!r}")
-
-
 def source_format(path: str | os.PathLike[str]) -> str:
-    """``'step'`` or ``'iges'`` from the suffix, else from the file's first bytes (STEP starts with
-    ``ISO-10303-21``); anything else is read as IGES, whose reader names what is wrong."""
-    suffix = Path(os.fspath(path)).suffix.lower()
-    if suffix in STEP_SUFFIXES:
-        return "step"
-    if suffix in IGES_SUFFIXES:
-        return "iges"
+    """``'step'`` or ``'iges'``: :func:`occsurf.bridge.exchange.reading.sniff_format` (by suffix, else by
+    the file's first bytes), its refusal naming the path.
+
+    Raises
+    ------
+    ExchangeError
+        Neither suffix, and the file cannot be read or starts like neither format.
+    """
     try:
-        with open(path, "rb") as fh:
-            head = fh.read(256).lstrip(b"\xef\xbb\xbf \t\r\n")
-    except OSError:
-        return "step"  # the reader reports the missing or unreadable file
-    return "step" if head.startswith(b"ISO-10303-21") else "iges"
+        return sniff_format(path)
+    except ExchangeError as err:
+        raise ExchangeError(f"{os.fspath(path)}: {err}") from err
 
 
 def convert(
@@ -122,9 +109,10 @@ def convert(
     Parameters
     ----------
     source : str or path-like
-        STEP or IGES file (format by suffix, else by content).
+        STEP or IGES file (format by suffix, else by content: :mod:`occsurf.bridge.exchange.reading`).
     target : str or path-like
-        ``.step``/``.stp``/``.p21`` or ``.iges``/``.igs``; replaced atomically.
+        ``.step``/``.stp``/``.p21`` or ``.iges``/``.igs`` (:func:`~occsurf.bridge.exchange.reading.target_format`);
+        replaced atomically.
     unit : str, optional
         Length unit of the target (a key of :data:`occsurf.bridge.exchange.xcaf.WRITE_UNITS`); default
         the unit the source declares.
@@ -150,7 +138,7 @@ def convert(
     InvalidGeometryError
         A bad target suffix, ``unit`` or ``digits``.
     ExchangeError
-        The source cannot be read (missing, damaged, a crash or time-out of the reader) or the
+        The source cannot be read (missing, damaged, neither STEP nor IGES, a crash or time-out of the reader) or the
         target cannot be written; no target file is created or modified then.
     """
     from . import xcaf
@@ -166,9 +154,7 @@ def convert(
     reader = read_step if in_fmt == "step" else read_iges
     model = reader(source, isolated=isolated, timeout=timeout)
     if strict and model.warnings:
-        more = f" (and {len(model.warnings) - 1} more)" if len(model.warnings) > 1 else ""
-        raise ExchangeError(f"{os.fspath(source)}: refused by --strict: {len(model.warnings)} warning"
-                            f"{'s' if len(model.warnings) > 1 else ''}: {model.warnings[0]}{more}")
+        raise ExchangeError(f"{os.fspath(source)}: {strict_refusal(model.warnings)}")
     out_unit = unit if unit is not None else (model.unit if model.unit in xcaf.WRITE_UNITS else "mm")
     if out_fmt == "step":
         written = write_step(target, model, precision_digits=digits or STEP_DIGITS, unit=out_unit,

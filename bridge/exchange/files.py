@@ -19,20 +19,22 @@ import stat
 from pathlib import Path
 from typing import Any
 
-from occsurf.algorithms import _files as _atomic
 from occsurf.algorithms._files import (
+    TEMP_SUFFIX,
+    as_path,
     atomic_write,
     atomic_write_many,
     check_target,
     clean_stale_temps,
     default_mode,
+    file_kind,
     file_lock,
 )
 from occsurf.algorithms.errors import ExchangeError
 
 __all__ = ["load", "check_step_text", "check_iges_text", "target", "atomic_write", "atomic_write_many",
            "check_target", "clean_stale_temps", "file_lock", "default_mode", "write_figure", "write_text",
-           "MAX_FILE_BYTES"]
+           "MAX_FILE_BYTES", "TEMP_SUFFIX"]
 
 #: Largest file :func:`load` reads (bytes): a bigger one is refused before it is read into memory.
 MAX_FILE_BYTES: int = 4 << 30
@@ -44,7 +46,7 @@ def load(path: str | os.PathLike[str], kind: str) -> tuple[Path, bytes]:
     The file is checked before it is read: a device (a symlink to ``/dev/zero``), FIFO or socket, a
     dangling symlink or a loop of symlinks, and a file larger than :data:`MAX_FILE_BYTES` are refused.
     """
-    p = _atomic._as_path(path)
+    p = as_path(path)
     try:
         st = os.stat(p)
     except FileNotFoundError as err:
@@ -58,7 +60,7 @@ def load(path: str | os.PathLike[str], kind: str) -> tuple[Path, bytes]:
     if stat.S_ISDIR(st.st_mode):
         raise ExchangeError(f"{p}: is a directory, not a {kind} file")
     if not stat.S_ISREG(st.st_mode):
-        raise ExchangeError(f"{p}: is {_atomic._kind(st.st_mode)}, not a {kind} file; not read")
+        raise ExchangeError(f"{p}: is {file_kind(st.st_mode)}, not a {kind} file; not read")
     if st.st_size > MAX_FILE_BYTES:
         raise ExchangeError(f"{p}: {st.st_size} bytes, more than the {MAX_FILE_BYTES} a {kind} file may have here")
     try:
@@ -138,7 +140,7 @@ def check_iges_text(p: Path, data: bytes) -> None:
 def target(path: str | os.PathLike[str], *, replace_readonly: bool = False) -> Path:
     """The path to write, checked before any work (:func:`occsurf.algorithms._files.check_target`): not a
     directory, device, FIFO or socket, not read-only unless ``replace_readonly``, in an existing folder."""
-    p = _atomic._as_path(path)
+    p = as_path(path)
     check_target(p, replace_readonly=replace_readonly)
     return p
 

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["zebra_before_after", "face_triangles", "ZEBRA_PAIRS", "PICTURE_SIZE"]
+__all__ = ["zebra_before_after", "hole_pictures", "face_triangles", "ZEBRA_PAIRS", "PICTURE_SIZE"]
 
 #: Light/dark stripe pairs per half turn of the reflected ray.
 ZEBRA_PAIRS: int = 10
@@ -152,6 +152,38 @@ def zebra_before_after(path: str | Path, before: Sequence[Any], neighbours: Sequ
     path = Path(path)
     atomic_write(path, buf.getvalue())
     return path
+
+
+def hole_pictures(out: str | Path, reports: Sequence[Any], holes: Sequence[dict[str, Any]], *,
+                  refill: bool = False) -> None:
+    """One :func:`zebra_before_after` picture per filled hole, ``OUT_STEM.holeK.png`` beside ``out``.
+
+    Parameters
+    ----------
+    out : str or Path
+        The filled model's file (the pictures are named after it).
+    reports : sequence
+        The holes' reports: :class:`~occsurf.bridge.modeling.fill.HoleReport` of
+        :func:`~occsurf.bridge.modeling.fill.fill_model`, or with ``refill`` those of
+        :func:`~occsurf.bridge.modeling.refill.refill_model` (the faces it removed are drawn before).
+    holes : sequence of dict
+        One dict per report (the JSON of ``occsurf fill``): the picture's path goes in as ``picture``, or
+        ``None`` and why not (one line) as ``picture_error``; a picture that fails never costs the fill.
+    refill : bool, default False
+    """
+    from ..messages import one_line
+
+    out = Path(out)
+    for k, (r, h) in enumerate(zip(reports, holes)):
+        if r.status != "filled" or not hasattr(r, "_fill_faces"):
+            continue
+        try:
+            path = zebra_before_after(out.with_name(f"{out.stem}.hole{k}.png"), r._removed if refill else [],
+                                      r._neighbours, r._fill_faces, label=f"before (hole {k})",
+                                      after_label=f"after: occsurf fill, {len(r._fill_faces)} patches")
+            h["picture"] = str(path)
+        except Exception as err:  # noqa: BLE001 - a picture must not cost the fill
+            h["picture"], h["picture_error"] = None, one_line(err)
 
 
 def _size(faces: Sequence[Any]) -> float:

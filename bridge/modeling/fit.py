@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     from ..rendering.error_maps import ErrorPanel
 
 __all__ = ["FitInput", "FitResult", "read_fit_input", "face_inputs", "fit_input", "write_fit_outputs", "face_deviation",
-           "GRID_SUFFIXES", "ROW_SUFFIXES"]
+           "error_panel", "scatter_error_panel", "GRID_SUFFIXES", "ROW_SUFFIXES"]
 
 GRID_SUFFIXES = (".npy",)
 ROW_SUFFIXES = (".csv", ".xyz", ".txt")
@@ -221,7 +221,7 @@ def _read_rows(p: Path) -> FitInput:
 
 
 def _read_face(p: Path, face: int | None, samples: int | None, strict: bool = False) -> FitInput:
-    from ..cli._common import read_model
+    from ..exchange.reading import read_model
 
     model = read_model(p, strict=strict)  # strict: a file read around damage is refused
     n = len(model.faces)
@@ -263,7 +263,7 @@ def face_inputs(path: str | os.PathLike[str], faces: list[int] | None = None, *,
     (int, FitInput or ExchangeError)
         The face index and its input, or the reason it cannot be sampled.
     """
-    from ..cli._common import read_model
+    from ..exchange.reading import read_model
 
     p = Path(os.fspath(path))
     model = read_model(p)
@@ -281,7 +281,7 @@ def read_fit_input(path: str | os.PathLike[str], *, face: int | None = None, x_r
 
     A STEP/IGES file read around damage keeps its warnings (``FitInput.warnings``); with ``strict``
     (``occsurf fit --strict``) it is refused instead (ExchangeError, the message of
-    :func:`occsurf.bridge.cli._common.strict_refusal`).
+    :func:`occsurf.bridge.exchange.reading.strict_refusal`).
 
     Raises
     ------
@@ -356,7 +356,7 @@ def fit_input(inp: FitInput, tol: float, *, ctrl: tuple[int, int] | None = None,
         hs = HierarchicalSurface(fit.surface)
         levels = [{"level": 0, "overlays": 0, "control_points": ctrl[0] * ctrl[1], "max_error": mx, "rms_error": rms}]
         res = FitResult(hs, levels, mx, rms, float(tol), mx <= tol, "least squares")
-        res.panels = [_panel(fit.surface, dist, u, v, f"least squares {ctrl[0]} x {ctrl[1]}", [])]
+        res.panels = [error_panel(fit.surface, dist, u, v, f"least squares {ctrl[0]} x {ctrl[1]}", [])]
     else:
         if smooth == "gcv":
             raise ParameterError("--smooth gcv: choose a number for the adaptive fit (gcv needs --ctrl)")
@@ -364,9 +364,9 @@ def fit_input(inp: FitInput, tol: float, *, ctrl: tuple[int, int] | None = None,
                           max_levels=max_levels, progress=say, x=x, y=y)
         levels = [L.as_dict() for L in af.levels]
         res = FitResult(af.hierarchy, levels, af.max_error, af.rms_error, float(tol), af.converged, "adaptive hierarchical")
-        res.panels = [_panel(s, d, af.u_params, af.v_params,
-                             f"level {L.level}: {L.overlays} overlays, max {L.max_error:.2g}",
-                             [o for o in af.hierarchy.overlays if o.level == L.level])
+        res.panels = [error_panel(s, d, af.u_params, af.v_params,
+                                  f"level {L.level}: {L.overlays} overlays, max {L.max_error:.2g}",
+                                  [o for o in af.hierarchy.overlays if o.level == L.level])
                       for L, s, d in zip(af.levels, af.level_surfaces, af.level_distances)]
     if inp.face is not None:
         res.face_deviation = face_deviation(res.hierarchy.flatten(), inp.face)
@@ -388,15 +388,15 @@ def _fit_scattered(inp: FitInput, tol: float, ctrl: tuple[int, int] | None, degr
                    "rms_error": fit.rms_error}]
         res = FitResult(HierarchicalSurface(fit.surface), levels, fit.max_error, fit.rms_error, float(tol),
                         fit.max_error <= tol, "scattered least squares")
-        res.panels = [_scatter_panel(fit.surface, fit.u, fit.v, fit.distance,
-                                     f"scattered least squares {ctrl[0]} x {ctrl[1]}")]
+        res.panels = [scatter_error_panel(fit.surface, fit.u, fit.v, fit.distance,
+                                          f"scattered least squares {ctrl[0]} x {ctrl[1]}")]
         return res
     af = fit_adaptive_scattered(inp.data, tol, degree, smoothing=lam, corrections=2, max_levels=max_levels,
                                 progress=say)
     res = FitResult(af.hierarchy, [L.as_dict() for L in af.levels], af.max_error, af.rms_error, float(tol),
                     af.converged, "adaptive hierarchical (scattered)")
-    res.panels = [_scatter_panel(s, af.u, af.v, d, f"level {L.level}: {L.overlays} overlays, max {L.max_error:.2g}",
-                                 [o for o in af.hierarchy.overlays if o.level == L.level])
+    res.panels = [scatter_error_panel(s, af.u, af.v, d, f"level {L.level}: {L.overlays} overlays, max {L.max_error:.2g}",
+                                      [o for o in af.hierarchy.overlays if o.level == L.level])
                   for L, s, d in zip(af.levels, af.level_surfaces, af.level_distances)]
     return res
 
@@ -456,8 +456,12 @@ def _overlay_lines(surface: BSplineSurface, overlays: Sequence[Overlay]) -> list
     return lines
 
 
-def _panel(surface: BSplineSurface, dist: np.ndarray, u: np.ndarray, v: np.ndarray, title: str,
-           overlays: Sequence[Overlay]) -> ErrorPanel:
+def error_panel(surface: BSplineSurface, dist: np.ndarray, u: np.ndarray, v: np.ndarray, title: str,
+                overlays: Sequence[Overlay]) -> ErrorPanel:
+    """Gridded data: the surface at the data's parameters ``u`` x ``v`` (every k-th, at most 160 a side)
+    coloured by the distance ``dist`` (``(len(u), len(v))``, the largest of each k x k block kept), the
+    borders of ``overlays`` (hierarchical overlays, with a ``region``) drawn: an
+    :class:`~occsurf.bridge.rendering.error_maps.ErrorPanel`."""
     from ..rendering.error_maps import ErrorPanel
 
     k = max(1, int(np.ceil(max(u.size, v.size) / 160)))
@@ -466,8 +470,8 @@ def _panel(surface: BSplineSurface, dist: np.ndarray, u: np.ndarray, v: np.ndarr
     return ErrorPanel(P, _pool(dist, k)[: uu.size, : vv.size], title, _overlay_lines(surface, overlays))
 
 
-def _scatter_panel(surface: BSplineSurface, u: np.ndarray, v: np.ndarray, distance: np.ndarray, title: str,
-                   overlays: Sequence[Overlay] = ()) -> ErrorPanel:
+def scatter_error_panel(surface: BSplineSurface, u: np.ndarray, v: np.ndarray, distance: np.ndarray, title: str,
+                        overlays: Sequence[Overlay] = ()) -> ErrorPanel:
     """Scattered data: the surface on an 80 x 80 grid coloured by the largest distance of the
     points whose parameters fall in each cell (grey where no data), overlay borders drawn."""
     from ..rendering.error_maps import ErrorPanel

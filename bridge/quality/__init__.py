@@ -15,6 +15,8 @@ models and validated against OCC's own checks.
 * :mod:`._evaluators` — vectorised evaluation of faces and p-curves in OCC's parametrisation (our
   B-splines, closed forms for elementary surfaces, OCC point by point for the rest).
 * :mod:`._pairs` — which faces meet along which edge (topology, seams, geometric matching).
+* :mod:`.check_files` — the per-file work of ``occsurf check``: the files its arguments name, the
+  worker's job (read, assess, draw), re-runs without the piece that crashed the worker, the pages and JSON.
 
 Names are imported lazily: importing this package does not load OCC.
 """

@@ -169,7 +169,7 @@ class SurfaceBatch:
         :mod:`occsurf.algorithms._numba_kernels` (one call per face; the NumPy stack is the fallback)."""
         from occsurf.algorithms import _numba_kernels as nk
 
-        kernel = (nk._state["kernels"] or {}).get("surface_derivatives")
+        kernel = nk.kernel("surface_derivatives")
         sel = np.flatnonzero(grp >= 0)
         # the points sorted by face, so each face's parameters and results are contiguous slices
         # of one buffer (one gather and one scatter in all, not one per face)
@@ -186,7 +186,7 @@ class SurfaceBatch:
             spline = self._splines[f]
             args = self._kargs.get(f)
             if args is None:  # span tables and read-only views built once per face
-                args = self._kargs[f] = tuple(nk._readonly(x) for x in spline._kernel_args())
+                args = self._kargs[f] = tuple(nk.readonly(x) for x in nk.surface_args(spline))
             if kernel is not None:
                 try:
                     kernel(*args, U[a:b], V[a:b], order, spline.is_rational, out[a:b])
@@ -226,9 +226,9 @@ def _use_numba(n: int) -> bool:
 
     if not nk.enabled():
         return False
-    if nk._state["loaded"]:
-        return nk._state["kernels"] is not None
-    return n >= NUMBA_MIN_POINTS and nk._load() is not None
+    if nk.loaded():
+        return nk.load() is not None  # the kernels loaded before (no compiling): whatever n
+    return n >= NUMBA_MIN_POINTS and nk.load() is not None
 
 
 def _into(x: Array, lo: Array, hi: Array, periodic: NDArray[np.bool_]) -> Array:

@@ -81,9 +81,9 @@ class ColoredMesh:
         """vtkPolyData with the colours as its point scalars (name ``'rgb'``) and the values as ``indicator``."""
         from vtkmodules.util.numpy_support import numpy_to_vtk
 
-        from ..rendering.vtk_scene import _polydata
+        from ..rendering.vtk_scene import polydata
 
-        pd = _polydata(self.points, self.triangles, "triangles")
+        pd = polydata(self.points, self.triangles, "triangles")
         rgb = numpy_to_vtk(np.ascontiguousarray(self.colors), deep=True)
         rgb.SetName("rgb")
         pd.GetPointData().SetScalars(rgb)

@@ -377,7 +377,7 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     trace : callable(str), optional
         Called before each step that runs OCC or heavy code on one piece of the model: ``"mesh"``
         (or ``"mesh face K"`` with ``mesh_each``), ``"face K"``, ``"edges"``; the last one seen
-        names the piece at fault when the process dies (:mod:`occsurf.bridge.cli.check` writes it
+        names the piece at fault when the process dies (:func:`occsurf.bridge.quality.check_files.check_job` writes it
         to a file).
     mesh_each : bool
         Triangulate face by face (each with the model's deflection) instead of the whole shape

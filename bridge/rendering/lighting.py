@@ -48,10 +48,10 @@ from .vtk_scene import (
     VIEW_ANGLE,
     VIEWS,
     Camera,
-    _polydata,
     _vertex_normals,
     apply_camera,
     fit_camera,
+    polydata,
     read_pixels,
     render_available,
     vtk_matrix,
@@ -227,7 +227,7 @@ def _actor(points: np.ndarray, triangles: np.ndarray, normals: np.ndarray) -> An
     from vtkmodules.util.numpy_support import numpy_to_vtk
     from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
 
-    pd = _polydata(points, triangles, "triangles")
+    pd = polydata(points, triangles, "triangles")
     pd.GetPointData().SetNormals(numpy_to_vtk(np.ascontiguousarray(normals, np.float32), deep=True))
     mapper = vtkPolyDataMapper()
     mapper.SetInputData(pd)

@@ -41,7 +41,7 @@ if TYPE_CHECKING:
     from vtkmodules.vtkRenderingCore import vtkCamera, vtkRenderer, vtkRenderWindow
 
 __all__ = ["Scene", "CAMERAS", "VIEWS", "VIEW_ANGLE", "Camera", "fit_camera", "apply_camera", "window",
-           "new_window", "read_pixels", "COLORMAPS", "colormap_rgb", "render_available"]
+           "new_window", "read_pixels", "COLORMAPS", "colormap_rgb", "render_available", "polydata"]
 
 #: Named views: direction *from* the target *to* the camera, and the view-up vector (``top``
 #: looks down -z with +y up).
@@ -339,7 +339,7 @@ def vtk_matrix(m: vtkMatrix4x4) -> np.ndarray:
     return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
 
 
-def _polydata(points: np.ndarray, cells: np.ndarray | Sequence[np.ndarray], kind: str) -> vtkPolyData:
+def polydata(points: np.ndarray, cells: np.ndarray | Sequence[np.ndarray], kind: str) -> vtkPolyData:
     """vtkPolyData from points ``(n, 3)`` and cells (triangles ``(m, 3)`` or polylines of indices)."""
     from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
     from vtkmodules.vtkCommonCore import vtkPoints
@@ -430,7 +430,7 @@ class Scene:
         T = np.asarray(triangles, np.int64)
         if P.ndim != 2 or P.shape[1] != 3 or T.ndim != 2 or T.shape[1] != 3:
             raise ValueError(f"points (n, 3) and triangles (m, 3) expected, got {P.shape} and {T.shape}")
-        pd = _polydata(P, T, "triangles")
+        pd = polydata(P, T, "triangles")
         if normals is not None:
             N = np.asarray(normals, float).copy()
             bad = ~np.all(np.isfinite(N), axis=1)
@@ -505,7 +505,7 @@ class Scene:
         starts = np.concatenate([[0], np.cumsum([len(p) for p in lines])[:-1]])
         cells = [np.arange(s, s + len(p)) for s, p in zip(starts, lines)]
         mapper = vtkPolyDataMapper()
-        mapper.SetInputData(_polydata(P, cells, "lines"))
+        mapper.SetInputData(polydata(P, cells, "lines"))
         # lines on a surface (edges, sections) are pulled towards the eye so the surface never hides them
         mapper.SetRelativeCoincidentTopologyLineOffsetParameters(-2.0, -2000.0)
         actor = vtkActor()
@@ -528,7 +528,7 @@ class Scene:
         P = P[np.all(np.isfinite(P), axis=1)]
         if not len(P):
             return
-        pd = _polydata(P, [np.array([k]) for k in range(len(P))], "lines")
+        pd = polydata(P, [np.array([k]) for k in range(len(P))], "lines")
         from vtkmodules.vtkCommonDataModel import vtkCellArray
 
         verts = vtkCellArray()

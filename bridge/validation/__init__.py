@@ -4,5 +4,7 @@
   and curvature against OCC's ``D2``/``D3``/``GeomLProp``) and :func:`roundtrip_deviation`;
 * :mod:`.inspect` — :func:`inspect_model`: one :class:`FaceReport` per face of an imported model
   (type, degrees, poles, flags, and the deviation of our evaluation from OCC's), what
-  ``occsurf inspect`` prints.
+  ``occsurf inspect`` prints;
+* :mod:`.files` — the same per STEP/IGES file: :class:`~.files.FileReport`, :func:`~.files.inspect_files`
+  and the worker job of ``occsurf inspect``, :func:`~.files.inspect_job`.
 """

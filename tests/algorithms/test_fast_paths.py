@@ -253,12 +253,12 @@ def test_failing_kernel_falls_back_to_numpy_with_a_warning(monkeypatch, with_num
 @needs_numba
 def test_uncachable_kernel_source_still_compiles():
     # numba raises RuntimeError at decoration when no cache directory is usable (here: a
-    # function without a source file); _jit must then compile without the cache.
+    # function without a source file); jit must then compile without the cache.
     import numba
 
     ns: dict = {}
     exec("def twice(x):\n    return 2 * x\n", ns)  # noqa: S102 - no file, so no cache locator
-    f = nk._jit(numba, ns["twice"])
+    f = nk.jit(numba, ns["twice"])
     assert f(21) == 42
 
 

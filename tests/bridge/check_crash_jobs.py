@@ -1,6 +1,7 @@
-"""Jobs for ``test_cli_check.py`` in place of ``occsurf check``'s worker job: the same job, but the
-worker dies (SIGSEGV, as a fault inside OCC would end it) on one face or one picture, named by an
-environment variable, every time it gets there."""
+"""Jobs for ``test_cli_check.py`` in place of ``occsurf check``'s worker job
+(:func:`occsurf.bridge.quality.check_files.check_job`): the same job, but the worker dies (SIGSEGV, as a
+fault inside OCC would end it) on one face or one picture, named by an environment variable, every time
+it gets there."""
 
 from __future__ import annotations
 
@@ -15,8 +16,8 @@ def _segfault() -> None:
 
 def crash_on_face(item: dict[str, Any]) -> Any:
     """Dies while checking face ``$OCCSURF_TEST_CRASH_FACES`` (comma-separated indices)."""
-    from occsurf.bridge.cli.check import check_job
     from occsurf.bridge.quality import report
+    from occsurf.bridge.quality.check_files import check_job
 
     targets = {int(k) for k in os.environ["OCCSURF_TEST_CRASH_FACES"].split(",")}
     original = report._check_face
@@ -32,8 +33,8 @@ def crash_on_face(item: dict[str, Any]) -> Any:
 
 def crash_on_picture(item: dict[str, Any]) -> Any:
     """Dies while drawing the picture file ``$OCCSURF_TEST_CRASH_PICTURE``."""
-    from occsurf.bridge.cli.check import check_job
     from occsurf.bridge.quality import pictures
+    from occsurf.bridge.quality.check_files import check_job
 
     target = os.environ["OCCSURF_TEST_CRASH_PICTURE"]
     original = pictures.render_picture

@@ -50,7 +50,7 @@ def test_json_and_files(loft_out) -> None:
         for name in f["pictures"].values():
             assert (out / name).stat().st_size > 2000
     # faces numbered as `occsurf inspect` numbers them
-    from occsurf.bridge.cli.inspect import inspect_files
+    from occsurf.bridge.validation.files import inspect_files
 
     (rep,) = inspect_files([str(SAMPLES / "loft.step")], samples=3)
     assert [(f.index, f.surface_type) for f in rep.faces] == [(f["index"], f["type"]) for f in doc["faces"]]
@@ -248,9 +248,9 @@ def test_folders_recursively_with_an_index(tmp_path, capsys) -> None:
 def test_a_crashing_face_is_left_out_and_named(tmp_path, capsys, monkeypatch) -> None:
     """A face that kills the worker (SIGSEGV inside OCC) costs that face only: the file is checked
     again without it, the report keeps every other face and names the crashed one."""
-    import occsurf.bridge.cli.check as check
+    import occsurf.bridge.quality.check_files as check_files
 
-    monkeypatch.setattr(check, "CHECK_JOB", "tests.bridge.check_crash_jobs:crash_on_face")
+    monkeypatch.setattr(check_files, "CHECK_JOB", "tests.bridge.check_crash_jobs:crash_on_face")
     monkeypatch.setenv("OCCSURF_TEST_CRASH_FACES", "3,7")
     out = tmp_path / "o"
     assert main(["check", str(SAMPLES / "loft.step"), "--out", str(out), "--no-pictures"]) == 0
@@ -266,9 +266,9 @@ def test_a_crashing_face_is_left_out_and_named(tmp_path, capsys, monkeypatch) ->
 
 
 def test_a_crashing_picture_is_left_out(tmp_path, capsys, monkeypatch) -> None:
-    import occsurf.bridge.cli.check as check
+    import occsurf.bridge.quality.check_files as check_files
 
-    monkeypatch.setattr(check, "CHECK_JOB", "tests.bridge.check_crash_jobs:crash_on_picture")
+    monkeypatch.setattr(check_files, "CHECK_JOB", "tests.bridge.check_crash_jobs:crash_on_picture")
     monkeypatch.setenv("OCCSURF_TEST_CRASH_PICTURE", "face_1_zebra.png")
     out = tmp_path / "o"
     assert main(["check", str(SAMPLES / "loft.step"), "--out", str(out), "--faces", "0-2", "--json"]) == 0

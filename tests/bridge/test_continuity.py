@@ -341,7 +341,7 @@ def test_batched_evaluation_matches_each_surface(monkeypatch) -> None:
         order = np.argsort(fid, kind="stable")
         batch = _batch.SurfaceBatch(evs)
         for use_numba in (False, True):
-            monkeypatch.setattr(_batch, "_use_numba", lambda n, flag=use_numba: flag and nk._load() is not None)
+            monkeypatch.setattr(_batch, "_use_numba", lambda n, flag=use_numba: flag and nk.load() is not None)
             D, errors = batch.derivatives(fid, u, v, 2)
             assert not errors
             # the partials the measures use (i + j <= 2); same arithmetic in other summation orders

@@ -115,7 +115,7 @@ def test_scattered_adaptive_fit_distances_agree_with_occ_projection():
 
 
 def _one_face_per_type(name: str) -> list[int]:
-    from occsurf.bridge.cli._common import read_model
+    from occsurf.bridge.exchange.reading import read_model
 
     seen: dict[str, int] = {}
     for k, f in enumerate(read_model(REALDATA / name).faces):

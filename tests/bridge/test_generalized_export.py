@@ -17,7 +17,8 @@ from occsurf.algorithms.topology.generalized import generalized_biquadratic
 from occsurf.algorithms.topology.generalized_bicubic import generalized_bicubic
 from occsurf.algorithms.topology.mesh import read_obj
 from occsurf.algorithms.topology.spatch_convert import piece_domain_points
-from occsurf.bridge.conversion.spatch_export import spatch_faces, write_spatches_step
+from occsurf.bridge.conversion.spatch_export import spatch_faces
+from occsurf.bridge.exchange.spatch_io import write_spatches_step
 from occsurf.bridge.exchange.step_iges import read_step
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "meshes"

@@ -248,7 +248,7 @@ def test_killed_write_keeps_the_old_file_and_its_temp_is_cleaned_next_time(tmp_p
     proc.join(60)
     assert proc.exitcode == -signal.SIGKILL
     assert target.read_bytes() == b"old picture"
-    temps = [p for p in tmp_path.iterdir() if p.name.endswith(files._atomic.TEMP_SUFFIX)]
+    temps = [p for p in tmp_path.iterdir() if p.name.endswith(files.TEMP_SUFFIX)]
     assert len(temps) == 1  # what kill -9 leaves
     files.atomic_write(tmp_path / "other.md", b"new")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["other.md", "pic.png"]
@@ -524,7 +524,7 @@ def test_audit_store_writes_through_the_atomic_helper(tmp_path, monkeypatch):
     for folder in ("files", "faces"):
         assert sorted(p.name for p in (out / folder).iterdir() if p.name.startswith(".")) == []
     # a part left half-written by kill -9 (the shared helper's temporary name, its writer gone)
-    stale = out / "files" / f".part-x.parquet.{2**22 + 12345}.abcdefgh{files._atomic.TEMP_SUFFIX}"
+    stale = out / "files" / f".part-x.parquet.{2**22 + 12345}.abcdefgh{files.TEMP_SUFFIX}"
     stale.write_bytes(b"half a parquet file")
     os.utime(stale, (time.time() - 3600,) * 2)
     store.ResultStore(out, resume=True)
@@ -532,7 +532,7 @@ def test_audit_store_writes_through_the_atomic_helper(tmp_path, monkeypatch):
 
 
 def test_strict_reading_refuses_a_file_read_around_damage(clean, tmp_path):
-    from occsurf.bridge.cli._common import read_model
+    from occsurf.bridge.exchange.reading import read_model
 
     st = C.StepText.parse(clean["step"].read_bytes())
     face = next(i for i, r in enumerate(st.records) if b"ADVANCED_FACE" in r)

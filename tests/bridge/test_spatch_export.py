@@ -1,6 +1,6 @@
-"""S-patches exported to OCC faces, sewn shells and STEP (bridge/conversion/spatch_export.py): OCC's own
-evaluation of the faces against SPatch.evaluate, shell validity and free boundaries, two patches
-sewn along a common side, the approximated path, STEP round trip."""
+"""S-patches exported to OCC faces, sewn shells (bridge/conversion/spatch_export.py) and STEP
+(bridge/exchange/spatch_io.py): OCC's own evaluation of the faces against SPatch.evaluate, shell validity
+and free boundaries, two patches sewn along a common side, the approximated path, STEP round trip."""
 
 from __future__ import annotations
 
@@ -19,12 +19,8 @@ import occsurf.bridge.conversion.spatch_export as export_mod
 from occsurf.algorithms.errors import InvalidGeometryError, KernelError
 from occsurf.algorithms.topology.spatch import SPatch, spatch_indices
 from occsurf.algorithms.topology.spatch_convert import piece_domain_points
-from occsurf.bridge.conversion.spatch_export import (
-    export_spatches,
-    read_spatches_step,
-    spatch_faces,
-    write_spatches_step,
-)
+from occsurf.bridge.conversion.spatch_export import export_spatches, spatch_faces
+from occsurf.bridge.exchange.spatch_io import read_spatches_step, write_spatches_step
 
 # OCC evaluates the exact rational Bézier pieces (bidegree <= 18 here) by its own de Boor in
 # homogeneous coordinates; measured agreement with SPatch.evaluate: <= 4e-15 relative to the

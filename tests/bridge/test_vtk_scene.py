@@ -174,7 +174,7 @@ def _vtk_reset_and_zoom(direction, up, lo, hi, aspect, legend, zoom):
     ren = vtkRenderer()
     corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
     mapper = vtkPolyDataMapper()
-    mapper.SetInputData(vtk_scene._polydata(corners, [np.arange(8)], "lines"))
+    mapper.SetInputData(vtk_scene.polydata(corners, [np.arange(8)], "lines"))
     actor = vtkActor()
     actor.SetMapper(mapper)
     ren.AddActor(actor)
