@@ -251,14 +251,19 @@ def test_fresh_install_is_visible_to_mypy(built, tmp_path):
     """Issue 26: ``pip install .`` (the wheel) in a new venv, without system site-packages, and mypy
     run from an empty folder resolves ``occsurf.algorithms.BSplineSurface``, the lazily exported
     top-level names and the tolerance names (served by a module ``__getattr__`` at run time)."""
+    # Nothing of this process's PYTHONPATH (tests/conftest.py puts the checkout there for worker
+    # processes; an in-tree build leaves occsurf.egg-info in it, which pip would take for an install).
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     venv = tmp_path / "venv"
-    _run([sys.executable, "-m", "venv", str(venv)], cwd=tmp_path)
+    _run([sys.executable, "-m", "venv", str(venv)], cwd=tmp_path, env=env)
     python = venv / "bin" / "python"
     _run([str(python), "-m", "pip", "install", "--no-deps", "--no-index", "--disable-pip-version-check",
-          str(built["wheel"])], cwd=tmp_path)
+          str(built["wheel"])], cwd=tmp_path, env=env)
+    assert (venv / "lib" / f"python{sys.version_info[0]}.{sys.version_info[1]}" / "site-packages" / "occsurf").is_dir()
     mypy = [sys.executable, "-m", "mypy", "--python-executable", str(python), "--no-incremental"]
-    _run([*mypy, "-c", "import occsurf.algorithms; occsurf.algorithms.BSplineSurface"], cwd=built["empty"])
-    proc = subprocess.run([*mypy, "-c", MYPY_PROBE], cwd=built["empty"], capture_output=True, text=True, timeout=300)
+    _run([*mypy, "-c", "import occsurf.algorithms; occsurf.algorithms.BSplineSurface"], cwd=built["empty"], env=env)
+    proc = subprocess.run([*mypy, "-c", MYPY_PROBE], cwd=built["empty"], capture_output=True, text=True, timeout=300,
+                          env=env)
     revealed = [line.split("Revealed type is ", 1)[1] for line in proc.stdout.splitlines() if "Revealed type is" in line]
     assert len(revealed) == 5, proc.stdout + proc.stderr
     assert all("occsurf.algorithms.kernel.surface.BSplineSurface" in r for r in revealed[:2]), revealed

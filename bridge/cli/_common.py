@@ -96,7 +96,7 @@ class OneLineParser(argparse.ArgumentParser):
     exit :data:`EXIT_ERROR`, like every other error of the command line (argparse's own prints the
     usage block first)."""
 
-    def error(self, message: str) -> Any:  # type: ignore[override]
+    def error(self, message: str) -> Any:
         command = self.prog.split(" ", 1)[1] if " " in self.prog else ""
         error(f"{command}: {message}" if command else message)
         self.exit(EXIT_ERROR)
@@ -304,11 +304,12 @@ def output_problem(path: Path) -> str | None:
 # ---------------------------------------------------------------------------------------- files
 def find_samples_dir(cwd: Path | None = None) -> Path | None:
     """The ``step_samples/`` folder: below the current directory first, then the one shipped in the
-    package (``occsurf/step_samples`` in a wheel, the repository's folder in a source checkout)."""
-    import occsurf
+    package, :mod:`occsurf.step_samples` (``occsurf/step_samples`` in a wheel, the repository's folder
+    under an editable install)."""
+    import occsurf.step_samples
 
     here = Path.cwd() if cwd is None else Path(cwd)
-    shipped = [Path(p) / SAMPLES_DIR for p in occsurf.__path__]
+    shipped = [Path(p) for p in occsurf.step_samples.__path__]
     for candidate in (here / SAMPLES_DIR, *shipped):
         if candidate.is_dir():
             return candidate

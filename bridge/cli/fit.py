@@ -30,6 +30,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -147,7 +148,7 @@ def _smooth(text: str) -> float | str:
     return v
 
 
-def _count(lo: int):
+def _count(lo: int) -> Callable[[str], int]:
     def parse(text: str) -> int:
         try:
             v = int(text)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -72,6 +72,14 @@ COMB_PERCENTILE = 99.0
 #: Smallest half-range of a curvature colour scale, times the model size (1/unit; squared for
 #: Gaussian curvature): a flat face's round-off (1e-14) is drawn as zero, not as a full scale.
 FLAT_SCALE = 1e-6
+
+
+_T = TypeVar("_T")
+
+
+def _returning(value: _T) -> Callable[[], _T]:
+    """A function of no arguments that returns ``value`` (bound now, not when it is called)."""
+    return lambda: value
 
 
 def _scale(values: Sequence[np.ndarray], kind: str, size: float = 1.0) -> tuple[float, float]:
@@ -341,7 +349,7 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
                 render_picture([fld], kind, out / name, size=FACE_SIZE, model_size=report.size,
                                flags=_flag_points(report, {row.index}) if kind == "mean" else None,
                                title=f"face {row.index} ({row.type}): {kind}",
-                               sections=(lambda own=own: own[0]) if own else None)
+                               sections=_returning(own[0]) if own else None)
                 row.pictures[kind] = name
             except Exception as err:  # noqa: BLE001
                 row.notes.append(f"picture {kind} not drawn: {error_line(err)}")

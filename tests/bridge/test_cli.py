@@ -325,11 +325,14 @@ def test_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
 
 # ------------------------------------------------------------------------------------ defaults
 def test_default_is_step_samples_from_cwd_or_package(tmp_path: Path) -> None:
-    proc = run_cli("inspect", "--samples", "3", cwd=tmp_path)  # no step_samples/ here: the repo's
+    proc = run_cli("inspect", "--samples", "3", cwd=tmp_path)  # no step_samples/ here: the package's
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == ""
+    import occsurf.step_samples
+
+    shipped = Path(occsurf.step_samples.__path__[0])  # the installed copy (the repository's folder if editable)
     for name in SAMPLE_FILES:
-        assert f"{SAMPLES / name} (" in proc.stdout
+        assert f"{shipped / name} (" in proc.stdout
     assert proc.stdout.rstrip().splitlines()[-1].startswith("5 files (0 unreadable), 43 faces, 13 free-form")
 
     local = tmp_path / "step_samples"  # the current directory's folder wins
