@@ -150,6 +150,15 @@ def test_sectors_never_fold(span: float, r0: float) -> None:
     assert q.folds.sum() == 0 and sum(count_folds(p) for p in fill.patches) == 0
 
 
+@pytest.mark.xfail(strict=True, reason="found by hypothesis (not derandomized, under pytest-xdist): a 156 deg sector "
+                   "with r0 = 1.546875, aspect 10.66, below the 11 the property above claims, folds in one patch "
+                   "(4 grid pairs); the aspect bound of test_sectors_never_fold is not a sharp one. Not fixed yet.")
+def test_sector_of_aspect_10_66_does_not_fold() -> None:
+    assert _aspect(156.0, 1.546875) < 11.0
+    fill, q, nz = _check_plane_fill(_sector(156.0, 1.546875))
+    assert q.folds.sum() == 0 and sum(count_folds(p) for p in fill.patches) == 0
+
+
 def test_very_long_thin_sector_still_folds_and_says_so() -> None:
     """The known limit: a 150 deg sector 0.25 wide (its middle arc 19 times its width) gets the right
     layout (centre on the bisector, internal edges along the harmonic curves) but the two patches on
