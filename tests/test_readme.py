@@ -30,6 +30,7 @@ def test_block_finder_sees_fences_only_at_line_starts() -> None:
     assert python_blocks(text) == [(3, "x = 1\n")]
 
 
+@pytest.mark.slow
 def test_readme_python_blocks_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     (tmp_path / "tests").mkdir()
     (tmp_path / "tests" / "fixtures").symlink_to(ROOT / "tests" / "fixtures")

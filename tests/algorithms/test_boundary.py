@@ -416,6 +416,7 @@ def _describe(cycle: list[str], graph: dict[str, dict[str, list[tuple[int, str]]
     return "\n".join(steps)
 
 
+@pytest.mark.slow
 def test_no_import_cycles_in_algorithms_and_bridge():
     """Module-level and function-level imports alike: a function-level import that closes a cycle
     is a cycle postponed, not removed."""

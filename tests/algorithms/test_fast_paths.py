@@ -126,6 +126,7 @@ def both_paths(monkeypatch, fn):
 # ------------------------------------------------------------- numba kernels vs NumPy paths
 
 
+@pytest.mark.slow
 @needs_numba
 @pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.parametrize("degree", DEGREES)
@@ -137,6 +138,7 @@ def test_curve_kernels_match_numpy(monkeypatch, degree, kind):
     assert_partials_close(fast[1], ref[1], 1)
 
 
+@pytest.mark.slow
 @needs_numba
 @pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.parametrize("degree", DEGREES)
@@ -172,6 +174,7 @@ def test_surface_kernels_orders_and_shapes(monkeypatch, order):
     assert_partials_close(fast, ref, 2)
 
 
+@pytest.mark.slow
 @needs_numba
 def test_two_dimensional_and_high_dimensional_poles(monkeypatch):
     # Dimensions 2 and 5 (k = 2, 3, 5, 6) take the generic, not the 3/4-coordinate, contraction.

@@ -45,6 +45,7 @@ def test_tolerance_holds_and_is_measured(sharp_fit):
     assert float(np.nanmax(fit.distance)) == pytest.approx(fit.max_error)
 
 
+@pytest.mark.slow
 def test_sharp_feature_needs_far_fewer_control_points_than_uniform(sharp_fit):
     x, Z, fit = sharp_fit
     P3 = np.stack(np.broadcast_arrays(x[:, None], x[None, :], Z), -1)

@@ -80,6 +80,7 @@ def test_result_is_an_editable_hierarchy(sharp_cloud):
         np.testing.assert_array_equal(hs.offsets(o), offs[o.id])
 
 
+@pytest.mark.slow
 def test_on_gridded_input_it_follows_the_gridded_path():
     x = np.linspace(0, 1, 101)
     X, Y = np.meshgrid(x, x, indexing="ij")

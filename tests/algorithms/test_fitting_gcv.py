@@ -111,6 +111,7 @@ def test_sparse_system_without_missing_cells_is_the_kronecker_fit():
     np.testing.assert_allclose(sg.gcv(lam), kr.gcv(lam), rtol=1e-8)
 
 
+@pytest.mark.slow
 def test_gcv_with_missing_cells_and_constraints_smooths_noise():
     x, y, truth, Z = _field(41, 37, noise=0.05, seed=6)
     Z[10:16, 20:26] = np.nan  # a hole over about one knot span

@@ -79,6 +79,7 @@ def test_heights_equal_scipy_and_stay_a_graph():
     np.testing.assert_allclose(P[:, 1], 3 * vv, atol=EXACT)
 
 
+@pytest.mark.slow
 @given(st.integers(1, 4), st.integers(1, 4), st.integers(0, 10_000))
 @test_settings(25)
 def test_reproduces_a_spline_of_the_same_space(p, q, seed):

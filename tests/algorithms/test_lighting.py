@@ -222,6 +222,7 @@ def test_shapes_broadcast_and_blocks_agree() -> None:
     np.testing.assert_allclose(per_point_eye, full, rtol=1e-14)
 
 
+@pytest.mark.slow
 def test_threads_and_float32() -> None:
     """Blocks on threads give the serial result bit for bit; float32 agrees to ~1e-6."""
     rng = np.random.default_rng(4)
@@ -457,6 +458,7 @@ def _points(seed: int, m: int = 20_000) -> tuple[np.ndarray, np.ndarray]:
     return P, N
 
 
+@pytest.mark.slow
 @needs_numba
 @kernel_must_run
 @pytest.mark.parametrize("seed", range(6))
@@ -492,6 +494,7 @@ def test_compiled_kernel_is_bit_identical_on_integer_exponents(monkeypatch) -> N
     np.testing.assert_array_equal(fast, shade(P, N, [1, -9, 4], setup))
 
 
+@pytest.mark.slow
 @needs_numba
 @kernel_must_run
 def test_compiled_kernel_threads_blocks_float32_and_threshold(monkeypatch) -> None:

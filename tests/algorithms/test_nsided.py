@@ -34,6 +34,7 @@ def _size(model) -> float:
     return float(np.linalg.norm(np.ptp(pts, axis=0)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("n", "rational"), [(n, False) for n in range(3, 9)] + [(3, True), (5, True), (8, True)])
 def test_fill_interpolates_and_is_g1_everywhere(n: int, rational: bool) -> None:
     m = ring_model(n, rational=rational)
@@ -219,6 +220,7 @@ def _moved(side: HoleSide, off: float) -> HoleSide:
     return HoleSide(BSplineCurve(c.degree, c.knots, np.asarray(c.control_points) + off, c.weights), X)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rational", [False, True])
 def test_fill_does_not_depend_on_where_the_hole_is(rational: bool) -> None:
     """Review: boundary derivatives were taken in absolute coordinates: a hole 1e4 from the origin

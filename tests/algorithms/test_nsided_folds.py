@@ -139,6 +139,7 @@ def _aspect(span: float, r0: float, r1: float = 2.0) -> float:
     return np.radians(span) * 0.5 * (r0 + r1) / (r1 - r0)
 
 
+@pytest.mark.slow
 @settings(max_examples=12, deadline=None)
 @given(span=st.floats(60.0, 160.0), r0=st.floats(1.0, 1.7))
 def test_sectors_never_fold(span: float, r0: float) -> None:

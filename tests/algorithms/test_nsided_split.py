@@ -177,6 +177,7 @@ def test_crescent_gets_a_centre_inside_and_does_not_fold() -> None:
     assert q.folds.sum() == 0 and _normals_up(fill)
 
 
+@pytest.mark.slow
 def test_many_sides() -> None:
     m = ring_model(32, jitter=0.0)
     fill = fill_hole(m.sides)

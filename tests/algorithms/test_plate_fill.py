@@ -254,6 +254,7 @@ _BASE_FILL = fill_plate(_BASE)
 _BASE_PTS = _inside_points(_BASE_FILL, 30)
 
 
+@pytest.mark.slow
 @test_settings(6)
 @given(q=st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(lambda q: np.linalg.norm(q) > 0.1),
        log_scale=st.floats(-3, 3), shift=st.lists(st.floats(-100, 100), min_size=3, max_size=3))

@@ -21,6 +21,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.nsided import HoleSide, count_folds
@@ -39,6 +40,7 @@ def _sides() -> tuple[list[HoleSide], float]:
     return sides, float(d["g0_tol"])
 
 
+@pytest.mark.slow
 def test_steep_plate_on_linkrods_13_22_does_not_ripple() -> None:
     sides, g0_tol = _sides()
     fill = fill_plate(sides, g0_tol=g0_tol)

@@ -80,6 +80,7 @@ def test_strip_is_refused_by_the_first_three_planes_and_taken_over_the_cap_axis(
     assert abs(np.linalg.det(np.c_[e1, e2, N]) - 1) < 1e-12
 
 
+@pytest.mark.slow
 def test_strip_plate_fill_meets_its_targets_and_stays_near_the_cylinder() -> None:
     sides = []
     for t, P, M in _strip_samples():

@@ -248,6 +248,7 @@ def _run_out(turns: float = 2.0) -> list[HoleSide]:
     ]
 
 
+@pytest.mark.slow
 def test_a_run_out_corner_takes_the_plane_of_the_unrolled_loop() -> None:
     """Screw pair [8, 22]: neither r nor z is a height over the whole unrolled run-out (see
     :func:`_run_out`); with r or z as the height the fill stays ~1e-3 off (on the screw: 2.9e-3 and

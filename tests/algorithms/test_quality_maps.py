@@ -134,6 +134,7 @@ def test_matches_surface_curvatures_on_explicit_params():
     assert_allclose(cm.points, s.evaluate(U, V), atol=1e-12)
 
 
+@pytest.mark.slow
 def test_rational_surface_and_large_grid_blocks():
     """A grid larger than one row block goes through the blocked path with the same answer."""
     s = torus()

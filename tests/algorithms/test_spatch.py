@@ -147,6 +147,7 @@ def test_wachspress_square_is_bilinear():
     assert_allclose(wachspress(x, 4), expected, rtol=0, atol=EXACT)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n", [5, 6])
 def test_wachspress_derivatives_vs_sympy(n):
     """Exact symbolic gradients and Hessians of the Wachspress coordinates (sympy) as the oracle."""

@@ -74,6 +74,7 @@ def test_sha256_and_sniffing(tmp_path: Path) -> None:
 
 
 # ------------------------------------------------------------------------------------ reader
+@pytest.mark.slow
 @pytest.mark.skipif(os.name != "posix", reason="needs POSIX signals")
 def test_reader_survives_a_real_occ_segfault_and_a_hang(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     env = hook_env(tmp_path)
@@ -101,6 +102,7 @@ def test_reader_survives_a_real_occ_segfault_and_a_hang(tmp_path: Path, monkeypa
 
 
 # ------------------------------------------------------------------------------------ the job
+@pytest.mark.slow
 def test_job_matches_inspect_model_and_round_trips_exactly() -> None:
     from occsurf.bridge import read_step
     from occsurf.bridge.validation.inspect import inspect_model
@@ -212,6 +214,7 @@ def _one_line_exit_2(proc) -> str:
     return proc.stderr
 
 
+@pytest.mark.slow
 def test_cli_bad_input_is_one_line_exit_2(tmp_path: Path) -> None:
     env = hook_env(tmp_path)
     (tmp_path / "empty").mkdir()

@@ -45,6 +45,7 @@ def _check_invariants(out: Path, n_input: int) -> tuple[list[dict], dict]:
     return rows, summary
 
 
+@pytest.mark.slow
 def test_local_cluster_two_workers_records_every_fault(tmp_path: Path) -> None:
     """Good samples, corrupt/truncated files, a real OCC segfault and a hang on 2 local workers."""
     corpus = tmp_path / "corpus"
@@ -109,6 +110,7 @@ def _wait_for(cond, timeout: float, what: str) -> None:
         time.sleep(0.1)
 
 
+@pytest.mark.slow
 def test_interrupt_then_resume_finishes_the_rest(tmp_path: Path) -> None:
     """SIGINT mid-run: exit 130, the dataset is readable and holds what finished; --resume does the
     rest, redoes nothing, and a renamed file is recognised by its content."""
@@ -152,6 +154,7 @@ def test_interrupt_then_resume_finishes_the_rest(tmp_path: Path) -> None:
     assert f"({len(files) - 1} already in" in proc4.stdout
 
 
+@pytest.mark.slow
 def test_worker_killed_mid_run_loses_nothing(tmp_path: Path) -> None:
     """SIGKILL to a Dask worker process while its reader is inside a file: the nanny restarts it,
     the scheduler reruns its tasks elsewhere, and every file ends with exactly one row."""
@@ -183,6 +186,7 @@ def test_worker_killed_mid_run_loses_nothing(tmp_path: Path) -> None:
     assert victim.pid not in {int(r["worker"].rsplit(":", 1)[1]) for r in rows[-3:]}
 
 
+@pytest.mark.slow
 def test_separately_started_scheduler_and_worker(tmp_path: Path) -> None:
     """``dask scheduler`` and ``dask worker`` on 127.0.0.1, as on a real cluster: same results."""
     dask_cli = Path(sys.executable).with_name("dask")
@@ -220,6 +224,7 @@ def test_separately_started_scheduler_and_worker(tmp_path: Path) -> None:
                 p.kill()
 
 
+@pytest.mark.slow
 def test_dashboard_link_answers_while_the_audit_runs(tmp_path: Path) -> None:
     """The local cluster's Dask dashboard (bokeh, declared with occsurf[audit]): its link is printed
     on stderr as the run starts, and the page answers HTTP 200 while files are still being read."""

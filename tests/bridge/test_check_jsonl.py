@@ -61,6 +61,7 @@ def test_in_order_hands_on_each_item_once_every_earlier_one_is_there():
     assert out == [(0, "a"), (1, "b"), (2, "c"), (3, "d")] and stream.emitted == ["a", "b", "c", "d"]
 
 
+@pytest.mark.slow
 @needs_script
 def test_jsonl_lines_are_the_files_of_report_json(tmp_path: Path, box: bytes) -> None:
     """One line per file, in the order of report.json's files (a dangling link among them: its row is
@@ -76,6 +77,7 @@ def test_jsonl_lines_are_the_files_of_report_json(tmp_path: Path, box: bytes) ->
     assert (tmp_path / "out" / lines[0]["data"]).is_file()  # paths relative to --out
 
 
+@pytest.mark.slow
 @needs_script
 def test_jsonl_of_one_file_is_one_line(tmp_path: Path, box: bytes) -> None:
     folder = _folder(tmp_path, box, ["a.step"])
@@ -89,6 +91,7 @@ def test_jsonl_of_one_file_is_one_line(tmp_path: Path, box: bytes) -> None:
     assert both.returncode == 2 and b"not allowed with" in both.stderr
 
 
+@pytest.mark.slow
 @posix
 @needs_script
 def test_lines_come_as_files_finish_and_ctrl_c_keeps_them(tmp_path: Path, box: bytes) -> None:
@@ -116,6 +119,7 @@ def test_lines_come_as_files_finish_and_ctrl_c_keeps_them(tmp_path: Path, box: b
     assert err.decode().strip().splitlines()[-1] == "occsurf: interrupted" and b"Traceback" not in err
 
 
+@pytest.mark.slow
 @posix
 @needs_script
 def test_jsonl_into_head_ends_quietly(tmp_path: Path, box: bytes) -> None:

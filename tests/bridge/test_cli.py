@@ -143,6 +143,7 @@ def test_sample_files_are_small() -> None:
         assert (SAMPLES / name).stat().st_size < 300_000, name
 
 
+@pytest.mark.slow
 def test_make_samples_is_reproducible(tmp_path: Path) -> None:
     """Rebuilding gives the committed files byte for byte (time stamps are fixed)."""
     proc = subprocess.run([sys.executable, str(SAMPLES / "make_samples.py"), str(tmp_path)],
@@ -170,6 +171,7 @@ def test_table_output(capsys: pytest.CaptureFixture[str]) -> None:
 
 
 # ------------------------------------------------------------------------------------ errors
+@pytest.mark.slow
 def test_bad_and_missing_files_beside_a_good_one(tmp_path: Path) -> None:
     """Run as ``python -m occsurf.bridge.cli``: exit 2, the good file still reported, one line per bad file."""
     garbage = tmp_path / "garbage.step"
@@ -254,6 +256,7 @@ def test_face_failure_stays_with_the_face(monkeypatch: pytest.MonkeyPatch,
     assert face["degree"] == [3, 3]
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(os.name != "posix", reason="needs POSIX signals")
 def test_crash_inside_the_reader_is_isolated(tmp_path: Path) -> None:
     """A segmentation fault while reading one file: that file is an error, the others are read."""
@@ -282,6 +285,7 @@ def test_crash_inside_the_reader_is_isolated(tmp_path: Path) -> None:
     assert [len(f["faces"]) for f in files] == [1, 0, 1]
 
 
+@pytest.mark.slow
 def test_a_hanging_file_times_out_and_the_others_are_read(tmp_path: Path) -> None:
     """A reader that never returns on one file: that file is reported after --timeout, the others are read."""
     hook_dir = tmp_path / "hook"
@@ -324,6 +328,7 @@ def test_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
 
 
 # ------------------------------------------------------------------------------------ defaults
+@pytest.mark.slow
 def test_default_is_step_samples_from_cwd_or_package(tmp_path: Path) -> None:
     proc = run_cli("inspect", "--samples", "3", cwd=tmp_path)  # no step_samples/ here: the package's
     assert proc.returncode == 0, proc.stderr
@@ -394,6 +399,7 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
 
 
 # ------------------------------------------------------------------------------------ real data
+@pytest.mark.slow
 @pytest.mark.skipif(not REALDATA.is_dir(), reason=f"public CAD files not present at {REALDATA}")
 def test_realdata_all_files() -> None:
     files = sorted(p for p in REALDATA.iterdir() if p.suffix.lower() in (".step", ".stp", ".iges", ".igs"))

@@ -37,6 +37,7 @@ def loft_out(tmp_path_factory):
     return out, proc
 
 
+@pytest.mark.slow
 def test_json_and_files(loft_out) -> None:
     out, proc = loft_out
     assert proc.returncode == 0, proc.stderr
@@ -56,6 +57,7 @@ def test_json_and_files(loft_out) -> None:
     assert [(f.index, f.surface_type) for f in rep.faces] == [(f["index"], f["type"]) for f in doc["faces"]]
 
 
+@pytest.mark.slow
 def test_fail_on_gates(tmp_path, capsys) -> None:
     path = str(SAMPLES / "loft.step")
     assert main(["check", path, "--out", str(tmp_path / "a"), "--fail-on", "catia", "--in-process"]) == 1
@@ -72,6 +74,7 @@ def test_fail_on_gates(tmp_path, capsys) -> None:
     assert rc == 0, doc["failures"]
 
 
+@pytest.mark.slow
 def test_faces_option(tmp_path, capsys) -> None:
     assert main(["check", str(SAMPLES / "loft.step"), "--out", str(tmp_path), "--faces", "0,2-3", "--json",
                  "--in-process"]) == 0
@@ -83,6 +86,7 @@ def test_faces_option(tmp_path, capsys) -> None:
     _one_error_line(capsys.readouterr().err)
 
 
+@pytest.mark.slow
 def test_unreadable_and_missing(tmp_path, capsys) -> None:
     bad = tmp_path / "bad.step"
     bad.write_text("ISO-10303-21;\nHEADER;\nthis is not a model\n")
@@ -122,6 +126,7 @@ def _chromium() -> tuple[str, str] | None:
     return (browser, driver) if browser and driver else None
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(_chromium() is None, reason="Debian packages chromium and chromium-driver not installed "
                                                "(.ci/run installs them)")
 def test_page_in_headless_chromium(loft_out) -> None:
@@ -191,6 +196,7 @@ def test_page_in_headless_chromium(loft_out) -> None:
 
 
 # ---------------------------------------------------------------------------------------- several files
+@pytest.mark.slow
 def test_folders_recursively_with_an_index(tmp_path, capsys) -> None:
     """A folder (searched recursively, STEP and IGES) and a file: one report folder per file, a
     top-level index.html and report.json over all (status, worst G1 edge, flags); an unreadable
@@ -245,6 +251,7 @@ def test_folders_recursively_with_an_index(tmp_path, capsys) -> None:
     assert "--faces" in _one_error_line(capsys.readouterr().err)
 
 
+@pytest.mark.slow
 def test_a_crashing_face_is_left_out_and_named(tmp_path, capsys, monkeypatch) -> None:
     """A face that kills the worker (SIGSEGV inside OCC) costs that face only: the file is checked
     again without it, the report keeps every other face and names the crashed one."""
@@ -265,6 +272,7 @@ def test_a_crashing_face_is_left_out_and_named(tmp_path, capsys, monkeypatch) ->
     assert doc["edges"]
 
 
+@pytest.mark.slow
 def test_a_crashing_picture_is_left_out(tmp_path, capsys, monkeypatch) -> None:
     import occsurf.bridge.quality.check_files as check_files
 

@@ -29,6 +29,7 @@ def run_main(capsys, *args: str) -> tuple[int, str, str]:
     return code, out, err
 
 
+@pytest.mark.slow
 def test_fill_sample_prints_table_and_writes_step(capsys, tmp_path: Path) -> None:
     out_file = tmp_path / "filled.step"
     code, out, err = run_main(capsys, "fill", str(HOLES / "dome_holes.step"), "--out", str(out_file))
@@ -47,6 +48,7 @@ def test_fill_sample_prints_table_and_writes_step(capsys, tmp_path: Path) -> Non
         assert len(pictures) == 4 and all(str(p) in out for p in pictures)
 
 
+@pytest.mark.slow
 def test_fill_json_and_rational_sample(capsys, tmp_path: Path) -> None:
     code, out, err = run_main(capsys, "fill", str(HOLES / "rational_holes.step"), "--out",
                               str(tmp_path / "r.step"), "--json")
@@ -73,6 +75,7 @@ def _fill_with_reflex_hole(capsys, tmp_path: Path, bump: float) -> tuple[Path, P
     return src, out_file, code, err
 
 
+@pytest.mark.slow
 def test_unfillable_hole_reported_others_filled(capsys, tmp_path: Path) -> None:
     src, out_file, code, err = _fill_with_reflex_hole(capsys, tmp_path, bump=0.0)
     # the reflex hole, refused by the central split, is filled by the trimmed plate (one face) since
@@ -81,6 +84,7 @@ def test_unfillable_hole_reported_others_filled(capsys, tmp_path: Path) -> None:
     assert out_file.exists() and len(read_step(out_file).faces) == 4 + 5 + 4 + 1
 
 
+@pytest.mark.slow
 def test_hole_neither_construction_takes_is_reported_others_filled(capsys, tmp_path: Path) -> None:
     """A reflex hole (central split refuses) whose neighbours turn past vertical along an edge (95.7 deg
     to the hole's mean plane: no height field, so the plate refuses too): one line naming both
@@ -93,6 +97,7 @@ def test_hole_neither_construction_takes_is_reported_others_filled(capsys, tmp_p
     assert out_file.exists() and len(read_step(out_file).faces) == 4 + 5 + 4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("content", [b"", b"ISO-10303-21;\ngarbage"])
 def test_bad_input_one_line_exit_2(capsys, tmp_path: Path, content: bytes) -> None:
     bad = tmp_path / "bad.step"
@@ -108,6 +113,7 @@ def test_missing_out_is_a_usage_error(capsys) -> None:
     assert code == 2 and "--out" in err
 
 
+@pytest.mark.slow
 def test_make_holes_is_reproducible(tmp_path: Path) -> None:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(x for x in (str(REPO), env.get("PYTHONPATH")) if x)
@@ -181,6 +187,7 @@ def test_reader_crash_is_one_line_exit_2(capsys, tmp_path: Path, monkeypatch) ->
     assert not (tmp_path / "o.step").exists()
 
 
+@pytest.mark.slow
 def test_in_process_gives_the_same_document(capsys, tmp_path: Path) -> None:
     """``--in-process`` skips the worker; the JSON is the same but for the times (and the pictures'
     names, which follow OUT's)."""
@@ -203,6 +210,7 @@ def test_in_process_gives_the_same_document(capsys, tmp_path: Path) -> None:
 _LENS = Path(__file__).resolve().parents[2].parent / "shared" / "realdata" / "pythonocc-core__sunglasses_lens.igs"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not _LENS.is_file(), reason=f"{_LENS} is absent (public real models)")
 def test_fill_faces_replaces_a_trimmed_face_and_reports_ours_beside_occ(capsys, tmp_path: Path) -> None:
     out = tmp_path / "lens.step"

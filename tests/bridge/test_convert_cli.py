@@ -55,6 +55,7 @@ def _props(model) -> list[tuple]:
     return [(f.name, f.color, f.layer, f.instance) for f in model.faces]
 
 
+@pytest.mark.slow
 def test_step_to_step_keeps_everything(tmp_path, assembly):
     out = tmp_path / "out.stp"
     proc = run_cli(str(assembly), str(out))
@@ -66,6 +67,7 @@ def test_step_to_step_keeps_everything(tmp_path, assembly):
     assert re.search(rb"CARTESIAN_POINT\('',\(-?\d\.\d{16}E[+-]\d\d", out.read_bytes())  # 17 digits
 
 
+@pytest.mark.slow
 def test_step_to_iges_says_what_is_lost(tmp_path, assembly):
     out = tmp_path / "out.igs"
     proc = run_cli(str(assembly), str(out))
@@ -83,6 +85,7 @@ def test_step_to_iges_says_what_is_lost(tmp_path, assembly):
     assert [f.name for f in read_step(back).faces] == [f.name for f in iges.faces]
 
 
+@pytest.mark.slow
 def test_unit_and_digits(tmp_path, assembly):
     out = tmp_path / "m.step"
     proc = run_cli(str(assembly), str(out), "--unit", "m", "--digits", "13")
@@ -139,6 +142,7 @@ def test_face_names_and_layers_through_iges(tmp_path, assembly):
     assert [(f.name, f.layer) for f in read_step(tmp_path / "named_back.step").faces] == want
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["missing", "truncated", "garbage", "directory"])
 def test_bad_input_one_line_exit_2(tmp_path, assembly, case):
     src = tmp_path / "in.step"
@@ -156,6 +160,7 @@ def test_bad_input_one_line_exit_2(tmp_path, assembly, case):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_bad_arguments(tmp_path, assembly):
     for args in ([str(assembly), str(tmp_path / "x.txt")], [str(assembly), str(tmp_path / "x.step"), "--unit", "furlong"],
                  [str(assembly), str(tmp_path / "x.step"), "--digits", "30"], [str(assembly), str(tmp_path)]):
@@ -171,6 +176,7 @@ def test_bad_arguments(tmp_path, assembly):
         convert(tmp_path / "none.step", tmp_path / "x.step")
 
 
+@pytest.mark.slow
 def test_crash_in_reader_is_isolated(tmp_path, assembly):
     hook = tmp_path / "hook"
     hook.mkdir()
@@ -206,6 +212,7 @@ def test_inspect_json_reports_unit(tmp_path, assembly):
     assert [f["unit"] for f in json.loads(proc.stdout)["files"]] == ["inch", "mm"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["occt__linkrods.step", "pythonocc-core__sunglasses_lens.igs"])
 def test_real_files_convert(tmp_path, name):
     src = REALDATA / name

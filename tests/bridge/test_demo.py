@@ -39,6 +39,7 @@ def test_unknown_demo_is_rejected(tmp_path, capsys):
     assert "unknown demo nope" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(set(demo.DEMOS) - {"manipulation"}))
 def test_every_registered_demo_writes_pictures_and_step(tmp_path, capsys, name):
     """Each gallery entry, run as a user runs it, writes real PNGs and STEP files OCC can read."""

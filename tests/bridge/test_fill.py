@@ -200,6 +200,7 @@ def TopoDS_reversed(shape):
     return TopoDS.Wire_s(shape.Reversed())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("bump", [0.0, 1.0])
 def test_round_hole_with_a_trimming_edge_is_capped(bump: float) -> None:
     """A plain ``fill`` of a one-sided hole whose edge is a trimming curve (course §8-3): the exact

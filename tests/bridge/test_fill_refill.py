@@ -38,6 +38,7 @@ def lens():
     return r.OneShape()
 
 
+@pytest.mark.slow
 def test_trimmed_face_is_replaced_no_worse_than_occ_and_the_model_stays_valid(lens) -> None:
     from occsurf.bridge.modeling.refill import model_faces, refill_model
 

@@ -39,6 +39,7 @@ def heights(tmp_path_factory) -> tuple[Path, np.ndarray]:
     return p, Z
 
 
+@pytest.mark.slow
 def test_adaptive_fit_json_contract_and_files(capsys, tmp_path, heights):
     src, Z = heights
     out = tmp_path / "fit.step"
@@ -103,6 +104,7 @@ def test_gridded_and_scattered_rows_are_detected(capsys, tmp_path):
     assert doc["kind"] == "scattered" and "scattered" in doc["detected"] and doc["max_error"] <= 1e-3
 
 
+@pytest.mark.slow
 def test_step_face_refit_measures_the_deviation_by_occ(capsys, tmp_path):
     rng = np.random.default_rng(4)
     t = np.r_[[0.0] * 4, 0.3, 0.6, [1.0] * 4]
@@ -161,6 +163,7 @@ def test_bad_grids_and_arguments(capsys, tmp_path):
     assert code == 2 and "positive" in err
 
 
+@pytest.mark.slow
 def test_scattered_cloud_is_fitted_adaptively(capsys, tmp_path):
     """A scattered .xyz cloud with a sharp feature: adaptive hierarchical by default (overlays, per
     level statistics), the STEP surface read back is within tol of every point (re-measured), the
@@ -191,6 +194,7 @@ def test_scattered_cloud_is_fitted_adaptively(capsys, tmp_path):
     assert len(hs.overlays) == sum(L["overlays"] for L in doc["levels"])
 
 
+@pytest.mark.slow
 def test_gcv_smoothing_of_a_grid_with_missing_cells(capsys, tmp_path, heights):
     """--ctrl with --smooth gcv on heights with a hole (NaN cells): the sparse path chooses λ by
     GCV over the valid cells (no refusal), the hole stays defined and the tolerance is reported."""

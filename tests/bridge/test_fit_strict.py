@@ -39,6 +39,7 @@ def _fit(*args: str) -> subprocess.CompletedProcess:
                            "6", "--timeout", "300"], capture_output=True, text=True, cwd=REPO, timeout=600)
 
 
+@pytest.mark.slow
 def test_fit_strict_refuses_a_damaged_file_and_writes_nothing(files, tmp_path):
     out = tmp_path / "fit.step"
     proc = _fit(str(files["bad"]), "--out", str(out), "--strict")
@@ -49,6 +50,7 @@ def test_fit_strict_refuses_a_damaged_file_and_writes_nothing(files, tmp_path):
     assert not out.exists() and not out.with_suffix(".json").exists() and not out.with_suffix(".png").exists()
 
 
+@pytest.mark.slow
 def test_fit_without_strict_fits_and_names_the_warnings(files, tmp_path):
     out = tmp_path / "fit.step"
     proc = _fit(str(files["bad"]), "--out", str(out), "--json")
@@ -59,6 +61,7 @@ def test_fit_without_strict_fits_and_names_the_warnings(files, tmp_path):
     assert out.is_file()
 
 
+@pytest.mark.slow
 def test_fit_strict_passes_a_clean_file(files, tmp_path):
     out = tmp_path / "fit.step"
     proc = _fit(str(files["clean"]), "--out", str(out), "--strict", "--json")

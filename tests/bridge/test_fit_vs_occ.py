@@ -56,6 +56,7 @@ def test_fewer_control_points_than_occ_fitter_on_a_sharp_feature():
     assert ours.control_points_total < np.prod(occ.n_poles), (ours.control_points_total, occ.n_poles, occ_err)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not REALDATA.is_dir(), reason="../shared/realdata (public CAD files) is absent")
 @pytest.mark.parametrize("name, faces", [("pythonocc-core__sunglasses_lens.igs", [0, 1, 2]),
                                          ("occt__linkrods.step", [12])])
@@ -87,6 +88,7 @@ def _occ_distances(surface, pts: np.ndarray) -> np.ndarray:
     return out
 
 
+@pytest.mark.slow
 def test_scattered_adaptive_fit_distances_agree_with_occ_projection():
     """A noisy scan-like cloud with one sharp feature: our measured distances (Newton from the data
     parameters) equal OCC's projections onto the same flat NURBS, and the tolerance holds by OCC's
@@ -123,6 +125,7 @@ def _one_face_per_type(name: str) -> list[int]:
     return sorted(seen.values())
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not REALDATA.is_dir(), reason="../shared/realdata (public CAD files) is absent")
 @pytest.mark.parametrize("name", ["build123d__M6-1x12-countersunk-screw.step", "occt__linkrods.step",
                                   "occt__bearing.iges"])

@@ -71,6 +71,7 @@ def _log(counts: Counter) -> None:
             fh.write(json.dumps(dict(counts)) + "\n")
 
 
+@pytest.mark.slow
 @test_settings(max_examples=4)
 @given(fmt=st.sampled_from(["step", "iges"]), mutations=st.lists(mutation, min_size=BATCH, max_size=BATCH))
 def test_mutated_files_through_every_reading_command(bases, tmp_path_factory, fmt, mutations):

@@ -99,6 +99,7 @@ def test_sewn_shell_is_valid_and_closed(name):
         assert not TopExp_Explorer(wires, TopAbs_EDGE).More()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
 def test_occ_faces_agree_with_spatch_evaluation(name):
     from OCP.BRep import BRep_Tool
@@ -122,6 +123,7 @@ def test_occ_faces_agree_with_spatch_evaluation(name):
     assert _compare(ev, _pieces(surf), len(faces)) < OCC_TOL
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
 def test_step_round_trip(tmp_path, name):
     surf = _surface(name)

@@ -118,6 +118,7 @@ def section(path: BSplineCurve) -> BSplineCurve:
 AXES = [((0, 0, 0), (0, 0, 1)), ((0.2, -0.1, 0.3), (0.1, 0.2, 1.0)), ((-3, 1, 0), (1, -1, 0.5))]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("angle", [2 * np.pi, 2.0, np.pi, 4.5, -1.3])
 @pytest.mark.parametrize("axis", range(len(AXES)))
 def test_revolve_vs_occ(angle, axis):
@@ -174,6 +175,7 @@ def test_rotational_sweep_vs_occ():
 
 
 # ------------------------------------------------------------------------------------------ sweeps
+@pytest.mark.slow
 @pytest.mark.parametrize(("path", "frame", "mode", "tol"), [
     ("planar", "rmf", "corrected_frenet", SWEEP),
     ("planar", "frenet", "frenet", SWEEP),
@@ -187,6 +189,7 @@ def test_sweep_vs_pipe_shell(path, frame, mode, tol):
     check(f"sweep {frame} ({path})", f"MakePipeShell {mode}", s, G().pipe_shell_face(c, q, mode=mode), tol, samples=21, accept=tol / 10)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", ["helix", "planar"])
 def test_sweep_scaling_law_vs_pipe_shell(path):
     q = helix() if path == "helix" else planar_path()

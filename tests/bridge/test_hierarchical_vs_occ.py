@@ -169,6 +169,7 @@ def test_malformed_sidecar_raises_exchange_error(tmp_path, change, match):
 REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (REALDATA / "occt__linkrods.step").is_file(), reason="../shared/realdata not available")
 def test_real_step_free_form_faces_become_editable_bases():
     # occt__linkrods.step (OCCT sample data): rational B-spline faces of bidegree (6, 3..10),
@@ -219,6 +220,7 @@ def test_non_bspline_face_is_refused(tmp_path):
         import_step_base(path, face=99)
 
 
+@pytest.mark.slow
 def test_demo_writes_pngs_step_and_sidecar(tmp_path):
     from occsurf.examples.hierarchical import render_hierarchical_demo
 

@@ -65,6 +65,7 @@ def _read_in_child(path: Path, isolated: bool = False) -> tuple[int, str]:
 
 
 # ---------------------------------------------------------------------------------------- crashes
+@pytest.mark.slow
 def test_the_four_segfaults_of_the_issue_are_refusals_in_process(clean, tmp_path):
     st = C.StepText.parse(clean["step"].read_bytes())
     k = next(i for i, r in enumerate(st.records) if b"ORIENTED_EDGE" in r)
@@ -88,6 +89,7 @@ def test_the_four_segfaults_of_the_issue_are_refusals_in_process(clean, tmp_path
         assert line.startswith("ExchangeError") and word in line and name in line, (name, line)
 
 
+@pytest.mark.slow
 def test_a_crash_in_the_reader_becomes_an_exchange_error_naming_the_file(clean, tmp_path, monkeypatch):
     import occsurf.bridge.exchange.step_iges as xs
 
@@ -101,6 +103,7 @@ def test_a_crash_in_the_reader_becomes_an_exchange_error_naming_the_file(clean, 
     assert time.perf_counter() - t0 < 60
 
 
+@pytest.mark.slow
 def test_isolated_read_gives_the_same_model(clean):
     for path, reader in ((clean["step"], read_step), (clean["iges"], read_iges)):
         here, there = reader(path), reader(path, isolated=True, timeout=120)
@@ -287,6 +290,7 @@ def _hier_writer(args: tuple[str, int]) -> None:
         write_hierarchical_step(path, hs, name=f"writer {k}")
 
 
+@pytest.mark.slow
 @posix
 def test_concurrent_hierarchical_writes_leave_a_matching_pair(tmp_path):
     from occsurf.bridge.exchange.hierarchical_io import read_hierarchical_step
@@ -301,6 +305,7 @@ def test_concurrent_hierarchical_writes_leave_a_matching_pair(tmp_path):
 
 
 # ---------------------------------------------------------------------------------------- CLI
+@pytest.mark.slow
 def test_inspect_warnings_json_stderr_and_strict(clean, tmp_path):
     st = C.StepText.parse(clean["step"].read_bytes())
     face = next(i for i, r in enumerate(st.records) if b"ADVANCED_FACE" in r)
@@ -317,6 +322,7 @@ def test_inspect_warnings_json_stderr_and_strict(clean, tmp_path):
     assert _cli("inspect", str(clean["step"]), "--strict").returncode == 0
 
 
+@pytest.mark.slow
 @posix
 def test_inspect_stdout_head_closed_full_and_odd_names(clean, tmp_path):
     folder = tmp_path / "d"
@@ -376,6 +382,7 @@ def test_ctrl_c_and_parent_death_stop_the_worker(tmp_path):
         assert state in ("Z", "X", "gone"), (sig, state)  # dead (a zombie until pid 1 reaps it)
 
 
+@pytest.mark.slow
 def test_cli_ctrl_c_is_one_line(tmp_path):
     rng = np.random.default_rng(5)
     surfaces = [BSplineSurface((3, 3), ([0.0] * 4 + [1.0] * 4,) * 2, rng.random((4, 4, 3))) for _ in range(20)]
@@ -389,6 +396,7 @@ def test_cli_ctrl_c_is_one_line(tmp_path):
     assert b"Traceback" not in err
 
 
+@pytest.mark.slow
 def test_fill_refuses_devices_and_reads_in_a_worker_with_a_timeout(clean, tmp_path):
     proc = _cli("fill", str(clean["step"]), "--out", "/dev/null")
     assert proc.returncode == 2 and b"not a regular file" in proc.stderr
@@ -436,6 +444,7 @@ def _edit_parameters(text: C.IgesText, etype: int, edit) -> bytes:
     return text.join(lines)
 
 
+@pytest.mark.slow
 def test_iges_closed_shell_that_is_open_is_reported(tmp_path):
     from occsurf.bridge.exchange.checks import scan_iges
 
@@ -470,6 +479,7 @@ def test_iges_closed_shell_that_is_open_is_reported(tmp_path):
     assert not any("entity 514" in w for w in declared_open.warnings), declared_open.warnings
 
 
+@pytest.mark.slow
 def test_hierarchical_step_reads_isolated(tmp_path, monkeypatch):
     from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
     from occsurf.bridge.exchange.hierarchical_io import (
@@ -603,6 +613,7 @@ def test_reference_swaps_that_crashed_occs_transfer_are_refused(clean, tmp_path)
     assert len(model.faces) == 10 and any("PCURVE" in w and "not 2" in w for w in model.warnings), model.warnings
 
 
+@pytest.mark.slow
 def test_strict_on_every_reading_command_that_writes(clean, tmp_path):
     """fill, render, convert and check read a damaged input around its damage (with warnings); with --strict
     they refuse it and write nothing."""
@@ -642,6 +653,7 @@ def test_reading_a_fifo_neither_blocks_nor_is_opened(tmp_path):
     assert time.perf_counter() - t0 < 120
 
 
+@pytest.mark.slow
 def test_iges_parameter_data_of_another_type_is_refused(clean, tmp_path):
     """Two entities whose type fields in the P section were swapped (the directory unchanged) made OCC's
     IGES reader hang until the time-out (2 of 300 mutated files); refused before OCC parses now."""

@@ -67,6 +67,7 @@ def test_a_hanging_item_times_out_and_the_rest_still_run(tmp_path: Path) -> None
     assert logged(log) == ["a", "b", "c"]
 
 
+@pytest.mark.slow
 def test_start_up_does_not_count_against_the_timeout(monkeypatch: pytest.MonkeyPatch) -> None:
     """The worker imports the job (and ``preload``) before it announces its first item."""
     monkeypatch.setenv("OCCSURF_TEST_IMPORT_DELAY", "3")
@@ -136,6 +137,7 @@ def test_describe_exit() -> None:
     assert describe_exit(3) == "exit status 3"
 
 
+@pytest.mark.slow
 def test_the_hidden_inspect_worker_command_speaks_the_same_protocol() -> None:
     """``occsurf _inspect-worker`` (kept for compatibility) runs the inspect job on its old input."""
     env = dict(os.environ)

@@ -47,6 +47,7 @@ def _bridge_calls(tmp_path: Path) -> None:
     fill_model(model.faces[0].face, compare_occ=False)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("level", [Message_Gravity.Message_Trace, Message_Gravity.Message_Info,
                                    Message_Gravity.Message_Warning, Message_Gravity.Message_Fail])
 def test_user_printer_level_is_unchanged_after_bridge_calls(printer, level, tmp_path):

@@ -158,6 +158,7 @@ def test_degenerate_points_reported(tmp_path) -> None:
     np.testing.assert_allclose(apex[:, :2], 0.0, atol=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not vtk_scene.render_available(), reason="VTK cannot open an offscreen window here")
 def test_every_picture_kind(loft_report, tmp_path) -> None:
     """Every picture kind of the model and of each face is drawn: not blank; curvature and draft

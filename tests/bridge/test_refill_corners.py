@@ -64,6 +64,7 @@ def test_snapping_the_corners_keeps_the_end_tangents() -> None:
     assert moved <= 0.5 * np.abs(gap).max() * (1 + 1e-12)  # half the gap, at most
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("face", [199, 207])
 def test_bearing_corner_holes_are_no_worse_than_occ(bearing, face) -> None:
     from occsurf.bridge.modeling.refill import OCC_DEFAULT, refill_faces

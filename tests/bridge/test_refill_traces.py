@@ -80,6 +80,7 @@ def test_a_trace_that_runs_past_the_corner_costs_half_its_overrun() -> None:
     np.testing.assert_allclose(x, [0.1 + over / 2, 0.2, 0.0], rtol=0, atol=1e-15)
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(st.floats(5.0, 175.0), st.floats(0.0, 360.0), st.lists(st.floats(-5e-6, 5e-6), min_size=3, max_size=3),
        st.floats(-3.0, 3.0))
@@ -152,6 +153,7 @@ def test_pinning_a_trace_end_moves_it_across_gently() -> None:
     assert Q[:, 0].max() <= 0.1 - 3e-6 + 1e-17
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("face", [5, 170, 188])
 def test_bearing_holes_follow_their_neighbours(bearing, face) -> None:
     from occsurf.algorithms import tolerances
@@ -247,6 +249,7 @@ def test_a_fit_that_swings_between_its_samples_is_reported() -> None:
     assert dev > 1e3 * HELIX_TOL  # _fit_points says so (0.2)
 
 
+@pytest.mark.slow
 def test_a_long_helix_side_of_several_edges_follows_its_traces() -> None:
     from occsurf.bridge.modeling.refill_traces import follow_traces
 
@@ -265,6 +268,7 @@ def test_a_long_helix_side_of_several_edges_follows_its_traces() -> None:
     assert np.abs(np.hypot(dense[:, 0], dense[:, 1]) - (HELIX_R + HELIX_OFF)).max() <= HELIX_TOL
 
 
+@pytest.mark.slow
 def test_screw_thread_sides_lie_on_their_neighbours(screw) -> None:
     """Every side of the screw's face 8 hole within FILL_FIT_G0 * size of its edges' traces (the
     neighbours' points along the p-curves, 1001 per edge). Before: side 4 (8 edges, the thread

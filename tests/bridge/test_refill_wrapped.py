@@ -32,6 +32,7 @@ def test_neighbour_axes_hold_the_screw_axis(screw) -> None:
     assert any(abs(abs(a[2]) - 1) < 1e-12 and np.hypot(*c[:2]) < 1e-9 for c, a in axes)
 
 
+@pytest.mark.slow
 def test_thread_crest_is_filled_by_the_wrapped_plate(screw, crest) -> None:
     rep, shape = crest
     assert rep.status == "filled" and rep.method == "wrap", rep.reason
@@ -79,6 +80,7 @@ def _distances_to(faces, shape_faces, zmin: float, count: int = 150) -> np.ndarr
                      for p in P])
 
 
+@pytest.mark.slow
 def test_a_flank_with_its_run_out_is_filled_about_the_screw_axis(screw, run_out) -> None:
     """Faces 8 and 22 removed together: a flank strip with its run-out at the thread's start (14
     edges). Unrolled about the axis, neither r nor z is a height over the whole loop (see

@@ -159,6 +159,7 @@ def sample() -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_cli_renders_a_model(tmp_path, sample) -> None:
     from PIL import Image
 

@@ -195,6 +195,7 @@ def test_fill_model_returns_a_build123d_or_cadquery_solid():
         bridge.fill_model(ball, as_="occ")
 
 
+@pytest.mark.slow
 def test_refill_takes_build123d_and_cadquery_shells():
     """refill_model / refill_faces on the same sphere as a build123d Shell, a cadquery Shell and a
     TopoDS_Shell: the same faces removed, the same outcome."""

@@ -126,6 +126,7 @@ def machined():
     return part + bd.Pos(0, 0, 3) * bd.Cylinder(3, 3)
 
 
+@pytest.mark.slow
 def test_every_face_of_a_machined_part_round_trips(machined):
     kinds = {"trimmed": 0, "untrimmed": 0}
     for face in machined.faces():
@@ -242,6 +243,7 @@ def _realdata_files():
     return sorted(p for p in REALDATA.iterdir() if p.suffix.lower() in (".step", ".stp", ".iges", ".igs"))
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not _realdata_files(), reason=f"no real data at {REALDATA}")
 @pytest.mark.parametrize("path", _realdata_files(), ids=lambda p: p.name)
 def test_every_real_face_round_trips(path):
@@ -347,6 +349,7 @@ def test_rebuilt_rational_faces_have_the_exact_area(name):
     assert abs(occ_area(rebuilt, OCC_PRECISE_EPS) - exact) <= 1e-12 * exact
 
 
+@pytest.mark.slow
 def test_rebuilt_machined_faces_keep_their_area_to_1e12(machined):
     """The machined part's faces on converted cylinders and the sphere (intersection p-curves, no
     closed form): our area and OCC's precise area of the rebuilt face both equal OCC's area of the
@@ -439,6 +442,7 @@ def test_occ_step_round_trip_of_sphere_pocket(tmp_path, machined):
     assert abs(occ_area(back) - occ_area(sphere.wrapped)) <= AREA_RTOL * occ_area(sphere.wrapped)
 
 
+@pytest.mark.slow
 def test_imported_face_trimmed_is_lazy_cached_and_right(tmp_path, machined, monkeypatch):
     """ImportedFace.trimmed is built on first access (reading converts no loops), once per face,
     shared by dataclasses.replace copies, pickles as its value, and equals the eager conversion; the
@@ -479,6 +483,7 @@ def test_imported_face_trimmed_is_lazy_cached_and_right(tmp_path, machined, monk
     assert manual.trimmed is None and fresh[k].trimmed is not None
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (REALDATA / "occt__linkrods.step").is_file(), reason=f"no occt__linkrods.step in {REALDATA}")
 def test_area_converges_beside_a_near_singular_point():
     """linkrods' blend faces 25 and 26: |S_u x S_v| falls to ~1e-6 (of 0.27) in the parameter box,

@@ -318,6 +318,7 @@ def _real(name: str) -> Path:
     return path
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["build123d__M6-1x12-countersunk-screw.step", "occt__linkrods.step"])
 def test_real_step_round_trips(tmp_path, name):
     model = read_step(_real(name))
