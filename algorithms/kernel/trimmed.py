@@ -621,16 +621,20 @@ def _classify_block(P: Array, A: Array, B: Array, tol: float, pts: NDArray[np.in
     local = np.repeat(np.arange(pts.size), count)
     offs = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
     seg = seg_sorted[np.repeat(first, count) + offs]
-    p, a, b = P[pts[local]], A[seg], B[seg]
-    straddle = (a[:, 1] > p[:, 1]) != (b[:, 1] > p[:, 1])
+    pu, pv = P[pts[local], 0], P[pts[local], 1]
+    au, av, bu, bv = A[seg, 0], A[seg, 1], B[seg, 0], B[seg, 1]
+    cross = np.flatnonzero((av > pv) != (bv > pv))  # the pairs whose segment straddles the point's ray
     with np.errstate(invalid="ignore", divide="ignore"):
-        x = a[:, 0] + (p[:, 1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
-    crossings = np.bincount(local, weights=(straddle & (p[:, 0] < x)), minlength=pts.size)
+        x = au[cross] + (pv[cross] - av[cross]) * (bu[cross] - au[cross]) / (bv[cross] - av[cross])
+    crossings = np.bincount(local[cross], weights=pu[cross] < x, minlength=pts.size)
     inside = (crossings.astype(np.int64) % 2) == 1
     on = np.zeros(pts.size, bool)
-    if tol > 0:
-        near = _point_segment_distance(p, a, b) <= tol
-        on[local[near]] = True
+    if tol > 0:  # distances only where the point lies in the segment's box widened by 2 tol (the others are farther than tol)
+        w = 2.0 * tol
+        box = np.flatnonzero((pu >= np.minimum(au, bu) - w) & (pu <= np.maximum(au, bu) + w))
+        ab = seg[box]
+        near = _point_segment_distance(np.c_[pu[box], pv[box]], A[ab], B[ab]) <= tol
+        on[local[box[near]]] = True
     state[pts] = np.where(on, ON, np.where(inside, INSIDE, OUTSIDE))
 
 

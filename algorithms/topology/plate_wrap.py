@@ -485,8 +485,10 @@ def _map_back(plate: PlateFill, c: Array, a: Array, e1: Array, r0: float, g0_tol
         cu = np.r_[(bu[:-1, None] + g[None] * np.diff(bu)[:, None]).ravel(), bu[-1]]
         cv = np.r_[(bv[:-1, None] + g[None] * np.diff(bv)[:, None]).ravel(), bv[-1]]
         err = np.linalg.norm(surf.evaluate_grid(cu, cv) - model(cu, cv), axis=-1)
-        U, V = np.meshgrid(cu, cv, indexing="ij")
-        err[~plate.trimmed.contains(U, V)] = 0.0
+        over = np.flatnonzero(err > 0.25 * g0_tol)  # only a miss off the face is let go: classify those
+        if over.size:
+            iu, iv = np.unravel_index(over, err.shape)
+            err.flat[over[~plate.trimmed.contains(cu[iu], cv[iv])]] = 0.0
         e_edge = np.linalg.norm(surf.evaluate(edge_uv[:, 0], edge_uv[:, 1]) - edge_model, axis=1)
         worst = max(float(err.max()), float(e_edge.max()))
         if worst <= 0.25 * g0_tol:

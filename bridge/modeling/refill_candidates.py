@@ -32,7 +32,7 @@ from ..conversion.splines import make_face
 from ..messages import one_line
 from .joints import ASSESS_SAMPLES, SEW_TOLERANCE, assess_joint
 from .plate import plate_fill_faces, revolution_axes, wrapped_fill_faces
-from .refill_sides import refill_sides
+from .refill_sides import refill_side_variants, refill_sides
 
 __all__ = ["fitted_fill", "fill_method", "occ_filling", "occ_variant", "OCC_DEFAULT", "OCC_TUNED", "PLATE_MARGIN"]
 
@@ -132,7 +132,9 @@ def _our_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, 
 def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float,
                 samples: int = ASSESS_SAMPLES) -> tuple:
     """The hole filled with fitted sides (trimming-curve edges), both boundary variants tried (the
-    neighbours' traces, the model's edge curves) and the better kept (:func:`_score`).
+    neighbours' traces, the model's edge curves) and the better kept (:func:`_score`); where
+    following the traces keeps every edge curve the two are the same sides, filled once
+    (:func:`.refill_sides.refill_side_variants`).
 
     The central split (:func:`fill_hole`) first; when it refuses both variants, or its best fill
     folds or misses one of the issue's targets (G0 1e-7 of the size, G1 0.01 deg: ``_score(...)[1]``
@@ -159,10 +161,16 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
     best, best_score, last_err = None, None, None
     etol = max(BRep_Tool.Tolerance_s(e) for e in edges)
     prepared = {}
-    for follow in (True, False):  # the neighbours' traces (G0 to them), and the model's edge curves
+    try:  # the neighbours' traces (G0 to them), and the model's edge curves: one variant where they agree
+        variants = refill_side_variants(edges, nbs, owners, size)
+    except InvalidGeometryError as err:
+        variants = [(True, err)]
+    for follow, prep in variants:
         try:
-            prepared[follow] = refill_sides(edges, nbs, owners, size, follow)
-            cand = _our_fill(edges, nbs, owners, size, follow, samples, prepared=prepared[follow])
+            if isinstance(prep, InvalidGeometryError):
+                raise prep
+            prepared[follow] = prep
+            cand = _our_fill(edges, nbs, owners, size, follow, samples, prepared=prep)
         except InvalidGeometryError as err:
             last_err = err
             continue

@@ -285,20 +285,75 @@ def refill_sides(edges: list[Any], nbs: list[Any], owners: list[Any], size: floa
     fit : list of float
         Per side: the fitted field's angle to the neighbours' planes (degrees).
     """
+    curves, groups, side_of_edge, bounds, traces = _side_curves(edges, nbs, size)
+    if follow_neighbour:
+        bounds = _followed(edges, nbs, size, curves, groups, bounds, traces)
+    return _finish(edges, nbs, owners, size, groups, side_of_edge, bounds)
+
+
+def refill_side_variants(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
+                         ) -> list[tuple[bool, tuple[list[Any], list[int], list[bool], list[float]] | InvalidGeometryError]]:
+    """:func:`refill_sides` with ``follow_neighbour`` ``True`` then ``False``, sharing the work both do.
+
+    The side curves and the neighbours' traces are computed once. Where following the traces keeps
+    every side curve (each lies within ``FILL_FIT_G0 * size`` of its traces and corners: every
+    G0-exact hole), the two variants are the same sides, and only the first is returned: its fills
+    would be built, measured and scored twice for nothing (screw pair [8, 22]: 2 x 40 s of wrapped
+    plate).
+
+    Returns
+    -------
+    list of (follow_neighbour, result or error)
+        :func:`refill_sides`' result per variant, or the :class:`InvalidGeometryError` it raised.
+    """
+    curves, groups, side_of_edge, bounds, traces = _side_curves(edges, nbs, size)
+    out: list[tuple[bool, Any]] = []
+    try:
+        followed = _followed(edges, nbs, size, curves, groups, bounds, traces)
+    except InvalidGeometryError as err:
+        out.append((True, err))
+        followed = None
+    same = followed is not None and all(a is b for a, b in zip(followed, bounds))
+    for follow, bs in ((True, followed), (False, bounds)):
+        if bs is None or (follow is False and same):
+            continue
+        try:
+            out.append((follow, _finish(edges, nbs, owners, size, groups, side_of_edge, bs)))
+        except InvalidGeometryError as err:
+            out.append((follow, err))
+    return out
+
+
+def _side_curves(edges: list[Any], nbs: list[Any], size: float) -> tuple[list[Any], list[list[int]], list[int],
+                                                                          list[Any], list[Any]]:
+    """The model's side curves (exact where an edge lies on its neighbour, else fitted), their
+    grouping into sides and the neighbours' traces along them."""
     curves = _oriented_curves(edges)
     groups = _groups(curves)  # one or two groups (a round hole, a slot end): fill_hole splits them
     side_of_edge = [gi for gi, group in enumerate(groups) for _ in group]
     order = [k for group in groups for k in group]
     side_of_edge = [side_of_edge[order.index(k)] for k in range(len(edges))]
-    tol = tolerances.FILL_FIT_G0 * size
     bounds: list[Any] = []
     traces: list[list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = []
     for group in groups:  # 1. the side curves: exact where the edge lies on its neighbour, else fitted
         c = curves[group[0]] if len(group) == 1 else _merged_curve([curves[k] for k in group], size)[0]
         bounds.append(c)
         traces.append([trace(edges[k], nbs[k], c) for k in group])
-    if follow_neighbour:
-        bounds = follow_traces(bounds, groups, curves, traces, tol, lambda k, c, n: trace(edges[k], nbs[k], c, n))
+    return curves, groups, side_of_edge, bounds, traces
+
+
+def _followed(edges: list[Any], nbs: list[Any], size: float, curves: list[Any], groups: list[list[int]],
+              bounds: list[Any], traces: list[Any]) -> list[Any]:
+    """The side curves that follow the neighbours' traces (:func:`follow_traces`; a kept side is the
+    same object)."""
+    tol = tolerances.FILL_FIT_G0 * size
+    return follow_traces(bounds, groups, curves, traces, tol, lambda k, c, n: trace(edges[k], nbs[k], c, n))
+
+
+def _finish(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, groups: list[list[int]],
+            side_of_edge: list[int], bounds: list[Any]) -> tuple[list[Any], list[int], list[bool], list[float]]:
+    """Steps 2 and 3 of :func:`refill_sides` on the side curves ``bounds``."""
+    tol = tolerances.FILL_FIT_G0 * size
     bounds = [_even_speed(c, tol) for c in _snap_ends(bounds)]  # uneven speed: by arc length, within tol
     g1 = [False] * len(edges)
     fields = []
@@ -320,6 +375,4 @@ def refill_sides(edges: list[Any], nbs: list[Any], owners: list[Any], size: floa
         res = side_from_normals(c, s, N)
         sides.append(res.side)
         fit.append(res.angle)
-    return sides, side_of_edge, g1, fit
-
-
+    return sides, side_of_edge, list(g1), fit

@@ -38,3 +38,9 @@ def screw():
     """build123d's M6 x 12 countersunk screw (STEP, ../shared/realdata) sewn once; skipped where
     ../shared is absent."""
     return _sewn("build123d__M6-1x12-countersunk-screw.step", "STEPControl_Reader")
+
+
+@pytest.fixture(scope="session")
+def linkrods():
+    """OCC's linkrods (STEP, ../shared/realdata) sewn once; skipped where ../shared is absent."""
+    return _sewn("occt__linkrods.step", "STEPControl_Reader")

@@ -299,3 +299,36 @@ def test_a_fit_farther_than_the_edge_curve_gives_way_to_it() -> None:
     with pytest.warns(RuntimeWarning, match="the model's edge curve .* is used instead"):
         side = follow_traces(bounds, groups, curves, traces, HELIX_TOL)[0]
     assert side is bounds[0]
+
+
+def _same_sides(a, b) -> bool:
+    """Two refill_sides results hold the same numbers (every array bit-identical)."""
+    sa, ea, ga, fa = a
+    sb, eb, gb, fb = b
+    if (ea, ga, fa) != (eb, gb, fb) or len(sa) != len(sb):
+        return False
+    arrays = [(getattr(x, part).knots, getattr(y, part).knots, getattr(x, part).control_points, getattr(y, part).control_points)
+              for x, y in zip(sa, sb) for part in ("curve", "cross")]
+    return all(np.array_equal(k1, k2) and np.array_equal(p1, p2) for k1, k2, p1, p2 in arrays)
+
+
+@pytest.mark.parametrize(("model", "faces", "count"), [("screw", [9], 1), ("linkrods", [13], 2), ("bearing", [170], 2)])
+def test_side_variants_are_refill_sides_and_one_where_following_keeps_every_curve(request, model, faces, count) -> None:
+    """refill_side_variants gives refill_sides(follow=True) and (follow=False) bit for bit, sharing
+    their work, and only the first where following the traces keeps every edge curve (screw face 9:
+    the thread crest's edges lie on their neighbours; linkrods 13, bearing 170: sides followed)."""
+    import warnings
+
+    from occsurf.bridge.modeling.refill_loop import hole_loop
+    from occsurf.bridge.modeling.refill_sides import refill_side_variants, refill_sides
+
+    sewn = request.getfixturevalue(model)
+    edges, nbs, owners = hole_loop(sewn, faces)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        variants = refill_side_variants(edges, nbs, owners, sewn.size)
+        assert [f for f, _ in variants] == [True, False][:count]
+        alone = {f: refill_sides(edges, nbs, owners, sewn.size, f) for f in (True, False)}
+    for follow, result in variants:
+        assert _same_sides(result, alone[follow])
+    assert _same_sides(alone[True], alone[False]) == (count == 1)

@@ -502,10 +502,22 @@ def test_area_converges_beside_a_near_singular_point():
         (u0, _), _ = t.surface.domain
         assert t._area_anchor() != u0
         if face.index == 25:  # u0-anchored, 64 pieces per span (level 6): 5e-10 from ours, moving by 2e-10
-            from occsurf.algorithms.kernel.trimmed import _green_area  # (levels 2-3 agree to 9e-10, 3e-8 off)
+            from occsurf.algorithms.kernel import trimmed  # (levels 2-3 agree to 9e-10, 3e-8 off)
 
             u0 = t.surface.domain[0][0]
-            uniform = sum(_green_area(t.surface, c, 64, u0) for loop in t.loops for c in loop)
-            assert abs(uniform - a) <= 1e-9 * a, (uniform, a)
-            with tolerances.override(TRIM_AREA_SINGULAR=0.0), pytest.raises(ToleranceError, match="TRIM_AREA_LEVELS"):
+            seen: dict[tuple[int, float], float] = {}  # (pieces, anchor) -> sum over the loops' p-curves
+            green = trimmed._green_area
+
+            def recorded(surface, c, pieces, anchor, seen=seen, green=green):
+                value = green(surface, c, pieces, anchor)
+                seen[pieces, anchor] = seen.get((pieces, anchor), 0.0) + value
+                return value
+
+            with tolerances.override(TRIM_AREA_SINGULAR=0.0), pytest.raises(ToleranceError, match="TRIM_AREA_LEVELS"), \
+                    pytest.MonkeyPatch.context() as mp:
+                mp.setattr(trimmed, "_green_area", recorded)
                 t.area()  # the override turns the anchor choice off (u0): the old failure
+            # its last level is the u0-anchored quadrature at 64 pieces per span (computed once, not twice)
+            assert int(tolerances.TRIM_AREA_LEVELS) == 6 and set(seen) == {(1 << k, u0) for k in range(7)}
+            uniform = seen[64, u0]
+            assert abs(uniform - a) <= 1e-9 * a, (uniform, a)
