@@ -11,7 +11,8 @@ Profiles
 ``ci``
     Hypothesis' built-in ``ci`` profile, unchanged (derandomized, no example database, failing
     examples printed as a blob to replay): scale 1. Hypothesis selects it by itself when the
-    ``CI`` environment variable is set, as ``.ci/run`` does.
+    ``CI`` environment variable is set (CI services set it; ``.ci/run`` does not, so it runs the
+    ``default`` profile: ``CI=1 .ci/run`` gives the derandomized run).
 ``thorough``
     A deep run: scale 25 (a test written with 40 examples runs 1000), no deadline, failing
     examples printed as a blob.

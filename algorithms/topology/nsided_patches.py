@@ -189,7 +189,12 @@ def _fair_interior(H: Array, free: NDArray[np.bool_], degree: tuple[int, int], k
 
     The energy's matrix ``K = Gu2 (x) Gv0 + 2 Gu1 (x) Gv1 + Gu0 (x) Gv2`` is banded-Kronecker (at most
     ``(2p+1)^2`` non-zeros a row), so it is built sparse and the free block is factored by SuperLU:
-    a dense (nu nv)^2 array was 1.1 GB and ~90 s for a 213 x 56 patch (lens face 2)."""
+    a dense (nu nv)^2 array was 1.1 GB and ~90 s for a 213 x 56 patch (lens face 2).
+
+    The free block is symmetric positive definite, so SuperLU runs in its symmetric mode (minimum
+    degree on ``K + K^T``, diagonal pivots): on linkrods face 20's patches (13794 to 62111 free
+    poles) 3 to 6 times faster than the default column ordering with partial pivoting, and with a
+    3 to 4 times smaller residual (7e-10 against 3e-9 relative; the poles move by 1e-9 relative)."""
     if not free.any():
         return H
     G = [[sparse.csr_matrix(_gram(knots[d], degree[d], k)) for k in range(3)] for d in range(2)]
@@ -198,5 +203,6 @@ def _fair_interior(H: Array, free: NDArray[np.bool_], degree: tuple[int, int], k
     f = free.ravel()
     flat = H.reshape(-1, H.shape[2]).copy()
     Kf = K[f]
-    flat[f] = splu(Kf[:, f].tocsc()).solve(-(Kf[:, ~f] @ flat[~f]))
+    lu = splu(Kf[:, f].tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    flat[f] = lu.solve(-(Kf[:, ~f] @ flat[~f]))
     return flat.reshape(H.shape)

@@ -122,3 +122,33 @@ def test_fair_interior_large_patch_stays_sparse():
         tracemalloc.stop()
     assert peak < 250e6, f"NumPy allocation peak {peak / 1e6:.0f} MB (dense K would be 564 MB)"
     np.testing.assert_allclose(got, exact, rtol=0, atol=1e-9)
+
+
+def test_symmetric_mode_agrees_with_the_default_factorisation_and_leaves_no_larger_residual():
+    """The free block is factored in SuperLU's symmetric mode (minimum degree on K + K^T, diagonal
+    pivots; 3 to 6 times faster on linkrods face 20's patches). Against SuperLU's default (COLAMD,
+    partial pivoting) on a 150 x 56 patch of degree 6 with random boundary poles: the poles agree
+    within 1e-8 of the pole scale (round-off through the system's condition: measured 1e-9 relative
+    on the real patches), and the residual of K_ff x = -K_fb h_b is no larger (measured 3-4 times
+    smaller there)."""
+    from scipy import sparse
+    from scipy.sparse.linalg import splu
+
+    pu = pv = 6
+    Ku = _knots(pu, np.linspace(0, 1, 145)[1:-1], True)
+    Kv = _knots(pv, np.linspace(0, 1, 51)[1:-1], True)
+    nu, nv = len(Ku) - pu - 1, len(Kv) - pv - 1
+    H = np.random.default_rng(7).uniform(-10, 10, (nu, nv, 3))
+    free = _free_interior(nu, nv)
+    got = _fair_interior(H, free, (pu, pv), (Ku, Kv))
+    G = [[sparse.csr_matrix(_gram(k, p, d)) for d in range(3)] for k, p in ((Ku, pu), (Kv, pv))]
+    K = (sparse.kron(G[0][2], G[1][0]) + 2 * sparse.kron(G[0][1], G[1][1]) + sparse.kron(G[0][0], G[1][2])).tocsr()
+    f = free.ravel()
+    Kff, rhs = K[f][:, f].tocsc(), -(K[f][:, ~f] @ H.reshape(-1, 3)[~f])
+    default = splu(Kff).solve(rhs)
+    ours = got.reshape(-1, 3)[f]
+    np.testing.assert_allclose(ours, default, rtol=0, atol=1e-8 * np.abs(H).max())
+
+    def residual(x: np.ndarray) -> float:
+        return float(np.linalg.norm(Kff @ x - rhs) / np.linalg.norm(rhs))
+    assert residual(ours) <= residual(default), (residual(ours), residual(default))
