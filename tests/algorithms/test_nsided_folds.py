@@ -143,20 +143,26 @@ def _aspect(span: float, r0: float, r1: float = 2.0) -> float:
 @settings(max_examples=12, deadline=None)
 @given(span=st.floats(60.0, 160.0), r0=st.floats(1.0, 1.7))
 def test_sectors_never_fold(span: float, r0: float) -> None:
-    """Annular sectors from fat to thin and from short to 160 deg long, up to a length 11 times the
-    width: no fold, the plane exactly. (Measured on a 10 deg x 0.05 grid of span and r0: the first
-    folds at aspect 11.8, 150 deg x r0 = 1.6, 24 grid pairs; see the next test.)"""
-    assume(_aspect(span, r0) <= 11.0)
+    """Annular sectors from fat to thin and from short to 160 deg long, up to a length 10 times the
+    width: no fold, the plane exactly.
+
+    The claim was 11 times, from a 10 deg x 0.05 grid of span and r0 (first fold at aspect 11.8,
+    150 deg x r0 = 1.6); hypothesis found a 156 deg sector folding at 10.66 (twice, in CI), and a
+    0.5 deg x 0.0075 scan of 140..160 deg (aspect 9.8..11, 251 sectors) finds the first folds at
+    aspect 10.58 (159.5 deg, r0 1.535), all at 156 deg or more, none below 150 deg. The central split
+    folds there (a defect kept as strict xfails below, not fixed); 10 is the bound the scan supports."""
+    assume(_aspect(span, r0) <= 10.0)
     fill, q, nz = _check_plane_fill(_sector(span, r0))
     assert q.folds.sum() == 0 and sum(count_folds(p) for p in fill.patches) == 0
 
 
-@pytest.mark.xfail(strict=True, reason="found by hypothesis (not derandomized, under pytest-xdist): a 156 deg sector "
-                   "with r0 = 1.546875, aspect 10.66, below the 11 the property above claims, folds in one patch "
-                   "(4 grid pairs); the aspect bound of test_sectors_never_fold is not a sharp one. Not fixed yet.")
-def test_sector_of_aspect_10_66_does_not_fold() -> None:
-    assert _aspect(156.0, 1.546875) < 11.0
-    fill, q, nz = _check_plane_fill(_sector(156.0, 1.546875))
+@pytest.mark.xfail(strict=True, reason="the central split folds on sectors of 156 deg or more from aspect 10.58 on "
+                   "(found by hypothesis: 156 deg, r0 1.546875, aspect 10.66, 4 grid pairs; by a scan: 159.5 deg, "
+                   "r0 1.535, aspect 10.58, 24 grid pairs). Not fixed yet; the refill falls back to the plate there.")
+@pytest.mark.parametrize(("span", "r0"), [(156.0, 1.546875), (159.5, 1.535)])
+def test_long_sectors_below_aspect_11_do_not_fold(span: float, r0: float) -> None:
+    assert 10.0 < _aspect(span, r0) < 11.0
+    fill, q, nz = _check_plane_fill(_sector(span, r0))
     assert q.folds.sum() == 0 and sum(count_folds(p) for p in fill.patches) == 0
 
 
