@@ -621,7 +621,8 @@ def _classify_block(P: Array, A: Array, B: Array, tol: float, pts: NDArray[np.in
     local = np.repeat(np.arange(pts.size), count)
     offs = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
     seg = seg_sorted[np.repeat(first, count) + offs]
-    pu, pv = P[pts[local], 0], P[pts[local], 1]
+    at = pts[local]
+    pu, pv = P[at, 0], P[at, 1]
     au, av, bu, bv = A[seg, 0], A[seg, 1], B[seg, 0], B[seg, 1]
     cross = np.flatnonzero((av > pv) != (bv > pv))  # the pairs whose segment straddles the point's ray
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -166,10 +166,11 @@ def fitted_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float
     except InvalidGeometryError as err:
         variants = [(True, err)]
     for follow, prep in variants:
+        if isinstance(prep, InvalidGeometryError):
+            last_err = prep
+            continue
+        prepared[follow] = prep  # the plates below are tried on it even where the central split refuses
         try:
-            if isinstance(prep, InvalidGeometryError):
-                raise prep
-            prepared[follow] = prep
             cand = _our_fill(edges, nbs, owners, size, follow, samples, prepared=prep)
         except InvalidGeometryError as err:
             last_err = err

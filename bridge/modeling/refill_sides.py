@@ -375,4 +375,4 @@ def _finish(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, gr
         res = side_from_normals(c, s, N)
         sides.append(res.side)
         fit.append(res.angle)
-    return sides, side_of_edge, list(g1), fit
+    return sides, side_of_edge, g1, fit
