@@ -361,6 +361,17 @@ def fmt_s(x: float | None) -> str:
 
 
 # ---------------------------------------------------------------------------------------- arguments
+def jobs_arg(text: str) -> int:
+    """``--jobs``: a positive whole number of worker processes."""
+    try:
+        value = int(text, 10)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of worker processes, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected at least 1 worker process, got {text!r}")
+    return value
+
+
 def timeout_arg(text: str) -> float:
     """``--timeout``: a positive, finite number of seconds."""
     try:

@@ -1,22 +1,24 @@
 """``occsurf fill IN --out OUT.step [--faces I ...] [--all-loops] [--no-occ] [--no-pictures] [--json]
-[--timeout SECONDS] [--strict] [--in-process]``.
+[--jobs N] [--timeout SECONDS] [--strict] [--in-process]``.
 
 Reads a STEP or IGES model, fills every hole with :func:`occsurf.bridge.modeling.fill.fill_model`
 (n G1 patches per hole, course §8-3), writes the sewn result to ``OUT`` (STEP) and prints per hole
 ours against OCC's ``BRepOffsetAPI_MakeFilling``. Exit status 0 when every hole was filled (a model
 without holes is written as it is), 2 otherwise or when the input cannot be read.
 
-The untrusted file is read, filled and written in a worker process
-(:func:`occsurf.bridge.isolation.run_jobs` with the job :func:`fill_job`): a crash inside OCC is
-reported in one line ``occsurf: IN: reason`` with exit status 2, not a dead command; so is a worker
-that takes longer than ``--timeout`` seconds. Warnings about the input (damage read around, see
+The untrusted file is read, filled and written in worker processes
+(:func:`occsurf.bridge.audit.fill_file.fill_file`): ``--jobs N`` (default: one per core) fill
+independent holes at once and the fills are sewn in once; a crash inside OCC is reported in one
+line ``occsurf: IN: reason`` with exit status 2, not a dead command; so is a worker that takes longer
+than ``--timeout`` seconds (with several jobs, a hole whose worker crashes or overruns fails with
+that reason and the others are still filled). Warnings about the input (damage read around, see
 :mod:`occsurf.bridge.exchange.checks`) are printed as ``occsurf: IN: warning: ...`` lines on stderr;
 ``--strict`` refuses such an input instead (exit status 2, nothing written).
 Beside ``OUT`` goes one zebra picture per filled hole, ``OUT_STEM.holeK.png`` (the model around the
 hole before and after, :func:`occsurf.bridge.modeling.fill_pictures.zebra_before_after`) where VTK
 can render offscreen; ``--no-pictures`` skips them. A fill that turns back over itself (a fold,
 :attr:`occsurf.algorithms.topology.nsided.FillQuality.folds`) is written but warned about.
-``--in-process`` does the work in the calling process instead (no isolation).
+``--in-process`` does the work in the calling process instead (no isolation, one hole after the other).
 """
 
 from __future__ import annotations
@@ -24,8 +26,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import warnings
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -38,93 +38,21 @@ from ._common import (
     fmt_dev,
     fmt_s,
     format_rows,
+    jobs_arg,
     output_problem,
-    read_model,
     shown_path,
     strip_path,
     timeout_arg,
     worker_failure,
 )
 
-__all__ = ["fill_job", "add_parser", "run", "DEFAULT_TIMEOUT"]
+__all__ = ["add_parser", "run", "DEFAULT_TIMEOUT"]
 
-#: Seconds the worker may take to read, fill and write before it is stopped (``--timeout``); the same
-#: default as ``occsurf inspect``.
+#: Seconds a worker may take before it is stopped (``--timeout``): to read, fill and write with one
+#: job; with several, per step (the plan, each hole, the sewing). The same default as ``occsurf inspect``.
 DEFAULT_TIMEOUT = 300.0
 
-#: The job the worker runs, and what it loads before starting it.
-FILL_JOB = "occsurf.bridge.cli.fill:fill_job"
-PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.modeling.fill")
-
 _HEADER = ("hole", "sides", "status", "G0 gap", "G1 angle", "time", "OCC G0 gap", "OCC G1 angle", "OCC time", "ours by")
-
-
-def fill_job(item: dict[str, Any]) -> dict[str, Any]:
-    """The worker's job: read ``item["input"]``, fill its holes, write ``item["output"]`` (STEP).
-
-    The output is written when some hole was filled, or when there was none to fill (the model
-    as it is, sewn).
-
-    Parameters
-    ----------
-    item : dict
-        ``{"input": str, "output": str, "all_loops": bool, "compare_occ": bool}``.
-
-    Returns
-    -------
-    dict
-        ``{"holes": [HoleReport as a dict, ...], "free_loops_after": int, "written": bool}``.
-
-    Raises
-    ------
-    Exception
-        Whatever reading, filling or writing raises (the command prints it on one line).
-    """
-    from ..isolation import quiet_native_stdout
-
-    src, out = Path(item["input"]), Path(item["output"])
-    with warnings.catch_warnings(), quiet_native_stdout():
-        warnings.simplefilter("ignore")
-        from ..exchange import step_iges as exchange
-        from ..modeling.fill import fill_model
-        from ..modeling.fill_pictures import hole_pictures
-
-        model = read_model(src, strict=bool(item.get("strict")))
-        if item.get("faces"):
-            return _refill_job(item, model, exchange)
-        result = fill_model(model.shape, all_loops=item["all_loops"], compare_occ=item["compare_occ"])
-        filled = any(h.status == "filled" for h in result.holes)
-        nothing_to_do = not any(h.status != "outer" for h in result.holes)
-        if filled or nothing_to_do:  # a model without holes is written as it is (sewn)
-            exchange.write_step(out, result.shape)
-        holes = [asdict(h) for h in result.holes]
-        if item.get("pictures", True):
-            hole_pictures(out, result.holes, holes)
-    return {"holes": holes, "free_loops_after": result.free_loops_after,
-            "written": filled or nothing_to_do, "warnings": list(model.warnings)}
-
-
-def _refill_job(item: dict[str, Any], model: Any, exchange: Any) -> dict[str, Any]:
-    """``--faces``: remove the faces, fill the hole(s) they leave, write the model if any was filled."""
-    from ..modeling.fill_pictures import hole_pictures
-    from ..modeling.refill import refill_model
-
-    reports, shape = refill_model(model.shape, item["faces"], compare_occ=item["compare_occ"])
-    if shape is not None:
-        exchange.write_step(Path(item["output"]), shape)
-    holes: list[dict[str, Any]] = []
-    for k, r in enumerate(reports):
-        d, t = r.occ.get("default", {}), r.occ.get("tuned", {})
-        holes.append({"index": k, "faces": r.faces, "sides": r.sides, "g1_edges": r.g1_edges,
-                      "status": "filled" if r.status == "filled" else "failed", "reason": r.reason,
-                      "seconds": r.seconds, "g0": r.g0, "g1": r.g1, "side_g0": r.side_g0, "side_g1": r.side_g1,
-                      "valid": r.valid, "step_round_trip": r.step_round_trip,
-                      "occ_status": d.get("status"), "occ_reason": d.get("reason"), "occ_seconds": d.get("seconds"),
-                      "occ_g0": d.get("g0"), "occ_g1": d.get("g1"), "occ_tuned": t or None, "folds": r.folds,
-                      "method": r.method})
-    if shape is not None and item.get("pictures", True):
-        hole_pictures(Path(item["output"]), reports, holes, refill=True)
-    return {"holes": holes, "free_loops_after": None, "written": shape is not None, "warnings": list(model.warnings)}
 
 
 def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
@@ -159,7 +87,8 @@ def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
 
 def run(ns: argparse.Namespace) -> int:
     """``occsurf fill IN --out OUT``: fill every hole (in a worker), print per hole ours vs OCC's filler."""
-    from ..isolation import ERROR, OK, run_jobs
+    from ..audit.fill_file import default_jobs, fill_file
+    from ..isolation import ERROR, OK
 
     src, out = Path(ns.input), Path(ns.out)
     why = output_problem(out)
@@ -168,7 +97,8 @@ def run(ns: argparse.Namespace) -> int:
         return EXIT_ERROR
     item = {"input": str(src), "output": str(out), "all_loops": ns.all_loops, "compare_occ": not ns.no_occ,
             "faces": list(ns.faces or []), "strict": ns.strict, "pictures": not ns.no_pictures}
-    [outcome] = run_jobs(FILL_JOB, [item], timeout=ns.timeout, isolate=not ns.in_process, preload=PRELOAD)
+    jobs = default_jobs() if ns.jobs is None else ns.jobs
+    outcome = fill_file(item, jobs=jobs, timeout=ns.timeout, isolate=not ns.in_process)
     if outcome.status != OK:
         why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
                worker_failure(outcome, ns.timeout, task="reading and filling this file", process="worker"))
@@ -217,8 +147,12 @@ def add_parser(sub: Any) -> None:
     f.add_argument("--no-pictures", action="store_true",
                    help="do not write the zebra before/after picture of each hole (OUT_STEM.holeK.png)")
     f.add_argument("--json", action="store_true", help="print one JSON document instead of the table")
+    f.add_argument("--jobs", type=jobs_arg, default=None, metavar="N",
+                   help="fill up to N holes at once, each in its own worker process, and sew once "
+                        "(default: one per core)")
     f.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
-                   help=f"stop the worker after this long and report it (default {DEFAULT_TIMEOUT:g})")
+                   help=f"stop a worker after this long and report it: the whole fill with one job, each hole "
+                        f"with several (default {DEFAULT_TIMEOUT:g})")
     add_strict_option(f, writes=True)
     f.add_argument("--in-process", action="store_true",
                    help="read and fill in this process, not in a worker (a crash inside OCC then ends it)")

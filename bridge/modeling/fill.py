@@ -75,7 +75,8 @@ from .joints import (  # noqa: F401 - re-exported
     edge_face_map,
 )
 
-__all__ = ["HoleReport", "FillResult", "fill_model", "find_loops", "hole_sides", "assess_joint",
+__all__ = ["HoleReport", "FillResult", "fill_model", "ModelHoles", "model_holes", "fill_loop", "sew_fills",
+           "hole_neighbours", "find_loops", "hole_sides", "assess_joint",
            "occ_fill", "sew_faces", "edge_face_map", "neighbour_face", "SEW_TOLERANCE", "ASSESS_SAMPLES",
            "ASSESS_END_SAMPLES", "ISO_TOLERANCE"]
 
@@ -352,6 +353,103 @@ def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int
     return fill, occ_faces
 
 
+@dataclass
+class ModelHoles:
+    """A model sewn into shells and its free loops, ready to fill one by one (:func:`model_holes`).
+
+    ``loops[k]`` is ``(edges, outer)``: hole ``k``'s edges in order, and whether it is a shell's outer
+    boundary (left open unless ``all_loops``). The same file read again gives the same loops in the
+    same order, so a worker process can fill hole ``k`` of its own copy (``occsurf fill --jobs``).
+    """
+
+    sewn: Any
+    e2f: Any
+    size: float
+    loops: list[tuple[list[Any], bool]]
+
+
+def model_holes(shape: Any, all_loops: bool = False) -> ModelHoles:
+    """Sew ``shape``'s faces into shells and find its free loops (the first steps of :func:`fill_model`).
+
+    Raises
+    ------
+    InvalidGeometryError
+        The shape has no faces.
+    """
+    faces = _faces(shape)
+    if not faces:
+        raise InvalidGeometryError("shape: the model has no faces")
+    sewn = sew_faces(faces)
+    return ModelHoles(sewn, edge_face_map(sewn), _model_size(sewn), find_loops(sewn, all_loops))
+
+
+@_occ.quiet_messages()
+def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True,
+              samples: int = ASSESS_SAMPLES) -> tuple[HoleReport, HoleFill | PlateFill | None, list[Any]]:
+    """Fill hole ``k`` of ``holes`` and measure it (and OCC's filler on it with ``compare_occ``).
+
+    Never raises for the hole: a failure is the report's ``status``/``reason``.
+
+    Returns
+    -------
+    (HoleReport, fill or None, list of TopoDS_Face)
+        The report; our fill and its OCC faces (``None`` and ``[]`` unless filled).
+    """
+    edges, outer = holes.loops[k]
+    rep = HoleReport(index=k, sides=len(edges), status="outer" if outer else "failed")
+    if outer:
+        rep.reason = "outer boundary of its shell (not filled; use --all-loops)"
+        return rep, None, []
+    nb = [neighbour_face(holes.e2f, e) for e in edges]
+    fill: HoleFill | PlateFill | None = None
+    occ_faces: list[Any] = []
+    try:
+        t0 = time.perf_counter()
+        fill, occ_faces = _fill_loop(edges, nb, holes.size, samples, rep)
+        rep.seconds = time.perf_counter() - t0
+        if isinstance(fill, PlateFill):  # rep.method 'plate' or 'wrap'
+            from .plate import plate_quality
+
+            rep.own_g0, rep.own_g1, rep.internal_g1, rep.folds = plate_quality(fill)
+        else:
+            q = measure_fill(fill)
+            rep.own_g0, rep.own_g1 = float(q.boundary_gap.max()), float(q.boundary_angle.max())
+            rep.internal_g1 = float(max(q.internal_angle.max(), q.center_angle))
+            rep.folds = int(q.folds.sum())
+        rep.g0, rep.g1 = max(rep.side_g0), max(rep.side_g1)
+        rep.status = "filled"
+        # for pictures; not dataclass fields, so asdict() leaves them out
+        rep._fill_faces, rep._neighbours = occ_faces, _unique(nb)  # type: ignore[attr-defined]
+    except Exception as err:  # noqa: BLE001 - one hole's failure must not stop the others
+        rep.status, rep.reason = "failed", one_line(err, expected=(OccsurfError,))
+        fill, occ_faces = None, []
+    if compare_occ and all(f is not None for f in nb):
+        try:
+            t0 = time.perf_counter()
+            of = occ_fill(edges, nb)
+            rep.occ_seconds = time.perf_counter() - t0
+            s_o = BRep_Tool.Surface_s(of)
+            per = [assess_joint(e, f, [s_o], samples) for e, f in zip(edges, nb)]
+            rep.occ_g0, rep.occ_g1 = max(p[0] for p in per), max(p[1] for p in per)
+            rep.occ_status = "ok"
+        except Exception as err:  # noqa: BLE001
+            rep.occ_status, rep.occ_reason = "failed", one_line(err, expected=(OccsurfError,))
+            if rep.occ_seconds is None:
+                rep.occ_seconds = time.perf_counter() - t0
+    return rep, fill, occ_faces
+
+
+def hole_neighbours(holes: ModelHoles, k: int) -> list[Any]:
+    """The faces around hole ``k``, each once (for its pictures)."""
+    return _unique([neighbour_face(holes.e2f, e) for e in holes.loops[k][0]])
+
+
+def sew_fills(holes: ModelHoles, new_faces: list[Any]) -> tuple[Any, int]:
+    """The model with ``new_faces`` sewn in (once), and the number of free loops left."""
+    result = sew_faces([holes.sewn] + new_faces) if new_faces else holes.sewn
+    return result, sum(1 for _ in find_loops(result, all_loops=True))
+
+
 @_occ.quiet_messages()  # OCC's printers at the caller's levels again afterwards
 def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
                samples: int = ASSESS_SAMPLES, as_: str | None = None) -> FillResult:
@@ -376,58 +474,14 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
     from ..exchange.objects import check_as, shape_object
 
     check_as(as_)
-    shape = as_shape(shape, "shape")
-    faces = _faces(shape)
-    if not faces:
-        raise InvalidGeometryError("shape: the model has no faces")
-    sewn = sew_faces(faces)
-    e2f = edge_face_map(sewn)
-    size = _model_size(sewn)
+    holes = model_holes(as_shape(shape, "shape"), all_loops)
     reports: list[HoleReport] = []
     fills: list[HoleFill | PlateFill | None] = []
     new_faces: list[Any] = []
-    for k, (edges, outer) in enumerate(find_loops(sewn, all_loops)):
-        rep = HoleReport(index=k, sides=len(edges), status="outer" if outer else "failed")
-        fills.append(None)
+    for k in range(len(holes.loops)):
+        rep, fill, occ_faces = fill_loop(holes, k, compare_occ=compare_occ, samples=samples)
         reports.append(rep)
-        if outer:
-            rep.reason = "outer boundary of its shell (not filled; use --all-loops)"
-            continue
-        nb = [neighbour_face(e2f, e) for e in edges]
-        try:
-            t0 = time.perf_counter()
-            fill, occ_faces = _fill_loop(edges, nb, size, samples, rep)
-            rep.seconds = time.perf_counter() - t0
-            if isinstance(fill, PlateFill):  # rep.method 'plate' or 'wrap'
-                from .plate import plate_quality
-
-                rep.own_g0, rep.own_g1, rep.internal_g1, rep.folds = plate_quality(fill)
-            else:
-                q = measure_fill(fill)
-                rep.own_g0, rep.own_g1 = float(q.boundary_gap.max()), float(q.boundary_angle.max())
-                rep.internal_g1 = float(max(q.internal_angle.max(), q.center_angle))
-                rep.folds = int(q.folds.sum())
-            rep.g0, rep.g1 = max(rep.side_g0), max(rep.side_g1)
-            rep.status = "filled"
-            # for pictures; not dataclass fields, so asdict() leaves them out
-            rep._fill_faces, rep._neighbours = occ_faces, _unique(nb)  # type: ignore[attr-defined]
-            fills[-1] = fill
-            new_faces += occ_faces
-        except Exception as err:  # noqa: BLE001 - one hole's failure must not stop the others
-            rep.status, rep.reason = "failed", one_line(err, expected=(OccsurfError,))
-        if compare_occ and all(f is not None for f in nb):
-            try:
-                t0 = time.perf_counter()
-                of = occ_fill(edges, nb)
-                rep.occ_seconds = time.perf_counter() - t0
-                s_o = BRep_Tool.Surface_s(of)
-                per = [assess_joint(e, f, [s_o], samples) for e, f in zip(edges, nb)]
-                rep.occ_g0, rep.occ_g1 = max(p[0] for p in per), max(p[1] for p in per)
-                rep.occ_status = "ok"
-            except Exception as err:  # noqa: BLE001
-                rep.occ_status, rep.occ_reason = "failed", one_line(err, expected=(OccsurfError,))
-                if rep.occ_seconds is None:
-                    rep.occ_seconds = time.perf_counter() - t0
-    result = sew_faces([sewn] + new_faces) if new_faces else sewn
-    after = sum(1 for _ in find_loops(result, all_loops=True))
+        fills.append(fill)
+        new_faces += occ_faces
+    result, after = sew_fills(holes, new_faces)
     return FillResult(result if as_ is None else shape_object(result, as_), reports, fills, after)

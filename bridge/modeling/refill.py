@@ -69,7 +69,7 @@ from .refill_traces import (
     TRACE_SAMPLES_PER_POLE,
 )
 
-__all__ = ["RefillReport", "refill_faces", "refill_model", "face_components", "model_faces", "fitted_fill", "G1_EDGE_DEG",
+__all__ = ["RefillReport", "refill_faces", "refill_model", "refill_components", "sew_refills", "face_components", "model_faces", "fitted_fill", "G1_EDGE_DEG",
            "OCC_TUNED", "OCC_DEFAULT", "fill_method",
            # re-exported from the modules the refill was split into (importable from here before)
            "SewnModel", "hole_gap", "refill_sides", "occ_filling", "FIT_SAMPLES", "CORNER_SLOPE",
@@ -198,21 +198,41 @@ def refill_model(shape: Any, faces: list[int], *, compare_occ: bool = True) -> t
     """
     from ..conversion.shapes import as_shape
 
-    shape = as_shape(shape, "shape")
-    model = SewnModel(shape)
+    model = SewnModel(as_shape(shape, "shape"))
+    reports = [refill_faces(model, comp, compare_occ=compare_occ, check=False)[0]
+               for comp in refill_components(model, faces)]
+    return reports, sew_refills(model, reports)
+
+
+def refill_components(model: SewnModel, faces: list[int]) -> list[list[int]]:
+    """``faces`` checked and grouped into edge-connected sets, one per hole (:func:`refill_model`).
+
+    Raises
+    ------
+    InvalidGeometryError
+        ``faces`` empty or not face indices of ``model``.
+    """
     n = len(model.faces)
     bad = [i for i in faces if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < n]
     if bad or not faces:
         raise InvalidGeometryError(f"faces: expected face indices 0..{n - 1} (numbered as by inspect), got {list(faces)}")
-    reports = [refill_faces(model, comp, compare_occ=compare_occ, check=False)[0]
-               for comp in face_components(model, list(faces))]
+    return face_components(model, list(faces))
+
+
+def sew_refills(model: SewnModel, reports: list[RefillReport]) -> Any:
+    """The model with every filled report's faces sewn in at once (``None`` when none was filled).
+
+    Checks the result (``BRepCheck_Analyzer``, a STEP round trip) and records both on every filled
+    report (``valid``, ``step_round_trip``). The reports need their fill faces (``_fill_faces``), as
+    :func:`refill_faces` leaves them.
+    """
     filled = [r for r in reports if r.status == "filled"]
     if not filled:
-        return reports, None
+        return None
     removed = sorted({i for r in filled for i in r.faces})
     result, valid = sew_in_checked(model, removed, [f for r in filled for f in r._fill_faces],
-                                    max(cast(float, r.g0) for r in filled))  # set on every filled report
+                                    max(cast(float, r.g0) for r in filled))
     trip = round_trip(result, len(model_faces(result)))
     for r in filled:
         r.valid, r.step_round_trip = valid, trip
-    return reports, result
+    return result
