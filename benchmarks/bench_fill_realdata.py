@@ -18,13 +18,24 @@ filler, its G0 is at most 1e-3 of the model size (a gap of a thousandth of the p
 where OCC returns a face: MakeFilling's "fills" of the screw's ten-turn thread strips miss their
 boundaries by 0.8 mm on a 6 mm screw); both the raw and the usable counts are printed.
 
-Run:  python benchmarks/bench_fill_realdata.py [--pairs | --only-pairs] [--skip N] [--max-holes N] [--files F ...] [--json OUT]
+Times: the distribution (p50 / p90 / max) of the construction's own seconds (ours: ``seconds``,
+OCC: each variant's ``seconds``), and the ratio ours / OCC tuned of the medians.
+
+Quality against a baseline (``--baseline benchmarks/baselines/fill_realdata.json``, rows saved by
+``--json`` on an earlier version): per hole in both, our G0 and G1 now against then; a hole filled
+then and not now, or worse in G0 or G1 beyond round-off (G0 by more than 1e-9 of the model size or
+1 % of the old value, G1 by more than 1e-6 degrees or 1 %), is listed as a regression and the
+command exits 1.
+
+Run:  python benchmarks/bench_fill_realdata.py [--pairs | --only-pairs] [--skip N] [--max-holes N] [--files F ...]
+      [--json OUT] [--baseline OLD.json]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import statistics
 import sys
 import time
@@ -73,6 +84,64 @@ def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only
               f"{t.get('status')} {t.get('g0')} {t.get('g1')} | {row['wall']:.1f} s | {rep.reason or ''}",
               file=sys.stderr, flush=True)
     return rows
+
+
+def _quantiles(vals: list[float]) -> str:
+    """``p50 / p90 / max`` of ``vals`` (seconds), nearest-rank quantiles."""
+    if not vals:
+        return "-"
+    v = sorted(vals)
+    q = [v[min(len(v) - 1, max(0, math.ceil(p * len(v)) - 1))] for p in (0.5, 0.9)]
+    return f"{q[0]:.2f} / {q[1]:.2f} / {v[-1]:.2f} s"
+
+
+def time_table(rows: list[dict]) -> str:
+    """The time distribution of each filler over the holes it filled, and ours / OCC tuned."""
+    ours = [r["seconds"] for r in rows if r["status"] == "filled" and r.get("seconds") is not None]
+    occ = {name: [r["occ"][name]["seconds"] for r in rows if r["occ"].get(name, {}).get("status") == "ok"]
+           for name in ("default", "tuned")}
+    out = ["| filler | holes | p50 / p90 / max |", "|---|---|---|",
+           f"| occsurf | {len(ours)} | {_quantiles(ours)} |"]
+    out += [f"| OCC MakeFilling {name} | {len(v)} | {_quantiles(v)} |" for name, v in occ.items()]
+    if ours and occ["tuned"]:
+        out.append(f"\nmedian ours / OCC tuned: {statistics.median(ours) / statistics.median(occ['tuned']):.1f}; "
+                   f"holes over 1 s: {sum(t > 1 for t in ours)}, over 5 s: {sum(t > 5 for t in ours)} "
+                   f"(of {len(ours)})")
+    return "\n".join(out)
+
+
+def _key(r: dict) -> tuple[str, tuple[int, ...]]:
+    return r["file"], tuple(r["faces"])
+
+
+def compare_baseline(rows: list[dict], base: list[dict]) -> tuple[str, int]:
+    """Per hole in both runs: our G0 / G1 now against the baseline's; the regressions counted."""
+    old = {_key(r): r for r in base}
+    both = [(r, old[_key(r)]) for r in rows if _key(r) in old]
+    lines, bad = [], 0
+    better = same = 0
+    for r, o in both:
+        if o["status"] != "filled":
+            continue
+        if r["status"] != "filled":
+            bad += 1
+            lines.append(f"REGRESSION {r['file']} {r['faces']}: filled before, now {r['status']}: {r['reason']}")
+            continue
+        size = r.get("size") or 1.0
+        worse_g0 = r["g0"] > o["g0"] + max(1e-9 * size, 0.01 * o["g0"])
+        worse_g1 = r["g1"] > o["g1"] + max(1e-6, 0.01 * o["g1"])
+        if worse_g0 or worse_g1:
+            bad += 1
+            lines.append(f"REGRESSION {r['file']} {r['faces']}: G0 {o['g0']:.2e} -> {r['g0']:.2e}, "
+                         f"G1 {o['g1']:.2e} -> {r['g1']:.2e} deg")
+        elif r["g0"] < o["g0"] - max(1e-9 * size, 0.01 * o["g0"]) or r["g1"] < o["g1"] - max(1e-6, 0.01 * o["g1"]):
+            better += 1
+        else:
+            same += 1
+    new = sum(1 for r, o in both if o["status"] != "filled" and r["status"] == "filled")
+    head = (f"against the baseline ({len(both)} holes in both): {same} the same within round-off, {better} better, "
+            f"{new} newly filled, {bad} worse")
+    return "\n".join([head, *lines]), bad
 
 
 def _stats(vals: list[float]) -> str:
@@ -153,13 +222,14 @@ def main() -> None:
     ap.add_argument("--max-holes", type=int, default=None, help="at most this many face sets per file")
     ap.add_argument("--files", nargs="*", default=None, help="file names in realdata (default: all)")
     ap.add_argument("--json", default=None, help="write the per-hole rows here")
+    ap.add_argument("--baseline", default=None, metavar="JSON",
+                    help="compare our G0/G1 per hole with rows saved earlier (--json); exit 1 on a regression")
     ap.add_argument("--merge", nargs="+", default=None, metavar="JSON",
                     help="print the table of rows saved by earlier runs (--json) instead of running")
     ns = ap.parse_args()
     if ns.merge:
         rows = [r for f in ns.merge for r in json.loads(Path(f).read_text())]
-        print(summary(rows))
-        return
+        sys.exit(report(rows, ns.baseline))
     if not REALDATA.is_dir():
         sys.exit(f"skipped: {REALDATA} is absent")
     files = sorted(p for p in REALDATA.iterdir() if p.suffix.lower() in (".step", ".stp", ".iges", ".igs"))
@@ -171,8 +241,22 @@ def main() -> None:
         rows += holes_of(p, ns.pairs, ns.max_holes, ns.skip, ns.only_pairs)
     if ns.json:
         Path(ns.json).write_text(json.dumps(rows, indent=1, default=str))
-    print(summary(rows))
+    code = report(rows, ns.baseline)
     print(f"\n(total {time.perf_counter() - t0:.0f} s)")
+    sys.exit(code)
+
+
+def report(rows: list[dict], baseline: str | None) -> int:
+    """Print the tables (and the baseline comparison); 1 when a hole got worse."""
+    print(summary(rows))
+    print()
+    print(time_table(rows))
+    if baseline is None:
+        return 0
+    text, bad = compare_baseline(rows, json.loads(Path(baseline).read_text()))
+    print()
+    print(text)
+    return 1 if bad else 0
 
 
 if __name__ == "__main__":

@@ -28,13 +28,16 @@ Writing (:func:`.xcaf_write.step_document_bytes`, :func:`.xcaf_write.iges_docume
 ``STEPCAFControl_Writer`` (printed with 17 significant digits, as ``write_step``) or
 ``IGESCAFControl_Writer`` (IGES has no instances: each instance becomes a placed copy); the
 writing side is :mod:`occsurf.bridge.exchange.xcaf_write`.
+
+This module reads the document (:func:`read_xcaf`, colours, the tree's walk); beside it live the
+assembly tree and :class:`XcafData` (:mod:`.xcaf_tree`), the length units (:mod:`.xcaf_units`) and
+IGES names and levels (:mod:`.xcaf_iges`). Their public names stay importable from here.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -42,20 +45,22 @@ import numpy as np
 from occsurf.algorithms.errors import InvalidGeometryError
 
 from ..messages import one_line
+from .xcaf_iges import _NO_NAMES, iges_face_attributes, iges_level_names, name_levels
+from .xcaf_tree import (
+    _IDENTITY,
+    AssemblyNode,
+    XcafData,
+    instance_layer_losses,
+    instance_overrides,
+    iter_nodes,
+    node_key,
+)
+from .xcaf_units import _OCC_UNIT, UNITS, WRITE_UNITS, iges_unit, step_unit, unit_scale
 
 __all__ = ["AssemblyNode", "UNITS", "WRITE_UNITS", "unit_scale", "XcafData", "read_xcaf", "step_unit", "iges_unit", "compound",
-           "iter_nodes", "instance_overrides", "instance_layer_losses", "COLOR_DECIMALS", "rgba_from_occ", "occ_color"]
-
-#: Millimetres per unit of each length unit occsurf reports or writes (``ImportedModel.unit``,
-#: ``write_step(..., unit=)``, ``occsurf convert --unit``).
-UNITS: dict[str, float] = {
-    "mm": 1.0, "cm": 10.0, "m": 1000.0, "km": 1e6, "um": 1e-3, "nm": 1e-6, "dm": 100.0,
-    "inch": 25.4, "ft": 304.8, "mi": 1609344.0, "mil": 0.0254, "uin": 2.54e-5,
-}
-
-#: OCC's unit keyword (``write.step.unit`` / ``write.iges.unit``) of each unit occsurf writes.
-_OCC_UNIT = {"mm": "MM", "cm": "CM", "m": "M", "km": "KM", "um": "UM", "inch": "INCH", "ft": "FT",
-             "mi": "MI", "mil": "MIL", "uin": "UIN"}
+           "iter_nodes", "instance_overrides", "instance_layer_losses", "COLOR_DECIMALS", "rgba_from_occ", "occ_color",
+           # from the modules the XCAF side was split into (importable from here before)
+           "node_key", "iges_face_attributes", "iges_level_names", "name_levels", "_OCC_UNIT", "_IDENTITY", "_NO_NAMES"]
 
 #: Decimals to which the RGB of a colour read is rounded (:func:`rgba_from_occ`). OCC holds colours as
 #: linear RGB in float32 and converts from and to the file's sRGB: the file's 0.2 comes back from
@@ -65,411 +70,6 @@ _OCC_UNIT = {"mm": "MM", "cm": "CM", "m": "M", "km": "KM", "um": "UM", "inch": "
 #: up to 7 decimals (0.2, 0.5, 1, 128/255 to 7 decimals) and any other within 5e-8 + 2e-8; build123d's
 #: ``tuple(Color)`` rounds to 7 decimals too.
 COLOR_DECIMALS: int = 7
-
-#: The units ``write_step``/``write_iges(..., unit=)`` and ``occsurf convert --unit`` accept.
-WRITE_UNITS: tuple[str, ...] = tuple(_OCC_UNIT)
-
-#: STEP unit names (``FileUnits``: SI prefix + 'metre', or a conversion-based unit's name).
-_STEP_NAMES = {
-    "millimetre": "mm", "millimeter": "mm", "centimetre": "cm", "centimeter": "cm", "metre": "m", "meter": "m",
-    "kilometre": "km", "kilometer": "km", "micrometre": "um", "micrometer": "um", "micron": "um",
-    "nanometre": "nm", "nanometer": "nm", "decimetre": "dm", "decimeter": "dm",
-    "inch": "inch", "in": "inch", "foot": "ft", "feet": "ft", "ft": "ft", "mile": "mi", "mil": "mil",
-    "thou": "mil", "microinch": "uin", "mm": "mm", "cm": "cm", "m": "m",
-}
-
-#: IGES global-section unit flags (IGES 5.3, §2.2.4.3, parameter 14).
-_IGES_FLAGS = {1: "inch", 2: "mm", 4: "ft", 5: "mi", 6: "m", 7: "km", 8: "mil", 9: "um", 10: "cm", 11: "uin"}
-_IGES_NAMES = {"IN": "inch", "INCH": "inch", "MM": "mm", "FT": "ft", "MI": "mi", "M": "m", "KM": "km",
-               "MIL": "mil", "UM": "um", "MICRON": "um", "CM": "cm", "UIN": "uin"}
-
-_NO_NAMES = frozenset({"", "NONE"})
-_IDENTITY = np.eye(4)
-_IDENTITY.setflags(write=False)
-
-
-# ---------------------------------------------------------------------------------------- the tree
-@dataclass(frozen=True, eq=False)
-class AssemblyNode:
-    """One node of an assembly: the root, a sub-assembly instance or a part instance.
-
-    Attributes
-    ----------
-    name : str
-        The instance's name (STEP: the ``NEXT_ASSEMBLY_USAGE_OCCURRENCE``'s name, else the product's);
-        the root's product name.
-    color : tuple of 4 floats or None
-        RGBA in [0, 1] the file gives this occurrence: an override for this very occurrence (STEP
-        SHUO: one of two instances of a sub-assembly's part recoloured; then the two nodes' colours
-        differ although they are the same component of the same sub-assembly), else the instance's
-        (component's) colour, else its part's. sRGB, the file's numbers (see
-        :attr:`occsurf.bridge.exchange.model.ImportedFace.color`).
-    layer : str or None
-        The instance's (else its part's) layer.
-    location : ndarray, shape (4, 4)
-        Placement relative to the parent (the identity for the root), millimetres.
-    part : str or None
-        Key of the shared prototype: the part's (product's) name, made unique with ``'#2'``, ``'#3'``...
-        when two different parts share a name. Two instances of one part have equal ``part`` and the
-        same ``shape``.
-    shape : TopoDS_Shape
-        The prototype, unlocated (for an assembly, the compound of its placed children).
-    children : tuple of AssemblyNode
-        Empty for a part instance.
-    """
-
-    name: str
-    color: tuple[float, float, float, float] | None
-    layer: str | None
-    location: np.ndarray = field(repr=False)
-    part: str | None
-    shape: Any = field(repr=False)
-    children: tuple[AssemblyNode, ...] = ()
-
-    def __post_init__(self) -> None:
-        loc = np.array(self.location, dtype=float)
-        if loc.shape != (4, 4) or not np.isfinite(loc).all():
-            raise InvalidGeometryError(f"location: expected a finite (4, 4) matrix, got shape {loc.shape}")
-        loc.setflags(write=False)
-        object.__setattr__(self, "location", loc)
-        object.__setattr__(self, "children", tuple(self.children))
-
-
-def iter_nodes(node: AssemblyNode, path: str = "") -> Iterable[tuple[str, AssemblyNode]]:
-    """``(path, node)`` of ``node`` and every node below it, depth first, path names joined by '/'."""
-    here = f"{path}/{node.name}" if path else node.name
-    yield here, node
-    for child in node.children:
-        yield from iter_nodes(child, here)
-
-
-def node_key(node: AssemblyNode) -> str:
-    """The prototype key of a node: its part, else (a node built without one) its identity."""
-    return node.part if node.part is not None else f"\0{id(node)}"
-
-
-def instance_overrides(root: AssemblyNode) -> list[tuple[str, tuple[int, ...], tuple[float, float, float, float]]]:
-    """The occurrences whose colour differs from the one their component has in the first
-    occurrence of its assembly: ``(path, child indices from the root, colour)``.
-
-    A part or sub-assembly is written once, from its first occurrence; such an occurrence needs a
-    per-occurrence override (STEP: a ``SPECIFIED_HIGHER_USAGE_OCCURRENCE`` styled by an
-    ``OVER_RIDING_STYLED_ITEM``; OCC: an SHUO), or, in IGES, a placed copy of its own colour.
-    Occurrences directly below the root are their own components: never listed."""
-    first: dict[str, tuple[AssemblyNode, ...]] = {}
-    out: list[tuple[str, tuple[int, ...], tuple[float, float, float, float]]] = []
-
-    def walk(node: AssemblyNode, path: str, indices: tuple[int, ...]) -> None:
-        given = first.setdefault(node_key(node), node.children)
-        for i, (child, written) in enumerate(zip(node.children, given)):
-            here, below = f"{path}/{child.name}", (*indices, i)
-            if indices and child.color is not None and child.color != written.color:
-                out.append((here, below, child.color))
-            walk(child, here, below)
-
-    walk(root, root.name, ())
-    return out
-
-
-def instance_layer_losses(root: AssemblyNode) -> list[tuple[str, str | None, str | None]]:
-    """``(path, layer, written layer)`` of each occurrence whose layer differs from its part's
-    first occurrence's: OCC's ``STEPCAFControl_Writer`` writes no layer on an instance
-    (``WriteLayers`` skips component and assembly labels: "there is no way to assign layer to
-    instance in STEP", OCC 7.9), so a part is written on its first occurrence's layer and every
-    occurrence reads back on it."""
-    first: dict[str, AssemblyNode] = {}
-    out = []
-    for path, node in iter_nodes(root):
-        written = first.setdefault(node_key(node), node)
-        if written is not node and node.layer != written.layer:
-            out.append((path, node.layer, written.layer))
-    return out
-
-
-@dataclass
-class XcafData:
-    """What the XCAF document adds to the transferred shape (face keys: 1-based map indices)."""
-
-    unit: str = "mm"
-    unit_scale: float = 1.0
-    colors: dict[int, tuple[float, float, float, float]] = field(default_factory=dict)
-    layers: dict[int, str] = field(default_factory=dict)
-    edge_colors: dict[int, tuple[float, float, float, float]] = field(default_factory=dict)
-    edge_layers: dict[int, str] = field(default_factory=dict)
-    edge_instances: dict[int, str] = field(default_factory=dict)
-    instances: dict[int, str] = field(default_factory=dict)
-    instance_names: dict[int, str] = field(default_factory=dict)
-    face_names: dict[int, str] = field(default_factory=dict)
-    assembly: AssemblyNode | None = None
-    warnings: list[str] = field(default_factory=list)
-
-    # -- crossing the process boundary of read_step(..., isolated=True) --------------------------
-    def to_json(self) -> tuple[dict[str, Any], list[Any]]:
-        """A JSON-safe dict plus the prototype shapes it refers to by index (to write as one BRep)."""
-        shapes: list[Any] = []
-        ids: dict[Any, int] = {}
-
-        def node_json(n: AssemblyNode) -> dict[str, Any]:
-            key = n.part if n.part is not None else id(n)  # one prototype per part: shared once
-            if key not in ids:
-                ids[key] = len(shapes)
-                shapes.append(n.shape)
-            return {"name": n.name, "color": n.color, "layer": n.layer, "location": n.location.tolist(),
-                    "part": n.part, "shape": ids[key], "children": [node_json(c) for c in n.children]}
-
-        doc = {"unit": self.unit, "unit_scale": self.unit_scale,
-               "colors": {str(k): list(v) for k, v in self.colors.items()},
-               "layers": {str(k): v for k, v in self.layers.items()},
-               "edge_colors": {str(k): list(v) for k, v in self.edge_colors.items()},
-               "edge_layers": {str(k): v for k, v in self.edge_layers.items()},
-               "edge_instances": {str(k): v for k, v in self.edge_instances.items()},
-               "instances": {str(k): v for k, v in self.instances.items()},
-               "instance_names": {str(k): v for k, v in self.instance_names.items()},
-               "face_names": {str(k): v for k, v in self.face_names.items()},
-               "warnings": list(self.warnings),
-               "assembly": node_json(self.assembly) if self.assembly is not None else None}
-        return doc, shapes
-
-    @classmethod
-    def from_json(cls, doc: dict[str, Any], shapes: Sequence[Any]) -> XcafData:
-        def node(d: dict[str, Any]) -> AssemblyNode:
-            color = tuple(d["color"]) if d["color"] is not None else None
-            return AssemblyNode(d["name"], color, d["layer"], np.array(d["location"]), d["part"],
-                                shapes[d["shape"]], tuple(node(c) for c in d["children"]))
-
-        return cls(unit=doc["unit"], unit_scale=float(doc["unit_scale"]),
-                   colors={int(k): tuple(v) for k, v in doc["colors"].items()},
-                   layers={int(k): v for k, v in doc["layers"].items()},
-                   edge_colors={int(k): tuple(v) for k, v in doc["edge_colors"].items()},
-                   edge_layers={int(k): v for k, v in doc["edge_layers"].items()},
-                   edge_instances={int(k): v for k, v in doc["edge_instances"].items()},
-                   instances={int(k): v for k, v in doc["instances"].items()},
-                   instance_names={int(k): v for k, v in doc["instance_names"].items()},
-                   face_names={int(k): v for k, v in doc["face_names"].items()},
-                   warnings=list(doc["warnings"]),
-                   assembly=node(doc["assembly"]) if doc["assembly"] is not None else None)
-
-
-def unit_scale(unit: str) -> float:
-    """Millimetres per ``unit`` (a key of :data:`UNITS`); raises :class:`InvalidGeometryError` otherwise."""
-    if unit not in UNITS:
-        raise InvalidGeometryError(f"unit: expected one of {', '.join(UNITS)}, got {unit!r}")
-    return UNITS[unit]
-
-
-# ---------------------------------------------------------------------------------------- units
-def step_unit(reader: Any) -> tuple[str, float, list[str]]:
-    """``(unit, millimetres per unit, warnings)`` the STEP file declares (read before any transfer).
-
-    Several representation contexts with different length units: the most frequent is reported, with
-    a warning (OCC converts each context's values with its own unit, so the geometry is right).
-    """
-    from OCP.TColStd import TColStd_SequenceOfAsciiString
-
-    lengths, angles, solid_angles = (TColStd_SequenceOfAsciiString() for _ in range(3))
-    try:
-        reader.FileUnits(lengths, angles, solid_angles)
-    except Exception as err:  # noqa: BLE001 - no unit is not fatal
-        return "mm", 1.0, [f"the file's length unit could not be read ({one_line(err)}); millimetres assumed"]
-    names = [lengths.Value(i).ToCString() for i in range(1, lengths.Length() + 1)]
-    if not names:
-        return "mm", 1.0, []
-    counts: dict[str, int] = {}
-    for n in names:
-        counts[n] = counts.get(n, 0) + 1
-    name = max(counts, key=lambda n: counts[n])
-    warnings = []
-    if len(counts) > 1:
-        warnings.append(f"the file declares several length units ({', '.join(sorted(counts))}); "
-                        f"'{name}' is reported, each part's values are converted with its own")
-    unit = _STEP_NAMES.get(name.strip().lower())
-    if unit is None:
-        factor = _conversion_factor(reader, name)
-        if factor is None:
-            return name.strip().lower(), 1.0, [*warnings, f"unknown length unit '{name}' (unit_scale 1.0 reported)"]
-        return name.strip().lower(), factor, warnings
-    return unit, UNITS[unit], warnings
-
-
-def _conversion_factor(reader: Any, name: str) -> float | None:
-    """Millimetres per unit of a STEP ``CONVERSION_BASED_UNIT`` called ``name`` (from the file)."""
-    try:
-        from OCP.StepBasic import StepBasic_ConversionBasedUnit, StepBasic_SiUnit
-
-        model = reader.WS().Model()
-        prefix = {"MILLI": 1.0, "CENTI": 10.0, "DECI": 100.0, "KILO": 1e6, "MICRO": 1e-3, "NANO": 1e-6}
-        for k in range(1, model.NbEntities() + 1):
-            ent = model.Value(k)
-            if isinstance(ent, StepBasic_ConversionBasedUnit) and ent.Name().ToCString() == name:
-                factor = ent.ConversionFactor()
-                value = float(factor.ValueComponent())
-                base = factor.UnitComponent().NamedUnit()
-                if isinstance(base, StepBasic_SiUnit):
-                    scale = prefix.get(base.Prefix().name.split("_")[-1].upper(), 1000.0) if base.HasPrefix() else 1000.0
-                    return value * scale
-                return None
-    except Exception:  # noqa: BLE001
-        return None
-    return None
-
-
-def iges_unit(reader: Any) -> tuple[str, float, list[str]]:
-    """``(unit, millimetres per unit, warnings)`` of the IGES global section (flag, else the name)."""
-    try:
-        header = reader.IGESModel().GlobalSection()
-        flag = int(header.UnitFlag())
-        name = header.UnitName().ToCString().strip() if header.UnitName() is not None else ""
-    except Exception as err:  # noqa: BLE001
-        return "mm", 1.0, [f"the file's length unit could not be read ({one_line(err)}); millimetres assumed"]
-    unit = _IGES_FLAGS.get(flag) or _IGES_NAMES.get(name.upper())
-    if unit is None:
-        return "mm", 1.0, [f"unknown IGES unit (flag {flag}, name '{name}'); millimetres assumed"]
-    return unit, UNITS[unit], []
-
-
-#: IGES entity types a face is transferred from (IGES 5.3 §4: analytic and spline surfaces 108-140,
-#: bounded/trimmed surfaces 143/144, CSG-free B-rep surfaces 190-198, the B-rep face 510).
-_IGES_FACE_TYPES = frozenset({108, 114, 118, 120, 122, 128, 140, 143, 144, 190, 192, 194, 196, 198, 510})
-
-
-def _iges_own_name(entity: Any) -> str | None:
-    """The name an IGES entity carries (406 form 15 name property, else its entity label)."""
-    try:
-        value = entity.NameValue() if entity.HasName() else None
-    except Exception:  # noqa: BLE001 - a name is optional
-        return None
-    text = value.ToCString().strip() if value is not None else ""
-    return None if text in _NO_NAMES else text
-
-
-def _iges_level(entity: Any) -> int | None:
-    """The one level an IGES entity is on (None: none, or a list of levels)."""
-    from OCP.IGESData import IGESData_DefList
-
-    try:
-        if entity.DefLevel() == IGESData_DefList.IGESData_DefOne and entity.Level() > 0:
-            return int(entity.Level())
-    except Exception:  # noqa: BLE001
-        return None
-    return None
-
-
-def iges_face_attributes(transfer: Any, faces_map: Any, named: Any, layered: Any) -> tuple[dict[int, str],
-                                                                                            dict[int, str]]:
-    """Own names and levels of faces whose IGES surface entity neither OCC nor its XCAF reader reports.
-
-    OCC binds a surface entity inside a 402 group to its face in the transient process, but
-    ``ShapeResult`` only knows the recorded (root) results, and the XCAF reader finds the face's
-    label only when the entity has a colour: the name property (406-15 or label) and the level of
-    an uncoloured face are lost. Here the face side is searched (``EntityFromShapeResult(face, -1)``:
-    one scan of the process per face), only when named or levelled face entities are left
-    unresolved, only for faces still without a name or a layer, until every such entity is found.
-
-    Parameters
-    ----------
-    transfer : XSControl_TransferReader
-        The IGES reader's, after the roots were transferred.
-    faces_map : TopTools_IndexedMapOfShape
-        The model's faces.
-    named, layered : container of int
-        Faces (1-based map index) that already have their own name, a layer.
-
-    Returns
-    -------
-    (dict of int to str, dict of int to str)
-        Further own face names, and layers (the level number as text), by 1-based map index.
-    """
-    process = transfer.TransientProcess()
-    # keyed by the Python object: OCP's MapIndex/Number of these entities answer 0 (measured), while
-    # the same C++ entity always comes back as the same (kept alive) Python object
-    unresolved: dict[int, tuple[Any, str | None, int | None]] = {}
-    for k in range(1, process.NbMapped() + 1):
-        entity = process.Mapped(k)
-        if not hasattr(entity, "TypeNumber") or entity.TypeNumber() not in _IGES_FACE_TYPES:
-            continue
-        name, level = _iges_own_name(entity), _iges_level(entity)
-        if name is None and level is None:
-            continue
-        try:
-            shape = transfer.ShapeResult(entity)
-        except Exception:  # noqa: BLE001
-            shape = None
-        if shape is None or shape.IsNull():
-            unresolved[id(entity)] = (entity, name, level)
-    names: dict[int, str] = {}
-    levels: dict[int, str] = {}
-    candidates = dict(unresolved)
-    for i in range(1, faces_map.Extent() + 1):
-        if not unresolved:  # (a further face split from the last entity keeps what OCC gave it)
-            break
-        if i in named and i in layered:
-            continue
-        try:
-            entity = transfer.EntityFromShapeResult(faces_map.FindKey(i), -1)
-        except Exception:  # noqa: BLE001 - not found
-            continue
-        hit = candidates.get(id(entity)) if entity is not None else None
-        if hit is None:
-            continue
-        unresolved.pop(id(entity), None)
-        if hit[1] is not None and i not in named:
-            names[i] = hit[1]
-        if hit[2] is not None and i not in layered:
-            levels[i] = str(hit[2])
-    return names, levels
-
-
-def iges_level_names(data: bytes) -> dict[int, str]:
-    """Level names of an IGES file: ``{level: name}`` from its Level Function properties (entity 406
-    form 3, IGES 5.3 §4.98: the function description of the level the entity is on), which OCC's
-    reader ignores (its layers are the bare level numbers). Read from the file's text: the Directory
-    entry's type, form and level, then the property's third parameter (a Hollerith string)."""
-    text = data.decode("latin-1")
-    by_sec: dict[str, list[str]] = {"G": [], "D": [], "P": []}
-    for line in text.splitlines():
-        if line[72:73] in by_sec:
-            by_sec[line[72:73]].append(line)
-    glob = "".join(x[:72] for x in by_sec["G"])
-    delim = glob[2] if glob[:2] == "1H" and len(glob) > 2 else ","
-    names: dict[int, str] = {}
-    d, par = by_sec["D"], by_sec["P"]
-    for k in range(0, len(d) - 1, 2):
-        a, b = d[k], d[k + 1]
-        if a[0:8].strip() != "406" or b[32:40].strip() != "3":
-            continue
-        try:
-            ptr, level, count = int(a[8:16]), int(a[32:40]), int(b[24:32])
-        except ValueError:
-            continue
-        if level <= 0 or ptr < 1:  # 0: no level; negative: a list of levels (406 form 1)
-            continue
-        name = _level_function_text("".join(x[:64] for x in par[ptr - 1:ptr - 1 + count]), delim)
-        if name:
-            names.setdefault(level, name)
-    return names
-
-
-def _level_function_text(params: str, delim: str) -> str | None:
-    """The function description of a 406-3 parameter record ``406,NP,FC,nH...;`` (None if absent)."""
-    fields = params.split(delim, 3)
-    if len(fields) < 4 or fields[0].strip() != "406":
-        return None
-    rest = fields[3].lstrip()
-    count, _, body = rest.partition("H")
-    if not (count.isascii() and count.isdigit()) or len(body) < int(count):
-        return None
-    if body[int(count):].lstrip()[:1] not in (delim, ";"):  # the string must end the parameter
-        return None
-    value = body[:int(count)].strip()
-    return None if value in _NO_NAMES else value
-
-
-def name_levels(data: XcafData, names: dict[int, str]) -> None:
-    """Layers of faces and free edges read as level numbers ('1') take the name the file gives the
-    level (in place)."""
-    if names:
-        data.layers, data.edge_layers = ({i: names.get(int(v), v) if v.isascii() and v.isdigit() else v
-                                          for i, v in layers.items()} for layers in (data.layers, data.edge_layers))
 
 
 # ---------------------------------------------------------------------------------------- reading
