@@ -34,7 +34,7 @@ import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import BinaryIO
+from typing import Any, BinaryIO
 
 from .errors import ExchangeError
 
@@ -59,13 +59,14 @@ def default_mode() -> int:
     return 0o666 & ~mask
 
 
-def as_path(path: str | os.PathLike[str], label: str = "path") -> Path:
+def as_path(path: str | bytes | os.PathLike[Any], label: str = "path") -> Path:
     """``path`` as a :class:`~pathlib.Path`; :class:`ExchangeError` naming ``label`` when it is not a
-    str or path-like."""
+    str, bytes or path-like (bytes, an OS path as the system gives it, are decoded as
+    :func:`os.fsdecode` does: undecodable bytes survive as surrogates and name the same file)."""
     try:
-        return Path(os.fspath(path))
+        return Path(os.fsdecode(path))
     except TypeError as err:
-        raise ExchangeError(f"{label}: expected a str or path-like, got {type(path).__name__}") from err
+        raise ExchangeError(f"{label}: expected a str, bytes or path-like, got {type(path).__name__}") from err
 
 
 def file_kind(mode: int) -> str:

@@ -60,7 +60,21 @@ def check_knots(knots: ArrayLike, degree: int, n_poles: int, name: str = "knots"
         raise InvalidGeometryError(
             f"{name}: the domain [knot[{degree}], knot[{n_poles}]] = [{float(t[degree])!r}, {float(t[n_poles])!r}] is empty"
         )
+    check_domain_length(t, degree, n_poles, name)
     return t
+
+
+def check_domain_length(t: NDArray[np.float64], degree: int, n_poles: int, name: str) -> None:
+    """Refuse a domain no longer than the knot tolerance (``KNOT_EQUALITY`` times the knot range, at
+    least 1): its ends count as one knot, and the basis functions divide by spans that round to
+    nothing (a domain of 1e-320 evaluates to NaN)."""
+    length = float(t[n_poles] - t[degree])
+    tol = tolerances.KNOT_EQUALITY * max(float(t[-1] - t[0]), 1.0)
+    if length <= tol:
+        raise InvalidGeometryError(
+            f"{name}: the domain [{float(t[degree])!r}, {float(t[n_poles])!r}] is {length:.3g} long, no longer than the "
+            f"knot tolerance {tol:.3g} (tolerances.KNOT_EQUALITY): its ends count as one knot"
+        )
 
 
 def check_weights(weights: ArrayLike, shape: tuple[int, ...], name: str = "weights") -> NDArray[np.float64]:

@@ -12,7 +12,9 @@ share one hierarchy without ``occsurf.algorithms`` importing anything from OCC.
 
     OccsurfError
     ├── InvalidGeometryError (ValueError)    bad knots, shapes, weights, degrees, NaN
-    │   └── ParameterError                   a parameter outside the domain
+    │   ├── ParameterError                   a parameter outside the domain
+    │   ├── UnknownNameError (KeyError)      a name that is none of the known ones (a tolerance)
+    │   └── ArgumentTypeError (TypeError)    an argument of the wrong type
     ├── ToleranceError (ValueError)          an operation impossible within the tolerance asked
     ├── KernelError (RuntimeError)           OCC refused or failed (raised by bridge only)
     └── ExchangeError (OSError)              STEP/IGES read or write failed
@@ -24,6 +26,8 @@ __all__ = [
     "OccsurfError",
     "InvalidGeometryError",
     "ParameterError",
+    "UnknownNameError",
+    "ArgumentTypeError",
     "ToleranceError",
     "KernelError",
     "ExchangeError",
@@ -43,6 +47,20 @@ class InvalidGeometryError(OccsurfError, ValueError):
 
 class ParameterError(InvalidGeometryError):
     """A parameter lies outside the domain of the curve or surface, or is not finite."""
+
+
+class UnknownNameError(InvalidGeometryError, KeyError):
+    """A name that is none of the known ones (``tolerances.override(NOPE=1.0)``); the message lists them.
+
+    Also a ``KeyError``, as a lookup of an unknown key is; shown as its message (``KeyError`` alone
+    would quote it).
+    """
+
+    __str__ = Exception.__str__
+
+
+class ArgumentTypeError(InvalidGeometryError, TypeError):
+    """An argument of the wrong type (a string where a number is expected); also a ``TypeError``."""
 
 
 class ToleranceError(OccsurfError, ValueError):

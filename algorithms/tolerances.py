@@ -717,26 +717,28 @@ def override(**values: float) -> Iterator[None]:
 
     Raises
     ------
-    KeyError
-        If a name is not an overridable tolerance of this module.
-    TypeError
-        If a value is not a real number (or an integer limit gets a non-integer).
-    ValueError
+    UnknownNameError
+        If a name is not an overridable tolerance of this module (also a ``KeyError``).
+    ArgumentTypeError
+        If a value is not a real number, or an integer limit gets a non-integer (also a ``TypeError``).
+    InvalidGeometryError
         If a value is NaN or infinite (a NaN tolerance disables every comparison made with it), or
         negative (every entry is a magnitude: a tolerance, an angle, a count; 0 is accepted, e.g.
         "no Newton step" or "exact only").
     """
+    from .errors import ArgumentTypeError, InvalidGeometryError, UnknownNameError
+
     for name, value in values.items():
         if name not in _DEFAULTS:
-            raise KeyError(f"override: {name!r} is not a tolerance; known: {', '.join(sorted(_DEFAULTS))}")
+            raise UnknownNameError(f"override: {name!r} is not a tolerance; known: {', '.join(sorted(_DEFAULTS))}")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise TypeError(f"override: {name} must be a real number, got {value!r}")
+            raise ArgumentTypeError(f"override: {name} must be a real number, got {value!r}")
         if not math.isfinite(value):
-            raise ValueError(f"override: {name} must be finite, got {value!r}")
+            raise InvalidGeometryError(f"override: {name} must be finite, got {value!r}")
         if value < 0:
-            raise ValueError(f"override: {name} must not be negative, got {value!r}")
+            raise InvalidGeometryError(f"override: {name} must not be negative, got {value!r}")
         if isinstance(_DEFAULTS[name], int) and not float(value).is_integer():
-            raise TypeError(f"override: {name} is an integer limit, got {value!r}")
+            raise ArgumentTypeError(f"override: {name} is an integer limit, got {value!r}")
 
     typed = {k: type(_DEFAULTS[k])(v) for k, v in values.items()}
     token = _OVERRIDES.set(MappingProxyType({**_OVERRIDES.get(), **typed}))

@@ -97,6 +97,7 @@ __all__ = [
     "TIMEOUT",
     "FAILED",
     "MARK",
+    "MAX_TIMEOUT",
 ]
 
 OK = "ok"
@@ -104,6 +105,11 @@ ERROR = "error"
 CRASHED = "crashed"
 TIMEOUT = "timeout"
 FAILED = "failed"
+
+#: The longest ``timeout`` accepted (seconds; 1e6 s is 11.6 days). Longer ones overflow the timers and
+#: waits they arm (``threading.TIMEOUT_MAX``, ``select``): 1e308 once killed the watchdog thread and
+#: the run went on with no timeout at all.
+MAX_TIMEOUT = 1e6
 
 #: Prefix of the worker's protocol lines on its stdout (anything else there is ignored).
 MARK = "\x1eoccsurf-worker "
@@ -357,6 +363,8 @@ def _check_args(job: Any, timeout: Any) -> None:
     number = isinstance(timeout, (int, float)) and not isinstance(timeout, bool)
     if not (number and math.isfinite(timeout) and timeout > 0):
         raise ValueError(f"timeout: expected a positive number of seconds or None, got {timeout!r}")
+    if timeout > MAX_TIMEOUT:
+        raise ValueError(f"timeout: at most {MAX_TIMEOUT:g} seconds, got {timeout!r}")
 
 
 def _last_line(fh: IO[bytes]) -> str | None:

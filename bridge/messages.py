@@ -76,7 +76,7 @@ def strip_path(message: str, path: str | os.PathLike[str]) -> str:
     """
     path = Path(path)
     candidates = {str(path), os.fspath(path)}
-    with contextlib.suppress(OSError):
+    with contextlib.suppress(OSError, RuntimeError):  # RuntimeError: a loop of symlinks (Python 3.11 resolve)
         candidates.add(str(path.resolve()))
         candidates.add(str(path.absolute()))
     for c in sorted(candidates, key=len, reverse=True):

@@ -303,6 +303,10 @@ def check_rescaled(t: Array, knots: Array, new: tuple[float, float], what: str) 
         raise ParameterError(f"{what}: the domain {new!r} is too long for doubles (its length overflows)")
     if np.count_nonzero(np.diff(t) > 0) != np.count_nonzero(np.diff(knots) > 0):
         raise ParameterError(f"{what}: the domain {new!r} is too short to keep the distinct knots apart")
+    tol = tolerances.KNOT_EQUALITY * max(float(t[-1] - t[0]), 1.0)
+    if new[1] - new[0] <= tol:
+        raise ParameterError(f"{what}: the domain {new!r} is no longer than the knot tolerance {tol:.3g} "
+                             "(tolerances.KNOT_EQUALITY): its ends would count as one knot")
     return t
 
 

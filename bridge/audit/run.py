@@ -16,6 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, TextIO
 
+from ..isolation import MAX_TIMEOUT
 from .corpus import Entry, expand_paths, hash_entries
 from .store import ResultStore
 from .tasks import CHECKS, DEFAULT_CHECKS, audit_task, make_item
@@ -119,6 +120,8 @@ def _check_args(checks: Sequence[str], timeout: float | None, workers: int | Non
         raise AuditInputError(f"checks: expected a comma-separated subset of {','.join(CHECKS)}, got {','.join(checks)!r}")
     if timeout is not None and not (math.isfinite(timeout) and timeout > 0):
         raise AuditInputError(f"timeout: expected a positive number of seconds, got {timeout!r}")
+    if timeout is not None and timeout > MAX_TIMEOUT:
+        raise AuditInputError(f"timeout: at most {MAX_TIMEOUT:g} seconds, got {timeout!r}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise AuditInputError(f"workers: expected a positive integer, got {workers!r}")
     return tuple(c for c in CHECKS if c in checks)

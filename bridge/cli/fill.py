@@ -88,9 +88,14 @@ def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
 def run(ns: argparse.Namespace) -> int:
     """``occsurf fill IN --out OUT``: fill every hole (in a worker), print per hole ours vs OCC's filler."""
     from ..audit.fill_file import default_jobs, fill_file
+    from ..exchange.files import input_problem
     from ..isolation import ERROR, OK
 
     src, out = Path(ns.input), Path(ns.out)
+    why = input_problem(src)
+    if why is not None:
+        error(f"{shown_path(src)}: {why}")
+        return EXIT_ERROR
     why = output_problem(out)
     if why is not None:
         error(f"{shown_path(out)}: cannot write the filled model there ({why})")

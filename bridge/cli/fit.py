@@ -182,10 +182,13 @@ def _check_out(out: Path) -> str | None:
 
 def run(ns: argparse.Namespace) -> int:
     """``occsurf fit DATA --tol T --out OUT.step``: fit in a worker, print the per-level table or JSON."""
+    from ..exchange.files import input_problem
+    from ..exchange.reading import shown_path
     from ..isolation import ERROR, OK, run_jobs
 
     src, out = Path(ns.data), Path(ns.out)
-    bad = _check_out(out)
+    why = input_problem(src, "data")
+    bad = _check_out(out) if why is None else f"{shown_path(src)}: {why}"
     if bad is None and ns.x is not None and not ns.x[0] < ns.x[1]:
         bad = f"--x: expected X0 < X1, got {ns.x[0]:g} {ns.x[1]:g}"
     if bad is None and ns.y is not None and not ns.y[0] < ns.y[1]:

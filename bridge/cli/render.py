@@ -32,6 +32,7 @@ from ._common import (
     error,
     output_problem,
     read_model,
+    shown_path,
     strip_path,
     timeout_arg,
     worker_failure,
@@ -109,6 +110,7 @@ def _read_lights(path: Path) -> tuple[dict[str, Any] | None, str | None]:
 
 def run(ns: argparse.Namespace) -> int:
     """``occsurf render``: check the arguments here, render in a worker, print one line."""
+    from ..exchange.files import input_problem
     from ..isolation import ERROR, OK, run_jobs
 
     src, out = Path(ns.input), Path(ns.out)
@@ -128,8 +130,9 @@ def run(ns: argparse.Namespace) -> int:
     if why is not None:
         error(f"{out}: cannot write the picture there ({why})")
         return EXIT_ERROR
-    if not src.is_file():
-        error(f"{src}: {'is a directory' if src.is_dir() else 'no such file'}")
+    why = input_problem(src)
+    if why is not None:
+        error(f"{shown_path(src)}: {why}")
         return EXIT_ERROR
     if ns.target is not None and ns.camera is None:
         error("--target needs --camera (a named --view always looks at the model's centre)")

@@ -254,10 +254,18 @@ def from_occ(obj: Any, bounds: tuple[float, ...] | None = None, *, tol: float | 
         if obj.ShapeType() not in (TopAbs_FACE, TopAbs_EDGE):
             return _from_container(obj, bounds, tol, trims)
         return _from_shape(obj, bounds, tol, trims)
-    if isinstance(obj, Geom_Curve):
-        return _from_geom_curve(obj, _check_bounds(bounds, 2, "curve"), tol)
-    if isinstance(obj, Geom_Surface):
-        return _from_geom_surface(obj, _check_bounds(bounds, 4, "surface"), tol)
+    if isinstance(obj, (Geom_Curve, Geom_Surface)):
+        b = _check_bounds(bounds, 2, "curve") if isinstance(obj, Geom_Curve) else _check_bounds(bounds, 4, "surface")
+        try:
+            if isinstance(obj, Geom_Curve):
+                return _from_geom_curve(obj, b, tol)
+            return _from_geom_surface(obj, b, tol)
+        except AttributeError as err:
+            if "'NoneType'" not in str(err):
+                raise
+            # OCC's arrays came back as None: the wrapper holds no object (made by __new__, say)
+            raise InvalidGeometryError(f"from_occ: the {type(obj).__name__} holds no geometry (a null or "
+                                       "uninitialised handle: its poles read as None)") from err
     name = type(obj).__name__
     if name.startswith("Geom2d"):
         raise InvalidGeometryError(f"from_occ: 2-D geometry ({name}) is out of scope; expected 3-D Geom_* objects")

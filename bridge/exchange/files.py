@@ -32,12 +32,40 @@ from occsurf.algorithms._files import (
 )
 from occsurf.algorithms.errors import ExchangeError
 
-__all__ = ["load", "check_step_text", "check_iges_text", "target", "atomic_write", "atomic_write_many",
+__all__ = ["load", "input_problem", "check_step_text", "check_iges_text", "target", "atomic_write", "atomic_write_many",
            "check_target", "clean_stale_temps", "file_lock", "default_mode", "write_figure", "write_text",
            "MAX_FILE_BYTES", "TEMP_SUFFIX"]
 
 #: Largest file :func:`load` reads (bytes): a bigger one is refused before it is read into memory.
 MAX_FILE_BYTES: int = 4 << 30
+
+
+def input_problem(path: str | bytes | os.PathLike[Any], kind: str = "STEP or IGES") -> str | None:
+    """Why ``path`` cannot be read as a ``kind`` file, in a few words, or ``None`` when it can be tried.
+
+    The one check every command runs on a file it is given before anything opens it: a missing
+    file, a dangling symlink or a loop of symlinks, a folder, a device (a symlink to ``/dev/zero``
+    reads forever), FIFO or socket (opening a FIFO waits for a writer), a file larger than
+    :data:`MAX_FILE_BYTES`. Nothing is opened; ``os.stat`` only.
+    """
+    p = as_path(path)
+    try:
+        st = os.stat(p)
+    except FileNotFoundError:
+        if os.path.islink(p):
+            return f"dangling symbolic link (to {os.readlink(p)})"
+        return "no such file"
+    except OSError as err:
+        if err.errno == errno.ELOOP:
+            return "a loop of symbolic links"
+        return f"cannot read: {err.strerror or err}"
+    if stat.S_ISDIR(st.st_mode):
+        return f"is a directory, not a {kind} file"
+    if not stat.S_ISREG(st.st_mode):
+        return f"is {file_kind(st.st_mode)}, not a {kind} file; not read"
+    if st.st_size > MAX_FILE_BYTES:
+        return f"{st.st_size} bytes, more than the {MAX_FILE_BYTES} a {kind} file may have here"
+    return None
 
 
 def load(path: str | os.PathLike[str], kind: str) -> tuple[Path, bytes]:
@@ -47,22 +75,9 @@ def load(path: str | os.PathLike[str], kind: str) -> tuple[Path, bytes]:
     dangling symlink or a loop of symlinks, and a file larger than :data:`MAX_FILE_BYTES` are refused.
     """
     p = as_path(path)
-    try:
-        st = os.stat(p)
-    except FileNotFoundError as err:
-        if p.is_symlink():
-            raise ExchangeError(f"{p}: dangling symbolic link (to {os.readlink(p)})") from err
-        raise ExchangeError(f"{p}: no such file") from err
-    except OSError as err:
-        if err.errno == errno.ELOOP:
-            raise ExchangeError(f"{p}: a loop of symbolic links") from err
-        raise ExchangeError(f"{p}: cannot read: {err.strerror or err}") from err
-    if stat.S_ISDIR(st.st_mode):
-        raise ExchangeError(f"{p}: is a directory, not a {kind} file")
-    if not stat.S_ISREG(st.st_mode):
-        raise ExchangeError(f"{p}: is {file_kind(st.st_mode)}, not a {kind} file; not read")
-    if st.st_size > MAX_FILE_BYTES:
-        raise ExchangeError(f"{p}: {st.st_size} bytes, more than the {MAX_FILE_BYTES} a {kind} file may have here")
+    why = input_problem(p, kind)
+    if why is not None:
+        raise ExchangeError(f"{p}: {why}")
     try:
         with open(p, "rb") as fh:
             data = fh.read(MAX_FILE_BYTES + 1)  # a file that grows while read cannot exceed the limit

@@ -58,7 +58,7 @@ _CLASSES: dict[str, type[HierarchicalSurface] | type[HierarchicalCurve]] = {
 
 def sidecar_path(step_path: str | os.PathLike[str]) -> Path:
     """``model.step`` -> ``model.hierarchy.json`` (same folder)."""
-    p = Path(os.fspath(step_path))
+    p = Path(os.fsdecode(step_path))
     return p.with_name(p.stem + SIDECAR_SUFFIX)
 
 
@@ -98,7 +98,7 @@ def write_hierarchical_step(path: str | os.PathLike[str], hierarchy: Hierarchica
         raise InvalidGeometryError(f"hierarchy: expected a HierarchicalSurface or HierarchicalCurve, got "
                                    f"{type(hierarchy).__name__}")
     step = _files.target(path, replace_readonly=replace_readonly)
-    side = sidecar_path(step) if sidecar is None else Path(os.fspath(sidecar))
+    side = sidecar_path(step) if sidecar is None else Path(os.fsdecode(sidecar))
     if side.is_dir():
         raise ExchangeError(f"{side}: is a directory; cannot write the hierarchy sidecar there")
     _files.check_target(side, replace_readonly=replace_readonly)
@@ -186,8 +186,8 @@ def read_hierarchical_step(path: str | os.PathLike[str], *, sidecar: str | os.Pa
     InvalidGeometryError
         ``timeout`` not a positive number of seconds.
     """
-    p = Path(os.fspath(path))
-    side = sidecar_path(p) if sidecar is None else Path(os.fspath(sidecar))
+    p = Path(os.fsdecode(path))
+    side = sidecar_path(p) if sidecar is None else Path(os.fsdecode(sidecar))
     _check_timeout(timeout)
     with _files.file_lock(_lock_path(side), shared=True):
         return _read_pair(p, side, isolated, timeout)
@@ -200,6 +200,10 @@ def _check_timeout(timeout: Any) -> None:
     number = isinstance(timeout, (int, float)) and not isinstance(timeout, bool)
     if not (number and np.isfinite(timeout) and timeout > 0):
         raise InvalidGeometryError(f"timeout: expected a positive number of seconds or None, got {timeout!r}")
+    from ..isolation import MAX_TIMEOUT
+
+    if timeout > MAX_TIMEOUT:
+        raise InvalidGeometryError(f"timeout: at most {MAX_TIMEOUT:g} seconds, got {timeout!r}")
 
 
 def _read_pair(p: Path, side: Path, isolated: bool = False,

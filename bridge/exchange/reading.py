@@ -146,7 +146,7 @@ def sniff_format(path: str | os.PathLike[str]) -> str:
     """
     from occsurf.algorithms.errors import ExchangeError
 
-    suffix = Path(os.fspath(path)).suffix.lower()
+    suffix = Path(os.fsdecode(path)).suffix.lower()
     if suffix in STEP_SUFFIXES:
         return "step"
     if suffix in IGES_SUFFIXES:
@@ -174,7 +174,7 @@ def target_format(path: str | os.PathLike[str]) -> str:
     """
     from occsurf.algorithms.errors import InvalidGeometryError
 
-    suffix = Path(os.fspath(path)).suffix.lower()
+    suffix = Path(os.fsdecode(path)).suffix.lower()
     for fmt, suffixes in TARGET_SUFFIXES.items():
         if suffix in suffixes:
             return fmt

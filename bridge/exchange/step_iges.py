@@ -385,7 +385,7 @@ def _read_isolated(path: str | os.PathLike[str], fmt: str, timeout: float | None
 
     from ..isolation import CRASHED, ERROR, OK, TIMEOUT, run_jobs
 
-    p = Path(os.fspath(path))
+    p = Path(os.fsdecode(path))
     with tempfile.TemporaryDirectory(prefix="occsurf-read-") as tmp:
         out = str(Path(tmp) / "shape.brep")
         item = {"path": os.fspath(p), "format": fmt, "out": out}

@@ -265,7 +265,7 @@ def face_inputs(path: str | os.PathLike[str], faces: list[int] | None = None, *,
     """
     from ..exchange.reading import read_model
 
-    p = Path(os.fspath(path))
+    p = Path(os.fsdecode(path))
     model = read_model(p)
     for k in range(len(model.faces)) if faces is None else faces:
         try:
@@ -291,7 +291,7 @@ def read_fit_input(path: str | os.PathLike[str], *, face: int | None = None, x_r
     ExchangeError
         Unreadable files, unknown formats, a face index out of range.
     """
-    p = Path(os.fspath(path))
+    p = Path(os.fsdecode(path))
     if not p.is_file():
         raise ExchangeError(f"{p}: no such file")
     suffix = p.suffix.lower()
@@ -499,7 +499,7 @@ def write_fit_outputs(result: FitResult, out_step: str | os.PathLike[str], *, na
     from ..exchange.hierarchical_io import write_hierarchical_step
     from ..rendering.error_maps import render_error_maps
 
-    step = Path(os.fspath(out_step))
+    step = Path(os.fsdecode(out_step))
     side = step.with_suffix(".json")
     png = step.with_suffix(".png")
     write_hierarchical_step(step, result.hierarchy, name, sidecar=side)

@@ -56,10 +56,11 @@ def test_move_vertex_refuses_negative_indices():
 
 
 def test_split_within_the_knot_tolerance_of_an_end_is_refused():
-    tiny = BSplineCurve(3, [0, 0, 0, 0, 1e-12, 1e-12, 1e-12, 1e-12], np.random.default_rng(1).random((4, 3)))
+    # A domain of twice the knot tolerance (1e-12): one of 1e-12 or less is itself refused (its ends are one knot).
+    tiny = BSplineCurve(3, [0, 0, 0, 0, 2e-12, 2e-12, 2e-12, 2e-12], np.random.default_rng(1).random((4, 3)))
     with pytest.raises(ParameterError, match="param: 4e-13 is within the knot tolerance"):
         tiny.split(4e-13)
-    s = BSplineSurface((1, 1), ([0, 0, 1e-12, 1e-12], [0, 0, 1, 1]), np.random.default_rng(2).random((2, 2, 3)))
+    s = BSplineSurface((1, 1), ([0, 0, 2e-12, 2e-12], [0, 0, 1, 1]), np.random.default_rng(2).random((2, 2, 3)))
     with pytest.raises(ParameterError, match="within the knot tolerance"):
         s.split(4e-13, direction="u")
     left, right = _curve().split(0.25)  # an ordinary split is unchanged
