@@ -491,6 +491,9 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
         x = V.as_finite_array(knots, "knots", ndim=1)
         if x.size == 0:
             return self
+        other = self._hpoles.shape[1 - ax]
+        V.check_size((self._hpoles.shape[ax] + x.size, other, self._hpoles.shape[-1] + 4),
+                     f"refine with {x.size} {direction}-knots")
         lo, hi = self.domain[ax]
         if x.min() <= lo or x.max() >= hi:
             bad = float(x.min() if x.min() <= lo else x.max())

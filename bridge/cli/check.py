@@ -262,6 +262,8 @@ def run(ns: argparse.Namespace) -> int:
             stream.put(k, rows[k])
             return
         doc = result["report"]
+        for w in doc.get("warnings") or []:  # what the reading read around, as inspect, convert and fill say it
+            error(f"{shown}: warning: {w}")
         failed |= not doc.get("passed", True)
         rows[k] = file_summary(shown, "." if single else name, doc, crashed=items[j].get("skip"),
                                thumbnail=(result.get("pictures") or {}).get("mean"))

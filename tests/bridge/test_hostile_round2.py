@@ -157,3 +157,43 @@ def test_bytes_paths_are_read(isolated: bool) -> None:
 
     model = read_step(os.fsencode(DOME), isolated=isolated)
     assert len(model.faces) == 18
+
+
+# ------------------------------------------------------------------------ item 8: refine's size
+def test_refine_refuses_more_than_max_array_bytes_before_working() -> None:
+    """``refine`` with 1e8 knots ran ~20 s into a MemoryError; now it is refused up front, as
+    ``evaluate_grid`` is (shown at a 1 MB limit, so that the test allocates little)."""
+    c = _cubic()
+    s = BSplineSurface((1, 1), ([0, 0, 1, 1], [0, 0, 1, 1]), np.arange(12.0).reshape(2, 2, 3))
+    many = np.linspace(0.1, 0.9, 100_000)
+    with tolerances.override(MAX_ARRAY_BYTES=10**6):
+        with pytest.raises(InvalidGeometryError, match=r"refine with 100000 knots: needs an array of shape \(100004, 7\)"):
+            c.refine(many)
+        with pytest.raises(InvalidGeometryError, match="refine with 100000 v-knots"):
+            s.refine(many, direction="v")
+        assert c.refine(many[:1000]).n_poles == 1004  # within the limit: refined as before
+
+
+# ------------------------------------------------------------------------ item 12: check's warnings on the terminal
+@pytest.mark.slow
+def test_check_prints_the_reading_warnings(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    """A point with four coordinates (OCC reads three): ``check`` wrote the warning into report.json
+    and the page only; inspect, convert and fill print it on stderr, and now so does check."""
+    import cadquery as cq
+
+    from occsurf.bridge.exchange.step_iges import write_step
+
+    from . import corrupt_files as C
+
+    box = cq.Workplane().box(1, 2, 3).val().wrapped
+    st = C.StepText.parse(write_step(tmp_path / "box.step", [box]).read_bytes())
+    point = next(r for r in st.records if b"CARTESIAN_POINT('',(" in r and r.count(b",") == 3)
+    head = point[: point.index(b"(", point.index(b"(") + 1) + 1]
+    four = C.write(tmp_path, "four.step", C.step_replace(st.join(), point, head + b"7.0," + point[len(head):]))
+    code, out, err = _main(capsys, "check", str(four), "--out", str(tmp_path / "rep"), "--no-pictures")
+    warnings = [ln for ln in err.splitlines() if ln.startswith(f"occsurf: {four}: warning: ")]
+    assert warnings and any("More than 3 coordinates" in w for w in warnings), err
+    import json
+
+    assert [f"occsurf: {four}: warning: {w}" for w in json.loads((tmp_path / "rep" / "report.json").read_text())["warnings"]] \
+        == warnings
