@@ -14,6 +14,7 @@ import importlib.util
 import logging
 import os
 import signal
+import threading
 from collections.abc import Iterator
 from typing import Any
 
@@ -106,8 +107,10 @@ def _sigint_ignored() -> Iterator[None]:
     Ctrl-C in a terminal signals the whole process group. The client handles it (flushes the
     finished rows, closes the cluster); workers that also took it would die mid-task with a
     traceback each. A signal ignored at exec stays ignored, and Python then installs no
-    KeyboardInterrupt handler of its own. Only the main thread may change handlers: elsewhere
-    this does nothing.
+    KeyboardInterrupt handler of its own. The cost: a Ctrl-C during the cluster's start-up (about
+    2 s) is lost. Blocking SIGINT instead (a blocked signal waits) does not keep it from the
+    workers: they took Ctrl-C and died with a traceback each. Only the main thread may change
+    handlers: elsewhere this does nothing.
     """
     try:
         old = signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -118,3 +121,32 @@ def _sigint_ignored() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+@contextlib.contextmanager
+def held_signals() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM back for the block (a cluster's start-up), then deliver them.
+
+    A ``KeyboardInterrupt`` raised inside ``LocalCluster(...)`` leaves a half-started cluster that
+    Dask's exit hook then fails to close, with a traceback. Here a signal is recorded while the
+    block runs and sent again to the handlers in place before it, once the block is done (the
+    caller has its cluster by then and closes it). SIGINT is ignored while the workers spawn
+    (:func:`_sigint_ignored`), so only a SIGTERM, or a SIGINT outside that moment, is held.
+    Main thread only: elsewhere this does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+
+    def record(signum: int, frame: Any) -> None:
+        got.append(signum)
+
+    old = {s: signal.signal(s, record) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        for signum in dict.fromkeys(got):
+            signal.raise_signal(signum)

@@ -19,6 +19,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..exchange.files import input_problem
 from ..exchange.reading import SUFFIXES, sniff_format
 
 __all__ = ["CorpusError", "Entry", "expand_paths", "sniff_cad", "sha256_of", "hash_entries"]
@@ -89,6 +90,8 @@ def _expand_one(arg: str, depth: int, out: list[Entry]) -> None:
                                      f"{path})"))
         else:
             out.append(Entry(str(path.absolute()), error="not a STEP or IGES file (unrecognised header)"))
+    elif os.path.lexists(path) and not (_GLOB_CHARS & set(arg)):  # a device, FIFO, socket, a link to nothing
+        out.append(Entry(str(path.absolute()), error=input_problem(path) or "not a regular file; not read"))
     elif _GLOB_CHARS & set(arg):
         for match in sorted(glob.glob(os.path.expanduser(arg), recursive=True)):
             m = Path(match)
@@ -137,6 +140,10 @@ def sha256_of(path: str) -> tuple[str, int]:
 
 
 def _hash_one(e: Entry) -> Entry:
+    if e.error is None:
+        # Before opening: a device (a link to /dev/zero) or a FIFO would read or wait forever, here,
+        # before any --timeout applies; a regular file is at most MAX_FILE_BYTES.
+        e.error = input_problem(e.path)
     if e.error is None:
         try:
             e.sha256, e.size = sha256_of(e.path)

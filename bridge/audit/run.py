@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -130,7 +131,8 @@ def _check_args(checks: Sequence[str], timeout: float | None, workers: int | Non
 def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, workers: int | None = None,
           timeout: float | None = 300.0, resume: bool = False, checks: Sequence[str] = DEFAULT_CHECKS,
           samples: int = DEFAULT_SAMPLES, progress: TextIO | None = sys.stderr,
-          on_dashboard: Callable[[str], None] | None = None, flush_seconds: float = 2.0) -> AuditResult:
+          on_dashboard: Callable[[str], None] | None = None, flush_seconds: float = 2.0,
+          stop: threading.Event | None = None) -> AuditResult:
     """Audit every STEP/IGES file of ``paths`` on Dask and write RESULTS ``out``.
 
     Parameters
@@ -151,6 +153,9 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
         Any of ``inspect``, ``quality``, ``roundtrip``.
     samples : int
         Grid size of the per-face deviation checks.
+    stop : threading.Event, optional
+        Set (by a signal handler, say) to end the run as an interrupt does, at the next file that
+        finishes, even where the ``KeyboardInterrupt`` itself was swallowed (inside Dask's callbacks).
 
     Returns
     -------
@@ -166,12 +171,14 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
     checks = _check_args(tuple(checks), timeout, workers)
     entries = expand_paths(paths)  # every refusal (corpus, --out, scheduler) before the long work
     store = ResultStore(out, resume=resume, flush_seconds=flush_seconds)
-    from .cluster import dashboard_link, open_client
+    from .cluster import dashboard_link, held_signals, open_client
 
-    client, cluster = open_client(scheduler, workers)
     t0 = time.monotonic()
     dashboard = None
+    client = cluster = None
     try:
+        with held_signals():  # a signal during start-up: delivered once the cluster is ours to close
+            client, cluster = open_client(scheduler, workers)
         dashboard = dashboard_link(client)  # first: the dashboard shows the cluster from the start
         if dashboard is not None and on_dashboard is not None:
             on_dashboard(dashboard)
@@ -179,10 +186,11 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
             print(f"audit: {len(entries)} files; hashing their contents", file=progress, flush=True)
         hash_entries(entries)
         bar = Progress(len(entries), progress)
-        skipped, interrupted = _drive(client, entries, store, bar, checks, samples, timeout)
+        skipped, interrupted = _drive(client, entries, store, bar, checks, samples, timeout, stop)
     finally:
         store.flush()
-        client.close()
+        if client is not None:
+            client.close()
         if cluster is not None:
             cluster.close()
     counts = dict.fromkeys(STATUSES, 0)
@@ -201,7 +209,7 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
 
 
 def _drive(client: Any, entries: list[Entry], store: ResultStore, bar: Progress, checks: tuple[str, ...],
-           samples: int, timeout: float | None) -> tuple[int, bool]:
+           samples: int, timeout: float | None, stop: threading.Event | None = None) -> tuple[int, bool]:
     """Submit a bounded window of tasks, record results as they come; returns (skipped, interrupted)."""
     from distributed import as_completed
 
@@ -238,8 +246,12 @@ def _drive(client: Any, entries: list[Entry], store: ResultStore, bar: Progress,
     if not todo:
         return skipped, False
     try:
+        if stop is not None and stop.is_set():
+            raise KeyboardInterrupt
         ac = as_completed(submit(window), with_results=False, loop=client.loop)
         for fut in ac:
+            if stop is not None and stop.is_set():  # the interrupt was swallowed somewhere: stop here
+                raise KeyboardInterrupt
             h = futures.pop(fut)
             try:
                 res = fut.result()

@@ -11,8 +11,8 @@ link go to stderr.
 Exit status: 0 when every file was audited ``ok``; 1 when the audit completed but some files are
 ``error``, ``crashed`` or ``timeout`` (their rows say why); 2 on bad input (an empty corpus, a
 missing PATH, an unreachable scheduler, an unwritable or already used ``--out``, a missing
-dependency), one line on stderr and nothing audited; 130 when interrupted (Ctrl-C, SIGTERM): what
-finished is in RESULTS and ``--resume`` does the rest.
+dependency), one line on stderr and nothing audited; 130 when interrupted by Ctrl-C (SIGINT), 143 by
+SIGTERM: what finished is in RESULTS and ``--resume`` does the rest.
 
 Only the standard library is imported at module level.
 """
@@ -24,6 +24,7 @@ import contextlib
 import importlib.util
 import signal
 import sys
+import threading
 from typing import Any
 
 from ._common import EXIT_ERROR, EXIT_OK, error, timeout_arg
@@ -58,21 +59,50 @@ def _missing_dependencies() -> list[str]:
     return [m for m in ("dask", "distributed", "pyarrow") if importlib.util.find_spec(m) is None]
 
 
-@contextlib.contextmanager
-def _sigterm_as_interrupt() -> Any:
-    """SIGTERM (a killed client) ends the run like Ctrl-C: finished rows are flushed first."""
-    def handler(signum: int, frame: Any) -> None:
+class _Interrupts:
+    """SIGINT (Ctrl-C) and SIGTERM (a killed client) end the run: the first raises
+    ``KeyboardInterrupt`` and sets :attr:`stop` (which the audit checks at every finished file, in
+    case a library swallowed the exception); later ones are ignored, so the flush of the finished
+    rows and the cluster's shutdown run to their end."""
+
+    def __init__(self) -> None:
+        self.stop = threading.Event()
+        self.signum: int | None = None
+        self._hook = sys.unraisablehook
+
+    def handler(self, signum: int, frame: Any) -> None:
+        if self.signum is not None:
+            return
+        self.signum = signum
+        self.stop.set()
         raise KeyboardInterrupt
 
-    try:
-        old = signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, old)
+    @property
+    def exit_status(self) -> int:
+        """128 + the signal's number: 130 for SIGINT, 143 for SIGTERM."""
+        return 128 + (self.signum or signal.SIGINT)
+
+    def unraisable(self, info: Any) -> None:
+        """The interrupt raised where Python cannot raise (a weakref callback, ``__del__``): it was
+        swallowed there, with a traceback printed; :attr:`stop` ends the run instead, quietly."""
+        if info.exc_type is KeyboardInterrupt and self.signum is not None:
+            return
+        self._hook(info)
+
+    @contextlib.contextmanager
+    def installed(self) -> Any:
+        try:
+            old = {s: signal.signal(s, self.handler) for s in (signal.SIGINT, signal.SIGTERM)}
+        except ValueError:  # not the main thread
+            yield
+            return
+        self._hook, sys.unraisablehook = sys.unraisablehook, self.unraisable
+        try:
+            yield
+        finally:
+            for s, h in old.items():
+                signal.signal(s, h)
+            sys.unraisablehook = self._hook
 
 
 def run(ns: argparse.Namespace) -> int:
@@ -87,24 +117,27 @@ def run(ns: argparse.Namespace) -> int:
     def dashboard(link: str) -> None:
         print(f"audit: Dask dashboard at {link}", file=sys.stderr, flush=True)
 
+    signals = _Interrupts()
     try:
-        with _sigterm_as_interrupt():
-            result = audit(ns.paths, ns.out, scheduler=ns.scheduler, workers=ns.workers, timeout=ns.timeout,
-                           resume=ns.resume, checks=ns.checks, samples=ns.samples, on_dashboard=dashboard)
+        with signals.installed():
+            try:
+                result = audit(ns.paths, ns.out, scheduler=ns.scheduler, workers=ns.workers, timeout=ns.timeout,
+                               resume=ns.resume, checks=ns.checks, samples=ns.samples, on_dashboard=dashboard,
+                               stop=signals.stop)
+            except KeyboardInterrupt:  # outside the loop over files (hashing, cluster start-up, the summary)
+                error(f"interrupted; what finished is in {ns.out} (rerun with --resume to finish the rest)")
+                return signals.exit_status
     except (CorpusError, StoreError, ClusterError, AuditInputError) as err:
         error(" ".join(str(err).split()))
         return EXIT_ERROR
     except Exception as err:  # noqa: BLE001 - a defect of ours: still one line, never a traceback
         error(f"audit failed: {error_line(err)} (results written so far are in {ns.out}; --resume continues)")
         return EXIT_ERROR
-    except KeyboardInterrupt:  # before the run started (hashing, cluster start-up)
-        error("interrupted before any file was audited")
-        return EXIT_INTERRUPTED
     c = result.counts
-    if result.interrupted:
+    if result.interrupted or signals.signum is not None:
         error(f"interrupted: {sum(c.values())} of {result.n_input} files are in {ns.out}; "
               "rerun with --resume to finish the rest")
-        return EXIT_INTERRUPTED
+        return signals.exit_status
     print(f"{result.n_input} files: {c['ok']} ok, {c['error']} failed, {c['crashed']} crashed, {c['timeout']} timeout "
           f"({result.skipped} already in {ns.out}); {result.seconds:.1f} s; {ns.out}/summary.html", flush=True)
     return EXIT_OK if c["ok"] == result.n_input else EXIT_FAILURES
@@ -118,7 +151,7 @@ def add_parser(sub: Any) -> None:
         description=("Per file: a crash-isolated read, the inspect numbers of every face, a STEP round trip, "
                      "and the quality summary; on a local Dask cluster (one process per core) or an existing "
                      "one (--scheduler). Results: RESULTS/files/ and RESULTS/faces/ (Parquet), summary.json, "
-                     "summary.html. Exit 0: all ok; 1: some files failed; 2: bad input; 130: interrupted."),
+                     "summary.html. Exit 0: all ok; 1: some files failed; 2: bad input; 130: interrupted (Ctrl-C); 143: SIGTERM."),
     )
     p.add_argument("paths", nargs="+", metavar="PATH",
                    help="STEP/IGES files, folders (recursive), glob patterns, or text files listing paths")
