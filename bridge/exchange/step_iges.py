@@ -586,8 +586,57 @@ def _convert(p: Path, fmt: str, shape: Any, names: tuple[dict[int, str], dict[in
     edges = [replace(e, color=x.edge_colors.get(i), layer=x.edge_layers.get(i), instance=x.edge_instances.get(i))
              if i in x.edge_colors or i in x.edge_layers or i in x.edge_instances else e
              for i, e in enumerate(edges, start=1)]
+    for what, entries in (("face", faces), ("curve", edges)):
+        for e in entries:
+            if e.error is not None and "expected finite values" in e.error:
+                how = (f"after scaling from {x.unit} to mm (x{x.unit_scale:g})" if x.unit_scale != 1.0 else "in the file")
+                warnings.append(f"{what} {e.index}: coordinates not finite {how}: {e.error}")
     return ImportedModel(path=str(p), format=fmt, shape=shape, faces=faces, edges=edges, warnings=warnings,
                          unit=x.unit, unit_scale=x.unit_scale, assembly=x.assembly)
+
+
+def _refuse_nonfinite(p: Path, shapes: Any) -> None:
+    """Refuse to write a face or curve whose coordinates are infinite or NaN (a pole of 1e308 in a
+    file in feet overflows when read into millimetres): OCC would print ``INF`` and call it done.
+
+    Raises
+    ------
+    ExchangeError
+        Naming the first such face (or free curve) by its index among the object's faces.
+    """
+    import math
+
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+    from OCP.TopExp import TopExp
+    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    def finite(shape: Any) -> bool:
+        box = Bnd_Box()
+        BRepBndLib.Add_s(shape, box, False)
+        return box.IsVoid() or all(math.isfinite(v) for v in box.Get())
+
+    for k, shape in enumerate(shapes):
+        if shape is None or shape.IsNull() or finite(shape):
+            continue
+        for kind, what in ((TopAbs_FACE, "face"), (TopAbs_EDGE, "curve")):
+            m = TopTools_IndexedMapOfShape()
+            TopExp.MapShapes_s(shape, kind, m)
+            for i in range(1, m.Extent() + 1):
+                if not finite(m.FindKey(i)):
+                    raise ExchangeError(f"{p}: object {k}, {what} {i - 1}: coordinates not finite (infinite or NaN); "
+                                        "nothing written")
+        raise ExchangeError(f"{p}: object {k}: coordinates not finite (infinite or NaN); nothing written")
+
+
+def _shapes_of(objects: Any, items: Any) -> list[Any]:
+    """The OCC shapes a write will translate (a model's, an assembly's prototypes, or the items')."""
+    if isinstance(objects, ImportedModel):
+        return [objects.shape]
+    if isinstance(objects, xcaf.AssemblyNode):
+        return [n.shape for _, n in xcaf.iter_nodes(objects)]
+    return [shape for shape, _ in items]
 
 
 # ------------------------------------------------------------------------------------ writing
@@ -655,9 +704,11 @@ def write_step(
     objects = _assembly_as_model(objects, names)
     file_unit = _write_unit(objects, names, unit)
     if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)):
+        _refuse_nonfinite(p, _shapes_of(objects, None))
         data = xcaf_write.step_document_bytes(p, objects, precision_digits, file_unit)
     else:
         items = _xocc.normalise(objects, names)
+        _refuse_nonfinite(p, _shapes_of(objects, items))
         data = _xocc.step_bytes(p, items, precision_digits, file_unit)
     _files.atomic_write(p, data, replace_readonly=replace_readonly)
     return p
@@ -715,9 +766,11 @@ def write_iges(
     objects = _assembly_as_model(objects, names)
     file_unit = _write_unit(objects, names, unit)
     if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)):
+        _refuse_nonfinite(p, _shapes_of(objects, None))
         data = xcaf_write.iges_document_bytes(p, objects, file_unit)
     else:
         items = _xocc.normalise(objects, names)
+        _refuse_nonfinite(p, _shapes_of(objects, items))
         data = _xocc.iges_bytes(p, items, file_unit)
     _files.atomic_write(p, data, replace_readonly=replace_readonly)
     return p

@@ -197,3 +197,41 @@ def test_check_prints_the_reading_warnings(capsys: pytest.CaptureFixture[str], t
 
     assert [f"occsurf: {four}: warning: {w}" for w in json.loads((tmp_path / "rep" / "report.json").read_text())["warnings"]] \
         == warnings
+
+
+# ------------------------------------------------------------------------ item 3: non-finite after unit scaling
+def _overflowing_iges(folder: Path) -> Path:
+    """A one-face IGES file in feet whose pole 1E308 overflows when read into millimetres (x304.8)."""
+    from occsurf.bridge.exchange.step_iges import write_iges
+
+    P = np.zeros((2, 2, 3))
+    P[..., 0], P[..., 1] = [[0, 0], [1, 1]], [[0, 1], [0, 1]]
+    P[1, 1, 2] = 0.5
+    text = write_iges(folder / "ft.igs", [BSplineSurface((1, 1), ([0, 0, 1, 1],) * 2, P)], unit="ft").read_text()
+    old = "1.640419948E-03,0.,1.,0.,1.;"  # 0.5 mm in feet, then the parameter ranges
+    assert old in text
+    out = folder / "ft_inf.igs"
+    out.write_text(text.replace(old, "1.0E308,        0.,1.,0.,1.;"))  # same columns
+    return out
+
+
+def test_overflow_after_unit_scaling_is_warned_and_never_written(capsys: pytest.CaptureFixture[str],
+                                                                  tmp_path: Path) -> None:
+    """``convert`` wrote INF into IGES with exit 0, and ``inspect`` showed the error only in its table."""
+    from occsurf.algorithms.errors import ExchangeError
+    from occsurf.bridge.exchange.step_iges import read_iges, write_iges, write_step
+
+    src = _overflowing_iges(tmp_path)
+    model = read_iges(src)
+    assert model.warnings == ["face 0: coordinates not finite after scaling from ft to mm (x304.8): InvalidGeometryError: "
+                              "control_points: expected finite values, got inf at index (1, 1, 2)"]
+    code, out, err = _main(capsys, "inspect", str(src), "--strict")
+    assert code == 2 and "coordinates not finite after scaling from ft to mm" in err
+    for target in ("o.igs", "o.step"):
+        code, out, err = _main(capsys, "convert", str(src), str(tmp_path / target))
+        assert code == 2 and err == f"occsurf: {tmp_path / target}: object 0, face 0: coordinates not finite " \
+                                    "(infinite or NaN); nothing written\n", err
+        assert not (tmp_path / target).exists()
+    for write in (write_iges, write_step):
+        with pytest.raises(ExchangeError, match="face 0: coordinates not finite"):
+            write(tmp_path / "direct", [model.faces[0].face])
