@@ -1,10 +1,11 @@
-"""``occsurf convert IN OUT [--unit UNIT] [--digits N] [--timeout SECONDS] [--strict] [--in-process]``.
+"""``occsurf convert IN OUT [--unit UNIT] [--digits N] [--timeout SECONDS] [--strict] [--allow-loss] [--in-process]``.
 
 Converts a STEP or IGES file to STEP or IGES (the format of ``OUT`` by its suffix) with
 :func:`occsurf.bridge.exchange.convert.convert`: assembly structure, names, colours, layers and the
 input's unit (``--unit`` to change it) are kept; STEP reals get 17 significant digits (``--digits``).
 ``IN`` is read in a worker process (an untrusted file that crashes OCC costs the worker, not the
-command); ``OUT`` is replaced atomically.
+command); ``OUT`` is replaced atomically. A model with fewer faces than ``IN`` describes (faces OCC
+refused: a B-spline of degree 1e9, decreasing knots) is not written unless ``--allow-loss``.
 
 Output: one line ``IN (FORMAT, UNIT) -> OUT (FORMAT, UNIT): N faces, M free curves``, then one line per
 property that could not be carried (``IGES has no assembly instances: 2 instances of 'plate' written
@@ -54,7 +55,7 @@ def run(ns: argparse.Namespace) -> int:
     before = _identity(out)
     try:
         report = convert(ns.input, ns.output, unit=ns.unit, digits=ns.digits, isolated=not ns.in_process,
-                         timeout=ns.timeout, strict=ns.strict)
+                         timeout=ns.timeout, strict=ns.strict, allow_loss=ns.allow_loss)
     except KeyboardInterrupt:
         if _identity(out) != before:  # Ctrl-C after the atomic replace, while OUT was read back
             error(f"{shown_path(ns.output)}: written, but interrupted while reading it back: nothing was compared")
@@ -112,6 +113,9 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop reading IN after this long (default {DEFAULT_TIMEOUT:g})")
     add_strict_option(p, writes=True)
+    p.add_argument("--allow-loss", action="store_true",
+                   help="write the model even when it has fewer faces than the source describes (faces OCC "
+                        "refused to read); refused otherwise, nothing written")
     p.add_argument("--in-process", action="store_true",
                    help="read IN in this process, not in a worker (a crash inside OCC then ends it)")
     p.set_defaults(func=run)

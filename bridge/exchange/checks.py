@@ -624,6 +624,21 @@ def occ_check_warnings(reader: Any, fmt: str, scan: StepScan | None = None) -> l
     return _limited(lines, "OCC check messages")
 
 
+#: The warning of :func:`model_warnings` when the model has another number of faces than the file
+#: describes (:func:`faces_lost` reads it back).
+FACE_COUNT_WARNING = "the file has {listed} face instances ({what}); the model read has {read} faces"
+_FACE_COUNT = re.compile(r"^the file has (\d+) face instances \(.*\); the model read has (\d+) faces$")
+
+
+def faces_lost(warnings: list[str]) -> tuple[int, int] | None:
+    """``(listed, read)`` when the warnings say the model has fewer faces than the file describes."""
+    for w in warnings:
+        m = _FACE_COUNT.match(w)
+        if m and int(m.group(2)) < int(m.group(1)):
+            return int(m.group(1)), int(m.group(2))
+    return None
+
+
 def model_warnings(shape: Any, reader: Any, scan: StepScan | IgesScan | None, n_faces: int) -> list[str]:
     """The model against the file: face count, and shells the file calls closed that have free edges
     (STEP ``CLOSED_SHELL``, IGES shell entity 514 of form 1)."""
@@ -633,7 +648,7 @@ def model_warnings(shape: Any, reader: Any, scan: StepScan | IgesScan | None, n_
     step = isinstance(scan, StepScan)
     what = ", ".join(STEP_FACE_TYPES) if step else "entities 510, or 143/144 and surfaces"
     if scan.face_instances and n_faces != scan.face_instances:
-        lines.append(f"the file has {scan.face_instances} face instances ({what}); the model read has {n_faces} faces")
+        lines.append(FACE_COUNT_WARNING.format(listed=scan.face_instances, what=what, read=n_faces))
     if scan.closed_shells:
         labels = [f"#{i}" for i in scan.closed_shells] if step else [f"D{i}" for i in scan.closed_shells]
         lines += _open_closed_shells(shape, labels, "CLOSED_SHELL" if step else "closed shells (entity 514, form 1)")

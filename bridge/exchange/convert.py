@@ -21,6 +21,7 @@ from typing import Any
 
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 
+from .checks import faces_lost
 from .reading import IGES_SUFFIXES, STEP_SUFFIXES, sniff_format, strict_refusal, target_format
 
 __all__ = ["ConversionReport", "convert", "target_format", "source_format", "STEP_SUFFIXES", "IGES_SUFFIXES",
@@ -103,6 +104,7 @@ def convert(
     timeout: float | None = None,
     replace_readonly: bool = False,
     strict: bool = False,
+    allow_loss: bool = False,
 ) -> ConversionReport:
     """Convert a STEP or IGES file to STEP or IGES (by the target's suffix), keeping its structure.
 
@@ -128,6 +130,10 @@ def convert(
     strict : bool, default False
         Refuse a source read around damage (``ImportedModel.warnings``, see
         :mod:`occsurf.bridge.exchange.checks`): nothing is written then (the command line's ``--strict``).
+    allow_loss : bool, default False
+        Write a model that has fewer faces than the source describes (OCC refused some: a B-spline
+        of degree 1e9, decreasing knots...). By default that is refused, nothing written (the
+        command line's ``--allow-loss`` allows it).
 
     Returns
     -------
@@ -138,8 +144,9 @@ def convert(
     InvalidGeometryError
         A bad target suffix, ``unit`` or ``digits``.
     ExchangeError
-        The source cannot be read (missing, damaged, neither STEP nor IGES, a crash or time-out of the reader) or the
-        target cannot be written; no target file is created or modified then.
+        The source cannot be read (missing, damaged, neither STEP nor IGES, a crash or time-out of the reader),
+        lost faces (without ``allow_loss``), or the target cannot be written; no target file is created or
+        modified then.
     """
     from . import xcaf
     from .step_iges import STEP_DIGITS, read_iges, read_step, write_iges, write_step
@@ -155,6 +162,10 @@ def convert(
     model = reader(source, isolated=isolated, timeout=timeout)
     if strict and model.warnings:
         raise ExchangeError(f"{os.fspath(source)}: {strict_refusal(model.warnings)}")
+    lost = faces_lost(model.warnings)
+    if lost is not None and not allow_loss:
+        raise ExchangeError(f"{os.fspath(source)}: the file describes {lost[0]} faces and {lost[1]} were read "
+                            f"({lost[0] - lost[1]} lost); nothing written (allow_loss / --allow-loss writes what was read)")
     out_unit = unit if unit is not None else (model.unit if model.unit in xcaf.WRITE_UNITS else "mm")
     if out_fmt == "step":
         written = write_step(target, model, precision_digits=digits or STEP_DIGITS, unit=out_unit,

@@ -235,3 +235,25 @@ def test_overflow_after_unit_scaling_is_warned_and_never_written(capsys: pytest.
     for write in (write_iges, write_step):
         with pytest.raises(ExchangeError, match="face 0: coordinates not finite"):
             write(tmp_path / "direct", [model.faces[0].face])
+
+
+# ------------------------------------------------------------------------ item 2: faces lost, never written silently
+@pytest.mark.parametrize("degree", ["1000000000", "-3"])
+def test_convert_refuses_a_model_that_lost_faces(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                                 degree: str) -> None:
+    """A B-spline surface of degree 1e9 (or -3): OCC drops its face; convert wrote the 10-face model of
+    an 11-face file with exit 0. Now: refused, nothing written, unless --allow-loss."""
+    import re
+
+    text = (REPO / "step_samples" / "loft.step").read_text()
+    m = re.search(r"B_SPLINE_SURFACE_WITH_KNOTS\('[^']*',(\d+),", text)
+    assert m is not None
+    src = tmp_path / "bad.step"
+    src.write_text(text[:m.start(1)] + degree + text[m.end(1):])
+    out = tmp_path / "o.step"
+    code, stdout, err = _main(capsys, "convert", str(src), str(out))
+    assert code == 2 and not out.exists()
+    assert err.endswith(f"occsurf: {src}: the file describes 11 faces and 10 were read (1 lost); nothing written "
+                        "(allow_loss / --allow-loss writes what was read)\n"), err
+    code, stdout, err = _main(capsys, "convert", str(src), str(out), "--allow-loss")
+    assert code == 0 and out.exists() and "10 faces" in stdout
