@@ -85,7 +85,7 @@ from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 from ..messages import one_line
 from . import files as _files
 from . import occ_io as _xocc
-from . import xcaf, xcaf_write
+from . import write_checks, xcaf, xcaf_write
 from .model import (  # noqa: F401 - the model types are part of this module's names
     ImportedEdge,
     ImportedFace,
@@ -595,51 +595,6 @@ def _convert(p: Path, fmt: str, shape: Any, names: tuple[dict[int, str], dict[in
                          unit=x.unit, unit_scale=x.unit_scale, assembly=x.assembly)
 
 
-def _refuse_nonfinite(p: Path, shapes: Any) -> None:
-    """Refuse to write a face or curve whose coordinates are infinite or NaN (a pole of 1e308 in a
-    file in feet overflows when read into millimetres): OCC would print ``INF`` and call it done.
-
-    Raises
-    ------
-    ExchangeError
-        Naming the first such face (or free curve) by its index among the object's faces.
-    """
-    import math
-
-    from OCP.Bnd import Bnd_Box
-    from OCP.BRepBndLib import BRepBndLib
-    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
-    from OCP.TopExp import TopExp
-    from OCP.TopTools import TopTools_IndexedMapOfShape
-
-    def finite(shape: Any) -> bool:
-        box = Bnd_Box()
-        BRepBndLib.Add_s(shape, box, False)
-        return box.IsVoid() or all(math.isfinite(v) for v in box.Get())
-
-    for k, shape in enumerate(shapes):
-        if shape is None or shape.IsNull() or finite(shape):
-            continue
-        for kind, what in ((TopAbs_FACE, "face"), (TopAbs_EDGE, "curve")):
-            m = TopTools_IndexedMapOfShape()
-            TopExp.MapShapes_s(shape, kind, m)
-            for i in range(1, m.Extent() + 1):
-                if not finite(m.FindKey(i)):
-                    raise ExchangeError(f"{p}: object {k}, {what} {i - 1}: coordinates not finite (infinite or NaN); "
-                                        "nothing written")
-        raise ExchangeError(f"{p}: object {k}: coordinates not finite (infinite or NaN); nothing written")
-
-
-def _shapes_of(objects: Any, items: Any) -> list[Any]:
-    """The OCC shapes a write will translate (a model's, an assembly's prototypes, or the items')."""
-    if isinstance(objects, ImportedModel):
-        return [objects.shape]
-    if isinstance(objects, xcaf.AssemblyNode):
-        return [n.shape for _, n in xcaf.iter_nodes(objects)]
-    return [shape for shape, _ in items]
-
-
-# ------------------------------------------------------------------------------------ writing
 def write_step(
     path: str | os.PathLike[str],
     objects: Any,
@@ -704,11 +659,11 @@ def write_step(
     objects = _assembly_as_model(objects, names)
     file_unit = _write_unit(objects, names, unit)
     if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)):
-        _refuse_nonfinite(p, _shapes_of(objects, None))
+        write_checks.refuse(p, "step", objects, None)
         data = xcaf_write.step_document_bytes(p, objects, precision_digits, file_unit)
     else:
         items = _xocc.normalise(objects, names)
-        _refuse_nonfinite(p, _shapes_of(objects, items))
+        write_checks.refuse(p, "step", objects, items)
         data = _xocc.step_bytes(p, items, precision_digits, file_unit)
     _files.atomic_write(p, data, replace_readonly=replace_readonly)
     return p
@@ -766,11 +721,13 @@ def write_iges(
     objects = _assembly_as_model(objects, names)
     file_unit = _write_unit(objects, names, unit)
     if isinstance(objects, (ImportedModel, xcaf.AssemblyNode)):
-        _refuse_nonfinite(p, _shapes_of(objects, None))
+        write_checks.refuse(p, "iges", objects, None)
         data = xcaf_write.iges_document_bytes(p, objects, file_unit)
+        items = None
     else:
         items = _xocc.normalise(objects, names)
-        _refuse_nonfinite(p, _shapes_of(objects, items))
+        write_checks.refuse(p, "iges", objects, items)
         data = _xocc.iges_bytes(p, items, file_unit)
+    write_checks.check_iges_bytes(p, data, objects, items)
     _files.atomic_write(p, data, replace_readonly=replace_readonly)
     return p

@@ -4,12 +4,15 @@ Python error, a silent NaN or a run that went on without its timeout)."""
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface, tolerances
 from occsurf.algorithms.errors import (
@@ -257,3 +260,53 @@ def test_convert_refuses_a_model_that_lost_faces(capsys: pytest.CaptureFixture[s
                         "(allow_loss / --allow-loss writes what was read)\n"), err
     code, stdout, err = _main(capsys, "convert", str(src), str(out), "--allow-loss")
     assert code == 0 and out.exists() and "10 faces" in stdout
+
+
+# ------------------------------------------------------------------------ item 7: names round-trip or are refused
+def _patch() -> BSplineSurface:
+    P = np.zeros((2, 2, 3))
+    P[..., 0], P[..., 1] = [[0, 0], [1, 1]], [[0, 1], [0, 1]]
+    return BSplineSurface((1, 1), ([0, 0, 1, 1],) * 2, P)
+
+
+@pytest.mark.parametrize("name, fmt, why", [
+    ("line\nbreak", "iges", "U+000A"),  # made the IGES file unreadable
+    ("cr\rx", "iges", "U+000D"),
+    ("cr\rx", "step", "U+000D"),  # STEP dropped the CR silently
+    ("nul\x00x", "step", "U+0000"),  # both cut the name at a NUL
+    ("nul\x00x", "iges", "U+0000"),
+    ("\\X2\\00E9\\X0\\", "step", "directive"),  # came back as 'é'
+    ("y" * 16100, "step", "STEP_NAME_MAX"),  # OCC's reader failed on the file (16,161 characters)
+    ("\u00e9" * 3000, "step", "36000 encoded"),
+    ("0 ", "step", "leading and trailing blanks"),  # came back as '0'
+    ("NONE", "iges", "as no name"),  # came back as None
+    ("\u0105", "iges", "names beyond ASCII shift IGES's fixed columns"),  # 'ą': a damaged IGES file
+    ("jw\x1aP", "iges", "U+001A"),  # SUB: OCC's IGES XCAF reader crashed (segmentation fault) on reading
+])
+def test_names_a_format_cannot_carry_are_refused(tmp_path: Path, name: str, fmt: str, why: str) -> None:
+    from occsurf.algorithms.errors import ExchangeError
+    from occsurf.bridge.exchange.step_iges import write_iges, write_step
+
+    out = tmp_path / f"n.{fmt}"
+    with pytest.raises(ExchangeError, match=re.escape(why)):
+        (write_step if fmt == "step" else write_iges)(out, [_patch()], names=[name])
+    assert not out.exists()
+
+
+@pytest.mark.slow
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(name=st.text(min_size=1, max_size=60), fmt=st.sampled_from(["step", "iges"]))
+def test_any_name_round_trips_or_is_refused(tmp_path: Path, name: str, fmt: str) -> None:
+    """Never cut silently: a name comes back exactly, or the write refuses it (nothing written)."""
+    from occsurf.algorithms.errors import ExchangeError
+    from occsurf.bridge.exchange.step_iges import read_iges, read_step, write_iges, write_step
+
+    out = tmp_path / f"n.{fmt}"
+    out.unlink(missing_ok=True)
+    try:
+        (write_step if fmt == "step" else write_iges)(out, [_patch()], names=[name])
+    except ExchangeError as err:
+        assert ("names[0]" in str(err) or "beyond ASCII" in str(err)) and not out.exists(), str(err)
+        return
+    got = (read_step if fmt == "step" else read_iges)(out).faces[0].name
+    assert got == name, (name, got)
