@@ -51,6 +51,8 @@ import numpy as np
 
 from occsurf.algorithms.errors import ExchangeError
 
+from .step_splines import spline_problems
+
 __all__ = ["StepScan", "IgesScan", "scan_step", "scan_iges", "occ_check_warnings", "model_warnings",
            "MAX_NESTING", "MAX_WARNINGS_PER_KIND", "STEP_FACE_TYPES", "STEP_CURVE_TYPES"]
 
@@ -239,6 +241,8 @@ def scan_step(p: Path, data: bytes, broken: dict[int, str] | None = None) -> Ste
     cols = order[pos_c[found]] if len(ids) else np.zeros(0, np.int64)
     _cycle_error(p, ids, rows[found], cols, types)
     scan.warnings += _transfer_crashes(p, ids_list, types, [texts[k] for k in rec_of], refs_per)
+    scan.warnings += _limited(spline_problems(ids_list, types, [texts[k] for k in rec_of], body_at, refs_per),
+                              "B-spline instances OCC cannot build")
     broken = {i: why for i, why in (broken or {}).items() if i in counts}
     if not found.all() or broken:
         scan.data, lines = _prune(data, starts, semis, rec_of, ids, types, refs_per,

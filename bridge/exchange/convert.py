@@ -164,8 +164,11 @@ def convert(
         raise ExchangeError(f"{os.fspath(source)}: {strict_refusal(model.warnings)}")
     lost = faces_lost(model.warnings)
     if lost is not None and not allow_loss:
+        named = [w for w in model.warnings if "OCC cannot build it" in w]
+        why = f": {named[0]}" + (f" and {len(named) - 1} more" if len(named) > 1 else "") if named else ""
         raise ExchangeError(f"{os.fspath(source)}: the file describes {lost[0]} faces and {lost[1]} were read "
-                            f"({lost[0] - lost[1]} lost); nothing written (allow_loss / --allow-loss writes what was read)")
+                            f"({lost[0] - lost[1]} lost{why}); nothing written (allow_loss / --allow-loss writes "
+                            "what was read)")
     out_unit = unit if unit is not None else (model.unit if model.unit in xcaf.WRITE_UNITS else "mm")
     if out_fmt == "step":
         written = write_step(target, model, precision_digits=digits or STEP_DIGITS, unit=out_unit,
