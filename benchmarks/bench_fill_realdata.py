@@ -60,7 +60,8 @@ def load(path: Path):
     return r.OneShape()
 
 
-def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only_pairs: bool = False) -> list[dict]:
+def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only_pairs: bool = False,
+             on_row=None) -> list[dict]:
     from OCP.BRep import BRep_Tool
     from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
 
@@ -78,6 +79,8 @@ def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only
         row = asdict(rep)
         row.update(file=path.name, wall=time.perf_counter() - t0, size=model.size)
         rows.append(row)
+        if on_row is not None:
+            on_row(row)
         o, t = rep.occ.get("default", {}), rep.occ.get("tuned", {})
         print(f"{path.name} {faces}: {rep.status} {rep.method or '-'} n={rep.sides} G0 {rep.g0} G1 {rep.g1} folds {rep.folds} valid {rep.valid} "
               f"step {rep.step_round_trip} | OCC {o.get('status')} {o.get('g0')} {o.get('g1')} | tuned "
@@ -221,7 +224,7 @@ def main() -> None:
     ap.add_argument("--skip", type=int, default=0, help="skip this many face sets per file first")
     ap.add_argument("--max-holes", type=int, default=None, help="at most this many face sets per file")
     ap.add_argument("--files", nargs="*", default=None, help="file names in realdata (default: all)")
-    ap.add_argument("--json", default=None, help="write the per-hole rows here")
+    ap.add_argument("--json", default=None, help="write the per-hole rows here (rewritten after every hole)")
     ap.add_argument("--baseline", default=None, metavar="JSON",
                     help="compare our G0/G1 per hole with rows saved earlier (--json); exit 1 on a regression")
     ap.add_argument("--merge", nargs="+", default=None, metavar="JSON",
@@ -236,11 +239,17 @@ def main() -> None:
     if ns.files:
         files = [p for p in files if p.name in ns.files]
     t0 = time.perf_counter()
-    rows = []
+    rows: list[dict] = []
+
+    def save(row: dict) -> None:  # after every hole: a run stopped half-way keeps what it measured
+        rows.append(row)
+        if ns.json:
+            tmp = Path(ns.json + ".tmp")
+            tmp.write_text(json.dumps(rows, indent=1, default=str))
+            tmp.replace(ns.json)
+
     for p in files:
-        rows += holes_of(p, ns.pairs, ns.max_holes, ns.skip, ns.only_pairs)
-    if ns.json:
-        Path(ns.json).write_text(json.dumps(rows, indent=1, default=str))
+        holes_of(p, ns.pairs, ns.max_holes, ns.skip, ns.only_pairs, on_row=save)
     code = report(rows, ns.baseline)
     print(f"\n(total {time.perf_counter() - t0:.0f} s)")
     sys.exit(code)
