@@ -314,8 +314,9 @@ class BSplineCurve(HomogeneousPoles, ControlPointValue):
         x = V.as_finite_array(knots, "knots", ndim=1)
         if x.size == 0:
             return self
-        # The refined poles, knots and the merge's work arrays (about four more values per pole).
-        V.check_size((self.n_poles + x.size, self._hpoles.shape[-1] + 4), f"refine with {x.size} knots")
+        # The Oslo matrix (dense: new poles x old poles), the refined poles and the merge's work arrays.
+        V.check_size((self.n_poles + x.size, max(self.n_poles, self._hpoles.shape[-1] + 4)),
+                     f"refine with {x.size} knots")
         lo, hi = self.domain
         if x.min() <= lo or x.max() >= hi:
             bad = float(x.min() if x.min() <= lo else x.max())

@@ -491,9 +491,10 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
         x = V.as_finite_array(knots, "knots", ndim=1)
         if x.size == 0:
             return self
-        other = self._hpoles.shape[1 - ax]
-        V.check_size((self._hpoles.shape[ax] + x.size, other, self._hpoles.shape[-1] + 4),
-                     f"refine with {x.size} {direction}-knots")
+        n, other = self._hpoles.shape[ax], self._hpoles.shape[1 - ax]
+        what = f"refine with {x.size} {direction}-knots"
+        V.check_size((n + x.size, n), what)  # the Oslo matrix (dense: new poles x old poles)
+        V.check_size((n + x.size, other, self._hpoles.shape[-1] + 4), what)
         lo, hi = self.domain[ax]
         if x.min() <= lo or x.max() >= hi:
             bad = float(x.min() if x.min() <= lo else x.max())
