@@ -90,11 +90,13 @@ def open_client(scheduler: str | None = None, workers: int | None = None,
             raise ClusterError(f"--scheduler {scheduler}: cannot connect ({type(err).__name__}: "
                                f"{' '.join(str(err).split()) or 'no answer'})") from err
     n = workers or default_workers()
+    # The workers' own logs: CRITICAL only. What goes wrong with a file is its row; at an interrupt, a
+    # worker whose heartbeat meets the closing scheduler logged an ERROR with two tracebacks.
     try:
         with _sigint_ignored():  # inherited by the worker processes: see _sigint_ignored
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                    dashboard_address=LOCAL_DASHBOARD if dashboard_available() else None,
-                                   silence_logs=logging.ERROR)
+                                   silence_logs=logging.CRITICAL)
     except Exception as err:  # noqa: BLE001 - any start-up failure is one line for the user
         raise ClusterError(f"cannot start a local Dask cluster of {n} workers: {err}") from err
     return Client(cluster, set_as_default=False), cluster

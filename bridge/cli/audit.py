@@ -100,8 +100,8 @@ class _Interrupts:
         try:
             yield
         finally:
-            for s, h in old.items():
-                signal.signal(s, h)
+            for s, h in old.items():  # after an interrupt the command is ending: a second signal must not
+                signal.signal(s, h if self.signum is None else signal.SIG_IGN)  # end it with -2 instead of 130
             sys.unraisablehook = self._hook
 
 

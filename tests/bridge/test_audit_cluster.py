@@ -277,6 +277,67 @@ def test_dashboard_link_answers_while_the_audit_runs(tmp_path: Path) -> None:
     assert proc.returncode in (0, 130), seen
 
 
+def _signal_trial(tmp_path: Path, corpus: Path, env: dict[str, str], n_files: int, trial: int,
+                  sig: signal.Signals, delay: float) -> str:
+    """One audit run signalled ``delay`` seconds in (SIGINT: once the cluster runs); how it ended."""
+    import re
+    import threading
+
+    out = tmp_path / f"results{trial}"
+    proc = subprocess.Popen([sys.executable, "-m", "occsurf.bridge.cli", "audit", str(corpus), "--out", str(out),
+                             "--workers", "1"], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    lines: list[str] = []
+    started = threading.Event()
+
+    def read() -> None:
+        for line in proc.stderr:
+            lines.append(line)
+            if "hashing their contents" in line:
+                started.set()
+        started.set()
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    try:
+        if sig == signal.SIGINT:
+            started.wait(120)
+        time.sleep(delay)
+        sent = proc.poll() is None
+        if sent:
+            if sig == signal.SIGINT:
+                os.killpg(proc.pid, sig)  # Ctrl-C in a terminal: the whole group
+            else:
+                proc.send_signal(sig)  # a client killed by its supervisor
+        proc.wait(timeout=60)  # not communicate(): the thread reads stderr
+        stdout = proc.stdout.read()
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    reader.join(10)
+    stderr = "".join(lines)
+    assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr, (trial, sig.name, stderr)
+    if proc.returncode == 0:  # it finished, its last line out, before the signal arrived
+        assert f"{n_files} files: {n_files} ok" in stdout, (trial, sig.name, stdout, stderr)
+        return "finished"
+    if proc.returncode == -sig:  # outside the command's handlers: before it began, or once it was over
+        done = f"{n_files}/{n_files} files: {n_files} ok" in stderr
+        assert sent and (stderr == "" and not out.exists() or done), (trial, stderr)
+        if done:  # the run was over (the interpreter's exit, Dask's atexit hooks): every row kept
+            assert len(read_files(out).to_pylist()) == n_files
+        return "outside"
+    assert sent and proc.returncode == 128 + sig, (trial, proc.returncode, stderr)
+    m = re.search(r"interrupted: (\d+) of (\d+) files are in ", stderr)
+    if m:  # in the loop over files: what it says finished is what the dataset holds
+        assert int(m.group(2)) == n_files
+        rows = read_files(out).to_pylist() if (out / "files").is_dir() else []
+        assert len(rows) == int(m.group(1)) and all(r["status"] == "ok" for r in rows)
+    else:  # before the files' loop (cluster start-up, hashing) or after it (the summary)
+        assert "interrupted; what finished is in" in stderr, stderr
+    return sig.name
+
+
 @pytest.mark.slow
 def test_signals_at_random_moments_end_the_run_promptly(tmp_path: Path) -> None:
     """Issue 34: Ctrl-C was lost in 2 of 15 trials (a traceback then exit 0, or the run went on).
@@ -286,73 +347,17 @@ def test_signals_at_random_moments_end_the_run_promptly(tmp_path: Path) -> None:
     of what finished readable and counted in the message. (A SIGINT during the cluster's ~2 s
     start-up is still lost: the workers must inherit it ignored; see ``cluster._sigint_ignored``.)"""
     import random
-    import re
-    import threading
+    from concurrent.futures import ThreadPoolExecutor
 
     corpus = tmp_path / "corpus"
-    files = good_files(corpus, n_copies=2, iges=False)
+    n_files = len(good_files(corpus, n_copies=2, iges=False))
     env = hook_env(tmp_path, OCCSURF_TEST_SLOW="0.3")
     rng = random.Random(34)
-    ended = Counter()
-    for trial in range(20):
-        out = tmp_path / f"results{trial}"
-        sig = signal.SIGTERM if trial % 2 == 0 else signal.SIGINT
-        proc = subprocess.Popen([sys.executable, "-m", "occsurf.bridge.cli", "audit", str(corpus), "--out", str(out),
-                                 "--workers", "1"], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                start_new_session=True)
-        lines: list[str] = []
-        started = threading.Event()
-
-        def read(stream=proc.stderr, lines=lines, started=started) -> None:
-            for line in stream:
-                lines.append(line)
-                if "hashing their contents" in line:
-                    started.set()
-            started.set()
-
-        reader = threading.Thread(target=read, daemon=True)
-        reader.start()
-        try:
-            if sig == signal.SIGINT:
-                started.wait(120)
-                time.sleep(rng.uniform(0.0, 4.0))
-            else:
-                time.sleep(rng.uniform(0.2, 7.0))
-            sent = proc.poll() is None
-            if sent:
-                if sig == signal.SIGINT:
-                    os.killpg(proc.pid, sig)  # Ctrl-C in a terminal: the whole group
-                else:
-                    proc.send_signal(sig)  # a client killed by its supervisor
-            proc.wait(timeout=60)  # not communicate(): the thread reads stderr
-            stdout = proc.stdout.read()
-        finally:
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
-        reader.join(10)
-        stderr = "".join(lines)
-        assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr, (trial, sig.name, stderr)
-        if proc.returncode == 0:  # it finished, its last line out, before the signal arrived
-            assert f"{len(files)} files: {len(files)} ok" in stdout, (trial, sig.name, stdout, stderr)
-            ended["finished"] += 1
-            continue
-        if proc.returncode == -sig:  # outside the command's handlers: before it began, or once it was over
-            done = f"{len(files)}/{len(files)} files: {len(files)} ok" in stderr
-            assert sent and (stderr == "" and not out.exists() or done), (trial, stderr)
-            if done:  # the run was over (the interpreter's exit, Dask's atexit hooks): every row kept
-                assert len(read_files(out).to_pylist()) == len(files)
-            ended["outside"] += 1
-            continue
-        assert sent and proc.returncode == 128 + sig, (trial, proc.returncode, stderr)
-        ended[sig.name] += 1
-        m = re.search(r"interrupted: (\d+) of (\d+) files are in ", stderr)
-        if m:  # in the loop over files: what it says finished is what the dataset holds
-            assert int(m.group(2)) == len(files)
-            rows = read_files(out).to_pylist() if (out / "files").is_dir() else []
-            assert len(rows) == int(m.group(1)) and all(r["status"] == "ok" for r in rows)
-        else:  # before the files' loop (cluster start-up, hashing) or after it (the summary)
-            assert "interrupted; what finished is in" in stderr, stderr
+    plan = [(trial, signal.SIGTERM if trial % 2 == 0 else signal.SIGINT) for trial in range(20)]
+    delays = [rng.uniform(0.2, 7.0) if sig == signal.SIGTERM else rng.uniform(0.0, 4.0) for _, sig in plan]
+    with ThreadPoolExecutor(max_workers=2) as pool:  # two runs at a time: the suite's longest test, halved
+        ended = Counter(pool.map(lambda k: _signal_trial(tmp_path, corpus, env, n_files, *plan[k], delays[k]),
+                                 range(len(plan))))
     assert ended["SIGINT"] >= 6 and ended["SIGTERM"] >= 5, ended
 
 
