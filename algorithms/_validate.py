@@ -64,12 +64,17 @@ def check_knots(knots: ArrayLike, degree: int, n_poles: int, name: str = "knots"
     return t
 
 
+def knot_tol(knots: NDArray[np.float64]) -> float:
+    """Absolute knot-equality tolerance for this knot vector: ``KNOT_EQUALITY`` times its range (at least 1)."""
+    return tolerances.KNOT_EQUALITY * max(float(knots[-1] - knots[0]), 1.0)
+
+
 def check_domain_length(t: NDArray[np.float64], degree: int, n_poles: int, name: str) -> None:
     """Refuse a domain no longer than the knot tolerance (``KNOT_EQUALITY`` times the knot range, at
     least 1): its ends count as one knot, and the basis functions divide by spans that round to
     nothing (a domain of 1e-320 evaluates to NaN)."""
     length = float(t[n_poles] - t[degree])
-    tol = tolerances.KNOT_EQUALITY * max(float(t[-1] - t[0]), 1.0)
+    tol = knot_tol(t)
     if length <= tol:
         raise InvalidGeometryError(
             f"{name}: the domain [{float(t[degree])!r}, {float(t[n_poles])!r}] is {length:.3g} long, no longer than the "

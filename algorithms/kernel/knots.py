@@ -19,7 +19,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from .. import tolerances
+from .._validate import knot_tol
 from ..errors import ParameterError
 from .basis import find_span
 from .blossom import blossom_basis
@@ -40,12 +40,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-
-
-def knot_tol(knots: Array) -> float:
-    """Absolute knot-equality tolerance for this knot vector."""
-    span = float(knots[-1] - knots[0])
-    return tolerances.KNOT_EQUALITY * max(span, 1.0)
 
 
 def distinct_knots(knots: Array) -> tuple[Array, NDArray[np.intp]]:
@@ -303,7 +297,7 @@ def check_rescaled(t: Array, knots: Array, new: tuple[float, float], what: str) 
         raise ParameterError(f"{what}: the domain {new!r} is too long for doubles (its length overflows)")
     if np.count_nonzero(np.diff(t) > 0) != np.count_nonzero(np.diff(knots) > 0):
         raise ParameterError(f"{what}: the domain {new!r} is too short to keep the distinct knots apart")
-    tol = tolerances.KNOT_EQUALITY * max(float(t[-1] - t[0]), 1.0)
+    tol = knot_tol(t)
     if new[1] - new[0] <= tol:
         raise ParameterError(f"{what}: the domain {new!r} is no longer than the knot tolerance {tol:.3g} "
                              "(tolerances.KNOT_EQUALITY): its ends would count as one knot")

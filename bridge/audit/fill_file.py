@@ -206,12 +206,10 @@ def plan_job(item: dict[str, Any]) -> dict[str, Any]:
 def hole_job(item: dict[str, Any]) -> dict[str, Any]:
     """Fill hole ``item["hole"]``: ``{"report": dict, "faces": base64 BinTools compound or None,
     "pid": the worker's process id}``."""
-    from dataclasses import fields
-
     ctx = _context(item)
     rep = _fill_one(ctx, int(item["hole"]), item)
     faces = getattr(rep, "_fill_faces", None) if rep.status == "filled" else None
-    return {"report": {f.name: getattr(rep, f.name) for f in fields(rep)},
+    return {"report": asdict(rep),
             "faces": None if faces is None else _faces_to_text(faces), "pid": os.getpid()}
 
 
@@ -227,6 +225,7 @@ def sew_job(item: dict[str, Any]) -> dict[str, Any]:
 def _report(ctx: _Context, k: int, res: dict[str, Any]) -> Any:
     """A report of :func:`hole_job` again, with the faces and the objects the pictures draw."""
     if ctx.components is not None:
+        from ..modeling.joints import unique_faces
         from ..modeling.refill import RefillReport
         from ..modeling.refill_loop import hole_loop
 
@@ -234,8 +233,7 @@ def _report(ctx: _Context, k: int, res: dict[str, Any]) -> Any:
         if res.get("faces") is not None:
             rep._fill_faces = _faces_from_text(res["faces"])
             rep._removed = [ctx.sewn.faces[i] for i in rep.faces]
-            nbs = hole_loop(ctx.sewn, rep.faces)[1]
-            rep._neighbours = [f for i, f in enumerate(nbs) if not any(f.IsSame(g) for g in nbs[:i])]
+            rep._neighbours = unique_faces(hole_loop(ctx.sewn, rep.faces)[1])
         return rep
     from ..modeling.fill import HoleReport, hole_neighbours
 

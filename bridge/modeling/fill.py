@@ -73,6 +73,7 @@ from .joints import (  # noqa: F401 - re-exported
     _local_analysis,
     assess_joint,
     edge_face_map,
+    unique_faces,
 )
 
 __all__ = ["HoleReport", "FillResult", "fill_model", "ModelHoles", "model_holes", "fill_loop", "sew_fills",
@@ -307,14 +308,6 @@ def _locator(fill: HoleFill, side: int) -> Locator:
     return locate
 
 
-def _unique(faces: list[Any]) -> list[Any]:
-    out: list[Any] = []
-    for f in faces:
-        if f is not None and not any(f.IsSame(g) for g in out):
-            out.append(f)
-    return out
-
-
 def _model_size(shape: Any) -> float:
     from OCP.Bnd import Bnd_Box
     from OCP.BRepBndLib import BRepBndLib
@@ -419,7 +412,7 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True,
         rep.g0, rep.g1 = max(rep.side_g0), max(rep.side_g1)
         rep.status = "filled"
         # for pictures; not dataclass fields, so asdict() leaves them out
-        rep._fill_faces, rep._neighbours = occ_faces, _unique(nb)  # type: ignore[attr-defined]
+        rep._fill_faces, rep._neighbours = occ_faces, unique_faces(nb)  # type: ignore[attr-defined]
     except Exception as err:  # noqa: BLE001 - one hole's failure must not stop the others
         rep.status, rep.reason = "failed", one_line(err, expected=(OccsurfError,))
         fill, occ_faces = None, []
@@ -441,7 +434,7 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True,
 
 def hole_neighbours(holes: ModelHoles, k: int) -> list[Any]:
     """The faces around hole ``k``, each once (for its pictures)."""
-    return _unique([neighbour_face(holes.e2f, e) for e in holes.loops[k][0]])
+    return unique_faces([neighbour_face(holes.e2f, e) for e in holes.loops[k][0]])
 
 
 def sew_fills(holes: ModelHoles, new_faces: list[Any]) -> tuple[Any, int]:

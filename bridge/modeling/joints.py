@@ -24,7 +24,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from occsurf.algorithms.errors import KernelError
 
-__all__ = ["assess_joint", "edge_face_map", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
+__all__ = ["assess_joint", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
 
 #: Tolerance of ``BRepBuilderAPI_Sewing`` (model units), for finding free edges and for the result.
 SEW_TOLERANCE: float = 1e-5
@@ -128,3 +128,12 @@ def edge_face_map(shape: TopoDS_Shape) -> TopTools_IndexedDataMapOfShapeListOfSh
     m = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, m)
     return m
+
+
+def unique_faces(faces: list[Any]) -> list[Any]:
+    """``faces`` each once (``IsSame``), in their order; ``None`` entries left out (a hole's neighbours)."""
+    out: list[Any] = []
+    for f in faces:
+        if f is not None and not any(f.IsSame(g) for g in out):
+            out.append(f)
+    return out

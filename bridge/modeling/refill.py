@@ -48,6 +48,7 @@ from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.topology.nsided import fill_folds
 
 from ..messages import one_line
+from .joints import unique_faces
 from .refill_candidates import OCC_DEFAULT, OCC_TUNED, PLATE_MARGIN, fill_method, fitted_fill, occ_filling, occ_variant
 from .refill_loop import (
     G1_EDGE_DEG,
@@ -159,7 +160,7 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         rep.status = "filled"
         rep._fill_faces = occ_faces  # for refill_model and the pictures (not fields: not serialised)
         rep._removed = [model.faces[i] for i in rep.faces]
-        rep._neighbours = [f for k, f in enumerate(nbs) if not any(f.IsSame(g) for g in nbs[:k])]
+        rep._neighbours = unique_faces(nbs)
         if check:
             shape, rep.valid = sew_in_checked(model, rep.faces, occ_faces, rep.g0)
             rep.step_round_trip = round_trip(shape, len(model_faces(shape)))
