@@ -485,6 +485,23 @@ _DEFAULTS: dict[str, float] = {
     # Curvatures below this times 1 / model size count as zero for the relative G2 jump (a radius
     # a million times the model): between two almost flat faces the ratio is noise.
     "CONTINUITY_CURVATURE_FLOOR": 1e-6,
+    # ---- matching (manipulation/matching.py, course ch. 4) ---------------------------------------
+    # Default G0 tolerance of match_surface, relative to the size of the pair (bounding-box diagonal
+    # of both nets): 1e-5 mm on a 100 mm part, a hundred times below CATIA's 0.001 mm default.
+    "MATCH_G0_RTOL": 1e-7,
+    # Refinement rounds of match_surface (each inserts the target's knots, then the midpoints of the
+    # spans that still miss a tolerance) and the most poles along the side it may reach.
+    "MATCH_MAX_ROUNDS": 8,
+    "MATCH_MAX_POLES": 400,
+    # Gauss-Newton steps that move a G2 / G3 match from the row-by-row solution to the joint
+    # minimum-norm change (measured: 4-5 steps to 1e-12 of the size on 20 x 20 nets).
+    "MATCH_MAX_ITERATIONS": 10,
+    # Relative singular-value cut-off below which the minimum-norm solve of a match treats a
+    # direction as noise (rows normalised) when the exact solution (cut-off 1e-12) would be more than
+    # twice as long: the G1 conditions n . S_u = 0 are homogeneous in the second row's offset, and
+    # data consistent only to interpolation error (a MatchTarget's normals, 1e-8) add singular values
+    # of that size whose direction is the collapse S_u = 0.
+    "MATCH_RCOND": 1e-6,
     # ---- lighting (course ch. 10, Warn 1983) ---------------------------------------------------
     # A light's direction (or a normal given to shade) shorter than this cannot be made a unit
     # vector: the direction is refused, the normal's point is shaded NaN. Absolute: directions are
@@ -663,6 +680,11 @@ CONTINUITY_SAMPLES: int
 CONTINUITY_REFINE_ITERATIONS: int
 CONTINUITY_MATCH_RTOL: float
 CONTINUITY_CURVATURE_FLOOR: float
+MATCH_G0_RTOL: float
+MATCH_MAX_ROUNDS: int
+MATCH_MAX_POLES: int
+MATCH_MAX_ITERATIONS: int
+MATCH_RCOND: float
 LIGHT_DIRECTION_ZERO: float
 LIGHT_FRAME_DEGENERATE: float
 LIGHT_MAX_COUNT: int

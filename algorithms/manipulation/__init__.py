@@ -2,7 +2,8 @@
 
 Public names: the constraints :class:`Position`, :class:`Tangent`, :class:`Derivative`,
 :class:`Curvature`; :func:`constrain`, :func:`drag_point`, :class:`Dragger`,
-:class:`PreparedConstraints` for curves and :func:`drag_surface_point` for surfaces; the solvers of
+:class:`PreparedConstraints` for curves and :func:`drag_surface_point` for surfaces;
+:func:`match_surface` (G0-G3 along an edge, :class:`MatchTarget`, :class:`MatchResult`); the solvers of
 :mod:`.linalg` (least squares, minimum norm, equality-constrained, dense and sparse) and their
 errors :class:`ConstraintError`, :class:`ConvergenceError`.
 """
@@ -10,6 +11,8 @@ errors :class:`ConstraintError`, :class:`ConvergenceError`.
 from .constraints import Curvature, Derivative, Position, Tangent
 from .curves import Dragger, PreparedConstraints, constrain, drag_point
 from .linalg import ConstraintError, ConvergenceError
+from .match_targets import MatchTarget
+from .matching import MatchResult, match_surface
 from .surfaces import drag_surface_point
 
 __all__ = [
@@ -22,6 +25,9 @@ __all__ = [
     "constrain",
     "drag_point",
     "drag_surface_point",
+    "match_surface",
+    "MatchResult",
+    "MatchTarget",
     "ConstraintError",
     "ConvergenceError",
 ]

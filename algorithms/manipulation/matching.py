@@ -1,0 +1,638 @@
+"""Match a surface to another along an edge, G0 to G3, by the least change of its poles.
+
+Rhino's ``MatchSrf``, CATIA's Match Surface and NX's Matching Edge, done the course's way (ch. 3-4):
+every continuity condition at a point of the side is a condition on the surface's cross-boundary
+derivatives there, and those are linear in the poles (the weights of a rational surface held),
+so the change is the minimum-norm solution of the conditions at samples along the side (course
+§4-4, §4-7..4-12: ``dP = pinv(J) r``), over the pole rows the order needs (row ``j`` from the side
+carries the ``j``-th cross derivative).
+
+The conditions (``S_j`` the ``j``-th cross derivative of the surface at a point of its side;
+``P, N, (e1, e2), H2, H3`` the target's point, normal, tangent frame and height-function
+derivatives there, :mod:`.match_targets`; ``xi_j = (e1, e2) . S_j``):
+
+====  ============================================================================
+G0    ``S_0 = P``
+G1    ``N . S_1 = 0``                                    (the tangent planes agree)
+G2    ``N . S_2 = H2(xi_1, xi_1)``                       (the normal curvatures agree)
+G3    ``N . S_3 = H3(xi_1, xi_1, xi_1) + 3 H2(xi_1, xi_2)`` (their derivatives agree)
+====  ============================================================================
+
+G0 and G1 are linear in the poles, and one solve gives the exact minimum-norm change; G2 and G3 are
+quadratic in the lower rows and are solved by Gauss-Newton steps that keep the change minimal
+(``x <- pinv(J) (J x - F)``). Each condition row is divided by its norm (the solution of a
+consistent system does not change; an inconsistent one is then solved in pole-displacement units).
+The point ``P`` is the foot of the surface's current side point on the target's edge, re-found at
+each step, so the side may slide along the edge.
+
+With ``refine=True`` knots are inserted (Oslo, course §2-10) along the side until the tolerances
+hold: first the target side's own knots where they fall (a target of the same degree is then
+matched exactly), then the midpoints of the spans that still miss, up to
+``tolerances.MATCH_MAX_ROUNDS`` rounds and ``MATCH_MAX_POLES`` poles. Rows the order needs that
+would touch the rows ``preserve_opposite`` holds (Rhino's "Preserve other end") are made by
+inserting knots across the side.
+
+References
+----------
+R. Bartels, course notes C25 (SIGGRAPH 1991), §3-12 and §4-4..4-12; R. H. Bartels, J. C. Beatty,
+"A technique for the direct manipulation of spline curves", Graphics Interface '89.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from math import comb
+from typing import TypeAlias
+
+import numpy as np
+import scipy.linalg as sla
+from numpy.typing import NDArray
+
+from .. import tolerances
+from ..errors import ArgumentTypeError, InvalidGeometryError, UnknownNameError
+from ..kernel.basis import basis_derivatives, find_span
+from ..kernel.curve import BSplineCurve
+from ..kernel.surface import BSplineSurface
+from .linalg import ConstraintError
+from .match_targets import Jets, MatchTarget, SampledCurve, SurfaceSide, height_jets
+
+__all__ = ["MatchResult", "MatchTarget", "match_surface", "SIDES", "CONTINUITIES"]
+
+Array = NDArray[np.float64]
+_Target: TypeAlias = "SurfaceSide | SampledCurve | _AverageSide"
+
+#: The sides of a surface, as ``match_surface`` names them.
+SIDES: tuple[str, ...] = ("u0", "u1", "v0", "v1")
+#: Continuity orders by name.
+CONTINUITIES: dict[str, int] = {"G0": 0, "G1": 1, "G2": 2, "G3": 3}
+_PRESERVE: dict[str, int] = {"none": -1, "G0": 0, "G1": 1, "G2": 2}
+
+
+@dataclass(frozen=True)
+class MatchResult:
+    """What :func:`match_surface` did.
+
+    Attributes
+    ----------
+    surface : BSplineSurface
+        The changed surface (same degrees and weights; knots added where ``knots_added > 0``).
+    target : BSplineSurface or MatchTarget
+        The target, changed only with ``average=True``.
+    g0_max : float
+        Largest distance between the side and the target's edge (model units), over dense samples.
+    g1_max_deg : float
+        Largest angle between the tangent planes across the edge (degrees); 0 for G0 matches too
+        (measured, not asked).
+    g2_max_rel : float
+        Largest relative jump of the normal curvature across the edge, ``|k1 - k2| / max(|k1|,
+        |k2|)`` as a fraction (CATIA's G2 % / 100); 0 where both are below
+        ``tolerances.CONTINUITY_CURVATURE_FLOOR`` / size; NaN if the target carries no curvature.
+    g3_max_rel : float
+        The same for the derivative of that curvature across the edge (G3 matches only; else NaN).
+    max_change : float
+        Largest distance between the surface before and after, on a dense grid (model units).
+    max_pole_change : float
+        Largest pole displacement (bounds ``max_change`` for non-rational surfaces).
+    knots_added : int
+        Knots inserted (both directions, both surfaces with ``average=True``).
+    met : bool
+        Whether every tolerance asked for holds.
+    """
+
+    surface: BSplineSurface
+    target: BSplineSurface | MatchTarget
+    g0_max: float
+    g1_max_deg: float
+    g2_max_rel: float
+    g3_max_rel: float
+    max_change: float
+    max_pole_change: float
+    knots_added: int
+    met: bool
+
+
+# ---- orientation: every side becomes side u0 of a clamped surface ---------------------------------
+
+def _canonical(s: BSplineSurface, side: str) -> BSplineSurface:
+    s = s.clamp()
+    if side == "u1":
+        return s.reverse(direction="u")
+    if side == "v0":
+        return s.swap_uv()
+    if side == "v1":
+        return s.swap_uv().reverse(direction="u")
+    return s
+
+
+def _restore(s: BSplineSurface, side: str) -> BSplineSurface:
+    if side == "u1":
+        return s.reverse(direction="u")
+    if side == "v0":
+        return s.swap_uv()
+    if side == "v1":
+        return s.reverse(direction="u").swap_uv()
+    return s
+
+
+def _unit(v: Array) -> Array:
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.where(n > 0, n, 1.0)
+
+
+# ---- the linear algebra ---------------------------------------------------------------------------
+
+def _cross_rows(S: BSplineSurface, v: Array, r: int) -> Array:
+    """Rows of the cross derivatives ``d^j S / du^j (u0, v_k)``, ``j <= r``, over the first ``r + 1``
+    pole rows flattened: shape ``(r + 1, m, (r + 1) * n_v)`` (quotient rule at fixed weights)."""
+    (p, q), (U, Vk), (nu, nv) = S.degree, S.knots, S.n_poles
+    u0 = np.array([U[p]])
+    su = find_span(U, p, nu, u0)
+    Du = basis_derivatives(U, p, su, u0, r)[0]  # (r+1, p+1): clamped, only the first j+1 are non-zero
+    Nu = Du[:, : r + 1]
+    m = v.shape[0]
+    sv = find_span(Vk, q, nv, v)
+    Bv = basis_derivatives(Vk, q, sv, v, 0)[:, 0, :]
+    Nv = np.zeros((m, nv))
+    Nv[np.arange(m)[:, None], sv[:, None] - q + np.arange(q + 1)] = Bv
+    A = Nu[:, None, :, None] * Nv[None, :, None, :]  # (r+1, m, r+1, nv)
+    if S.weights is not None:
+        Aw = A * S.weights[None, None, : r + 1, :]
+        w = Aw.sum(axis=(2, 3))  # (r+1, m)
+        R = np.empty_like(A)
+        for j in range(r + 1):
+            acc = Aw[j].copy()
+            for i in range(1, j + 1):
+                acc -= comb(j, i) * w[i][:, None, None] * R[j - i]
+            R[j] = acc / w[0][:, None, None]
+        A = R
+    return A.reshape(r + 1, m, (r + 1) * nv)
+
+
+def _equations(R: Array, Sj: Array, tg: Jets, r: int) -> tuple[Array, Array]:
+    """Residuals ``F`` (n_eq,) and Jacobian ``J`` (n_eq, n_poles * 3) of the G0..Gr conditions."""
+    m, n = R.shape[1], R.shape[2]
+    F = [(Sj[0] - tg.P).ravel()]
+    J = [np.einsum("ki,cd->kcid", R[0], np.eye(3)).reshape(3 * m, 3 * n)]
+    N, E = tg.N, tg.E
+
+    def rows(terms: list[tuple[int, Array]]) -> Array:
+        return sum(np.einsum("ki,kc->kic", R[j], g) for j, g in terms).reshape(m, 3 * n)
+
+    if r >= 1:
+        F.append(np.einsum("kc,kc->k", N, Sj[1]))
+        J.append(rows([(1, N)]))
+    if r >= 2:
+        assert tg.H2 is not None
+        xi1 = np.einsum("kac,kc->ka", E, Sj[1])
+        Hx1 = np.einsum("kab,kb->ka", tg.H2, xi1)
+        F.append(np.einsum("kc,kc->k", N, Sj[2]) - np.einsum("ka,ka->k", Hx1, xi1))
+        J.append(rows([(2, N), (1, -2.0 * np.einsum("ka,kac->kc", Hx1, E))]))
+    if r >= 3:
+        assert tg.H2 is not None and tg.H3 is not None
+        xi2 = np.einsum("kac,kc->ka", E, Sj[2])
+        H3x = np.einsum("kabc,ka,kb->kc", tg.H3, xi1, xi1)
+        Hx2 = np.einsum("kab,kb->ka", tg.H2, xi2)
+        F.append(np.einsum("kc,kc->k", N, Sj[3]) - np.einsum("kc,kc->k", H3x, xi1)
+                 - 3.0 * np.einsum("ka,ka->k", Hx1, xi2))
+        J.append(rows([(3, N), (1, -3.0 * np.einsum("ka,kac->kc", H3x + Hx2, E)),
+                       (2, -3.0 * np.einsum("ka,kac->kc", Hx1, E))]))
+    return np.concatenate(F), np.concatenate(J)
+
+
+def _lstsq(J: Array, rhs: Array) -> Array:
+    """Minimum-norm least-squares solution, rows divided by their norms, noise directions dropped.
+
+    Two cut-offs of one SVD: singular values above ``1e-12`` of the largest (the exact minimum-norm
+    solution of a consistent system) and above ``tolerances.MATCH_RCOND`` of it. The first is kept
+    unless it is more than twice as long as the second: then it buys its smaller residual by
+    fitting noise, such as the collapse ``S_u -> 0`` that homogeneous G1 conditions reach on
+    data consistent only to interpolation error."""
+    s = np.linalg.norm(J, axis=1)
+    s = np.where(s > 0, s, 1.0)
+    U, sv, Vt = sla.svd(J / s[:, None], full_matrices=False, lapack_driver="gesdd")
+    if sv.size == 0 or sv[0] == 0:
+        return np.zeros(J.shape[1])
+    c = U.T @ (rhs / s)
+    exact = sv > 1e-12 * sv[0]
+    robust = sv > tolerances.MATCH_RCOND * sv[0]
+    xa = Vt[exact].T @ (c[exact] / sv[exact])
+    xb = Vt[robust].T @ (c[robust] / sv[robust])
+    return xa if np.linalg.norm(xa) <= 2.0 * np.linalg.norm(xb) + 1e-300 else xb
+
+
+def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) -> Array:
+    """Minimum-norm change of the first ``r + 1`` pole rows, shape ``(r + 1, n_v, 3)``.
+
+    The target's jets are taken once, at the points that correspond to the side's samples ``v``
+    (:meth:`SurfaceSide.corresponding`). Order ``j``'s conditions are linear in row ``j`` once the
+    rows below are known, so a first solution takes the rows in turn, each by its minimum-norm
+    change (for G0 and G1 it is already the joint minimum-norm change when the rows below are
+    determined by their conditions). For G2 and G3, Gauss-Newton steps ``x <- pinv(J) (J x - F)``
+    on all rows at once then move it to the nearest point where the joint change is minimal; the
+    result is kept only if it still meets the conditions and is smaller."""
+    R = _cross_rows(S, v, r)
+    tg = target.corresponding(S, v)
+    nv = S.n_poles[1]
+    P0 = S.control_points[: r + 1].reshape(-1, 3)
+    x = np.zeros(P0.size)
+    m = v.shape[0]
+    start = [0, 3 * m] + [3 * m + j * m for j in range(1, r + 1)]
+
+    def residual(x: Array, j: int = r) -> tuple[Array, Array]:
+        Sj = np.einsum("jki,ic->jkc", R[: j + 1], P0 + x.reshape(P0.shape))
+        return _equations(R[: j + 1], Sj, tg, j)
+
+    def rowwise(x: Array) -> Array:
+        """Row j's minimum-norm correction for order j's conditions, j = 0..r in turn."""
+        x = x.copy()
+        for j in range(r + 1):
+            F, J = residual(x, j)
+            rows, cols = slice(start[j], start[j + 1]), slice(3 * j * nv, 3 * (j + 1) * nv)
+            x[cols] += _lstsq(J[rows, cols], -F[rows])
+        return x
+
+    x = rowwise(np.zeros(P0.size))
+    if r >= 2:
+        y = x
+        for _ in range(tolerances.MATCH_MAX_ITERATIONS):
+            F, J = residual(y)
+            z = _lstsq(J, J @ y - F)
+            step = float(np.max(np.abs(z - y)))
+            y = z
+            if step <= 1e-12 * size:
+                break
+        y = rowwise(y)  # the conditions exactly again where the steps stopped short
+        if np.linalg.norm(y) < np.linalg.norm(x):
+            x = y
+    return x.reshape(r + 1, nv, 3)
+
+
+# ---- sampling and measuring -----------------------------------------------------------------------
+
+def _spans(S: BSplineSurface) -> Array:
+    q, Vk = S.degree[1], S.knots[1]
+    k = np.unique(Vk[q: len(Vk) - q])
+    return k
+
+
+def _solve_params(S: BSplineSurface) -> Array:
+    k = _spans(S)
+    # n . S_u is a polynomial of degree ~3q along a span of a polynomial pair: 3q + 3 points pin it
+    x, _ = np.polynomial.legendre.leggauss(3 * S.degree[1] + 3)
+    inner = (0.5 * (k[:-1, None] + k[1:, None]) + 0.5 * (k[1:, None] - k[:-1, None]) * x[None]).ravel()
+    return np.sort(np.concatenate([k, inner]))
+
+
+def _check_params(S: BSplineSurface) -> tuple[Array, NDArray[np.intp]]:
+    k = _spans(S)
+    n = 4 * S.degree[1] + 5
+    t = np.linspace(0.0, 1.0, n)
+    v = (k[:-1, None] + (k[1:, None] - k[:-1, None]) * t[None]).ravel()
+    return v, np.repeat(np.arange(len(k) - 1), n)
+
+
+@dataclass
+class _Measures:
+    g0: Array
+    g1: Array
+    g2: Array
+    g3: Array
+    fold: bool
+
+
+def _angle(a: Array, b: Array) -> Array:
+    """Angles between unit vectors (degrees), by atan2: exact near 0 where arccos loses 1e-8 rad."""
+    return np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.einsum("mc,mc->m", a, b)))
+
+
+def _rel(a: Array, b: Array, floor: float) -> Array:
+    big = np.maximum(np.abs(a), np.abs(b))
+    return np.where(big > floor, np.abs(a - b) / np.where(big > floor, big, 1.0), 0.0)
+
+
+def _measure(S: BSplineSurface, target: _Target, v: Array, r: int, size: float,
+             before: BSplineSurface | None = None) -> _Measures:
+    """G0 distance, G1 angle (deg), relative G2 and G3 jumps across the side at parameters ``v``."""
+    u0 = S.knots[0][S.degree[0]]
+    D = S.derivatives(np.full_like(v, u0), v, 3 if r >= 3 else 2)
+    tg = target.at(D[:, 0, 0])
+    Su, Sv = D[:, 1, 0], D[:, 0, 1]
+    tau = _unit(Sv)
+    nS = _unit(np.cross(Su, Sv))
+    bS = _unit(Su - np.einsum("mc,mc->m", Su, tau)[:, None] * tau)
+    if tg.inward is not None:
+        bT = _unit(tg.inward - np.einsum("mc,mc->m", tg.inward, tau)[:, None] * tau)
+        g1 = _angle(bS, -bT)
+        fold = bool(np.any(g1 > 90.0))
+    else:
+        g1 = _angle(nS, tg.N)
+        g1 = np.minimum(g1, 180.0 - g1)
+        fold = False
+        if before is not None:
+            Db = before.derivatives(np.full_like(v, u0), v, 1)
+            tb = _unit(Db[:, 0, 1])
+            b0 = Db[:, 1, 0] - np.einsum("mc,mc->m", Db[:, 1, 0], tb)[:, None] * tb
+            fold = bool(np.any(np.einsum("mc,mc->m", b0, bS) < 0))
+    g2 = g3 = np.full_like(v, np.nan)
+    if tg.H2 is not None:
+        sgn = np.where(np.einsum("mc,mc->m", nS, tg.N) < 0, -1.0, 1.0)[:, None]
+        nO = nS * sgn
+        E = np.stack([tau, np.cross(nO, tau)], axis=1)
+        H2, H3 = height_jets(D, nO, E)
+        floor = tolerances.CONTINUITY_CURVATURE_FLOOR / size
+        g2 = _rel(H2[:, 1, 1], tg.H2[:, 1, 1], floor)
+        if r >= 3 and H3 is not None and tg.H3 is not None:
+            # the cross direction of the target's frame may be the opposite of ours: h''' is odd
+            s3 = np.sign(np.einsum("mc,mc->m", tg.E[:, 1], E[:, 1]))
+            g3 = _rel(H3[:, 1, 1, 1], s3 * tg.H3[:, 1, 1, 1], floor / size)
+    return _Measures(np.linalg.norm(D[:, 0, 0] - tg.P, axis=1), g1, g2, g3, fold)
+
+
+def _max(a: Array) -> float:
+    return float(np.max(a)) if a.size and np.any(np.isfinite(a)) and not np.all(np.isnan(a)) else float("nan")
+
+
+# ---- the match ------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Tols:
+    g0: float
+    g1: float
+    g2: float
+
+
+def _bad(m: _Measures, r: int, tol: _Tols) -> NDArray[np.bool_]:
+    bad = m.g0 > tol.g0
+    if r >= 1:
+        bad |= m.g1 > tol.g1
+    if r >= 2:
+        bad |= np.nan_to_num(m.g2) > tol.g2
+    return bad
+
+
+def _rows_for_preserve(S: BSplineSurface, r: int, o: int, refine: bool, side: str) -> tuple[BSplineSurface, int]:
+    """Insert u-knots until the rows the match moves (``0..r``) and the rows ``preserve_opposite``
+    holds (the last ``o + 1``) are apart."""
+    need = r + o + 2
+    added = 0
+    while S.n_poles[0] < need:
+        if not refine:
+            raise ConstraintError(
+                f"match on side {side!r}: G{r} moves {r + 1} pole rows and preserve_opposite holds {o + 1}, "
+                f"but the surface has only {S.n_poles[0]} rows across the side; allow refine=True or "
+                f"preserve less")
+        k = np.unique(S.knots[0][S.degree[0]: len(S.knots[0]) - S.degree[0]])
+        i = int(np.argmax(np.diff(k)))
+        S = S.insert_knot(0.5 * (k[i] + k[i + 1]), direction="u")
+        added += 1
+    return S, added
+
+
+def _target_knots(S: BSplineSurface, target: _Target) -> Array:
+    """Parameters on the side of ``S`` that correspond to the target side's interior knots."""
+    if isinstance(target, _AverageSide):
+        return target.knots(S)
+    if not isinstance(target, SurfaceSide):
+        return np.empty(0)
+    c = target.curve
+    kn = np.unique(c.knots[c.degree + 1: len(c.knots) - c.degree - 1])
+    return target.to_side(S, kn) if kn.size else kn
+
+
+def _new_knots(S: BSplineSurface, cand: Array) -> Array:
+    k = _spans(S)
+    span = k[-1] - k[0]
+    cand = np.unique(cand[(cand > k[0] + 1e-9 * span) & (cand < k[-1] - 1e-9 * span)])
+    if cand.size == 0:
+        return cand
+    near = np.min(np.abs(cand[:, None] - k[None]), axis=1) > 1e-9 * span
+    return cand[near]
+
+
+def _match_canonical(S: BSplineSurface, target: _Target, r: int, o: int, tol: _Tols,
+                     refine: bool, size: float, side: str) -> tuple[BSplineSurface, BSplineSurface, int, _Measures, bool]:
+    """Match side u0 of the clamped surface ``S``; returns (changed, refined original, knots added,
+    measures at the check samples, met)."""
+    p = S.degree[0]
+    if p < r:
+        raise ConstraintError(
+            f"match on side {side!r}: G{r} needs degree >= {r} across the side, the surface has degree {p}; "
+            f"raise it first (elevate_degree)")
+    S, added = _rows_for_preserve(S, r, o, refine, side)
+    rounds = tolerances.MATCH_MAX_ROUNDS
+    for rnd in range(rounds + 1):
+        x = _solve(S, target, r, _solve_params(S), size)
+        P = S.control_points.copy()
+        P[: r + 1] += x
+        new = BSplineSurface._trusted(S.degree, S.knots, P, S.weights)
+        vc, span_of = _check_params(new)
+        meas = _measure(new, target, vc, r, size, before=S)
+        bad = _bad(meas, r, tol)
+        if not bad.any() or not refine or rnd == rounds:
+            break
+        cand = _target_knots(S, target) if rnd == 0 else np.empty(0)
+        ins = _new_knots(S, cand)
+        if ins.size == 0:
+            k = _spans(S)
+            spans = np.unique(span_of[bad])
+            ins = _new_knots(S, 0.5 * (k[spans] + k[spans + 1]))
+        if ins.size == 0 or S.n_poles[1] + ins.size > tolerances.MATCH_MAX_POLES:
+            break
+        S = S.refine(ins, direction="v")
+        added += int(ins.size)
+    if meas.fold:
+        raise ConstraintError(
+            f"match on side {side!r}: the matched surface folds back over the target (its side runs into the "
+            f"target instead of away from it); the two surfaces overlap rather than meet")
+    return new, S, added, meas, not bool(_bad(meas, r, tol).any())
+
+
+def _check_choice(value: object, choices: dict[str, int] | tuple[str, ...], name: str) -> str:
+    if not isinstance(value, str):
+        raise ArgumentTypeError(f"{name}: expected one of {', '.join(choices)}, got {type(value).__name__}")
+    if value not in choices:
+        raise UnknownNameError(f"{name}: expected one of {', '.join(choices)}, got {value!r}")
+    return value
+
+
+def _check_tol(value: object, name: str, default: float) -> float:
+    if value is None:
+        return default
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise ArgumentTypeError(f"{name}: expected a number, got {type(value).__name__}")
+    x = float(value)
+    if not (np.isfinite(x) and x > 0):
+        raise InvalidGeometryError(f"{name}: expected a finite number > 0, got {value!r}")
+    return x
+
+
+def _size(*surfaces: BSplineSurface) -> float:
+    P = np.concatenate([s.control_points.reshape(-1, s.dim) for s in surfaces])
+    return float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))) or 1.0
+
+
+def _find_side(target: BSplineSurface, points: Array) -> str:
+    """The side of ``target`` nearest to ``points`` (the largest distance, smallest over the sides)."""
+    best, best_d = "u0", np.inf
+    for side in SIDES:
+        _, d = SurfaceSide(_canonical(target, side)).feet(points)
+        if float(np.max(d)) < best_d:
+            best, best_d = side, float(np.max(d))
+    return best
+
+
+def _change(before: BSplineSurface, after: BSplineSurface) -> float:
+    (u0, u1), (v0, v1) = before.domain
+    us = np.linspace(u0, u1, 8 * before.n_poles[0] + 1)
+    vs = np.linspace(v0, v1, 8 * before.n_poles[1] + 1)
+    return float(np.max(np.linalg.norm(after.evaluate_grid(us, vs) - before.evaluate_grid(us, vs), axis=-1)))
+
+
+class _AverageSide:
+    """The mean of two surfaces' jets along their common edge, as a target for either of them.
+
+    ``own`` is side u0 of the original surface, ``other`` the target's side; their parameters are
+    paired as :meth:`SurfaceSide.corresponding` pairs them. At a parameter ``v`` of ``own``: the
+    mean point, the normalised mean normal (the target's turned to agree), and both surfaces'
+    ``H2`` and ``H3`` re-expressed in one frame perpendicular to that normal and averaged. With
+    ``for_own=False`` the parameters asked about are ``other``'s."""
+
+    def __init__(self, own: SurfaceSide, other: SurfaceSide, S: BSplineSurface, for_own: bool) -> None:
+        self.own, self.other, self.S, self.for_own = own, other, S, for_own
+        self.curve = own.curve if for_own else other.curve
+
+    def _mean(self, v: Array) -> Jets:
+        a = self.own._jets(v)
+        b = self.other.corresponding(self.S, v)
+        flip = np.where(np.einsum("mc,mc->m", a.N, b.N) < 0, -1.0, 1.0)
+        N = _unit(a.N + b.N * flip[:, None])
+        e1 = _unit(a.E[:, 0] - np.einsum("mc,mc->m", a.E[:, 0], N)[:, None] * N)
+        E = np.stack([e1, np.cross(N, e1)], axis=1)
+        forms = []
+        for j, f in ((a, 1.0), (b, flip)):
+            assert j.H2 is not None and j.H3 is not None
+            M = np.einsum("mic,mjc->mij", E, j.E)  # new e_i . old e_j
+            sg = np.asarray(f, float).reshape(-1, 1, 1)
+            forms.append((np.einsum("mij,mjk,mlk->mil", M, j.H2 * sg, M),
+                          np.einsum("mia,mjb,mkc,mabc->mijk", M, M, M, j.H3 * sg[..., None])))
+        return Jets(0.5 * (a.P + b.P), N, E, 0.5 * (forms[0][0] + forms[1][0]), 0.5 * (forms[0][1] + forms[1][1]))
+
+    def corresponding(self, X: BSplineSurface, v: Array) -> Jets:
+        if self.for_own:
+            return self._mean(v)
+        return self._mean(self.other.to_side(self.S, v))
+
+    def at(self, points: Array) -> Jets:
+        return self._mean(self.own.feet(points)[0])
+
+    def knots(self, X: BSplineSurface) -> Array:
+        """Both sides' interior knots, as parameters of the surface being matched."""
+        def interior(c: BSplineCurve) -> Array:
+            return np.unique(c.knots[c.degree + 1: len(c.knots) - c.degree - 1])
+
+        v = np.concatenate([interior(self.own.curve), self.other.to_side(self.S, interior(self.other.curve))])
+        return v if self.for_own else self.other_param(v)
+
+    def other_param(self, v: Array) -> Array:
+        """``own``'s parameters ``v`` as parameters of ``other``'s side (the inverse pairing)."""
+        lo, hi = self.other.curve.domain
+        t = np.linspace(lo, hi, 2)
+        a, b = self.other.to_side(self.S, t)
+        return lo + (hi - lo) * (v - a) / (b - a)
+
+
+def match_surface(surface: BSplineSurface, target: BSplineSurface | MatchTarget, side: str,
+                  continuity: str = "G1", *, preserve_opposite: str = "G1", average: bool = False,
+                  tol_g0: float | None = None, tol_g1_deg: float = 0.01, tol_g2_rel: float = 0.01,
+                  refine: bool = True) -> MatchResult:
+    """Match ``surface`` along ``side`` to ``target`` with G0, G1, G2 or G3 continuity.
+
+    Parameters
+    ----------
+    surface : BSplineSurface
+        The surface to change (3-D; rational surfaces keep their weights).
+    target : BSplineSurface or MatchTarget
+        A surface one of whose sides runs along ``side`` (the nearest side is taken), or samples along
+        a curve (:class:`MatchTarget`, for trimmed targets; G3 and ``average`` need a surface).
+    side : {'u0', 'u1', 'v0', 'v1'}
+        The side of ``surface``: ``'u0'`` is ``u = u_min``, and so on.
+    continuity : {'G0', 'G1', 'G2', 'G3'}
+        The order to reach; the surface's degree across the side must be at least the order.
+    preserve_opposite : {'none', 'G0', 'G1', 'G2'}
+        Keep the opposite side's position, tangent plane or curvature (its last 1, 2 or 3 pole rows
+        are held; knots are inserted across the side when the rows would overlap).
+    average : bool
+        Move both surfaces to the mean of their positions, normals and curvatures along the edge.
+    tol_g0 : float, optional
+        Largest gap (model units); default ``tolerances.MATCH_G0_RTOL`` times the size of the pair.
+    tol_g1_deg, tol_g2_rel : float
+        Largest angle between the tangent planes (degrees) and relative curvature jump (fraction).
+    refine : bool
+        Insert knots until the tolerances hold (Rhino's "Refine match").
+
+    Returns
+    -------
+    MatchResult
+        ``met`` says whether the tolerances hold; the measures say by how much.
+
+    Raises
+    ------
+    ConstraintError
+        The degree cannot carry the order, the rows cannot be moved without touching the preserved
+        ones (``refine=False``), or the match folds the surface back over the target.
+    InvalidGeometryError
+        Bad arguments, named.
+    """
+    if not isinstance(surface, BSplineSurface):
+        raise ArgumentTypeError(f"surface: expected a BSplineSurface, got {type(surface).__name__}")
+    if not isinstance(target, (BSplineSurface, MatchTarget)):
+        raise ArgumentTypeError(f"target: expected a BSplineSurface or a MatchTarget, got {type(target).__name__}")
+    for s, name in ((surface, "surface"), (target, "target")):
+        if isinstance(s, BSplineSurface) and s.dim != 3:
+            raise InvalidGeometryError(f"{name}: needs a 3-D surface, this one has dim {s.dim}")
+    side = _check_choice(side, SIDES, "side")
+    r = CONTINUITIES[_check_choice(continuity, CONTINUITIES, "continuity")]
+    o = _PRESERVE[_check_choice("none" if preserve_opposite is None else preserve_opposite, _PRESERVE,
+                                "preserve_opposite")]
+    if isinstance(target, MatchTarget):
+        if average:
+            raise InvalidGeometryError("average=True needs a surface target, not a MatchTarget")
+        if r >= 3:
+            raise InvalidGeometryError("continuity='G3' needs a surface target: a MatchTarget carries curvature only")
+        if r >= 2 and target.cross_curvatures is None:
+            raise InvalidGeometryError("continuity='G2' needs MatchTarget.cross_curvatures")
+    size = _size(surface, *([target] if isinstance(target, BSplineSurface) else []))
+    if isinstance(target, MatchTarget):
+        P = target.points
+        size = max(size, float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))))
+    tol = _Tols(_check_tol(tol_g0, "tol_g0", tolerances.MATCH_G0_RTOL * size),
+                _check_tol(tol_g1_deg, "tol_g1_deg", 0.01), _check_tol(tol_g2_rel, "tol_g2_rel", 0.01))
+    Sc = _canonical(surface, side)
+    if isinstance(target, MatchTarget):
+        tgt: SurfaceSide | SampledCurve = target._curve  # type: ignore[assignment]
+        new, ref, added, meas, met = _match_canonical(Sc, tgt, r, o, tol, refine, size, side)
+        out_target: BSplineSurface | MatchTarget = target
+    else:
+        tside = _find_side(target, Sc.evaluate(np.full(17, Sc.knots[0][Sc.degree[0]]),
+                                                 np.linspace(*Sc.domain[1], 17)))
+        Tc = _canonical(target, tside)
+        if not average:
+            new, ref, added, meas, met = _match_canonical(Sc, SurfaceSide(Tc), r, o, tol, refine, size, side)
+            out_target = target
+        else:
+            own, other = SurfaceSide(Sc), SurfaceSide(Tc)
+            new, ref, added, _, _ = _match_canonical(Sc, _AverageSide(own, other, Sc, True), r, o, tol, refine,
+                                                     size, side)
+            tnew, tref, tadded, _, _ = _match_canonical(Tc, _AverageSide(own, other, Sc, False), r, o, tol,
+                                                        refine, size, tside)
+            added += tadded
+            meas = _measure(new, SurfaceSide(tnew), _check_params(new)[0], r, size)
+            met = not bool(_bad(meas, r, tol).any())
+            out_target = _restore(tnew, tside)
+    result = _restore(new, side)
+    refined = _restore(ref, side)
+    return MatchResult(
+        surface=result, target=out_target, g0_max=_max(meas.g0), g1_max_deg=_max(meas.g1),
+        g2_max_rel=_max(meas.g2), g3_max_rel=_max(meas.g3), max_change=_change(refined, result),
+        max_pole_change=float(np.max(np.linalg.norm(result.control_points - refined.control_points, axis=-1))),
+        knots_added=added, met=met)

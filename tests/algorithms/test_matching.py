@@ -1,0 +1,265 @@
+"""Surface matching along an edge, G0-G3 (course ch. 3-4): closed forms, oracles, invariants, errors.
+
+Oracles, independent of the code under test:
+* tangent planes: ``BSplineSurface.normal`` on both sides of the edge, angle by ``atan2`` (the G1
+  angle of a 3 deg kink must drop to 1e-10 deg: arccos would lose 1e-6 deg to round-off);
+* curvature across the edge: the classical ``(L a^2 + 2 M a b + N b^2) / (E a^2 + 2 F a b + G b^2)``
+  with ``(a, b)`` solving ``S_u a + S_v b = d`` for the direction ``d`` across the edge, not the
+  height-function jets the matcher uses;
+* the least change: ``scipy.linalg.pinv`` of the G1 conditions built here, at 60 points of the
+  test's own choosing (the conditions are polynomial of degree 8 along a bicubic edge, so any 9 or
+  more points give the same solution set, and the minimum-norm change is unique).
+
+Tolerances: G0 1e-9 of the size and G1 0.01 deg are the issue's targets; the measured values are
+1e-15 and 1e-13 deg, and the tests ask 1e-12 / 1e-10 where the target side lies in the surface's
+spline space (exact matches). The pseudo-inverse comparison is to 1e-10 (two factorisations of
+the same system).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.algorithms.kernel.surface import BSplineSurface
+from occsurf.algorithms.manipulation import ConstraintError, MatchTarget, match_surface
+from occsurf.algorithms.manipulation.matching import _canonical, _restore
+
+CUBIC = np.array([0, 0, 0, 0, 1, 1, 1, 1], float)
+
+
+def _knots(n: int, p: int = 3) -> np.ndarray:
+    return np.concatenate([np.zeros(p + 1), np.linspace(0, 1, n - p + 1)[1:-1], np.ones(p + 1)])
+
+
+def _pair(kink_deg: float = 3.0, nu_s: int = 4, seed: int = 1, nv: int = 4):
+    """Target T on x <= 0 and surface S on x >= 0 sharing the edge x = 0 (S's side u0 is T's side
+    u0); S's second pole row turned by ``kink_deg`` about the edge."""
+    rng = np.random.default_rng(seed)
+    ys = np.linspace(0, 1, nv)
+    h = 1.0 / 3
+    T = np.zeros((4, nv, 3))
+    S = np.zeros((nu_s, nv, 3))
+    for i in range(4):
+        T[i, :, 0], T[i, :, 1] = -i * h, ys
+        T[i, :, 2] = 0.3 * np.sin(1.3 * T[i, :, 0] + 2.0 * ys) + 0.02 * rng.normal(size=nv)
+    for i in range(nu_s):
+        S[i, :, 0], S[i, :, 1] = i * h, ys
+        S[i, :, 2] = 0.3 * np.sin(1.3 * S[i, :, 0] + 2.0 * ys) + 0.02 * rng.normal(size=nv)
+    S[0] = T[0]
+    S[1, :, 2] = T[0, :, 2] + (T[0, :, 2] - T[1, :, 2]) + h * np.tan(np.radians(kink_deg))
+    return (BSplineSurface((3, 3), (CUBIC, _knots(nv)), T),
+            BSplineSurface((3, 3), (_knots(nu_s), _knots(nv)), S))
+
+
+def _angles(a: BSplineSurface, ua: float, b: BSplineSurface, ub: float, vs: np.ndarray) -> np.ndarray:
+    na, nb = a.normal(np.full_like(vs, ua), vs), b.normal(np.full_like(vs, ub), vs)
+    ang = np.degrees(np.arctan2(np.linalg.norm(np.cross(na, nb), axis=1), np.einsum("ij,ij->i", na, nb)))
+    return np.minimum(ang, 180 - ang)
+
+
+def _cross_curvature(s: BSplineSurface, u: np.ndarray, v: np.ndarray, d: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Normal curvature of ``s`` in the tangent direction ``d`` with respect to the normal ``n``."""
+    D = s.derivatives(u, v, 2)
+    Su, Sv = D[:, 1, 0], D[:, 0, 1]
+    E, F, G = (np.einsum("ij,ij->i", x, y) for x, y in ((Su, Su), (Su, Sv), (Sv, Sv)))
+    L, M, N = (np.einsum("ij,ij->i", x, n) for x in (D[:, 2, 0], D[:, 1, 1], D[:, 0, 2]))
+    A = np.stack([Su, Sv], axis=2)  # (m, 3, 2)
+    ab = np.array([np.linalg.lstsq(A[k], d[k], rcond=None)[0] for k in range(len(u))])
+    a, b = ab[:, 0], ab[:, 1]
+    return (L * a * a + 2 * M * a * b + N * b * b) / (E * a * a + 2 * F * a * b + G * b * b)
+
+
+def _g2_rel(T: BSplineSurface, S: BSplineSurface, vs: np.ndarray) -> np.ndarray:
+    """Relative jump of the curvature across the edge x = 0 between T (side u0) and S (side u0)."""
+    z = np.zeros_like(vs)
+    nT = T.normal(z, vs)
+    tau = T.derivatives(z, vs, 1)[:, 0, 1]
+    d = np.cross(nT, tau)
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    nS = S.normal(z, vs)
+    nS *= np.sign(np.einsum("ij,ij->i", nS, nT))[:, None]
+    kT, kS = _cross_curvature(T, z, vs, d, nT), _cross_curvature(S, z, vs, d, nS)
+    return np.abs(kT - kS) / np.maximum(np.abs(kT), np.abs(kS))
+
+
+VS = np.linspace(0, 1, 201)
+
+
+def test_g1_closes_a_3_degree_kink_exactly():
+    T, S = _pair(3.0)
+    assert _angles(T, 0, S, 0, VS).max() > 2.9
+    res = match_surface(S, T, "u0", "G1")
+    assert res.met and res.knots_added == 0
+    assert _angles(T, 0, res.surface, 0, VS).max() < 1e-10
+    gap = np.linalg.norm(T.evaluate(0 * VS, VS) - res.surface.evaluate(0 * VS, VS), axis=1).max()
+    assert gap <= 1e-12 * 2 and res.g0_max <= 1e-12
+    assert res.g1_max_deg < 1e-10
+    # only the second row moved (the first is already on the target; preserve_opposite='G1' holds rows 3, 4)
+    dP = res.surface.control_points - S.control_points
+    assert np.abs(dP[0]).max() < 1e-14 and np.abs(dP[2:]).max() == 0.0
+    assert res.max_change > 0 and res.max_change <= res.max_pole_change + 1e-15
+
+
+def test_g1_change_is_the_pseudo_inverse_solution():
+    T, S = _pair(3.0, seed=4)
+    res = match_surface(S, T, "u0", "G1")
+    # the G1 conditions n_T(v) . S_u(0, v) = 0 at 60 points, on the change of row 1 (row 0 fixed by G0)
+    vs = np.linspace(0, 1, 60)
+    n = T.normal(np.zeros(60), vs)
+    Nv = np.array([BSplineSurface((3, 3), (CUBIC, CUBIC), np.eye(16).reshape(4, 4, 16))
+                   .derivatives(0.0, v, 1)[1, 0] for v in vs])  # (60, 16): dS_u/dP over the net
+    cols = [4 + j for j in range(4)]  # row 1 of the flattened 4 x 4 net
+    C = np.einsum("kc,ki->kic", n, Nv[:, cols]).reshape(60, 12)
+    Su = S.derivatives(np.zeros(60), vs, 1)[:, 1, 0]
+    d = -np.einsum("kc,kc->k", n, Su)
+    dx = sla.pinv(C, rtol=1e-12) @ d
+    got = (res.surface.control_points[1] - S.control_points[1]).ravel()
+    np.testing.assert_allclose(got, dx, atol=1e-10 * np.abs(dx).max())
+
+
+def test_g2_curvature_jump_below_one_percent_and_far_edge_kept():
+    T, S = _pair(3.0, nu_s=7)
+    # a third patch Q continuing S across its side u1 with C1 continuity
+    P = S.control_points
+    Q = np.zeros((4, 4, 3))
+    Q[0] = P[-1]
+    for i in range(1, 4):
+        Q[i] = P[-1] + i * (P[-1] - P[-2])
+    Q = BSplineSurface((3, 3), (CUBIC, CUBIC), Q)
+    before = _angles(S, 1, Q, 0, VS)
+    res = match_surface(S, T, "u0", "G2", preserve_opposite="G1")
+    assert res.met and res.g2_max_rel <= 0.01
+    assert _g2_rel(T, res.surface, VS).max() <= 0.01
+    assert _angles(T, 0, res.surface, 0, VS).max() < 1e-10
+    after = _angles(res.surface, 1, Q, 0, VS)
+    np.testing.assert_allclose(after, before, atol=1e-6)
+
+
+def test_g2_on_a_cubic_with_preserve_inserts_rows():
+    T, S = _pair(3.0)  # 4 rows: G2 moves 3, preserve G1 holds 2 -> one knot across
+    res = match_surface(S, T, "u0", "G2", preserve_opposite="G1")
+    assert res.met and res.knots_added >= 1 and res.surface.n_poles[0] >= 5
+    assert _g2_rel(T, res.surface, VS).max() <= 0.01
+    with pytest.raises(ConstraintError, match="rows across the side"):
+        match_surface(S, T, "u0", "G2", preserve_opposite="G1", refine=False)
+
+
+def test_g3_on_cubic():
+    T, S = _pair(2.0, nu_s=8)
+    res = match_surface(S, T, "u0", "G3")
+    assert res.met and res.g3_max_rel < 1e-6 and res.g2_max_rel < 1e-9
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), side_s=st.sampled_from(["u0", "u1", "v0", "v1"]),
+       side_t=st.sampled_from(["u0", "u1", "v0", "v1"]), order=st.sampled_from(["G0", "G1", "G2"]),
+       kink=st.floats(-8.0, 8.0), flip=st.booleans())
+def test_match_any_sides(seed, side_s, side_t, order, kink, flip):
+    """Random pairs presented with the matched sides anywhere (and the target's edge reversed):
+    the tolerances hold by the oracles, and the opposite side's rows do not move."""
+    T, S = _pair(kink, nu_s=7, seed=seed)
+    Tr, Sr = _restore(T.reverse(direction="v") if flip else T, side_t), _restore(S, side_s)
+    res = match_surface(Sr, Tr, side_s, order)
+    assert res.met
+    new = _canonical(res.surface, side_s)  # in S's own parametrisation again, as T is
+    gap = np.linalg.norm(T.evaluate(0 * VS, VS) - new.evaluate(0 * VS, VS), axis=1).max()
+    assert gap <= 1e-9 * 3
+    if order != "G0":
+        assert _angles(T, 0, new, 0, VS).max() <= 0.01
+    if order == "G2":
+        assert _g2_rel(T, new, VS).max() <= 0.01
+    old = _canonical(Sr, side_s)
+    assert np.array_equal(new.control_points[-2:], old.control_points[-2:])
+
+
+def _cylinder(R: float, a0: float, a1: float, c=(0.0, 0.0)) -> BSplineSurface:
+    am, h = 0.5 * (a0 + a1), 0.5 * (a1 - a0)
+    P2 = np.array([[np.cos(a0), np.sin(a0)], [np.cos(am) / np.cos(h), np.sin(am) / np.cos(h)],
+                   [np.cos(a1), np.sin(a1)]]) * R + np.asarray(c)
+    P = np.zeros((3, 4, 3))
+    P[..., 0], P[..., 2], P[..., 1] = P2[:, 0, None], P2[:, 1, None], np.linspace(0, 1, 4)[None]
+    w = np.repeat(np.array([1.0, np.cos(h), 1.0])[:, None], 4, 1)
+    return BSplineSurface((2, 3), ([0, 0, 0, 1, 1, 1], CUBIC), P, w)
+
+
+def test_rational_g2_to_a_cylinder_keeps_the_weight_function():
+    T = _cylinder(1.0, 0.0, np.pi / 2)
+    a = np.radians(5)
+    c = np.array([0.0, 1.0]) - 1.5 * np.array([np.cos(np.pi / 2 - a), np.sin(np.pi / 2 - a)])
+    S = _cylinder(1.5, np.pi / 2 - a, np.pi / 2 - a + 0.8, c)
+    res = match_surface(S, T, "u0", "G2")
+    assert res.met
+    new = res.surface
+    # the weight function is S's (refined exactly), the curvature across the edge is the cylinder's 1/R
+    extra = np.setdiff1d(new.knots[0], S.knots[0])
+    np.testing.assert_allclose(new.weights, S.refine(extra, direction="u").weights, rtol=0, atol=1e-15)
+    z = np.zeros_like(VS)
+    nS = new.normal(z, VS)
+    d = -new.derivatives(z, VS, 1)[:, 1, 0]
+    d -= np.einsum("ij,ij->i", d, nS)[:, None] * nS
+    k = _cross_curvature(new, z, VS, d, nS)
+    assert np.allclose(np.abs(k), 1.0, rtol=0.01)
+
+
+def test_match_target_samples_give_the_surface_result():
+    T, S = _pair(3.0, nu_s=7, seed=7)
+    vs = np.linspace(0, 1, 41)
+    z = np.zeros_like(vs)
+    pts, nrm = T.evaluate(z, vs), T.normal(z, vs)
+    tau = T.derivatives(z, vs, 1)[:, 0, 1]
+    b = np.cross(nrm, tau)
+    b /= np.linalg.norm(b, axis=1)[:, None]
+    k = _cross_curvature(T, z, vs, b, nrm)
+    res = match_surface(S, MatchTarget(pts, nrm, k), "u0", "G2")
+    assert res.met
+    assert _angles(T, 0, res.surface, 0, VS).max() <= 0.01
+    assert _g2_rel(T, res.surface, VS).max() <= 0.01
+    # G1 is linear: the same least change as with the surface itself, to the samples' interpolation
+    # error (1e-8 in the points, 1e-6 in the change measured). G2 is not: both meet it, by different
+    # changes of the second row, so only the tolerances are compared there.
+    one = match_surface(S, MatchTarget(pts, nrm, k), "u0", "G1").surface
+    ref = match_surface(S, T, "u0", "G1").surface
+    assert np.abs(one.control_points - ref.control_points).max() < 1e-3 * np.abs(ref.control_points - S.control_points).max()
+
+
+def test_average_moves_both_and_meets():
+    T, S = _pair(4.0, nu_s=7, seed=3)
+    T7 = T.insert_knot(0.3, direction="u").insert_knot(0.6, direction="u").insert_knot(0.8, direction="u")
+    one = match_surface(S, T7, "u0", "G1")
+    res = match_surface(S, T7, "u0", "G1", average=True)
+    assert res.met and isinstance(res.target, BSplineSurface)
+    assert _angles(res.target, 0, res.surface, 0, VS).max() <= 0.01
+    moved_t = np.abs(res.target.control_points - T7.control_points).max()
+    moved_s = np.abs(res.surface.control_points - S.control_points).max()
+    assert 0 < moved_s < np.abs(one.surface.control_points - S.control_points).max()
+    assert moved_t > 0
+
+
+def test_bad_input_is_named():
+    T, S = _pair()
+    with pytest.raises(InvalidGeometryError, match="side"):
+        match_surface(S, T, "w0")
+    with pytest.raises(InvalidGeometryError, match="continuity"):
+        match_surface(S, T, "u0", "C2")
+    with pytest.raises(InvalidGeometryError, match="preserve_opposite"):
+        match_surface(S, T, "u0", preserve_opposite="G4")
+    with pytest.raises(InvalidGeometryError, match="tol_g1_deg"):
+        match_surface(S, T, "u0", tol_g1_deg=-1)
+    with pytest.raises(InvalidGeometryError, match="target"):
+        match_surface(S, "T", "u0")  # type: ignore[arg-type]
+    lin = BSplineSurface((1, 3), ([0, 0, 1, 1], CUBIC), S.control_points[:2])
+    with pytest.raises(ConstraintError, match="degree >= 2"):
+        match_surface(lin, T, "u0", "G2")
+    pts = T.evaluate(np.zeros(5), np.linspace(0, 1, 5))
+    nrm = T.normal(np.zeros(5), np.linspace(0, 1, 5))
+    with pytest.raises(InvalidGeometryError, match="cross_curvatures"):
+        match_surface(S, MatchTarget(pts, nrm), "u0", "G2")
+    with pytest.raises(InvalidGeometryError, match="G3"):
+        match_surface(S, MatchTarget(pts, nrm, np.zeros(5)), "u0", "G3")
+    with pytest.raises(InvalidGeometryError, match="coincide"):
+        MatchTarget(np.zeros((3, 3)), nrm[:3])
