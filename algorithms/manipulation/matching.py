@@ -56,7 +56,7 @@ from ..kernel.surface import BSplineSurface
 from .linalg import ConstraintError
 from .match_targets import Jets, MatchTarget, SampledCurve, SurfaceSide, height_jets
 
-__all__ = ["MatchResult", "MatchTarget", "match_surface", "SIDES", "CONTINUITIES"]
+__all__ = ["MatchResult", "MatchTarget", "match_surface", "side_along", "SIDES", "CONTINUITIES"]
 
 Array = NDArray[np.float64]
 _Target: TypeAlias = "SurfaceSide | SampledCurve | _AverageSide"
@@ -479,6 +479,21 @@ def _find_side(target: BSplineSurface, points: Array) -> str:
         if float(np.max(d)) < best_d:
             best, best_d = side, float(np.max(d))
     return best
+
+
+def side_along(surface: BSplineSurface, points: Array, tol: float) -> tuple[str | None, float]:
+    """The side of ``surface`` that ``points`` (m, 3) lie along, within ``tol``, and its distance.
+
+    Returns the side (``'u0'``, ``'u1'``, ``'v0'``, ``'v1'``) whose boundary curve has the smallest
+    largest distance to the points, and that distance; the side is ``None`` where that distance is
+    above ``tol`` (an edge that crosses the surface's interior, as a trimmed face's may).
+    """
+    best, best_d = None, np.inf
+    for side in SIDES:
+        _, d = SurfaceSide(_canonical(surface, side)).feet(np.asarray(points, float))
+        if float(np.max(d)) < best_d:
+            best, best_d = side, float(np.max(d))
+    return (best if best_d <= tol else None), best_d
 
 
 def _change(before: BSplineSurface, after: BSplineSurface) -> float:

@@ -6,6 +6,9 @@
     occsurf inspect [FILE|DIR ...] [--json | --jsonl] [--samples N] [--timeout SECONDS] [--strict] [--in-process]
     occsurf fill IN --out OUT.step [--faces I ...] [--all-loops] [--no-occ] [--json] [--timeout SECONDS] [--strict]
                  [--in-process]
+    occsurf match IN --face I --to J --out OUT.step [--continuity G0|G1|G2|G3] [--preserve-opposite none|G0|G1|G2]
+                  [--average] [--tol-g0 D] [--tol-g1 DEG] [--tol-g2 PCT] [--sharp-deg DEG] [--json] [--timeout S]
+                  [--strict] [--in-process]
     occsurf fit DATA --tol T --out OUT.step [--json] [--ctrl NU NV] [--degree D] [--smooth S] [--fix-boundary]
                 [--timeout SECONDS] [--strict] [--in-process]
     occsurf render FILE (--lights LIGHTS.json | --preset NAME) --out IMAGE.png [--size W H] [--view NAME]
@@ -50,7 +53,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from . import audit, check, convert, demo, fill, fit, inspect, render
+from . import audit, check, convert, demo, fill, fit, inspect, match, render
 from ._common import EXIT_ERROR, OneLineParser, guarded
 
 __all__ = ["main", "build_parser"]
@@ -67,6 +70,7 @@ def build_parser() -> argparse.ArgumentParser:
     inspect.add_parser(sub)
     demo.add_parser(sub)
     fill.add_parser(sub)
+    match.add_parser(sub)
     fit.add_parser(sub)
     render.add_parser(sub)
     audit.add_parser(sub)
