@@ -228,8 +228,9 @@ def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) ->
     rows below are known, so a first solution takes the rows in turn, each by its minimum-norm
     change (for G0 and G1 it is already the joint minimum-norm change when the rows below are
     determined by their conditions). For G2 and G3, Gauss-Newton steps ``x <- pinv(J) (J x - F)``
-    on all rows at once then move it to the nearest point where the joint change is minimal; the
-    result is kept only if it still meets the conditions and is smaller."""
+    on rows 1..r at once (row 0 is fixed by G0 alone) then move it to the nearest point where their
+    joint change is minimal; the rows are then solved in turn from there again (the conditions
+    exactly), and the result is kept only if it is smaller."""
     R = _cross_rows(S, v, r)
     tg = target.corresponding(S, v)
     nv = S.n_poles[1]
@@ -253,12 +254,16 @@ def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) ->
 
     x = rowwise(np.zeros(P0.size))
     if r >= 2:
-        y = x
+        # row 0 is fixed by G0 alone (its change is already the least one): the steps move rows
+        # 1..r under the conditions of orders 1..r only, a third smaller system
+        y = x.copy()
+        rows, cols = slice(start[1], None), slice(3 * nv, None)
         for _ in range(tolerances.MATCH_MAX_ITERATIONS):
             F, J = residual(y)
-            z = _lstsq(J, J @ y - F)
-            step = float(np.max(np.abs(z - y)))
-            y = z
+            Jr = J[rows, cols]
+            z = _lstsq(Jr, Jr @ y[cols] - F[rows])
+            step = float(np.max(np.abs(z - y[cols])))
+            y[cols] = z
             if step <= 1e-12 * size:
                 break
         y = rowwise(y)  # the conditions exactly again where the steps stopped short
@@ -481,19 +486,23 @@ def _find_side(target: BSplineSurface, points: Array) -> str:
     return best
 
 
-def side_along(surface: BSplineSurface, points: Array, tol: float) -> tuple[str | None, float]:
-    """The side of ``surface`` that ``points`` (m, 3) lie along, within ``tol``, and its distance.
+def side_along(surface: BSplineSurface, points: Array, tol: float) -> tuple[str | None, float, float]:
+    """The side of ``surface`` that ``points`` (m, 3) lie along, within ``tol``, and how well.
 
     Returns the side (``'u0'``, ``'u1'``, ``'v0'``, ``'v1'``) whose boundary curve has the smallest
-    largest distance to the points, and that distance; the side is ``None`` where that distance is
-    above ``tol`` (an edge that crosses the surface's interior, as a trimmed face's may).
+    largest distance to the points, that distance, and the fraction of the side's parameter range
+    the points' feet span (1: the points run from one end of the side to the other); the side is
+    ``None`` where the distance is above ``tol`` (an edge that crosses the surface's interior, as a
+    trimmed face's may).
     """
-    best, best_d = None, np.inf
+    best, best_d, best_cover = None, np.inf, 0.0
     for side in SIDES:
-        _, d = SurfaceSide(_canonical(surface, side)).feet(np.asarray(points, float))
+        ss = SurfaceSide(_canonical(surface, side))
+        t, d = ss.feet(np.asarray(points, float))
         if float(np.max(d)) < best_d:
-            best, best_d = side, float(np.max(d))
-    return (best if best_d <= tol else None), best_d
+            lo, hi = ss.curve.domain
+            best, best_d, best_cover = side, float(np.max(d)), float((t.max() - t.min()) / (hi - lo))
+    return (best if best_d <= tol else None), best_d, best_cover
 
 
 def _change(before: BSplineSurface, after: BSplineSurface) -> float:

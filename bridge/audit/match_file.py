@@ -1,4 +1,5 @@
-"""Match two faces of a STEP/IGES file in a worker process (``occsurf match``).
+"""Match two faces of a STEP/IGES file, or repair a model, in a worker process (``occsurf match``,
+``occsurf repair``).
 
 :func:`match_file` is what ``occsurf match`` runs: the untrusted file is read in a worker
 (:mod:`occsurf.bridge.isolation`), :func:`occsurf.bridge.modeling.matching.match_faces` changes
@@ -19,11 +20,12 @@ from typing import Any
 
 from ..isolation import Outcome, run_jobs
 
-__all__ = ["match_file", "match_job", "MATCH_JOB", "PRELOAD"]
+__all__ = ["match_file", "match_job", "repair_job", "MATCH_JOB", "REPAIR_JOB", "PRELOAD"]
 
 #: What a worker imports before its first item (the timeout excludes it).
 PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.modeling.matching")
 MATCH_JOB = "occsurf.bridge.audit.match_file:match_job"
+REPAIR_JOB = "occsurf.bridge.audit.match_file:repair_job"
 
 
 def _refusal(rep: dict[str, Any], item: dict[str, Any]) -> str | None:
@@ -59,7 +61,28 @@ def match_job(item: dict[str, Any]) -> dict[str, Any]:
     return {"report": rep, "written": why is None, "refused": why, "warnings": list(model.warnings)}
 
 
-def match_file(item: dict[str, Any], *, timeout: float | None = None, isolate: bool = True) -> Outcome:
-    """:func:`match_job` on ``item`` in a worker process (``isolate=False``: in this one)."""
-    [outcome] = run_jobs(MATCH_JOB, [item], timeout=timeout, isolate=isolate, preload=PRELOAD)
+def repair_job(item: dict[str, Any]) -> dict[str, Any]:
+    """Read ``item["input"]``, repair it with ``item["preset"]`` (``item["max_change"]``), write
+    ``item["output"]`` and the page ``<output stem>_report/index.html``: ``{"report": dict,
+    "page": str, "warnings": [str]}``."""
+    from ..exchange import step_iges
+    from ..exchange.reading import read_model
+    from ..isolation import quiet_native_stdout
+    from ..modeling.repair import repair_model, write_repair_page
+
+    with warnings.catch_warnings(), quiet_native_stdout():
+        warnings.simplefilter("ignore")
+        model = read_model(Path(item["input"]), strict=bool(item.get("strict")))
+        report, shape = repair_model(model.shape, str(item.get("preset", "catia")), max_change=item.get("max_change"))
+        out = Path(item["output"])
+        step_iges.write_step(out, shape)
+        page = write_repair_page(report, out.with_name(out.stem + "_report"), Path(item["input"]).name)
+    return {"report": report.to_dict(), "page": str(page), "warnings": list(model.warnings)}
+
+
+def match_file(item: dict[str, Any], *, timeout: float | None = None, isolate: bool = True,
+               job: str = MATCH_JOB) -> Outcome:
+    """:func:`match_job` (or ``job``: :data:`REPAIR_JOB`) on ``item`` in a worker process
+    (``isolate=False``: in this one)."""
+    [outcome] = run_jobs(job, [item], timeout=timeout, isolate=isolate, preload=PRELOAD)
     return outcome

@@ -9,6 +9,8 @@
     occsurf match IN --face I --to J --out OUT.step [--continuity G0|G1|G2|G3] [--preserve-opposite none|G0|G1|G2]
                   [--average] [--tol-g0 D] [--tol-g1 DEG] [--tol-g2 PCT] [--sharp-deg DEG] [--json] [--timeout S]
                   [--strict] [--in-process]
+    occsurf repair IN --preset catia|class-a|mechanical --out OUT.step [--max-change D] [--json] [--timeout S]
+                   [--strict] [--in-process]
     occsurf fit DATA --tol T --out OUT.step [--json] [--ctrl NU NV] [--degree D] [--smooth S] [--fix-boundary]
                 [--timeout SECONDS] [--strict] [--in-process]
     occsurf render FILE (--lights LIGHTS.json | --preset NAME) --out IMAGE.png [--size W H] [--view NAME]
@@ -53,7 +55,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from . import audit, check, convert, demo, fill, fit, inspect, match, render
+from . import audit, check, convert, demo, fill, fit, inspect, match, render, repair
 from ._common import EXIT_ERROR, OneLineParser, guarded
 
 __all__ = ["main", "build_parser"]
@@ -71,6 +73,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_parser(sub)
     fill.add_parser(sub)
     match.add_parser(sub)
+    repair.add_parser(sub)
     fit.add_parser(sub)
     render.add_parser(sub)
     audit.add_parser(sub)

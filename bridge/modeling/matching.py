@@ -38,11 +38,13 @@ from OCP.BRepTools import BRepTools, BRepTools_ReShape
 from OCP.Geom import Geom_BSplineSurface
 from OCP.gp import gp_Pnt, gp_Vec
 from OCP.ShapeFix import ShapeFix_Edge
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_WIRE
-from OCP.TopExp import TopExp_Explorer
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_WIRE
+from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face
+from OCP.TopTools import TopTools_IndexedMapOfShape
 
+from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import ArgumentTypeError, InvalidGeometryError
 from occsurf.algorithms.kernel.surface import BSplineSurface
 from occsurf.algorithms.kernel.trimmed import TrimmedSurface
@@ -53,7 +55,7 @@ from occsurf.algorithms.manipulation.matching import CONTINUITIES, side_along
 from .. import _occ
 from ..conversion.splines import from_occ, to_occ
 from .joints import _edge_samples, assess_joint
-from .refill_loop import SewnModel, model_faces
+from .refill_loop import SewnModel
 
 __all__ = ["FaceMatch", "match_faces", "MATCH_SHARP_DEG", "SIDE_RTOL"]
 
@@ -65,6 +67,11 @@ MATCH_SHARP_DEG: float = 15.0
 #: A face's surface runs along the shared edge when every sample of the edge lies within this much
 #: of one of its sides (relative to the model's size), or within 10x the edge's tolerance.
 SIDE_RTOL: float = 1e-6
+#: The shared edge must run from one end of the changed face's side to the other, to this fraction
+#: of the side's parameter range (its ends sit within the model's tolerance of the corners, not on
+#: them): a side that runs on past the edge (along other faces) would be matched to the target over
+#: its whole length.
+COVER_SLACK: float = 1e-3
 #: Samples along the shared edge (plus 16 clustered at each end, as :func:`.joints.assess_joint`).
 EDGE_SAMPLES: int = 81
 
@@ -79,7 +86,8 @@ class FaceMatch:
     ``G2CurvatureGap`` differs); ``opposite_g1_max_deg``: the worst OCC G1 angle along the changed
     face's other shared edges against their neighbours after the change (``..._before``: before);
     ``faces_out``: the numbers of the changed face and the target in the returned model (sewing the
-    model renumbers its faces).
+    model renumbers its faces); ``met``: the tolerances hold by the match's own measures and by
+    OCC's along the edge (G0 within the larger of the tolerance and the edge's own).
     """
 
     face: int
@@ -103,8 +111,12 @@ class FaceMatch:
     target_moved: bool = False
     notes: list[str] = field(default_factory=list)
 
+    #: For each face of the input, its number in the returned model (-1: not found); not serialised.
+    _numbering: list[int] = field(default_factory=list, repr=False)
+
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
+        out.pop("_numbering", None)
         for k, v in out.items():
             if isinstance(v, float) and not math.isfinite(v):
                 out[k] = None
@@ -186,17 +198,20 @@ def _restricted(surface: BSplineSurface, face: Any) -> BSplineSurface:
 
 
 def _along(surface: BSplineSurface, face: Any, pts: np.ndarray, tol: float
-           ) -> tuple[BSplineSurface, str | None, float]:
-    """The surface (or its piece on the face's UV box) with a side along ``pts``, that side, and the
-    distance (the side is ``None`` when neither has one)."""
-    side, dist = side_along(surface, pts, tol)
-    if side is not None:
-        return surface, side, dist
+           ) -> tuple[BSplineSurface, str | None, float, float]:
+    """The surface (or its piece on the face's UV box) with a side along ``pts``, that side, the
+    distance and the fraction of the side the points cover (the side is ``None`` when neither has
+    one)."""
+    side, dist, cover = side_along(surface, pts, tol)
+    if side is not None and cover >= 1.0 - COVER_SLACK:
+        return surface, side, dist, cover
     piece = _restricted(surface, face)
     if piece is surface:
-        return surface, None, dist
-    side2, dist2 = side_along(piece, pts, tol)
-    return (piece, side2, dist2) if side2 is not None else (surface, None, min(dist, dist2))
+        return surface, side, dist, cover
+    side2, dist2, cover2 = side_along(piece, pts, tol)
+    if side2 is not None and (side is None or cover2 > cover):
+        return piece, side2, dist2, cover2
+    return surface, side, min(dist, dist2), cover
 
 
 def _sampled_target(face: Any, edge: Any) -> MatchTarget:
@@ -319,20 +334,26 @@ def match_faces(shape: Any, face: int, target: int, continuity: str = "G1", *, p
     etol = max(BRep_Tool.Tolerance_s(e) for e in edges)
     tol_side = max(SIDE_RTOL * model.size, 10.0 * etol)
     S, _, converted = _surface_of(fi, order)
-    S, side, dist = _along(S, fi, pts, tol_side)
+    S, side, dist, cover = _along(S, fi, pts, tol_side)
     if side is None:
         raise InvalidGeometryError(
             f"the edge between faces {i} and {j} does not run along a side of face {i}'s surface (it lies "
             f"{dist:.3g} from the nearest side, more than {tol_side:.3g}): the face is trimmed across its surface")
+    if cover < 1.0 - COVER_SLACK:
+        raise InvalidGeometryError(
+            f"the edge between faces {i} and {j} covers {100 * cover:.3g} % of side {side} of face {i}'s surface: "
+            f"the side runs on past the edge, and matching only part of a side is not supported")
     T, _, _ = _surface_of(fj, order)
-    T, side_j, _ = _along(T, fj, pts, tol_side)
+    T, side_j, _, cover_j = _along(T, fj, pts, tol_side)
+    if side_j is not None and cover_j < 1.0 - COVER_SLACK:
+        side_j = None  # the target's side runs on past the edge: samples of it along the edge instead
     notes = []
     if side_j is None:
         if average:
             raise InvalidGeometryError(f"average needs the edge along a side of face {j}'s surface too; it is trimmed "
                                        "across it")
         tgt: BSplineSurface | MatchTarget = _sampled_target(fj, max(edges, key=lambda e: BRep_Tool.Tolerance_s(e)))
-        notes.append(f"face {j} is trimmed across its surface: matched to samples of it along the edge")
+        notes.append(f"the edge is not a whole side of face {j}'s surface: matched to samples of it along the edge")
     else:
         tgt = T
     res = match_surface(S, tgt, side, continuity, preserve_opposite=preserve_opposite, average=average,
@@ -354,13 +375,23 @@ def match_faces(shape: Any, face: int, target: int, continuity: str = "G1", *, p
     for e in edges:
         a, b = assess_joint(e, nb, [geom_new])
         g0, g1 = max(g0, a), max(g1, b)
+    # met: by the match's own measures *and* by OCC's along the real edge
+    g0_tol = max(etol, tol_g0 if tol_g0 is not None else tolerances.MATCH_G0_RTOL * model.size)
+    met = res.met and g0 <= g0_tol and (order < 1 or g1 <= tol_g1_deg)
+    if res.met and not met:
+        notes.append(f"the match meets its tolerances on the surface's side, but OCC measures G0 {g0:.3g} / G1 "
+                     f"{g1:.3g} deg along the edge")
     others = _other_edges(model, i, j)
-    after = model_faces(out)
-    pos = [next((k for k, f in enumerate(after) if f.IsSame(g)), -1) for g in (new_i, nb)]
+    index = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(out, TopAbs_FACE, index)
+    now = [new_i if k == i else new_j if (k == j and new_j is not None) else f for k, f in enumerate(model.faces)]
+    numbering = [index.FindIndex(f) - 1 for f in now]
+    pos = [numbering[i], numbering[j]]
     report = FaceMatch(
         face=i, target=j, continuity=continuity, side=side, target_side=side_j, g0_max=g0, g1_max_deg=g1,
-        g2_max_rel=res.g2_max_rel, max_change=res.max_change, knots_added=res.knots_added, met=res.met,
+        g2_max_rel=res.g2_max_rel, max_change=res.max_change, knots_added=res.knots_added, met=met,
         valid=valid, opposite_g1_max_deg=_worst_g1(others, geom_new), g0_before=g0_before,
         g1_before_deg=g1_before, opposite_g1_before_deg=_worst_g1(others, geom_i), converted=converted,
         target_moved=new_j is not None, notes=notes, faces_out=(pos[0], pos[1]))
+    report._numbering = numbering
     return report, out

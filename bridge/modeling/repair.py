@@ -1,0 +1,249 @@
+"""Repair what the report finds: match every smooth edge that breaks a preset (issue 29, item 4).
+
+:func:`repair_model` is the loop assess -> repair -> assess again:
+
+1. :func:`occsurf.bridge.quality.continuity.edge_continuity` and
+   :func:`~occsurf.bridge.quality.continuity.check_edges` find the edges that break the preset;
+   the ones meant to be smooth (not classified ``sharp``, ``gap``, ``seam`` or ``degenerate``)
+   with a G1 or curvature violation are repaired, worst first;
+2. for each, the face that moves is the one with fewer other smooth edges (the fewer constraints
+   it carries), ties to the smaller area; the continuity asked is G2 where the preset checks
+   curvature jumps, else G1, at half the preset's tolerances (so that the check after passes with
+   room); :func:`.matching.match_faces` does it. A match is refused (and the other face tried, then
+   G1 where G2 was asked) when it fails, is not valid, misses the tolerances, or would move the
+   face more than ``max_change``;
+3. the model is checked again with the same preset.
+
+A sharp edge is never changed (it is not a candidate), nor is any face moved by more than
+``max_change`` (default 1e-3 of the model's size). Fairing (issue 29, item 2) is not part of this
+yet: ``faces_faired`` is 0.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from OCP.BRepGProp import BRepGProp
+from OCP.GProp import GProp_GProps
+
+from occsurf.algorithms.errors import OccsurfError
+
+from .. import _occ
+from .matching import match_faces
+
+__all__ = ["RepairReport", "EdgeRepair", "repair_model", "write_repair_page", "MAX_CHANGE_RTOL"]
+
+#: Default largest change of a face, relative to the model's size (bounding-box diagonal).
+MAX_CHANGE_RTOL: float = 1e-3
+
+
+@dataclass
+class EdgeRepair:
+    """One edge: its faces (input numbering), what broke, what was done."""
+
+    edge: int
+    faces: tuple[int, int]
+    classification: str
+    measures: list[str]
+    g1_before_deg: float
+    g2_rel_before: float
+    status: str = "refused"  # "repaired" or "refused"
+    moved: int | None = None
+    continuity: str | None = None
+    reason: str | None = None
+    g1_after_deg: float | None = None
+    max_change: float | None = None
+
+
+@dataclass
+class RepairReport:
+    """What :func:`repair_model` did; ``violations_*``: the preset's violations on smooth edges."""
+
+    preset: str
+    max_change: float
+    edges: list[EdgeRepair] = field(default_factory=list)
+    violations_before: int = 0
+    violations_after: int = 0
+    edges_breaking_before: int = 0
+    edges_breaking_after: int = 0
+    worst_smooth_g1_before: float = 0.0
+    worst_smooth_g1_after: float = 0.0
+    faces_faired: int = 0
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def repaired(self) -> int:
+        return sum(e.status == "repaired" for e in self.edges)
+
+    @property
+    def refused(self) -> int:
+        return sum(e.status == "refused" for e in self.edges)
+
+    def to_dict(self) -> dict[str, Any]:
+        out = asdict(self)
+        out.update(edges_repaired=self.repaired, edges_refused=self.refused)
+        return _finite(out)
+
+
+def _finite(x: Any) -> Any:
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite(v) for v in x]
+    return x
+
+
+_SMOOTH_MEASURES = ("g1", "g2_rel", "g2")
+_NOT_SMOOTH = ("sharp", "gap", "seam", "degenerate")
+
+
+def _breaking(shape: Any, preset: str) -> tuple[Any, dict[int, list[Any]], float]:
+    """The continuity result, the smooth edges' violations by edge, and the worst smooth G1."""
+    from ..quality.continuity import check_edges, edge_continuity
+
+    res = edge_continuity(shape, preset=preset)
+    by_edge: dict[int, list[Any]] = {}
+    for v in check_edges(res, preset):
+        r = res[v.edge]
+        if v.measure in _SMOOTH_MEASURES and r.classification not in _NOT_SMOOTH and r.faces[0] != r.faces[1]:
+            by_edge.setdefault(v.edge, []).append(v)
+    worst = max((r.g1_max_deg for r in res if r.classification not in _NOT_SMOOTH
+                 and math.isfinite(r.g1_max_deg)), default=0.0)
+    return res, by_edge, float(worst)
+
+
+def _area(face: Any) -> float:
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props)
+    return float(props.Mass())
+
+
+@_occ.quiet_messages()
+def repair_model(shape: Any, preset: str = "catia", *, max_change: float | None = None
+                 ) -> tuple[RepairReport, Any]:
+    """Match every smooth edge of ``shape`` that breaks ``preset``; check again.
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape (or a build123d / cadquery shape)
+        Faces numbered as ``occsurf check`` numbers them.
+    preset : {'catia', 'class-a', 'mechanical'}
+    max_change : float, optional
+        Largest change of any face (model units); default ``MAX_CHANGE_RTOL`` x the model's size.
+
+    Returns
+    -------
+    (RepairReport, TopoDS_Shape)
+        The report (face numbers of the input) and the repaired model (sewn: numbered anew).
+    """
+    from ..quality.continuity import PRESETS
+    from .refill_loop import model_faces
+
+    if preset not in PRESETS:
+        raise OccsurfError(f"preset: expected one of {', '.join(sorted(PRESETS))}, got {preset!r}")
+    th = PRESETS[preset]
+    t0 = time.perf_counter()
+    before, by_edge, worst0 = _breaking(shape, preset)
+    size = float(before.stats.get("model_size") or 1.0)
+    limit = MAX_CHANGE_RTOL * size if max_change is None else float(max_change)
+    report = RepairReport(preset, limit, violations_before=sum(map(len, by_edge.values())),
+                          edges_breaking_before=len(by_edge), worst_smooth_g1_before=worst0)
+    report.seconds["check_before"] = time.perf_counter() - t0
+    faces0 = model_faces(shape)
+    smooth_count: dict[int, int] = {}
+    for r in before:
+        if r.classification not in _NOT_SMOOTH:
+            for f in set(r.faces):
+                smooth_count[f] = smooth_count.get(f, 0) + 1
+    order = sorted(by_edge, key=lambda e: -max(v.value / v.limit for v in by_edge[e]))
+    current, numbering = shape, list(range(len(faces0)))
+    t1 = time.perf_counter()
+    for e in order:
+        r = before[e]
+        a, b = r.faces
+        item = EdgeRepair(e, (a, b), r.classification, sorted({v.measure for v in by_edge[e]}), r.g1_max_deg,
+                          r.g2_max_rel)
+        report.edges.append(item)
+        # G2 where the preset checks curvature; where that would move a face too far, G1 still
+        # mends the tangent planes
+        conts = ["G1"] if th.g2_rel is None else ["G2", "G1"]
+        first = sorted((a, b), key=lambda f: (smooth_count.get(f, 0), _area(faces0[f])))
+        reasons = []
+        for cont, (move, other) in ((c, m) for c in conts for m in (first, first[::-1])):
+            try:
+                rep, out = match_faces(current, numbering[move], numbering[other], cont,
+                                       tol_g1_deg=0.5 * th.g1_deg,
+                                       tol_g2_rel=0.5 * (th.g2_rel if th.g2_rel is not None else 2.0) / 100.0)
+            except (OccsurfError, ValueError) as err:
+                reasons.append(f"{cont} face {move}: {err}")
+                continue
+            if rep.max_change > limit:
+                reasons.append(f"{cont} face {move}: would move by {rep.max_change:.3g} > {limit:.3g}")
+            elif not rep.valid:
+                reasons.append(f"{cont} face {move}: the result is not valid (BRepCheck)")
+            elif not rep.met:
+                reasons.append(f"{cont} face {move}: tolerances not met (G1 {rep.g1_max_deg:.3g} deg)")
+            else:
+                item.status, item.moved, item.continuity = "repaired", move, cont
+                item.g1_after_deg, item.max_change = rep.g1_max_deg, rep.max_change
+                numbering = [rep._numbering[k] for k in numbering]
+                current = out
+                break
+        if item.status != "repaired":
+            item.reason = "; ".join(reasons)
+    report.seconds["match"] = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    _, after, worst1 = _breaking(current, preset)
+    report.violations_after = sum(map(len, after.values()))
+    report.edges_breaking_after = len(after)
+    report.worst_smooth_g1_after = worst1
+    report.seconds["check_after"] = time.perf_counter() - t2
+    report.seconds["total"] = time.perf_counter() - t0
+    return report, current
+
+
+def write_repair_page(report: RepairReport, folder: str | Path, source: str = "") -> Path:
+    """``folder/index.html``: the counts before and after side by side, and every edge tried."""
+    from ..exchange.files import atomic_write
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+
+    def num(x: float | None, unit: str = "") -> str:
+        return "-" if x is None or not math.isfinite(x) else f"{x:.3g}{unit}"
+
+    rows = "\n".join(
+        f"<tr class='{e.status}'><td>{e.edge}</td><td>{e.faces[0]}-{e.faces[1]}</td><td>{html.escape(e.classification)}"
+        f"</td><td>{', '.join(e.measures)}</td><td>{num(e.g1_before_deg, ' deg')}</td><td>{num(e.g2_rel_before, ' %')}"
+        f"</td><td>{e.status}</td><td>{'' if e.moved is None else e.moved}</td><td>{e.continuity or ''}</td>"
+        f"<td>{num(e.g1_after_deg, ' deg')}</td><td>{num(e.max_change)}</td><td>{html.escape(e.reason or '')}</td></tr>"
+        for e in report.edges)
+    page = f"""<!doctype html><html><head><meta charset="utf-8"><title>occsurf repair {html.escape(source)}</title>
+<style>body{{font-family:sans-serif;margin:1.5em}} table{{border-collapse:collapse}} td,th{{border:1px solid #ccc;
+padding:2px 6px;font-size:13px}} tr.repaired{{background:#e8f6e8}} tr.refused{{background:#fbeaea}}
+.side{{display:inline-block;vertical-align:top;margin-right:3em}}</style></head><body>
+<h1>Repair of {html.escape(source)} ({html.escape(report.preset)})</h1>
+<div class="side"><h2>Before</h2><table>
+<tr><th>smooth edges breaking the preset</th><td>{report.edges_breaking_before}</td></tr>
+<tr><th>violations on them</th><td>{report.violations_before}</td></tr>
+<tr><th>worst smooth G1 angle</th><td>{num(report.worst_smooth_g1_before, ' deg')}</td></tr></table></div>
+<div class="side"><h2>After</h2><table>
+<tr><th>smooth edges breaking the preset</th><td>{report.edges_breaking_after}</td></tr>
+<tr><th>violations on them</th><td>{report.violations_after}</td></tr>
+<tr><th>worst smooth G1 angle</th><td>{num(report.worst_smooth_g1_after, ' deg')}</td></tr></table></div>
+<p>Edges repaired: {report.repaired}; refused: {report.refused}; faces faired: {report.faces_faired};
+largest change allowed {num(report.max_change)} (model units). Face numbers are the input's.</p>
+<table><tr><th>edge</th><th>faces</th><th>class</th><th>broke</th><th>G1 before</th><th>G2 before</th><th>status</th>
+<th>moved</th><th>asked</th><th>G1 after (OCC)</th><th>change</th><th>reason</th></tr>
+{rows}</table></body></html>
+"""
+    path = folder / "index.html"
+    atomic_write(path, page.encode("utf-8"))
+    return path
