@@ -3,13 +3,15 @@
 Public names: the constraints :class:`Position`, :class:`Tangent`, :class:`Derivative`,
 :class:`Curvature`; :func:`constrain`, :func:`drag_point`, :class:`Dragger`,
 :class:`PreparedConstraints` for curves and :func:`drag_surface_point` for surfaces;
-:func:`match_surface` (G0-G3 along an edge, :class:`MatchTarget`, :class:`MatchResult`); the solvers of
+:func:`match_surface` (G0-G3 along an edge, :class:`MatchTarget`, :class:`MatchResult`);
+:func:`fair_surface` (wiggles out by the least curvature variation within a tolerance); the solvers of
 :mod:`.linalg` (least squares, minimum norm, equality-constrained, dense and sparse) and their
 errors :class:`ConstraintError`, :class:`ConvergenceError`.
 """
 
 from .constraints import Curvature, Derivative, Position, Tangent
 from .curves import Dragger, PreparedConstraints, constrain, drag_point
+from .fairing import FairResult, fair_surface
 from .linalg import ConstraintError, ConvergenceError
 from .match_targets import MatchTarget
 from .matching import MatchResult, match_surface
@@ -26,6 +28,8 @@ __all__ = [
     "drag_point",
     "drag_surface_point",
     "match_surface",
+    "fair_surface",
+    "FairResult",
     "MatchResult",
     "MatchTarget",
     "ConstraintError",
