@@ -12,11 +12,12 @@
    room); :func:`.matching.match_faces` does it. A match is refused (and the other face tried, then
    G1 where G2 was asked) when it fails, is not valid, misses the tolerances, or would move the
    face more than ``max_change``;
-3. the model is checked again with the same preset.
+3. the B-spline faces ``face_flags`` flags for wiggles are faired
+   (:func:`.fairing.fair_faces`, within ``max_change``, the outer pole rows held);
+4. the model is checked again with the same preset.
 
 A sharp edge is never changed (it is not a candidate), nor is any face moved by more than
-``max_change`` (default 1e-3 of the model's size). Fairing (issue 29, item 2) is not part of this
-yet: ``faces_faired`` is 0.
+``max_change`` (default 1e-3 of the model's size).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from OCP.GProp import GProp_GProps
 from occsurf.algorithms.errors import OccsurfError
 
 from .. import _occ
+from .fairing import fair_faces
 from .matching import match_faces
 
 __all__ = ["RepairReport", "EdgeRepair", "repair_model", "write_repair_page", "MAX_CHANGE_RTOL"]
@@ -74,6 +76,7 @@ class RepairReport:
     worst_smooth_g1_before: float = 0.0
     worst_smooth_g1_after: float = 0.0
     faces_faired: int = 0
+    fairings: list[dict[str, Any]] = field(default_factory=list)
     seconds: dict[str, float] = field(default_factory=dict)
 
     @property
@@ -117,6 +120,26 @@ def _breaking(shape: Any, preset: str) -> tuple[Any, dict[int, list[Any]], float
     worst = max((r.g1_max_deg for r in res if r.classification not in _NOT_SMOOTH
                  and math.isfinite(r.g1_max_deg)), default=0.0)
     return res, by_edge, float(worst)
+
+
+def _wiggly_faces(shape: Any) -> list[int]:
+    """B-spline faces of ``shape`` (its own numbering) that ``face_flags`` flags for wiggles."""
+    from OCP.BRep import BRep_Tool
+    from OCP.Geom import Geom_BSplineSurface
+
+    from occsurf.algorithms.quality.flags import face_flags
+
+    from ..conversion.splines import from_occ
+    from .refill_loop import model_faces
+
+    out = []
+    for k, f in enumerate(model_faces(shape)):
+        if not isinstance(BRep_Tool.Surface_s(f), Geom_BSplineSurface):
+            continue
+        s = from_occ(f, trims=False)
+        if any(fl.kind == "wiggle" for fl in face_flags(s)):
+            out.append(k)
+    return out
 
 
 def _area(face: Any) -> float:
@@ -199,6 +222,17 @@ def repair_model(shape: Any, preset: str = "catia", *, max_change: float | None 
         if item.status != "repaired":
             item.reason = "; ".join(reasons)
     report.seconds["match"] = time.perf_counter() - t1
+    tf = time.perf_counter()
+    wiggly = _wiggly_faces(current)
+    if wiggly:
+        fairs, current, fair_numbering = fair_faces(current, wiggly, tol=limit)
+        inverse = {now: k for k, now in enumerate(numbering)}
+        for r in fairs:
+            r.face = inverse.get(r.face, r.face)  # the input's numbering
+        report.fairings = [r.to_dict() for r in fairs]
+        report.faces_faired = sum(r.status == "faired" for r in fairs)
+        numbering = [fair_numbering[k] for k in numbering]
+    report.seconds["fair"] = time.perf_counter() - tf
     t2 = time.perf_counter()
     _, after, worst1 = _breaking(current, preset)
     report.violations_after = sum(map(len, after.values()))
@@ -225,6 +259,12 @@ def write_repair_page(report: RepairReport, folder: str | Path, source: str = ""
         f"</td><td>{e.status}</td><td>{'' if e.moved is None else e.moved}</td><td>{e.continuity or ''}</td>"
         f"<td>{num(e.g1_after_deg, ' deg')}</td><td>{num(e.max_change)}</td><td>{html.escape(e.reason or '')}</td></tr>"
         for e in report.edges)
+    fair_rows = "" if not report.fairings else (
+        "<h2>Faces flagged for wiggles</h2><table><tr><th>face</th><th>status</th><th>wiggly iso-lines before</th>"
+        "<th>after</th><th>change</th><th>reason</th></tr>" + "".join(
+            f"<tr class='{'repaired' if f['status'] == 'faired' else 'refused'}'><td>{f['face']}</td><td>{f['status']}"
+            f"</td><td>{f['wiggles_before']}</td><td>{f['wiggles_after']}</td><td>{num(f['max_deviation'])}</td>"
+            f"<td>{html.escape(f['reason'] or '')}</td></tr>" for f in report.fairings) + "</table>")
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>occsurf repair {html.escape(source)}</title>
 <style>body{{font-family:sans-serif;margin:1.5em}} table{{border-collapse:collapse}} td,th{{border:1px solid #ccc;
 padding:2px 6px;font-size:13px}} tr.repaired{{background:#e8f6e8}} tr.refused{{background:#fbeaea}}
@@ -240,6 +280,7 @@ padding:2px 6px;font-size:13px}} tr.repaired{{background:#e8f6e8}} tr.refused{{b
 <tr><th>worst smooth G1 angle</th><td>{num(report.worst_smooth_g1_after, ' deg')}</td></tr></table></div>
 <p>Edges repaired: {report.repaired}; refused: {report.refused}; faces faired: {report.faces_faired};
 largest change allowed {num(report.max_change)} (model units). Face numbers are the input's.</p>
+{fair_rows}
 <table><tr><th>edge</th><th>faces</th><th>class</th><th>broke</th><th>G1 before</th><th>G2 before</th><th>status</th>
 <th>moved</th><th>asked</th><th>G1 after (OCC)</th><th>change</th><th>reason</th></tr>
 {rows}</table></body></html>

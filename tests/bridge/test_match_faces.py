@@ -190,3 +190,23 @@ def test_cli_repair(tmp_path: Path):
     assert out.is_file() and (tmp_path / "fixed_report" / "index.html").is_file()
     proc = run_cli("repair", str(src), "--preset", "nx", "--out", str(tmp_path / "x.step"))
     assert proc.returncode == 2 and "invalid choice" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_fair_faces_and_repair_fairs_wiggles(tmp_path: Path):
+    from occsurf.bridge.modeling.fairing import fair_faces
+    from occsurf.bridge.modeling.repair import repair_model
+    from tests.algorithms.test_fairing import _rippled, _u_sign_changes
+
+    S = _rippled()
+    reps, out, numbering = fair_faces(make_face(S), [0], tol=0.01)
+    [r] = reps
+    assert r.status == "faired" and r.wiggles_after < r.wiggles_before and r.max_deviation <= 0.01
+    assert BRepCheck_Analyzer(out).IsValid() and numbering == [0]
+    from occsurf.bridge.conversion.splines import from_occ
+
+    faired = from_occ(model_faces(out)[0], trims=False)
+    assert _u_sign_changes(S).max() >= 4 and _u_sign_changes(faired).max() == 0
+    rep, _ = repair_model(make_face(S), "catia", max_change=0.01)
+    assert rep.faces_faired == 1 and rep.fairings[0]["face"] == 0
+    with pytest.raises(InvalidGeometryError, match="out of range"):
+        fair_faces(make_face(S), [3], tol=0.01)
