@@ -356,8 +356,11 @@ def match_faces(shape: Any, face: int, target: int, continuity: str = "G1", *, p
         notes.append(f"the edge is not a whole side of face {j}'s surface: matched to samples of it along the edge")
     else:
         tgt = T
+    # a model's own gaps are its edges' tolerances: asking a match for less than that (1e-7 of the
+    # size by default) only buys knots, or misses against samples interpolated to ~1e-7
+    g0_tol = max(etol, tol_g0 if tol_g0 is not None else tolerances.MATCH_G0_RTOL * model.size)
     res = match_surface(S, tgt, side, continuity, preserve_opposite=preserve_opposite, average=average,
-                        tol_g0=tol_g0, tol_g1_deg=tol_g1_deg, tol_g2_rel=tol_g2_rel, refine=refine)
+                        tol_g0=g0_tol, tol_g1_deg=tol_g1_deg, tol_g2_rel=tol_g2_rel, refine=refine)
     fit_tol = max(etol, res.max_change, 1e-7)
     new_i = _replace_surface(fi, res.surface, fit_tol)
     rs = BRepTools_ReShape()
@@ -376,7 +379,6 @@ def match_faces(shape: Any, face: int, target: int, continuity: str = "G1", *, p
         a, b = assess_joint(e, nb, [geom_new])
         g0, g1 = max(g0, a), max(g1, b)
     # met: by the match's own measures *and* by OCC's along the real edge
-    g0_tol = max(etol, tol_g0 if tol_g0 is not None else tolerances.MATCH_G0_RTOL * model.size)
     met = res.met and g0 <= g0_tol and (order < 1 or g1 <= tol_g1_deg)
     if res.met and not met:
         notes.append(f"the match meets its tolerances on the surface's side, but OCC measures G0 {g0:.3g} / G1 "
