@@ -16,6 +16,10 @@ tasks finish; ``--resume`` skips content already audited (SHA-256).
 :mod:`.summary`     ``summary.json`` and ``summary.html``
 :mod:`.cluster`     the Dask client: ``LocalCluster`` or ``--scheduler ADDRESS``
 :mod:`.run`         :func:`audit`, the driver
+:mod:`.fill_file`   ``occsurf fill`` in crash-isolated workers, several holes at once
+:mod:`.repair`      assess, match smooth edges, fair wiggles, assess again (``occsurf repair``); it sits
+                    here because it drives both the quality and the modeling rooms
+:mod:`.match_file`  ``occsurf match`` and ``occsurf repair`` in a worker process
 ==================  ================================================================================
 
 Names are loaded on first use (``dask``, ``pyarrow`` and OCC are not imported by ``import

@@ -68,7 +68,7 @@ def repair_job(item: dict[str, Any]) -> dict[str, Any]:
     from ..exchange import step_iges
     from ..exchange.reading import read_model
     from ..isolation import quiet_native_stdout
-    from ..modeling.repair import repair_model, write_repair_page
+    from .repair import repair_model, write_repair_page
 
     with warnings.catch_warnings(), quiet_native_stdout():
         warnings.simplefilter("ignore")

@@ -2,7 +2,7 @@
 [--timeout S] [--strict] [--in-process]``.
 
 Checks the model's edges against the preset, matches every edge that is meant to be smooth (not
-classified sharp) and breaks it (:func:`occsurf.bridge.modeling.repair.repair_model`, in a worker
+classified sharp) and breaks it (:func:`occsurf.bridge.audit.repair.repair_model`, in a worker
 process), checks again, writes ``OUT`` (STEP) and ``OUT_STEM_report/index.html`` (before and after
 side by side, every edge tried with what was done or why not), and prints the counts: edges
 repaired, refused, faces faired. A sharp edge is never changed, nor is a face moved by more than

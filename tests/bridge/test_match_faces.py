@@ -149,7 +149,7 @@ def test_repair_fixes_the_smooth_edge_and_leaves_the_crease(tmp_path: Path, pres
     """catia: 0.2 deg breaks G1 (0.01) and 2 deg is a crease (>= 0.5); mechanical: 2 deg breaks G1
     (0.5), 10 deg is a crease (>= 5). Under catia the pair's curvature jump (~100 %) cannot be
     closed within the 1e-3 change limit: G2 is refused, G1 done, the edge still breaks G2."""
-    from occsurf.bridge.modeling.repair import repair_model, write_repair_page
+    from occsurf.bridge.audit.repair import repair_model, write_repair_page
 
     shape = _three_faces(*kinks)
     before_sq = _occ_edge(shape, 1, 2)[1]
@@ -193,8 +193,8 @@ def test_cli_repair(tmp_path: Path):
 
 
 def test_fair_faces_and_repair_fairs_wiggles(tmp_path: Path):
+    from occsurf.bridge.audit.repair import repair_model
     from occsurf.bridge.modeling.fairing import fair_faces
-    from occsurf.bridge.modeling.repair import repair_model
     from tests.algorithms.test_fairing import _rippled, _u_sign_changes
 
     S = _rippled()

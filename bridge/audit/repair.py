@@ -35,8 +35,8 @@ from OCP.GProp import GProp_GProps
 from occsurf.algorithms.errors import OccsurfError
 
 from .. import _occ
-from .fairing import fair_faces
-from .matching import match_faces
+from ..modeling.fairing import fair_faces
+from ..modeling.matching import match_faces
 
 __all__ = ["RepairReport", "EdgeRepair", "repair_model", "write_repair_page", "MAX_CHANGE_RTOL"]
 
@@ -127,16 +127,18 @@ def _wiggly_faces(shape: Any) -> list[int]:
     from OCP.BRep import BRep_Tool
     from OCP.Geom import Geom_BSplineSurface
 
+    from occsurf.algorithms.kernel.surface import BSplineSurface
     from occsurf.algorithms.quality.flags import face_flags
 
     from ..conversion.splines import from_occ
-    from .refill_loop import model_faces
+    from ..modeling.refill_loop import model_faces
 
     out = []
     for k, f in enumerate(model_faces(shape)):
         if not isinstance(BRep_Tool.Surface_s(f), Geom_BSplineSurface):
             continue
         s = from_occ(f, trims=False)
+        assert isinstance(s, BSplineSurface)
         if any(fl.kind == "wiggle" for fl in face_flags(s)):
             out.append(k)
     return out
@@ -166,8 +168,8 @@ def repair_model(shape: Any, preset: str = "catia", *, max_change: float | None 
     (RepairReport, TopoDS_Shape)
         The report (face numbers of the input) and the repaired model (sewn: numbered anew).
     """
+    from ..modeling.refill_loop import model_faces
     from ..quality.continuity import PRESETS
-    from .refill_loop import model_faces
 
     if preset not in PRESETS:
         raise OccsurfError(f"preset: expected one of {', '.join(sorted(PRESETS))}, got {preset!r}")
