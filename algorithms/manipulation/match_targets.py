@@ -128,19 +128,43 @@ class SurfaceSide:
         w = None if surface.weights is None else surface.weights[0]
         self.curve = BSplineCurve(q, Vk, surface.control_points[0], w)
 
-    def feet(self, points: Array) -> tuple[Array, Array]:
-        """Parameters on the side of the points nearest to ``points`` (m, 3) and the distances."""
-        return closest_parameters(self.curve, points)
+    def feet(self, points: Array, t0: Array | None = None, samples: int = 401) -> tuple[Array, Array]:
+        """Parameters on the side of the points nearest to ``points`` (m, 3) and the distances:
+        Newton's iteration from ``t0``, or from the nearest of ``samples`` uniform parameters."""
+        if t0 is None:
+            return closest_parameters(self.curve, points, samples=samples)
+        lo, hi = self.curve.domain
+        t = np.asarray(t0, float)
+        for _ in range(8):
+            D = self.curve.derivatives(t, 2)
+            r = D[:, 0] - points
+            g = np.einsum("md,md->m", r, D[:, 1])
+            h = np.einsum("md,md->m", D[:, 1], D[:, 1]) + np.einsum("md,md->m", r, D[:, 2])
+            t_new = np.clip(t - np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0), lo, hi)
+            done = np.abs(t_new - t).max() <= 1e-15 * (hi - lo)
+            t = t_new
+            if done:
+                break
+        return t, np.linalg.norm(self.curve.evaluate(t) - points, axis=1)
 
-    def corresponding(self, S: BSplineSurface, v: Array) -> Jets:
-        """The target's jets at the points that correspond to side u0 of ``S`` at ``v``: the two
-        sides' parameters mapped linearly end to end, in the direction that pairs the nearer ends."""
+    def params(self, S: BSplineSurface, v: Array) -> Array:
+        """The side's parameters paired with side u0 of ``S`` at ``v``: mapped linearly end to end,
+        in the direction that pairs the nearer ends."""
         (a, b), (lo, hi) = S.domain[1], self.curve.domain
         ends = S.evaluate(np.full(2, S.knots[0][S.degree[0]]), np.array([a, b]))
         mine = self.curve.evaluate(np.array([lo, hi]))
         same = np.linalg.norm(ends - mine, axis=1).sum() <= np.linalg.norm(ends - mine[::-1], axis=1).sum()
         x = (v - a) / (b - a)
-        return self._jets(lo + (hi - lo) * (x if same else 1.0 - x))
+        return lo + (hi - lo) * (x if same else 1.0 - x)
+
+    def corresponding(self, S: BSplineSurface, v: Array) -> Jets:
+        """The target's jets at the points that correspond to side u0 of ``S`` at ``v``
+        (:meth:`params`)."""
+        return self._jets(self.params(S, v))
+
+    def at_near(self, points: Array, S: BSplineSurface, v: Array) -> Jets:
+        """:meth:`at`, the feet found by Newton's iteration from the parameters paired with ``v``."""
+        return self._jets(self.feet(points, self.params(S, v))[0])
 
     def to_side(self, S: BSplineSurface, t: Array) -> Array:
         """The parameters of side u0 of ``S`` that :meth:`corresponding` pairs with ``t``."""

@@ -200,7 +200,8 @@ def _equations(R: Array, Sj: Array, tg: Jets, r: int) -> tuple[Array, Array]:
 
 
 def _lstsq(J: Array, rhs: Array) -> Array:
-    """Minimum-norm least-squares solution, rows divided by their norms, noise directions dropped.
+    """Minimum-norm least-squares solution, rows divided by their norms, noise directions dropped
+    (``rhs`` one vector, or one column per right-hand side).
 
     Two cut-offs of one SVD: singular values above ``1e-12`` of the largest (the exact minimum-norm
     solution of a consistent system) and above ``tolerances.MATCH_RCOND`` of it. The first is kept
@@ -211,12 +212,13 @@ def _lstsq(J: Array, rhs: Array) -> Array:
     s = np.where(s > 0, s, 1.0)
     U, sv, Vt = sla.svd(J / s[:, None], full_matrices=False, lapack_driver="gesdd")
     if sv.size == 0 or sv[0] == 0:
-        return np.zeros(J.shape[1])
-    c = U.T @ (rhs / s)
+        return np.zeros((J.shape[1],) + rhs.shape[1:])
+    c = U.T @ (rhs / (s if rhs.ndim == 1 else s[:, None]))
     exact = sv > 1e-12 * sv[0]
     robust = sv > tolerances.MATCH_RCOND * sv[0]
-    xa = Vt[exact].T @ (c[exact] / sv[exact])
-    xb = Vt[robust].T @ (c[robust] / sv[robust])
+    inv = 1.0 / sv if rhs.ndim == 1 else (1.0 / sv)[:, None]
+    xa = Vt[exact].T @ (c[exact] * inv[exact])
+    xb = Vt[robust].T @ (c[robust] * inv[robust])
     return xa if np.linalg.norm(xa) <= 2.0 * np.linalg.norm(xb) + 1e-300 else xb
 
 
@@ -246,7 +248,10 @@ def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) ->
     def rowwise(x: Array) -> Array:
         """Row j's minimum-norm correction for order j's conditions, j = 0..r in turn."""
         x = x.copy()
-        for j in range(r + 1):
+        # G0 alone: the same conditions for each coordinate, one solve with three right-hand sides
+        Sj = np.einsum("ki,ic->kc", R[0], P0 + x.reshape(P0.shape))
+        x[: 3 * nv] += _lstsq(R[0][:, :nv], -(Sj - tg.P)).ravel()
+        for j in range(1, r + 1):
             F, J = residual(x, j)
             rows, cols = slice(start[j], start[j + 1]), slice(3 * j * nv, 3 * (j + 1) * nv)
             x[cols] += _lstsq(J[rows, cols], -F[rows])
@@ -320,7 +325,7 @@ def _measure(S: BSplineSurface, target: _Target, v: Array, r: int, size: float,
     """G0 distance, G1 angle (deg), relative G2 and G3 jumps across the side at parameters ``v``."""
     u0 = S.knots[0][S.degree[0]]
     D = S.derivatives(np.full_like(v, u0), v, 3 if r >= 3 else 2)
-    tg = target.at(D[:, 0, 0])
+    tg = target.at_near(D[:, 0, 0], S, v) if isinstance(target, SurfaceSide) else target.at(D[:, 0, 0])
     Su, Sv = D[:, 1, 0], D[:, 0, 1]
     tau = _unit(Sv)
     nS = _unit(np.cross(Su, Sv))
@@ -480,7 +485,7 @@ def _find_side(target: BSplineSurface, points: Array) -> str:
     """The side of ``target`` nearest to ``points`` (the largest distance, smallest over the sides)."""
     best, best_d = "u0", np.inf
     for side in SIDES:
-        _, d = SurfaceSide(_canonical(target, side)).feet(points)
+        _, d = SurfaceSide(_canonical(target, side)).feet(points, samples=65)
         if float(np.max(d)) < best_d:
             best, best_d = side, float(np.max(d))
     return best
