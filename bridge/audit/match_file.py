@@ -63,8 +63,9 @@ def match_job(item: dict[str, Any]) -> dict[str, Any]:
 
 def repair_job(item: dict[str, Any]) -> dict[str, Any]:
     """Read ``item["input"]``, repair it with ``item["preset"]`` (``item["max_change"]``), write
-    ``item["output"]`` and the page ``<output stem>_report/index.html``: ``{"report": dict,
-    "page": str, "warnings": [str]}``."""
+    ``item["output"]`` and the page ``<output stem>_report/index.html``, read the written file
+    again: ``{"report": dict (with ``round_trip``: faces in, faces read back, BRepCheck validity of
+    what was read), "page": str, "warnings": [str]}``."""
     from ..exchange import step_iges
     from ..exchange.reading import read_model
     from ..isolation import quiet_native_stdout
@@ -77,7 +78,15 @@ def repair_job(item: dict[str, Any]) -> dict[str, Any]:
         out = Path(item["output"])
         step_iges.write_step(out, shape)
         page = write_repair_page(report, out.with_name(out.stem + "_report"), Path(item["input"]).name)
-    return {"report": report.to_dict(), "page": str(page), "warnings": list(model.warnings)}
+        back = read_model(out)  # the written file read again: faces and validity, as OCC sees them
+        from OCP.BRepCheck import BRepCheck_Analyzer
+
+        from ..modeling.refill_loop import model_faces
+
+        round_trip = {"faces_in": len(model_faces(model.shape)), "faces_out": len(model_faces(back.shape)),
+                      "valid": bool(BRepCheck_Analyzer(back.shape).IsValid())}
+    return {"report": {**report.to_dict(), "round_trip": round_trip}, "page": str(page),
+            "warnings": list(model.warnings)}
 
 
 def match_file(item: dict[str, Any], *, timeout: float | None = None, isolate: bool = True,

@@ -73,6 +73,9 @@ def run(ns: argparse.Namespace) -> int:
             f"{src}: {rep['edges_breaking_before']} smooth edges broke {rep['preset']} before, "
             f"{rep['edges_breaking_after']} after; edges repaired {rep['edges_repaired']}, refused "
             f"{rep['edges_refused']}, faces faired {rep['faces_faired']}\n")
+        rt = rep.get("round_trip") or {}
+        sys.stdout.write(f"  written and read back: {rt.get('faces_out')} faces of {rt.get('faces_in')}, "
+                         f"{'valid' if rt.get('valid') else 'NOT valid'} (BRepCheck_Analyzer)\n")
         reasons: dict[str, int] = {}
         for e in rep["edges"]:
             if e["status"] == "refused":

@@ -187,6 +187,7 @@ def test_cli_repair(tmp_path: Path):
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
     assert doc["edges_repaired"] == 1 and doc["worst_smooth_g1_after"] < 1e-6 and doc["faces_faired"] == 0
+    assert doc["round_trip"] == {"faces_in": 3, "faces_out": 3, "valid": True}
     assert out.is_file() and (tmp_path / "fixed_report" / "index.html").is_file()
     proc = run_cli("repair", str(src), "--preset", "nx", "--out", str(tmp_path / "x.step"))
     assert proc.returncode == 2 and "invalid choice" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
