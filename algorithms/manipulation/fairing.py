@@ -122,7 +122,7 @@ def _movable(knots: Array, p: int, n: int, lo: float, hi: float, hold: int) -> N
 def _wiggle_lines(s: BSplineSurface, us: Array, vs: Array, size: float) -> int:
     """Iso-lines (along u and along v) whose normal curvature changes sign twice or more."""
     from .. import tolerances
-    from ..quality.flags import _sign_changes
+    from ..quality.flags import sign_changes
 
     D = s.derivatives_grid(us, vs, 2)
     n = np.cross(D[..., 1, 0, :], D[..., 0, 1, :])
@@ -131,7 +131,7 @@ def _wiggle_lines(s: BSplineSurface, us: Array, vs: Array, size: float) -> int:
     with np.errstate(invalid="ignore", divide="ignore"):
         ku = np.einsum("...i,...i", D[..., 2, 0, :], n) / np.einsum("...i,...i", D[..., 1, 0, :], D[..., 1, 0, :])
         kv = np.einsum("...i,...i", D[..., 0, 2, :], n) / np.einsum("...i,...i", D[..., 0, 1, :], D[..., 0, 1, :])
-    return int((_sign_changes(ku.T, zero).sum(-1) >= 2).sum() + (_sign_changes(kv, zero).sum(-1) >= 2).sum())
+    return int((sign_changes(ku.T, zero).sum(-1) >= 2).sum() + (sign_changes(kv, zero).sum(-1) >= 2).sum())
 
 
 def fair_surface(surface: BSplineSurface, region: tuple[tuple[float, float], tuple[float, float]] | None = None, *,

@@ -20,7 +20,7 @@ from ..errors import InvalidGeometryError
 from ._common import Array, QualitySurface, check_mask, grid_axes, grid_partials, surface_of, trim_mask
 from .curvature_maps import CurvatureMap, map_from_partials
 
-__all__ = ["FLAG_KINDS", "Flag", "face_flags"]
+__all__ = ["FLAG_KINDS", "Flag", "face_flags", "sign_changes"]
 
 #: Kinds of :class:`Flag`, with the correction each suggests.
 SUGGESTIONS = {
@@ -81,7 +81,7 @@ def _flag(kind: str, cm: CurvatureMap, i: int | np.integer, j: int | np.integer,
                 suggestion=SUGGESTIONS[kind], count=int(count))
 
 
-def _sign_changes(k: Array, zero: float) -> NDArray[np.intp]:
+def sign_changes(k: Array, zero: float) -> NDArray[np.intp]:
     """Significant sign changes along the last axis (values with |k| <= zero and NaN skipped)."""
     s = np.where(np.abs(np.nan_to_num(k)) > zero, np.sign(np.nan_to_num(k)), 0.0)
     # carry the last non-zero sign forward, vectorised: index of the last non-zero so far
@@ -106,7 +106,7 @@ def _wiggles(cm: CurvatureMap, D: Array, size: float) -> list[Flag]:
     out = []
     for k, axis in ((ku, 0), (kv, 1)):  # two directions
         lines = np.moveaxis(k, axis, -1)  # iso-lines along the varying parameter
-        ch = _sign_changes(lines, zero)
+        ch = sign_changes(lines, zero)
         count = ch.sum(-1)
         bad = np.flatnonzero(count >= 2)
         if bad.size == 0:

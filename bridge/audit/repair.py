@@ -10,8 +10,10 @@
    it carries), ties to the smaller area; the continuity asked is G2 where the preset checks
    curvature jumps, else G1, at half the preset's tolerances (so that the check after passes with
    room); :func:`.matching.match_faces` does it. A match is refused (and the other face tried, then
-   G1 where G2 was asked) when it fails, is not valid, misses the tolerances, or would move the
-   face more than ``max_change``;
+   G1 where G2 was asked) when it fails, is not valid, misses the tolerances, would move the face
+   more than ``max_change``, or would leave the face's other edges worse than they were (and than
+   the preset allows): on the OCCT bearing, without that check, 242 sequential matches raised the
+   worst smooth G1 angle from 0.25 to 0.47 deg;
 3. the B-spline faces ``face_flags`` flags for wiggles are faired
    (:func:`.fairing.fair_faces`, within ``max_change``, the outer pole rows held);
 4. the model is checked again with the same preset.
@@ -215,6 +217,11 @@ def repair_model(shape: Any, preset: str = "catia", *, max_change: float | None 
                 reasons.append(f"{cont} face {move}: the result is not valid (BRepCheck)")
             elif not rep.met:
                 reasons.append(f"{cont} face {move}: tolerances not met (G1 {rep.g1_max_deg:.3g} deg)")
+            elif rep.opposite_g1_max_deg > max(rep.opposite_g1_before_deg, th.g1_deg) + 1e-6:
+                # the face's other edges: a repair never makes a smooth edge worse than it was (or
+                # than the preset allows)
+                reasons.append(f"{cont} face {move}: its other edges would go from "
+                               f"{rep.opposite_g1_before_deg:.3g} to {rep.opposite_g1_max_deg:.3g} deg")
             else:
                 item.status, item.moved, item.continuity = "repaired", move, cont
                 item.g1_after_deg, item.max_change = rep.g1_max_deg, rep.max_change
