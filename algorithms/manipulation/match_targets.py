@@ -131,21 +131,7 @@ class SurfaceSide:
     def feet(self, points: Array, t0: Array | None = None, samples: int = 401) -> tuple[Array, Array]:
         """Parameters on the side of the points nearest to ``points`` (m, 3) and the distances:
         Newton's iteration from ``t0``, or from the nearest of ``samples`` uniform parameters."""
-        if t0 is None:
-            return closest_parameters(self.curve, points, samples=samples)
-        lo, hi = self.curve.domain
-        t = np.asarray(t0, float)
-        for _ in range(8):
-            D = self.curve.derivatives(t, 2)
-            r = D[:, 0] - points
-            g = np.einsum("md,md->m", r, D[:, 1])
-            h = np.einsum("md,md->m", D[:, 1], D[:, 1]) + np.einsum("md,md->m", r, D[:, 2])
-            t_new = np.clip(t - np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0), lo, hi)
-            done = np.abs(t_new - t).max() <= 1e-15 * (hi - lo)
-            t = t_new
-            if done:
-                break
-        return t, np.linalg.norm(self.curve.evaluate(t) - points, axis=1)
+        return closest_parameters(self.curve, points, samples=samples, t0=t0)
 
     def params(self, S: BSplineSurface, v: Array) -> Array:
         """The side's parameters paired with side u0 of ``S`` at ``v``: mapped linearly end to end,

@@ -31,11 +31,12 @@ def _unit(v: Array) -> Array:
 
 
 def closest_parameters(curve: BSplineCurve, points: Array, samples: int = 401,
-                       iterations: int = 8) -> tuple[Array, Array]:
+                       iterations: int = 8, t0: Array | None = None) -> tuple[Array, Array]:
     """Parameters of the points of ``curve`` closest to ``points`` (m, dim), vectorised.
 
-    The nearest of ``samples`` uniform parameters starts Newton's iteration on
-    ``(C(t) - p) . C'(t) = 0`` (clamped to the domain), all points at once.
+    The nearest of ``samples`` uniform parameters (or ``t0``, when given: a start known to be
+    near) starts Newton's iteration on ``(C(t) - p) . C'(t) = 0`` (clamped to the domain), all
+    points at once.
 
     Returns
     -------
@@ -45,10 +46,13 @@ def closest_parameters(curve: BSplineCurve, points: Array, samples: int = 401,
     """
     P = np.atleast_2d(np.asarray(points, float))
     lo, hi = curve.domain
-    grid = np.linspace(lo, hi, samples)
-    dense = curve.evaluate(grid)
-    d2 = np.einsum("mkd,mkd->mk", P[:, None] - dense[None], P[:, None] - dense[None])
-    t = grid[np.argmin(d2, axis=1)]
+    if t0 is not None:
+        t = np.asarray(t0, float)
+    else:
+        grid = np.linspace(lo, hi, samples)
+        dense = curve.evaluate(grid)
+        d2 = np.einsum("mkd,mkd->mk", P[:, None] - dense[None], P[:, None] - dense[None])
+        t = grid[np.argmin(d2, axis=1)]
     for _ in range(iterations):
         D = curve.derivatives(t, 2)
         r = D[:, 0] - P

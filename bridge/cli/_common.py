@@ -102,6 +102,34 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(EXIT_ERROR)
 
 
+def paths_problem(src: Path, out: Path, what: str) -> bool:
+    """Report (one line) an input that cannot be read or an output ``what`` cannot be written to;
+    ``True`` when there is such a problem (the command then exits :data:`EXIT_ERROR`)."""
+    from ..exchange.files import input_problem
+
+    why = input_problem(src)
+    if why is not None:
+        error(f"{shown_path(src)}: {why}")
+        return True
+    why = output_problem(out)
+    if why is not None:
+        error(f"{shown_path(out)}: cannot write {what} there ({why})")
+        return True
+    return False
+
+
+def outcome_problem(outcome: Outcome, src: Path, timeout: float | None, task: str) -> bool:
+    """Report (one line) why a worker run on ``src`` gave no result; ``True`` when it gave none."""
+    from ..isolation import ERROR, OK
+
+    if outcome.status == OK:
+        return False
+    why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
+           worker_failure(outcome, timeout, task=task, process="worker"))
+    error(f"{shown_path(src)}: {why}")
+    return True
+
+
 def worker_failure(outcome: Outcome, timeout: float | None, *, task: str, process: str) -> str:
     """Why an item run by :func:`occsurf.bridge.isolation.run_jobs` gave no result, in one line.
 
@@ -370,6 +398,17 @@ def jobs_arg(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected at least 1 worker process, got {text!r}")
     return value
+
+
+def positive_arg(text: str) -> float:
+    """A positive, finite number (a tolerance, a distance)."""
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (x > 0 and x < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return x
 
 
 def timeout_arg(text: str) -> float:

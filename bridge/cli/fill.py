@@ -39,11 +39,10 @@ from ._common import (
     fmt_s,
     format_rows,
     jobs_arg,
-    output_problem,
+    outcome_problem,
+    paths_problem,
     shown_path,
-    strip_path,
     timeout_arg,
-    worker_failure,
 )
 
 __all__ = ["add_parser", "run", "DEFAULT_TIMEOUT"]
@@ -88,26 +87,15 @@ def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
 def run(ns: argparse.Namespace) -> int:
     """``occsurf fill IN --out OUT``: fill every hole (in a worker), print per hole ours vs OCC's filler."""
     from ..audit.fill_file import default_jobs, fill_file
-    from ..exchange.files import input_problem
-    from ..isolation import ERROR, OK
 
     src, out = Path(ns.input), Path(ns.out)
-    why = input_problem(src)
-    if why is not None:
-        error(f"{shown_path(src)}: {why}")
-        return EXIT_ERROR
-    why = output_problem(out)
-    if why is not None:
-        error(f"{shown_path(out)}: cannot write the filled model there ({why})")
+    if paths_problem(src, out, "the filled model"):
         return EXIT_ERROR
     item = {"input": str(src), "output": str(out), "all_loops": ns.all_loops, "compare_occ": not ns.no_occ,
             "faces": list(ns.faces or []), "strict": ns.strict, "pictures": not ns.no_pictures}
     jobs = default_jobs() if ns.jobs is None else ns.jobs
     outcome = fill_file(item, jobs=jobs, timeout=ns.timeout, isolate=not ns.in_process)
-    if outcome.status != OK:
-        why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
-               worker_failure(outcome, ns.timeout, task="reading and filling this file", process="worker"))
-        error(f"{shown_path(src)}: {why}")
+    if outcome_problem(outcome, src, ns.timeout, "reading and filling this file"):
         return EXIT_ERROR
     result = outcome.value
     for w in result.get("warnings", ()):

@@ -32,27 +32,17 @@ from ._common import (
     fmt_deg,
     fmt_dev,
     format_rows,
-    output_problem,
+    outcome_problem,
+    paths_problem,
+    positive_arg,
     shown_path,
-    strip_path,
     timeout_arg,
-    worker_failure,
 )
 
 __all__ = ["add_parser", "run", "DEFAULT_TIMEOUT"]
 
 #: Seconds the worker may take to read, match and write.
 DEFAULT_TIMEOUT = 300.0
-
-
-def _positive(text: str) -> float:
-    try:
-        x = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (x > 0 and x < float("inf")):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
-    return x
 
 
 def _face(text: str) -> int:
@@ -85,26 +75,15 @@ def _table(src: Path, out: Path, rep: dict[str, Any]) -> None:
 def run(ns: argparse.Namespace) -> int:
     """``occsurf match IN --face I --to J --out OUT``."""
     from ..audit.match_file import match_file
-    from ..exchange.files import input_problem
-    from ..isolation import ERROR, OK
 
     src, out = Path(ns.input), Path(ns.out)
-    why = input_problem(src)
-    if why is not None:
-        error(f"{shown_path(src)}: {why}")
-        return EXIT_ERROR
-    why = output_problem(out)
-    if why is not None:
-        error(f"{shown_path(out)}: cannot write the matched model there ({why})")
+    if paths_problem(src, out, "the matched model"):
         return EXIT_ERROR
     item = {"input": str(src), "output": str(out), "face": ns.face, "target": ns.to, "continuity": ns.continuity,
             "preserve_opposite": ns.preserve_opposite, "average": ns.average, "tol_g0": ns.tol_g0,
             "tol_g1_deg": ns.tol_g1, "tol_g2_rel": ns.tol_g2 / 100.0, "sharp_deg": ns.sharp_deg, "strict": ns.strict}
     outcome = match_file(item, timeout=ns.timeout, isolate=not ns.in_process)
-    if outcome.status != OK:
-        why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
-               worker_failure(outcome, ns.timeout, task="reading and matching this file", process="worker"))
-        error(f"{shown_path(src)}: {why}")
+    if outcome_problem(outcome, src, ns.timeout, "reading and matching this file"):
         return EXIT_ERROR
     result = outcome.value
     for w in result.get("warnings", ()):
@@ -137,12 +116,12 @@ def add_parser(sub: Any) -> None:
     m.add_argument("--preserve-opposite", choices=("none", "G0", "G1", "G2"), default="G1",
                    help="keep the opposite side's position / tangent plane / curvature (default G1)")
     m.add_argument("--average", action="store_true", help="move both faces to their mean along the edge")
-    m.add_argument("--tol-g0", type=_positive, default=None, metavar="D",
+    m.add_argument("--tol-g0", type=positive_arg, default=None, metavar="D",
                    help="largest gap, model units (default 1e-7 of the pair's size)")
-    m.add_argument("--tol-g1", type=_positive, default=0.01, metavar="DEG", help="largest angle (default 0.01)")
-    m.add_argument("--tol-g2", type=_positive, default=1.0, metavar="PCT",
+    m.add_argument("--tol-g1", type=positive_arg, default=0.01, metavar="DEG", help="largest angle (default 0.01)")
+    m.add_argument("--tol-g2", type=positive_arg, default=1.0, metavar="PCT",
                    help="largest relative curvature jump, percent (default 1)")
-    m.add_argument("--sharp-deg", type=_positive, default=None, metavar="DEG",
+    m.add_argument("--sharp-deg", type=positive_arg, default=None, metavar="DEG",
                    help="refuse edges whose faces meet at this angle or more (default 15): a crease by design")
     m.add_argument("--out", required=True, metavar="OUT.step", help="where to write the changed model (STEP)")
     m.add_argument("--json", action="store_true", help="print one JSON document instead of the table")

@@ -24,13 +24,12 @@ from ._common import (
     EXIT_OK,
     add_strict_option,
     error,
-    output_problem,
+    outcome_problem,
+    paths_problem,
+    positive_arg,
     shown_path,
-    strip_path,
     timeout_arg,
-    worker_failure,
 )
-from .match import _positive
 
 __all__ = ["add_parser", "run", "DEFAULT_TIMEOUT"]
 
@@ -41,25 +40,14 @@ DEFAULT_TIMEOUT = 1800.0
 def run(ns: argparse.Namespace) -> int:
     """``occsurf repair IN --preset P --out OUT``."""
     from ..audit.match_file import REPAIR_JOB, match_file
-    from ..exchange.files import input_problem
-    from ..isolation import ERROR, OK
 
     src, out = Path(ns.input), Path(ns.out)
-    why = input_problem(src)
-    if why is not None:
-        error(f"{shown_path(src)}: {why}")
-        return EXIT_ERROR
-    why = output_problem(out)
-    if why is not None:
-        error(f"{shown_path(out)}: cannot write the repaired model there ({why})")
+    if paths_problem(src, out, "the repaired model"):
         return EXIT_ERROR
     item = {"input": str(src), "output": str(out), "preset": ns.preset, "max_change": ns.max_change,
             "strict": ns.strict}
     outcome = match_file(item, timeout=ns.timeout, isolate=not ns.in_process, job=REPAIR_JOB)
-    if outcome.status != OK:
-        why = (strip_path(outcome.error or "unknown error", src) if outcome.status == ERROR else
-               worker_failure(outcome, ns.timeout, task="reading and repairing this file", process="worker"))
-        error(f"{shown_path(src)}: {why}")
+    if outcome_problem(outcome, src, ns.timeout, "reading and repairing this file"):
         return EXIT_ERROR
     res = outcome.value
     for w in res.get("warnings", ()):
@@ -101,7 +89,7 @@ def add_parser(sub: Any) -> None:
     r.add_argument("--preset", choices=("catia", "class-a", "mechanical"), default="catia",
                    help="the tolerances to repair to (default catia)")
     r.add_argument("--out", required=True, metavar="OUT.step", help="where to write the repaired model (STEP)")
-    r.add_argument("--max-change", type=_positive, default=None, metavar="D",
+    r.add_argument("--max-change", type=positive_arg, default=None, metavar="D",
                    help="largest change of a face, model units (default 1e-3 of the model's size)")
     r.add_argument("--json", action="store_true", help="print one JSON document instead of the counts")
     r.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",

@@ -132,36 +132,27 @@ def _index(value: object, n: int, name: str) -> int:
     return i
 
 
-def _shared_edges(model: SewnModel, i: int, j: int) -> list[Any]:
-    out = []
+def _face_edges(model: SewnModel, i: int) -> list[Any]:
+    """The edges of face ``i``, each once, degenerated ones left out."""
+    out: list[Any] = []
     ex = TopExp_Explorer(model.faces[i], TopAbs_EDGE)
-    seen: list[Any] = []
     while ex.More():
         e = TopoDS.Edge_s(ex.Current())
         ex.Next()
-        if BRep_Tool.Degenerated_s(e) or any(e.IsSame(s) for s in seen):
-            continue
-        seen.append(e)
-        if any(f.IsSame(model.faces[j]) for f in model.edge_faces(e)):
+        if not BRep_Tool.Degenerated_s(e) and not any(e.IsSame(s) for s in out):
             out.append(e)
     return out
 
 
+def _shared_edges(model: SewnModel, i: int, j: int) -> list[Any]:
+    """The edges faces ``i`` and ``j`` share."""
+    return [e for e in _face_edges(model, i) if any(f.IsSame(model.faces[j]) for f in model.edge_faces(e))]
+
+
 def _other_edges(model: SewnModel, i: int, j: int) -> list[tuple[Any, Any]]:
     """(edge, neighbour face) for the edges of face ``i`` shared with faces other than ``j``."""
-    out: list[tuple[Any, Any]] = []
-    ex = TopExp_Explorer(model.faces[i], TopAbs_EDGE)
-    seen: list[Any] = []
-    while ex.More():
-        e = TopoDS.Edge_s(ex.Current())
-        ex.Next()
-        if BRep_Tool.Degenerated_s(e) or any(e.IsSame(s) for s in seen):
-            continue
-        seen.append(e)
-        for f in model.edge_faces(e):
-            if not f.IsSame(model.faces[i]) and not f.IsSame(model.faces[j]):
-                out.append((e, f))
-    return out
+    return [(e, f) for e in _face_edges(model, i) for f in model.edge_faces(e)
+            if not f.IsSame(model.faces[i]) and not f.IsSame(model.faces[j])]
 
 
 def _surface_of(face: Any, order: int) -> tuple[BSplineSurface, TrimmedSurface | None, str | None]:
