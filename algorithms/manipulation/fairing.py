@@ -216,11 +216,12 @@ def fair_surface(surface: BSplineSurface, region: tuple[tuple[float, float], tup
         return float(sum(f * np.sum(w * np.einsum("kc,kc->k", n0, D[..., a, b, :].reshape(-1, 3)) ** 2)
                          for (a, b), f in FORMS))
 
+    D0 = surface.derivatives_grid(tu, tv, order)  # the original's partials: the same every round
+
     def system(s: BSplineSurface) -> tuple[sp.csc_matrix, Array, Array]:
         """The normal equations of ``E(t)`` for moves ``t`` along ``s``'s normals from the original
         poles, with ``n0`` the normals of ``s`` (the current iterate)."""
-        D, n0, Nrm = normals(s)
-        D0 = surface.derivatives_grid(tu, tv, order)
+        _, n0, Nrm = normals(s)
         H = None
         g = np.zeros(mov.size)
         for (a, b), f in FORMS:
