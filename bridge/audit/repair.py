@@ -31,14 +31,18 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from OCP.BRep import BRep_Tool
+from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepGProp import BRepGProp
+from OCP.Geom import Geom_BSplineSurface
 from OCP.GProp import GProp_GProps
 
 from occsurf.algorithms.errors import OccsurfError
 
 from .. import _occ
-from ..modeling.fairing import fair_faces
-from ..modeling.matching import match_faces
+from ..modeling.fairing import fair_edited
+from ..modeling.matching import FaceMatcher
+from ..modeling.model_edits import ModelEdits
 
 __all__ = ["RepairReport", "EdgeRepair", "repair_model", "write_repair_page", "MAX_CHANGE_RTOL"]
 
@@ -78,6 +82,8 @@ class RepairReport:
     worst_smooth_g1_before: float = 0.0
     worst_smooth_g1_after: float = 0.0
     faces_faired: int = 0
+    #: ``BRepCheck_Analyzer`` on the whole repaired model.
+    valid_after: bool = True
     fairings: list[dict[str, Any]] = field(default_factory=list)
     seconds: dict[str, float] = field(default_factory=dict)
 
@@ -124,24 +130,15 @@ def _breaking(shape: Any, preset: str) -> tuple[Any, dict[int, list[Any]], float
     return res, by_edge, float(worst)
 
 
-def _wiggly_faces(shape: Any) -> list[int]:
-    """B-spline faces of ``shape`` (its own numbering) that ``face_flags`` flags for wiggles."""
-    from OCP.BRep import BRep_Tool
-    from OCP.Geom import Geom_BSplineSurface
-
-    from occsurf.algorithms.kernel.surface import BSplineSurface
+def _wiggly_faces(edits: ModelEdits) -> list[int]:
+    """B-spline faces of the model that ``face_flags`` flags for wiggles."""
     from occsurf.algorithms.quality.flags import face_flags
 
-    from ..conversion.splines import from_occ
-    from ..modeling.refill_loop import model_faces
-
     out = []
-    for k, f in enumerate(model_faces(shape)):
-        if not isinstance(BRep_Tool.Surface_s(f), Geom_BSplineSurface):
+    for k in range(len(edits)):
+        if not isinstance(BRep_Tool.Surface_s(edits.faces[k]), Geom_BSplineSurface):
             continue
-        s = from_occ(f, trims=False)
-        assert isinstance(s, BSplineSurface)
-        if any(fl.kind == "wiggle" for fl in face_flags(s)):
+        if any(fl.kind == "wiggle" for fl in face_flags(edits.surface(k)[0])):
             out.append(k)
     return out
 
@@ -170,7 +167,6 @@ def repair_model(shape: Any, preset: str = "catia", *, max_change: float | None 
     (RepairReport, TopoDS_Shape)
         The report (face numbers of the input) and the repaired model (sewn: numbered anew).
     """
-    from ..modeling.refill_loop import model_faces
     from ..quality.continuity import PRESETS
 
     if preset not in PRESETS:
@@ -183,14 +179,14 @@ def repair_model(shape: Any, preset: str = "catia", *, max_change: float | None 
     report = RepairReport(preset, limit, violations_before=sum(map(len, by_edge.values())),
                           edges_breaking_before=len(by_edge), worst_smooth_g1_before=worst0)
     report.seconds["check_before"] = time.perf_counter() - t0
-    faces0 = model_faces(shape)
+    edits = ModelEdits(shape)
+    matcher = FaceMatcher(edits)
     smooth_count: dict[int, int] = {}
     for r in before:
         if r.classification not in _NOT_SMOOTH:
             for f in set(r.faces):
                 smooth_count[f] = smooth_count.get(f, 0) + 1
     order = sorted(by_edge, key=lambda e: -max(v.value / v.limit for v in by_edge[e]))
-    current, numbering = shape, list(range(len(faces0)))
     t1 = time.perf_counter()
     for e in order:
         r = before[e]
@@ -201,46 +197,33 @@ def repair_model(shape: Any, preset: str = "catia", *, max_change: float | None 
         # G2 where the preset checks curvature; where that would move a face too far, G1 still
         # mends the tangent planes
         conts = ["G1"] if th.g2_rel is None else ["G2", "G1"]
-        first = sorted((a, b), key=lambda f: (smooth_count.get(f, 0), _area(faces0[f])))
+        first = sorted((a, b), key=lambda f: (smooth_count.get(f, 0), _area(edits.model.faces[f])))
         reasons = []
         for cont, (move, other) in ((c, m) for c in conts for m in (first, first[::-1])):
             try:
-                rep, out = match_faces(current, numbering[move], numbering[other], cont,
-                                       tol_g1_deg=0.5 * th.g1_deg,
-                                       tol_g2_rel=0.5 * (th.g2_rel if th.g2_rel is not None else 2.0) / 100.0)
+                rep = matcher.match(move, other, cont, tol_g1_deg=0.5 * th.g1_deg,
+                                    tol_g2_rel=0.5 * (th.g2_rel if th.g2_rel is not None else 2.0) / 100.0,
+                                    strict=True, max_change=limit, others_deg=th.g1_deg)
             except (OccsurfError, ValueError) as err:
                 reasons.append(f"{cont} face {move}: {err}")
                 continue
-            if rep.max_change > limit:
-                reasons.append(f"{cont} face {move}: would move by {rep.max_change:.3g} > {limit:.3g}")
-            elif not rep.valid:
-                reasons.append(f"{cont} face {move}: the result is not valid (BRepCheck)")
-            elif not rep.met:
-                reasons.append(f"{cont} face {move}: tolerances not met (G1 {rep.g1_max_deg:.3g} deg)")
-            elif rep.opposite_g1_max_deg > max(rep.opposite_g1_before_deg, th.g1_deg) + 1e-6:
-                # the face's other edges: a repair never makes a smooth edge worse than it was (or
-                # than the preset allows)
-                reasons.append(f"{cont} face {move}: its other edges would go from "
-                               f"{rep.opposite_g1_before_deg:.3g} to {rep.opposite_g1_max_deg:.3g} deg")
-            else:
-                item.status, item.moved, item.continuity = "repaired", move, cont
-                item.g1_after_deg, item.max_change = rep.g1_max_deg, rep.max_change
-                numbering = [rep._numbering[k] for k in numbering]
-                current = out
-                break
+            if rep.refused is not None:
+                reasons.append(f"{cont} face {move}: {rep.refused}")
+                continue
+            item.status, item.moved, item.continuity = "repaired", move, cont
+            item.g1_after_deg, item.max_change = rep.g1_max_deg, rep.max_change
+            break
         if item.status != "repaired":
             item.reason = "; ".join(reasons)
     report.seconds["match"] = time.perf_counter() - t1
     tf = time.perf_counter()
-    wiggly = _wiggly_faces(current)
+    wiggly = _wiggly_faces(edits)
     if wiggly:
-        fairs, current, fair_numbering = fair_faces(current, wiggly, tol=limit)
-        inverse = {now: k for k, now in enumerate(numbering)}
-        for r in fairs:
-            r.face = inverse.get(r.face, r.face)  # the input's numbering
+        fairs = fair_edited(edits, wiggly, tol=limit)
         report.fairings = [r.to_dict() for r in fairs]
         report.faces_faired = sum(r.status == "faired" for r in fairs)
-        numbering = [fair_numbering[k] for k in numbering]
+    current, _ = edits.shape()
+    report.valid_after = bool(BRepCheck_Analyzer(current).IsValid())
     report.seconds["fair"] = time.perf_counter() - tf
     t2 = time.perf_counter()
     _, after, worst1 = _breaking(current, preset)

@@ -4,7 +4,7 @@
 (a B-spline face; other surfaces have no wiggles to fair and are refused with the reason), over the
 face's UV box, holding the outer pole rows where the box reaches the surface's boundary and every
 pole whose support leaves the box; the faired surface goes back on the face's own wires as in
-:mod:`.matching` (same edges and neighbours, p-curves re-projected, tolerances set by
+:func:`.model_edits.replace_surface` (same edges and neighbours, p-curves re-projected, tolerances set by
 ``SameParameter``), and the model is checked by ``BRepCheck_Analyzer``.
 """
 
@@ -15,22 +15,16 @@ from typing import Any
 
 from OCP.BRep import BRep_Tool
 from OCP.BRepCheck import BRepCheck_Analyzer
-from OCP.BRepTools import BRepTools, BRepTools_ReShape
+from OCP.BRepTools import BRepTools
 from OCP.Geom import Geom_BSplineSurface
-from OCP.TopAbs import TopAbs_FACE
-from OCP.TopExp import TopExp
-from OCP.TopTools import TopTools_IndexedMapOfShape
 
-from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
-from occsurf.algorithms.kernel.surface import BSplineSurface
+from occsurf.algorithms.errors import OccsurfError
 from occsurf.algorithms.manipulation import fair_surface
 
 from .. import _occ
-from ..conversion.splines import from_occ
-from .matching import _replace_surface
-from .refill_loop import SewnModel
+from .model_edits import ModelEdits
 
-__all__ = ["FaceFairing", "fair_faces"]
+__all__ = ["FaceFairing", "fair_faces", "fair_edited"]
 
 
 @dataclass
@@ -48,6 +42,41 @@ class FaceFairing:
         return asdict(self)
 
 
+def fair_edited(edits: ModelEdits, faces: list[int], *, tol: float, hold: str = "G1") -> list[FaceFairing]:
+    """Fair ``faces`` of ``edits`` within ``tol``, each face replaced when it is faired and valid
+    (``BRepCheck_Analyzer`` on the face); one :class:`FaceFairing` per face."""
+    out_reports: list[FaceFairing] = []
+    for i in faces:
+        i = edits.index(i, "faces")
+        f = edits.faces[i]
+        if not isinstance(BRep_Tool.Surface_s(f), Geom_BSplineSurface):
+            out_reports.append(FaceFairing(i, "refused", reason=f"face {i} is not a B-spline surface "
+                                           f"({type(BRep_Tool.Surface_s(f)).__name__}): nothing to fair"))
+            continue
+        conv, _ = edits.surface(i)
+        u0, u1, v0, v1 = BRepTools.UVBounds_s(f)
+        (a0, a1), (b0, b1) = conv.domain
+        region = ((max(u0, a0), min(u1, a1)), (max(v0, b0), min(v1, b1)))
+        try:
+            res = fair_surface(conv, region, hold=hold, tol=tol)
+        except OccsurfError as err:
+            out_reports.append(FaceFairing(i, "refused", reason=str(err)))
+            continue
+        if res.surface is conv or res.wiggles_after >= res.wiggles_before:
+            out_reports.append(FaceFairing(i, "unchanged" if res.wiggles_before == 0 else "refused",
+                                           res.wiggles_before, res.wiggles_before, 0.0,
+                                           None if res.wiggles_before == 0 else res.reason or "no fairer within tol"))
+            continue
+        etol = max(BRep_Tool.Tolerance_s(f), res.max_deviation, 1e-7)
+        if not edits.replace({i: res.surface}, etol):
+            out_reports.append(FaceFairing(i, "refused", res.wiggles_before, res.wiggles_before, 0.0,
+                                           "the faired face is not valid (BRepCheck); kept the original"))
+            continue
+        out_reports.append(FaceFairing(i, "faired", res.wiggles_before, res.wiggles_after, res.max_deviation,
+                                       res.reason))
+    return out_reports
+
+
 @_occ.quiet_messages()
 def fair_faces(shape: Any, faces: list[int], *, tol: float, hold: str = "G1"
                ) -> tuple[list[FaceFairing], Any, list[int]]:
@@ -56,52 +85,16 @@ def fair_faces(shape: Any, faces: list[int], *, tol: float, hold: str = "G1"
     Returns
     -------
     (list of FaceFairing, TopoDS_Shape, list of int)
-        Per face what was done; the model (sewn; faired faces replaced); for each input face its
-        number in the returned model.
+        Per face what was done; the model (sewn; faired faces replaced; the sewn input with every
+        fairing refused when ``BRepCheck_Analyzer`` finds the whole model invalid); for each input
+        face its number in the returned model.
     """
-    model = SewnModel(shape)
-    n = len(model.faces)
-    out_reports: list[FaceFairing] = []
-    rs = BRepTools_ReShape()
-    replaced: dict[int, Any] = {}
-    for i in faces:
-        if not 0 <= int(i) < n:
-            raise InvalidGeometryError(f"faces: face {i} is out of range: the model has {n} faces (0..{n - 1})")
-        f = model.faces[int(i)]
-        if not isinstance(BRep_Tool.Surface_s(f), Geom_BSplineSurface):
-            out_reports.append(FaceFairing(int(i), "refused", reason=f"face {i} is not a B-spline surface "
-                                           f"({type(BRep_Tool.Surface_s(f)).__name__}): nothing to fair"))
-            continue
-        conv = from_occ(f, trims=False)
-        assert isinstance(conv, BSplineSurface)
-        u0, u1, v0, v1 = BRepTools.UVBounds_s(f)
-        (a0, a1), (b0, b1) = conv.domain
-        region = ((max(u0, a0), min(u1, a1)), (max(v0, b0), min(v1, b1)))
-        try:
-            res = fair_surface(conv, region, hold=hold, tol=tol)
-        except OccsurfError as err:
-            out_reports.append(FaceFairing(int(i), "refused", reason=str(err)))
-            continue
-        if res.surface is conv or res.wiggles_after >= res.wiggles_before:
-            out_reports.append(FaceFairing(int(i), "unchanged" if res.wiggles_before == 0 else "refused",
-                                           res.wiggles_before, res.wiggles_before, 0.0,
-                                           None if res.wiggles_before == 0 else res.reason or "no fairer within tol"))
-            continue
-        etol = max(BRep_Tool.Tolerance_s(f), res.max_deviation, 1e-7)
-        new = _replace_surface(f, res.surface, etol)
-        rs.Replace(f, new)
-        replaced[int(i)] = new
-        out_reports.append(FaceFairing(int(i), "faired", res.wiggles_before, res.wiggles_after, res.max_deviation,
-                                       res.reason))
-    with _occ.kernel_errors("replacing the faired faces"):
-        out = rs.Apply(model.shape)
-    if replaced and not BRepCheck_Analyzer(out).IsValid():
-        for r in out_reports:
+    edits = ModelEdits(shape)
+    reports = fair_edited(edits, faces, tol=tol, hold=hold)
+    out, numbering = edits.shape()
+    if any(r.status == "faired" for r in reports) and not BRepCheck_Analyzer(out).IsValid():
+        for r in reports:
             if r.status == "faired":
                 r.status, r.reason = "refused", "the faired model is not valid (BRepCheck); kept the original"
-        out = model.shape
-        replaced = {}
-    index = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(out, TopAbs_FACE, index)
-    numbering = [index.FindIndex(replaced.get(k, f)) - 1 for k, f in enumerate(model.faces)]
-    return out_reports, out, numbering
+        out, numbering = edits.model.shape, list(range(len(edits)))
+    return reports, out, numbering

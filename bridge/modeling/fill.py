@@ -69,10 +69,10 @@ from .joints import (  # noqa: F401 - re-exported
     ASSESS_SAMPLES,
     SEW_TOLERANCE,
     Locator,
-    _edge_samples,
     _local_analysis,
     assess_joint,
     edge_face_map,
+    edge_samples,
     unique_faces,
 )
 

@@ -24,7 +24,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from occsurf.algorithms.errors import KernelError
 
-__all__ = ["assess_joint", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
+__all__ = ["assess_joint", "edge_samples", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
 
 #: Tolerance of ``BRepBuilderAPI_Sewing`` (model units), for finding free edges and for the result.
 SEW_TOLERANCE: float = 1e-5
@@ -42,7 +42,7 @@ PROJECTION_TOLERANCE: float = 1e-7
 #: ``(surface index, u, v)`` of each.
 Locator = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
-def _edge_samples(edge: Any, face: Any, samples: int) -> tuple[Any, list[Any], np.ndarray]:
+def edge_samples(edge: Any, face: Any, samples: int) -> tuple[Any, list[Any], np.ndarray]:
     """The neighbour's surface, its (u, v) at ``samples`` points of ``edge`` (from the p-curve) and
     the points themselves, shape (samples, 3)."""
     s_n = BRep_Tool.Surface_s(face)
@@ -91,7 +91,7 @@ def assess_joint(edge: Any, face: Any, fill_surfaces: list[Any], samples: int = 
     from ..conversion.shapes import as_edge, as_face
 
     edge, face = as_edge(edge, "edge"), as_face(face, "face")
-    s_n, uvs, pts = _edge_samples(edge, face, samples)
+    s_n, uvs, pts = edge_samples(edge, face, samples)
     g0 = g1 = 0.0
     if locate is not None:
         idx, us, vs = locate(pts)

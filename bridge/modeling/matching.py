@@ -3,9 +3,11 @@
 :func:`match_faces` is CATIA's Match Surface / NX's Matching Edge on a model: face ``face`` (numbered
 as ``occsurf check`` and ``inspect`` number them) is changed by
 :func:`occsurf.algorithms.manipulation.match_surface` so that it meets face ``target`` with the asked
-continuity along their shared edge, and is put back in place of the old face with its own wires:
+continuity along their shared edge, and is put back in place of the old face with its own wires.
+:class:`FaceMatcher` does the same one edge after another on one :class:`.model_edits.ModelEdits`
+(``occsurf repair``), keeping what does not change between attempts:
 
-1. the model is sewn once (:class:`.refill_loop.SewnModel`); the shared edge(s) found;
+1. the model is sewn once; the shared edge(s) found;
 2. the edge is sampled on the target face (its p-curve), and OCC's ``LocalAnalysis`` gives the
    angle before: an edge at or above ``sharp_deg`` is a crease by design and is refused;
 3. the face's surface (converted exactly when it is not a B-spline, and raised in degree then when
@@ -15,13 +17,15 @@ continuity along their shared edge, and is put back in place of the old face wit
    where the edge runs along one of its sides too, else samples of it along the edge
    (:class:`~occsurf.algorithms.manipulation.MatchTarget`: points, normals, cross curvatures from
    OCC's second derivatives);
-4. the new face is the new surface bounded by the *old wires* (``BRep_Builder``; ``ShapeFix_Edge``
-   adds the p-curves on the new surface, ``BRepLib::SameParameter`` sets the edges' tolerances),
-   so the topology and the neighbours are untouched, and it replaces the old face
-   (``BRepTools_ReShape``);
-5. the result is checked by ``BRepCheck_Analyzer`` and measured by OCC's ``LocalAnalysis`` along the
-   matched edge and along the face's other edges against their neighbours (``opposite_g1_max_deg``),
-   not by our own code.
+4. the new surface is measured by OCC's ``LocalAnalysis`` along the matched edge and along the
+   face's other edges against their neighbours (``opposite_g1_max_deg``), not by our own code;
+5. the new face is the new surface bounded by the *old wires*
+   (:func:`.model_edits.replace_surface`), so the topology and the neighbours are untouched, and
+   is checked by ``BRepCheck_Analyzer`` (:func:`match_faces`: the whole model too).
+
+With ``strict=True`` (the repair) a match that moves the face more than ``max_change``, misses
+its tolerances, leaves the face's other edges worse, or gives an invalid face is not made, and
+each of these is decided before the work the next one needs.
 """
 
 from __future__ import annotations
@@ -31,34 +35,25 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
-from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRep import BRep_Tool
 from OCP.BRepCheck import BRepCheck_Analyzer
-from OCP.BRepLib import BRepLib
-from OCP.BRepTools import BRepTools, BRepTools_ReShape
-from OCP.Geom import Geom_BSplineSurface
+from OCP.BRepTools import BRepTools
 from OCP.gp import gp_Pnt, gp_Vec
-from OCP.ShapeFix import ShapeFix_Edge
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_WIRE
-from OCP.TopExp import TopExp, TopExp_Explorer
-from OCP.TopLoc import TopLoc_Location
-from OCP.TopoDS import TopoDS, TopoDS_Face
-from OCP.TopTools import TopTools_IndexedMapOfShape
+from OCP.TopAbs import TopAbs_REVERSED
 
 from occsurf.algorithms import tolerances
-from occsurf.algorithms.errors import ArgumentTypeError, InvalidGeometryError
+from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.kernel.surface import BSplineSurface
-from occsurf.algorithms.kernel.trimmed import TrimmedSurface
 from occsurf.algorithms.manipulation import MatchTarget, match_surface
 from occsurf.algorithms.manipulation.match_targets import height_jets
 from occsurf.algorithms.manipulation.matching import CONTINUITIES, side_along
 
 from .. import _occ
-from ..conversion.splines import from_occ, to_occ
-from .joints import _edge_samples, assess_joint
-from .refill_loop import SewnModel
+from ..conversion.splines import to_occ
+from .joints import assess_joint, edge_samples
+from .model_edits import ModelEdits
 
-__all__ = ["FaceMatch", "match_faces", "MATCH_SHARP_DEG", "SIDE_RTOL"]
-
+__all__ = ["FaceMatch", "FaceMatcher", "match_faces", "MATCH_SHARP_DEG", "SIDE_RTOL"]
 #: An edge whose tangent planes meet at this angle (degrees) or more is a crease by design:
 #: :func:`match_faces` refuses to make it G1 or smoother unless told a larger ``sharp_deg``. The
 #: report's presets call edges sharp from 0.5 deg (CATIA) or 5 deg (mechanical); a match is asked
@@ -87,7 +82,9 @@ class FaceMatch:
     face's other shared edges against their neighbours after the change (``..._before``: before);
     ``faces_out``: the numbers of the changed face and the target in the returned model (sewing the
     model renumbers its faces); ``met``: the tolerances hold by the match's own measures and by
-    OCC's along the edge (G0 within the larger of the tolerance and the edge's own).
+    OCC's along the edge (G0 within the larger of the tolerance and the edge's own); ``valid``:
+    ``BRepCheck_Analyzer`` finds the new face (:func:`match_faces`: the whole model) valid. The
+    measures a refused match did not reach are NaN.
     """
 
     face: int
@@ -110,6 +107,8 @@ class FaceMatch:
     converted: str | None = None
     target_moved: bool = False
     notes: list[str] = field(default_factory=list)
+    #: Why the match was not made (``strict`` matches only; ``None``: the face was replaced).
+    refused: str | None = None
 
     #: For each face of the input, its number in the returned model (-1: not found); not serialised.
     _numbering: list[int] = field(default_factory=list, repr=False)
@@ -121,54 +120,6 @@ class FaceMatch:
             if isinstance(v, float) and not math.isfinite(v):
                 out[k] = None
         return out
-
-
-def _index(value: object, n: int, name: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ArgumentTypeError(f"{name}: expected a face number, got {type(value).__name__}")
-    i = int(value)
-    if not 0 <= i < n:
-        raise InvalidGeometryError(f"{name}: face {i} is out of range: the model has {n} faces (0..{n - 1})")
-    return i
-
-
-def _face_edges(model: SewnModel, i: int) -> list[Any]:
-    """The edges of face ``i``, each once, degenerated ones left out."""
-    out: list[Any] = []
-    ex = TopExp_Explorer(model.faces[i], TopAbs_EDGE)
-    while ex.More():
-        e = TopoDS.Edge_s(ex.Current())
-        ex.Next()
-        if not BRep_Tool.Degenerated_s(e) and not any(e.IsSame(s) for s in out):
-            out.append(e)
-    return out
-
-
-def _shared_edges(model: SewnModel, i: int, j: int) -> list[Any]:
-    """The edges faces ``i`` and ``j`` share."""
-    return [e for e in _face_edges(model, i) if any(f.IsSame(model.faces[j]) for f in model.edge_faces(e))]
-
-
-def _other_edges(model: SewnModel, i: int, j: int) -> list[tuple[Any, Any]]:
-    """(edge, neighbour face) for the edges of face ``i`` shared with faces other than ``j``."""
-    return [(e, f) for e in _face_edges(model, i) for f in model.edge_faces(e)
-            if not f.IsSame(model.faces[i]) and not f.IsSame(model.faces[j])]
-
-
-def _surface_of(face: Any, order: int) -> tuple[BSplineSurface, TrimmedSurface | None, str | None]:
-    """The face's surface as ours (and its trim), and what it was converted from if not a B-spline;
-    a converted surface is raised to degree ``order`` where it is lower."""
-    geom = BRep_Tool.Surface_s(face)
-    conv = from_occ(face)
-    trimmed = conv if isinstance(conv, TrimmedSurface) else None
-    surface = conv.surface if isinstance(conv, TrimmedSurface) else conv
-    assert isinstance(surface, BSplineSurface)
-    converted = None if isinstance(geom, Geom_BSplineSurface) else type(geom).__name__.replace("Geom_", "")
-    if converted is not None:
-        for ax, d in enumerate(surface.degree):
-            if d < order:
-                surface = surface.elevate_degree(order - d, direction="uv"[ax])  # type: ignore[arg-type]
-    return surface, trimmed, converted
 
 
 def _restricted(surface: BSplineSurface, face: Any) -> BSplineSurface:
@@ -208,7 +159,7 @@ def _along(surface: BSplineSurface, face: Any, pts: np.ndarray, tol: float
 def _sampled_target(face: Any, edge: Any) -> MatchTarget:
     """The target face along ``edge``: points, oriented normals and curvature across the edge, from
     OCC's derivatives of its surface at the edge's p-curve."""
-    s, uvs, pts = _edge_samples(edge, face, EDGE_SAMPLES)
+    s, uvs, pts = edge_samples(edge, face, EDGE_SAMPLES)
     # samples closer than round-off to the previous one (an edge that stalls at a pole) carry nothing
     step = np.linalg.norm(np.diff(pts, axis=0), axis=1)
     keep = np.concatenate([[True], step > 1e-9 * max(float(np.ptp(pts, axis=0).max()), 1e-300)])
@@ -233,41 +184,219 @@ def _sampled_target(face: Any, edge: Any) -> MatchTarget:
     return MatchTarget(pts, n, H2[:, 1, 1])
 
 
-def _replace_surface(face: Any, surface: BSplineSurface, tol: float) -> Any:
-    """A face on ``surface`` bounded by ``face``'s own wires (same edges), oriented as ``face``.
-
-    The face is made by ``BRep_Builder`` with the wires as the old face holds them (their stored
-    orientations): ``BRepBuilderAPI_MakeFace(surface, wire, inside)`` re-orients the wire and the
-    face then fails ``BRepCheck`` with ``BadOrientationOfSubshape``. Each edge gets its p-curve on
-    the new surface by projection (``ShapeFix_Edge::FixAddPCurve``); ``BRepLib::SameParameter``
-    then sets the edge tolerances to what the new surface needs."""
-    geom = to_occ(surface)
-    fwd = TopoDS.Face_s(face.Oriented(TopAbs_FORWARD))
-    b = BRep_Builder()
-    new = TopoDS_Face()
-    with _occ.kernel_errors("rebuilding the matched face"):
-        b.MakeFace(new, geom, TopLoc_Location(), BRep_Tool.Tolerance_s(fwd))
-        ex = TopExp_Explorer(fwd, TopAbs_WIRE)
-        while ex.More():
-            b.Add(new, ex.Current())
-            ex.Next()
-        fix = ShapeFix_Edge()
-        ex = TopExp_Explorer(new, TopAbs_EDGE)
-        while ex.More():
-            e = TopoDS.Edge_s(ex.Current())
-            ex.Next()
-            if not BRep_Tool.Degenerated_s(e):
-                fix.FixAddPCurve(e, new, False, tol)
-        BRepLib.SameParameter_s(new, tol, True)
-    return TopoDS.Face_s(new.Reversed()) if face.Orientation() == TopAbs_REVERSED else new
-
-
-def _worst_g1(pairs: list[tuple[Any, Any]], geom: Any) -> float:
+def _worst_g1(edits: ModelEdits, others: list[tuple[Any, int]], geom: Any) -> float:
+    """The worst OCC G1 angle (degrees) between ``geom`` and the neighbours along ``others``."""
     worst = 0.0
-    for e, nb in pairs:
-        _, g1 = assess_joint(e, nb, [geom])
+    for e, k in others:
+        _, g1 = assess_joint(e, edits.faces[k], [geom])
         worst = max(worst, g1)
     return worst
+
+
+@dataclass
+class _Pair:
+    """What matching face i to face j needs that does not depend on the continuity asked."""
+
+    edges: list[Any]
+    error: InvalidGeometryError | None = None
+    etol: float = 0.0
+    g0_before: float = 0.0
+    g1_before: float = 0.0
+    surface: BSplineSurface | None = None
+    side: str | None = None
+    converted: str | None = None
+    target_surface: BSplineSurface | None = None
+    target_side: str | None = None
+    sampled: MatchTarget | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+class FaceMatcher:
+    """Faces of one model matched one edge after another (``occsurf repair``; course ch. 3-4).
+
+    What an attempt learns about a pair of faces that the continuity asked does not change (the
+    shared edges, the angle before, which side of each surface runs along the edge, the sampled
+    target, the face's other edges before) is kept until either face, or a neighbour, is
+    replaced: the repair tries G2 then G1, each face in turn, on the same pair.
+
+    Parameters
+    ----------
+    edits : ModelEdits
+        The model; :meth:`match` replaces its faces.
+    """
+
+    def __init__(self, edits: ModelEdits) -> None:
+        self.edits = edits
+        self._pairs: dict[tuple[int, ...], _Pair] = {}
+        self._opposite: dict[tuple[int, ...], float] = {}
+
+    def _pair(self, i: int, j: int, order: int) -> _Pair:
+        ed = self.edits
+        conv_i, conv_j = ed.surface(i)[1], ed.surface(j)[1]
+        key = (i, j, order if (conv_i or conv_j) else -1, ed.version[i], ed.version[j])
+        if key in self._pairs:
+            return self._pairs[key]
+        edges = ed.shared_edges(i, j)
+        pair = _Pair(edges)
+        self._pairs[key] = pair
+        if not edges:
+            pair.error = InvalidGeometryError(f"faces {i} and {j} share no edge")
+            return pair
+        fi, fj = ed.faces[i], ed.faces[j]
+        geom_i = BRep_Tool.Surface_s(fi)
+        for e in edges:
+            a, b = assess_joint(e, fj, [geom_i])
+            pair.g0_before, pair.g1_before = max(pair.g0_before, a), max(pair.g1_before, b)
+        pts = np.concatenate([edge_samples(e, fj, EDGE_SAMPLES)[2] for e in edges])
+        pair.etol = max(BRep_Tool.Tolerance_s(e) for e in edges)
+        tol_side = max(SIDE_RTOL * ed.size, 10.0 * pair.etol)
+        S, side, dist, cover = _along(_elevated(*ed.surface(i), order), fi, pts, tol_side)
+        pair.converted = conv_i
+        if side is None:
+            pair.error = InvalidGeometryError(
+                f"the edge between faces {i} and {j} does not run along a side of face {i}'s surface (it lies "
+                f"{dist:.3g} from the nearest side, more than {tol_side:.3g}): the face is trimmed across its surface")
+            return pair
+        if cover < 1.0 - COVER_SLACK:
+            pair.error = InvalidGeometryError(
+                f"the edge between faces {i} and {j} covers {100 * cover:.3g} % of side {side} of face {i}'s "
+                f"surface: the side runs on past the edge, and matching only part of a side is not supported")
+            return pair
+        pair.surface, pair.side = S, side
+        T, side_j, _, cover_j = _along(_elevated(*ed.surface(j), order), fj, pts, tol_side)
+        if side_j is not None and cover_j < 1.0 - COVER_SLACK:
+            side_j = None  # the target's side runs on past the edge: samples of it along the edge instead
+        pair.target_surface, pair.target_side = T, side_j
+        if side_j is None:
+            pair.notes.append(f"the edge is not a whole side of face {j}'s surface: matched to samples of it along "
+                              "the edge")
+        return pair
+
+    def _others(self, i: int, j: int) -> list[tuple[Any, int]]:
+        """(edge, neighbour) for the edges of face ``i`` shared with faces other than ``j``."""
+        return [(e, k) for e in self.edits.edges(i) for k in self.edits.neighbours(e, i) if k != j]
+
+    def _opposite_before(self, i: int, others: list[tuple[Any, int]]) -> float:
+        ed = self.edits
+        key = (i, *sorted({k for _, k in others}), *(ed.version[k] for k in sorted({i} | {k for _, k in others})))
+        if key not in self._opposite:
+            self._opposite[key] = _worst_g1(ed, others, BRep_Tool.Surface_s(ed.faces[i]))
+        return self._opposite[key]
+
+    @_occ.quiet_messages()
+    def match(self, face: int, target: int, continuity: str = "G1", *, preserve_opposite: str = "G1",
+              average: bool = False, tol_g0: float | None = None, tol_g1_deg: float = 0.01,
+              tol_g2_rel: float = 0.01, refine: bool = True, sharp_deg: float = MATCH_SHARP_DEG,
+              strict: bool = False, max_change: float | None = None, others_deg: float = 0.0) -> FaceMatch:
+        """Match face ``face`` to face ``target`` along their shared edge and replace it.
+
+        Parameters as :func:`match_faces`, and:
+
+        strict : bool
+            Make the change only when it moves the face no more than ``max_change``, meets the
+            tolerances (OCC's measure too), leaves the face's other edges no worse than they were
+            or than ``others_deg`` (degrees, whichever is larger; 1e-6 deg of slack), and gives a
+            face valid for ``BRepCheck_Analyzer``; else ``refused`` says which failed first.
+        max_change : float, optional
+            With ``strict``: the largest change allowed (model units).
+        others_deg : float
+            With ``strict``: the G1 angle the face's other edges may reach in any case.
+
+        Returns
+        -------
+        FaceMatch
+            ``faces_out`` and the numbering are not set: :meth:`ModelEdits.shape` makes the model.
+        """
+        if isinstance(continuity, str) and continuity not in CONTINUITIES:
+            raise InvalidGeometryError(f"continuity: expected one of {', '.join(CONTINUITIES)}, got {continuity!r}")
+        order = CONTINUITIES.get(continuity, 0) if isinstance(continuity, str) else 0
+        ed = self.edits
+        i, j = ed.index(face, "face"), ed.index(target, "target")
+        if i == j:
+            raise InvalidGeometryError(f"face and target are the same face ({i})")
+        pair = self._pair(i, j, order)
+        if pair.error is not None and not pair.edges:
+            raise pair.error
+        if order >= 1 and pair.g1_before >= sharp_deg:
+            raise InvalidGeometryError(
+                f"the edge between faces {i} and {j} is sharp: its tangent planes meet at {pair.g1_before:.3g} deg "
+                f"(>= {sharp_deg:g}), a crease by design; asking it to be {continuity} needs a larger sharp_deg")
+        if pair.error is not None:
+            raise pair.error
+        assert pair.surface is not None and pair.side is not None and pair.target_surface is not None
+        fj = ed.faces[j]
+        if pair.target_side is None:
+            if average:
+                raise InvalidGeometryError(f"average needs the edge along a side of face {j}'s surface too; it is "
+                                           "trimmed across it")
+            if pair.sampled is None:
+                pair.sampled = _sampled_target(fj, max(pair.edges, key=lambda e: BRep_Tool.Tolerance_s(e)))
+            tgt: BSplineSurface | MatchTarget = pair.sampled
+        else:
+            tgt = pair.target_surface
+        # a model's own gaps are its edges' tolerances: asking a match for less than that (1e-7 of the
+        # size by default) only buys knots, or misses against samples interpolated to ~1e-7
+        g0_tol = max(pair.etol, tol_g0 if tol_g0 is not None else tolerances.MATCH_G0_RTOL * ed.size)
+        res = match_surface(pair.surface, tgt, pair.side, continuity, preserve_opposite=preserve_opposite,
+                            average=average, tol_g0=g0_tol, tol_g1_deg=tol_g1_deg, tol_g2_rel=tol_g2_rel,
+                            refine=refine)
+        nan = math.nan
+        report = FaceMatch(
+            face=i, target=j, continuity=continuity, side=pair.side, target_side=pair.target_side, g0_max=nan,
+            g1_max_deg=nan, g2_max_rel=res.g2_max_rel, max_change=res.max_change, knots_added=res.knots_added,
+            met=False, valid=False, opposite_g1_max_deg=nan, g0_before=pair.g0_before,
+            g1_before_deg=pair.g1_before, opposite_g1_before_deg=nan, converted=pair.converted,
+            notes=list(pair.notes))
+        if strict and max_change is not None and res.max_change > max_change:
+            report.refused = f"would move by {res.max_change:.3g} > {max_change:.3g}"
+            return report
+        fit_tol = max(pair.etol, res.max_change, 1e-7)
+        surfaces = {i: res.surface}
+        if average and isinstance(res.target, BSplineSurface):
+            surfaces[j] = res.target
+            report.target_moved = True
+        geoms = {k: to_occ(s) for k, s in surfaces.items()}
+        others = self._others(i, j)
+        if report.target_moved:
+            # the edge is sampled on the target face: the moved one, made first (the face's other
+            # edges measured before that, on its old surface)
+            before = self._opposite_before(i, others)
+            report.valid = ed.replace(surfaces, fit_tol, geoms=geoms, keep_invalid=True)
+        g0 = g1 = 0.0
+        for e in pair.edges:
+            a, b = assess_joint(e, ed.faces[j], [geoms[i]])
+            g0, g1 = max(g0, a), max(g1, b)
+        # met: by the match's own measures *and* by OCC's along the real edge
+        met = res.met and g0 <= g0_tol and (order < 1 or g1 <= tol_g1_deg)
+        report.g0_max, report.g1_max_deg, report.met = g0, g1, met
+        if res.met and not met:
+            report.notes.append(f"the match meets its tolerances on the surface's side, but OCC measures G0 "
+                                f"{g0:.3g} / G1 {g1:.3g} deg along the edge")
+        if strict and not met:
+            report.refused = f"tolerances not met (G1 {g1:.3g} deg)"
+            return report
+        if not report.target_moved:
+            before = self._opposite_before(i, others)
+        report.opposite_g1_before_deg = before
+        report.opposite_g1_max_deg = after = _worst_g1(ed, others, geoms[i])
+        if strict and after > max(before, others_deg) + 1e-6:
+            # a repair never makes a smooth edge worse than it was (or than the preset allows)
+            report.refused = f"its other edges would go from {before:.3g} to {after:.3g} deg"
+            return report
+        if not report.target_moved:
+            report.valid = ed.replace(surfaces, fit_tol, geoms=geoms, keep_invalid=not strict)
+            if not report.valid and strict:
+                report.refused = "the result is not valid (BRepCheck)"
+        return report
+
+
+def _elevated(surface: BSplineSurface, converted: str | None, order: int) -> BSplineSurface:
+    """A converted surface raised to degree ``order`` where it is lower (a B-spline one as it is)."""
+    if converted is not None:
+        for ax, d in enumerate(surface.degree):
+            if d < order:
+                surface = surface.elevate_degree(order - d, direction="uv"[ax])  # type: ignore[arg-type]
+    return surface
 
 
 @_occ.quiet_messages()
@@ -291,7 +420,8 @@ def match_faces(shape: Any, face: int, target: int, continuity: str = "G1", *, p
     Returns
     -------
     (FaceMatch, TopoDS_Shape)
-        The report and the model with the face(s) replaced (same topology).
+        The report and the model with the face(s) replaced (same topology), whatever the measures;
+        ``valid`` is ``BRepCheck_Analyzer`` on the whole model.
 
     Raises
     ------
@@ -302,89 +432,12 @@ def match_faces(shape: Any, face: int, target: int, continuity: str = "G1", *, p
     """
     if isinstance(continuity, str) and continuity not in CONTINUITIES:
         raise InvalidGeometryError(f"continuity: expected one of {', '.join(CONTINUITIES)}, got {continuity!r}")
-    order = CONTINUITIES.get(continuity, 0) if isinstance(continuity, str) else 0
-    model = SewnModel(shape)
-    n = len(model.faces)
-    i, j = _index(face, n, "face"), _index(target, n, "target")
-    if i == j:
-        raise InvalidGeometryError(f"face and target are the same face ({i})")
-    edges = _shared_edges(model, i, j)
-    if not edges:
-        raise InvalidGeometryError(f"faces {i} and {j} share no edge")
-    fi, fj = model.faces[i], model.faces[j]
-    geom_i = BRep_Tool.Surface_s(fi)
-    g0_before = g1_before = 0.0
-    for e in edges:
-        a, b = assess_joint(e, fj, [geom_i])
-        g0_before, g1_before = max(g0_before, a), max(g1_before, b)
-    if order >= 1 and g1_before >= sharp_deg:
-        raise InvalidGeometryError(
-            f"the edge between faces {i} and {j} is sharp: its tangent planes meet at {g1_before:.3g} deg "
-            f"(>= {sharp_deg:g}), a crease by design; asking it to be {continuity} needs a larger sharp_deg")
-    pts = np.concatenate([_edge_samples(e, fj, EDGE_SAMPLES)[2] for e in edges])
-    etol = max(BRep_Tool.Tolerance_s(e) for e in edges)
-    tol_side = max(SIDE_RTOL * model.size, 10.0 * etol)
-    S, _, converted = _surface_of(fi, order)
-    S, side, dist, cover = _along(S, fi, pts, tol_side)
-    if side is None:
-        raise InvalidGeometryError(
-            f"the edge between faces {i} and {j} does not run along a side of face {i}'s surface (it lies "
-            f"{dist:.3g} from the nearest side, more than {tol_side:.3g}): the face is trimmed across its surface")
-    if cover < 1.0 - COVER_SLACK:
-        raise InvalidGeometryError(
-            f"the edge between faces {i} and {j} covers {100 * cover:.3g} % of side {side} of face {i}'s surface: "
-            f"the side runs on past the edge, and matching only part of a side is not supported")
-    T, _, _ = _surface_of(fj, order)
-    T, side_j, _, cover_j = _along(T, fj, pts, tol_side)
-    if side_j is not None and cover_j < 1.0 - COVER_SLACK:
-        side_j = None  # the target's side runs on past the edge: samples of it along the edge instead
-    notes = []
-    if side_j is None:
-        if average:
-            raise InvalidGeometryError(f"average needs the edge along a side of face {j}'s surface too; it is trimmed "
-                                       "across it")
-        tgt: BSplineSurface | MatchTarget = _sampled_target(fj, max(edges, key=lambda e: BRep_Tool.Tolerance_s(e)))
-        notes.append(f"the edge is not a whole side of face {j}'s surface: matched to samples of it along the edge")
-    else:
-        tgt = T
-    # a model's own gaps are its edges' tolerances: asking a match for less than that (1e-7 of the
-    # size by default) only buys knots, or misses against samples interpolated to ~1e-7
-    g0_tol = max(etol, tol_g0 if tol_g0 is not None else tolerances.MATCH_G0_RTOL * model.size)
-    res = match_surface(S, tgt, side, continuity, preserve_opposite=preserve_opposite, average=average,
-                        tol_g0=g0_tol, tol_g1_deg=tol_g1_deg, tol_g2_rel=tol_g2_rel, refine=refine)
-    fit_tol = max(etol, res.max_change, 1e-7)
-    new_i = _replace_surface(fi, res.surface, fit_tol)
-    rs = BRepTools_ReShape()
-    rs.Replace(fi, new_i)
-    new_j = None
-    if average and isinstance(res.target, BSplineSurface):
-        new_j = _replace_surface(fj, res.target, fit_tol)
-        rs.Replace(fj, new_j)
-    with _occ.kernel_errors("replacing the matched face"):
-        out = rs.Apply(model.shape)
-    valid = bool(BRepCheck_Analyzer(out).IsValid())
-    geom_new = BRep_Tool.Surface_s(new_i)
-    nb = new_j if new_j is not None else fj
-    g0 = g1 = 0.0
-    for e in edges:
-        a, b = assess_joint(e, nb, [geom_new])
-        g0, g1 = max(g0, a), max(g1, b)
-    # met: by the match's own measures *and* by OCC's along the real edge
-    met = res.met and g0 <= g0_tol and (order < 1 or g1 <= tol_g1_deg)
-    if res.met and not met:
-        notes.append(f"the match meets its tolerances on the surface's side, but OCC measures G0 {g0:.3g} / G1 "
-                     f"{g1:.3g} deg along the edge")
-    others = _other_edges(model, i, j)
-    index = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(out, TopAbs_FACE, index)
-    now = [new_i if k == i else new_j if (k == j and new_j is not None) else f for k, f in enumerate(model.faces)]
-    numbering = [index.FindIndex(f) - 1 for f in now]
-    pos = [numbering[i], numbering[j]]
-    report = FaceMatch(
-        face=i, target=j, continuity=continuity, side=side, target_side=side_j, g0_max=g0, g1_max_deg=g1,
-        g2_max_rel=res.g2_max_rel, max_change=res.max_change, knots_added=res.knots_added, met=met,
-        valid=valid, opposite_g1_max_deg=_worst_g1(others, geom_new), g0_before=g0_before,
-        g1_before_deg=g1_before, opposite_g1_before_deg=_worst_g1(others, geom_i), converted=converted,
-        target_moved=new_j is not None, notes=notes, faces_out=(pos[0], pos[1]))
+    edits = ModelEdits(shape)
+    report = FaceMatcher(edits).match(
+        face, target, continuity, preserve_opposite=preserve_opposite, average=average, tol_g0=tol_g0,
+        tol_g1_deg=tol_g1_deg, tol_g2_rel=tol_g2_rel, refine=refine, sharp_deg=sharp_deg)
+    out, numbering = edits.shape()
+    report.valid = report.valid and bool(BRepCheck_Analyzer(out).IsValid())
     report._numbering = numbering
+    report.faces_out = (numbering[report.face], numbering[report.target])
     return report, out

@@ -22,7 +22,7 @@ from OCP.TopoDS import TopoDS
 
 from occsurf.algorithms import BSplineSurface
 from occsurf.bridge.conversion.splines import make_face, to_occ
-from occsurf.bridge.modeling.joints import _edge_samples, _local_analysis, _projector, assess_joint
+from occsurf.bridge.modeling.joints import _local_analysis, _projector, assess_joint, edge_samples
 
 KNOTS = [0, 0, 0, 0, 0.3, 0.6, 1, 1, 1, 1]
 
@@ -54,7 +54,7 @@ def test_projector_gives_the_numbers_of_a_projection_per_point():
 
 def _reference(edge, face, surfaces, samples):
     """assess_joint's measurement with a fresh ``Init(point, surface)`` per sample and surface."""
-    s_n, uvs, pts = _edge_samples(edge, face, samples)
+    s_n, uvs, pts = edge_samples(edge, face, samples)
     g0 = g1 = 0.0
     for uv, p in zip(uvs, pts):
         best = None

@@ -25,6 +25,7 @@ from occsurf.bridge.conversion.splines import make_face
 from occsurf.bridge.exchange.step_iges import read_step, write_step
 from occsurf.bridge.modeling.joints import assess_joint
 from occsurf.bridge.modeling.matching import match_faces
+from occsurf.bridge.modeling.model_edits import ModelEdits
 from occsurf.bridge.modeling.refill_loop import SewnModel, model_faces
 from tests.algorithms.test_matching import CUBIC, _knots, _pair
 
@@ -43,11 +44,9 @@ def _occ_edge(shape, i: int, j: int) -> tuple[float, float]:
     """OCC's largest C0 gap and G1 angle along the edge(s) of faces i and j of ``shape``."""
     from OCP.BRep import BRep_Tool
 
-    from occsurf.bridge.modeling.matching import _shared_edges
-
-    m = SewnModel(shape)
+    m = ModelEdits(shape)
     g0 = g1 = 0.0
-    for e in _shared_edges(m, i, j):
+    for e in m.shared_edges(i, j):
         a, b = assess_joint(e, m.faces[j], [BRep_Tool.Surface_s(m.faces[i])])
         g0, g1 = max(g0, a), max(g1, b)
     return g0, g1
