@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import make_interp_spline
+from scipy.spatial import cKDTree
 
 from .. import _validate as V
 from ..errors import InvalidGeometryError
@@ -242,11 +243,15 @@ class SampledCurve:
         self.h3 = None if H3 is None else make_interp_spline(c, H3.reshape(len(c), -1), k=k)
         self.dense_c = np.linspace(0.0, 1.0, 16 * len(c) + 1)
         self.dense = self.curve(self.dense_c)
+        self._tree = cKDTree(self.dense)
+        self._d1 = self.curve.derivative(1)
+        self._d2 = self.curve.derivative(2) if k > 1 else None
 
     def feet(self, points: Array) -> tuple[Array, Array]:
-        d2 = ((points[:, None, :] - self.dense[None]) ** 2).sum(-1)
-        c = self.dense_c[np.argmin(d2, axis=1)]
-        d1, d2c = self.curve.derivative(1), self.curve.derivative(2) if self.k > 1 else None
+        """The curve's parameters nearest to ``points`` (m, 3), and the distances: Newton's
+        iteration from the nearest of the dense samples (found by a k-d tree)."""
+        c = self.dense_c[self._tree.query(points)[1]]
+        d1, d2c = self._d1, self._d2
         for _ in range(12):
             r = self.curve(c) - points
             g1 = d1(c)
@@ -262,7 +267,7 @@ class SampledCurve:
     def at(self, points: Array) -> Jets:
         c, _ = self.feet(points)
         P = self.curve(c)
-        g1 = self.curve.derivative(1)(c)
+        g1 = self._d1(c)
         n_raw = self.normal(c)
         N = _unit(n_raw)
         t = _unit(g1 - np.einsum("md,md->m", g1, N)[:, None] * N)
@@ -274,7 +279,7 @@ class SampledCurve:
             H3 = None if self.h3 is None else self.h3(c).reshape(-1, 2, 2, 2)
         elif self.cross is not None:
             speed2 = np.einsum("md,md->m", g1, g1)
-            g2 = self.curve.derivative(2)(c) if self.k > 1 else np.zeros_like(g1)
+            g2 = self._d2(c) if self._d2 is not None else np.zeros_like(g1)
             k_t = np.einsum("md,md->m", N, g2) / speed2
             dn = self.normal.derivative(1)(c)
             dN = (dn - np.einsum("md,md->m", dn, N)[:, None] * N) / np.linalg.norm(n_raw, axis=1)[:, None]

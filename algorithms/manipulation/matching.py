@@ -481,14 +481,45 @@ def _size(*surfaces: BSplineSurface) -> float:
     return float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))) or 1.0
 
 
+def _sides_by_bound(surface: BSplineSurface, points: Array) -> list[tuple[float, int, str, SurfaceSide]]:
+    """The sides of ``surface`` as ``(bound, index in SIDES, side, SurfaceSide)``, in the order of
+    ``bound``: a lower bound of the largest distance from ``points`` to the side, their largest
+    distance to the bounding box of the side's poles (the side lies in their convex hull; 0 where
+    a weight is not positive). A side whose bound exceeds the best distance found need not be
+    searched: it cannot be nearer."""
+    out = []
+    for k, side in enumerate(SIDES):
+        ss = SurfaceSide(_canonical(surface, side))
+        C, w = ss.curve.control_points, ss.curve.weights
+        if w is not None and np.any(w <= 0):
+            bound = 0.0
+        else:
+            lo, hi = C.min(axis=0), C.max(axis=0)
+            bound = float(np.max(np.linalg.norm(np.maximum(lo - points, 0.0) + np.maximum(points - hi, 0.0), axis=1)))
+        out.append((bound, k, side, ss))
+    return sorted(out, key=lambda x: (x[0], x[1]))
+
+
+def _nearest_side(surface: BSplineSurface, points: Array, samples: int) -> tuple[str, float, Array, SurfaceSide]:
+    """The side with the smallest largest distance to ``points`` (ties: the first in ``SIDES``),
+    that distance, the points' feet on it and the side; sides ruled out by their bound are not
+    searched."""
+    best: tuple[float, int] = (np.inf, len(SIDES))
+    found: tuple[str, Array, SurfaceSide] | None = None
+    for bound, k, side, ss in _sides_by_bound(surface, points):
+        if bound > best[0] * (1.0 + 1e-9):
+            break
+        t, d = ss.feet(points, samples=samples)
+        key = (float(np.max(d)), k)
+        if key < best:
+            best, found = key, (side, t, ss)
+    assert found is not None
+    return found[0], best[0], found[1], found[2]
+
+
 def _find_side(target: BSplineSurface, points: Array) -> str:
     """The side of ``target`` nearest to ``points`` (the largest distance, smallest over the sides)."""
-    best, best_d = "u0", np.inf
-    for side in SIDES:
-        _, d = SurfaceSide(_canonical(target, side)).feet(points, samples=65)
-        if float(np.max(d)) < best_d:
-            best, best_d = side, float(np.max(d))
-    return best
+    return _nearest_side(target, np.asarray(points, float), 65)[0]
 
 
 def side_along(surface: BSplineSurface, points: Array, tol: float) -> tuple[str | None, float, float]:
@@ -500,14 +531,9 @@ def side_along(surface: BSplineSurface, points: Array, tol: float) -> tuple[str 
     ``None`` where the distance is above ``tol`` (an edge that crosses the surface's interior, as a
     trimmed face's may).
     """
-    best, best_d, best_cover = None, np.inf, 0.0
-    for side in SIDES:
-        ss = SurfaceSide(_canonical(surface, side))
-        t, d = ss.feet(np.asarray(points, float))
-        if float(np.max(d)) < best_d:
-            lo, hi = ss.curve.domain
-            best, best_d, best_cover = side, float(np.max(d)), float((t.max() - t.min()) / (hi - lo))
-    return (best if best_d <= tol else None), best_d, best_cover
+    best, best_d, t, ss = _nearest_side(surface, np.asarray(points, float), 401)
+    lo, hi = ss.curve.domain
+    return (best if best_d <= tol else None), best_d, float((t.max() - t.min()) / (hi - lo))
 
 
 def _change(before: BSplineSurface, after: BSplineSurface) -> float:
