@@ -13,9 +13,10 @@ from typing import Any
 
 import numpy as np
 from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GeomAbs import GeomAbs_Shape
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
-from OCP.gp import gp_Pnt
+from OCP.gp import gp_Pnt, gp_Pnt2d
 from OCP.LocalAnalysis import LocalAnalysis_SurfaceContinuity
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopExp import TopExp
@@ -24,7 +25,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from occsurf.algorithms.errors import KernelError
 
-__all__ = ["assess_joint", "edge_samples", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
+__all__ = ["assess_joint", "edge_samples", "edge_curve_points", "surface_feet", "surfaces_joint", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
 
 #: Tolerance of ``BRepBuilderAPI_Sewing`` (model units), for finding free edges and for the result.
 SEW_TOLERANCE: float = 1e-5
@@ -48,9 +49,7 @@ def edge_samples(edge: Any, face: Any, samples: int) -> tuple[Any, list[Any], np
     s_n = BRep_Tool.Surface_s(face)
     pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
     a, b = BRep_Tool.Range_s(edge, face)
-    ends = np.geomspace(1e-5, 5e-2, ASSESS_END_SAMPLES)
-    fractions = np.unique(np.concatenate((np.linspace(0.0, 1.0, samples), ends, 1.0 - ends)))
-    uvs = [pc.Value(a + t * (b - a)) for t in fractions]
+    uvs = [pc.Value(a + t * (b - a)) for t in _fractions(samples)]
     pts = np.array([s_n.Value(uv.X(), uv.Y()).Coord() for uv in uvs])
     return s_n, uvs, pts
 
@@ -112,6 +111,42 @@ def assess_joint(edge: Any, face: Any, fill_surfaces: list[Any], samples: int = 
         if best is None:
             raise KernelError("cannot project a boundary point onto the fill")
         gap, ang = _local_analysis(s_n, uv, best[1], best[2], best[3])
+        g0, g1 = max(g0, gap), max(g1, ang)
+    return g0, g1
+
+
+def _fractions(samples: int) -> np.ndarray:
+    ends = np.geomspace(1e-5, 5e-2, ASSESS_END_SAMPLES)
+    return np.unique(np.concatenate((np.linspace(0.0, 1.0, samples), ends, 1.0 - ends)))
+
+
+def edge_curve_points(edge: Any, samples: int = ASSESS_SAMPLES) -> np.ndarray:
+    """Points of ``edge``'s 3-D curve, shape (k, 3): ``samples`` evenly spaced in its parameter,
+    plus :data:`ASSESS_END_SAMPLES` clustered towards each end (as :func:`edge_samples`)."""
+    c = BRepAdaptor_Curve(edge)
+    a, b = c.FirstParameter(), c.LastParameter()
+    return np.array([c.Value(a + t * (b - a)).Coord() for t in _fractions(samples)])
+
+
+def surface_feet(surface: Any, points: np.ndarray) -> np.ndarray:
+    """``(u, v)`` of the feet of ``points`` (k, 3) on the Geom surface ``surface``
+    (``GeomAPI_ProjectPointOnSurf``, the nearest solution), shape (k, 2)."""
+    pr = _projector(surface)
+    out = np.empty((len(points), 2))
+    for k, p in enumerate(points):
+        pr.Perform(gp_Pnt(*p))
+        if pr.NbPoints() == 0:
+            raise KernelError("cannot project a point of the edge onto the surface")
+        out[k] = pr.LowerDistanceParameters()
+    return out
+
+
+def surfaces_joint(s_a: Any, uv_a: np.ndarray, s_b: Any, uv_b: np.ndarray) -> tuple[float, float]:
+    """Max ``C0Value`` gap and ``G1Angle`` (degrees) of OCC's LocalAnalysis (order G1) between Geom
+    surfaces ``s_a`` at ``uv_a`` and ``s_b`` at ``uv_b`` (each (k, 2), paired)."""
+    g0 = g1 = 0.0
+    for (ua, va), (ub, vb) in zip(uv_a, uv_b):
+        gap, ang = _local_analysis(s_a, gp_Pnt2d(ua, va), s_b, float(ub), float(vb))
         g0, g1 = max(g0, gap), max(g1, ang)
     return g0, g1
 

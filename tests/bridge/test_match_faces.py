@@ -210,3 +210,44 @@ def test_fair_faces_and_repair_fairs_wiggles(tmp_path: Path):
     assert rep.faces_faired == 1 and rep.fairings[0]["face"] == 0
     with pytest.raises(InvalidGeometryError, match="out of range"):
         fair_faces(make_face(S), [3], tol=0.01)
+
+
+def _with_smooth_neighbour():
+    """T | S | Q as :func:`_three_faces` (T-S kinked 0.2 deg, S-Q a 2 deg crease), and W below S
+    across S's side v0, a C1 continuation of it (W's poles S's reflected through its side)."""
+    T, S = _pair(0.2, nu_s=7)
+    P = S.control_points
+    d = P[-1] - P[-2]
+    a = np.radians(2.0)
+    d = np.stack([d[:, 0] * np.cos(a) - d[:, 2] * np.sin(a), d[:, 1], d[:, 0] * np.sin(a) + d[:, 2] * np.cos(a)], 1)
+    Q = BSplineSurface((3, 3), (CUBIC, S.knots[1]), np.stack([P[-1] + i * d for i in range(4)]))
+    W = BSplineSurface((3, 3), S.knots, (2.0 * P[:, :1] - P)[:, ::-1])
+    return _model(T, S, Q, W)
+
+
+def test_strict_match_judges_each_other_edge_on_its_own():
+    """Matching S to T moves S's side v0 off W: its edge to W breaks G1 while the worst of S's
+    other edges (the crease to Q, held by preserve_opposite) stays what it was. A strict match
+    is refused for the one edge, and nothing is changed."""
+    from OCP.BRep import BRep_Tool
+
+    from occsurf.bridge.modeling.matching import FaceMatcher
+
+    shape = _with_smooth_neighbour()
+    m = ModelEdits(shape)
+    assert len(m) == 4 and m.shared_edges(1, 3) and m.shared_edges(1, 2) and not m.shared_edges(0, 3)
+    assert _occ_edge(shape, 1, 3)[1] < 1e-6 and _occ_edge(shape, 1, 2)[1] > 1.9
+    tolerances = [BRep_Tool.Tolerance_s(e) for f in model_faces(shape) for e in ModelEdits(f).edges(0)]
+    matcher = FaceMatcher(m)
+    rep = matcher.match(1, 0, "G1", strict=True, max_change=1.0, others_deg=0.01)
+    assert rep.refused is not None and "edge to face 3" in rep.refused, rep.refused
+    # judged by the worst of the other edges, the change would have passed
+    assert rep.opposite_g1_before_deg > 1.9 and rep.opposite_g1_max_deg <= rep.opposite_g1_before_deg + 1e-6
+    assert m.version == [0, 0, 0, 0] and m.faces[1] is m.model.faces[1]
+    # not strict: made, and OCC's own measure on the result finds the S-W edge broken
+    rep = matcher.match(1, 0, "G1")
+    assert rep.refused is None and rep.valid and m.version[1] == 1
+    out, numbering = m.shape()
+    assert _occ_edge(out, numbering[1], numbering[3])[1] > 0.01 and _occ_edge(out, numbering[1], numbering[0])[1] < 0.01
+    # the caller's model is not touched (ModelEdits works on a copy)
+    assert [BRep_Tool.Tolerance_s(e) for f in model_faces(shape) for e in ModelEdits(f).edges(0)] == tolerances
