@@ -40,6 +40,7 @@ from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepTools import BRepTools
 from OCP.gp import gp_Pnt, gp_Vec
 from OCP.TopAbs import TopAbs_REVERSED
+from threadpoolctl import threadpool_limits
 
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError
@@ -67,6 +68,10 @@ SIDE_RTOL: float = 1e-6
 #: them): a side that runs on past the edge (along other faces) would be matched to the target over
 #: its whole length.
 COVER_SLACK: float = 1e-3
+#: BLAS threads while a surface is matched: its systems are small dense SVDs (100..1000 rows,
+#: 50..250 columns), which one thread does faster than two (300 x 80: 1.35 against 2.53 ms on the
+#: 2-core test machine; the whole OCCT bearing's repair 63.6 s against 91.7 s, the same results).
+MATCH_BLAS_THREADS: int = 1
 #: Samples along the shared edge (plus 16 clustered at each end, as :func:`.joints.assess_joint`).
 EDGE_SAMPLES: int = 81
 
@@ -348,9 +353,11 @@ class FaceMatcher:
         # a model's own gaps are its edges' tolerances: asking a match for less than that (1e-7 of the
         # size by default) only buys knots, or misses against samples interpolated to ~1e-7
         g0_tol = max(pair.etol, tol_g0 if tol_g0 is not None else tolerances.MATCH_G0_RTOL * ed.size)
-        res = match_surface(pair.surface, tgt, pair.side, continuity, preserve_opposite=preserve_opposite,
-                            average=average, tol_g0=g0_tol, tol_g1_deg=tol_g1_deg, tol_g2_rel=tol_g2_rel,
-                            refine=refine)
+        # one BLAS thread: the systems are small, and threads cost more than they save (MATCH_BLAS_THREADS)
+        with threadpool_limits(limits=MATCH_BLAS_THREADS, user_api="blas"):
+            res = match_surface(pair.surface, tgt, pair.side, continuity, preserve_opposite=preserve_opposite,
+                                average=average, tol_g0=g0_tol, tol_g1_deg=tol_g1_deg, tol_g2_rel=tol_g2_rel,
+                                refine=refine)
         nan = math.nan
         report = FaceMatch(
             face=i, target=j, continuity=continuity, side=pair.side, target_side=pair.target_side, g0_max=nan,
