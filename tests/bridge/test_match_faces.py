@@ -251,3 +251,18 @@ def test_strict_match_judges_each_other_edge_on_its_own():
     assert _occ_edge(out, numbering[1], numbering[3])[1] > 0.01 and _occ_edge(out, numbering[1], numbering[0])[1] < 0.01
     # the caller's model is not touched (ModelEdits works on a copy)
     assert [BRep_Tool.Tolerance_s(e) for f in model_faces(shape) for e in ModelEdits(f).edges(0)] == tolerances
+
+
+def test_repair_leaves_a_g1_edge_that_breaks_only_curvature_to_g2():
+    """T-S without a kink is G1 (OCC: < 1e-6 deg) but jumps in curvature (~100 %): CATIA's preset
+    flags only its G2. G2 would move S more than 1e-3 of the size, and a G1 match would change
+    nothing the preset asks: the edge is refused, G1 never tried, the model unchanged."""
+    from occsurf.bridge.audit.repair import repair_model
+
+    shape = _three_faces(0.0, 2.0)
+    assert _occ_edge(shape, 1, 0)[1] < 1e-6
+    rep, out = repair_model(shape, "catia")
+    [e] = rep.edges
+    assert e.measures == ["g2_rel"] and e.status == "refused"
+    assert e.reason is not None and "G2 face" in e.reason and "G1 face" not in e.reason
+    assert rep.by_measure_before == {"g2_rel": 1} and rep.by_measure_after == {"g2_rel": 1} and rep.valid_after
