@@ -216,7 +216,8 @@ def _lstsq(J: Array, rhs: Array) -> Array:
     c = U.T @ (rhs / (s if rhs.ndim == 1 else s[:, None]))
     exact = sv > 1e-12 * sv[0]
     robust = sv > tolerances.MATCH_RCOND * sv[0]
-    inv = 1.0 / sv if rhs.ndim == 1 else (1.0 / sv)[:, None]
+    inv = np.divide(1.0, sv, out=np.zeros_like(sv), where=sv > 0)  # zeros are cut off below anyway
+    inv = inv if rhs.ndim == 1 else inv[:, None]
     xa = Vt[exact].T @ (c[exact] * inv[exact])
     xb = Vt[robust].T @ (c[robust] * inv[robust])
     return xa if np.linalg.norm(xa) <= 2.0 * np.linalg.norm(xb) + 1e-300 else xb
