@@ -20,6 +20,8 @@ tasks finish; ``--resume`` skips content already audited (SHA-256).
 :mod:`.repair`      assess, match smooth edges, fair wiggles, assess again (``occsurf repair``); it sits
                     here because it drives both the quality and the modeling rooms
 :mod:`.match_file`  ``occsurf match`` and ``occsurf repair`` in a worker process
+:mod:`.fit_file`    ``occsurf fit`` in a worker process (progress through a file the command follows)
+:mod:`.render_file` ``occsurf render`` in a worker process
 ==================  ================================================================================
 
 Names are loaded on first use (``dask``, ``pyarrow`` and OCC are not imported by ``import

@@ -10,7 +10,7 @@ plain least squares with ``--ctrl``. Writes ``OUT.step`` (the flat exact NURBS),
 ``--json``); progress goes to stderr.
 
 The data file is read, fitted and written in a worker process
-(:func:`occsurf.bridge.isolation.run_jobs` with the job :func:`fit_job`), so a STEP/IGES file that
+(:func:`occsurf.bridge.isolation.run_jobs` with the job :func:`occsurf.bridge.audit.fit_file.fit_job`), so a STEP/IGES file that
 crashes OCC costs a one-line error, not the command; the worker's progress lines reach stderr
 through a small file this process follows; a worker that takes longer than ``--timeout`` seconds (reading,
 fitting and writing together) is stopped and reported. Bad data (NaN-only rows, too few points for the
@@ -34,54 +34,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from ..audit.fit_file import FIT_JOB, PRELOAD
 from ._common import EXIT_ERROR, EXIT_OK, add_strict_option, error, format_rows, strip_path, timeout_arg, worker_failure
 
-__all__ = ["fit_job", "add_parser", "run"]
+__all__ = ["add_parser", "run"]
 
-FIT_JOB = "occsurf.bridge.cli.fit:fit_job"
-PRELOAD = ("occsurf.bridge.modeling.fit",)
 #: Seconds the worker may take to read, fit and write before it is stopped (``--timeout``): a file that
 #: hangs OCC's reader must not hang the command; real fits take seconds (see the README's fitting section).
 DEFAULT_TIMEOUT = 1800.0
-
-
-def fit_job(item: dict[str, Any]) -> dict[str, Any]:
-    """The worker's job: read ``item["input"]``, fit, write the outputs; returns the JSON report.
-
-    ``item`` holds the command's options (``tol``, ``ctrl``, ``degree``, ``smooth``,
-    ``fix_boundary``, ``x``, ``y``, ``face``, ``levels``), ``output`` and ``progress`` (a file the
-    job appends its progress lines to, or None).
-    """
-    import warnings
-
-    from ..isolation import quiet_native_stdout
-
-    log = open(item["progress"], "a", encoding="utf-8") if item.get("progress") else None  # noqa: SIM115
-
-    def say(msg: str) -> None:
-        if log is not None:
-            log.write(msg + "\n")
-            log.flush()
-
-    try:
-        with warnings.catch_warnings(), quiet_native_stdout():
-            warnings.simplefilter("ignore")
-            from ..modeling.fit import fit_input, read_fit_input, write_fit_outputs
-
-            inp = read_fit_input(item["input"], face=item.get("face"), x_range=item.get("x"), y_range=item.get("y"),
-                                 strict=bool(item.get("strict")))
-            say(inp.description)
-            res = fit_input(inp, item["tol"], ctrl=item.get("ctrl"), degree=item["degree"], smooth=item["smooth"],
-                            fix_boundary=item["fix_boundary"], max_levels=item.get("levels"), progress=say)
-            say("writing " + item["output"])
-            outputs = write_fit_outputs(res, item["output"])
-    finally:
-        if log is not None:
-            log.close()
-    doc = {"input": item["input"], "detected": inp.description, "kind": inp.kind, "warnings": list(inp.warnings)}
-    doc.update(res.report())
-    doc["outputs"] = outputs
-    return doc
 
 
 class _Follow(threading.Thread):

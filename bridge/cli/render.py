@@ -9,7 +9,7 @@ The camera is a named view (``--view``, default ``iso``; ``top`` looks down -z a
 or an explicit ``--camera`` position looking at ``--target`` (default: the model's centre).
 
 The file is read, meshed and rendered in a worker process (:func:`occsurf.bridge.isolation.run_jobs`
-with the job :func:`render_job`): a crash inside OCC or VTK is one line ``occsurf: FILE: reason``.
+with the job :func:`occsurf.bridge.audit.render_file.render_job`): a crash inside OCC or VTK is one line ``occsurf: FILE: reason``.
 Bad JSON, an unknown view, an unwritable output: one line on stderr, exit status 2, nothing written.
 A model read around damage (see :mod:`occsurf.bridge.exchange.checks`) is rendered as read, with one line
 ``occsurf: FILE: warning: ...`` per warning on stderr; ``--strict`` refuses it instead (exit 2, no picture).
@@ -21,79 +21,29 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import warnings
 from pathlib import Path
 from typing import Any
 
+from ..audit.render_file import PRELOAD, RENDER_JOB
 from ._common import (
     EXIT_ERROR,
     EXIT_OK,
     add_strict_option,
     error,
     output_problem,
-    read_model,
     shown_path,
     strip_path,
     timeout_arg,
     worker_failure,
 )
 
-__all__ = ["render_job", "add_parser", "run", "VIEW_NAMES"]
+__all__ = ["add_parser", "run", "VIEW_NAMES"]
 
-#: The job the worker runs, and what it loads before starting it.
-RENDER_JOB = "occsurf.bridge.cli.render:render_job"
-PRELOAD = ("occsurf.bridge.exchange.step_iges", "occsurf.bridge.rendering.lighting")
 DEFAULT_TIMEOUT = 300.0
 #: The named views (the same keys as :data:`occsurf.bridge.rendering.lighting.VIEWS`, listed here
 #: so that the command-line process need not import NumPy to check ``--view``).
 VIEW_NAMES = ("iso", "top", "bottom", "front", "back", "left", "right")
 PRESET_NAMES = ("studio", "key-flaps", "highlight-check")
-
-
-def render_job(item: dict[str, Any]) -> dict[str, Any]:
-    """The worker's job: validate the lights, read ``item["input"]``, render, write ``item["output"]``.
-
-    Parameters
-    ----------
-    item : dict
-        ``{"input", "output", "lights": dict or None, "preset": str or None, "size": [w, h],
-        "view": str, "camera": {"position", "target" or None, "up"} or None}``.
-
-    Returns
-    -------
-    dict
-        ``{"faces", "triangles", "lights", "size", "render_seconds"}``.
-    """
-    import numpy as np
-
-    from occsurf.algorithms.lighting import preset, setup_from_dict
-
-    from ..exchange.files import check_target
-    from ..isolation import quiet_native_stdout
-    from ..rendering.lighting import Camera, camera_for_view, mesh_of_model, render_lit, write_png
-
-    # fail before reading the model: the lights, then the target (again: it may have changed)
-    setup = setup_from_dict(item["lights"]) if item.get("lights") is not None else None
-    check_target(item["output"])
-    with warnings.catch_warnings(), np.errstate(all="ignore"), quiet_native_stdout():
-        warnings.simplefilter("ignore")
-        model = read_model(Path(item["input"]), strict=bool(item.get("strict")))
-        P, T, N = mesh_of_model(model)
-    lo, hi = P.min(axis=0), P.max(axis=0)
-    centre, diag = (lo + hi) / 2, float(np.linalg.norm(hi - lo)) or 1.0
-    if setup is None:
-        setup = preset(item["preset"], centre, diag)
-    width, height = item["size"]
-    cam = item.get("camera")
-    if cam is not None:
-        camera = Camera(position=cam["position"], target=cam["target"] if cam.get("target") else tuple(centre),
-                        up=cam.get("up") or (0.0, 0.0, 1.0))
-    else:
-        camera = camera_for_view(item["view"], lo, hi, width / height)
-    image = render_lit(P, T, setup, normals=N, size=(width, height), camera=camera, samples=item.get("samples", 4))
-    write_png(item["output"], image)
-    return {"faces": len(model.faces), "triangles": int(len(T)), "lights": len(setup.lights), "size": [width, height],
-            "render_seconds": round(image.seconds, 4), "warnings": list(model.warnings)}
 
 
 def _read_lights(path: Path) -> tuple[dict[str, Any] | None, str | None]:
