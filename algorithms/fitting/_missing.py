@@ -43,7 +43,7 @@ from ..manipulation.linalg import ConstraintError
 from ._common import difference_penalty
 
 if TYPE_CHECKING:
-    from .gridded import _Rows
+    from .grid_constraints import Rows
 
 __all__ = ["SparseGrid", "sparse_rows", "kronecker_penalty"]
 
@@ -65,7 +65,7 @@ def kronecker_penalty(A: Array, B: Array) -> sp.csr_matrix:
     return (sp.kron(Ru, Gv) + sp.kron(Gu, Rv)).tocsr()
 
 
-def sparse_rows(rows: _Rows, Nu: int, Nv: int, d: int) -> tuple[sp.csr_matrix, Array, list[str]]:
+def sparse_rows(rows: Rows, Nu: int, Nv: int, d: int) -> tuple[sp.csr_matrix, Array, list[str]]:
     """Every constraint as sparse rows on the stacked vector ``[vec(P_0), ..., vec(P_{d-1})]``."""
     blocks: list[sp.csr_matrix] = []
     targets: list[Array] = []
@@ -118,11 +118,11 @@ class SparseGrid:
         Collocation matrices of the complete grid.
     Q : ndarray, shape (m, n, d)
         Data, NaN on missing cells.
-    rows : gridded._Rows
+    rows : grid_constraints.Rows
         The constraints.
     """
 
-    def __init__(self, A: Array, B: Array, Q: Array, rows: _Rows) -> None:
+    def __init__(self, A: Array, B: Array, Q: Array, rows: Rows) -> None:
         m, n, d = Q.shape
         self.valid = ~np.isnan(Q).any(axis=2)
         if not self.valid.any():

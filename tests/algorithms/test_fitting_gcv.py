@@ -15,14 +15,8 @@ import pytest
 
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.fitting._missing import SparseGrid
-from occsurf.algorithms.fitting.gridded import (
-    FixedPoint,
-    TangentPlane,
-    _build_rows,
-    _Kronecker,
-    _Space,
-    fit_grid,
-)
+from occsurf.algorithms.fitting.grid_constraints import FixedPoint, Space, TangentPlane, build_rows
+from occsurf.algorithms.fitting.gridded import _Kronecker, fit_grid
 from occsurf.algorithms.kernel.basis import basis_matrix
 
 
@@ -39,10 +33,10 @@ def _system(Z, x, y, poles, constraints):
     probe = fit_grid(np.nan_to_num(Z), poles, 3, x=x, y=y)
     tu, tv = probe.surface.knots
     Q = Z[..., None]
-    space = _Space(Q, True, x, y, (3, 3), tu, tv)
+    space = Space(Q, True, x, y, (3, 3), tu, tv)
     A = basis_matrix(tu, 3, poles[0], x)[0]
     B = basis_matrix(tv, 3, poles[1], y)[0]
-    return (tu, tv), A, B, Q, _build_rows(space, constraints, False)
+    return (tu, tv), A, B, Q, build_rows(space, constraints, False)
 
 
 def _loo_trace(Z, x, y, poles, knots, lam, constraints):
@@ -75,7 +69,7 @@ def test_kronecker_trace_with_point_constraints_equals_leave_one_out(lam):
     tr = kr.trace(lam)
     np.testing.assert_allclose(tr, loo, rtol=1e-8)
     # the constraints take degrees of freedom away: at most one per row
-    free = _Kronecker(A, B, Q, _build_rows(_Space(Q, True, x, y, (3, 3), *knots), [], False)).trace(lam)
+    free = _Kronecker(A, B, Q, build_rows(Space(Q, True, x, y, (3, 3), *knots), [], False)).trace(lam)
     assert 0.5 < free - tr <= len(rows.alpha) + 1e-9
     # the GCV score uses that trace and the constrained residual
     rss = float(np.sum((full.surface.evaluate_grid(x, y)[..., 2] - Z) ** 2))

@@ -215,11 +215,12 @@ def test_gcv_minimises_the_score_and_beats_no_smoothing_on_noise():
     x, y, X, Y, Z = _grid(61, 61, noise=0.02, seed=5)
     fit = fit_grid(Z, (30, 30), 3, smoothing="gcv")
     lams = 10.0 ** np.linspace(-6, 1, 15)
-    from occsurf.algorithms.fitting.gridded import _Kronecker, _Rows
+    from occsurf.algorithms.fitting.grid_constraints import Rows
+    from occsurf.algorithms.fitting.gridded import _Kronecker
 
     A = basis_matrix(fit.surface.knots[0], 3, 30, x)[0]
     B = basis_matrix(fit.surface.knots[1], 3, 30, y)[0]
-    kr = _Kronecker(A, B, Z[..., None], _Rows([[]], [[]]))
+    kr = _Kronecker(A, B, Z[..., None], Rows([[]], [[]]))
     assert fit.gcv <= min(kr.gcv(lam) for lam in lams) * (1 + 1e-9)
     truth = franke(X, Y)
     plain = fit_grid(Z, (30, 30), 3)
