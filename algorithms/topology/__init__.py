@@ -18,8 +18,9 @@ from .mesh import Mesh, catmull_clark, doo_sabin, read_obj, write_obj
 from .nsided import FillQuality, HoleFill, HoleSide, count_folds, fill_hole, measure_fill, side_from_surface
 from .nsided_sides import SideFit, fit_boundary, side_from_normals
 from .plate_fill import PlateFill, fill_plate
-from .spatch import SPatch, domain_vertices, spatch_indices, wachspress, wachspress_derivatives, wachspress_gradient
+from .spatch import SPatch, domain_vertices, spatch_indices
 from .spatch_convert import SPatchConversion, convert_spatch, spatch_to_surfaces
+from .wachspress import wachspress, wachspress_derivatives, wachspress_gradient
 
 __all__ = [
     "SPatch",

@@ -2,18 +2,22 @@
 
 The index sets of an S-patch and the side normals of its regular n-gon domain, needed by
 :mod:`.spatch` (evaluation, degree elevation) and :mod:`.spatch_convert` (the exact pieces). They are
-trusted kernels: nothing is validated here, the public entry points (:class:`.spatch.SPatch`,
-:func:`.spatch.spatch_indices`, :func:`.spatch.domain_vertices`) check their arguments once.
+trusted kernels: nothing is validated here but by :func:`check_sides` and :func:`check_depth`, which the public entry points (:class:`.spatch.SPatch`,
+:func:`.spatch.spatch_indices`, :func:`.spatch.domain_vertices`) call to check their arguments once.
 """
 
 from __future__ import annotations
 
 import functools
+import numbers
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["index_tuples", "edge_normals"]
+from .. import tolerances
+from ..errors import InvalidGeometryError
+
+__all__ = ["index_tuples", "edge_normals", "check_sides", "check_depth"]
 
 
 @functools.lru_cache(maxsize=256)
@@ -62,3 +66,16 @@ def edge_normals(sides: int) -> NDArray[np.float64]:
     """
     a = 2.0 * np.pi * (np.arange(sides) + 0.5) / sides
     return np.column_stack((np.cos(a), np.sin(a)))
+
+
+def check_sides(sides: object, name: str = "sides") -> int:
+    limit = tolerances.SPATCH_MAX_SIDES
+    if isinstance(sides, bool) or not isinstance(sides, numbers.Integral) or not 3 <= int(sides) <= limit:
+        raise InvalidGeometryError(f"{name}: expected an integer from 3 to {limit}, got {sides!r}")
+    return int(sides)
+
+
+def check_depth(depth: object, name: str = "depth") -> int:
+    if isinstance(depth, bool) or not isinstance(depth, numbers.Integral) or int(depth) < 1:
+        raise InvalidGeometryError(f"{name}: expected an integer >= 1, got {depth!r}")
+    return int(depth)
