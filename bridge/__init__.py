@@ -52,8 +52,10 @@ if TYPE_CHECKING:  # the lazily served names, for type checkers and IDEs
         ConversionReport,
         convert,
     )
-    from .exchange.objects import (
+    from .exchange.object_import import (
         model_from_object,
+    )
+    from .exchange.objects import (
         to_build123d,
         to_cadquery,
     )
@@ -122,7 +124,7 @@ _EXPORTS = {
     "ConversionReport": "exchange.convert",
     "to_build123d": "exchange.objects",
     "to_cadquery": "exchange.objects",
-    "model_from_object": "exchange.objects",
+    "model_from_object": "exchange.object_import",
     "fill_model": "modeling.fill",
     "FillResult": "modeling.fill",
     "HoleReport": "modeling.fill",

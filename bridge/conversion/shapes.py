@@ -25,7 +25,7 @@ cadquery ``Edge`` or ``Wire`` (any object of the table above: its edges), or a b
 ``check_model``, ``render_model_lit``...): an :class:`~occsurf.bridge.ImportedModel` passes
 through, anything else becomes one whose faces carry the names and colours the objects hold
 (build123d ``label``/``color`` along the ``children`` tree, cadquery assembly names/colours), built
-by :func:`occsurf.bridge.exchange.objects.model_from_object`.
+by :func:`occsurf.bridge.exchange.object_import.model_from_object`.
 
 A null shape, an empty Workplane and anything else are refused with an
 :class:`~occsurf.algorithms.errors.InvalidGeometryError` naming the argument.

@@ -621,7 +621,7 @@ def write_step(
         with its assembly structure (each part once, instances as references with their placements),
         the names of parts, instances and faces, the colours and layers of instances and faces.
         A build123d ``Compound`` with ``children`` or a cadquery ``Assembly`` (without ``names``) is
-        written the same way, as :func:`occsurf.bridge.exchange.objects.model_from_object` reads it
+        written the same way, as :func:`occsurf.bridge.exchange.object_import.model_from_object` reads it
         (labels / names, colours, placements, shared parts, cadquery subshape colours and names).
     names : str or sequence of (str or None), optional
         One name per object (a str for a single object); see the module notes for where they go.
@@ -671,8 +671,8 @@ def write_step(
 
 def _assembly_as_model(objects: Any, names: Any) -> Any:
     """A build123d Compound tree or a cadquery Assembly (without ``names``) as the model of its
-    structure, names and colours (:func:`occsurf.bridge.exchange.objects.model_from_object`)."""
-    from .objects import is_assembly_object, model_from_object
+    structure, names and colours (:func:`occsurf.bridge.exchange.object_import.model_from_object`)."""
+    from .object_import import is_assembly_object, model_from_object
 
     return model_from_object(objects, "objects") if names is None and is_assembly_object(objects) else objects
 

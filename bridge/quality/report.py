@@ -355,7 +355,7 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     ----------
     model : ImportedModel, or a build123d / cadquery / OCC shape
         From :func:`~occsurf.bridge.exchange.step_iges.read_step` or ``read_iges``; any other object
-        :func:`~occsurf.bridge.exchange.objects.as_model` accepts (a Solid, Shell, Compound, Workplane...).
+        :func:`~occsurf.bridge.exchange.object_import.as_model` accepts (a Solid, Shell, Compound, Workplane...).
     faces : sequence of int, optional
         Face indices to report (as ``occsurf inspect`` numbers them); default all. Edges are
         reported when one of their faces is selected.
@@ -394,7 +394,7 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     """
     from occsurf.algorithms.errors import InvalidGeometryError
 
-    from ..exchange.objects import as_model
+    from ..exchange.object_import import as_model
     from ..rendering import tessellation
 
     model = as_model(model)  # a build123d / cadquery / OCC object: its faces with their labels and colours

@@ -364,8 +364,8 @@ def mesh_of_model(model: ImportedModel) -> tuple[np.ndarray, np.ndarray, np.ndar
     """One triangle mesh ``(points (n, 3), triangles (m, 3), normals (n, 3))`` of every face of an
     imported model: OCC's trimmed triangulation with positions and normals evaluated on our
     converted surfaces (:mod:`occsurf.bridge.rendering.tessellation`). ``model`` may also be any
-    build123d / cadquery / OCC shape (:func:`~occsurf.bridge.exchange.objects.as_model`)."""
-    from ..exchange.objects import as_model
+    build123d / cadquery / OCC shape (:func:`~occsurf.bridge.exchange.object_import.as_model`)."""
+    from ..exchange.object_import import as_model
     from .tessellation import mesh_face, mesh_model
 
     model = as_model(model)

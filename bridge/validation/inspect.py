@@ -137,7 +137,7 @@ def inspect_model(model: ImportedModel, samples: int = DEFAULT_SAMPLES) -> list[
     ----------
     model : ImportedModel, or a build123d / cadquery / OCC shape
         From :func:`~occsurf.bridge.exchange.step_iges.read_step` or ``read_iges``; any other object
-        :func:`~occsurf.bridge.exchange.objects.as_model` accepts (a Solid, Shell, Compound, Face...).
+        :func:`~occsurf.bridge.exchange.object_import.as_model` accepts (a Solid, Shell, Compound, Face...).
     samples : int, default 25
         Grid size ``N`` of the deviation check (``N x N`` parameters per free-form face), >= 2.
 
@@ -158,7 +158,7 @@ def inspect_model(model: ImportedModel, samples: int = DEFAULT_SAMPLES) -> list[
     [2.3e-16, ...]
     """
     n = _check_samples(samples)
-    from ..exchange.objects import as_model  # not at module level: the CLI reads FaceReport without OCC
+    from ..exchange.object_import import as_model  # not at module level: the CLI reads FaceReport without OCC
 
     return [_inspect_face_guarded(face, n) for face in as_model(model).faces]
 

@@ -311,7 +311,7 @@ def test_moved_instances_keep_their_colours(tmp_path, kind):
     build123d primitive is a compound holding a located solid). Moved, rotated and sub-assembly
     leaves keep colour, name and placement through write_step -> read_step, for occsurf's reader
     and OCC's, and through write_iges -> read_iges (placed copies named after the instance)."""
-    from occsurf.bridge.exchange.objects import model_from_object
+    from occsurf.bridge.exchange.object_import import model_from_object
 
     obj = _placed_tree(kind)
     model = model_from_object(obj)

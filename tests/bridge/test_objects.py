@@ -20,7 +20,8 @@ cq = pytest.importorskip("cadquery")
 from occsurf.algorithms import BSplineSurface  # noqa: E402
 from occsurf.algorithms.errors import InvalidGeometryError  # noqa: E402
 from occsurf.bridge import read_iges, read_step  # noqa: E402
-from occsurf.bridge.exchange.objects import model_from_object, shape_object, to_build123d, to_cadquery  # noqa: E402
+from occsurf.bridge.exchange.object_import import model_from_object  # noqa: E402
+from occsurf.bridge.exchange.objects import shape_object, to_build123d, to_cadquery  # noqa: E402
 
 SAMPLES = Path(__file__).resolve().parents[2] / "step_samples"
 RED, BLUE, GREEN = (1.0, 0.0, 0.0, 1.0), (0.0, 0.0, 1.0, 1.0), (0.0, 1.0, 0.0, 0.5)
