@@ -96,6 +96,7 @@ def main() -> None:
         from occsurf.bridge.quality.check_files import check_file
 
         out = Path(os.environ.get("TMPDIR", "/tmp")) / "bench_match_check"
+        out.mkdir(parents=True, exist_ok=True)  # (the command makes it; the library call writes into it)
         t0 = time.perf_counter()
         check_file(path, out, pictures=False)
         t_check = time.perf_counter() - t0
@@ -104,7 +105,9 @@ def main() -> None:
         t_rep = time.perf_counter() - t0
         print(f"bearing: check --no-pictures {t_check:.1f} s; repair {t_rep:.1f} s = {t_rep / t_check:.1f}x check "
               f"(target < 3x); edges breaking catia {rep2.edges_breaking_before} -> {rep2.edges_breaking_after}, "
-              f"repaired {rep2.repaired}, refused {rep2.refused}, faired {rep2.faces_faired}")
+              f"repaired {rep2.repaired}, refused {rep2.refused}, faired {rep2.faces_faired}; violations by measure "
+              f"{rep2.by_measure_before} -> {rep2.by_measure_after}; worst smooth G1 "
+              f"{rep2.worst_smooth_g1_before:.4f} -> {rep2.worst_smooth_g1_after:.4f} deg; valid {rep2.valid_after}")
 
 
 if __name__ == "__main__":
