@@ -421,7 +421,7 @@ def _new_knots(S: BSplineSurface, cand: Array) -> Array:
 
 
 def _match_canonical(S: BSplineSurface, target: _Target, r: int, o: int, tol: _Tols,
-                     refine: bool, size: float, side: str) -> tuple[BSplineSurface, BSplineSurface, int, _Measures, bool]:
+                     refine: bool, size: float, side: str, max_poles: int = 0) -> tuple[BSplineSurface, BSplineSurface, int, _Measures, bool]:
     """Match side u0 of the clamped surface ``S``; returns (changed, refined original, knots added,
     measures at the check samples, met)."""
     p = S.degree[0]
@@ -447,7 +447,7 @@ def _match_canonical(S: BSplineSurface, target: _Target, r: int, o: int, tol: _T
             k = _spans(S)
             spans = np.unique(span_of[bad])
             ins = _new_knots(S, 0.5 * (k[spans] + k[spans + 1]))
-        if ins.size == 0 or S.n_poles[1] + ins.size > tolerances.MATCH_MAX_POLES:
+        if ins.size == 0 or S.n_poles[1] + ins.size > (max_poles or tolerances.MATCH_MAX_POLES):
             break
         S = S.refine(ins, direction="v")
         added += int(ins.size)
@@ -600,7 +600,7 @@ class _AverageSide:
 def match_surface(surface: BSplineSurface, target: BSplineSurface | MatchTarget, side: str,
                   continuity: str = "G1", *, preserve_opposite: str = "G1", average: bool = False,
                   tol_g0: float | None = None, tol_g1_deg: float = 0.01, tol_g2_rel: float = 0.01,
-                  refine: bool = True) -> MatchResult:
+                  refine: bool = True, max_poles: int | None = None) -> MatchResult:
     """Match ``surface`` along ``side`` to ``target`` with G0, G1, G2 or G3 continuity.
 
     Parameters
@@ -625,6 +625,10 @@ def match_surface(surface: BSplineSurface, target: BSplineSurface | MatchTarget,
         Largest angle between the tangent planes (degrees) and relative curvature jump (fraction).
     refine : bool
         Insert knots until the tolerances hold (Rhino's "Refine match").
+    max_poles : int, optional
+        The most poles along the side refinement may reach (default
+        ``tolerances.MATCH_MAX_POLES``); the match is returned as it stands there, ``met`` saying
+        whether it holds.
 
     Returns
     -------
@@ -663,24 +667,29 @@ def match_surface(surface: BSplineSurface, target: BSplineSurface | MatchTarget,
         size = max(size, float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))))
     tol = _Tols(_check_tol(tol_g0, "tol_g0", tolerances.MATCH_G0_RTOL * size),
                 _check_tol(tol_g1_deg, "tol_g1_deg", 0.01), _check_tol(tol_g2_rel, "tol_g2_rel", 0.01))
+    cap = 0
+    if max_poles is not None:
+        if isinstance(max_poles, bool) or not isinstance(max_poles, (int, np.integer)) or int(max_poles) < 1:
+            raise InvalidGeometryError(f"max_poles: expected an integer >= 1, got {max_poles!r}")
+        cap = int(max_poles)
     Sc = _canonical(surface, side)
     if isinstance(target, MatchTarget):
         tgt: SurfaceSide | SampledCurve = target._curve  # type: ignore[assignment]
-        new, ref, added, meas, met = _match_canonical(Sc, tgt, r, o, tol, refine, size, side)
+        new, ref, added, meas, met = _match_canonical(Sc, tgt, r, o, tol, refine, size, side, cap)
         out_target: BSplineSurface | MatchTarget = target
     else:
         tside = _find_side(target, Sc.evaluate(np.full(17, Sc.knots[0][Sc.degree[0]]),
                                                  np.linspace(*Sc.domain[1], 17)))
         Tc = _canonical(target, tside)
         if not average:
-            new, ref, added, meas, met = _match_canonical(Sc, SurfaceSide(Tc), r, o, tol, refine, size, side)
+            new, ref, added, meas, met = _match_canonical(Sc, SurfaceSide(Tc), r, o, tol, refine, size, side, cap)
             out_target = target
         else:
             own, other = SurfaceSide(Sc), SurfaceSide(Tc)
             new, ref, added, _, _ = _match_canonical(Sc, _AverageSide(own, other, Sc, True), r, o, tol, refine,
-                                                     size, side)
+                                                     size, side, cap)
             tnew, tref, tadded, _, _ = _match_canonical(Tc, _AverageSide(own, other, Sc, False), r, o, tol,
-                                                        refine, size, tside)
+                                                        refine, size, tside, cap)
             added += tadded
             meas = _measure(new, SurfaceSide(tnew), _check_params(new)[0], r, size)
             met = not bool(_bad(meas, r, tol).any())

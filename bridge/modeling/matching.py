@@ -303,7 +303,8 @@ class FaceMatcher:
     def match(self, face: int, target: int, continuity: str = "G1", *, preserve_opposite: str = "G1",
               average: bool = False, tol_g0: float | None = None, tol_g1_deg: float = 0.01,
               tol_g2_rel: float = 0.01, refine: bool = True, sharp_deg: float = MATCH_SHARP_DEG,
-              strict: bool = False, max_change: float | None = None, others_deg: float = 0.0) -> FaceMatch:
+              strict: bool = False, max_change: float | None = None, others_deg: float = 0.0,
+              max_poles: int | None = None) -> FaceMatch:
         """Match face ``face`` to face ``target`` along their shared edge and replace it.
 
         Parameters as :func:`match_faces`, and:
@@ -317,6 +318,9 @@ class FaceMatcher:
             With ``strict``: the largest change allowed (model units).
         others_deg : float
             With ``strict``: the G1 angle the face's other edges may reach in any case.
+        max_poles : int, optional
+            The most poles along the side the match's refinement may reach
+            (:func:`~occsurf.algorithms.manipulation.match_surface`).
 
         Returns
         -------
@@ -361,7 +365,7 @@ class FaceMatcher:
         with threadpool_limits(limits=MATCH_BLAS_THREADS, user_api="blas"):
             res = match_surface(pair.surface, tgt, pair.side, continuity, preserve_opposite=preserve_opposite,
                                 average=average, tol_g0=g0_ask, tol_g1_deg=tol_g1_deg, tol_g2_rel=tol_g2_rel,
-                                refine=refine)
+                                refine=refine, max_poles=max_poles)
         # the match's own measures, G0 within the accepted tolerance
         own_met = bool(res.g0_max <= g0_tol and (order < 1 or res.g1_max_deg <= tol_g1_deg)
                        and (order < 2 or np.nan_to_num(res.g2_max_rel) <= tol_g2_rel))

@@ -263,3 +263,20 @@ def test_bad_input_is_named():
         match_surface(S, MatchTarget(pts, nrm, np.zeros(5)), "u0", "G3")
     with pytest.raises(InvalidGeometryError, match="coincide"):
         MatchTarget(np.zeros((3, 3)), nrm[:3])
+
+
+def test_max_poles_caps_the_refinement():
+    """S has 4 poles along the side, the target 12: the match needs the target's 8 knots. With
+    max_poles=12 it is the default's match to the bit; with 11 the refinement stops at 4 poles,
+    where the coarse match folds back over the target (refused)."""
+    T, S = _pair(3.0, nu_s=7, nv=12)
+    S4 = BSplineSurface((3, 3), (S.knots[0], _knots(4)), S.evaluate_grid(np.linspace(0, 1, 7), np.linspace(0, 1, 4)))
+    full = match_surface(S4, T, "u0", "G1")
+    assert full.met and full.knots_added == 8 and full.surface.n_poles == (7, 12)
+    capped = match_surface(S4, T, "u0", "G1", max_poles=12)
+    assert np.array_equal(capped.surface.control_points, full.surface.control_points)
+    with pytest.raises(ConstraintError, match="folds back"):
+        match_surface(S4, T, "u0", "G1", max_poles=11)
+    for bad in (0, -3, 2.5, True):
+        with pytest.raises(InvalidGeometryError, match="max_poles"):
+            match_surface(S4, T, "u0", "G1", max_poles=bad)
