@@ -271,7 +271,8 @@ def write_repair_page(report: RepairReport, folder: str | Path, source: str = ""
     def measures(counts: dict[str, int]) -> str:
         names = {"g1": "G1 angle", "g2_rel": "relative curvature jump", "g2": "curvature jump"}
         keys = sorted(set(report.by_measure_before) | set(report.by_measure_after))
-        return "".join(f"<tr><th>&nbsp;&nbsp;{names.get(k, k)}</th><td>{counts.get(k, 0)}</td></tr>" for k in keys)
+        return "".join(f"<tr><th style='text-align:right'>{names.get(k, k)}</th><td>{counts.get(k, 0)}</td></tr>"
+                       for k in keys)
 
     rows = "\n".join(
         f"<tr class='{e.status}'><td>{e.edge}</td><td>{e.faces[0]}-{e.faces[1]}</td><td>{html.escape(e.classification)}"
@@ -304,6 +305,7 @@ padding:2px 6px;font-size:13px}} tr.repaired{{background:#e8f6e8}} tr.refused{{b
 <p>Edges repaired: {report.repaired}; refused: {report.refused}; faces faired: {report.faces_faired};
 largest change allowed {num(report.max_change)} (model units). Face numbers are the input's.</p>
 {fair_rows}
+<h2>Smooth edges that broke the preset</h2>
 <table><tr><th>edge</th><th>faces</th><th>class</th><th>broke</th><th>G1 before</th><th>G2 before</th><th>status</th>
 <th>moved</th><th>asked</th><th>G1 after (OCC)</th><th>change</th><th>reason</th></tr>
 {rows}</table></body></html>
