@@ -86,6 +86,7 @@ from ..messages import one_line
 from . import files as _files
 from . import occ_io as _xocc
 from . import write_checks, xcaf, xcaf_write
+from .entity_names import BareIndex, entity_names, root_name
 from .model import (  # noqa: F401 - the model types are part of this module's names
     ImportedEdge,
     ImportedFace,
@@ -128,7 +129,6 @@ STEP_DEFAULT_RELATIVE_ERROR: float = 5e-12
 #: elsewhere (10 significant digits, relative <= 5e-10); parsing adds at most half an ulp.
 IGES_RELATIVE_ERROR: float = 5e-9
 
-_NO_NAMES = frozenset({"", "NONE"})
 
 
 # ------------------------------------------------------------------------------------ reading
@@ -275,7 +275,7 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
         warnings += root_warnings + unit_warnings
         warnings += checks.model_warnings(shape, reader, scan if fmt == "step" else iges_scan, _count_bare_faces(shape))
         faces_map, edges_map = _maps(shape)
-        xdata = xcaf.read_xcaf(caf, faces_map, _BareIndex(faces_map), p.stem, (edges_map, _BareIndex(edges_map)))
+        xdata = xcaf.read_xcaf(caf, faces_map, BareIndex(faces_map), p.stem, (edges_map, BareIndex(edges_map)))
         xdata.unit, xdata.unit_scale = unit, scale
         if fmt == "iges":  # names and levels of uncoloured faces in groups; level names (406 form 3)
             own_names, levels = xcaf.iges_face_attributes(reader.WS().TransferReader(), faces_map,
@@ -427,115 +427,6 @@ def _read_isolated(path: str | os.PathLike[str], fmt: str, timeout: float | None
     return model
 
 
-def _entity_name(entity: Any) -> str | None:
-    """The name an entity of the file carries (STEP ``name`` attribute, IGES name value)."""
-    if entity is None:
-        return None
-    try:
-        if hasattr(entity, "NameValue"):  # IGES: 406-15 name property, else the short label
-            value = entity.NameValue()
-        elif hasattr(entity, "Name"):
-            value = entity.Name()
-        else:
-            return None
-    except Exception:  # noqa: BLE001 - a name is optional
-        return None
-    if value is None:
-        return None
-    text = value.ToCString().strip()
-    return None if text in _NO_NAMES else text
-
-
-def _root_name(root: Any) -> str | None:
-    """STEP: the product of a root product definition; IGES: the root entity's own name."""
-    try:
-        from OCP.StepBasic import StepBasic_ProductDefinition
-
-        if isinstance(root, StepBasic_ProductDefinition):
-            return _entity_name(root.Formation().OfProduct())
-    except Exception:  # noqa: BLE001
-        return None
-    return _entity_name(root)
-
-
-class _BareIndex:
-    """Face or edge indices of a model keyed by the sub-shape without location (and orientation):
-    the shape an entity of the file transferred to is found among its instances in O(1)."""
-
-    def __init__(self, index_map: Any) -> None:
-        from OCP.TopLoc import TopLoc_Location
-        from OCP.TopTools import TopTools_IndexedMapOfShape
-
-        self._identity = TopLoc_Location()
-        self._bare = TopTools_IndexedMapOfShape()
-        self._ids: list[list[int]] = []
-        for i in range(1, index_map.Extent() + 1):
-            j = self._bare.Add(index_map.FindKey(i).Located(self._identity))
-            if j > len(self._ids):
-                self._ids.append([])
-            self._ids[j - 1].append(i)
-
-    def find(self, shape: Any) -> list[int]:
-        j = self._bare.FindIndex(shape.Located(self._identity))
-        return self._ids[j - 1] if j else []
-
-
-def _names(
-    reader: Any, root_shapes: list[tuple[Any, str | None]], faces_map: Any, edges_map: Any
-) -> tuple[tuple[dict[int, str], dict[int, str]], dict[int, str]]:
-    """Names of faces and edges (1-based map indices), by priority: the entity the face or edge
-    itself came from; an entity it is part of (shell, curve set, group...); the root it came from
-    (STEP product, IGES root entity). Also the faces' own names (the first priority alone).
-
-    One pass over the transfer map: ``EntityFromShapeResult`` per face searches the whole map,
-    which made naming the faces of a 600-face file take 4 s instead of 0.5 s.
-    """
-    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
-    from OCP.TopExp import TopExp_Explorer
-
-    kinds = ((TopAbs_FACE, _BareIndex(faces_map)), (TopAbs_EDGE, _BareIndex(edges_map)))
-    own: tuple[dict[int, str], dict[int, str]] = ({}, {})
-    part_of: tuple[dict[int, str], dict[int, str]] = ({}, {})
-
-    def spread(shape: Any, name: str, targets: tuple[dict[int, str], dict[int, str]]) -> None:
-        for (kind, index), target in zip(kinds, targets):
-            ex = TopExp_Explorer(shape, kind)
-            while ex.More():
-                for i in index.find(ex.Current()):
-                    target.setdefault(i, name)
-                ex.Next()
-
-    transfer = reader.WS().TransferReader()
-    process = transfer.TransientProcess()
-    results: list[tuple[Any, str]] = []
-    with _xocc.statics({"read.encoderegularity.angle": 0.0}):  # else ShapeResult re-encodes each time
-        for k in range(1, process.NbMapped() + 1):
-            entity = process.Mapped(k)
-            name = _entity_name(entity)
-            if name is None:
-                continue
-            try:
-                results.append((transfer.ShapeResult(entity), name))
-            except Exception:  # noqa: BLE001 - no shape for this entity: nothing to name
-                continue
-    for shape, name in results:
-        if shape is None or shape.IsNull():
-            continue
-        kind = shape.ShapeType()
-        if kind not in (TopAbs_FACE, TopAbs_EDGE):
-            spread(shape, name, part_of)
-            continue
-        slot = 0 if kind == TopAbs_FACE else 1
-        for i in kinds[slot][1].find(shape):
-            own[slot].setdefault(i, name)
-    roots: tuple[dict[int, str], dict[int, str]] = ({}, {})
-    for shape, name in root_shapes:
-        if name is not None:
-            spread(shape, name, roots)
-    merged = tuple({**r, **c, **o} for o, c, r in zip(own, part_of, roots))
-    return merged, own[0]  # type: ignore[return-value]
-
-
 def _transfer_roots(p: Path, reader: Any) -> tuple[Any, tuple[dict[int, str], dict[int, str]], list[str],
                                                   dict[int, str]]:
     """Transfer every root: ``(shape, (face names, edge names) by 1-based map index, warnings, own face names)``."""
@@ -554,7 +445,7 @@ def _transfer_roots(p: Path, reader: Any) -> tuple[Any, tuple[dict[int, str], di
             continue
         if reader.NbShapes() == before:
             warnings.append(f"root {i} ({root.DynamicType().Name()}) gave no shape")
-        name = _root_name(root)
+        name = root_name(root)
         new = [reader.Shape(k) for k in range(before + 1, reader.NbShapes() + 1)]
         root_shapes.extend((s, name) for s in new if not s.IsNull())  # a null shape crashes OCP
     shape = reader.OneShape()
@@ -563,7 +454,7 @@ def _transfer_roots(p: Path, reader: Any) -> tuple[Any, tuple[dict[int, str], di
     faces_map, edges_map = _maps(shape)
     if faces_map.Extent() == 0 and edges_map.Extent() == 0:
         raise ExchangeError(f"{p}: the file holds no faces and no curves")
-    names, own_face_names = _names(reader, root_shapes, faces_map, edges_map)
+    names, own_face_names = entity_names(reader, root_shapes, faces_map, edges_map)
     return shape, names, warnings, own_face_names
 
 
