@@ -1,0 +1,157 @@
+"""Trimming loops as polylines, and points classified against them (the kernels of :mod:`.trimmed`).
+
+A loop of p-curves becomes a closed polyline within a chordal tolerance (:func:`loop_polyline`,
+sampled per knot span and bisected where a chord strays); :func:`classify_points` tells points
+inside, on or outside a region bounded by such polylines by the crossing number (even-odd rule),
+vectorised in blocks of bounded memory.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .. import tolerances
+from .curve import BSplineCurve
+
+__all__ = ["INSIDE", "ON", "OUTSIDE", "classify_points", "loop_polyline", "curve_polyline", "span_samples",
+           "signed_area", "Loop"]
+
+Array = NDArray[np.float64]
+Loop = tuple[BSplineCurve, ...]
+
+#: Values of :meth:`.trimmed.TrimmedSurface.classify` (OCC's ``TopAbs_IN`` / ``TopAbs_ON`` / ``TopAbs_OUT``).
+INSIDE, ON, OUTSIDE = 1, 0, -1
+
+_PAIR_BLOCK = 1 << 22  # point-segment pairs tested at once by the classifier (bounded memory)
+
+
+def signed_area(P: Array) -> float:
+    """Shoelace area of a closed polygon ``(k, 2)`` (last point may repeat the first)."""
+    x, y = P[:, 0], P[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def span_samples(c: BSplineCurve, per_span: int) -> Array:
+    """``per_span`` equally spaced parameters in every non-empty knot span, and the domain end."""
+    k = np.unique(c.knots[c.degree:c.n_poles + 1])
+    a, b = k[:-1], k[1:]
+    t = (a[:, None] + (b - a)[:, None] * (np.arange(per_span) / per_span)).ravel()
+    return np.r_[t, k[-1]]
+
+
+def curve_polyline(c: BSplineCurve, tol: float) -> Array:
+    """Points of ``c`` whose polyline stays within ``tol`` of it (midpoint test, refined where it
+    fails, at most ``tolerances.TRIM_POLYLINE_LEVELS`` halvings)."""
+    t = span_samples(c, 2 * (c.degree + 1))
+    P = c.evaluate(t)
+    for _ in range(int(tolerances.TRIM_POLYLINE_LEVELS)):
+        tm = 0.5 * (t[:-1] + t[1:])
+        Pm = c.evaluate(tm)
+        bad = _point_segment_distance(Pm, P[:-1], P[1:]) > tol
+        if not bad.any():
+            break
+        order = np.argsort(np.r_[t, tm[bad]], kind="stable")
+        t = np.r_[t, tm[bad]][order]
+        P = np.r_[P, Pm[bad]][order]
+    return P
+
+
+def loop_polyline(loop: Loop, tol: float) -> Array:
+    pts = np.concatenate([curve_polyline(c, tol)[:-1] if i < len(loop) - 1 else curve_polyline(c, tol)
+                          for i, c in enumerate(loop)])
+    return np.r_[pts, pts[:1]]
+
+
+def _point_segment_distance(P: Array, A: Array, B: Array) -> Array:
+    """Distance from ``P[i]`` to segment ``A[i] B[i]`` (all ``(m, 2)``)."""
+    d = B - A
+    L2 = np.einsum("ij,ij->i", d, d)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(L2 > 0, np.einsum("ij,ij->i", P - A, d) / L2, 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    return np.linalg.norm(P - (A + t[:, None] * d), axis=1)
+
+
+def classify_points(points: ArrayLike, seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0) -> NDArray[np.int8]:
+    """Crossing-number point-in-polygon test against a set of segments, vectorised.
+
+    Parameters
+    ----------
+    points : array_like, shape (m, 2)
+    seg_a, seg_b : array_like, shape (k, 2)
+        Segment ends; the segments of all closed loops of the region (even-odd rule).
+    tol : float
+        Points within ``tol`` of a segment are :data:`ON`.
+
+    Returns
+    -------
+    ndarray of int8, shape (m,)
+        :data:`INSIDE`, :data:`ON` or :data:`OUTSIDE`.
+
+    Notes
+    -----
+    A ray from each point towards ``+u`` crosses a segment ``(a, b)`` when ``(a_v > p_v) !=
+    (b_v > p_v)`` and the crossing lies right of the point (half-open rule: a vertex on the ray
+    is counted once). Segments are binned into ``k`` horizontal bands of the ``v`` range
+    (a segment in every band its ``v`` range, widened by ``tol``, meets); each point meets only the
+    segments of its band, in blocks of at most ``2**22`` point-segment pairs.
+    """
+    P = np.asarray(points, float).reshape(-1, 2)
+    A = np.asarray(seg_a, float).reshape(-1, 2)
+    B = np.asarray(seg_b, float).reshape(-1, 2)
+    m, k = P.shape[0], A.shape[0]
+    state = np.full(m, OUTSIDE, np.int8)
+    if m == 0 or k == 0:
+        return state
+    ylo = np.minimum(A[:, 1], B[:, 1]) - tol
+    yhi = np.maximum(A[:, 1], B[:, 1]) + tol
+    y0, y1 = float(ylo.min()), float(yhi.max())
+    nb = int(np.clip(k, 1, 1 << 20))
+    h = (y1 - y0) / nb if y1 > y0 else 1.0
+    b0 = np.clip(((ylo - y0) / h).astype(np.int64), 0, nb - 1)
+    b1 = np.clip(((yhi - y0) / h).astype(np.int64), 0, nb - 1)
+    cnt = b1 - b0 + 1
+    seg_of = np.repeat(np.arange(k), cnt)
+    band_of = np.repeat(b0, cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+    order = np.argsort(band_of, kind="stable")
+    seg_sorted = seg_of[order]
+    start = np.searchsorted(band_of[order], np.arange(nb + 1))
+    in_range = (P[:, 1] >= y0) & (P[:, 1] <= y1)
+    idx = np.flatnonzero(in_range)
+    pb = np.clip(((P[idx, 1] - y0) / h).astype(np.int64), 0, nb - 1)
+    n_pairs = start[pb + 1] - start[pb]
+    lo = 0
+    csum = np.cumsum(n_pairs)
+    while lo < idx.size:
+        hi = int(np.searchsorted(csum, (csum[lo - 1] if lo else 0) + _PAIR_BLOCK, side="right"))
+        hi = max(hi, lo + 1)
+        _classify_block(P, A, B, tol, idx[lo:hi], start[pb[lo:hi]], n_pairs[lo:hi], seg_sorted, state)
+        lo = hi
+    return state
+
+
+def _classify_block(P: Array, A: Array, B: Array, tol: float, pts: NDArray[np.intp], first: NDArray[np.intp],
+                    count: NDArray[np.intp], seg_sorted: NDArray[np.intp], state: NDArray[np.int8]) -> None:
+    total = int(count.sum())
+    if total == 0:
+        return
+    local = np.repeat(np.arange(pts.size), count)
+    offs = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+    seg = seg_sorted[np.repeat(first, count) + offs]
+    at = pts[local]
+    pu, pv = P[at, 0], P[at, 1]
+    au, av, bu, bv = A[seg, 0], A[seg, 1], B[seg, 0], B[seg, 1]
+    cross = np.flatnonzero((av > pv) != (bv > pv))  # the pairs whose segment straddles the point's ray
+    with np.errstate(invalid="ignore", divide="ignore"):
+        x = au[cross] + (pv[cross] - av[cross]) * (bu[cross] - au[cross]) / (bv[cross] - av[cross])
+    crossings = np.bincount(local[cross], weights=pu[cross] < x, minlength=pts.size)
+    inside = (crossings.astype(np.int64) % 2) == 1
+    on = np.zeros(pts.size, bool)
+    if tol > 0:  # distances only where the point lies in the segment's box widened by 2 tol (the others are farther than tol)
+        w = 2.0 * tol
+        box = np.flatnonzero((pu >= np.minimum(au, bu) - w) & (pu <= np.maximum(au, bu) + w))
+        ab = seg[box]
+        near = _point_segment_distance(np.c_[pu[box], pv[box]], A[ab], B[ab]) <= tol
+        on[local[box[near]]] = True
+    state[pts] = np.where(on, ON, np.where(inside, INSIDE, OUTSIDE))
