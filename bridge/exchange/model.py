@@ -293,7 +293,7 @@ def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> Trim
 
 def _conversion_bounds(face: Any, occ_surface: Any) -> tuple[float, float, float, float] | None:
     """``None`` for B-spline and Bézier faces (converted whole: bit-exact); else the face's UV
-    box (``from_occ`` snaps periodic sides, see ``convert.PERIOD_SNAP``)."""
+    box (``from_occ`` snaps periodic sides, see ``conversion.from_geom.PERIOD_SNAP``)."""
     from OCP.BRepTools import BRepTools
     from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
 
