@@ -21,18 +21,18 @@ and comments masked first) and
   removed from the list, an instance with a dangling attribute is removed, and so on up the graph. Each
   removal is a warning; the partial model is read and reported as partial;
 * counts the face instances (``ADVANCED_FACE``, ``FACE_SURFACE``) and notes the ``CLOSED_SHELL`` ones,
-  which :func:`model_warnings` compares with what OCC built.
+  which :func:`.read_warnings.model_warnings` compares with what OCC built.
 
 :func:`scan_iges` checks the Directory and Parameter sections of an IGES file: every entity's parameter
 lines exist and start with the entity type of its directory entry (swapped type fields made OCC's reader
 hang until the time-out), and the B-spline curves (126) and surfaces (128) have non-negative upper indices, positive
 degrees and as many parameters as their counts imply (a negative upper index crashes OCC's reader).
 
-After OCC has read the file (OCC imported lazily)
+After OCC has read the file: :mod:`.read_warnings`
 -------------------------------------------------
-:func:`occ_check_warnings` turns OCC's own check messages (``Interface_CheckTool``) into warnings: wrong
+:func:`~.read_warnings.occ_check_warnings` turns OCC's own check messages (``Interface_CheckTool``) into warnings: wrong
 arity, a text where a real is expected (read as 0), more than 3 coordinates (cut to 3), a reference of
-the wrong type. :func:`model_warnings` compares the model with the file: fewer faces than face instances,
+the wrong type. :func:`~.read_warnings.model_warnings` compares the model with the file: fewer faces than face instances,
 and shells the file calls closed (STEP ``CLOSED_SHELL``, IGES shell 514 of form 1) that have free edges.
 
 Warnings are one line each, prefixed by what they concern (``#16 CLOSED_SHELL: ...``); at most
@@ -53,8 +53,7 @@ from occsurf.algorithms.errors import ExchangeError
 
 from .step_splines import spline_problems
 
-__all__ = ["StepScan", "IgesScan", "scan_step", "scan_iges", "occ_check_warnings", "model_warnings",
-           "MAX_NESTING", "MAX_WARNINGS_PER_KIND", "STEP_FACE_TYPES", "STEP_CURVE_TYPES"]
+__all__ = ["StepScan", "IgesScan", "scan_step", "scan_iges", "MAX_NESTING", "MAX_WARNINGS_PER_KIND", "STEP_FACE_TYPES", "STEP_CURVE_TYPES"]
 
 #: Deepest nesting of parentheses accepted in one STEP instance (real files nest 3 to 6 deep; OCC's
 #: parser recurses per level and dies of a stack overflow long before 100000).
@@ -550,154 +549,3 @@ def _check_bspline(p: Path, seq: int, etype: int, fields: list[str]) -> None:
         need = 1 + 9 + (k1 + m1 + 2) + (k2 + m2 + 2) + 4 * c + 4
     if len(fields) < need:
         raise ExchangeError(f"{where}: {len(fields) - 1} parameters, its counts need {need - 1})")
-
-
-# ---------------------------------------------------------------------------------------- after OCC
-def _step_id(model: Any, num: int, scan: StepScan | None) -> int | None:
-    """The ``#id`` of OCC's ``num``-th instance: OCC numbers them in file order."""
-    if scan is not None and len(scan.ids) == model.NbEntities() and 1 <= num <= len(scan.ids):
-        return scan.ids[num - 1]
-    return None
-
-
-#: OCC check failures that leave a null field in the instance read (its transfer would dereference it).
-_NULL_FIELD_FAILS = ("illegal type", "Count of Parameters", "not an Entity", "Unresolved Reference",
-                     "reference to another entity is unresolved")
-
-
-def occ_broken_ids(reader: Any, scan: StepScan) -> dict[int, str]:
-    """Instances OCC's STEP parser read with a null field (a reference of the wrong type, a wrong number
-    of parameters): ``{id: why}``, to be removed (:func:`scan_step`) before OCC transfers anything."""
-    from OCP.Interface import Interface_CheckTool
-
-    model = reader.WS().Model()
-    out: dict[int, str] = {}
-    try:
-        it = Interface_CheckTool(model).CompleteCheckList()
-        it.Start()
-    except Exception:  # noqa: BLE001
-        return out
-    while it.More():
-        check, num = it.Value(), it.Number()
-        ident = _step_id(model, num, scan) if num > 0 else None
-        if ident is not None:
-            fails = [" ".join(str(check.CFail(i)).split()) for i in range(1, check.NbFails() + 1)]
-            bad = [f for f in fails if any(k in f for k in _NULL_FIELD_FAILS)]
-            if bad:
-                out[ident] = f"OCC cannot read it ({bad[0]})"
-        it.Next()
-    return out
-
-
-def occ_check_warnings(reader: Any, fmt: str, scan: StepScan | None = None) -> list[str]:
-    """OCC's check messages on the model it read, one warning each (unresolved references excluded:
-    :func:`scan_step` reports those)."""
-    from OCP.Interface import Interface_CheckTool
-
-    model = reader.WS().Model()
-    lines: list[str] = []
-    try:
-        it = Interface_CheckTool(model).CompleteCheckList()
-        it.Start()
-    except Exception:  # noqa: BLE001 - the checks are advisory
-        return lines
-    while it.More():
-        check, num = it.Value(), it.Number()
-        label = "file"
-        if num > 0:
-            try:
-                ent = model.Value(num)
-                name = ent.DynamicType().Name()
-                name = name.split("_", 1)[1] if "_" in name else name
-                if fmt == "step":
-                    ident = _step_id(model, num, scan)
-                    label = f"#{ident} {name}" if ident is not None else f"instance {num} ({name})"
-                else:
-                    label = f"D{2 * num - 1} {name}"  # the entity's first directory line
-            except Exception:  # noqa: BLE001
-                label = f"entity {num}"
-        msgs = [check.CFail(i) for i in range(1, check.NbFails() + 1)]
-        if num > 0:  # warnings on the file's header (a missing date) say nothing about the model
-            msgs += [check.CWarning(i) for i in range(1, check.NbWarnings() + 1)]
-        for msg in msgs:
-            text = " ".join(str(msg).split())
-            if fmt == "step" and ("Unresolved Reference" in text or "reference to another entity is unresolved" in text):
-                continue  # scan_step reported (and pruned) them
-            lines.append(f"{label}: {text} (OCC)")
-        it.Next()
-    return _limited(lines, "OCC check messages")
-
-
-#: The warning of :func:`model_warnings` when the model has another number of faces than the file
-#: describes (:func:`faces_lost` reads it back).
-FACE_COUNT_WARNING = "the file has {listed} face instances ({what}); the model read has {read} faces"
-_FACE_COUNT = re.compile(r"^the file has (\d+) face instances \(.*\); the model read has (\d+) faces$")
-
-
-def faces_lost(warnings: list[str]) -> tuple[int, int] | None:
-    """``(listed, read)`` when the warnings say the model has fewer faces than the file describes."""
-    for w in warnings:
-        m = _FACE_COUNT.match(w)
-        if m and int(m.group(2)) < int(m.group(1)):
-            return int(m.group(1)), int(m.group(2))
-    return None
-
-
-def model_warnings(shape: Any, reader: Any, scan: StepScan | IgesScan | None, n_faces: int) -> list[str]:
-    """The model against the file: face count, and shells the file calls closed that have free edges
-    (STEP ``CLOSED_SHELL``, IGES shell entity 514 of form 1)."""
-    lines: list[str] = []
-    if scan is None:
-        return lines
-    step = isinstance(scan, StepScan)
-    what = ", ".join(STEP_FACE_TYPES) if step else "entities 510, or 143/144 and surfaces"
-    if scan.face_instances and n_faces != scan.face_instances:
-        lines.append(FACE_COUNT_WARNING.format(listed=scan.face_instances, what=what, read=n_faces))
-    if scan.closed_shells:
-        labels = [f"#{i}" for i in scan.closed_shells] if step else [f"D{i}" for i in scan.closed_shells]
-        lines += _open_closed_shells(shape, labels, "CLOSED_SHELL" if step else "closed shells (entity 514, form 1)")
-    return lines
-
-
-def _open_closed_shells(shape: Any, labels: list[str], what: str) -> list[str]:
-    """The file's closed shells (``labels``: ``#16`` or ``D41``) against the shells of the model without
-    free edges: a warning when fewer of the model's shells are closed than the file says."""
-    from OCP.BRep import BRep_Tool
-    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopLoc import TopLoc_Location
-    from OCP.TopoDS import TopoDS
-    from OCP.TopTools import TopTools_IndexedMapOfShape
-
-    shells = TopTools_IndexedMapOfShape()
-    sx = TopExp_Explorer(shape, TopAbs_SHELL)
-    while sx.More():
-        shells.Add(sx.Current().Located(TopLoc_Location()))  # an instanced part counts once
-        sx.Next()
-    n_closed, free_counts = 0, []
-    for k in range(1, shells.Extent() + 1):
-        edges = TopTools_IndexedMapOfShape()
-        uses: list[int] = []
-        fx = TopExp_Explorer(shells.FindKey(k), TopAbs_FACE)
-        while fx.More():
-            ex = TopExp_Explorer(fx.Current(), TopAbs_EDGE)
-            while ex.More():
-                e = ex.Current()
-                if not BRep_Tool.Degenerated_s(TopoDS.Edge_s(e)):
-                    i = edges.Add(e)  # IsSame: one key per edge, whatever its orientation in a face
-                    if i > len(uses):
-                        uses.append(0)
-                    uses[i - 1] += 1
-                ex.Next()
-            fx.Next()
-        free = sum(u == 1 for u in uses)
-        if free:
-            free_counts.append(free)
-        elif uses:
-            n_closed += 1
-    n_file = len(labels)
-    if n_closed >= n_file:
-        return []
-    shown = ", ".join(labels[:6]) + (" ..." if n_file > 6 else "")
-    opened = f"; {len(free_counts)} open, with {', '.join(map(str, free_counts[:6]))} free edges" if free_counts else ""
-    return [f"the file has {n_file} {what} ({shown}); {n_closed} shells of the model are closed{opened}"]

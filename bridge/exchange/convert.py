@@ -21,7 +21,7 @@ from typing import Any
 
 from occsurf.algorithms.errors import ExchangeError, InvalidGeometryError
 
-from .checks import faces_lost
+from .read_warnings import faces_lost
 from .reading import IGES_SUFFIXES, STEP_SUFFIXES, sniff_format, strict_refusal, target_format
 
 __all__ = ["ConversionReport", "convert", "target_format", "source_format", "STEP_SUFFIXES", "IGES_SUFFIXES",

@@ -234,7 +234,7 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
     is a warning), then the same transfer fills an XCAF document (:func:`.xcaf.read_xcaf`): unit,
     assembly tree, colours, layers, instances. In an assembly a face without a name of its own is
     named after its instance."""
-    from . import checks
+    from . import checks, read_warnings
 
     kind = fmt.upper()
     p, data = _files.load(path, kind)
@@ -262,7 +262,7 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
             raise ExchangeError(f"{p}: not a readable {kind} file (OCC read status {status.name})")
         if scan is not None:
             reader, scan, warnings, caf = _without_broken(p, data, reader, scan, warnings, caf)
-        warnings += checks.occ_check_warnings(reader, fmt, scan)
+        warnings += read_warnings.occ_check_warnings(reader, fmt, scan)
         if fmt == "step":
             reader.SetSystemLengthUnit(1.0)  # millimetres
         unit, scale, unit_warnings = xcaf.step_unit(reader) if fmt == "step" else xcaf.iges_unit(reader)
@@ -273,7 +273,7 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
                 raise
             raise ExchangeError(f"{err} ({warnings[0]})") from err
         warnings += root_warnings + unit_warnings
-        warnings += checks.model_warnings(shape, reader, scan if fmt == "step" else iges_scan, _count_bare_faces(shape))
+        warnings += read_warnings.model_warnings(shape, reader, scan if fmt == "step" else iges_scan, _count_bare_faces(shape))
         faces_map, edges_map = _maps(shape)
         xdata = xcaf.read_xcaf(caf, faces_map, BareIndex(faces_map), p.stem, (edges_map, BareIndex(edges_map)))
         xdata.unit, xdata.unit_scale = unit, scale
@@ -300,11 +300,11 @@ def _without_broken(p: Path, data: bytes, reader: Any, scan: Any, warnings: list
     transferring them crashes the process), as long as it finds such instances (at most 3 rounds)."""
     from OCP.IFSelect import IFSelect_ReturnStatus
 
-    from . import checks
+    from . import checks, read_warnings
 
     broken: dict[int, str] = {}
     for _ in range(3):
-        new = checks.occ_broken_ids(reader, scan)
+        new = read_warnings.occ_broken_ids(reader, scan)
         if not new or new.keys() <= broken.keys():
             break
         broken.update(new)
