@@ -90,9 +90,11 @@ class MatchResult:
     g3_max_rel : float
         The same for the derivative of that curvature across the edge (G3 matches only; else NaN).
     max_change : float
-        Largest distance between the surface before and after, on a dense grid (model units).
+        Largest distance between the surface before and after, on a dense grid (model units); with
+        ``average=True`` the larger of the two surfaces' changes.
     max_pole_change : float
-        Largest pole displacement (bounds ``max_change`` for non-rational surfaces).
+        Largest pole displacement (bounds ``max_change`` for non-rational surfaces; both surfaces
+        with ``average=True``).
     knots_added : int
         Knots inserted (both directions, both surfaces with ``average=True``).
     met : bool
@@ -694,10 +696,16 @@ def match_surface(surface: BSplineSurface, target: BSplineSurface | MatchTarget,
             meas = _measure(new, SurfaceSide(tnew), _check_params(new)[0], r, size)
             met = not bool(_bad(meas, r, tol).any())
             out_target = _restore(tnew, tside)
+            # the target moves too: its change counts as much as ours
+            t_change = _change(tref, tnew)
+            t_pole_change = float(np.max(np.linalg.norm(tnew.control_points - tref.control_points, axis=-1)))
     result = _restore(new, side)
     refined = _restore(ref, side)
+    change = _change(refined, result)
+    pole_change = float(np.max(np.linalg.norm(result.control_points - refined.control_points, axis=-1)))
+    if average and not isinstance(target, MatchTarget):
+        change, pole_change = max(change, t_change), max(pole_change, t_pole_change)
     return MatchResult(
         surface=result, target=out_target, g0_max=_max(meas.g0), g1_max_deg=_max(meas.g1),
-        g2_max_rel=_max(meas.g2), g3_max_rel=_max(meas.g3), max_change=_change(refined, result),
-        max_pole_change=float(np.max(np.linalg.norm(result.control_points - refined.control_points, axis=-1))),
+        g2_max_rel=_max(meas.g2), g3_max_rel=_max(meas.g3), max_change=change, max_pole_change=pole_change,
         knots_added=added, met=met)

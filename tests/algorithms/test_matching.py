@@ -238,6 +238,16 @@ def test_average_moves_both_and_meets():
     moved_s = np.abs(res.surface.control_points - S.control_points).max()
     assert 0 < moved_s < np.abs(one.surface.control_points - S.control_points).max()
     assert moved_t > 0
+    # max_change bounds both surfaces' changes, also where the target moves the more (T7 matched to
+    # S: S, the stiffer, moves 3x as far), measured on a grid of our own
+    g = np.linspace(0, 1, 41)
+    back = match_surface(T7, S, "u0", "G1", average=True)
+    for r, pairs in ((res, ((S, res.surface), (T7, res.target))), (back, ((T7, back.surface), (S, back.target)))):
+        moves = [np.linalg.norm(b.evaluate_grid(g, g) - a.evaluate_grid(g, g), axis=-1).max() for a, b in pairs]
+        assert max(moves) <= r.max_change * (1 + 1e-9) + 1e-15 and max(moves) >= 0.9 * r.max_change
+        assert r.max_pole_change >= max(np.abs(b.control_points - a.control_points).max() for a, b in pairs
+                                        if a.n_poles == b.n_poles) - 1e-15
+    assert moves[1] > 2 * moves[0]  # the target moved the more
 
 
 def test_bad_input_is_named():
