@@ -109,6 +109,9 @@ class FaceMatch:
     g0_before: float
     g1_before_deg: float
     opposite_g1_before_deg: float
+    #: How far the face now lies from its surface before any change in this model (several
+    #: matches of one face add up; :meth:`.model_edits.ModelEdits.change`); NaN where not reached.
+    total_change: float = math.nan
     faces_out: tuple[int, int] | None = None
     converted: str | None = None
     target_moved: bool = False
@@ -315,7 +318,8 @@ class FaceMatcher:
             or than ``others_deg`` (degrees, whichever is larger; 1e-6 deg of slack), and gives a
             face valid for ``BRepCheck_Analyzer``; else ``refused`` says which failed first.
         max_change : float, optional
-            With ``strict``: the largest change allowed (model units).
+            With ``strict``: the largest change allowed (model units), of this match and of the
+            face's changes before it together (``total_change``).
         others_deg : float
             With ``strict``: the G1 angle the face's other edges may reach in any case.
         max_poles : int, optional
@@ -376,8 +380,12 @@ class FaceMatcher:
             met=False, valid=False, opposite_g1_max_deg=nan, g0_before=pair.g0_before,
             g1_before_deg=pair.g1_before, opposite_g1_before_deg=nan, converted=pair.converted,
             notes=list(pair.notes))
-        if strict and max_change is not None and res.max_change > max_change:
-            report.refused = f"would move by {res.max_change:.3g} > {max_change:.3g}"
+        # the face may have been changed before (another of its edges): the limit is on the sum
+        report.total_change = max(res.max_change, ed.change(i, res.surface))
+        if strict and max_change is not None and report.total_change > max_change:
+            report.refused = (f"would move by {res.max_change:.3g} > {max_change:.3g}" if res.max_change > max_change
+                              else f"would move it by {report.total_change:.3g} in all > {max_change:.3g} (changed "
+                              f"before by {ed.change(i):.3g})")
             return report
         fit_tol = max(pair.etol, res.max_change, 1e-7)
         surfaces = {i: res.surface}

@@ -114,6 +114,7 @@ class ModelEdits:
         self.size: float = self.model.size
         self.version: list[int] = [0] * len(self.faces)
         self._surfaces: dict[int, tuple[BSplineSurface, str | None]] = {}
+        self._originals: dict[int, BSplineSurface] = {}
         self._edges: dict[int, list[Any]] = {}
 
     def __len__(self) -> int:
@@ -140,7 +141,25 @@ class ModelEdits:
             assert isinstance(surface, BSplineSurface)
             converted = None if isinstance(geom, Geom_BSplineSurface) else type(geom).__name__.replace("Geom_", "")
             self._surfaces[i] = (surface, converted)
+            self._originals.setdefault(i, surface)
         return self._surfaces[i]
+
+    def change(self, i: int, surface: BSplineSurface | None = None) -> float:
+        """How far ``surface`` (default: face ``i``'s surface now) lies from face ``i``'s surface
+        before any replacement: the largest distance at equal parameters on a grid of ``8 n + 1``
+        values per direction over ``surface``'s domain (``n`` its poles), as ``match_surface``
+        measures ``max_change``. A surface that went through several changes is measured against
+        the first, so that their sum stays within a limit."""
+        original = self._originals.get(i) or self.surface(i)[0]
+        s = self.surface(i)[0] if surface is None else surface
+        if s is original:
+            return 0.0
+        (u0, u1), (v0, v1) = s.domain
+        us = np.linspace(u0, u1, 8 * s.n_poles[0] + 1)
+        vs = np.linspace(v0, v1, 8 * s.n_poles[1] + 1)
+        (a0, a1), (b0, b1) = original.domain
+        us, vs = np.clip(us, a0, a1), np.clip(vs, b0, b1)  # a piece's domain lies in the original's
+        return float(np.max(np.linalg.norm(s.evaluate_grid(us, vs) - original.evaluate_grid(us, vs), axis=-1)))
 
     def edges(self, i: int) -> list[Any]:
         """The edges of face ``i``, each once, degenerated ones left out (a replaced face keeps them)."""
@@ -185,6 +204,8 @@ class ModelEdits:
                 saved_vertices.setdefault(v.TShape(), (v, BRep_Tool.Tolerance_s(TopoDS.Vertex_s(v))))
         new: dict[int, Any] = {}
         valid = True
+        for i in surfaces:
+            self.surface(i)  # the face's first surface kept (self.change measures from it)
         for i, s in surfaces.items():
             geoms.setdefault(i, to_occ(s))
             new[i] = replace_surface(self.faces[i], geoms[i], tol)

@@ -168,6 +168,13 @@ def test_repair_fixes_the_smooth_edge_and_leaves_the_crease(tmp_path: Path, pres
         assert rep.edges_breaking_after == 0 and e.continuity == "G1"
     else:
         assert e.continuity == "G1" and "G2" in (e.reason or "G2 refused")
+    # the check after, by its own measure, on the same two faces (the model after is numbered anew)
+    assert e.g1_check_after_deg is not None and e.g1_check_after_deg < 1e-6 < e.g1_before_deg
+    assert e.g2_rel_check_after is not None
+    if preset == "mechanical":
+        assert e.breaks_after is False
+    else:  # the curvature jump stays (G2 refused): the edge still breaks CATIA's G2 %
+        assert e.breaks_after is True and e.g2_rel_check_after > 1.0
     m = SewnModel(out)
     assert len(m.faces) == 3 and BRepCheck_Analyzer(out).IsValid()
     # the crease keeps its angle (S's rows next to it are held by preserve_opposite)
