@@ -273,3 +273,21 @@ def test_repair_leaves_a_g1_edge_that_breaks_only_curvature_to_g2():
     assert e.measures == ["g2_rel"] and e.status == "refused"
     assert e.reason is not None and "G2 face" in e.reason and "G1 face" not in e.reason
     assert rep.by_measure_before == {"g2_rel": 1} and rep.by_measure_after == {"g2_rel": 1} and rep.valid_after
+
+
+def test_the_change_limit_is_on_a_faces_changes_together():
+    """A face matched once (by c) and asked again with a limit below c is refused "in all": the
+    second match alone moves it by ~0, but the face now lies c from its first surface."""
+    from occsurf.bridge.modeling.matching import FaceMatcher
+
+    m = ModelEdits(_three_faces(0.2, 2.0))
+    matcher = FaceMatcher(m)
+    assert m.change(1) == 0.0
+    first = matcher.match(1, 0, "G1")
+    c = m.change(1)
+    assert first.refused is None and 0.5 * first.max_change < c < 2.0 * first.max_change
+    again = matcher.match(1, 0, "G1", strict=True, max_change=0.5 * c)
+    assert again.max_change < 1e-3 * c and again.total_change >= c * (1 - 1e-9)
+    assert again.refused is not None and "in all" in again.refused and m.version[1] == 1
+    ok = matcher.match(1, 0, "G1", strict=True, max_change=2.0 * c)
+    assert ok.refused is None and m.version[1] == 2
