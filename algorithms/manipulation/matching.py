@@ -56,7 +56,7 @@ from ..kernel.surface import BSplineSurface
 from .linalg import ConstraintError
 from .match_targets import Jets, MatchTarget, SampledCurve, SurfaceSide, height_jets
 
-__all__ = ["MatchResult", "MatchTarget", "match_surface", "side_along", "SIDES", "CONTINUITIES"]
+__all__ = ["MatchResult", "MatchTarget", "match_surface", "side_along", "surface_change", "SIDES", "CONTINUITIES"]
 
 Array = NDArray[np.float64]
 _Target: TypeAlias = "SurfaceSide | SampledCurve | _AverageSide"
@@ -539,10 +539,15 @@ def side_along(surface: BSplineSurface, points: Array, tol: float) -> tuple[str 
     return (best if best_d <= tol else None), best_d, float((t.max() - t.min()) / (hi - lo))
 
 
-def _change(before: BSplineSurface, after: BSplineSurface) -> float:
-    (u0, u1), (v0, v1) = before.domain
-    us = np.linspace(u0, u1, 8 * before.n_poles[0] + 1)
-    vs = np.linspace(v0, v1, 8 * before.n_poles[1] + 1)
+def surface_change(before: BSplineSurface, after: BSplineSurface) -> float:
+    """How far ``after`` lies from ``before``: the largest distance at equal parameters on a grid of
+    ``8 n + 1`` values per direction over ``after``'s domain (``n`` its poles), the measure of
+    :attr:`MatchResult.max_change`. ``after``'s domain must lie in ``before``'s (the same surface
+    changed, refined, or cut to a piece)."""
+    (u0, u1), (v0, v1) = after.domain
+    (a0, a1), (b0, b1) = before.domain
+    us = np.clip(np.linspace(u0, u1, 8 * after.n_poles[0] + 1), a0, a1)
+    vs = np.clip(np.linspace(v0, v1, 8 * after.n_poles[1] + 1), b0, b1)
     return float(np.max(np.linalg.norm(after.evaluate_grid(us, vs) - before.evaluate_grid(us, vs), axis=-1)))
 
 
@@ -697,11 +702,11 @@ def match_surface(surface: BSplineSurface, target: BSplineSurface | MatchTarget,
             met = not bool(_bad(meas, r, tol).any())
             out_target = _restore(tnew, tside)
             # the target moves too: its change counts as much as ours
-            t_change = _change(tref, tnew)
+            t_change = surface_change(tref, tnew)
             t_pole_change = float(np.max(np.linalg.norm(tnew.control_points - tref.control_points, axis=-1)))
     result = _restore(new, side)
     refined = _restore(ref, side)
-    change = _change(refined, result)
+    change = surface_change(refined, result)
     pole_change = float(np.max(np.linalg.norm(result.control_points - refined.control_points, axis=-1)))
     if average and not isinstance(target, MatchTarget):
         change, pole_change = max(change, t_change), max(pole_change, t_pole_change)

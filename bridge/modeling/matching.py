@@ -284,16 +284,20 @@ class FaceMatcher:
         (sampled on one face's p-curve instead, the bearing's edge 75/193 measured 0.246 deg one
         way and 0.257 the other before any change). The points and their feet on each neighbour
         are kept until the neighbour is replaced."""
-        out = np.zeros(len(others))
-        for n, (e, k) in enumerate(others):
+        kept = []
+        for e, k in others:
             key = (e.TShape(), k, self.edits.version[k])
             if key not in self._feet:
                 pts = edge_curve_points(e)
                 s_k = BRep_Tool.Surface_s(self.edits.faces[k])
                 self._feet[key] = (pts, s_k, surface_feet(s_k, pts))
-            pts, s_k, uv_k = self._feet[key]
-            out[n] = surfaces_joint(s_k, uv_k, geom, surface_feet(geom, pts))[1]
-        return out
+            kept.append(self._feet[key])
+        if not kept:
+            return np.zeros(0)
+        # every edge's points onto geom at once: one projector for the surface, not one per edge
+        uv = np.split(surface_feet(geom, np.concatenate([pts for pts, _, _ in kept])),
+                      np.cumsum([len(pts) for pts, _, _ in kept])[:-1])
+        return np.array([surfaces_joint(s_k, uv_k, geom, uv_g)[1] for (_, s_k, uv_k), uv_g in zip(kept, uv)])
 
     def _others_before(self, i: int, others: list[tuple[Any, int]]) -> np.ndarray:
         ed = self.edits

@@ -37,6 +37,7 @@ from OCP.TopTools import TopTools_IndexedMapOfShape
 from occsurf.algorithms.errors import ArgumentTypeError, InvalidGeometryError
 from occsurf.algorithms.kernel.surface import BSplineSurface
 from occsurf.algorithms.kernel.trimmed import TrimmedSurface
+from occsurf.algorithms.manipulation.matching import surface_change
 
 from .. import _occ
 from ..conversion.splines import from_occ, to_occ
@@ -146,20 +147,14 @@ class ModelEdits:
 
     def change(self, i: int, surface: BSplineSurface | None = None) -> float:
         """How far ``surface`` (default: face ``i``'s surface now) lies from face ``i``'s surface
-        before any replacement: the largest distance at equal parameters on a grid of ``8 n + 1``
-        values per direction over ``surface``'s domain (``n`` its poles), as ``match_surface``
-        measures ``max_change``. A surface that went through several changes is measured against
-        the first, so that their sum stays within a limit."""
-        original = self._originals.get(i) or self.surface(i)[0]
-        s = self.surface(i)[0] if surface is None else surface
-        if s is original:
-            return 0.0
-        (u0, u1), (v0, v1) = s.domain
-        us = np.linspace(u0, u1, 8 * s.n_poles[0] + 1)
-        vs = np.linspace(v0, v1, 8 * s.n_poles[1] + 1)
-        (a0, a1), (b0, b1) = original.domain
-        us, vs = np.clip(us, a0, a1), np.clip(vs, b0, b1)  # a piece's domain lies in the original's
-        return float(np.max(np.linalg.norm(s.evaluate_grid(us, vs) - original.evaluate_grid(us, vs), axis=-1)))
+        before any replacement, as ``match_surface`` measures ``max_change``
+        (:func:`~occsurf.algorithms.manipulation.matching.surface_change`). A surface that went
+        through several changes is measured against the first, so that their sum stays within a
+        limit."""
+        now = self.surface(i)[0]  # (also keeps the face's first surface)
+        original = self._originals[i]
+        s = now if surface is None else surface
+        return 0.0 if s is original else surface_change(original, s)
 
     def edges(self, i: int) -> list[Any]:
         """The edges of face ``i``, each once, degenerated ones left out (a replaced face keeps them)."""
