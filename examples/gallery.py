@@ -25,6 +25,7 @@ DEMOS: dict[str, str] = {
     "generalized": "occsurf.examples.generalized:render_generalized_demo",  # course §8-6, 8-7
     "lighting": "occsurf.examples.lighting:render_lighting_demo",  # course ch. 10
     "repair": "occsurf.examples.repair:render_repair_demo",  # course ch. 3-4, 9 (issue 29)
+    "figures": "occsurf.examples.figures:render_figures_demo",  # course §5-42..5-47
 }
 
 
