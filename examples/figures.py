@@ -92,32 +92,37 @@ def _bump(shape: tuple[int, ...], margin: int = 3) -> np.ndarray:
     return np.outer(one(shape[0]), one(shape[1]))
 
 
-def demo_hierarchy(n_u: int = 30, n_v: int = 30) -> tuple[HierarchicalSurface, dict[str, int]]:
+def demo_hierarchy(n_u: int = 30, n_v: int = 30, vein: bool = True) -> tuple[HierarchicalSurface, dict[str, int]]:
     """The arm at rest: the tube with four overlays in frame offsets — the biceps (level 1), the
     forearm's flesh (level 1, the dynamic level of the GIF), a vein on it (level 2) and the point
-    of the elbow (level 1); returns it and the overlay ids by name."""
+    of the elbow (level 1); returns it and the overlay ids by name. ``vein=False`` leaves the vein
+    out (three overlays, the benchmark's surface)."""
     base = arm_tube(n_u, n_v)
     hs = HierarchicalSurface(base)
     u = lambda x: _u_of_x(base, x)  # noqa: E731 - a local shorthand
     biceps = hs.add_overlay((u(-2.3), u(-0.7)), (0.62, 0.88))
     flesh = hs.add_overlay((u(0.3), u(2.45)), (0.08, 0.92))
-    vein = hs.add_overlay((u(0.6), u(2.3)), (0.44, 0.56), flesh)
+    ids = {"biceps": biceps.id, "flesh": flesh.id}
+    if vein:
+        v = hs.add_overlay((u(0.6), u(2.3)), (0.44, 0.56), flesh)
+        o = np.zeros(v.shape + (3,))
+        mid = v.shape[1] // 2
+        o[1:-1, mid, 2] = 0.06 * _bump((v.shape[0], 1), 3)[1:-1, 0]
+        o[1:-1, mid, 1] = 0.02 * np.sin(np.linspace(0, 3 * np.pi, v.shape[0] - 2))  # it meanders
+        hs.set_offsets(v, o)
+        ids["vein"] = v.id
     point = hs.add_overlay((u(-0.45), u(0.45)), (0.17, 0.33))
+    ids["point"] = point.id
     hs.set_offsets(flesh, 0.03 * _bump(flesh.shape, 4)[..., None] * np.array([0.0, 0.0, 1.0]))
-    o = np.zeros(vein.shape + (3,))
-    mid = vein.shape[1] // 2
-    o[1:-1, mid, 2] = 0.06 * _bump((vein.shape[0], 1), 3)[1:-1, 0]
-    o[1:-1, mid, 1] = 0.02 * np.sin(np.linspace(0, 3 * np.pi, vein.shape[0] - 2))  # it meanders
-    hs.set_offsets(vein, o)
     hs.set_offsets(point, 0.09 * _bump(point.shape, 2)[..., None] * np.array([0.0, 0.0, 1.0]))
     hs.set_offsets(biceps, 0.04 * _bump(biceps.shape, 3)[..., None] * np.array([0.0, 0.0, 1.0]))
-    return hs, {"biceps": biceps.id, "flesh": flesh.id, "vein": vein.id, "point": point.id}
+    return hs, ids
 
 
-def demo_arm(blend: str = "dual_quaternion", n_u: int = 30, n_v: int = 30) -> AttachedSurface:
+def demo_arm(blend: str = "dual_quaternion", n_u: int = 30, n_v: int = 30, vein: bool = True) -> AttachedSurface:
     """The arm attached to its skeleton: base bound to the bones (a multi-segment joint at the
     elbow, half-width ``ARM['blend']``), the biceps flexing by 0.06 per radian of elbow angle."""
-    hs, ids = demo_hierarchy(n_u, n_v)
+    hs, ids = demo_hierarchy(n_u, n_v, vein)
     sk = arm_skeleton()
     binding = bind_to_bones(hs.base.control_points, sk, ARM["blend"])
     shape = next(o for o in hs.overlays if o.id == ids["biceps"]).shape

@@ -296,10 +296,15 @@ def test_the_bent_elbow_keeps_its_section_and_does_not_self_intersect(arm):
     plane halving the bend) stays within 20 % of rest, the generators in the bend plane (the inner
     and outer sides, where a bent tube folds first) never cross themselves, and the inner sides of
     the two rigid parts stay apart. The baseline (the flat surface's poles blended linearly)
-    collapses to cos(theta / 2) of the area."""
+    collapses to cos(theta / 2) of the area.
+
+    Clearance: the distance between the samples of the upper arm (rest x <= -0.2) and of the forearm
+    (rest x >= 0.2), the crease of the joint itself (0.4 elbow radii) left out. At 120 degrees it is
+    the flexed biceps' gap to the forearm. The samples are 0.007 apart along the arm and 0.025
+    around, so the sampled distance overstates the true one by at most 0.013."""
     sk = arm.skeleton
     lin = linear_baseline(arm)
-    us, vs = np.linspace(0, 1, 801), np.linspace(0, 1, 97)
+    us, vs = np.linspace(0, 1, 801), np.linspace(0, 1, 129)
     rest = arm.rest.evaluate_grid(us, vs)
     rx = rest[:, 0, 0]
     inner, outer = int(np.argmax(rest[400, :, 1])), int(np.argmin(rest[400, :, 1]))
@@ -312,12 +317,12 @@ def test_the_bent_elbow_keeps_its_section_and_does_not_self_intersect(arm):
         P = arm.at(pose).evaluate_grid(us, vs)
         ours = section_area(arm.at(pose), *bisector(th)) / a0
         base = section_area(lin.at(pose), *bisector(th)) / l0
-        far_a, far_b = P[rx <= -ARM["blend"]].reshape(-1, 3), P[rx >= ARM["blend"]].reshape(-1, 3)
+        far_a, far_b = P[rx <= -0.2].reshape(-1, 3), P[rx >= 0.2].reshape(-1, 3)
         clearance = float(cKDTree(far_b).query(far_a)[0].min())
         rows.append((deg, ours, base, clearance))
         assert abs(ours - 1.0) <= 0.2, (deg, ours)
         assert _crossings(P[:, inner, :2]) == 0 and _crossings(P[:, outer, :2]) == 0, deg
-        assert clearance > 0.1, (deg, clearance)
+        assert clearance > 0.05, (deg, clearance)  # > 0 with room for the sampling's 0.013
     print("\nelbow deg | area ours / rest | area linear baseline / rest | clearance of the inner sides")
     for r in rows:
         print(f"{r[0]:9.0f} | {r[1]:16.4f} | {r[2]:27.4f} | {r[3]:.4f}")
