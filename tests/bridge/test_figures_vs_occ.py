@@ -92,22 +92,31 @@ def test_section_area_agrees_with_occs_plane_section(arm, deg):
     assert ours == pytest.approx(theirs, rel=1e-5)
 
 
-def test_the_demo_writes_a_gif_of_the_bend_and_a_figure_that_loads(tmp_path):
+@pytest.mark.slow
+def test_the_figures_demo_writes_poses_a_gif_of_the_bend_and_a_figure_that_loads(tmp_path, capsys):
+    """``occsurf demo --only figures`` as a user runs it (the gallery's generic test leaves this demo
+    to this one): five pose pictures and STEP files OCC reads, the GIF of the bend, the JSON."""
     from PIL import Image
 
-    from occsurf.examples.figures import render_figures_demo
+    from occsurf.bridge import cli
 
-    pytest.importorskip("vtk")
-    files = render_figures_demo(tmp_path)
-    gif = next(f for f in files if f.suffix == ".gif")
-    with Image.open(gif) as im:
+    assert cli.main(["demo", "--out", str(tmp_path), "--only", "figures"]) == 0, capsys.readouterr().err
+    files = sorted((tmp_path / "figures").iterdir())
+    pngs = [f for f in files if f.suffix == ".png"]
+    assert len(pngs) == 7  # five poses, the contact sheet, the cross-section chart
+    for f in pngs:
+        assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f.stat().st_size > 10_000
+    steps = [f for f in files if f.suffix == ".step"]
+    assert len(steps) == 5
+    for f in steps:
+        model = read_step(f)
+        assert len(model.faces) == 1 and BRepCheck_Analyzer(model.faces[0].face).IsValid()
+    with Image.open(tmp_path / "figures" / "bend.gif") as im:
         assert im.n_frames == 50
         im.seek(0)
         first = np.asarray(im.convert("RGB"), float)
         im.seek(20)
         bent = np.asarray(im.convert("RGB"), float)
     assert np.abs(first - bent).mean() > 1.0  # the arm moved
-    fig = AttachedSurface.from_dict(json.loads(next(f for f in files if f.suffix == ".json").read_text()))
+    fig = AttachedSurface.from_dict(json.loads((tmp_path / "figures" / "arm.json").read_text()))
     assert len(fig.rest.overlays) == 4 and len(fig.procedures) == 1
-    assert len([f for f in files if f.suffix == ".step"]) == 5
-
