@@ -1,5 +1,5 @@
-"""``occsurf check FILE_OR_DIR ... [--out DIR] [--json | --jsonl] [--faces ...] [--fail-on PRESET] [--no-pictures]
-[--timeout S] [--strict] [--in-process]``: the surface-quality report.
+"""``occsurf check FILE_OR_DIR ... [--out DIR] [--json | --jsonl] [--faces ...] [--fail-on PRESET]
+[--pictures worst|all|none] [--timeout S] [--strict] [--in-process]``: the surface-quality report.
 
 Reads each STEP or IGES model in a worker process (:func:`occsurf.bridge.isolation.run_jobs`, as
 ``occsurf inspect`` does: a crash or a hang inside OCC costs that file, not the terminal, and the
@@ -11,7 +11,8 @@ recursively for STEP/IGES files. For one file, ``DIR`` gets
 * ``DIR/report.json``: every number (``faces``: index, type, k_min, k_max, flags, ...; ``edges``:
   faces, midpoint, matched, g0_max, g1_max_deg, g2_max, g2_max_rel, worst_point, ...);
 * ``DIR/index.html``: one offline page (overview, sortable face table, edge table, per-face
-  pictures and flags, an interactive 3-D view) with its PNG pictures beside it;
+  pictures and flags, an interactive 3-D view) with its PNG pictures beside it: the model's and,
+  by default, the 10 worst faces' (``--pictures all``: every face's; ``none``: no PNG);
 
 for several files (or a folder) each file gets those in a folder of its own below ``DIR`` (its path
 relative to the folder given, ``.`` of the suffix made ``_``: ``DIR/sub/part_step/``), and ``DIR``
@@ -59,6 +60,7 @@ from typing import Any
 
 from ..messages import error_line, strip_path
 from ..quality.check_files import collect_files, file_summary, run_checks, write_outputs, write_summary
+from ..quality.pictures import PICTURE_CHOICES, WORST_FACES
 from ._common import (
     EXIT_ERROR,
     EXIT_OK,
@@ -233,7 +235,8 @@ def run(ns: argparse.Namespace) -> int:
         os.close(fd)
         scratch.append(Path(trace_name))
         items.append({"path": str(e[1].resolve()), "out": str(folders[k].resolve()), "faces": faces, "preset": preset,
-                      "progress": progress_name, "trace": trace_name, "pictures": not ns.no_pictures, "skip": {},
+                      "progress": progress_name, "trace": trace_name, "pictures": "none" if ns.no_pictures else ns.pictures,
+                      "skip": {},
                       "strict": ns.strict})
     rows: dict[int, dict[str, Any]] = {}
     code = EXIT_OK
@@ -334,8 +337,12 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--fail-on", choices=PRESET_NAMES, metavar="PRESET",
                    help=f"exit 1 when an edge or face breaks this preset ({', '.join(PRESET_NAMES)}); it is also the "
                         "preset the report is judged against (default catia)")
-    p.add_argument("--no-pictures", action="store_true",
-                   help="skip the PNG pictures (the page keeps its tables and 3-D view): a faster CI gate")
+    pics = p.add_mutually_exclusive_group()
+    pics.add_argument("--pictures", choices=PICTURE_CHOICES, default="worst",
+                      help="PNG pictures: 'worst' (default) the model's and the "
+                           f"{WORST_FACES} worst faces' (by flags and violations), 'all' every face's too, 'none' "
+                           "(the page keeps its tables and 3-D view)")
+    pics.add_argument("--no-pictures", action="store_true", help="the same as --pictures none: a faster CI gate")
     p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop the checker after this long (default {DEFAULT_TIMEOUT:g})")
     add_strict_option(p, writes=True)

@@ -85,10 +85,13 @@ def collect_files(args: list[str]) -> list[tuple[str, Path | None, str | None, s
 
 # ---------------------------------------------------------------------------------------- worker
 def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, faces: list[int] | None = None,
-               preset: str = "catia", pictures: bool = True, progress: Callable[[str, int, int], None] | None = None,
+               preset: str = "catia", pictures: bool | str = "worst", progress: Callable[[str, int, int], None] | None = None,
                skip: dict[str, Any] | None = None, trace: Callable[[str], None] | None = None,
                strict: bool = False) -> dict[str, Any]:
     """Read, assess and draw one model; the library side of ``occsurf check`` (in this process).
+
+    ``pictures``: ``"worst"`` (the model pictures and the :data:`~.pictures.WORST_FACES` worst faces'),
+    ``"all"`` (every face's too), ``"none"``; ``True``/``False`` mean ``"all"``/``"none"``.
 
     Writes the pictures and ``.viewer.json`` (the 3-D view's data) into ``out``; returns
     ``{"report": report JSON, "pictures": {kind: file}, "viewer": path of the viewer data}``.
@@ -100,9 +103,12 @@ def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, fac
     """
     from ..exchange.files import atomic_write
     from .html import viewer_payload
-    from .pictures import render_report_pictures
-    from .report import check_model
+    from .pictures import PICTURE_CHOICES, WORST_FACES, render_report_pictures
+    from .report import check_model, worst_faces
 
+    choice = {True: "all", False: "none"}.get(pictures, pictures) if isinstance(pictures, bool) else pictures
+    if choice not in PICTURE_CHOICES:
+        raise ValueError(f"pictures: expected one of {', '.join(PICTURE_CHOICES)}, got {pictures!r}")
     p = Path(path)
     skip = skip or {}
     note: Callable[[str], None] = trace if trace is not None else (lambda stage: None)
@@ -117,12 +123,15 @@ def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, fac
     report.path = str(path)
     shown: dict[str, str] = {}
     out = Path(out)
-    if pictures:
+    chosen: set[int] | None = set() if choice == "none" else (
+        None if choice == "all" else set(worst_faces(report, WORST_FACES)))
+    if choice != "none":
         t1 = time.perf_counter()
-        shown = render_report_pictures(report, out, progress=None if progress is None else
+        shown = render_report_pictures(report, out, faces=chosen, progress=None if progress is None else
                                        (lambda k, n: progress("pictures", k, n)),
                                        skip=skip.get("pictures"), trace=note)
         report.seconds["pictures"] = time.perf_counter() - t1
+    report.picture_faces = {"choice": choice, "faces": None if chosen is None else sorted(chosen)}
     note("viewer")
     report.seconds["read"] = t_read
     report.seconds["total"] = time.perf_counter() - t0
@@ -158,7 +167,7 @@ def check_job(item: dict[str, Any]) -> dict[str, Any]:
 
     with np.errstate(all="ignore"), quiet_native_stdout():
         return check_file(item["path"], item["out"], faces=item.get("faces"), preset=item.get("preset", "catia"),
-                          pictures=bool(item.get("pictures", True)), progress=progress, skip=item.get("skip"),
+                          pictures=item.get("pictures", "worst"), progress=progress, skip=item.get("skip"),
                           trace=trace, strict=bool(item.get("strict")))
 
 

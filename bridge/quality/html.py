@@ -22,6 +22,8 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .report import face_scores
+
 if TYPE_CHECKING:
     from .report import QualityReport
 
@@ -112,11 +114,6 @@ def _num_attr(x: Any) -> str:
     return repr(v) if math.isfinite(v) else ""
 
 
-def _face_score(face: dict[str, Any]) -> float:
-    """The face table's default order: errors first, then flags, then the worst adjacent G1."""
-    return (1e9 if face.get("error") else 0) + 1e6 * len(face.get("flags") or ()) + (face.get("worst_g1_deg") or 0.0)
-
-
 def _overview(doc: dict[str, Any], pictures: dict[str, str]) -> str:
     status = "passed" if doc.get("passed") else "failed"
     rows = [
@@ -148,14 +145,16 @@ def _overview(doc: dict[str, Any], pictures: dict[str, str]) -> str:
     return "\n".join(out)
 
 
-def _face_table(faces: list[dict[str, Any]]) -> str:
+def _face_table(faces: list[dict[str, Any]], violations: list[dict[str, Any]]) -> str:
     cols = ("face", "type", "k_min", "k_max", "flags", "worst G1 (deg)", "degenerate pts", "vertices", "status")
     out = ['<section id="faces"><h2>Faces</h2><p class="hint">Click a column to sort; rows start worst first '
-           '(unevaluated, then flagged, then the largest angle at an adjacent edge).</p>',
+           '(unevaluated, then by flags plus violations of adjacent edges, then the largest angle at an adjacent '
+           'edge).</p>',
            '<table class="sortable" id="face-table"><thead><tr>']
     out += [f'<th data-col="{i}">{c}</th>' for i, c in enumerate(cols)]
     out.append("</tr></thead><tbody>")
-    for f in sorted(faces, key=_face_score, reverse=True):
+    scores = face_scores(faces, violations)
+    for f in sorted(faces, key=lambda f: (-scores[int(f["index"])], int(f["index"]))):
         n_flags = len(f.get("flags") or ())
         status = "error" if f.get("error") else ("flagged" if n_flags else "ok")
         cells = [
@@ -364,7 +363,7 @@ def render_html(doc: dict[str, Any], payload: dict[str, Any], pictures: dict[str
         f'<select id="indicator">{options}</select></label> <span id="viewer-status">loading...</span></div>'
         '<div id="viewer-wrap"><canvas id="viewer"></canvas><div id="legend"><div class="hi"></div>'
         '<canvas width="24" height="240"></canvas><div class="lo"></div></div></div></section>',
-        _face_table(doc.get("faces") or []),
+        _face_table(doc.get("faces") or [], doc.get("violations") or []),
         _edge_table(doc.get("edges") or [], doc.get("violations") or []),
         _face_sections(doc.get("faces") or []),
         '<footer><p class="note">3-D view: three.js r187 (MIT licence), embedded. Pictures: VTK, offscreen. '

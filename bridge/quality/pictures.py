@@ -11,7 +11,7 @@ indicators (:func:`~occsurf.bridge.quality.report.face_fields`); degenerate poin
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from .report import FaceField, QualityReport
 
 __all__ = ["render_report_pictures", "render_picture", "MODEL_PICTURES", "FACE_PICTURES", "PICTURE_KINDS",
-           "section_lines", "face_section_lines"]
+           "PICTURE_CHOICES", "WORST_FACES", "section_lines", "face_section_lines"]
 
 #: Every picture kind: (indicator, colour map, legend title).
 PICTURE_KINDS: dict[str, tuple[str | None, str, str, str]] = {
@@ -45,6 +45,11 @@ EDGE_COLORS: dict[str, tuple[float, float, float]] = {
 }
 MODEL_PICTURES = ("mean", "gaussian", "zebra", "isophote", "draft", "hedgehog", "sections", "edges")
 FACE_PICTURES = ("mean", "zebra", "sections")
+#: ``occsurf check --pictures``: ``worst`` (the default) draws the model pictures and the
+#: :data:`WORST_FACES` worst faces' (:func:`~occsurf.bridge.quality.report.worst_faces`), ``all``
+#: every face's, ``none`` no PNG (the page keeps its tables and 3-D view).
+PICTURE_CHOICES = ("worst", "all", "none")
+WORST_FACES = 10
 #: Picture sizes in pixels.
 MODEL_SIZE = (900, 640)
 FACE_SIZE = (440, 330)
@@ -273,13 +278,14 @@ def _flag_points(report: QualityReport, faces: set[int] | None = None) -> np.nda
 
 
 def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_pictures: Sequence[str] = MODEL_PICTURES,
-                           face_pictures: Sequence[str] = FACE_PICTURES,
+                           face_pictures: Sequence[str] = FACE_PICTURES, faces: Collection[int] | None = None,
                            progress: Callable[[int, int], None] | None = None,
                            skip: dict[str, str] | None = None, trace: Callable[[str], None] | None = None) -> dict[str, str]:
     """Write the model's and every face's pictures into ``out_dir`` (created); paths relative to it.
 
     Model pictures are ``model_<kind>.png`` (returned); face pictures ``face_<index>_<kind>.png``
-    (recorded in each :attr:`FaceQuality.pictures`). Every face's sections are cut through its own
+    (recorded in each :attr:`FaceQuality.pictures`), for the faces of index in ``faces`` (default:
+    every face; the colour scales stay the whole model's). Every face's sections are cut through its own
     extent (:func:`face_section_lines`). A picture that fails is skipped and noted on its face (or
     in the report's warnings), never fatal; so is every picture named in ``skip`` (file name ->
     reason: one that crashed the process before). ``trace(f"picture {name}")`` is called before each.
@@ -292,7 +298,8 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
         return shown
     scales = {v: _scale([f.values[v] for f in fields], v, report.size) for v in ("mean", "gaussian", "max", "absolute")}
     flags_all = _flag_points(report)
-    total = len(model_pictures) + len(fields) * len(face_pictures)
+    drawn = [f for f in fields if faces is None or f.mesh.index in faces]
+    total = len(model_pictures) + len(drawn) * len(face_pictures)
     cut: dict[str, Any] = {}
 
     def cuts() -> tuple[Lines, dict[int, Lines]]:
@@ -330,7 +337,7 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
         if progress is not None:
             progress(done, total)
     by_index = {f.index: f for f in report.faces}
-    for fld in fields:
+    for fld in drawn:
         row = by_index[fld.mesh.index]
         for kind in face_pictures:
             name = f"face_{row.index}_{kind}.png"

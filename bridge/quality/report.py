@@ -36,7 +36,8 @@ if TYPE_CHECKING:
     from ..rendering.tessellation import FaceMesh
     from .continuity import Thresholds
 
-__all__ = ["FaceQuality", "QualityReport", "FaceField", "check_model", "face_fields", "summarize_model", "DEFAULT_PRESET"]
+__all__ = ["FaceQuality", "QualityReport", "FaceField", "check_model", "face_fields", "summarize_model", "DEFAULT_PRESET",
+           "face_scores", "worst_faces"]
 
 #: The threshold preset used when none is named (CATIA's Connect Checker defaults).
 DEFAULT_PRESET = "catia"
@@ -127,6 +128,25 @@ class FaceQuality:
         }
 
 
+def face_scores(faces: list[dict[str, Any]], violations: list[dict[str, Any]]) -> dict[int, float]:
+    """How bad each face is, for the face table's order and the ``--pictures worst`` choice (report
+    JSON rows): unevaluated faces first, then by their flags plus the threshold violations of their
+    edges, then by the largest G1 angle at an adjacent edge."""
+    touching: dict[int, int] = {}
+    for v in violations:
+        for i in v.get("faces") or ():
+            touching[int(i)] = touching.get(int(i), 0) + 1
+    return {int(f["index"]): (1e9 if f.get("error") else 0.0)
+            + 1e6 * (len(f.get("flags") or ()) + touching.get(int(f["index"]), 0)) + float(f.get("worst_g1_deg") or 0.0)
+            for f in faces}
+
+
+def worst_faces(report: QualityReport, n: int) -> list[int]:
+    """Indices of the ``n`` worst faces by :func:`face_scores` (ties: the lower index first)."""
+    scores = face_scores([f.to_json() for f in report.faces], report.violations)
+    return sorted(scores, key=lambda i: (-scores[i], i))[:n]
+
+
 @dataclass
 class QualityReport:
     """What :func:`check_model` found; :meth:`to_json` is ``report.json``."""
@@ -143,6 +163,8 @@ class QualityReport:
     seconds: dict[str, float] = field(default_factory=dict)
     violations: list[dict[str, Any]] = field(default_factory=list)
     match_tol: float | None = None
+    #: ``occsurf check --pictures``: the choice and the faces whose pictures were drawn (``None``: all).
+    picture_faces: dict[str, Any] = field(default_factory=dict)
     edge_lines: list[tuple[str, np.ndarray]] = field(default_factory=list, repr=False)
     fields: dict[int, FaceField] = field(default_factory=dict, repr=False)
 
@@ -166,6 +188,7 @@ class QualityReport:
             "n_flags": sum(len(f.flags) for f in self.faces),
             "warnings": list(self.warnings), "seconds": {k: round(v, 3) for k, v in self.seconds.items()},
             "faces": [f.to_json() for f in self.faces], "edges": list(self.edges),
+            "face_pictures": dict(self.picture_faces),
         }
 
 
