@@ -147,7 +147,7 @@ def render_figures_demo(out_dir: Path) -> list[Path]:
     """Write the pose pictures, STEP files, contact sheet, GIF, chart and JSON into ``out_dir``."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
-    from PIL import Image, ImageDraw
+    from PIL import Image, ImageDraw, ImageFont
 
     from occsurf.algorithms.hierarchical.dynamics import SoftTissue
     from occsurf.algorithms.lighting import LightingSetup, Material, WarnLight
@@ -163,14 +163,15 @@ def render_figures_demo(out_dir: Path) -> list[Path]:
     key = WarnLight(position=(-2.0, -4.0, 7.0), direction=(0.3, 0.6, -1.0), name="key")
     fill = WarnLight(position=(5.0, 6.0, 3.0), direction=(-0.6, -0.6, -0.3), name="fill", color=(0.35, 0.38, 0.45))
     setup = LightingSetup(lights=(key, fill), ambient=0.12, material=skin)
-    camera = Camera(position=(-0.6, -3.6, 8.2), target=(-0.4, 0.9, 0.0), up=(0.0, 0.9, 0.4), view_angle=40.0)
+    camera = Camera(position=(-0.5, -3.2, 7.4), target=(-0.3, 0.8, 0.0), up=(0.0, 0.9, 0.4), view_angle=37.0)
     size = (900, 700)
+    font = ImageFont.load_default(size=30)
 
     def picture(hs: HierarchicalSurface, caption: str) -> Image.Image:
         mesh = grid_mesh(hs.flatten(), 181)
         img = render_lit(mesh.points, mesh.triangles, setup, normals=mesh.normals, size=size, camera=camera)
         tile = Image.fromarray(img.rgb)
-        ImageDraw.Draw(tile).text((14, 12), caption, fill=(240, 240, 240))
+        ImageDraw.Draw(tile).text((16, 12), caption, fill=(240, 240, 240), font=font)
         return tile
 
     files: list[Path] = []

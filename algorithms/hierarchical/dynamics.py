@@ -59,12 +59,14 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from ..errors import InvalidGeometryError
-from ..kernel.surface import BSplineSurface
-from .figures import AttachedSurface, set_world_points
+from .figures import AttachedSurface, set_base_points, set_world_points
 from .skeleton import Pose
 from .surface import HierarchicalSurface
 
-__all__ = ["SoftTissue", "grid_laplacian", "grid_laplacian_eigenvalues"]
+__all__ = ["SoftTissue", "grid_laplacian", "grid_laplacian_eigenvalues", "PROPAGATOR_CACHE"]
+
+#: Propagators kept per :class:`SoftTissue`, one per distinct time step (oldest dropped first).
+PROPAGATOR_CACHE = 8
 
 Array = NDArray[np.float64]
 
@@ -91,6 +93,8 @@ def grid_laplacian_eigenvalues(shape: tuple[int, int]) -> Array:
 
 
 def _positive(x: float, name: str, zero_ok: bool = False) -> float:
+    if isinstance(x, bool):
+        raise InvalidGeometryError(f"{name}: expected a number, got {x!r}")
     try:
         v = float(x)
     except (TypeError, ValueError):
@@ -127,7 +131,8 @@ class SoftTissue:
             raise InvalidGeometryError(f"figure: expected an AttachedSurface, got {type(figure).__name__}")
         self.figure = figure
         rest = figure.rest
-        if level != 0 and level not in {o.id for o in rest.overlays}:
+        if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or (
+                level != 0 and level not in {o.id for o in rest.overlays}):
             raise InvalidGeometryError(f"level: the surface has no overlay {level!r} (0 is the base)")
         self.level = int(level)
         self.mass = _positive(mass, "mass")
@@ -174,6 +179,8 @@ class SoftTissue:
         """Per mode, ``Phi(h)`` (n, 2, 2) and ``Gamma(h)`` (n, 2) of the exact step (module notes)."""
         h = _positive(h, "dt")
         if h not in self._props:
+            if len(self._props) >= PROPAGATOR_CACHE:  # frame-timed (jittered) steps: keep the newest
+                del self._props[next(iter(self._props))]
             n = self._lam.size
             A = np.zeros((n, 3, 3))
             A[:, 0, 1] = 1.0
@@ -229,8 +236,7 @@ class SoftTissue:
         hs = self._hs.copy()
         x = self._T[1].reshape(self.shape + (3,)) + self.deviation
         if self.level == 0:
-            b = hs.base
-            hs.set_base(BSplineSurface(b.degree, b.knots, x, b.weights))
+            set_base_points(hs, x)
         else:
             set_world_points(hs, self.level, x)
         return hs

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -25,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from ..errors import InvalidGeometryError
-from .skinning import check_rigid, invert_rigid, rotation_about
+from .skinning import check_rigid, invert_rigid, rotation_about, twist_angle
 
 __all__ = ["Joint", "Skeleton", "Pose"]
 
@@ -83,8 +84,11 @@ class Joint:
         ax = V.as_finite_array(self.axis, f"joint {self.name!r}: axis")
         if ax.shape != (3,) or not np.linalg.norm(ax) > 0:
             raise InvalidGeometryError(f"joint {self.name!r}: axis must be a non-zero 3-vector, got {self.axis!r}")
-        length = float(self.length)
-        if not (math.isfinite(length) and length >= 0):
+        try:
+            length = float(self.length)
+        except (TypeError, ValueError):
+            raise InvalidGeometryError(f"joint {self.name!r}: length must be a number, got {self.length!r}") from None
+        if isinstance(self.length, bool) or not (math.isfinite(length) and length >= 0):
             raise InvalidGeometryError(f"joint {self.name!r}: length must be finite and >= 0, got {self.length!r}")
         object.__setattr__(self, "_rest", V.readonly(rest))
         object.__setattr__(self, "_axis", V.readonly(ax / np.linalg.norm(ax)))
@@ -101,6 +105,7 @@ class Joint:
         return self._axis
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: name, parent, rest (4 x 4 rows), axis, length."""
         return {"name": self.name, "parent": self.parent, "rest": self._rest.tolist(),
                 "axis": self._axis.tolist(), "length": self.length}
 
@@ -150,7 +155,8 @@ class Skeleton:
         self._joints = by_name
         self._order = tuple(order)
         self._index = {n: i for i, n in enumerate(order)}
-        self._rest_world = self._world({})
+        self._rest_world = self._world({})[0]
+        self._rest_inverse = np.stack([invert_rigid(R) for R in self._rest_world])
 
     # ------------------------------------------------------------------ structure
     @property
@@ -160,9 +166,11 @@ class Skeleton:
 
     @property
     def root(self) -> str:
+        """The root joint's name."""
         return self._order[0]
 
     def joint(self, name: str) -> Joint:
+        """The joint called ``name`` (:class:`InvalidGeometryError` naming the known ones if none)."""
         try:
             return self._joints[name]
         except (KeyError, TypeError):
@@ -174,6 +182,7 @@ class Skeleton:
         return self._index[name]
 
     def children(self, name: str) -> list[str]:
+        """Names of the joints whose parent is ``name``."""
         self.joint(name)
         return [n for n in self._order if self._joints[n].parent == name]
 
@@ -191,18 +200,26 @@ class Skeleton:
             M = np.eye(4)
             M[:3, :3] = rotation_about(j.unit_axis, a)
             return M, a
+        if value is None or isinstance(value, (str, bool)):
+            raise InvalidGeometryError(f"pose: joint {name!r}: expected an angle or a rigid transform, got {value!r}")
         M = check_rigid(value, f"pose: joint {name!r}")
-        R = M[:3, :3]
-        vee = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-        return M, math.atan2(float(j.unit_axis @ vee), 0.5 * (float(np.trace(R)) - 1.0))
+        return M, twist_angle(M[:3, :3], j.unit_axis)
 
-    def _world(self, local: Mapping[str, Array], placement: Array | None = None) -> Array:
+    def _world(self, local: Mapping[str, Array], placement: Array | None = None) -> tuple[Array, NDArray[np.bool_]]:
+        """World frames, and which joints moved from rest (own motion, an ancestor's, or a placement)."""
         W = np.empty((len(self._order), 4, 4))
+        moved = np.zeros(len(self._order), bool)
         for i, n in enumerate(self._order):
             j = self._joints[n]
             M = j.rest_matrix if n not in local else j.rest_matrix @ local[n]
-            W[i] = (placement @ M if placement is not None else M) if j.parent is None else W[self._index[j.parent]] @ M
-        return W
+            if j.parent is None:
+                W[i] = placement @ M if placement is not None else M
+                moved[i] = placement is not None or n in local
+            else:
+                k = self._index[j.parent]
+                W[i] = W[k] @ M
+                moved[i] = moved[k] or n in local
+        return W, moved
 
     def pose(self, values: Mapping[str, Any] | None = None, *, placement: ArrayLike | None = None) -> Pose:
         """The skeleton posed by joint angles or local transforms.
@@ -211,7 +228,9 @@ class Skeleton:
         ----------
         values : mapping of joint name -> float or (4, 4) / (3, 3) array, optional
             An angle (radians) turns the joint about its ``axis``; a matrix is the joint's local
-            rigid motion in its own frame (after its rest transform). Joints not named stay at rest.
+            rigid motion in its own frame (after its rest transform). Joints not named stay at rest
+            and move by exactly the identity (with their ancestors). :attr:`Pose.angles` keeps a
+            given angle as given; for a matrix it is the twist about the axis, in (-pi, pi].
         placement : array_like, shape (4, 4), optional
             A rigid motion of the whole skeleton in world coordinates.
 
@@ -231,16 +250,20 @@ class Skeleton:
             self.joint(name)
             local[name], angles[name] = self._local_motion(name, value)
         G = None if placement is None else check_rigid(placement, "pose: placement")
-        W = self._world(local, G)
-        motions = W @ np.stack([invert_rigid(R) for R in self._rest_world])
-        return Pose(self, W, motions, {n: angles.get(n, 0.0) for n in self._order})
+        W, moved = self._world(local, G)
+        motions = np.broadcast_to(np.eye(4), W.shape).copy()  # joints at rest move by exactly I
+        motions[moved] = W[moved] @ self._rest_inverse[moved]
+        return Pose(self, V.readonly(W), V.readonly(motions),
+                    MappingProxyType({n: angles.get(n, 0.0) for n in self._order}))
 
     # ------------------------------------------------------------------ storage
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: the joints, parents first (:meth:`from_dict` reads it back)."""
         return {"type": "Skeleton", "version": SKELETON_FORMAT, "joints": [self._joints[n].to_dict() for n in self._order]}
 
     @classmethod
     def from_dict(cls, data: Any) -> Skeleton:
+        """The skeleton of :meth:`to_dict`; bad data is one :class:`InvalidGeometryError`."""
         if not isinstance(data, dict) or data.get("type") != "Skeleton":
             raise InvalidGeometryError("skeleton.from_dict: expected a dict with type 'Skeleton'")
         if data.get("version") != SKELETON_FORMAT:
@@ -252,8 +275,10 @@ class Skeleton:
         for k, item in enumerate(items):
             try:
                 joints.append(Joint(item["name"], item["parent"], item["rest"], item["axis"], item["length"]))
-            except (KeyError, TypeError) as err:
-                raise InvalidGeometryError(f"skeleton.from_dict: joint {k}: missing or bad entry ({err!r})") from err
+            except (KeyError, TypeError, ValueError) as err:
+                raise InvalidGeometryError(f"skeleton.from_dict: joint {k}: missing or bad entry ({err})") from err
+            except InvalidGeometryError as err:
+                raise InvalidGeometryError(f"skeleton.from_dict: joint {k}: {err}") from err
         return cls(joints)
 
     def __repr__(self) -> str:
@@ -268,10 +293,11 @@ class Pose:
     ----------
     skeleton : Skeleton
     frames : ndarray, shape (k, 4, 4)
-        World frame of every segment, in :attr:`Skeleton.names` order.
+        World frame of every segment, in :attr:`Skeleton.names` order (read-only).
     motions : ndarray, shape (k, 4, 4)
-        ``frames[j] @ rest_frames[j]^{-1}``: the rigid motion of segment ``j`` from rest.
-    angles : dict of str -> float
+        ``frames[j] @ rest_frames[j]^{-1}``: the rigid motion of segment ``j`` from rest; exactly
+        the identity for segments that did not move (read-only).
+    angles : mapping of str -> float (read-only)
         Per joint, the signed rotation angle about its hinge axis (0 at rest; for a joint posed
         by a matrix, the angle of its rotation measured about the axis).
     """
@@ -279,7 +305,7 @@ class Pose:
     skeleton: Skeleton
     frames: Array
     motions: Array
-    angles: dict[str, float]
+    angles: Mapping[str, float]
 
     def angle(self, name: str) -> float:
         """The signed angle (radians) of joint ``name`` about its hinge axis."""

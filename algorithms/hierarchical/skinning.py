@@ -42,6 +42,7 @@ from ..errors import InvalidGeometryError
 
 __all__ = [
     "BLENDS",
+    "twist_angle",
     "rigid_transform",
     "check_rigid",
     "invert_rigid",
@@ -77,7 +78,11 @@ def rigid_transform(rotation: ArrayLike | None = None, translation: ArrayLike | 
 
 def check_rigid(matrix: ArrayLike, name: str) -> Array:
     """``matrix`` as a float (4, 4) rigid motion (a proper rotation and a translation), or an
-    :class:`InvalidGeometryError` naming ``name`` and what is wrong."""
+    :class:`InvalidGeometryError` naming ``name`` and what is wrong.
+
+    A rotation block within :data:`RIGID_TOL` of orthonormal (e.g. printed with few digits) is
+    replaced by the nearest rotation (polar decomposition, ``U V^T`` of its SVD), so that the
+    motions built from it are rigid to round-off, not to the input's precision."""
     M = V.as_finite_array(matrix, name)
     if M.shape == (3, 3):
         M = np.block([[M, np.zeros((3, 1))], [np.zeros((1, 3)), np.ones((1, 1))]])
@@ -90,6 +95,10 @@ def check_rigid(matrix: ArrayLike, name: str) -> Array:
     if err > RIGID_TOL or np.linalg.det(R) < 0:
         raise InvalidGeometryError(f"{name}: the rotation block is not a proper rotation (|R^T R - I| = {err:.3g}, "
                                    f"det = {np.linalg.det(R):.6g}); scaling, shear and mirroring are not rigid")
+    if err > 1e-13:  # beyond round-off (which is kept bit for bit, so that stored frames read back equal)
+        U, _, Vt = np.linalg.svd(R)
+        M = M.copy()
+        M[:3, :3] = U @ Vt
     return M
 
 
@@ -107,6 +116,18 @@ def rotation_about(axis: ArrayLike, angle: float) -> Array:
     a = a / np.linalg.norm(a)
     K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
     return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+
+
+def twist_angle(R: ArrayLike, axis: ArrayLike) -> float:
+    """The signed angle of the *twist* of rotation ``R`` about the unit ``axis``, in (-pi, pi].
+
+    Swing-twist decomposition ``R = swing * twist`` with ``twist`` a rotation about ``axis``: for
+    the unit quaternion ``(w, v)`` of ``R`` the twist angle is ``2 atan2(v . axis, w)``. A rotation
+    about ``axis`` gives its own angle; one about a perpendicular axis gives 0.
+    """
+    q = quaternions_from_matrices(np.asarray(R, float)[None])[0]
+    a = 2.0 * np.arctan2(float(q[1:] @ np.asarray(axis, float)), float(q[0]))
+    return float(a - 2.0 * np.pi if a > np.pi else a)
 
 
 def quaternions_from_matrices(R: Array) -> Array:

@@ -96,6 +96,10 @@ def normalise(objects: Any, names: Any) -> list[tuple[Any, str | None]]:
 
 
 def _as_shape(obj: Any, label: str) -> Any:
+    from occsurf.algorithms.hierarchical import HierarchicalCurve, HierarchicalSurface
+
+    if isinstance(obj, (HierarchicalSurface, HierarchicalCurve)):  # e.g. a posed figure: its exact flat form
+        obj = obj.flatten()
     if isinstance(obj, TrimmedSurface):  # a trimmed face: its loops rebuilt (conversion.trimming)
         from ..conversion.splines import make_face
 

@@ -502,7 +502,8 @@ def write_step(
     path : str or path-like
         The target; an existing file is replaced only once the new one is complete.
     objects : object or sequence of objects
-        :class:`BSplineSurface` (written as one face over its whole domain), :class:`BSplineCurve`
+        :class:`BSplineSurface` (written as one face over its whole domain; a hierarchical surface or
+        curve, such as a posed figure's ``AttachedSurface.at(pose)``, as its exact ``flatten()``), :class:`BSplineCurve`
         (one edge), ``TopoDS_Shape``, build123d or cadquery shapes (or a cadquery ``Workplane``).
         Surfaces and curves must be 3-D. Each object is one STEP product. A spline with an
         unclamped knot vector is written as its ``clamp()`` (the same geometry): OCC's STEP writer

@@ -43,8 +43,9 @@ def test_a_posed_arm_is_exact_nurbs_that_occ_evaluates_alike(arm):
 
 
 def test_a_pose_written_as_step_reads_back_to_round_off_and_valid(arm, tmp_path):
-    posed = arm.at(arm.skeleton.pose({"elbow": np.radians(60)})).flatten()
-    path = write_step(tmp_path / "arm_060.step", [posed], names=["arm at 60 deg"])
+    hierarchy = arm.at(arm.skeleton.pose({"elbow": np.radians(60)}))
+    posed = hierarchy.flatten()
+    path = write_step(tmp_path / "arm_060.step", [hierarchy], names=["arm at 60 deg"])  # written as its flatten()
     model = read_step(path)
     assert len(model.faces) == 1
     back = model.faces[0].surface
