@@ -123,6 +123,7 @@ def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, fac
     report.path = str(path)
     shown: dict[str, str] = {}
     out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)  # also without pictures: the viewer data goes there
     chosen: set[int] | None = set() if choice == "none" else (
         None if choice == "all" else set(worst_faces(report, WORST_FACES)))
     if choice != "none":
