@@ -30,7 +30,12 @@ if TYPE_CHECKING:
 
     from .report import FaceField, QualityReport
 
-__all__ = ["ColoredMesh", "colored_mesh", "as_edges", "section_curves", "reflection_lines"]
+__all__ = ["ColoredMesh", "colored_mesh", "as_edges", "section_curves", "reflection_lines", "quality_overlays",
+           "OVERLAY_COLORS"]
+
+#: Colours (RGB 0..1) of the overlays of :func:`quality_overlays` that have no edge class.
+OVERLAY_COLORS: dict[str, tuple[float, float, float]] = {
+    "sections": (0.15, 0.15, 0.2), "combs": (0.85, 0.1, 0.55), "inflections": (0.1, 0.7, 0.2)}
 
 
 @dataclass(frozen=True)
@@ -216,3 +221,55 @@ def reflection_lines(field: FaceField, *, levels: Sequence[float] = (0.0, 0.5)) 
             rows = np.arange(len(pts))
             segs.append(np.stack([pts[rows, first], pts[rows, second]], axis=1))
     return np.concatenate(segs) if segs else np.zeros((0, 2, 3))
+
+
+def quality_overlays(source: Any, *, preset: str = "catia") -> list[bd.Compound]:
+    """The report's line sets as coloured, labelled build123d Compounds, to show beside the part in
+    a build123d viewer (``ocp_vscode.show(part, *quality_overlays(part))``) (issue 28).
+
+    Parameters
+    ----------
+    source : QualityReport, ImportedModel or a build123d / cadquery / OCP shape
+        A report of :func:`~occsurf.bridge.quality.report.check_model`, or a model to check (with
+        ``preset``).
+
+    Returns
+    -------
+    list of build123d.Compound
+        ``sections`` (the cuts), ``combs`` (teeth and outlines), ``inflections`` (small crosses at
+        the combs' sign changes) and one ``edges <class>`` per edge-continuity class present (G2,
+        G1, G0, sharp, gap, seam, degenerate; the colours of the report's edge picture). Each has
+        ``label`` and ``color`` set; empty sets are left out.
+    """
+    from build123d import Color, Compound, Edge, Vector
+
+    from .pictures import EDGE_COLORS
+    from .report import QualityReport, check_model
+
+    report = source if isinstance(source, QualityReport) else check_model(source, preset=preset)
+    lines: dict[str, Any] = (section_curves(report) if report.fields
+                             else {"sections": [], "combs": [], "inflections": np.zeros((0, 3))})
+    groups: list[tuple[str, tuple[float, float, float], list[bd.Edge]]] = [
+        ("sections", OVERLAY_COLORS["sections"], as_edges(lines["sections"])),
+        ("combs", OVERLAY_COLORS["combs"], as_edges([c for c in lines["combs"] if len(c) == 2], smooth=False)
+         + as_edges([c for c in lines["combs"] if len(c) > 2])),
+    ]
+    infl = np.asarray(lines["inflections"], float).reshape(-1, 3)
+    if len(infl):
+        r = 0.004 * (report.size or 1.0)
+        crosses = [Edge.make_line(Vector(*(p - r * e)), Vector(*(p + r * e))) for p in infl for e in np.eye(3)]
+        groups.append(("inflections", OVERLAY_COLORS["inflections"], crosses))
+    by_class: dict[str, list[np.ndarray]] = {}
+    for cls, pl in report.edge_lines:
+        by_class.setdefault(cls, []).append(pl)
+    for cls, pls in by_class.items():
+        groups.append((f"edges {cls}", EDGE_COLORS.get(cls, (0.5, 0.5, 0.5)), as_edges(pls)))
+    out: list[bd.Compound] = []
+    for label, rgb, edges in groups:
+        if not edges:
+            continue
+        comp = Compound(children=edges)
+        comp.label = label
+        comp.color = Color(*rgb)
+        out.append(comp)
+    return out

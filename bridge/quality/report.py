@@ -178,6 +178,18 @@ class QualityReport:
         vals = [v for e in self.edges if (v := _finite(e.get("g1_max_deg"))) is not None]
         return max(vals) if vals else None
 
+    def _repr_html_(self) -> str:
+        """The report's page (tables and the interactive 3-D view, no PNGs) inline in Jupyter, VS Code
+        or any notebook: the whole offline page of ``occsurf check`` in an ``<iframe srcdoc>`` (its
+        scripts run inside the frame; nothing is fetched)."""
+        import html as _html
+
+        from .html import render_html, viewer_payload
+
+        page = render_html(self.to_json(), viewer_payload(self), {})
+        return ('<iframe title="occsurf quality report" style="width:100%;height:720px;border:1px solid #ccd" '
+                f'srcdoc="{_html.escape(page, quote=True)}"></iframe>')
+
     def to_json(self) -> dict[str, Any]:
         return {
             "path": self.path, "format": self.format, "model_size": self.size,
