@@ -6,13 +6,13 @@ a *job* (a module-level function, named ``"package.module:function"``) on each o
 *items* in a worker subprocess, one item after the other, and reports each item's
 :class:`Outcome` as soon as it is known:
 
-==========  =====================================================================================
-``ok``      the job returned; ``value`` is what it returned (through JSON)
-``error``   the job raised; ``error`` is the exception on one line (``messages.error_line``)
-``crashed`` the worker died while running this item (``signal``: ``'SIGSEGV'``, ...; ``exit_code``)
-``timeout`` the item took longer than ``timeout`` seconds; the worker was killed
-``failed``  the item was not run: the worker could not start, or died outside any item
-==========  =====================================================================================
+===========  =====================================================================================
+``ok``       the job returned; ``value`` is what it returned (through JSON)
+``error``    the job raised; ``error`` is the exception on one line (``messages.error_line``)
+``crashed``  the worker died while running this item (``signal``: ``'SIGSEGV'``, ...; ``exit_code``)
+``timeout``  the item took longer than ``timeout`` seconds; the worker was killed
+``failed``   the item was not run: the worker could not start, or died outside any item
+===========  =====================================================================================
 
 After a crash or a timeout a new worker carries on with the items after the one that failed;
 every other item is run exactly once. Used by ``occsurf inspect`` and ``occsurf fill``::

@@ -2,7 +2,7 @@
 
 A message that reaches a user (a table cell, a JSON ``error`` field, a line ``occsurf: PATH: reason``
 on stderr) must fit on one line whatever the exception's text holds (OCC messages often span
-several); :func:`strip_path` drops the leading ``PATH: `` from a message shown beside its path. Only
+several); :func:`strip_path` drops the leading ``PATH:`` (and its blank) from a message shown beside its path. Only
 the standard library is imported here, so the command-line process can use it
 without loading NumPy or OCC.
 """

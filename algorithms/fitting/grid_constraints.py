@@ -70,7 +70,7 @@ class FixedPoint:
 
 @dataclass(frozen=True)
 class TangentPlane:
-    """Tangent planes along a boundary: ``normals[k] . dS/dn(params[k]) = 0`` where ``dS/dn`` is the
+    """Tangent planes along a boundary: ``normals[k]·dS/dn(params[k]) = 0`` where ``dS/dn`` is the
     derivative across ``side`` (G1 to a neighbour whose normals these are, at the sites). Where
     ``normals[k]`` is also perpendicular to the boundary's tangent (a neighbour's normal along a
     shared boundary held by :class:`BoundaryCurve`), the surface's normal equals it there."""

@@ -200,7 +200,7 @@ def curvature(curve: BSplineCurve, u: ArrayLike) -> Array:
 
 
 def torsion(curve: BSplineCurve, u: ArrayLike) -> Array:
-    """Torsion ``(C' x C'') . C''' / |C' x C''|^2`` (course §6-4); NaN where the curvature vanishes."""
+    """Torsion ``(C' x C'')·C''' / |C' x C''|^2`` (course §6-4); NaN where the curvature vanishes."""
     return curve_frenet(curve, u).torsion
 
 

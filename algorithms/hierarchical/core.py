@@ -12,7 +12,7 @@ control vertices whose reference parameters (Greville abscissae) lie in that reg
 
 with ``T_N`` the refinement matrices (one per parametric direction), ``o_N`` the stored offsets,
 ``F_N`` the parent's frames at the reference parameters and ``map`` the offset mapping function
-(:mod:`.hierarchical_offsets`). The level spline ``(knots_N, H_N)`` is the surface "up to N"
+(:mod:`.offsets`). The level spline ``(knots_N, H_N)`` is the surface "up to N"
 (base and N's ancestors). Because refinement does not change a spline, the whole hierarchical
 spline is the base plus one small *delta spline* per overlay:
 

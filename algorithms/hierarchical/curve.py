@@ -4,7 +4,7 @@ The one-parameter case of :class:`.hierarchical.HierarchicalSurface`: a base
 :class:`BSplineCurve` (any degree, knots, weights) and a tree of overlays refining parameter
 intervals; overlay vertices are offsets in the parent curve's local frame (2-D: tangent and
 normal; 3-D: tangent, an "up"-aligned normal and their cross product, see
-:mod:`.hierarchical_offsets`) or plain world differences (``offsets="additive"``).
+:mod:`.offsets`) or plain world differences (``offsets="additive"``).
 
 Mutability: as for surfaces, **every edit changes this object in place** and returns ``None``
 (``add_overlay`` returns the handle); :meth:`HierarchicalCurve.copy` keeps a state and

@@ -6,7 +6,7 @@ overlay refines a rectangle of its parent's knot vectors (midpoint insertion by 
 the refined control vertices whose Greville points lie in it; creating one leaves the surface
 unchanged. Each overlay vertex is stored as an offset from its reference vertex (the parent's
 refined vertex) in the parent's local frame at its reference parameter (§5-15, see
-:mod:`.hierarchical_offsets`), so editing a coarse level carries the details along (§5-23..5-24).
+:mod:`.offsets`), so editing a coarse level carries the details along (§5-23..5-24).
 
 Mutability (one rule for every edit)
 ------------------------------------
@@ -89,7 +89,7 @@ class HierarchicalSurface(Hierarchy):
     -----
     **Edits change this object in place** (see the module notes); evaluation never does.
     Evaluation is vectorised; each overlay contributes only where its delta spline's support
-    covers the parameter. See :mod:`.hierarchical_core` for the representation and the caches.
+    covers the parameter. See :mod:`.core` for the representation and the caches.
 
     Examples
     --------
@@ -465,7 +465,7 @@ class HierarchicalSurface(Hierarchy):
         """Inverse of :meth:`to_dict`; loads every format version up to :data:`FORMAT_VERSION`.
 
         A custom offset mapping must be registered first
-        (:func:`.hierarchical_offsets.register_offset_mapping`).
+        (:func:`.offsets.register_offset_mapping`).
         """
         check_format(data, cls._kind)
         try:

@@ -3,7 +3,7 @@
 Ruled surfaces, Coons patches, lofts and Gordon surfaces combine the control points of several
 curves row by row, which is only meaningful when the curves share a degree and a knot vector.
 Compatibility is reached without changing any curve's geometry: a common parameter domain by an
-affine reparametrisation, a common degree by degree elevation (course §2-12), and a common knot
+affine reparametrisation, a common degree by degree elevation (course §2-6), and a common knot
 vector by knot refinement (course §2-10, Oslo algorithm). See also The NURBS Book, 2nd ed., §10.3.
 """
 
@@ -126,7 +126,7 @@ def make_compatible(
 
     Notes
     -----
-    Course §2-10 (knot refinement) and §2-12 (degree raising); The NURBS Book, 2nd ed., §10.3
+    Course §2-10 (knot refinement) and §2-6 (degree raising); The NURBS Book, 2nd ed., §10.3
     ("making curves compatible" for skinning).
     """
     items = _check_curves(curves)

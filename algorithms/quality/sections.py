@@ -85,7 +85,7 @@ class SectionCurve:
 
 @dataclass(frozen=True)
 class Section:
-    """All curves of one cutting plane ``{x : (x - origin) . normal = 0}``.
+    """All curves of one cutting plane ``{x : (x - origin)·normal = 0}``.
 
     Attributes
     ----------
@@ -644,7 +644,7 @@ def _cut_family(point: ArrayLike, point_name: str, direction: ArrayLike, directi
 
 def plane_sections(faces: Sequence[SectionFace], origin: ArrayLike, normal: ArrayLike, offsets: ArrayLike, *,
                    tol: float | None = None, fit: bool = False, scale: float | None = None) -> list[Section]:
-    """Cut faces with the parallel planes ``(x - origin - offset * normal) . normal = 0``.
+    """Cut faces with the parallel planes ``(x - origin - offset * normal)·normal = 0``.
 
     Parameters
     ----------

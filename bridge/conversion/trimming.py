@@ -1,7 +1,7 @@
 """Trimmed faces both ways: an OCC ``TopoDS_Face`` <-> :class:`occsurf.algorithms.TrimmedSurface`.
 
 OCC -> ours (:func:`face_from_occ`, what ``from_occ(face)`` calls)
------------------------------------------------------------------
+------------------------------------------------------------------
 The surface is converted as ``from_occ`` always did (B-spline and Bézier surfaces whole and
 bit-exact; other surfaces on the face's UV box through ``GeomConvert``). Every wire of the face
 (explored on its FORWARD copy, edges in connection order by ``BRepTools_WireExplorer``) gives a

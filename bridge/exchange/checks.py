@@ -29,7 +29,7 @@ hang until the time-out), and the B-spline curves (126) and surfaces (128) have 
 degrees and as many parameters as their counts imply (a negative upper index crashes OCC's reader).
 
 After OCC has read the file: :mod:`.read_warnings`
--------------------------------------------------
+--------------------------------------------------
 :func:`~.read_warnings.occ_check_warnings` turns OCC's own check messages (``Interface_CheckTool``) into warnings: wrong
 arity, a text where a real is expected (read as 0), more than 3 coordinates (cut to 3), a reference of
 the wrong type. :func:`~.read_warnings.model_warnings` compares the model with the file: fewer faces than face instances,

@@ -119,13 +119,13 @@ __all__ = [
 #: STEP round trip is bit-exact.
 STEP_DIGITS: int = 17
 
-#: Per-value relative error bound of OCC's default STEP writer (``%14.12f`` for 0.1 <= |x| < 1000:
+#: Per-value relative error bound of OCC's default STEP writer (``%14.12f`` for ``0.1 <= |x| < 1000``:
 #: 12 decimals, half a unit of 1e-12 on a value of 0.1; ``%14.12E`` elsewhere, 5e-13). Not used by
 #: this module: documentation, and the bound the test of OCC's own writer checks.
 STEP_DEFAULT_RELATIVE_ERROR: float = 5e-12
 
 #: Per-value relative error bound of an IGES round trip: OCC writes ``%11.9f`` for
-#: 0.1 <= |x| < 1000 (absolute error <= 5e-10, relative <= 5e-9 at |x| = 0.1) and ``%11.9E``
+#: ``0.1 <= |x| < 1000`` (absolute error <= 5e-10, relative <= 5e-9 at ``|x| = 0.1``) and ``%11.9E``
 #: elsewhere (10 significant digits, relative <= 5e-10); parsing adds at most half an ulp.
 IGES_RELATIVE_ERROR: float = 5e-9
 
@@ -590,7 +590,7 @@ def write_iges(
 ) -> Path:
     """Write surfaces, curves and shapes to an IGES file (millimetres, faces as 144/128), atomically.
 
-    IGES keeps 10 significant digits (9 decimals for 0.1 <= |x| < 1000): values come back within
+    IGES keeps 10 significant digits (9 decimals for ``0.1 <= |x| < 1000``): values come back within
     :data:`IGES_RELATIVE_ERROR` (``5e-9 |x|``). Use :func:`write_step` for lossless exchange.
 
     Parameters

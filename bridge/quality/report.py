@@ -76,7 +76,7 @@ class FaceField:
     ----------
     mesh : FaceMesh
     values : dict of str -> ndarray, shape (n,)
-        ``'mean'``, ``'gaussian'``, ``'max'`` (k1), ``'min'`` (k2), ``'absolute'`` (|k1|+|k2|),
+        ``'mean'``, ``'gaussian'``, ``'max'`` (k1), ``'min'`` (k2), ``'absolute'`` (``|k1|+|k2|``),
         ``'zebra'`` (phase in [0, 1)), ``'isophote'`` (n . l), ``'draft'`` (degrees); NaN where
         undefined (degenerate points).
     degenerate : ndarray of bool, shape (n,)

@@ -84,7 +84,7 @@ def render_surfaces(
         quad pieces of an S-patch, or data computed elsewhere).
     color : {"mean", "gaussian", "height", "none"}
         The scalar mapped to colour (diverging map, symmetric about 0 for curvatures; the limits
-        are the 98th percentile of |value| over all items unless ``limits`` is given).
+        are the 98th percentile of ``|value|`` over all items unless ``limits`` is given).
     curves : sequence of BSplineCurve or (m, 3) arrays
         Drawn as black lines on top (input curves of a curve net, boundaries).
     nets : sequence of (nu, nv, 3) arrays
