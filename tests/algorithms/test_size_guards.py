@@ -1,0 +1,110 @@
+"""Issue 34, item 8: requests whose size the user sets are refused before the large array exists.
+
+Each case runs under a lowered ``MAX_ARRAY_BYTES`` (1 MB), so the refusal is fast and allocates
+little; each failed on the code before (a MemoryError, minutes of work, or an array far beyond the
+limit). The error is the one :func:`check_size` raises (an ``InvalidGeometryError``), its message
+names the argument and the size.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+
+import numpy as np
+import pytest
+
+from occsurf.algorithms import BSplineCurve, BSplineSurface, tolerances
+from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.algorithms.hierarchical.curve import HierarchicalCurve
+from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
+from occsurf.algorithms.kernel.trimmed import TrimmedSurface
+
+LIMIT = 10**6  # bytes
+
+
+@pytest.fixture(autouse=True)
+def _small_limit() -> Iterator[None]:
+    with tolerances.override(MAX_ARRAY_BYTES=LIMIT):
+        yield
+
+
+def refused(call: Callable[[], object], match: str, seconds: float = 1.0) -> str:
+    """``call`` raises check_size's error matching ``match``, within ``seconds``; its message."""
+    t0 = time.perf_counter()
+    with pytest.raises(InvalidGeometryError, match=match) as info:
+        call()
+    assert time.perf_counter() - t0 < seconds
+    assert "MAX_ARRAY_BYTES" in str(info.value)
+    return str(info.value)
+
+
+def _surface() -> BSplineSurface:
+    t = [0.0] * 4 + [0.5] + [1.0] * 4
+    return BSplineSurface((3, 3), (t, t), np.random.default_rng(0).random((5, 5, 3)))
+
+
+def _curve() -> BSplineCurve:
+    return BSplineCurve(3, [0, 0, 0, 0, 0.5, 1, 1, 1, 1], np.c_[np.linspace(0, 4, 5), np.sin(np.arange(5)), np.zeros(5)])
+
+
+def _square() -> tuple[BSplineCurve, ...]:
+    pts = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    return tuple(BSplineCurve(1, [0, 0, 1, 1], [pts[i], pts[(i + 1) % 4]]) for i in range(4))
+
+
+def _trimmed() -> TrimmedSurface:
+    return TrimmedSurface(_surface(), _square())
+
+
+# ------------------------------------------------------------------ broadcast u, v
+def test_broadcast_u_v_is_refused_before_the_points_exist() -> None:
+    """``u`` of shape (n, 1) and ``v`` of shape (1, n) ask for n^2 points: evaluate allocated them
+    (and derivatives flattened them before its own check)."""
+    u = np.linspace(0, 1, 2000)[:, None]
+    v = np.linspace(0, 1, 2000)[None, :]
+    s, hs, ts = _surface(), HierarchicalSurface(_surface()), _trimmed()
+    for call in (lambda: s.evaluate(u, v), lambda: s.derivatives(u, v, 1), lambda: s.normal(u, v),
+                 lambda: hs.evaluate(u, v), lambda: hs.derivatives(u, v, 1),
+                 lambda: ts.evaluate(u, v), lambda: ts.classify(u, v), lambda: ts.contains(u, v),
+                 lambda: ts.normal(u, v)):
+        refused(call, r"u, v broadcast to shape \(2000, 2000\)")
+    refused(lambda: ts.derivatives(u[:200], v[:, :200], 4), r"u, v broadcast to shape \(200, 200\) for derivatives "
+            "of order 4")
+    # within the limit: the same values as before
+    small_u, small_v = u[:20], v[:, :20]
+    assert s.evaluate(small_u, small_v).shape == (20, 20, 3)
+    np.testing.assert_allclose(hs.evaluate(small_u, small_v), s.evaluate(small_u, small_v), atol=1e-14)
+    np.testing.assert_allclose(ts.evaluate(small_u * 0.5 + 0.25, small_v * 0.5 + 0.25),
+                               s.evaluate(small_u * 0.5 + 0.25, small_v * 0.5 + 0.25), atol=1e-14)
+
+
+# ------------------------------------------------------------------ add_overlay(knots=)
+def test_add_overlay_knots_are_refused_before_the_dense_refinement() -> None:
+    """``add_overlay(knots=...)`` built the dense (new poles x old poles) Oslo matrix and the refined
+    net with no check: 1e5 knots took ~1e10 floats."""
+    many = np.linspace(0.01, 0.99, 100_000)
+    hs = HierarchicalSurface(_surface())
+    refused(lambda: hs.add_overlay((0.0, 1.0), (0.0, 1.0), knots=(many, [0.5 + 1e-3])),
+            r"add_overlay with knots= of 100000 inserted u-knots \(the refinement matrix\)")
+    hs_big = HierarchicalSurface(BSplineSurface((1, 1), (np.r_[0, np.linspace(0, 1, 201), 1],) * 2,
+                                                np.random.default_rng(1).random((201, 201, 3))))
+    fine = np.linspace(0.001, 0.999, 400)
+    refused(lambda: hs_big.add_overlay((0.0, 1.0), (0.0, 1.0), knots=(fine, fine)),
+            r"add_overlay with knots= of 400 x 400 inserted \(the refined net\)")
+    hc = HierarchicalCurve(_curve())
+    refused(lambda: hc.add_overlay((0.0, 1.0), knots=many), "add_overlay with knots= of 100000 inserted knots")
+    assert hs.add_overlay((0.0, 1.0), (0.0, 1.0), knots=(many[:50], [0.25])).shape[0] > 50  # within the limit
+
+
+# ------------------------------------------------------------------ polylines(tol)
+def test_trimmed_polylines_with_a_tiny_tol_are_refused_while_refining() -> None:
+    """``polylines(tol=0)``: every segment fails the midpoint test, so 30 halvings asked for
+    ~2^30 points per loop."""
+    c = BSplineCurve(2, [0, 0, 0, 1, 1, 1], [(0, 0), (1, 1.5), (1, 0)])  # a curved p-curve
+    loop = (c, BSplineCurve(1, [0, 0, 1, 1], [(1, 0), (0, 0)]))
+    ts = TrimmedSurface(BSplineSurface((1, 1), ([0, 0, 1, 1],) * 2, np.random.default_rng(2).random((2, 2, 3))),
+                        loop)
+    refused(lambda: ts.polylines(0.0), r"tol = 0: a p-curve's polyline within tol")
+    refused(lambda: ts.polylines(1e-300), r"tol = 1e-300")
+    assert ts.polylines(1e-6)[0].shape[0] > 10
