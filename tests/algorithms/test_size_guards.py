@@ -108,3 +108,26 @@ def test_trimmed_polylines_with_a_tiny_tol_are_refused_while_refining() -> None:
     refused(lambda: ts.polylines(0.0), r"tol = 0: a p-curve's polyline within tol")
     refused(lambda: ts.polylines(1e-300), r"tol = 1e-300")
     assert ts.polylines(1e-6)[0].shape[0] > 10
+
+
+# ------------------------------------------------------------------ scattered fits
+def test_scattered_fit_pole_counts_are_refused_before_the_normal_equations() -> None:
+    """``fit_scattered(n_poles=(1e5, 1e5))`` made a dense (n, n) difference matrix (80 GB) and a
+    sparse LU whose fill grows as n_u n_v min(n_u, n_v); both fits now refuse up front, naming
+    ``n_poles`` / ``base_poles``."""
+    from occsurf.algorithms.fitting.adaptive_scattered import fit_adaptive_scattered
+    from occsurf.algorithms.fitting.scattered import fit_scattered
+
+    X = np.random.default_rng(3).random((400, 3))
+    refused(lambda: fit_scattered(X, (100_000, 100_000)), r"n_poles = \(100000, 100000\): the penalised normal")
+    refused(lambda: fit_scattered(X, (60, 60)), r"n_poles = \(60, 60\)")
+    refused(lambda: fit_adaptive_scattered(X, 1e-3, base_poles=(60, 60)), r"base_poles = \(60, 60\)")
+    assert fit_scattered(X, (8, 8)).surface.n_poles == (8, 8)  # within the limit
+
+
+def test_sparse_difference_penalty_equals_the_dense_one() -> None:
+    from occsurf.algorithms.fitting._common import difference_penalty, sparse_difference_penalty
+
+    for n in (1, 2, 3, 7):
+        for order in (1, 2, 3):
+            np.testing.assert_array_equal(sparse_difference_penalty(n, order).toarray(), difference_penalty(n, order))
