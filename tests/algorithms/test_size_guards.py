@@ -131,3 +131,80 @@ def test_sparse_difference_penalty_equals_the_dense_one() -> None:
     for n in (1, 2, 3, 7):
         for order in (1, 2, 3):
             np.testing.assert_array_equal(sparse_difference_penalty(n, order).toarray(), difference_penalty(n, order))
+
+
+# ------------------------------------------------------------------ S-patches
+def test_spatch_depth_elevation_and_wachspress_order_are_refused_up_front() -> None:
+    """``elevate_depth(times=200)`` ran 252 s into 965 MB; ``wachspress_derivatives(order=500)``
+    built ~order^4 / 24 jet terms."""
+    from occsurf.algorithms.topology.spatch import SPatch
+    from occsurf.algorithms.topology.wachspress import wachspress_derivatives
+
+    from .test_spatch_convert import random_patch
+
+    patch = random_patch(np.random.default_rng(4), 5, 3)
+    refused(lambda: patch.elevate_depth(200), r"elevate_depth\(times=200\) from depth 3 to 203")
+    refused(lambda: patch.elevate_depth(12), r"elevate_depth\(times=12\)")
+    assert isinstance(patch.elevate_depth(2), SPatch)
+    pts = np.zeros((4000, 2))
+    refused(lambda: wachspress_derivatives(pts, 5, 6), r"wachspress_derivatives of order 6 at 4000 points")
+    with pytest.raises(InvalidGeometryError, match="order: 500 exceeds SPATCH_MAX_DERIVATIVE_ORDER"):
+        wachspress_derivatives(pts[:1], 5, 500)
+    assert wachspress_derivatives(pts[:10], 5, 2).shape == (10, 5, 3, 3)
+
+
+# ------------------------------------------------------------------ curves: approximation, interpolation
+def test_polynomial_approximation_is_refused_before_a_step_passes_the_limit() -> None:
+    """A tolerance never met and ``max_subdivisions=2**40`` doubled the pieces until MemoryError."""
+    from occsurf.algorithms.construction.coons_patches import polynomial_approximation
+    from occsurf.algorithms.kernel.conics import circle
+
+    c = circle([0.0, 0.0, 0.0], 1.0)
+    refused(lambda: polynomial_approximation(c, 0.0, max_subdivisions=2**40),
+            r"polynomial_approximation with max_subdivisions=1099511627776: \d+ pieces per span")
+    with pytest.raises(InvalidGeometryError, match="max_subdivisions: expected a positive integer"):
+        polynomial_approximation(c, 1e-3, max_subdivisions=float("inf"))
+    assert polynomial_approximation(c, 1e-4)[1] <= 1e-4
+
+
+def test_interpolation_is_banded_and_the_dense_fits_are_refused() -> None:
+    """``interpolate_curve`` of m points built a dense m x m matrix (20 000 points: 3.2 GB); now the
+    band alone, so 20 000 points interpolate within a 1 MB limit. ``fit_curve`` keeps its dense
+    least-squares operator and is refused, naming ``points``."""
+    from occsurf.algorithms.fitting.interpolation import fit_curve, interpolate_curve, interpolate_surface, parametrize
+    from occsurf.algorithms.kernel.basis import basis_matrix
+
+    s = np.linspace(0, 6, 20_000)
+    Q = np.c_[np.cos(s), np.sin(s), s / 10]
+    c = interpolate_curve(Q)
+    u = parametrize(Q)
+    np.testing.assert_allclose(c.evaluate(u[::997]), Q[::997], rtol=0, atol=1e-12)
+    small = Q[::200]
+    c_small = interpolate_curve(small)
+    dense = np.linalg.solve(basis_matrix(c_small.knots, 3, small.shape[0], parametrize(small))[0], small)
+    np.testing.assert_allclose(c_small.control_points, dense, rtol=0, atol=1e-13)  # the same poles as the dense solve
+    refused(lambda: fit_curve(Q[:2000], 500), r"points: 2000 data points need \d+ dense 2000 x 500 matrices")
+    refused(lambda: interpolate_surface(np.random.default_rng(5).random((400, 4, 3))),
+            r"points: 400 data points need 3 dense 400 x 400 matrices")
+
+
+# ------------------------------------------------------------------ plates, frames
+def test_fill_plate_max_spans_and_frame_dims_are_refused_up_front() -> None:
+    from occsurf.algorithms.geometry.affine_maps import AffineMap, Frame
+    from occsurf.algorithms.topology.nsided import HoleSide
+    from occsurf.algorithms.topology.plate_fill import fill_plate
+
+    sq = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    sides = []
+    for i in range(4):
+        a, b = sq[i], sq[(i + 1) % 4]
+        out = np.cross(b - a, [0, 0, 1.0])
+        sides.append(HoleSide(BSplineCurve(1, [0, 0, 1, 1], np.array([a, b])),
+                              BSplineCurve(1, [0, 0, 1, 1], np.array([out, out]))))
+    refused(lambda: fill_plate(sides, max_spans=10**6), r"max_spans: a plate of up to n_poles = \(1000003, 1000003\)")
+    refused(lambda: fill_plate(sides, max_spans=40), r"max_spans")
+    refused(lambda: Frame.standard(10**6), r"Frame.standard\(dim=1000000\)")
+    refused(lambda: AffineMap.identity(10**5), r"AffineMap.identity\(dim=100000\)")
+    with pytest.raises(InvalidGeometryError, match="dim: expected a positive integer"):
+        Frame.standard(0)
+    assert Frame.standard(4).basis.shape == (4, 4)
