@@ -181,6 +181,16 @@ def check_size(shape: tuple[int, ...], what: str, itemsize: int = 8) -> None:
                                    "ask for less (or raise the limit with tolerances.override(MAX_ARRAY_BYTES=...))")
 
 
+def check_count(value: object, name: str, per_item: int, minimum: int = 1) -> int:
+    """A count the user sets (samples, levels, ticks): an integer ``>= minimum`` whose arrays,
+    ``per_item`` floats for each, fit ``tolerances.MAX_ARRAY_BYTES`` (refused before they exist)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or int(value) < minimum:
+        raise InvalidGeometryError(f"{name}: expected an integer >= {minimum}, got {value!r}")
+    k = int(value)
+    check_size((k, per_item), f"{name} = {k}")
+    return k
+
+
 def check_homogeneous(points: NDArray[np.float64], weights: NDArray[np.float64] | None) -> None:
     """Rational poles whose homogeneous form ``w P`` overflows (poles 1e150, weights 1e200) would
     evaluate to inf or NaN: refused. Evaluation is a convex combination of ``w P`` and ``w``, so

@@ -208,3 +208,48 @@ def test_fill_plate_max_spans_and_frame_dims_are_refused_up_front() -> None:
     with pytest.raises(InvalidGeometryError, match="dim: expected a positive integer"):
         Frame.standard(0)
     assert Frame.standard(4).basis.shape == (4, 4)
+
+
+# ------------------------------------------------------------------ quality grids, counts, arc length
+def test_quality_grids_and_counts_are_refused_before_their_arrays() -> None:
+    """Curvature maps, flags and hedgehogs on every path (NumPy, numba, S-patch, trimmed) check the
+    grid once; counts (comb samples, fold grids, fill samples, isophote levels, legend ticks,
+    patch-continuity samples) and arc-length limit pairs are checked before their arrays."""
+    from occsurf.algorithms.geometry.differential import arc_length
+    from occsurf.algorithms.quality import curvature_comb, curvature_map, face_flags, isophotes, normal_hedgehog
+    from occsurf.algorithms.topology.nsided_measure import count_folds
+
+    from .test_spatch_convert import random_patch
+
+    s, ts, patch = _surface(), _trimmed(), random_patch(np.random.default_rng(6), 5, 3)
+    for call in (lambda: curvature_map(s, us=400, vs=400), lambda: curvature_map(ts, us=400, vs=400),
+                 lambda: curvature_map(patch, us=400, vs=400), lambda: face_flags(s, us=400, vs=400),
+                 lambda: normal_hedgehog(s, us=400, vs=400)):
+        refused(call, r"us, vs: a 400 x 400 grid")
+    refused(lambda: curvature_map(s, us=10**12, vs=3), r"us: 1000000000000 samples")
+    assert curvature_map(s, us=20, vs=20).values.shape == (20, 20)
+    refused(lambda: curvature_comb(_curve(), n=10**6), r"n = 1000000")
+    refused(lambda: count_folds(s, grid=1000), r"grid = 1000: a 1000 x 1000 grid")
+    refused(lambda: isophotes(np.array([[0, 0, 1.0]]), [0, 0, 1.0], levels=10**6), r"levels = 1000000")
+    cmap = curvature_map(s, us=5, vs=5)
+    from occsurf.algorithms.quality import color_scale
+    refused(lambda: color_scale(cmap.values).legend_ticks(10**6), r"n = 1000000")
+    c = _curve()
+    refused(lambda: arc_length(c, np.zeros((3000, 1)), np.ones((1, 3000)) * 0.5),
+            r"u0, u1 broadcast to shape \(3000, 3000\)")
+    assert float(arc_length(c, 0.0, 1.0)) > 0
+
+
+def test_fill_and_generalized_samples_are_refused_before_their_arrays() -> None:
+    from occsurf.algorithms.topology.generalized import generalized_biquadratic
+    from occsurf.algorithms.topology.nsided import fill_hole
+    from occsurf.algorithms.topology.nsided_measure import measure_fill
+
+    from .test_generalized import ngon_with_skirt
+    from .test_nsided_split import _circle, _planar
+
+    fill = fill_hole([_planar(_circle())])
+    refused(lambda: measure_fill(fill, samples=10**6), r"samples = 1000000")
+    g = generalized_biquadratic(ngon_with_skirt(5, np.random.default_rng(7)))
+    refused(lambda: g.continuity(samples=10**6), r"samples = 1000000")
+    assert g.continuity(samples=9)[0] >= 0.0
