@@ -157,11 +157,12 @@ def grid_axes(surface: Evaluable, us: ArrayLike | int, vs: ArrayLike | int) -> t
 GRID_FLOATS_PER_POINT = 80
 
 
-def check_grid(m: int, n: int) -> None:
+def check_grid(m: int, n: int, name: str = "us, vs") -> None:
     """Refuse an ``m x n`` quality grid above ``tolerances.MAX_ARRAY_BYTES`` before any of its
-    per-point arrays exist (every path: NumPy, the numba kernel, S-patches, trimmed faces)."""
+    per-point arrays exist (every path: NumPy, the numba kernel, S-patches, trimmed faces);
+    ``name`` is the argument that set the grid."""
     V.check_size((m, n, GRID_FLOATS_PER_POINT),
-                 f"us, vs: a {m} x {n} grid ({GRID_FLOATS_PER_POINT} floats per point for the partials and fields)")
+                 f"{name}: a {m} x {n} grid ({GRID_FLOATS_PER_POINT} floats per point for the partials and fields)")
 
 
 def trim_mask(surface: QualitySurface, us: Array, vs: Array, mask: NDArray[np.bool_] | None) -> NDArray[np.bool_] | None:
