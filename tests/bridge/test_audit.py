@@ -74,6 +74,41 @@ def test_sha256_and_sniffing(tmp_path: Path) -> None:
     assert entries[0].sha256 == hashlib.sha256(data).hexdigest() and entries[1].error == "no such file"
 
 
+def test_hashing_respects_the_timeout(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 34: the corpus was hashed before ``--timeout`` applied. A read that keeps returning
+    blocks is stopped between two of them; one that blocks inside the system call (a hung network
+    share, simulated) is recorded ``timeout`` at its deadline while the other files are hashed, and
+    its stuck thread holds up nothing."""
+    import threading
+    import time
+
+    data = os.urandom(3 << 20)
+    files = [tmp_path / f"{k}.step" for k in range(4)]
+    for f in files:
+        f.write_bytes(data)
+    slow = corpus.hash_entries([corpus.Entry(str(files[0]))], timeout=1e-9)[0]  # past it after the first block
+    assert slow.timed_out and slow.sha256 is None and slow.error == (
+        "reading it to hash its contents took more than 1e-09 s (--timeout); not audited")
+    release = threading.Event()
+    real = corpus.sha256_of
+
+    def hung(path: str, deadline: float | None = None) -> tuple[str, int]:
+        if path.endswith("1.step"):
+            release.wait(60)  # a read(2) that does not return
+        return real(path, deadline)
+
+    monkeypatch.setattr(corpus, "sha256_of", hung)
+    t0 = time.monotonic()
+    entries = corpus.hash_entries([corpus.Entry(str(f)) for f in files], threads=1, timeout=0.5)
+    took = time.monotonic() - t0
+    release.set()
+    assert 0.5 <= took < 3.0, took
+    assert [e.timed_out for e in entries] == [False, True, False, False]
+    assert all(e.sha256 == hashlib.sha256(data).hexdigest() for e in entries if not e.timed_out)
+    assert "more than 0.5 s (--timeout)" in (entries[1].error or "")
+    assert corpus.hash_entries([corpus.Entry(str(files[2]))], timeout=None)[0].sha256 is not None
+
+
 # ------------------------------------------------------------------------------------ reader
 @pytest.mark.slow
 @pytest.mark.skipif(os.name != "posix", reason="needs POSIX signals")
