@@ -148,10 +148,9 @@ def new_window(width: int, height: int, *, multisamples: int = 0) -> vtkRenderWi
     """An offscreen render window: EGL (no display needed) when the build has it, else the default.
 
     ``multisamples=0`` (the scene's choice: FXAA on the renderer instead, half the read-back time of
-    4x MSAA); the error maps of ``occsurf fit`` ask for 4. Sizes whose buffers would exceed
-    ``tolerances.MAX_ARRAY_BYTES`` are refused first (:func:`check_pixels`).
+    4x MSAA); the error maps of ``occsurf fit`` ask for 4.
     """
-    check_pixels(width, height, multisamples)
+    check_pixels(width, height, multisamples)  # too large for MAX_ARRAY_BYTES: refused first
     import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (registers the OpenGL factories)
     from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
     from vtkmodules.vtkRenderingCore import vtkRenderWindow
@@ -172,19 +171,13 @@ def new_window(width: int, height: int, *, multisamples: int = 0) -> vtkRenderWi
 
 _WINDOWS: dict[tuple[int, int, int], vtkRenderWindow] = {}
 
-#: Bytes a picture takes per pixel beyond 8 per multisample (colour and depth): the resolved
-#: buffers, VTK's pixel and depth arrays and our RGB and float32 depth copies.
-PIXEL_BYTES = 24
-
-
 def check_pixels(width: int, height: int, multisamples: int = 0) -> None:
-    """Refuse a picture whose buffers would exceed ``tolerances.MAX_ARRAY_BYTES`` before the window
-    exists (16384 x 16384 with 16 samples asked for ~39 GB); the message names ``size``."""
+    """Refuse, before the window exists, a picture whose buffers (8 bytes per multisample, 24 more per
+    pixel: resolved buffers, the copies read back) exceed ``tolerances.MAX_ARRAY_BYTES``."""
     from occsurf.algorithms._validate import check_size
 
-    check_size((int(height), int(width), 8 * max(int(multisamples), 1) + PIXEL_BYTES),
-               f"size: a {int(width)} x {int(height)} picture with {int(multisamples)} samples "
-               "(framebuffer, depth and their copies)", itemsize=1)
+    w, h, s = int(width), int(height), int(multisamples)
+    check_size((h, w, 8 * max(s, 1) + 24), f"size: a {w} x {h} picture with {s} samples", itemsize=1)
 
 
 def window(width: int, height: int, multisamples: int = 0) -> vtkRenderWindow:
