@@ -240,6 +240,11 @@ def test_summary_counts_and_worst(tmp_path: Path) -> None:
     assert doc["roundtrip"] == {"n_faces": 2, "n_inexact": 1, "max_dev": 1e-13}
     assert json.loads((out / "summary.json").read_text()) == doc
     assert (out / "summary.html").read_text().count("data:image/png;base64,") == 4
+    # a file whose hashing passed --timeout is counted and listed as a timeout, not an error
+    hung = corpus.Entry("/x/hung.step", error="reading it to hash its contents took more than 5 s", timed_out=True)
+    doc = write_summary(out, ["a", "b", "c"], n_input=5, unreadable=[corpus.Entry("/x/gone", error="cannot read"), hung])
+    assert doc["counts"] == {"ok": 2, "error": 1, "crashed": 0, "timeout": 2, "missing": 0}
+    assert {"path": "/x/hung.step", "status": "timeout", "error": hung.error, "signal": None} in doc["failures"]
 
 
 # ------------------------------------------------------------------------------------ CLI
