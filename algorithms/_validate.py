@@ -115,18 +115,31 @@ def check_parameters(u: ArrayLike, lo: float, hi: float, name: str = "u") -> NDA
     return np.clip(a, lo, hi)
 
 
-def check_uv(u: ArrayLike, v: ArrayLike, domain: tuple[tuple[float, float], tuple[float, float]]
-             ) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[int, ...]]:
+def check_uv(u: ArrayLike, v: ArrayLike, domain: tuple[tuple[float, float], tuple[float, float]],
+             per_point: int = 8) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[int, ...]]:
     """Surface parameters ``u, v`` checked against ``domain``, broadcast together and flattened;
-    returns ``(u, v, shape)`` with ``shape`` the broadcast shape."""
+    returns ``(u, v, shape)`` with ``shape`` the broadcast shape. The broadcast shape times
+    ``per_point`` floats (what the caller allocates per point) is checked by :func:`check_size`
+    before the flattened copies are made."""
     (u0, u1), (v0, v1) = domain
     a = check_parameters(u, u0, u1, "u")
     b = check_parameters(v, v0, v1, "v")
-    try:
-        a, b = np.broadcast_arrays(a, b)
-    except ValueError as err:
-        raise ParameterError(f"u, v: shapes {np.shape(a)} and {np.shape(b)} do not broadcast") from err
+    check_broadcast(a, b, per_point)
+    a, b = np.broadcast_arrays(a, b)
     return a.reshape(-1), b.reshape(-1), a.shape
+
+
+def check_broadcast(u: ArrayLike, v: ArrayLike, per_point: int, what: str = "") -> tuple[int, ...]:
+    """The shape ``u`` and ``v`` broadcast to, refused before anything of that shape is made when
+    ``per_point`` floats per point would exceed ``tolerances.MAX_ARRAY_BYTES`` (``u`` of shape
+    ``(n, 1)`` and ``v`` of shape ``(1, n)`` ask for ``n**2`` points). ``what`` is added to the
+    message (the request, e.g. " for derivatives of order 9")."""
+    try:
+        shape = np.broadcast_shapes(np.shape(u), np.shape(v))
+    except ValueError as err:
+        raise ParameterError(f"u, v: shapes {np.shape(u)} and {np.shape(v)} do not broadcast") from err
+    check_size(shape + (per_point,), f"u, v broadcast to shape {shape}{what} ({per_point} floats per point)")
+    return shape
 
 
 def check_parameter(u: ArrayLike, lo: float, hi: float, name: str = "u") -> float:
@@ -166,6 +179,16 @@ def check_size(shape: tuple[int, ...], what: str, itemsize: int = 8) -> None:
         raise InvalidGeometryError(f"{what}: needs an array of shape {tuple(int(k) for k in shape)} "
                                    f"({size / 2**30:.3g} GiB), more than MAX_ARRAY_BYTES = {limit / 2**30:.3g} GiB; "
                                    "ask for less (or raise the limit with tolerances.override(MAX_ARRAY_BYTES=...))")
+
+
+def check_count(value: object, name: str, per_item: int, minimum: int = 1) -> int:
+    """A count the user sets (samples, levels, ticks): an integer ``>= minimum`` whose arrays,
+    ``per_item`` floats for each, fit ``tolerances.MAX_ARRAY_BYTES`` (refused before they exist)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or int(value) < minimum:
+        raise InvalidGeometryError(f"{name}: expected an integer >= {minimum}, got {value!r}")
+    k = int(value)
+    check_size((k, per_item), f"{name} = {k}")
+    return k
 
 
 def check_homogeneous(points: NDArray[np.float64], weights: NDArray[np.float64] | None) -> None:

@@ -134,7 +134,8 @@ def polynomial_approximation(curve: BSplineCurve, tol: float | None = None, *,
     tol : float, optional
         Default ``tolerances.APPROXIMATION_TOLERANCE``.
     max_subdivisions : int
-        Largest ``k`` tried.
+        Largest ``k`` tried. A step whose work arrays would exceed ``tolerances.MAX_ARRAY_BYTES``
+        is refused before it is made (InvalidGeometryError).
 
     Returns
     -------
@@ -148,6 +149,7 @@ def polynomial_approximation(curve: BSplineCurve, tol: float | None = None, *,
     """
     c = check_curve(curve, "curve")
     tol = resolve_tolerance(tol, tolerances.APPROXIMATION_TOLERANCE)
+    cap = V.check_times(max_subdivisions, "max_subdivisions")
     if not c.is_rational:
         return c, 0.0
     c = c.clamp()
@@ -156,7 +158,11 @@ def polynomial_approximation(curve: BSplineCurve, tol: float | None = None, *,
     mult = np.minimum(mult + (p - c.degree), p + 1)  # keeps the curve's continuity at its knots
     k = 2
     err = np.inf
-    while k <= max_subdivisions:
+    while k <= cap:
+        # per piece: knots, Greville sites, homogeneous values, the banded system (2p + 1) and 16
+        # samples of both curves; refused before the step that would pass MAX_ARRAY_BYTES
+        V.check_size(((vals.size - 1) * k, 4 + c.dim + 2 * p + 1 + 16 * 2 * (c.dim + 1)),
+                     f"polynomial_approximation with max_subdivisions={cap}: {k} pieces per span of {vals.size - 1}")
         f = np.linspace(0.0, 1.0, k + 1)[1:-1]
         extra = (vals[:-1, None] + f * np.diff(vals)[:, None]).ravel()
         kn = np.sort(np.r_[np.repeat(vals, mult), extra])
@@ -171,7 +177,7 @@ def polynomial_approximation(curve: BSplineCurve, tol: float | None = None, *,
         k *= 2
     raise ToleranceError(
         f"polynomial_approximation: could not approximate the rational curve within tol={tol:g} "
-        f"(error {err:.3g} with {max_subdivisions} pieces per span)"
+        f"(error {err:.3g} with {k // 2} pieces per span)"
     )
 
 

@@ -49,7 +49,7 @@ from ..errors import InvalidGeometryError, ParameterError
 from ..hierarchical.core import Overlay
 from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.surface import BSplineSurface
-from ._common import difference_penalty, project_points
+from ._common import check_fit_size, project_points, sparse_difference_penalty
 from ._refine import (
     FitSummary,
     LevelReport,
@@ -157,8 +157,8 @@ class _BaseSolver:
         self.A = scattered_collocation(self.knots, self.deg, self.n, u, v)
         G = (self.A.T @ self.A).tocsr()
         nu, nv = self.n
-        pen = sp.kron(sp.csr_matrix(difference_penalty(nu)), sp.identity(nv)) + \
-            sp.kron(sp.identity(nu), sp.csr_matrix(difference_penalty(nv)))
+        pen = sp.kron(sparse_difference_penalty(nu), sp.identity(nv)) + \
+            sp.kron(sp.identity(nu), sparse_difference_penalty(nv))
         c = G.diagonal().sum() / max(pen.diagonal().sum(), 1e-300)
         self.lu = spla.splu((G + (lam * c) * pen).tocsc())
 
@@ -359,6 +359,7 @@ def fit_adaptive_scattered(points: ArrayLike, tol: float, degree: int | tuple[in
     if not (u.max() > u.min() and v.max() > v.min()):
         raise InvalidGeometryError("params: the points' parameters span no area (collinear or coincident points)")
     poles = _pair_of(base_poles, "base_poles") if base_poles is not None else (pu + 5, pv + 5)
+    check_fit_size(poles, (pu, pv), "base_poles")
     for _ in range(int(corrections)):
         u, v = _corrected(X, u, v, poles, (pu, pv), lam)
     if knots is None:

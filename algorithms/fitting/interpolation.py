@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError, ParameterError
-from ..kernel.basis import basis_matrix
+from ..kernel.basis import basis_functions, basis_matrix, find_span
 from ..kernel.compat import make_compatible
 from ..kernel.curve import BSplineCurve
 from ..kernel.rational import from_homogeneous, to_homogeneous
@@ -229,15 +229,22 @@ def approximation_knots(params: ArrayLike, n_poles: int, degree: int) -> Array:
 
 
 # ----------------------------------------------------------------------------- operators
-def _collocation(params: Array, degree: int, knots: Array, n: int) -> Array:
+def _collocation(params: Array, degree: int, knots: Array, n: int, name: str = "points", copies: int = 1) -> Array:
+    """The dense ``(m, n)`` collocation matrix, refused above ``tolerances.MAX_ARRAY_BYTES`` (with
+    ``copies`` matrices of its size alive at once) before it exists: ``name`` holds the data."""
+    m = params.shape[0]
+    V.check_size((copies * m, n), f"{name}: {m} data points need {copies} dense {m} x {n} matrices")
     return basis_matrix(knots, degree, n, params)[0]
 
 
 def _check_sw(B: Array, name: str) -> None:
+    _check_sw_diagonal(np.diagonal(B), name)
+
+
+def _check_sw_diagonal(d: Array, name: str) -> None:
     # Schoenberg–Whitney margin: refused when some basis function is smaller than
     # tolerances.SCHOENBERG_WHITNEY at its own data site (the matrix is then singular or nearly so,
     # and the "interpolant" would be meaningless). Relative to the basis' maximum of 1.
-    d = np.diagonal(B)
     margin = tolerances.SCHOENBERG_WHITNEY
     if np.any(d < margin):
         i = int(np.argmax(d < margin))
@@ -247,19 +254,23 @@ def _check_sw(B: Array, name: str) -> None:
         )
 
 
-def _banded_solve(B: Array, rhs: Array) -> Array:
-    nz = np.nonzero(B)
-    lo = int(max(0, (nz[0] - nz[1]).max()))
-    up = int(max(0, (nz[1] - nz[0]).max()))
-    n = B.shape[0]
-    ab = np.zeros((lo + up + 1, n))
-    for k in range(-lo, up + 1):  # one diagonal per pass: at most 2p + 1 passes
-        diag = np.diagonal(B, k)
-        if k >= 0:
-            ab[up - k, k:] = diag
-        else:
-            ab[up - k, :n + k] = diag
-    flat = rhs.reshape(n, -1)
+def _banded_interpolation(u: Array, degree: int, knots: Array, rhs: Array, name: str) -> Array:
+    """Solve ``B P = rhs`` for the square collocation matrix ``B[i, j] = N_j(u_i)`` in LAPACK's
+    banded storage, built from the ``degree + 1`` non-zero basis functions per row: ``O(m p)``
+    memory (a dense ``B`` for 20 000 points took 3.2 GB)."""
+    m, p = u.shape[0], degree
+    span = find_span(knots, p, m, u)
+    N = basis_functions(knots, p, span, u)  # (m, p + 1)
+    rows = np.broadcast_to(np.arange(m)[:, None], N.shape)
+    cols = span[:, None] - p + np.arange(p + 1)
+    diag = np.where(rows == cols, N, 0.0).sum(axis=1)
+    _check_sw_diagonal(diag, name)
+    nz = N != 0
+    off = (cols - rows)[nz]
+    lo, up = int(max(0, -off.min())), int(max(0, off.max()))
+    ab = np.zeros((lo + up + 1, m))
+    ab[up + rows[nz] - cols[nz], cols[nz]] = N[nz]
+    flat = rhs.reshape(m, -1)
     return scipy.linalg.solve_banded((lo, up), ab, flat, check_finite=False).reshape(rhs.shape)
 
 
@@ -292,19 +303,18 @@ def interpolate_values(params: ArrayLike, values: ArrayLike, degree: int, knots:
     lo, hi = t[p], t[m]
     if u[0] < lo - 1e-12 * (hi - lo) or u[-1] > hi + 1e-12 * (hi - lo):
         raise ParameterError(f"params: must lie in the knot domain [{lo!r}, {hi!r}], got [{u[0]!r}, {u[-1]!r}]")
-    B = _collocation(np.clip(u, lo, hi), p, t, m)
-    _check_sw(B, "params")
-    return _banded_solve(B, Y)
+    return _banded_interpolation(np.clip(u, lo, hi), p, t, Y, "params")
 
 
 def _lsq_operator(params: Array, degree: int, knots: Array, n: int) -> Array:
     """The (n, m) matrix mapping data to least-squares poles with both end points interpolated."""
     m = params.shape[0]
-    if n == m:
-        B = _collocation(params, degree, knots, n)
+    if n == m:  # the matrix, the identity and the inverse
+        B = _collocation(params, degree, knots, n, copies=3)
         _check_sw(B, "params")
         return cast(Array, np.linalg.solve(B, np.eye(m)))  # numpy's stubs type linalg of float64 as floating[Any]
-    N = _collocation(params, degree, knots, n)
+    # in units of m x n: N, X, F and lstsq's copy of A; S (m x m) and lstsq's copy of it
+    N = _collocation(params, degree, knots, n, copies=4 + -(-2 * m // n))
     A = N[1:-1, 1:-1]  # interior data against interior poles
     S = np.zeros((m - 2, m))
     S[:, 1:-1] = np.eye(m - 2)

@@ -34,7 +34,7 @@ from .. import tolerances
 from ..errors import InvalidGeometryError, ParameterError
 from ..kernel.basis import basis_functions, find_span
 from ..kernel.surface import BSplineSurface
-from ._common import clamped_uniform_knots, difference_penalty, project_points
+from ._common import check_fit_size, clamped_uniform_knots, project_points, sparse_difference_penalty
 from .gridded import _pair_of
 
 __all__ = ["ScatteredFit", "fit_scattered", "scattered_collocation", "plane_parameters", "base_parameters"]
@@ -145,8 +145,8 @@ def base_parameters(base: BSplineSurface, points: Array, samples: int = 64) -> t
 
 def _solve(AtA: sp.csr_matrix, AtX: Array, n_poles: tuple[int, int], lam: float) -> Array:
     nu, nv = n_poles
-    pen = sp.kron(sp.csr_matrix(difference_penalty(nu)), sp.identity(nv)) + \
-        sp.kron(sp.identity(nu), sp.csr_matrix(difference_penalty(nv)))
+    pen = sp.kron(sparse_difference_penalty(nu), sp.identity(nv)) + \
+        sp.kron(sp.identity(nu), sparse_difference_penalty(nv))
     c = AtA.diagonal().sum() / max(pen.diagonal().sum(), 1e-300)
     N = (AtA + (lam * c) * pen).tocsc()
     try:
@@ -198,6 +198,7 @@ def fit_scattered(points: ArrayLike, n_poles: int | tuple[int, int], degree: int
     nu, nv = _pair_of(n_poles, "n_poles")
     if nu < p + 1 or nv < q + 1:
         raise InvalidGeometryError(f"n_poles: expected at least ({p + 1}, {q + 1}) for degree ({p}, {q}), got ({nu}, {nv})")
+    check_fit_size((nu, nv), (p, q), "n_poles")
     if X.shape[0] < (p + 1) * (q + 1):
         raise InvalidGeometryError(f"points: a degree ({p}, {q}) fit needs at least {(p + 1) * (q + 1)} points, got {X.shape[0]}")
     lam = float(tolerances.FIT_SCATTERED_SMOOTHING) if smoothing is None else float(smoothing)

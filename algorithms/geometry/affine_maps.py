@@ -9,12 +9,14 @@ exports both modules' public names.
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..kernel.curve import BSplineCurve
@@ -76,8 +78,16 @@ class Frame:
 
     @classmethod
     def standard(cls, dim: int = 3) -> Frame:
-        """The world frame: origin 0, basis the identity."""
-        return cls(Point(np.zeros(dim)), np.eye(dim))
+        """The world frame: origin 0, basis the identity.
+
+        Raises
+        ------
+        InvalidGeometryError
+            ``dim`` not a positive integer, or its basis, inverse and their work arrays (about four
+            ``dim x dim`` matrices) above ``tolerances.MAX_ARRAY_BYTES``.
+        """
+        d = _dim(dim, 4, "Frame.standard")
+        return cls(Point(np.zeros(d)), np.eye(d))
 
     @classmethod
     def orthonormal(cls, origin: Point | ArrayLike, x_dir: Vector | ArrayLike, z_dir: Vector | ArrayLike) -> Frame:
@@ -213,7 +223,10 @@ class AffineMap:
 
     @classmethod
     def identity(cls, dim: int = 3) -> AffineMap:
-        return cls._trusted(np.eye(dim), np.zeros(dim))
+        """The identity map of ``dim``-D space (``dim`` a positive integer; its ``dim x dim`` matrix
+        is refused above ``tolerances.MAX_ARRAY_BYTES``)."""
+        d = _dim(dim, 1, "AffineMap.identity")
+        return cls._trusted(np.eye(d), np.zeros(d))
 
     @classmethod
     def translate(cls, v: Vector | ArrayLike) -> AffineMap:
@@ -466,3 +479,12 @@ class ProjectiveMap:
 
     def __repr__(self) -> str:
         return f"ProjectiveMap(matrix={self.matrix.tolist()})"
+
+
+def _dim(dim: object, copies: int, what: str) -> int:
+    """A dimension: a positive integer whose ``copies`` ``dim x dim`` matrices fit ``MAX_ARRAY_BYTES``."""
+    if isinstance(dim, bool) or not isinstance(dim, numbers.Integral) or int(dim) < 1:
+        raise InvalidGeometryError(f"dim: expected a positive integer, got {dim!r}")
+    d = int(dim)
+    V.check_size((copies, d, d), f"{what}(dim={d})")
+    return d

@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
-from ..errors import InvalidGeometryError, ToleranceError
+from ..errors import InvalidGeometryError, ParameterError, ToleranceError
 from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 
@@ -272,6 +272,13 @@ def arc_length(curve: BSplineCurve, u0: ArrayLike, u1: ArrayLike, tol: float | N
     lo, hi = c.domain
     a = V.check_parameters(u0, lo, hi, "u0")
     b = V.check_parameters(u1, lo, hi, "u1")
+    # per limit pair and knot: its pieces' ends and owners, and the 16 Gauss nodes with the speed there
+    per = (np.unique(c.knots).size + 1) * (8 + 16 * (2 * c.dim + 4))
+    try:
+        shape = np.broadcast_shapes(a.shape, b.shape)
+    except ValueError as err:
+        raise ParameterError(f"u0, u1: shapes {a.shape} and {b.shape} do not broadcast") from err
+    V.check_size(shape + (per,), f"u0, u1 broadcast to shape {shape} ({per} floats per pair)")
     a, b = np.broadcast_arrays(a, b)
     shape = a.shape
     a, b = a.reshape(-1), b.reshape(-1)

@@ -366,9 +366,20 @@ class Hierarchy:
             regions.append(reg)
             inserted.append(V.readonly(ins))
             new_knots.append(V.readonly(tau))
-            Ts.append(refinement_matrix(t, p, tau))
             vertices.append((int(idx[0]), int(idx[-1])))
             refs.append(V.readonly(np.clip(g[idx[0]: idx[-1] + 1], lo, hi)))
+        # Refused before the dense refinement matrices (new poles x old poles per direction) and the
+        # refined nets (reference, net, offsets, frames: ~4 (d + 1) + d^2 floats a pole) exist.
+        olds = [self._knots_of(pnode)[ax] for ax in range(self._npar)]
+        news = tuple(tau.size - self._deg[ax] - 1 for ax, tau in enumerate(new_knots))
+        for ax in range(self._npar):
+            kind = f"{'uv'[ax]}-knots" if self._npar == 2 else "knots"
+            V.check_size((news[ax], olds[ax].size - self._deg[ax] - 1),
+                         f"add_overlay with knots= of {inserted[ax].size} inserted {kind} (the refinement matrix)")
+        V.check_size(news + (4 * (self._dim + 1) + self._dim ** 2,),
+                     "add_overlay with knots= of " + " x ".join(str(k.size) for k in inserted) + " inserted (the refined net)")
+        for ax in range(self._npar):
+            Ts.append(refinement_matrix(olds[ax], self._deg[ax], new_knots[ax]))
         ident = self._next_id if ident is None else ident
         level = 1 if pnode.handle is None else pnode.handle.level + 1
         h = Overlay(ident, 0 if pnode.handle is None else pnode.handle.id, level, tuple(regions), tuple(inserted),

@@ -323,7 +323,8 @@ class HierarchicalSurface(Hierarchy):
 
     def _uv(self, u: ArrayLike, v: ArrayLike) -> tuple[Array, Array, tuple[int, ...]]:
         du, dv = self._domain
-        return V.check_uv(u, v, (du, dv))
+        # per point: the flattened u, v, the base's homogeneous values, their copy and the quotient
+        return V.check_uv(u, v, (du, dv), per_point=2 + 3 * (self._dim + 1))
 
     def _scattered_h(self, a: Array, b: Array, order: int) -> Array:
         """Homogeneous partials ``(m, r+1, r+1, k)`` at scattered parameters."""

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .. import _validate as V
 from .. import tolerances
 from .curve import BSplineCurve
 
@@ -51,6 +52,8 @@ def curve_polyline(c: BSplineCurve, tol: float) -> Array:
         bad = _point_segment_distance(Pm, P[:-1], P[1:]) > tol
         if not bad.any():
             break
+        # refused before the refined arrays exist: t, P, their midpoints and the sort (~10 floats a point)
+        V.check_size((t.size + int(bad.sum()), 10), f"tol = {tol:.3g}: a p-curve's polyline within tol")
         order = np.argsort(np.r_[t, tm[bad]], kind="stable")
         t = np.r_[t, tm[bad]][order]
         P = np.r_[P, Pm[bad]][order]

@@ -187,7 +187,8 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
 
     # ------------------------------------------------------------------ evaluation
     def _uv(self, u: ArrayLike, v: ArrayLike) -> tuple[Array, Array, tuple[int, ...]]:
-        return V.check_uv(u, v, self.domain)
+        # per point: the flattened u, v and the homogeneous result with its rational quotient
+        return V.check_uv(u, v, self.domain, per_point=2 + 2 * self._hpoles.shape[-1])
 
     def _kernel_args(self) -> tuple[Any, ...]:
         """Knots, degrees, span bounds and homogeneous net, as the numba kernels take them."""

@@ -255,7 +255,7 @@ class TrimmedSurface:
         and each point is tested against the segments of its band only
         (:func:`classify_points`).
         """
-        a, b, shape = _finite_uv(u, v)
+        a, b, shape = _finite_uv(u, v, per_point=8 + 2 * self.dim + 2 * (self.surface.dim + 1))
         on_tol = self._tol(tol, tolerances.TRIM_ON, "tol")
         line_tol = min(on_tol, tolerances.TRIM_POLYLINE * self._diag()) if on_tol > 0 else \
             tolerances.TRIM_POLYLINE * self._diag()
@@ -314,7 +314,10 @@ class TrimmedSurface:
             NaN blocks at parameters outside the face when ``outside="nan"``.
         """
         order = V.check_order(order)
-        a, b, ok, shape = self._inside(u, v, outside, "derivatives")
+        # per point: the result and the surface's derivatives at the points on the face
+        u, v, shape = _finite_uv(u, v, 8 + 2 * (order + 1) ** 2 * (self.surface.dim + 1),
+                                 f" for derivatives of order {order}")
+        a, b, ok, _ = self._inside(u, v, outside, "derivatives")
         out = np.full((a.size, order + 1, order + 1, self.dim), np.nan)
         if ok.any():
             out[ok] = self.surface.derivatives(a[ok], b[ok], order)
@@ -495,11 +498,16 @@ def _trusted(surface: BSplineSurface, outer: Loop, inner: tuple[Loop, ...], rev:
 
 
 # ============================================================================ kernels
-def _finite_uv(u: ArrayLike, v: ArrayLike) -> tuple[Array, Array, tuple[int, ...]]:
+def _finite_uv(u: ArrayLike, v: ArrayLike, per_point: int = 8, what: str = "") -> tuple[Array, Array, tuple[int, ...]]:
+    """``u, v`` broadcast and flattened; the broadcast shape with ``per_point`` floats per point is
+    refused above ``tolerances.MAX_ARRAY_BYTES`` before the flattened copies are made."""
     try:
-        a, b = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
+        a, b = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
+        np.broadcast_shapes(a.shape, b.shape)
     except (TypeError, ValueError) as err:
         raise ParameterError(f"u, v: expected real parameters that broadcast together ({err})") from err
+    V.check_broadcast(a, b, per_point, what)
+    a, b = np.broadcast_arrays(a, b)
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         raise ParameterError("u, v: parameters must be finite")
     return a.reshape(-1), b.reshape(-1), a.shape

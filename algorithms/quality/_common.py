@@ -123,6 +123,7 @@ def grid_axis(x: ArrayLike | int, lo: float, hi: float, name: str) -> Array:
     if isinstance(x, numbers.Integral) and not isinstance(x, bool):
         if int(x) < 2:
             raise InvalidGeometryError(f"{name}: expected at least 2 samples, got {x!r}")
+        V.check_size((int(x),), f"{name}: {int(x)} samples")
         return np.linspace(lo, hi, int(x))
     a = V.check_parameters(x, lo, hi, name)
     if a.ndim != 1 or a.size == 0:
@@ -144,8 +145,24 @@ def grid_axes(surface: Evaluable, us: ArrayLike | int, vs: ArrayLike | int) -> t
             if a.size == 0:
                 raise InvalidGeometryError(f"{name}: expected a non-empty 1-D array of domain coordinates")
             out.append(a)
-        return out[0], out[1]
-    return grid_axis(us, u0, u1, "us"), grid_axis(vs, v0, v1, "vs")
+        a, b = out
+    else:
+        a, b = grid_axis(us, u0, u1, "us"), grid_axis(vs, v0, v1, "vs")
+    check_grid(a.size, b.size)
+    return a, b
+
+
+#: Floats a map, flag or hedgehog holds per grid point at once: the partials to order 2 (27) and
+#: their masked copy, points, normals, the curvature fields, meshgrids and masks.
+GRID_FLOATS_PER_POINT = 80
+
+
+def check_grid(m: int, n: int, name: str = "us, vs") -> None:
+    """Refuse an ``m x n`` quality grid above ``tolerances.MAX_ARRAY_BYTES`` before any of its
+    per-point arrays exist (every path: NumPy, the numba kernel, S-patches, trimmed faces);
+    ``name`` is the argument that set the grid."""
+    V.check_size((m, n, GRID_FLOATS_PER_POINT),
+                 f"{name}: a {m} x {n} grid ({GRID_FLOATS_PER_POINT} floats per point for the partials and fields)")
 
 
 def trim_mask(surface: QualitySurface, us: Array, vs: Array, mask: NDArray[np.bool_] | None) -> NDArray[np.bool_] | None:

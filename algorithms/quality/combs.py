@@ -217,8 +217,8 @@ def curvature_comb(curve: BSplineCurve | SampledCurve, n: int = 200, *, scale: f
         raise InvalidGeometryError(f"curve: expected a BSplineCurve or SampledCurve, got {type(curve).__name__}")
     if curve.dim not in (2, 3):
         raise InvalidGeometryError(f"curve: needs a 2-D or 3-D curve, this one has dim {curve.dim}")
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
-        raise InvalidGeometryError(f"n: expected an integer >= 2, got {n!r}")
+    # per sample: its derivatives to order 2, the comb's fields and the inflection brackets
+    n = V.check_count(n, "n", 24 * (curve.degree + 4), minimum=2)
     m = _plane_of(curve.dim, plane_normal)
     lo, hi = curve.domain
     t = np.linspace(lo, hi, int(n))

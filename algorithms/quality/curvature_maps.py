@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..geometry.differential import curvatures_from_derivatives
@@ -293,9 +294,7 @@ class ColorScale:
     def legend_ticks(self, n: int = 5) -> Array:
         """``n >= 2`` equally spaced values from ``lo`` to ``hi`` (symmetric scales include 0 when
         ``n`` is odd), for the labels of a colour bar."""
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
-            raise InvalidGeometryError(f"n: expected an integer >= 2, got {n!r}")
-        return np.linspace(self.lo, self.hi, int(n))
+        return np.linspace(self.lo, self.hi, V.check_count(n, "n", 1, minimum=2))
 
 
 def _percentile(p: Iterable[float]) -> tuple[float, float]:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .. import _validate as V
 from ..errors import InvalidGeometryError
 from ._common import Array, dot, positive, unit_vectors, vectors
 
@@ -176,9 +177,8 @@ def isophotes(normals: ArrayLike, light_dir: ArrayLike, levels: ArrayLike | int 
     N = vectors(normals, "normals", allow_nan=True)
     ell = unit_vectors(light_dir, "light_dir")
     if isinstance(levels, (int, np.integer)) and not isinstance(levels, bool):
-        if levels < 1:
-            raise InvalidGeometryError(f"levels: expected at least 1 level, got {levels!r}")
-        lv = np.cos(np.linspace(0.0, np.pi, int(levels) + 2)[1:-1])[::-1]
+        k = V.check_count(levels, "levels", 4)
+        lv = np.cos(np.linspace(0.0, np.pi, k + 2)[1:-1])[::-1]
     else:
         lv = np.sort(np.asarray(levels, dtype=float).ravel())
         if lv.size == 0 or not np.all(np.isfinite(lv)) or lv[0] < -1 or lv[-1] > 1:

@@ -403,7 +403,8 @@ class GeneralizedSurface:
         -------
         (gap, angle) : (float, float)
         """
-        t = np.linspace(0.0, 1.0, int(samples))
+        # per sample of a side: its domain points, points, derivatives and normals on both patches
+        t = np.linspace(0.0, 1.0, V.check_count(samples, "samples", 64, minimum=2))
         gap = ang = 0.0
         for i, k, j, l_ in self.shared_sides():
             a, b = self.patches[i], self.patches[j]

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import _validate as Val
 from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..kernel.curve import BSplineCurve
@@ -81,7 +82,8 @@ def measure_fill(fill: HoleFill, samples: int = 201) -> FillQuality:
     if not isinstance(fill, HoleFill):
         raise InvalidGeometryError(f"fill: expected a HoleFill, got {type(fill).__name__}")
     P, sd, n = fill.patches, fill.sides, len(fill.patches)
-    t = np.linspace(0.0, 1.0, max(int(samples), 3))
+    # per sample of a joint: parameters, points, derivatives and normals of the sides and both patches
+    t = np.linspace(0.0, 1.0, max(Val.check_count(samples, "samples", 64), 3))
     bg, ba, ig, ia = (np.zeros(n) for _ in range(4))
     for i in range(n):
         k = (i + 1) % n
@@ -139,6 +141,8 @@ def count_folds(surface: BSplineSurface | TrimmedSurface, grid: int = 41) -> int
     else:
         (u0, u1), (v0, v1) = surface.domain
         gu = gv = grid
+    # per grid point: meshgrids, derivatives (homogeneous, flattened, result), normals and the trim test
+    Val.check_size((gu, gv, 40), f"grid = {grid}: a {gu} x {gv} grid")
     U, V = np.meshgrid(np.linspace(u0, u1, gu), np.linspace(v0, v1, gv), indexing="ij")
     D = surface.derivatives(U.ravel(), V.ravel(), 1)
     N = np.cross(D[:, 1, 0], D[:, 0, 1]).reshape(gu, gv, 3)

@@ -73,6 +73,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
+from ..fitting._common import check_fit_size
 from ..kernel.basis import basis_derivatives, find_span
 from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
@@ -436,7 +437,8 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
     angle_tol : float, optional
         Target angle (degrees) to the neighbours' tangent planes; default ``tolerances.FILL_FIT_ANGLE``.
     max_spans : int, optional
-        Most knot spans per direction; default ``tolerances.FILL_PLATE_MAX_SPANS``.
+        Most knot spans per direction; default ``tolerances.FILL_PLATE_MAX_SPANS``. A value whose
+        largest plate would pass ``tolerances.MAX_ARRAY_BYTES`` is refused before any work.
     size : float, optional
         Model size for the default ``g0_tol``; default the loop's diameter about its centroid
         (twice the largest distance of a boundary point from it: invariant under rigid motions).
@@ -459,6 +461,9 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
     max_spans = int(tolerances.FILL_PLATE_MAX_SPANS if max_spans is None else max_spans)
     if max_spans < 1:
         raise InvalidGeometryError(f"max_spans: expected a positive integer, got {max_spans}")
+    # the largest plate the refinement may reach, (max_spans + p)^2 poles: its sparse normal equations
+    # and their LU factors (as a scattered fit's, :func:`~..fitting._common.check_fit_size`)
+    check_fit_size((max_spans + _DEGREE,) * 2, (_DEGREE, _DEGREE), "max_spans: a plate of up to n_poles")
     angle_tol = float(tolerances.FILL_FIT_ANGLE if angle_tol is None else angle_tol)
     # ---- the plane, from a dense polyline of the loop
     per = _CHECK_POINTS // len(sides) + 2

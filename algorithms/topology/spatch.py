@@ -585,9 +585,19 @@ class SPatch(ControlPointValue):
         """The same surface as an S-patch of depth ``d + times`` (Loop & DeRose 1989, §4).
 
         ``P'_J = Σ_k (j_k / (d + 1)) P_{J - e_k}`` per step, in homogeneous coordinates.
+
+        Raises
+        ------
+        InvalidGeometryError
+            ``times`` whose control net (``C(n + d + times - 1, n - 1)`` points, each with its index
+            tuple in the lookup of the step) would exceed ``tolerances.MAX_ARRAY_BYTES``, before any work.
         """
         t = V.check_times(times)
         n, d, H = self.sides, self.depth, self._hpoles
+        # per point of the last step: its index tuple as Python objects (~24 bytes an entry, as in
+        # spatch_indices) in the new and old index sets, and the old and new homogeneous nets
+        V.check_size((comb(n + d + t - 1, n - 1), 2 * 3 * n + 2 * H.shape[1]),
+                     f"elevate_depth(times={t}) from depth {d} to {d + t}")
         for _ in range(t):
             old = {tuple(row): i for i, row in enumerate(np.array(index_tuples(n, d)))}
             new_idx = np.array(index_tuples(n, d + 1), dtype=np.intp)

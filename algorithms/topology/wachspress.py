@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
-from ..errors import ParameterError
+from ..errors import InvalidGeometryError, ParameterError
 from ._common import check_sides, edge_normals
 
 __all__ = ["wachspress", "wachspress_derivatives", "wachspress_gradient"]
@@ -163,10 +163,23 @@ def wachspress_derivatives(points: ArrayLike, sides: int, order: int = 2) -> Arr
     -------
     ndarray, shape (..., sides, order + 1, order + 1)
         ``[..., k, i, j] = d^{i+j} λ_k / dx^i dy^j``; entries with ``i + j > order`` are zero.
+
+    Raises
+    ------
+    InvalidGeometryError
+        ``order`` above ``tolerances.SPATCH_MAX_DERIVATIVE_ORDER``, or work arrays above
+        ``tolerances.MAX_ARRAY_BYTES``, before any work.
     """
     n = check_sides(sides)
     r = V.check_order(order)
+    if r > tolerances.SPATCH_MAX_DERIVATIVE_ORDER:  # the jet products are ~order**4 / 24 Python-level terms
+        raise InvalidGeometryError(
+            f"order: {r} exceeds SPATCH_MAX_DERIVATIVE_ORDER = {tolerances.SPATCH_MAX_DERIVATIVE_ORDER} (the jet "
+            "products grow like order**4); raise it with tolerances.override")
     x, shape = _domain_points(points, n)
+    # the jets L, w, W and the quotient (4 x K per side) and the derivative table ((r+1)^2 per side)
+    V.check_size((x.shape[0], n, 4 * (r + 1) * (r + 2) // 2 + (r + 1) ** 2),
+                 f"wachspress_derivatives of order {r} at {x.shape[0]} points")
     jets = _wachspress_jets(x, n, r)
     return _jet_to_derivatives(jets[..., None], r)[..., 0].reshape(shape + (n, r + 1, r + 1))
 

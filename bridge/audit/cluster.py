@@ -93,7 +93,7 @@ def open_client(scheduler: str | None = None, workers: int | None = None,
     # The workers' own logs: CRITICAL only. What goes wrong with a file is its row; at an interrupt, a
     # worker whose heartbeat meets the closing scheduler logged an ERROR with two tracebacks.
     try:
-        with _sigint_ignored():  # inherited by the worker processes: see _sigint_ignored
+        with _sigint_blocked_for_workers():  # inherited by the worker processes: see there
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                    dashboard_address=LOCAL_DASHBOARD if dashboard_available() else None,
                                    silence_logs=logging.CRITICAL)
@@ -103,26 +103,32 @@ def open_client(scheduler: str | None = None, workers: int | None = None,
 
 
 @contextlib.contextmanager
-def _sigint_ignored() -> Iterator[None]:
-    """Ignore SIGINT while the local workers are spawned, so that they inherit "ignored".
+def _sigint_blocked_for_workers() -> Iterator[None]:
+    """Block SIGINT in this thread while the local workers are spawned, so that they are born with it
+    blocked, and stay so: Ctrl-C in a terminal signals the whole process group, and a worker that
+    took it would die mid-task with a traceback. This process still takes it: a Ctrl-C during the
+    start-up (about 2 s) waits, blocked, and is handled as the block ends (:func:`held_signals`).
 
-    Ctrl-C in a terminal signals the whole process group. The client handles it (flushes the
-    finished rows, closes the cluster); workers that also took it would die mid-task with a
-    traceback each. A signal ignored at exec stays ignored, and Python then installs no
-    KeyboardInterrupt handler of its own. The cost: a Ctrl-C during the cluster's start-up (about
-    2 s) is lost. Blocking SIGINT instead (a blocked signal waits) does not keep it from the
-    workers: they took Ctrl-C and died with a traceback each. Only the main thread may change
-    handlers: elsewhere this does nothing.
+    A thread inherits the mask of the thread that starts it, a spawned process that of the thread
+    that forks it; Dask's IO-loop thread is started here, and it starts the threads that spawn the
+    workers. Blocking alone did not reach the workers before, because ``multiprocessing``'s resource
+    tracker, started on first use from that IO-loop thread, unblocks SIGINT and SIGTERM in its
+    caller when it is done (``resource_tracker.ensure_running``: block, spawn, then SIG_UNBLOCK, not
+    a restore). It is started here first, while nothing is blocked; the workers use the same one.
+    (Ignoring SIGINT instead, which the workers inherit too, lost a Ctrl-C during the start-up.)
+    Main thread only, and only where ``pthread_sigmask`` exists: elsewhere this does nothing.
     """
-    try:
-        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    except ValueError:
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
         yield
         return
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, old)
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 @contextlib.contextmanager
@@ -132,8 +138,8 @@ def held_signals() -> Iterator[None]:
     A ``KeyboardInterrupt`` raised inside ``LocalCluster(...)`` leaves a half-started cluster that
     Dask's exit hook then fails to close, with a traceback. Here a signal is recorded while the
     block runs and sent again to the handlers in place before it, once the block is done (the
-    caller has its cluster by then and closes it). SIGINT is ignored while the workers spawn
-    (:func:`_sigint_ignored`), so only a SIGTERM, or a SIGINT outside that moment, is held.
+    caller has its cluster by then and closes it). A SIGINT while the workers spawn waits blocked
+    (:func:`_sigint_blocked_for_workers`) and is held here as the mask is restored.
     Main thread only: elsewhere this does nothing.
     """
     if threading.current_thread() is not threading.main_thread():

@@ -14,8 +14,9 @@ from __future__ import annotations
 import glob
 import hashlib
 import os
+import threading
+import time
 from collections.abc import Iterable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,12 +35,14 @@ class CorpusError(ValueError):
 @dataclass
 class Entry:
     """One input file: ``path`` (absolute), ``sha256`` (``None`` until hashed or if unreadable),
-    ``size`` in bytes, ``error`` (why it cannot be read: it is then recorded as ``error``)."""
+    ``size`` in bytes, ``error`` (why it cannot be read: it is then recorded as ``error``, or as
+    ``timeout`` when ``timed_out``: hashing it took longer than the audit's ``--timeout``)."""
 
     path: str
     sha256: str | None = None
     size: int | None = None
     error: str | None = None
+    timed_out: bool = False
 
 
 def sniff_cad(path: Path) -> str | None:
@@ -128,32 +131,96 @@ def expand_paths(args: Sequence[str]) -> list[Entry]:
     return unique
 
 
-def sha256_of(path: str) -> tuple[str, int]:
-    """``(hex digest, size)`` of a file, read in 1 MiB blocks."""
+def sha256_of(path: str, deadline: float | None = None) -> tuple[str, int]:
+    """``(hex digest, size)`` of a file, read in 1 MiB blocks.
+
+    Raises
+    ------
+    TimeoutError
+        ``time.monotonic()`` passed ``deadline`` between two blocks (a slow disk or network share).
+    """
     h = hashlib.sha256()
     size = 0
     with open(path, "rb") as fh:
         while block := fh.read(1 << 20):
             h.update(block)
             size += len(block)
+            if deadline is not None and time.monotonic() > deadline:
+                raise TimeoutError
     return h.hexdigest(), size
 
 
-def _hash_one(e: Entry) -> Entry:
+def _hash_one(e: Entry, timeout: float | None = None) -> Entry:
     if e.error is None:
-        # Before opening: a device (a link to /dev/zero) or a FIFO would read or wait forever, here,
-        # before any --timeout applies; a regular file is at most MAX_FILE_BYTES.
+        # Before opening: a device (a link to /dev/zero) or a FIFO would read or wait forever, here;
+        # a regular file is at most MAX_FILE_BYTES.
         e.error = input_problem(e.path)
     if e.error is None:
         try:
-            e.sha256, e.size = sha256_of(e.path)
+            e.sha256, e.size = sha256_of(e.path, None if timeout is None else time.monotonic() + timeout)
+        except TimeoutError:
+            _timed_out(e, timeout)
         except OSError as err:
             e.error = f"cannot read: {err.strerror or err}"
     return e
 
 
-def hash_entries(entries: list[Entry], threads: int = 8) -> list[Entry]:
-    """Fill ``sha256`` and ``size`` in place (threads: hashlib releases the GIL); unreadable files get ``error``."""
-    with ThreadPoolExecutor(max_workers=max(1, threads)) as pool:
-        list(pool.map(_hash_one, entries, chunksize=64))
+def _timed_out(e: Entry, timeout: float | None) -> None:
+    e.sha256 = e.size = None
+    e.timed_out = True
+    e.error = f"reading it to hash its contents took more than {timeout:g} s (--timeout); not audited"
+
+
+def hash_entries(entries: list[Entry], threads: int = 8, timeout: float | None = None) -> list[Entry]:
+    """Fill ``sha256`` and ``size`` in place (threads: hashlib releases the GIL); unreadable files get ``error``.
+
+    Each file is hashed under ``timeout`` seconds (``None``: no limit), as the audit's ``--timeout``
+    bounds its reading. A read that keeps returning blocks is stopped between two of them; one that
+    blocks inside the system call (a hung network share, a FUSE file system) cannot be: its file is
+    recorded ``timeout`` at its deadline all the same, a fresh thread takes its place, and the stuck
+    thread (a daemon) is left behind without holding up the rest or the process's exit. The waiting
+    is in the calling thread, so SIGINT and SIGTERM end it at once.
+    """
+    todo = list(entries)
+    if not todo:
+        return entries
+    lock = threading.Condition()
+    queue = list(reversed(todo))
+    started: dict[int, tuple[Entry, float]] = {}  # id(thread's current entry) -> (entry, start)
+    settled: set[int] = set()
+
+    def work() -> None:
+        while True:
+            with lock:
+                if not queue:
+                    return
+                e = queue.pop()
+                started[id(e)] = (e, time.monotonic())
+            copy = Entry(e.path, error=e.error)
+            _hash_one(copy, timeout)
+            with lock:
+                if id(e) not in settled:  # not already recorded as timed out by the watchdog
+                    e.sha256, e.size, e.error, e.timed_out = copy.sha256, copy.size, copy.error, copy.timed_out
+                    settled.add(id(e))
+                started.pop(id(e), None)
+                lock.notify_all()
+
+    def spawn() -> None:
+        threading.Thread(target=work, name="occsurf-audit-hash", daemon=True).start()
+
+    for _ in range(max(1, min(threads, len(todo)))):
+        spawn()
+    with lock:
+        while len(settled) < len(todo):
+            wait = None
+            if timeout is not None and started:
+                now = time.monotonic()
+                for key, (e, t0) in list(started.items()):
+                    if now - t0 > timeout:  # stuck in a read: recorded now, its thread replaced
+                        _timed_out(e, timeout)
+                        settled.add(key)
+                        del started[key]
+                        spawn()
+                wait = max(0.0, min((t0 + timeout for _, t0 in started.values()), default=now + timeout) - now) + 0.01
+            lock.wait(wait)
     return entries

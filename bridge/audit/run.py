@@ -184,7 +184,7 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
             on_dashboard(dashboard)
         if progress is not None:
             print(f"audit: {len(entries)} files; hashing their contents", file=progress, flush=True)
-        hash_entries(entries)
+        hash_entries(entries, timeout=timeout)  # under --timeout too: a hung read is a timeout row
         bar = Progress(len(entries), progress)
         skipped, interrupted = _drive(client, entries, store, bar, checks, samples, timeout, stop)
     finally:
@@ -195,7 +195,7 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
             cluster.close()
     counts = dict.fromkeys(STATUSES, 0)
     for e in entries:
-        status = store.done.get(e.sha256) if e.sha256 else ("error" if e.error else None)
+        status = store.done.get(e.sha256) if e.sha256 else (_unread_status(e) if e.error else None)
         if status is not None:  # None: not reached before an interruption
             counts[status] += 1
     if not interrupted:
@@ -208,6 +208,11 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
                        [e.sha256 for e in entries])
 
 
+def _unread_status(e: Entry) -> str:
+    """The status of a file that was not read: ``timeout`` if hashing it passed ``--timeout``."""
+    return "timeout" if e.timed_out else "error"
+
+
 def _drive(client: Any, entries: list[Entry], store: ResultStore, bar: Progress, checks: tuple[str, ...],
            samples: int, timeout: float | None, stop: threading.Event | None = None) -> tuple[int, bool]:
     """Submit a bounded window of tasks, record results as they come; returns (skipped, interrupted)."""
@@ -217,9 +222,9 @@ def _drive(client: Any, entries: list[Entry], store: ResultStore, bar: Progress,
     skipped = 0
     for e in entries:
         if e.sha256 is None:  # unreadable: recorded at once, redone by a later --resume
-            store.add({"path": e.path, "sha256": None, "status": "error", "error": e.error, "run_id": store.run_id,
+            store.add({"path": e.path, "sha256": None, "status": _unread_status(e), "error": e.error, "run_id": store.run_id,
                        "finished": int(time.time() * 1000)})
-            bar.add("error")
+            bar.add(_unread_status(e))
         elif e.sha256 in store.done:
             skipped += 1
             bar.add(store.done[e.sha256], new=False)

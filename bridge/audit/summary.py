@@ -55,7 +55,7 @@ def summarize(out: str | Path, hashes: list[str], n_input: int | None = None,
     path_of = {r["sha256"]: r["path"] for r in rows}
     by_hash_status = {r["sha256"]: r["status"] for r in rows}
     status = Counter(by_hash_status[h] for h in hashes if h in by_hash_status)
-    status["error"] += len(unreadable)
+    status.update("timeout" if e.timed_out else "error" for e in unreadable)  # hashing passed --timeout, or unreadable
     counts = {s: int(status.get(s, 0)) for s in ("ok", "error", "crashed", "timeout")}
     n_input = len(hashes) + len(unreadable) if n_input is None else n_input
     counts["missing"] = n_input - sum(counts.values())
@@ -85,7 +85,8 @@ def summarize(out: str | Path, hashes: list[str], n_input: int | None = None,
                           for r in sorted(ok, key=lambda r: -(r["seconds"] or 0))[:TOP]],
         "failures": [{"path": r["path"], "status": r["status"], "error": r["error"], "signal": r["signal"]}
                      for r in rows if r["status"] != "ok"][:200]
-                    + [{"path": e.path, "status": "error", "error": e.error, "signal": None} for e in unreadable][:200],
+                    + [{"path": e.path, "status": "timeout" if e.timed_out else "error", "error": e.error, "signal": None}
+                       for e in unreadable][:200],
     }
     return doc
 

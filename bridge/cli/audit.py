@@ -127,6 +127,9 @@ def run(ns: argparse.Namespace) -> int:
             except KeyboardInterrupt:  # outside the loop over files (hashing, cluster start-up, the summary)
                 error(f"interrupted; what finished is in {ns.out} (rerun with --resume to finish the rest)")
                 return signals.exit_status
+    except KeyboardInterrupt:  # our handler's, as it was being installed or restored (a SIGTERM is 143 here too)
+        error(f"interrupted; what finished is in {ns.out} (rerun with --resume to finish the rest)")
+        return signals.exit_status
     except (CorpusError, StoreError, ClusterError, AuditInputError) as err:
         error(" ".join(str(err).split()))
         return EXIT_ERROR

@@ -376,6 +376,14 @@ def model_holes(shape: Any, all_loops: bool = False) -> ModelHoles:
     return ModelHoles(sewn, edge_face_map(sewn), _model_size(sewn), find_loops(sewn, all_loops))
 
 
+def _check_samples(samples: object) -> int:
+    """``samples`` per joint: an integer >= 2 whose arrays (points, normals, feet and OCC's values,
+    ~64 floats a sample) fit ``tolerances.MAX_ARRAY_BYTES``; refused before any hole is filled."""
+    from occsurf.algorithms._validate import check_count
+
+    return check_count(samples, "samples", 64, minimum=2)
+
+
 @_occ.quiet_messages()
 def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True,
               samples: int = ASSESS_SAMPLES) -> tuple[HoleReport, HoleFill | PlateFill | None, list[Any]]:
@@ -388,6 +396,7 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True,
     (HoleReport, fill or None, list of TopoDS_Face)
         The report; our fill and its OCC faces (``None`` and ``[]`` unless filled).
     """
+    _check_samples(samples)  # a bad argument, not a failure of the hole
     edges, outer = holes.loops[k]
     rep = HoleReport(index=k, sides=len(edges), status="outer" if outer else "failed")
     if outer:
@@ -467,6 +476,7 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
     from ..exchange.objects import check_as, shape_object
 
     check_as(as_)
+    _check_samples(samples)
     holes = model_holes(as_shape(shape, "shape"), all_loops)
     reports: list[HoleReport] = []
     fills: list[HoleFill | PlateFill | None] = []

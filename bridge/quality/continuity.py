@@ -74,6 +74,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from occsurf.algorithms import tolerances
+from occsurf.algorithms._validate import check_size
 from occsurf.algorithms.errors import InvalidGeometryError
 
 from ..messages import one_line
@@ -358,6 +359,7 @@ def _model_size(faces: list[FaceData], shape: Any) -> float:
 def _check_args(samples: Any, match_tol: Any) -> tuple[int, float | None]:
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 3:
         raise InvalidGeometryError(f"samples: expected an integer >= 3, got {samples!r}")
+    check_size((int(samples), 64), f"samples = {int(samples)}")  # per sample of an edge: both sides' partials
     if match_tol is not None:
         if isinstance(match_tol, bool) or not isinstance(match_tol, (int, float)) or not math.isfinite(match_tol) or match_tol <= 0:
             raise InvalidGeometryError(f"match_tol: expected a finite number > 0 (model units) or None, got {match_tol!r}")

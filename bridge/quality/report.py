@@ -427,11 +427,14 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     InvalidGeometryError
         A face index out of range, or an unknown preset.
     """
+    from occsurf.algorithms._validate import check_count
     from occsurf.algorithms.errors import InvalidGeometryError
+    from occsurf.algorithms.quality._common import check_grid
 
     from ..exchange.object_import import as_model
     from ..rendering import tessellation
 
+    check_grid(check_count(samples, "samples", 1, minimum=2), int(samples), "samples")  # each face's flags grid, up front
     model = as_model(model)  # a build123d / cadquery / OCC object: its faces with their labels and colours
     n = len(model.faces)
     chosen = None if faces is None else sorted({int(k) for k in faces})

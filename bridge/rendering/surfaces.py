@@ -31,6 +31,11 @@ def surface_grid(surface: BSplineSurface, resolution: int = 60, color: str = "me
     Degenerate points (NaN curvature, e.g. a sphere's pole) take the value of their neighbours'
     median so they do not blot the picture.
     """
+    from occsurf.algorithms._validate import check_count
+    from occsurf.algorithms.quality._common import check_grid
+
+    r = check_count(resolution, "resolution", 1, minimum=2)
+    check_grid(r, r, "resolution")  # the grid, its curvatures and the mesh, refused before any of them exists
     (u0, u1), (v0, v1) = surface.domain
     # pull the samples a hair inside so poles of revolved surfaces do not give NaN normals
     eu, ev = 1e-6 * (u1 - u0), 1e-6 * (v1 - v0)

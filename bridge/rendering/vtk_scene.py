@@ -150,6 +150,7 @@ def new_window(width: int, height: int, *, multisamples: int = 0) -> vtkRenderWi
     ``multisamples=0`` (the scene's choice: FXAA on the renderer instead, half the read-back time of
     4x MSAA); the error maps of ``occsurf fit`` ask for 4.
     """
+    check_pixels(width, height, multisamples)  # too large for MAX_ARRAY_BYTES: refused first
     import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (registers the OpenGL factories)
     from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
     from vtkmodules.vtkRenderingCore import vtkRenderWindow
@@ -169,6 +170,14 @@ def new_window(width: int, height: int, *, multisamples: int = 0) -> vtkRenderWi
 
 
 _WINDOWS: dict[tuple[int, int, int], vtkRenderWindow] = {}
+
+def check_pixels(width: int, height: int, multisamples: int = 0) -> None:
+    """Refuse, before the window exists, a picture whose buffers (8 bytes per multisample, 24 more per
+    pixel: resolved buffers, the copies read back) exceed ``tolerances.MAX_ARRAY_BYTES``."""
+    from occsurf.algorithms._validate import check_size
+
+    w, h, s = int(width), int(height), int(multisamples)
+    check_size((h, w, 8 * max(s, 1) + 24), f"size: a {w} x {h} picture with {s} samples", itemsize=1)
 
 
 def window(width: int, height: int, multisamples: int = 0) -> vtkRenderWindow:

@@ -354,6 +354,8 @@ def curve_deviation(ours: BSplineCurve, occ_curve: Any = None, samples: int = 10
     """
     _check(ours, BSplineCurve, "ours")
     m = _check_samples(samples)
+    # per sample: both curves' derivatives to order 3 (our homogeneous work, OCC's, differences)
+    check_size((m, 4 * 4 * 3 + 8), f"curve_deviation with samples={m}")
     occ_c = to_occ(ours) if occ_curve is None else _occ_curve_of(occ_curve)
     t0, t1 = ours.domain
     ts = _snap_to_knots(np.linspace(t0, t1, m), ours.knots)
@@ -417,6 +419,7 @@ def roundtrip_deviation(before: BSplineCurve | BSplineSurface, after: BSplineCur
 
     if isinstance(before, BSplineCurve) and isinstance(after, BSplineCurve):
         check_dims()
+        check_size((m, 4 * (before.dim + 1) + 4), f"roundtrip_deviation with samples={m}")
         kb, ka = [before.knots], [after.knots]
         (b0, b1), (a0, a1) = before.domain, after.domain
         s = np.linspace(0.0, 1.0, m)
@@ -424,6 +427,8 @@ def roundtrip_deviation(before: BSplineCurve | BSplineSurface, after: BSplineCur
         pa = after.evaluate(np.clip(a0 + s * (a1 - a0), a0, a1))
     elif isinstance(before, BSplineSurface) and isinstance(after, BSplineSurface):
         check_dims()
+        # per grid point: both surfaces' homogeneous grids and points, and their difference
+        check_size((m, m, 4 * (before.dim + 1) + 4), f"roundtrip_deviation with samples={m} ({m} x {m} grid)")
         kb, ka = list(before.knots), list(after.knots)
         s = np.linspace(0.0, 1.0, m)
         grids = []

@@ -75,6 +75,58 @@ def step_swap(text: StepText, a: int, b: int) -> bytes:
     return text.join(recs)
 
 
+# B-spline surface records: the simple form ``B_SPLINE_SURFACE_WITH_KNOTS('',p,q,(...` and the
+# complex (rational) form ``( ... B_SPLINE_SURFACE(p,q,(...) ... B_SPLINE_SURFACE_WITH_KNOTS((mu),(mv),...``.
+_DEGREES = re.compile(rb"B_SPLINE_SURFACE(?:_WITH_KNOTS\('[^']*',|\()\s*(-?\d+)\s*,\s*(-?\d+)\s*,")
+_MULTS = re.compile(rb"(?:\.[TFU]\.\s*,\s*\.[TFU]\.\s*,\s*\.[TFU]\.\s*,|B_SPLINE_SURFACE_WITH_KNOTS\()"
+                    rb"\s*\(([-\d,\s]+)\)\s*,\s*\(([-\d,\s]+)\)")
+
+
+def _spline_records(text: StepText) -> list[int]:
+    return [k for k, r in enumerate(text.records) if _DEGREES.search(r)]
+
+
+def step_degree(text: StepText, k: int, direction: int, value: int) -> bytes:
+    """Set the u (``direction`` 0) or v (1) degree of the ``k``-th B-spline surface record (any ``k``:
+    modulo their count) to ``value``."""
+    recs = list(text.records)
+    i = _spline_records(text)[k % len(_spline_records(text))]
+    m = _DEGREES.search(recs[i])
+    assert m is not None
+    g = 1 + direction % 2
+    recs[i] = recs[i][:m.start(g)] + str(value).encode() + recs[i][m.end(g):]
+    return text.join(recs)
+
+
+def step_multiplicity(text: StepText, k: int, which: int, value: int) -> bytes:
+    """Set one knot multiplicity of the ``k``-th B-spline surface record to ``value``: ``which`` picks
+    the direction (even: u, odd: v) and the entry (``which // 2``, modulo the list's length; entry 0 is
+    the first end knot)."""
+    recs = list(text.records)
+    i = _spline_records(text)[k % len(_spline_records(text))]
+    m = _MULTS.search(recs[i])
+    assert m is not None, recs[i][:200]
+    g = 1 + which % 2
+    entries = recs[i][m.start(g):m.end(g)].split(b",")
+    entries[(which // 2) % len(entries)] = str(value).encode()
+    recs[i] = recs[i][:m.start(g)] + b",".join(entries) + recs[i][m.end(g):]
+    return text.join(recs)
+
+
+def step_unit_overflow(text: StepText, k: int, which: int) -> bytes:
+    """A pole of the ``k``-th B-spline surface (``which``: which of its poles) at ``1.0E+308`` in a
+    file whose length unit becomes the kilometre: finite as written, ``inf`` once scaled to mm."""
+    recs = list(text.records)
+    i = _spline_records(text)[k % len(_spline_records(text))]
+    poles = [int(x) for x in _REF.findall(recs[i][recs[i].index(b"=") + 1:])]
+    j = text.record_of(poles[which % len(poles)])
+    recs[j] = re.sub(rb"\(\s*[-+.\dEe]+\s*,", b"(1.0E+308,", recs[j], count=1)
+    for u, r in enumerate(recs):
+        if b"LENGTH_UNIT" in r and b"SI_UNIT(" in r:
+            recs[u] = re.sub(rb"SI_UNIT\((?:\.\w+\.|\$)\s*,\s*\.METRE\.\)", b"SI_UNIT(.KILO.,.METRE.)", r)
+    return text.join(recs)
+
+
 def step_replace(data: bytes, old: bytes, new: bytes) -> bytes:
     assert old in data, old
     return data.replace(old, new, 1)
@@ -148,13 +200,27 @@ def iges_swap(text: IgesText, a: int, b: int) -> bytes:
     return text.join(lines)
 
 
+#: Values a degree or a knot multiplicity is set to by :func:`mutate`: OCC's limit and beyond it,
+#: non-positive, one above degree + 1, and absurdly large (issue 34's degree 1e9, multiplicity 2e9).
+BAD_DEGREES = (0, -3, 26, 1000000000)
+BAD_MULTIPLICITIES = (0, -1, 4, 5, 2000000000)
+
+
 def mutate(fmt: str, clean: bytes, kind: str, a: int, b: int) -> bytes:
     """One damaged copy of ``clean`` (``fmt`` "step" or "iges"): ``kind`` "delete" (a record/line),
-    "swap" (two references) or "cut" (at an entity boundary, trailer put back); the integers ``a``,
+    "swap" (two references) or "cut" (at an entity boundary, trailer put back); for STEP with B-spline
+    surfaces also "degree" (one set to a :data:`BAD_DEGREES` value), "multiplicity" (one knot's set to
+    a :data:`BAD_MULTIPLICITIES` value) or "unit" (a pole at 1e308 in a kilometre file); the integers ``a``,
     ``b`` choose where (any size: taken modulo the file's counts). The mutation fuzz's generator
     (tests/bridge/test_fuzz_exchange.py, benchmarks/bench_fuzz_exchange.py)."""
     if fmt == "step":
         text = StepText.parse(clean)
+        if kind == "degree":
+            return step_degree(text, a, b, BAD_DEGREES[(b // 2) % len(BAD_DEGREES)])
+        if kind == "multiplicity":
+            return step_multiplicity(text, a, b, BAD_MULTIPLICITIES[(a + b) % len(BAD_MULTIPLICITIES)])
+        if kind == "unit":
+            return step_unit_overflow(text, a, b)
         n, refs = len(text.records), len(text.references())
         if kind == "delete":
             return step_delete(text, a % n)

@@ -14,6 +14,11 @@ and asserts: the caller is never killed by a signal, nothing prints a traceback,
 0 or 2, no in-process read dies of a signal, and a file read with a face count other than the clean
 model's always carries a warning.
 
+A second property (issue 34, items 2, 3 and 11) damages the B-spline surfaces of the STEP samples
+instead: a degree or a knot multiplicity out of range, a pole that overflows once the length unit
+is scaled; each file must be read with a one-line warning naming the entity or the unit factor (or
+refused in one line), never as a silently smaller model, and ``convert`` must write none of them.
+
 ``OCCSURF_FUZZ_LOG=path`` appends one JSON line of counts per example (the counts the issue asks
 for: how many files were read cleanly, read with warnings, refused, crashed a worker, timed out).
 """
@@ -126,3 +131,58 @@ def test_mutated_files_through_every_reading_command(bases, tmp_path_factory, fm
             assert o.value["warnings"], (p, o.value["faces"], n_clean)
     _log(counts)
     assert not crashed, crashed
+
+
+# (kind, base file, a, b). A pole at inf after scaling costs OCC's transfer of loft.step ~57 s (11
+# faces sharing edges; bounded by --timeout); the one-face samples take ~2 s, so units use those.
+spline_mutation = st.one_of(
+    st.tuples(st.sampled_from(["degree", "multiplicity"]), st.sampled_from(["loft.step", "nurbs_torus.step"]),
+              st.integers(0, 10**6), st.integers(0, 10**6)),
+    st.tuples(st.just("unit"), st.sampled_from(["nurbs_torus.step", "periodic_vase.step"]),
+              st.integers(0, 10**6), st.integers(0, 10**6)))
+
+
+@pytest.mark.slow
+@test_settings(max_examples=3)
+@given(mutations=st.lists(spline_mutation, min_size=4, max_size=4))
+def test_mutated_degrees_multiplicities_and_units_are_named_never_silent(tmp_path_factory, mutations):
+    """Issue 34, items 2, 3 and 11: a B-spline surface's degree (0, -3, 26, 1e9) or one knot
+    multiplicity (0, -1, 4, 5, 2e9; the end knots among them) set out of range, or a pole at 1e308
+    in a kilometre file (``inf`` once scaled to mm). ``inspect`` reads each with a one-line warning
+    that names the entity (and the face it costs) or the unit factor, never a silent model: a file
+    that lost a face says so; ``convert`` writes none of them (a lost face, a non-finite value)."""
+    folder = tmp_path_factory.mktemp("fuzz-splines")
+    samples = REPO / "step_samples"
+    paths = {C.write(folder, f"{k}_{kind}_{base}", C.mutate("step", (samples / base).read_bytes(), kind, a, b)):
+             (kind, base) for k, (kind, base, a, b) in enumerate(mutations)}
+    n_clean = {base: len(read_step(samples / base).faces) for _, base in paths.values()}
+    counts: Counter = Counter(files=len(paths))
+
+    proc = subprocess.run([sys.executable, "-m", "occsurf.bridge.cli", "inspect", str(folder), "--json",
+                           "--samples", "5", "--timeout", "120"], capture_output=True, cwd=REPO, timeout=1800)
+    _no_traceback(proc)
+    for f in json.loads(proc.stdout)["files"]:
+        kind, base = paths[Path(f["path"])]
+        if f["error"] is not None:  # refused: one line naming the file's problem
+            counts[f"{kind}_refused"] += 1
+            assert "\n" not in f["error"].strip(), f["error"]
+            continue
+        warnings = f["warnings"] or []
+        assert warnings and all("\n" not in w for w in warnings), (f["path"], warnings)
+        if kind == "unit":
+            assert any("not finite after scaling from km to mm (x1e+06)" in w for w in warnings), warnings
+        else:
+            assert f["n_faces"] < n_clean[base], (f["path"], f["n_faces"])
+            assert any("B_SPLINE_SURFACE" in w and "OCC cannot build it" in w and "is dropped" in w
+                       for w in warnings), warnings
+        counts[f"{kind}_warned"] += 1
+
+    first = next(iter(paths))
+    out = folder / "converted.igs"
+    proc = subprocess.run([sys.executable, "-m", "occsurf.bridge.cli", "convert", str(first), str(out),
+                           "--timeout", "120"], capture_output=True, cwd=REPO, timeout=600)
+    _no_traceback(proc)
+    assert proc.returncode == 2 and not out.exists(), (paths[first], proc.returncode, proc.stderr[-2000:])
+    lines = proc.stderr.decode("utf-8", "replace").splitlines()  # one line per message, the refusal last
+    assert lines and all(ln.startswith("occsurf: ") for ln in lines), lines
+    _log(counts)
