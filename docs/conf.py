@@ -27,7 +27,12 @@ extensions = [
     "sphinx.ext.intersphinx",
     "sphinx.ext.mathjax",
     "sphinx_gallery.gen_gallery",
+    "myst_parser",
 ]
+# The user guide is Markdown (docs/guide/*.md, also read on the repository's page; the README
+# links to it): MyST, with GitHub-style tables and headings anchored for links between pages.
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+myst_heading_anchors = 3
 templates_path = ["_templates"]
 exclude_patterns = ["_build", "gallery", "tutorials", "sg_execution_times.rst", "auto_*/*.ipynb", "**/*.md5", "**/*.codeobj.json", "check",
                     "fill", "fitting", "lighting", "repair", "figures", "_inv"]
