@@ -3,13 +3,15 @@
 One HTML file that opens from the file system with no network: the model overview (numbers and the
 overview pictures), a face table sortable by any column (worst first by default), the edge-
 continuity table, and per face its curvature map, zebra stripes, sections with combs and flags
-with their suggested corrections. An interactive 3-D view (rotate, zoom, switch the indicator:
-curvatures, per-pixel zebra that follows the view, isophotes, draft) runs on three.js r187,
-vendored in ``static/three-viewer.min.js`` (MIT licence, ``static/THREE_LICENSE``) and embedded in
-the page, since a page opened from ``file://`` may not load scripts as ES modules.
+with their suggested corrections. An interactive 3-D view (:mod:`.viewer_js`: rotate, zoom, switch
+the indicator, per-pixel zebra and isophotes with adjustable stripes, the draft against any axis,
+sections with combs and edge classes as line sets, picking linked to the tables; the PNGs instead
+without WebGL) runs on three.js r187, vendored in ``static/three-viewer.min.js`` (MIT licence,
+``static/THREE_LICENSE``) and embedded in the page, since a page opened from ``file://`` may not
+load scripts as ES modules.
 
-:func:`viewer_payload` packs the triangulated faces and their per-vertex indicators (float32,
-base64); :func:`render_html` builds the page from a report's JSON and that payload.
+:func:`viewer_payload` packs the triangulated faces, their per-vertex indicators and the line sets
+(float32/uint32, base64); :func:`render_html` builds the page from a report's JSON and that payload.
 """
 
 from __future__ import annotations
@@ -18,11 +20,13 @@ import base64
 import html
 import json
 import math
+from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .report import face_scores
+from .viewer_js import VIEWER_CSS, VIEWER_JS
 
 if TYPE_CHECKING:
     from .report import QualityReport
@@ -38,13 +42,23 @@ VIEWER_INDICATORS: tuple[tuple[str, str, str, bool], ...] = (
     ("absolute", "|k1|+|k2|", "rainbow", False),
     ("zebra", "zebra (per pixel, follows the view)", "stripes", False),
     ("isophote", "isophotes (per pixel)", "stripes", False),
-    ("draft", "draft angle (pull +z), deg", "diverging", True),
+    ("draft", "draft angle, deg (pull direction below)", "diverging", True),
     ("shaded", "shaded", "grey", False),
 )
 #: Vertices above which the 3-D view's mesh is thinned (every k-th triangle kept is not an
 #: option: faces would get holes; instead big models are sent whole and the page stays usable
 #: up to a few hundred thousand vertices).
 MAX_VIEWER_VERTICES = 400_000
+#: The pull direction of the report's stored draft angles (:func:`~.report.face_fields`' default);
+#: the page recomputes the draft for the others.
+DRAFT_PULL = (0.0, 0.0, 1.0)
+#: The page's pull directions: (label, direction).
+PULL_CHOICES: tuple[tuple[str, tuple[int, int, int]], ...] = (
+    ("+z", (0, 0, 1)), ("-z", (0, 0, -1)), ("+x", (1, 0, 0)), ("-x", (-1, 0, 0)), ("+y", (0, 1, 0)), ("-y", (0, -1, 0)))
+#: The directions the zebra stripes can run in the view: (label, the view-space axis the stripe
+#: phase follows, i.e. across the stripes).
+ZEBRA_DIRECTIONS: tuple[tuple[str, tuple[float, float, float]], ...] = (
+    ("vertical", (1.0, 0.0, 0.0)), ("horizontal", (0.0, 1.0, 0.0)), ("diagonal", (1.0, 1.0, 0.0)))
 
 
 def viewer_script() -> str:
@@ -58,13 +72,41 @@ def _b64(a: Any, dtype: str) -> str:
     return base64.b64encode(np.ascontiguousarray(a, dtype=dtype).tobytes()).decode("ascii")
 
 
-def viewer_payload(report: QualityReport) -> dict[str, Any]:
-    """The faces of ``report`` as the 3-D view's data: per face base64 float32 positions and
-    normals, uint32 triangles and one float32 array per indicator (NaN kept), plus the common
-    colour range of each indicator (symmetric about 0 where the value has a sign)."""
+def _polylines(polylines: Sequence[Any]) -> dict[str, str]:
+    """Polylines ``(k_i, 3)`` as one base64 float32 array of their points end to end (``"points"``)
+    and one of uint32 point counts (``"counts"``)."""
     import numpy as np
 
-    from .pictures import _scale
+    pls = [np.asarray(p, float).reshape(-1, 3) for p in polylines]
+    pls = [p for p in pls if len(p) >= 2 and np.all(np.isfinite(p))]
+    pts = np.concatenate(pls) if pls else np.zeros((0, 3))
+    return {"points": _b64(pts, "<f4"), "counts": _b64([len(p) for p in pls], "<u4")}
+
+
+def viewer_payload(report: QualityReport) -> dict[str, Any]:
+    """The 3-D view's data for ``report`` (what the page's script reads; JSON-safe).
+
+    Returns
+    -------
+    dict
+        ``faces``: per face ``index``, ``n`` (vertices), ``points`` and ``normals`` (base64 float32,
+        shape (n, 3), little-endian), ``triangles`` (base64 uint32, (m, 3)), ``values``: one base64
+        float32 array (n,) per indicator of :data:`VIEWER_INDICATORS` the face has (NaN kept,
+        the report's :class:`~occsurf.bridge.quality.report.FaceField` values); empty when the model
+        has more than :data:`MAX_VIEWER_VERTICES` vertices (``skipped``).
+        ``ranges``: each coloured indicator's common colour range (symmetric about 0 where the
+        value has a sign). ``pull``: the pull direction of the stored draft values.
+        ``zebra_pairs``, ``isophote_pairs``: the stripe counts the view starts with.
+        ``lines``: ``sections`` and ``combs`` (comb teeth and outlines) of
+        :func:`~occsurf.bridge.quality.pictures.model_sections`, each ``{"points", "counts"}``
+        (polylines end to end, base64 float32 (sum k, 3), and their point counts, base64 uint32);
+        ``inflections`` (base64 float32 (j, 3)); ``edges``: one entry per continuity class of
+        :attr:`QualityReport.edge_lines` with its ``class``, ``color`` (RGB in [0, 1],
+        :data:`~occsurf.bridge.quality.pictures.EDGE_COLORS`), ``points`` and ``counts``.
+    """
+    import numpy as np
+
+    from .pictures import EDGE_COLORS, ISOPHOTE_PAIRS, ZEBRA_PAIRS, _scale, model_sections
 
     fields = [report.fields[k] for k in sorted(report.fields)]
     total = sum(f.mesh.n_vertices for f in fields)
@@ -84,8 +126,16 @@ def viewer_payload(report: QualityReport) -> dict[str, Any]:
             continue
         lo, hi = _scale([f.values[key] for f in fields], key, report.size)
         ranges[key] = [lo, hi]
+    sections, combs, inflections = model_sections(report)
+    order = list(EDGE_COLORS)
+    classes = sorted({c for c, _ in report.edge_lines}, key=lambda c: (order.index(c) if c in order else len(order), c))
+    edges = [dict(_polylines([pl for c, pl in report.edge_lines if c == cls]), **{
+        "class": cls, "color": list(EDGE_COLORS.get(cls, (0.4, 0.4, 0.4)))}) for cls in classes]
+    lines = {"sections": _polylines(sections), "combs": _polylines(combs),
+             "inflections": _b64(np.asarray(inflections, float).reshape(-1, 3), "<f4"), "edges": edges}
     return {"faces": faces, "ranges": ranges, "size": report.size, "skipped": total > MAX_VIEWER_VERTICES,
-            "n_vertices": total}
+            "n_vertices": total, "pull": list(DRAFT_PULL), "zebra_pairs": ZEBRA_PAIRS,
+            "isophote_pairs": ISOPHOTE_PAIRS, "lines": lines}
 
 
 # ---------------------------------------------------------------------------------------- page
@@ -149,8 +199,8 @@ def _face_table(faces: list[dict[str, Any]], violations: list[dict[str, Any]]) -
     cols = ("face", "type", "k_min", "k_max", "flags", "worst G1 (deg)", "degenerate pts", "vertices", "status")
     out = ['<section id="faces"><h2>Faces</h2><p class="hint">Click a column to sort; rows start worst first '
            '(unevaluated, then by flags plus violations of adjacent edges, then the largest angle at an adjacent '
-           'edge).</p>',
-           '<table class="sortable" id="face-table"><thead><tr>']
+           'edge). Click a row to highlight its face in the 3-D view.</p>',
+           '<div class="table-scroll"><table class="sortable" id="face-table"><thead><tr>']
     out += [f'<th data-col="{i}">{c}</th>' for i, c in enumerate(cols)]
     out.append("</tr></thead><tbody>")
     scores = face_scores(faces, violations)
@@ -164,9 +214,19 @@ def _face_table(faces: list[dict[str, Any]], violations: list[dict[str, Any]]) -
             (f.get("n_degenerate"), str(f.get("n_degenerate", 0))), (f.get("n_vertices"), str(f.get("n_vertices", 0))),
             (status, status),
         ]
-        out.append(f'<tr class="{status}">' + "".join(f'<td data-v="{_num_attr(v)}">{t}</td>' for v, t in cells) + "</tr>")
-    out.append("</tbody></table></section>")
+        out.append(f'<tr class="{status}" data-face="{int(f["index"])}">'
+                   + "".join(f'<td data-v="{_num_attr(v)}">{t}</td>' for v, t in cells) + "</tr>")
+    out.append("</tbody></table></div></section>")
     return "\n".join(out)
+
+
+def _point_attr(p: Any) -> str:
+    """A point ``[x, y, z]`` as the ``data-point`` of a table row (empty when missing)."""
+    try:
+        xyz = [float(x) for x in p]
+    except (TypeError, ValueError):
+        return ""
+    return ",".join(repr(x) for x in xyz) if len(xyz) == 3 and all(math.isfinite(x) for x in xyz) else ""
 
 
 def _edge_table(edges: list[dict[str, Any]], violations: list[dict[str, Any]]) -> str:
@@ -178,7 +238,8 @@ def _edge_table(edges: list[dict[str, Any]], violations: list[dict[str, Any]]) -
         out.append("<p>No edge is shared by two faces, and no loose edges matched geometrically: "
                    "nothing to measure.</p></section>")
         return "\n".join(out)
-    out.append('<table class="sortable" id="edge-table"><thead><tr>')
+    out.append('<p class="hint">Click a row to fly the 3-D view to the edge\'s worst point.</p>'
+               '<div class="table-scroll"><table class="sortable" id="edge-table"><thead><tr>')
     out += [f'<th data-col="{i}">{c}</th>' for i, c in enumerate(cols)]
     out.append("</tr></thead><tbody>")
     for k, e in enumerate(edges):
@@ -191,8 +252,10 @@ def _edge_table(edges: list[dict[str, Any]], violations: list[dict[str, Any]]) -
             (e.get("g2_max_rel"), _fmt(e.get("g2_max_rel"))), (None, _fmt(e.get("worst_point"), 5)),
             (None, _fmt(e.get("midpoint"), 5)),
         ]
-        out.append(f'<tr class="{cls}">' + "".join(f'<td data-v="{_num_attr(v)}">{t}</td>' for v, t in cells) + "</tr>")
-    out.append("</tbody></table></section>")
+        point = _point_attr(e.get("worst_point")) or _point_attr(e.get("midpoint"))
+        out.append(f'<tr class="{cls}" data-edge="{html.escape(str(idx))}" data-point="{point}">'
+                   + "".join(f'<td data-v="{_num_attr(v)}">{t}</td>' for v, t in cells) + "</tr>")
+    out.append("</tbody></table></div></section>")
     return "\n".join(out)
 
 
@@ -240,87 +303,7 @@ tr.error td{background:#fde2e2}tr.flagged td{background:#fff5d6}tr.violation td{
 .passed{color:#070;font-weight:bold}.failed{color:#b00;font-weight:bold}.warn,.error{color:#b00}.note{color:#555}
 .pics{display:flex;flex-wrap:wrap;gap:8px}.pics figure{margin:0}.pics img{max-width:520px;border:1px solid #dde}
 figcaption{font-size:.85em;color:#555;text-align:center}
-#viewer-wrap{position:relative;width:100%;max-width:1100px;height:620px;border:1px solid #ccd;background:#fff}
-#viewer{width:100%;height:100%;display:block}#viewer-ui{margin:.4em 0}
-#legend{position:absolute;right:10px;top:10px;background:rgba(255,255,255,.85);padding:4px 6px;font-size:12px}
-#legend canvas{display:block;width:24px;height:240px}
 nav a{margin-right:1em}
-"""
-
-_VIEWER_JS = r"""
-(function(){
-const DATA = JSON.parse(document.getElementById('viewer-data').textContent);
-const IND = JSON.parse(document.getElementById('viewer-indicators').textContent);
-const MAPS = JSON.parse(document.getElementById('viewer-maps').textContent);
-const status = document.getElementById('viewer-status');
-const canvas = document.getElementById('viewer');
-function dec(s, T){const b=atob(s);const u=new Uint8Array(b.length);for(let i=0;i<b.length;i++)u[i]=b.charCodeAt(i);return new T(u.buffer);}
-function cmap(name, t){const c=MAPS[name];if(!c)return [0.78,0.8,0.84];if(!(t>=0))t=0;if(t>1)t=1;const x=t*(c.length-1);const i=Math.min(Math.floor(x),c.length-2);const f=x-i;
-  return [0,1,2].map(k=>c[i][k]*(1-f)+c[i+1][k]*f);}
-let renderer;
-try { renderer = new THREE.WebGLRenderer({canvas, antialias:true, preserveDrawingBuffer:true}); }
-catch(e){ status.textContent = 'WebGL is not available in this browser: ' + e.message; return; }
-if (DATA.skipped){ status.textContent = 'The model has ' + DATA.n_vertices + ' mesh vertices: too many for the 3-D view; see the pictures.'; }
-const scene = new THREE.Scene(); scene.background = new THREE.Color(0xf4f6fa);
-const camera = new THREE.PerspectiveCamera(30, 1, 1e-3, 1e7);
-scene.add(new THREE.HemisphereLight(0xffffff, 0x8899aa, 1.2));
-const key = new THREE.DirectionalLight(0xffffff, 1.6); camera.add(key); key.position.set(1,1,2); scene.add(camera);
-const group = new THREE.Group(); scene.add(group);
-const meshes = [];
-const zebraMat = new THREE.ShaderMaterial({side: THREE.DoubleSide, uniforms:{pairs:{value:8.0}, mode:{value:0}},
-  vertexShader:'varying vec3 vN; varying vec3 vP; void main(){ vec4 p = modelViewMatrix*vec4(position,1.0); vP=p.xyz; vN=normalize(normalMatrix*normal); gl_Position=projectionMatrix*p; }',
-  fragmentShader:'uniform float pairs; uniform int mode; varying vec3 vN; varying vec3 vP; void main(){ vec3 n=normalize(vN); if(!gl_FrontFacing) n=-n; vec3 d=normalize(vP); '+
-   'float s; if(mode==0){ vec3 r=reflect(d,n); s=asin(clamp(r.x,-1.0,1.0))/3.14159265*2.0*pairs+0.25; } else { s=dot(n, vec3(0.0,0.0,1.0))*6.0; } '+
-   'float w=fwidth(s); float f=fract(s); float a=smoothstep(0.5-w,0.5+w,f)-smoothstep(1.0-w,1.0,f)+ (f<w? 1.0-smoothstep(0.0,w,f):0.0); '+
-   'vec3 c=mix(vec3(0.97), vec3(0.05), clamp(a,0.0,1.0)); gl_FragColor=vec4(c,1.0); }'});
-const shadedMat = new THREE.MeshPhongMaterial({vertexColors:true, side:THREE.DoubleSide, shininess:40, specular:0x333333});
-for (const f of DATA.faces){
-  const g = new THREE.BufferGeometry();
-  g.setAttribute('position', new THREE.BufferAttribute(dec(f.points, Float32Array), 3));
-  g.setAttribute('normal', new THREE.BufferAttribute(dec(f.normals, Float32Array), 3));
-  g.setIndex(new THREE.BufferAttribute(dec(f.triangles, Uint32Array), 1));
-  g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(3*f.n), 3));
-  const vals = {}; for (const k in f.values) vals[k] = dec(f.values[k], Float32Array);
-  const m = new THREE.Mesh(g, shadedMat); m.userData = {index: f.index, vals}; group.add(m); meshes.push(m);
-}
-function colour(ind){
-  const spec = IND.find(x=>x[0]===ind); const map = spec ? spec[2] : 'grey';
-  const r = DATA.ranges[ind] || [0,1];
-  for (const m of meshes){
-    if (ind==='zebra' || ind==='isophote'){ zebraMat.uniforms.mode.value = ind==='zebra'?0:1; m.material = zebraMat; continue; }
-    m.material = shadedMat;
-    const col = m.geometry.getAttribute('color'); const v = m.userData.vals[ind];
-    for (let i=0;i<col.count;i++){
-      let c;
-      if (ind==='shaded' || !v) c = [0.78,0.8,0.84];
-      else if (!isFinite(v[i])) c = [1,0,1];
-      else c = cmap(map, (v[i]-r[0])/((r[1]-r[0])||1));
-      col.setXYZ(i, c[0], c[1], c[2]);
-    }
-    col.needsUpdate = true;
-  }
-  drawLegend(ind, map, r);
-}
-function drawLegend(ind, map, r){
-  const box = document.getElementById('legend'); const cv = box.querySelector('canvas'); const ctx = cv.getContext('2d');
-  const show = !(ind==='zebra'||ind==='isophote'||ind==='shaded'); box.style.display = show?'block':'none'; if(!show) return;
-  for (let y=0;y<cv.height;y++){ const c = cmap(map, 1-y/(cv.height-1)); ctx.fillStyle='rgb('+c.map(x=>Math.round(255*x)).join(',')+')'; ctx.fillRect(0,y,cv.width,1); }
-  box.querySelector('.hi').textContent = r[1].toPrecision(3); box.querySelector('.lo').textContent = r[0].toPrecision(3);
-}
-const box = new THREE.Box3().setFromObject(group); const sph = box.getBoundingSphere(new THREE.Sphere());
-const R = sph.radius || 1; const dir = new THREE.Vector3(1,-1,0.8).normalize();
-camera.up.set(0,0,1); camera.position.copy(sph.center.clone().add(dir.multiplyScalar(R*3.3))); camera.near=R/100; camera.far=R*100; camera.updateProjectionMatrix();
-const controls = new THREE.OrbitControls(camera, canvas); controls.target.copy(sph.center); controls.update();
-function resize(){ const w=canvas.clientWidth, h=canvas.clientHeight; renderer.setSize(w,h,false); camera.aspect=w/h; camera.updateProjectionMatrix(); }
-const sel = document.getElementById('indicator');
-sel.addEventListener('change', ()=>{ colour(sel.value); });
-resize(); colour(sel.value);
-function loop(){ controls.update(); renderer.render(scene, camera); requestAnimationFrame(loop); }
-window.addEventListener('resize', resize); loop();
-window.occsurfViewer = {ready:true, meshes: meshes.length};
-if (!DATA.skipped) status.textContent = meshes.length + ' faces, ' + DATA.n_vertices + ' vertices: drag to rotate, wheel to zoom, right-drag to pan.';
-document.body.setAttribute('data-viewer', 'ready');
-})();
 """
 
 _SORT_JS = r"""
@@ -344,25 +327,58 @@ def _json_script(element_id: str, data: Any) -> str:
     return f'<script type="application/json" id="{element_id}">{text}</script>'
 
 
+def _viewer_section(payload: dict[str, Any]) -> str:
+    """The 3-D view's section: its controls, the canvas with the legend, and the note and pictures
+    shown instead when the browser has no WebGL (filled in by the script)."""
+    from .pictures import EDGE_COLORS, ISOPHOTE_PAIRS, ZEBRA_PAIRS
+
+    def select(element_id: str, choices: Sequence[tuple[str, str]]) -> str:
+        return f'<select id="{element_id}">' + "".join(
+            f'<option value="{html.escape(v)}">{html.escape(label)}</option>' for v, label in choices) + "</select>"
+
+    indicators = select("indicator", [(k, label) for k, label, _, _ in VIEWER_INDICATORS])
+    pulls = select("pull", [(",".join(str(x) for x in d), label) for label, d in PULL_CHOICES])
+    directions = select("zebra-dir", [(",".join(repr(x) for x in d), label) for label, d in ZEBRA_DIRECTIONS])
+    classes = [e["class"] for e in (payload.get("lines") or {}).get("edges") or []]
+    key = "".join(f'<span style="background:rgb({",".join(str(round(255 * c)) for c in EDGE_COLORS.get(k, (.4, .4, .4)))})">'
+                  f"</span>{html.escape(k)}" for k in classes)
+    return (
+        '<section id="view3d"><h2>3-D view</h2>'
+        f'<div id="viewer-ui"><label id="viewer-indicator">indicator {indicators}</label><span id="viewer-status">loading...</span></div>'
+        '<div id="viewer-ui-more"><div id="viewer-controls">'
+        f'<fieldset><legend>zebra</legend><label>stripe pairs <input type="number" id="zebra-count" min="1" max="64" '
+        f'step="1" value="{ZEBRA_PAIRS}"></label> <label>running {directions}</label></fieldset> '
+        f'<fieldset><legend>isophotes</legend><label>bands <input type="number" id="iso-count" min="1" max="64" '
+        f'step="1" value="{ISOPHOTE_PAIRS}"></label></fieldset> '
+        f'<fieldset><legend>draft</legend><label>pull {pulls}</label></fieldset> '
+        '<fieldset title="sections navy, curvature combs orange with inflections green, edges by continuity class">'
+        '<legend>lines</legend><label><input type="checkbox" id="show-sections"> sections</label> '
+        '<label><input type="checkbox" id="show-combs"> combs</label> '
+        f'<label><input type="checkbox" id="show-edges"> edges</label><span id="edge-key">{key}</span>'
+        '</fieldset></div><p id="viewer-pick"></p></div>'
+        '<div id="viewer-wrap"><canvas id="viewer"></canvas><div id="legend"><div class="title"></div><div class="hi"></div>'
+        '<canvas width="24" height="240"></canvas><div class="lo"></div></div></div>'
+        '<div id="viewer-fallback" hidden><p class="warn why"></p><div class="pics"></div></div>'
+        '<noscript><p class="warn">The 3-D view needs JavaScript; the overview pictures and the tables hold the '
+        "report.</p></noscript></section>"
+    )
+
+
 def render_html(doc: dict[str, Any], payload: dict[str, Any], pictures: dict[str, str] | None = None) -> str:
     """The page for a report's JSON ``doc`` (:meth:`QualityReport.to_json`), the 3-D view's
     ``payload`` (:func:`viewer_payload`) and the overview ``pictures`` (kind -> file name)."""
     from ..rendering.vtk_scene import COLORMAPS
 
     title = f"occsurf check: {Path(str(doc.get('path', ''))).name}"
-    options = "".join(f'<option value="{k}">{html.escape(label)}</option>' for k, label, _, _ in VIEWER_INDICATORS)
     parts = [
         "<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
-        f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>",
+        f"<title>{html.escape(title)}</title><style>{_CSS}{VIEWER_CSS}</style></head><body>",
         f"<h1>{html.escape(title)}</h1>",
         '<nav><a href="#overview">model</a><a href="#view3d">3-D view</a><a href="#faces">faces</a>'
         '<a href="#edges">edges</a><a href="#face-details">faces in detail</a></nav>',
         _overview(doc, pictures or {}),
-        '<section id="view3d"><h2>3-D view</h2><div id="viewer-ui"><label>indicator '
-        f'<select id="indicator">{options}</select></label> <span id="viewer-status">loading...</span></div>'
-        '<div id="viewer-wrap"><canvas id="viewer"></canvas><div id="legend"><div class="hi"></div>'
-        '<canvas width="24" height="240"></canvas><div class="lo"></div></div></div></section>',
+        _viewer_section(payload),
         _face_table(doc.get("faces") or [], doc.get("violations") or []),
         _edge_table(doc.get("edges") or [], doc.get("violations") or []),
         _face_sections(doc.get("faces") or []),
@@ -373,7 +389,7 @@ def render_html(doc: dict[str, Any], payload: dict[str, Any], pictures: dict[str
         _json_script("viewer-maps", {k: [list(c) for c in v] for k, v in COLORMAPS.items()}),
         f"<script>{_SORT_JS}</script>",
         f"<script>{viewer_script()}</script>",
-        f"<script>{_VIEWER_JS}</script>",
+        f"<script>{VIEWER_JS}</script>",
         "</body></html>",
     ]
     return "\n".join(parts)

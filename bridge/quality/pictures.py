@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 
@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from .report import FaceField, QualityReport
 
 __all__ = ["render_report_pictures", "render_picture", "MODEL_PICTURES", "FACE_PICTURES", "PICTURE_KINDS",
-           "PICTURE_CHOICES", "WORST_FACES", "section_lines", "face_section_lines"]
+           "PICTURE_CHOICES", "WORST_FACES", "section_lines", "face_section_lines", "model_sections"]
 
 #: Every picture kind: (indicator, colour map, legend title).
 PICTURE_KINDS: dict[str, tuple[str | None, str, str, str]] = {
@@ -150,6 +150,22 @@ def section_lines(fields: Sequence[FaceField], size: float) -> tuple[Lines, dict
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     axis = int(np.argmax(hi - lo))
     return _cut(fields, lo, np.eye(3)[axis], np.linspace(0.04, 0.96, N_SECTIONS) * float(hi[axis] - lo[axis]))
+
+
+def model_sections(report: QualityReport) -> Lines:
+    """The model's sections, combs and inflections (:func:`section_lines` of all its faces), computed
+    once per report and kept on it (:attr:`QualityReport.sections`): the sections picture and the
+    page's 3-D view share them. Empty lines, and a warning in the report, when cutting fails."""
+    if report.sections is None:
+        fields = [report.fields[k] for k in sorted(report.fields)]
+        empty: Lines = ([], [], np.zeros((0, 3)))
+        try:
+            report.sections = section_lines(fields, report.size)[0] if fields else empty
+        except Exception as err:  # noqa: BLE001 - the rest of the report stands without sections
+            report.warnings.append(f"sections not computed: {error_line(err)}")
+            report.sections = empty
+    lines: Lines = report.sections
+    return lines
 
 
 def face_section_lines(field_: FaceField, axis: int) -> Lines:
@@ -300,17 +316,6 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
     flags_all = _flag_points(report)
     drawn = [f for f in fields if faces is None or f.mesh.index in faces]
     total = len(model_pictures) + len(drawn) * len(face_pictures)
-    cut: dict[str, Any] = {}
-
-    def cuts() -> tuple[Lines, dict[int, Lines]]:
-        if "v" not in cut:
-            try:
-                cut["v"] = section_lines(fields, report.size)
-            except Exception as err:  # noqa: BLE001 - the other pictures are still drawn
-                report.warnings.append(f"sections not computed: {error_line(err)}")
-                cut["v"] = (([], [], np.zeros((0, 3))), {})
-        return cut["v"]
-
     skip = dict(skip or {})
     note = trace if trace is not None else (lambda stage: None)
     axis = model_section_axis(fields)
@@ -329,7 +334,7 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
                            flags=flags_all if kind == "mean" else (_violation_points(report) if kind == "edges" else None),
                            edges=report.edge_lines,
                            title=f"{Path(report.path).name}: {PICTURE_KINDS[kind][3]}",
-                           sections=lambda: cuts()[0])
+                           sections=lambda: model_sections(report))
             shown[kind] = name
         except Exception as err:  # noqa: BLE001
             report.warnings.append(f"picture {kind} not drawn: {error_line(err)}")

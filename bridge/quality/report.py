@@ -167,6 +167,9 @@ class QualityReport:
     picture_faces: dict[str, Any] = field(default_factory=dict)
     edge_lines: list[tuple[str, np.ndarray]] = field(default_factory=list, repr=False)
     fields: dict[int, FaceField] = field(default_factory=dict, repr=False)
+    #: The model's sections, combs and inflections once computed
+    #: (:func:`~occsurf.bridge.quality.pictures.model_sections`: the pictures and the page share them).
+    sections: Any = field(default=None, repr=False, compare=False)
 
     @property
     def passed(self) -> bool:
@@ -186,7 +189,8 @@ class QualityReport:
 
         from .html import render_html, viewer_payload
 
-        page = render_html(self.to_json(), viewer_payload(self), {})
+        payload = viewer_payload(self)  # first: a failed section is noted in the warnings
+        page = render_html(self.to_json(), payload, {})
         return ('<iframe title="occsurf quality report" style="width:100%;height:720px;border:1px solid #ccd" '
                 f'srcdoc="{_html.escape(page, quote=True)}"></iframe>')
 
