@@ -60,7 +60,7 @@ from typing import Any
 
 from ..messages import error_line, strip_path
 from ..quality.check_files import collect_files, file_summary, run_checks, write_outputs, write_summary
-from ..quality.pictures import PICTURE_CHOICES, WORST_FACES
+from ..quality.choices import PICTURE_CHOICES, WORST_FACES
 from ._common import (
     EXIT_ERROR,
     EXIT_OK,

@@ -25,7 +25,7 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .report import face_scores
+from .choices import face_scores
 from .viewer_js import VIEWER_CSS, VIEWER_JS
 
 if TYPE_CHECKING:

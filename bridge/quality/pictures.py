@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, TypeVar
 import numpy as np
 
 from ..messages import error_line
+from .choices import PICTURE_CHOICES, WORST_FACES
 
 if TYPE_CHECKING:
     from .report import FaceField, QualityReport
@@ -45,11 +46,8 @@ EDGE_COLORS: dict[str, tuple[float, float, float]] = {
 }
 MODEL_PICTURES = ("mean", "gaussian", "zebra", "isophote", "draft", "hedgehog", "sections", "edges")
 FACE_PICTURES = ("mean", "zebra", "sections")
-#: ``occsurf check --pictures``: ``worst`` (the default) draws the model pictures and the
-#: :data:`WORST_FACES` worst faces' (:func:`~occsurf.bridge.quality.report.worst_faces`), ``all``
-#: every face's, ``none`` no PNG (the page keeps its tables and 3-D view).
-PICTURE_CHOICES = ("worst", "all", "none")
-WORST_FACES = 10
+# ``--pictures`` choices and the worst-face count live in .choices (the command line reads them
+# without NumPy); re-exported here.
 #: Picture sizes in pixels.
 MODEL_SIZE = (900, 640)
 FACE_SIZE = (440, 330)

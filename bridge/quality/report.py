@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..messages import error_line
+from .choices import face_scores
 
 if TYPE_CHECKING:
     from occsurf.algorithms import BSplineSurface
@@ -126,19 +127,6 @@ class FaceQuality:
             "worst_g1_deg": self.worst_g1_deg, "notes": list(self.notes), "error": self.error,
             "pictures": dict(self.pictures),
         }
-
-
-def face_scores(faces: list[dict[str, Any]], violations: list[dict[str, Any]]) -> dict[int, float]:
-    """How bad each face is, for the face table's order and the ``--pictures worst`` choice (report
-    JSON rows): unevaluated faces first, then by their flags plus the threshold violations of their
-    edges, then by the largest G1 angle at an adjacent edge."""
-    touching: dict[int, int] = {}
-    for v in violations:
-        for i in v.get("faces") or ():
-            touching[int(i)] = touching.get(int(i), 0) + 1
-    return {int(f["index"]): (1e9 if f.get("error") else 0.0)
-            + 1e6 * (len(f.get("flags") or ()) + touching.get(int(f["index"]), 0)) + float(f.get("worst_g1_deg") or 0.0)
-            for f in faces}
 
 
 def worst_faces(report: QualityReport, n: int) -> list[int]:
