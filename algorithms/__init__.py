@@ -19,21 +19,10 @@ Cross-cutting modules stay at this level: :mod:`.errors` (the exception hierarch
 :mod:`._numba_kernels` (optional compiled kernels).
 """
 
-from .construction import (
-    SweepResult,
-    coons,
-    coons_bicubic,
-    exact_sweep,
-    extrude,
-    gordon,
-    network_parameters,
-    polynomial_approximation,
-    revolve,
-    rotational_sweep,
-    ruled,
-    sweep,
-    translational_sweep,
-)
+from typing import TYPE_CHECKING
+
+from occsurf._lazy import lazy_exports
+
 from .errors import (
     ExchangeError,
     InvalidGeometryError,
@@ -42,94 +31,205 @@ from .errors import (
     ParameterError,
     ToleranceError,
 )
-from .fitting import (
-    approximation_knots,
-    averaged_knots,
-    fit_curve,
-    fit_surface,
-    interpolate_curve,
-    interpolate_surface,
-    loft,
-    parametrize,
-)
-from .geometry import (
-    AffineMap,
-    Frame,
-    Normal,
-    Point,
-    ProjectiveMap,
-    Vector,
-    affine_combination,
-    arc_length,
-    curvature,
-    curve_frenet,
-    rotation_minimizing_frames,
-    surface_curvatures,
-    torsion,
-)
-from .hierarchical import (
-    ADDITIVE_OFFSETS,
-    FRAME_OFFSETS,
-    HierarchicalCurve,
-    HierarchicalSurface,
-    OffsetMapping,
-    Overlay,
-    register_offset_mapping,
-)
-from .kernel import (
-    BSplineCurve,
-    BSplineSurface,
-    TrimmedSurface,
-    arc,
-    circle,
-    conic_arc,
-    conic_from_shoulder,
-    conic_through_point,
-    conic_type,
-    ellipse,
-    make_compatible,
-)
-from .manipulation import (
-    ConstraintError,
-    ConvergenceError,
-    Curvature,
-    Derivative,
-    Dragger,
-    Position,
-    PreparedConstraints,
-    Tangent,
-    constrain,
-    drag_point,
-    drag_surface_point,
-)
-from .topology import (
-    FillQuality,
-    GeneralizedSurface,
-    HoleFill,
-    HoleSide,
-    Mesh,
-    SPatch,
-    SPatchConversion,
-    biquadratic_patch,
-    catmull_clark,
-    convert_spatch,
-    domain_vertices,
-    doo_sabin,
-    fill_hole,
-    generalized_bicubic,
-    generalized_biquadratic,
-    measure_fill,
-    read_obj,
-    ribbon_patch,
-    side_from_surface,
-    spatch_curvatures,
-    spatch_indices,
-    spatch_to_surfaces,
-    wachspress,
-    wachspress_derivatives,
-    wachspress_gradient,
-    write_obj,
-)
+
+if TYPE_CHECKING:  # the lazily served names, for type checkers and IDEs
+    from .construction import (
+        SweepResult,
+        coons,
+        coons_bicubic,
+        exact_sweep,
+        extrude,
+        gordon,
+        network_parameters,
+        polynomial_approximation,
+        revolve,
+        rotational_sweep,
+        ruled,
+        sweep,
+        translational_sweep,
+    )
+    from .fitting import (
+        approximation_knots,
+        averaged_knots,
+        fit_curve,
+        fit_surface,
+        interpolate_curve,
+        interpolate_surface,
+        loft,
+        parametrize,
+    )
+    from .geometry import (
+        AffineMap,
+        Frame,
+        Normal,
+        Point,
+        ProjectiveMap,
+        Vector,
+        affine_combination,
+        arc_length,
+        curvature,
+        curve_frenet,
+        rotation_minimizing_frames,
+        surface_curvatures,
+        torsion,
+    )
+    from .hierarchical import (
+        ADDITIVE_OFFSETS,
+        FRAME_OFFSETS,
+        HierarchicalCurve,
+        HierarchicalSurface,
+        OffsetMapping,
+        Overlay,
+        register_offset_mapping,
+    )
+    from .kernel import (
+        BSplineCurve,
+        BSplineSurface,
+        TrimmedSurface,
+        arc,
+        circle,
+        conic_arc,
+        conic_from_shoulder,
+        conic_through_point,
+        conic_type,
+        ellipse,
+        make_compatible,
+    )
+    from .manipulation import (
+        ConstraintError,
+        ConvergenceError,
+        Curvature,
+        Derivative,
+        Dragger,
+        Position,
+        PreparedConstraints,
+        Tangent,
+        constrain,
+        drag_point,
+        drag_surface_point,
+    )
+    from .topology import (
+        FillQuality,
+        GeneralizedSurface,
+        HoleFill,
+        HoleSide,
+        Mesh,
+        SPatch,
+        SPatchConversion,
+        biquadratic_patch,
+        catmull_clark,
+        convert_spatch,
+        domain_vertices,
+        doo_sabin,
+        fill_hole,
+        generalized_biquadratic,
+        measure_fill,
+        read_obj,
+        ribbon_patch,
+        side_from_surface,
+        spatch_curvatures,
+        spatch_indices,
+        spatch_to_surfaces,
+        wachspress_derivatives,
+        wachspress_gradient,
+        write_obj,
+    )
+    from .topology.generalized_bicubic import generalized_bicubic  # a function named as its module
+    from .topology.wachspress import wachspress  # (from the package, mypy sees the module's name twice)
+
+#: Name -> the subpackage that defines it: imported on first use (PEP 562), so `import
+#: occsurf.algorithms` (or one chapter) does not load every chapter and its SciPy modules.
+_EXPORTS: dict[str, str] = {
+    "SweepResult": ".construction",
+    "coons": ".construction",
+    "coons_bicubic": ".construction",
+    "exact_sweep": ".construction",
+    "extrude": ".construction",
+    "gordon": ".construction",
+    "network_parameters": ".construction",
+    "polynomial_approximation": ".construction",
+    "revolve": ".construction",
+    "rotational_sweep": ".construction",
+    "ruled": ".construction",
+    "sweep": ".construction",
+    "translational_sweep": ".construction",
+    "approximation_knots": ".fitting",
+    "averaged_knots": ".fitting",
+    "fit_curve": ".fitting",
+    "fit_surface": ".fitting",
+    "interpolate_curve": ".fitting",
+    "interpolate_surface": ".fitting",
+    "loft": ".fitting",
+    "parametrize": ".fitting",
+    "AffineMap": ".geometry",
+    "Frame": ".geometry",
+    "Normal": ".geometry",
+    "Point": ".geometry",
+    "ProjectiveMap": ".geometry",
+    "Vector": ".geometry",
+    "affine_combination": ".geometry",
+    "arc_length": ".geometry",
+    "curvature": ".geometry",
+    "curve_frenet": ".geometry",
+    "rotation_minimizing_frames": ".geometry",
+    "surface_curvatures": ".geometry",
+    "torsion": ".geometry",
+    "ADDITIVE_OFFSETS": ".hierarchical",
+    "FRAME_OFFSETS": ".hierarchical",
+    "HierarchicalCurve": ".hierarchical",
+    "HierarchicalSurface": ".hierarchical",
+    "OffsetMapping": ".hierarchical",
+    "Overlay": ".hierarchical",
+    "register_offset_mapping": ".hierarchical",
+    "BSplineCurve": ".kernel",
+    "BSplineSurface": ".kernel",
+    "TrimmedSurface": ".kernel",
+    "arc": ".kernel",
+    "circle": ".kernel",
+    "conic_arc": ".kernel",
+    "conic_from_shoulder": ".kernel",
+    "conic_through_point": ".kernel",
+    "conic_type": ".kernel",
+    "ellipse": ".kernel",
+    "make_compatible": ".kernel",
+    "ConstraintError": ".manipulation",
+    "ConvergenceError": ".manipulation",
+    "Curvature": ".manipulation",
+    "Derivative": ".manipulation",
+    "Dragger": ".manipulation",
+    "Position": ".manipulation",
+    "PreparedConstraints": ".manipulation",
+    "Tangent": ".manipulation",
+    "constrain": ".manipulation",
+    "drag_point": ".manipulation",
+    "drag_surface_point": ".manipulation",
+    "FillQuality": ".topology",
+    "GeneralizedSurface": ".topology",
+    "HoleFill": ".topology",
+    "HoleSide": ".topology",
+    "Mesh": ".topology",
+    "SPatch": ".topology",
+    "SPatchConversion": ".topology",
+    "biquadratic_patch": ".topology",
+    "catmull_clark": ".topology",
+    "convert_spatch": ".topology",
+    "domain_vertices": ".topology",
+    "doo_sabin": ".topology",
+    "fill_hole": ".topology",
+    "generalized_bicubic": ".topology",
+    "generalized_biquadratic": ".topology",
+    "measure_fill": ".topology",
+    "read_obj": ".topology",
+    "ribbon_patch": ".topology",
+    "side_from_surface": ".topology",
+    "spatch_curvatures": ".topology",
+    "spatch_indices": ".topology",
+    "spatch_to_surfaces": ".topology",
+    "wachspress": ".topology",
+    "wachspress_derivatives": ".topology",
+    "wachspress_gradient": ".topology",
+    "write_obj": ".topology",
+}
 
 __all__ = [
     "HoleSide",
@@ -228,3 +328,21 @@ __all__ = [
     "ConstraintError",
     "ConvergenceError",
 ]
+
+_names, _dir = lazy_exports(__name__, _EXPORTS, globals())
+#: The chapters and cross-cutting modules, served as attributes once imported on first use
+#: (``occsurf.algorithms.quality.curvature_map`` works without importing ``quality`` first).
+_SUBMODULES = ("kernel", "geometry", "construction", "fitting", "manipulation", "hierarchical", "topology",
+               "quality", "lighting", "errors", "tolerances")
+
+
+def __getattr__(name: str) -> object:
+    if name in _SUBMODULES:
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
+    return _names(name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(_dir()) | set(_SUBMODULES))

@@ -17,7 +17,7 @@ import pytest
 
 from occsurf.algorithms import tolerances
 
-LAZY_PACKAGES = ["occsurf", "occsurf.bridge", "occsurf.bridge.quality", "occsurf.bridge.audit"]
+LAZY_PACKAGES = ["occsurf", "occsurf.algorithms", "occsurf.bridge", "occsurf.bridge.quality", "occsurf.bridge.audit"]
 
 
 def _tree(module_name: str) -> ast.Module:
