@@ -119,7 +119,12 @@ def step_unit_overflow(text: StepText, k: int, which: int) -> bytes:
     recs = list(text.records)
     i = _spline_records(text)[k % len(_spline_records(text))]
     poles = [int(x) for x in _REF.findall(recs[i][recs[i].index(b"=") + 1:])]
-    j = text.record_of(poles[which % len(poles)])
+    # Only a pole the surface uses: a closed surface lists its wrap poles twice (the last row or
+    # column repeats the first), and OCC's reader keeps one of each pair, so a changed duplicate is
+    # dropped and nothing overflows (found by the fuzz: the torus's pole #90).
+    coords = [recs[text.record_of(p)].split(b"(", 2)[-1] for p in poles]
+    used = [p for p, c in zip(poles, coords) if coords.count(c) == 1] or poles
+    j = text.record_of(used[which % len(used)])
     recs[j] = re.sub(rb"\(\s*[-+.\dEe]+\s*,", b"(1.0E+308,", recs[j], count=1)
     for u, r in enumerate(recs):
         if b"LENGTH_UNIT" in r and b"SI_UNIT(" in r:
