@@ -1,7 +1,5 @@
 """``python -m occsurf.bridge.cli`` runs the ``occsurf`` command line."""
 
-import sys
+from . import console
 
-from . import main
-
-sys.exit(main())
+console()

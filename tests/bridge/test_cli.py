@@ -419,3 +419,27 @@ def test_realdata_all_files() -> None:
         for face in free:
             assert face["error"] is None, (name, face["index"], face["error"])
             assert face["max_deviation"] <= REALDATA_TOL, (name, face["index"], face["max_deviation"])
+
+
+@pytest.mark.parametrize("code", [130, 143, 0, 2])
+def test_console_ends_a_handled_interrupt_without_finalization(tmp_path: Path, code: int) -> None:
+    """Issue 34: an audit that handled SIGTERM (its cluster closed, its rows flushed) returned 143 and
+    then died in the interpreter's finalization (exit -6, "Fatal Python error ... finalizing") when a
+    library's daemon thread was still inside a C call. ``console`` ends such a run by ``os._exit``
+    after flushing stdout and stderr: the status stands, the output is all there, and nothing of the
+    finalization runs (an atexit hook here stands for it). Other statuses exit normally."""
+    marker = tmp_path / "finalized"
+    script = textwrap.dedent(f"""
+        import atexit, sys
+        import occsurf.bridge.cli as c
+        atexit.register(lambda: open({str(marker)!r}, "w").close())
+        def fake(argv=None):
+            print("rows written", flush=False); print("interrupted", file=sys.stderr, flush=False)
+            return {code}
+        c.main = fake
+        c.console([])
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == code, proc.stderr
+    assert proc.stdout == "rows written\n" and proc.stderr == "interrupted\n", (proc.stdout, proc.stderr)
+    assert marker.exists() == (code not in cli.INTERRUPTED)
