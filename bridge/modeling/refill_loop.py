@@ -160,26 +160,27 @@ def normals_on(edge: Any, face: Any, ts: np.ndarray) -> tuple[np.ndarray, np.nda
     s = BRep_Tool.Surface_s(face)
     pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
     sign = -1.0 if face.Orientation() == TopAbs_REVERSED else 1.0
-    pts: list[Any] = []
-    nrm: list[np.ndarray] = []
+    m = len(ts)
+    P, DU, DV = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
     uvs: list[Any] = []
     p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
-    for t in ts:
+    for k, t in enumerate(ts):  # OCC's D1 per point; the arithmetic below is vectorised
         uv = pc.Value(float(t))
         s.D1(uv.X(), uv.Y(), p, du, dv)
-        n = np.cross(du.Coord(), dv.Coord())
-        if (np.linalg.norm(n) <= tolerances.FILL_EDGE_NORMAL_DEGENERATE * max(du.Magnitude() * dv.Magnitude(), 1e-300)
-                or not np.all(np.isfinite(n))):
-            pr = GeomLProp_SLProps(s, uv.X(), uv.Y(), 1, tolerances.FILL_EDGE_NORMAL_RESOLUTION)
-            n = np.array(pr.Normal().Coord()) if pr.IsNormalDefined() else np.full(3, np.nan)
-        pts.append(p.Coord())
-        nrm.append(n)
+        P[k], DU[k], DV[k] = p.Coord(), du.Coord(), dv.Coord()
         uvs.append(uv)
-    N = np.array(nrm) * sign
+    nrm = np.cross(DU, DV)
+    floor = tolerances.FILL_EDGE_NORMAL_DEGENERATE * np.maximum(
+        np.linalg.norm(DU, axis=1) * np.linalg.norm(DV, axis=1), 1e-300)
+    for k in np.flatnonzero((np.linalg.norm(nrm, axis=1) <= floor) | ~np.all(np.isfinite(nrm), axis=1)):
+        # a degenerate point (a pole of the surface): the normal by its limit, where OCC defines one
+        pr = GeomLProp_SLProps(s, uvs[k].X(), uvs[k].Y(), 1, tolerances.FILL_EDGE_NORMAL_RESOLUTION)
+        nrm[k] = np.array(pr.Normal().Coord()) if pr.IsNormalDefined() else np.full(3, np.nan)
+    N = nrm * sign
     good = np.all(np.isfinite(N), axis=1) & (np.linalg.norm(N, axis=1) > 0)
     if good.sum() < int(tolerances.FILL_EDGE_MIN_NORMALS):
         raise InvalidGeometryError("the neighbour's normal is undefined along a hole edge")
-    return np.array(pts)[good], N[good] / np.linalg.norm(N[good], axis=1, keepdims=True), [u for u, g in zip(uvs, good) if g]
+    return P[good], N[good] / np.linalg.norm(N[good], axis=1, keepdims=True), [u for u, g in zip(uvs, good) if g]
 
 
 def joint_angle(edge: Any, f1: Any, f2: Any) -> float:
