@@ -54,8 +54,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
 import scipy.sparse as sp
+from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import make_lsq_spline
 from scipy.linalg import solveh_banded
 from scipy.optimize import least_squares
