@@ -345,6 +345,9 @@ _DEFAULTS: dict[str, float] = {
     # Largest distance (relative to the model's size) of a fitted boundary where edges meeting at a
     # flat corner are merged into one side (the issue's G0 <= 1e-7 of the model size).
     "FILL_FIT_G0": 1e-7,
+    # Target relative jump of the normal curvature across a side where a fill is asked to be
+    # curvature continuous (G2): CATIA's G2 ratio |k1 - k2| / max(|k1|, |k2|), issue 31's 1 %.
+    "FILL_FIT_G2_REL": 0.01,
     # Fraction of a side over which the neighbour's normal is turned into the fill's corner plane
     # where the two neighbours of a corner do not share a tangent plane (G1 is lost only there).
     "FILL_CORNER_BLEND": 0.1,
@@ -626,6 +629,7 @@ FILL_FOLD_DEGENERATE: float
 FILL_FIT_ANGLE: float
 FILL_FIT_MAX_SPANS: int
 FILL_FIT_G0: float
+FILL_FIT_G2_REL: float
 FILL_CORNER_BLEND: float
 FILL_CORNER_TURN_G0: float
 FILL_PLATE_MAX_TILT: float

@@ -38,10 +38,16 @@ class HoleSide:
         across the boundary, pointing *into the neighbour* (away from the hole). For a polynomial
         ``curve`` it is 3-D; for a rational one it is the 4-D derivative of the neighbour's
         homogeneous surface ``(w x, w y, w z, w)`` (what :func:`side_from_surface` returns).
+    cross2 : BSplineCurve, optional
+        The second derivative of the neighbour across the boundary, along the same parameter as
+        ``cross`` (3-D, or 4-D homogeneous for a rational ``curve``): the neighbour's curvature
+        across the side, which a curvature-continuous (G2) fill matches
+        (:func:`.plate_fill.fill_plate` with ``g2``). ``None``: the side carries G1 data only.
     """
 
     curve: BSplineCurve
     cross: BSplineCurve
+    cross2: BSplineCurve | None = None
 
 
 @dataclass(frozen=True)
@@ -184,16 +190,26 @@ def side_from_surface(surface: BSplineSurface, edge: str, reverse: bool = False)
         (q, p), (Kc, Kb) = s.degree, s.knots
     else:
         (p, q), (Kb, Kc) = s.degree, s.knots
-    nc = H.shape[1]
-    if edge[1] == "0":
-        row, cross = H[:, 0], q / (Kc[q + 1] - Kc[1]) * (H[:, 1] - H[:, 0])
-    else:
-        row, cross = H[:, -1], q / (Kc[nc + q - 1] - Kc[nc - 1]) * (H[:, -2] - H[:, -1])
+    if edge[1] == "1":  # the far rows first, the parameter reflected: derivatives into the surface
+        H, Kc = H[:, ::-1], -Kc[::-1]
+    row, cross, cross2 = _start_jet(H, Kc, q)
     if s.is_rational:
         curve = BSplineCurve(p, Kb, row[:, :3] / row[:, 3:], row[:, 3])
     else:
         curve = BSplineCurve(p, Kb, row)
     X = BSplineCurve(p, Kb, cross)
+    X2 = BSplineCurve(p, Kb, cross2)
     if reverse:
-        curve, X = curve.reverse(), X.reverse()
-    return HoleSide(curve, X)
+        curve, X, X2 = curve.reverse(), X.reverse(), X2.reverse()
+    return HoleSide(curve, X, X2)
+
+
+def _start_jet(H: Array, K: Array, q: int) -> tuple[Array, Array, Array]:
+    """Rows of poles ``(n, w)`` of ``S(., v0)``, ``S_v(., v0)`` and ``S_vv(., v0)`` of the
+    (homogeneous) net ``H`` (n, m, w) of degree ``q`` in ``v`` on the clamped knots ``K``, at their
+    start: the derivative poles of The NURBS Book eq. (3.8), applied twice (zero for ``q < 2``)."""
+    d1 = q / (K[q + 1] - K[1]) * (H[:, 1] - H[:, 0])
+    if q < 2:
+        return H[:, 0], d1, np.zeros_like(d1)
+    d1b = q / (K[q + 2] - K[2]) * (H[:, 2] - H[:, 1])
+    return H[:, 0], d1, (q - 1) / (K[q + 1] - K[2]) * (d1b - d1)

@@ -79,12 +79,15 @@ from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
 from .nsided import HoleSide, count_folds
+from .plate_plane import plate_plane
+from .side_jets import cross_curvature, graph_jet, relative_jump, side_jet
 
 __all__ = ["PlateFill", "fill_plate", "plate_plane"]
 
 Array = NDArray[np.float64]
 
 _DEGREE = 3
+_DEGREE_G2 = 4  # a G2 plate: curvature C2 across knots, approximated to O(h^3)
 _CHECK_POINTS = 2048  # polyline points of the loop for the one-to-one (simple projection) test
 
 
@@ -118,6 +121,14 @@ class PlateFill:
         The targets.
     lean : float
         Largest angle (degrees) between a G1 side's neighbour normal and ``normal``.
+    g2 : ndarray of bool, shape (n,)
+        Sides on which curvature continuity (G2) was asked (empty: none).
+    side_g2 : ndarray, shape (n,)
+        Largest relative jump of the normal curvature across each G2 side (CATIA's G2 ratio
+        ``|k1 - k2| / max(|k1|, |k2|)``, a fraction; :func:`.side_jets.relative_jump`), ``nan`` on
+        the others.
+    g2_tol : float
+        The G2 target (a fraction; ``tolerances.FILL_FIT_G2_REL``).
     """
 
     surface: BSplineSurface
@@ -136,6 +147,9 @@ class PlateFill:
     angle_tol: float
     lean: float = 0.0
     method: str = field(default="plate")
+    g2: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
+    side_g2: Array = field(default_factory=lambda: np.zeros(0))
+    g2_tol: float = 0.01
 
     @property
     def patches(self) -> list[BSplineSurface]:
@@ -210,156 +224,6 @@ def _validate(sides: Sequence[HoleSide],
     return sides, flags
 
 
-# ===================================================================================== the plane
-def _crossings(Q: Array) -> tuple[int, int] | None:
-    """A pair of non-adjacent segments of the closed polyline ``Q`` (shape (m, 2)) that cross, or None."""
-    A, B = Q, np.roll(Q, -1, axis=0)
-    m = len(Q)
-    lo, hi = np.minimum(A, B), np.maximum(A, B)
-    idx = np.arange(m)
-
-    def orient(p: Array, q: Array, r: Array) -> Array:
-        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0])
-
-    block = 256
-    for s in range(0, m, block):  # blocks of segments against all (memory bound, vectorised inside)
-        i = idx[s:s + block]
-        box = np.all((lo[i, None] <= hi[None]) & (lo[None] <= hi[i, None]), axis=2)
-        gap = np.abs(i[:, None] - idx[None])
-        box &= (gap > 1) & (gap < m - 1) & (i[:, None] < idx[None])
-        ii, jj = np.nonzero(box)
-        if ii.size == 0:
-            continue
-        a, b = A[i[ii]], B[i[ii]]
-        c, d = A[jj], B[jj]
-        o1, o2 = orient(a, b, c), orient(a, b, d)
-        o3, o4 = orient(c, d, a), orient(c, d, b)
-        hit = (o1 * o2 < 0) & (o3 * o4 < 0)
-        if hit.any():
-            k = int(np.argmax(hit))
-            return int(i[ii[k]]), int(jj[k])
-    return None
-
-
-def _widest_cap_axis(M: Array, iterations: int = 400) -> Array:
-    """The axis of the smallest spherical cap holding the unit vectors ``M`` (shape (m, 3)): the
-    direction that the most-leaning of them leans least from (the minimax plane normal).
-
-    Badoiu and Clarkson's core-set iteration for the smallest enclosing ball ("Smaller core-sets for
-    balls", SODA 2003: step towards the farthest point by 1/(k+1)); for points on the unit sphere
-    within a hemisphere the ball's centre points along the cap's axis. Error ~ 1/iterations of the
-    cap's radius: a candidate plane, judged afterwards like the others."""
-    c = M.mean(axis=0)
-    for k in range(1, iterations + 1):
-        far = M[int(np.argmax(np.einsum("ij,ij->i", M - c, M - c)))]
-        c = c + (far - c) / (k + 1)
-    return c
-
-
-def _judge(P: Array, Q: Array, M: Array, g1: NDArray[np.bool_], N: Array, newell: Array
-           ) -> tuple[tuple[Array, Array, Array, Array, float] | None, str]:
-    """One candidate plane normal ``N``: ``(frame, "")`` when the hole is a height field over it
-    (loop simple in projection, every G1 normal leaning less than ``FILL_PLATE_MAX_TILT``), else
-    ``(None, why)``."""
-    length = float(np.linalg.norm(N))
-    if not np.isfinite(length) or length == 0:
-        return None, "no direction"
-    N = N / length
-    if float(newell @ N) < 0:
-        N = -N  # the loop runs counter-clockwise about the normal
-    e1, e2 = _in_plane_axes(Q, N)
-    uv = np.c_[Q @ e1, Q @ e2]
-    area = 0.5 * float(np.sum(uv[:, 0] * np.roll(uv[:, 1], -1) - np.roll(uv[:, 0], -1) * uv[:, 1]))
-    scale = float(np.ptp(uv, axis=0).max()) or 1.0
-    if area <= 1e-9 * scale * scale:
-        return None, "the loop encloses no area in projection (it winds back over itself)"
-    max_tilt = tolerances.FILL_PLATE_MAX_TILT
-    cosines = M[g1] @ N if g1.any() else np.ones(1)
-    lean = float(np.degrees(np.arccos(np.clip(cosines.min(), -1.0, 1.0))))
-    if lean >= max_tilt:
-        k = int(np.flatnonzero(g1)[np.argmin(cosines)])
-        return None, (f"a neighbour's tangent plane stands at {lean:.1f} deg to it (at "
-                      f"{np.array2string(P[k], precision=4)}; at most {max_tilt:g} deg, "
-                      "tolerances.FILL_PLATE_MAX_TILT; beyond 90 it turns back over the hole)")
-    hit = _crossings(uv)
-    if hit is not None:
-        return None, (f"the loop crosses itself in projection (samples {hit[0]} and {hit[1]} of {len(P)}, "
-                      f"near {np.array2string(P[hit[0]], precision=4)})")
-    return (P.mean(axis=0), e1, e2, N, lean), ""
-
-
-def plate_plane(points: Array, normals: Array, g1: NDArray[np.bool_] | None = None,
-                normal: ArrayLike | None = None) -> tuple[Array, Array, Array, Array, float]:
-    """The reference plane of a hole over which its fill is a height field.
-
-    Parameters
-    ----------
-    points : ndarray, shape (m, 3)
-        The loop, densely sampled, in order (closed implicitly).
-    normals : ndarray, shape (m, 3)
-        Neighbour normals ``cross x tangent`` at the samples (any length; the orientation the
-        loop gives: for a loop running counter-clockwise about the fill's normal they point to
-        the fill's side).
-    g1 : ndarray of bool, shape (m,), optional
-        Samples whose neighbour normal must lean less than ``tolerances.FILL_PLATE_MAX_TILT``
-        from the plane normal (default: all).
-
-    Returns
-    -------
-    (origin, e1, e2, normal, lean)
-        The frame and the largest lean (degrees) of a G1 normal from ``normal``.
-
-    Notes
-    -----
-    Candidates, in order: the loop's vector area (Newell), the mean neighbour normal, the principal
-    axes' normal; of those that pass, the one with the least lean. Only when none passes, the axis
-    of the smallest cap holding the G1 normals (:func:`_widest_cap_axis`: the least lean any plane
-    can have) and that axis tilted towards the Newell normal (1/3, 2/3 of the way: a plane between
-    the two trades lean for a simpler projection) are tried, in that order (the first that passes
-    is kept), so that the holes the first three fill keep their fill.
-
-    Raises
-    ------
-    InvalidGeometryError
-        No candidate plane has the loop project one-to-one with every G1 normal leaning less than
-        the limit; the message says why for each candidate.
-    """
-    P = np.asarray(points, float)
-    M = np.asarray(normals, float)
-    M = M / np.maximum(np.linalg.norm(M, axis=1, keepdims=True), 1e-300)
-    g1 = np.ones(len(P), bool) if g1 is None else np.asarray(g1, bool)
-    o = P.mean(axis=0)
-    Q = P - o
-    newell = 0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
-    if normal is not None:
-        frame, reason = _judge(P, Q, M, g1, np.asarray(normal, float).ravel(), newell)
-        if frame is None:
-            raise InvalidGeometryError(f"plate fill: not a height field over the plane asked: {reason}")
-        return frame
-    mean_n = M.sum(axis=0)
-    _, _, Vt = np.linalg.svd(Q, full_matrices=False)
-    best, why = None, []
-    for name, N in (("vector area", newell), ("mean neighbour normal", mean_n), ("principal axes", Vt[2])):
-        frame, reason = _judge(P, Q, M, g1, N, newell)
-        if frame is None:
-            why.append(f"{name}: {reason}")
-        elif best is None or frame[4] < best[4]:
-            best = frame
-    if best is not None:
-        return best
-    G = M[g1] if g1.any() else M
-    axis = _widest_cap_axis(G)
-    nn = newell / max(float(np.linalg.norm(newell)), 1e-300)
-    axis = axis / max(float(np.linalg.norm(axis)), 1e-300)
-    for name, N in (("widest-cap axis", axis), ("cap axis 1/3 towards the vector area", 2 * axis + nn),
-                    ("cap axis 2/3 towards the vector area", axis + 2 * nn)):
-        frame, reason = _judge(P, Q, M, g1, N, newell)
-        if frame is not None:
-            return frame
-        why.append(f"{name}: {reason}")
-    raise InvalidGeometryError("plate fill: not a height field over any plane tried (" + "; ".join(why) + ")")
-
-
 # ===================================================================================== the fit
 def _knots(lo: float, hi: float, spans: int, degree: int) -> Array:
     inner = np.linspace(lo, hi, spans + 1)[1:-1]
@@ -368,15 +232,25 @@ def _knots(lo: float, hi: float, spans: int, degree: int) -> Array:
 
 def _rows(ku: Array, kv: Array, p: int, u: Array, v: Array) -> tuple[Array, Array, Array, Array]:
     """Per point: values, d/du and d/dv of the (p+1)^2 non-zero tensor basis functions, and their columns."""
+    val, du, dv, _, _, _, cols = _rows2(ku, kv, p, u, v, 1)
+    return val, du, dv, cols
+
+
+def _rows2(ku: Array, kv: Array, p: int, u: Array, v: Array,
+           order: int = 2) -> tuple[Array, Array, Array, Array | None, Array | None, Array | None, Array]:
+    """:func:`_rows` and, with ``order`` 2, the rows of d2/du2, d2/dudv and d2/dv2 (else ``None``)."""
     nu, nv = ku.size - p - 1, kv.size - p - 1
     su, sv = find_span(ku, p, nu, u), find_span(kv, p, nv, v)
-    Du, Dv = basis_derivatives(ku, p, su, u, 1), basis_derivatives(kv, p, sv, v, 1)  # (m, 2, p+1)
-    val = (Du[:, 0, :, None] * Dv[:, 0, None, :]).reshape(u.size, -1)
-    du = (Du[:, 1, :, None] * Dv[:, 0, None, :]).reshape(u.size, -1)
-    dv = (Du[:, 0, :, None] * Dv[:, 1, None, :]).reshape(u.size, -1)
+    Du, Dv = basis_derivatives(ku, p, su, u, order), basis_derivatives(kv, p, sv, v, order)  # (m, order+1, p+1)
+
+    def tensor(i: int, j: int) -> Array:
+        return (Du[:, i, :, None] * Dv[:, j, None, :]).reshape(u.size, -1)
+
     cols = ((su[:, None] - p + np.arange(p + 1))[:, :, None] * nv
             + (sv[:, None] - p + np.arange(p + 1))[:, None, :]).reshape(u.size, -1)
-    return val, du, dv, cols
+    if order < 2:
+        return tensor(0, 0), tensor(1, 0), tensor(0, 1), None, None, None, cols
+    return tensor(0, 0), tensor(1, 0), tensor(0, 1), tensor(2, 0), tensor(1, 1), tensor(0, 2), cols
 
 
 def _gram(knots: Array, p: int) -> list[sp.csr_matrix]:
@@ -421,7 +295,8 @@ def _angle(gu: Array, gv: Array, m: Array) -> Array:
 
 def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.bool_] | None = None, g0_tol: float | None = None,
                angle_tol: float | None = None, max_spans: int | None = None, size: float | None = None,
-               normal: ArrayLike | None = None) -> PlateFill:
+               normal: ArrayLike | None = None, g2: Sequence[bool] | NDArray[np.bool_] | None = None,
+               g2_tol: float | None = None) -> PlateFill:
     """Fill a hole with one trimmed thin-plate height field (see the module; course §8-3, GeomPlate).
 
     Parameters
@@ -444,6 +319,16 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
         (twice the largest distance of a boundary point from it: invariant under rigid motions).
     normal : array_like, shape (3,), optional
         The plane's normal, when the caller knows it (:func:`plate_plane`); default: the candidates.
+    g2 : sequence of bool, shape (n,), optional
+        Per side, whether the fill must also be curvature continuous (G2) to the neighbour there
+        (default none; a G2 side is a G1 side too). Such a side must carry the neighbour's second
+        cross derivative (``HoleSide.cross2``). The neighbour's curvature is fitted as the Hessian
+        of its height over the plate's plane (:func:`.side_jets.graph_jet`) at the same samples
+        as its position and tangent plane, and the relative jump of the normal curvature across
+        the side (CATIA's G2 ratio) is the third target.
+    g2_tol : float, optional
+        Target relative curvature jump (a fraction) on G2 sides; default ``tolerances.FILL_FIT_G2_REL``
+        (1 %).
 
     Returns
     -------
@@ -458,6 +343,11 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
         tried (:func:`plate_plane`: the reason is named).
     """
     sides, flags = _validate(sides, g1)
+    g2f = _g2_flags(sides, g2)
+    flags = flags | g2f
+    g2_tol = float(tolerances.FILL_FIT_G2_REL if g2_tol is None else g2_tol)
+    if not g2_tol > 0:
+        raise InvalidGeometryError(f"g2_tol: expected a positive relative curvature jump, got {g2_tol}")
     max_spans = int(tolerances.FILL_PLATE_MAX_SPANS if max_spans is None else max_spans)
     if max_spans < 1:
         raise InvalidGeometryError(f"max_spans: expected a positive integer, got {max_spans}")
@@ -484,11 +374,12 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
     margin = 0.02 * float(np.max(hi - lo))
     lo, hi = lo - margin, hi + margin
     ext = hi - lo
-    p = _DEGREE
+    p = _DEGREE_G2 if g2f.any() else _DEGREE
     start = [max(2, int(round(8 * e / ext.max()))) for e in ext]
     lengths = np.array([np.linalg.norm(np.diff(d[0], axis=0), axis=1).sum() for d in dense]) / L
     tol0 = g0_tol / L
     tol1 = np.radians(angle_tol)
+    kfloor = tolerances.CONTINUITY_CURVATURE_FLOOR / size * L  # curvatures below it count as flat (local units)
     best = None  # (score, c, knots, g0 per side, g1 per side, folds): the best stage is returned
     rippled = False
     for held in (False, True):  # the energy's weight: per stage (of the traces); held (after a ripple)
@@ -517,6 +408,9 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             rows_v = np.vstack([val / tol0, du[gsel] * w1[:, None], dv[gsel] * w1[:, None]])
             cols_all = np.vstack([cols, cols[gsel], cols[gsel]])
             rhs = np.r_[X[:, 2] / tol0, gx * w1, gy * w1]
+            if g2f.any():  # the neighbour's Hessian as a height over the plane, where G2 is asked
+                r2, c2, b2 = _curvature_rows(sides, g2f, fit_t, ku, kv, p, o, R, L, g2_tol, kfloor)
+                rows_v, cols_all, rhs = np.vstack([rows_v, r2]), np.vstack([cols_all, c2]), np.r_[rhs, b2]
             k = rows_v.shape[1]
             A = sp.csr_matrix((rows_v.ravel(), cols_all.ravel(), np.arange(0, rows_v.shape[0] * k + 1, k)),
                               shape=(rows_v.shape[0], n))
@@ -528,7 +422,8 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             if held:  # the first stage's weight, grown with the sample count only (see the module)
                 eps = eps0[0] * len(X) / eps0[1]
             lu = spla.splu((AtA + eps * E).tocsc())
-            ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L)
+            ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
+                             g2=g2f, kfloor=kfloor, g2_tol=g2_tol)
             c = lu.solve(A.T @ rhs)
             stage = (ev.score(c, g0_tol, angle_tol), c)
             for _ in range(int(tolerances.FILL_PLATE_ITERATIONS)):
@@ -544,12 +439,13 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
                     break
             c = stage[1]
             g0_side, g1_side, bu, bv = ev.measure(c, g0_tol, angle_tol)
+            g2_side = ev.side_g2(c)
             folds = count_folds(_build(c, ku, kv, p, o, e1, e2, N, L, sides)[1])
             rippled |= folds > 0
             stalled = stalled + 1 if stage[0] > 0.9 * top else 0
             top = min(top, stage[0])
             if best is None or (folds > 0, stage[0]) < (best[6] > 0, best[0]):  # a ripple loses to any fill without
-                best = (stage[0], c, ku, kv, g0_side, g1_side, folds)
+                best = (stage[0], c, ku, kv, g0_side, g1_side, folds, g2_side)
             if stage[0] <= 1.0 or stalled >= 4:  # met, or four refinements gained < 10 % (a target the
                 break  # data cannot meet, e.g. neighbours without a common tangent plane at a corner)
             ku2, kv2 = _bisect(ku, p, bu, max_spans), _bisect(kv, p, bv, max_spans)
@@ -558,11 +454,12 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             ku, kv = ku2, kv2
     if best is None:  # the first stage of the first pass always sets it
         raise RuntimeError("fill_plate: no stage was fitted")
-    score, c, ku, kv, g0_side, g1_side, _ = best
+    score, c, ku, kv, g0_side, g1_side, _, g2_side = best
     met = score <= 1.0
     surf, trimmed = _build(c, ku, kv, p, o, e1, e2, N, L, sides)
     return PlateFill(surf, trimmed, sides, flags, g0_side, g1_side, o, e1, e2, N,
-                     (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean)
+                     (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean,
+                     g2=g2f, side_g2=g2_side, g2_tol=g2_tol)
 
 
 def _build(c: Array, ku: Array, kv: Array, p: int, o: Array, e1: Array, e2: Array, N: Array, L: float,
@@ -586,7 +483,8 @@ class _Evaluation:
     vector achieves there (vectorised over all samples)."""
 
     def __init__(self, sides: list[HoleSide], flags: NDArray[np.bool_], ts: list[Array], ku: Array, kv: Array,
-                 p: int, o: Array, R: Array, L: float) -> None:
+                 p: int, o: Array, R: Array, L: float, g2: NDArray[np.bool_] | None = None, kfloor: float = 0.0,
+                 g2_tol: float = 1.0) -> None:
         data = [_local_data(s, t, o, R, L) for s, t in zip(sides, ts)]
         self.sid = np.concatenate([np.full(len(t), i) for i, t in enumerate(ts)])
         self.X = np.concatenate([d[0] for d in data])
@@ -594,6 +492,20 @@ class _Evaluation:
         self.g1 = flags[self.sid]
         self.val, self.du, self.dv, self.cols = _rows(ku, kv, p, self.X[:, 0], self.X[:, 1])
         self.L, self.n = L, len(sides)
+        self.curv: _Curvature | None = None
+        if g2 is not None and g2.any():
+            self.curv = _Curvature(sides, g2, ts, ku, kv, p, o, R, L, kfloor)
+        self.g2_tol = g2_tol
+
+    def side_g2(self, c: Array) -> Array:
+        """Per side: the largest relative curvature jump across it (``nan`` where G2 is not asked)."""
+        out = np.full(self.n, np.nan)
+        if self.curv is not None:
+            rel = self.curv.jumps(c)
+            top = np.full(self.n, -np.inf)
+            np.maximum.at(top, self.curv.sid, rel)
+            out[np.isfinite(top)] = top[np.isfinite(top)]
+        return out
 
     def errors(self, c: Array) -> tuple[Array, Array]:
         """Per sample: distance (model units) and angle (degrees; nan on G0-only sides)."""
@@ -610,6 +522,8 @@ class _Evaluation:
         worst = float(e0.max()) / g0_tol
         if self.g1.any():
             worst = max(worst, float(np.nanmax(ang)) / angle_tol)
+        if self.curv is not None:
+            worst = max(worst, float(self.curv.jumps(c).max()) / self.g2_tol)
         return worst if np.isfinite(worst) else np.inf
 
     def measure(self, c: Array, g0_tol: float, angle_tol: float) -> tuple[Array, Array, Array, Array]:
@@ -621,7 +535,85 @@ class _Evaluation:
         np.maximum.at(g1, self.sid[self.g1], ang[self.g1])
         g1[~np.isfinite(g1)] = np.nan
         miss = (e0 > g0_tol) | (self.g1 & (np.nan_to_num(ang, nan=0.0) > angle_tol))
-        return g0, g1, self.X[miss, 0], self.X[miss, 1]
+        bu, bv = self.X[miss, 0], self.X[miss, 1]
+        if self.curv is not None:
+            far = self.curv.jumps(c) > self.g2_tol
+            bu, bv = np.r_[bu, self.curv.X[far, 0]], np.r_[bv, self.curv.X[far, 1]]
+        return g0, g1, bu, bv
+
+
+class _Curvature:
+    """The neighbours' curvature across the G2 sides at samples (local frame, units of ``L``) and the
+    plate's second-derivative rows there: the relative jump a coefficient vector leaves."""
+
+    def __init__(self, sides: list[HoleSide], g2: NDArray[np.bool_], ts: list[Array], ku: Array, kv: Array,
+                 p: int, o: Array, R: Array, L: float, kfloor: float) -> None:
+        idx = [i for i in range(len(sides)) if g2[i]]
+        jets = [_local_jet(sides[i], ts[i], o, R, L) for i in idx]
+        self.sid = np.concatenate([np.full(len(ts[i]), i) for i in idx])
+        self.X = np.concatenate([j[0] for j in jets])
+        self.T = np.concatenate([j[1] for j in jets])
+        self.m = np.concatenate([j[2] for j in jets])
+        self.k = np.concatenate([j[5] for j in jets])
+        self.val, self.du, self.dv, self.duu, self.duv, self.dvv, self.cols = _rows2(
+            ku, kv, p, self.X[:, 0], self.X[:, 1])
+        self.kfloor = kfloor
+
+    def jumps(self, c: Array) -> Array:
+        """Per sample, CATIA's G2 ratio between the plate and the neighbour across the side."""
+        cc = c[self.cols]
+        h = [np.einsum("ij,ij->i", rows, cc) for rows in (self.du, self.dv, self.duu, self.duv, self.dvv)]
+        z, one = np.zeros_like(h[0]), np.ones_like(h[0])
+        Su, Sv = np.c_[one, z, h[0]], np.c_[z, one, h[1]]
+        k = cross_curvature(Su, Sv, np.c_[z, z, h[2]], np.c_[z, z, h[3]], np.c_[z, z, h[4]], self.T, self.m)
+        return relative_jump(k, self.k, self.kfloor)
+
+
+def _local_jet(side: HoleSide, t: Array, o: Array, R: Array, L: float) -> tuple[Array, Array, Array, Array, Array, Array]:
+    """At ``t`` on a G2 side, in the local frame (units of ``L``): points, tangents, unit neighbour
+    normals, the neighbour's gradient (m, 2) and Hessian (m, 3) as a height over the plane
+    (:func:`.side_jets.graph_jet`) and its normal curvature across the side (signed by the normal)."""
+    G, Gs, Gt, Gss, Gst, Gtt = side_jet(side, t)
+    Gl = [(G - o) @ R / L] + [D @ R / L for D in (Gs, Gt, Gss, Gst, Gtt)]
+    m = np.cross(Gl[2], Gl[1])  # as _local_data: cross x tangent
+    m /= np.maximum(np.linalg.norm(m, axis=1, keepdims=True), 1e-300)
+    g, H = graph_jet(*Gl[1:])
+    k = cross_curvature(Gl[1], Gl[2], Gl[3], Gl[4], Gl[5], Gl[1], m)
+    return Gl[0], Gl[1], m, g, H, k
+
+
+def _curvature_rows(sides: list[HoleSide], g2: NDArray[np.bool_], ts: list[Array], ku: Array, kv: Array, p: int,
+                    o: Array, R: Array, L: float, g2_tol: float, kfloor: float) -> tuple[Array, Array, Array]:
+    """Least-squares rows ``(rows, columns, right-hand side)`` asking the plate's Hessian at the G2
+    sides' samples to be the neighbour's (as heights over the plane): ``h_xx``, ``sqrt 2 h_xy``,
+    ``h_yy``, each weighted so that a residual of 1 is about the target jump of the curvature
+    (``g2_tol`` of the neighbour's curvature across the side, at least ``kfloor``; in a graph the
+    normal curvature in any direction changes by at most the Hessian's change)."""
+    rows, cols, rhs = [], [], []
+    for i in np.flatnonzero(g2):
+        X, _, _, _, H, k = _local_jet(sides[i], ts[i], o, R, L)
+        _, _, _, duu, duv, dvv, cl = _rows2(ku, kv, p, X[:, 0], X[:, 1])
+        w = 1.0 / (g2_tol * np.maximum(np.abs(k), kfloor))
+        r2 = np.sqrt(2.0)
+        rows += [duu * w[:, None], duv * (r2 * w)[:, None], dvv * w[:, None]]
+        cols += [cl, cl, cl]
+        rhs += [H[:, 0] * w, r2 * H[:, 1] * w, H[:, 2] * w]
+    return np.vstack(rows), np.vstack(cols), np.concatenate(rhs)
+
+
+def _g2_flags(sides: list[HoleSide], g2: Sequence[bool] | NDArray[np.bool_] | None) -> NDArray[np.bool_]:
+    """The G2 flags, one per side, each G2 side checked to carry its neighbour's second cross derivative."""
+    flags = np.zeros(len(sides), bool) if g2 is None else np.asarray(g2, bool).ravel()
+    if flags.shape != (len(sides),):
+        raise InvalidGeometryError(f"g2: expected {len(sides)} flags (one per side), got {flags.shape[0]}")
+    for i in np.flatnonzero(flags):
+        x2 = sides[i].cross2
+        if x2 is None:
+            raise InvalidGeometryError(f"sides[{i}]: G2 asked but the side has no second cross derivative (cross2)")
+        want = 4 if sides[i].curve.is_rational else 3
+        if x2.dim != want:
+            raise InvalidGeometryError(f"sides[{i}].cross2: expected a {want}-D field, got {x2.dim}-D")
+    return flags
 
 
 def _local_data(side: HoleSide, t: Array, o: Array, R: Array, L: float) -> tuple[Array, Array]:
@@ -630,17 +622,6 @@ def _local_data(side: HoleSide, t: Array, o: Array, R: Array, L: float) -> tuple
     m = np.cross(X, T)
     m /= np.maximum(np.linalg.norm(m, axis=1, keepdims=True), 1e-300)
     return (P - o) @ R / L, m @ R
-
-
-def _in_plane_axes(Q: Array, N: Array) -> tuple[Array, Array]:
-    """``e1``: the principal axis of the points ``Q`` projected onto the plane of normal ``N`` (the
-    bounding box then hugs the loop, and the frame turns with the data: rigid motions commute with
-    the fill); ``e2 = N x e1``."""
-    F = Q - np.outer(Q @ N, N)
-    _, _, Vt = np.linalg.svd(F, full_matrices=False)
-    e1 = Vt[0] - (Vt[0] @ N) * N
-    e1 /= np.linalg.norm(e1)
-    return e1, np.cross(N, e1)
 
 
 def _greville(knots: Array, p: int) -> Array:

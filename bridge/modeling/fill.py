@@ -79,7 +79,7 @@ from .joints import (  # noqa: F401 - re-exported
 __all__ = ["HoleReport", "FillResult", "fill_model", "ModelHoles", "model_holes", "fill_loop", "sew_fills",
            "hole_neighbours", "find_loops", "hole_sides", "assess_joint",
            "occ_fill", "sew_faces", "edge_face_map", "neighbour_face", "SEW_TOLERANCE", "ASSESS_SAMPLES",
-           "ASSESS_END_SAMPLES", "ISO_TOLERANCE"]
+           "ASSESS_END_SAMPLES", "ISO_TOLERANCE", "CONTINUITIES", "check_continuity"]
 
 #: How close (relative to the edge's length) an edge must lie to an iso-boundary of its face.
 ISO_TOLERANCE: float = 1e-7
@@ -113,6 +113,11 @@ class HoleReport:
     occ_seconds: float | None = None
     occ_g0: float | None = None
     occ_g1: float | None = None
+    continuity: str = "G1"  # asked: 'G1' or 'G2' (issue 31)
+    g2: float | None = None  # G2 asked: largest relative curvature jump across the boundary (OCC's principal curvatures)
+    side_g2: list[float] = field(default_factory=list)  # ... per side
+    occ_g2_gap: float | None = None  # ... and OCC LocalAnalysis' G2CurvatureGap, max over the boundary
+    occ_g2: float | None = None  # G2 asked: OCC's filler's relative curvature jump (measured as g2)
 
 
 @dataclass
@@ -235,7 +240,8 @@ def _iso_side(surf: BSplineSurface, pts: np.ndarray) -> HoleSide:
     eps = 1e-9 * (hi - lo)
     if t0 > lo + eps or t1 < hi - eps:  # the edge covers part of the boundary: that part is the side
         t0, t1 = (lo if t0 <= lo + eps else t0), (hi if t1 >= hi - eps else t1)
-        side = HoleSide(side.curve.segment(t0, t1), side.cross.segment(t0, t1))
+        side = HoleSide(side.curve.segment(t0, t1), side.cross.segment(t0, t1),
+                        None if side.cross2 is None else side.cross2.segment(t0, t1))
     return side
 
 
@@ -269,19 +275,25 @@ def hole_sides(edges: list[Any], faces: list[Any | None]) -> list[HoleSide]:
         d_end = min(np.linalg.norm(a1 - b0), np.linalg.norm(a1 - b1))
         d_start = min(np.linalg.norm(a0 - b0), np.linalg.norm(a0 - b1))
         s = sides[k]
-        out.append(s if d_end <= d_start else HoleSide(s.curve.reverse(), s.cross.reverse()))
+        out.append(s if d_end <= d_start else HoleSide(s.curve.reverse(), s.cross.reverse(),
+                                                        None if s.cross2 is None else s.cross2.reverse()))
     return out
 
 
 # ---------------------------------------------------------------------------------------- assessment
-def occ_fill(edges: list[Any], faces: list[Any]) -> Any:
-    """OCC's ``BRepOffsetAPI_MakeFilling`` on the hole (G1 to the faces), cadquery's defaults."""
+def occ_fill(edges: list[Any], faces: list[Any], continuity: str = "G1") -> Any:
+    """OCC's ``BRepOffsetAPI_MakeFilling`` on the hole (G1, or ``GeomAbs_G2`` with ``continuity='G2'``,
+    to the faces), cadquery's defaults."""
+    # OCC defect: BRepFill_Filling hands the GeomAbs_Shape's enum value on as the constraint's order
+    # (0..2), so GeomAbs_G2 (3) throws "The continuity is not G0 G1 or G2"; GeomAbs_C1 (2) is the
+    # curvature constraint (tests/bridge/test_fill_g2.py keeps the literal G2 as a strict xfail).
+    order = GeomAbs_Shape.GeomAbs_C1 if check_continuity(continuity) == "G2" else GeomAbs_Shape.GeomAbs_G1
     o = OCC_FILL_DEFAULTS
     mk = BRepOffsetAPI_MakeFilling(o["degree"], o["nb_pts_on_cur"], o["nb_iter"], o["anisotropy"], o["tol2d"],
                                    o["tol3d"], o["tol_ang"], o["tol_curv"], o["max_deg"], o["max_segments"])
     with _occ.kernel_errors("BRepOffsetAPI_MakeFilling"):
         for k, (e, f) in enumerate(zip(edges, faces)):
-            mk.Add(as_edge(e, f"edges[{k}]"), as_face(f, f"faces[{k}]"), GeomAbs_Shape.GeomAbs_G1, True)
+            mk.Add(as_edge(e, f"edges[{k}]"), as_face(f, f"faces[{k}]"), order, True)
         mk.Build()
         if not mk.IsDone():
             raise KernelError("BRepOffsetAPI_MakeFilling: not done")
@@ -318,11 +330,22 @@ def _model_size(shape: Any) -> float:
 
 
 def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int,
-               rep: HoleReport) -> tuple[HoleFill | PlateFill, list[Any]]:
+               rep: HoleReport, continuity: str = "G1") -> tuple[HoleFill | PlateFill, list[Any]]:
     """Fill one loop: exactly from the neighbours' iso-boundaries when every edge is one, else with
     sides fitted to the neighbours along the edges' p-curves (trimming curves; G1 to 0.01 deg,
     :func:`occsurf.bridge.modeling.refill.fitted_fill`). Records the per-edge OCC measurements and
-    the construction (``'iso'``, ``'fitted'``) on ``rep``; returns the fill and its OCC faces."""
+    the construction (``'iso'``, ``'fitted'``) on ``rep``; returns the fill and its OCC faces.
+
+    ``continuity='G2'``: curvature continuous to the neighbours (issue 31), by the plate with the
+    neighbours' curvature across each side (:func:`_g2_fill`), where every edge is an iso-boundary
+    (the exact second cross derivative); elsewhere the fill is G1 and ``rep.reason`` says why."""
+    if continuity == "G2":
+        try:
+            sides = hole_sides(edges, nb)
+        except InvalidGeometryError as err:
+            rep.reason = f"G2 not available, filled G1: {one_line(err, expected=(OccsurfError,))}"
+        else:
+            return _g2_fill(edges, nb, sides, size, samples, rep)
     try:
         fill = fill_hole(hole_sides(edges, nb))
     except InvalidGeometryError as exact_err:
@@ -343,6 +366,34 @@ def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int
     per = [assess_joint(e, f, occ_surfs, samples, locate=_locator(fill, i)) for i, (e, f) in enumerate(zip(edges, nb))]
     rep.side_g0, rep.side_g1 = [p[0] for p in per], [p[1] for p in per]
     rep.construction, rep.method = "iso", "central"
+    return fill, occ_faces
+
+
+def _g2_fill(edges: list[Any], nb: list[Any | None], sides: list[HoleSide], size: float, samples: int,
+             rep: HoleReport) -> tuple[PlateFill, list[Any]]:
+    """The G2 plate of a loop with exact sides (:func:`occsurf.algorithms.topology.plate_fill.fill_plate`
+    with ``g2``), its face, and the OCC measures per edge: G0, G1 (:func:`.joints.assess_joint`) and
+    the curvature jump (:func:`.joints.assess_curvature`)."""
+    from occsurf.algorithms import tolerances
+
+    from .joints import assess_curvature
+    from .plate import plate_fill_faces
+
+    g0_tol = min(tolerances.FILL_FIT_G0 * size, tolerances.FILL_PLATE_SEW_SHARE * SEW_TOLERANCE)
+    flags = [True] * len(sides)
+    fill, occ_faces = plate_fill_faces(sides, flags, g0_tol, gap=max(BRep_Tool.Tolerance_s(e) for e in edges),
+                                       g2=flags)
+    surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
+    floor = tolerances.CONTINUITY_CURVATURE_FLOOR / size
+    per, curv = [], []
+    for i, (e, f) in enumerate(zip(edges, nb)):
+        loc = _locator(fill, i)
+        per.append(assess_joint(e, f, surfs, samples, locate=loc))
+        curv.append(assess_curvature(e, f, surfs, floor, samples, locate=loc))
+    rep.side_g0, rep.side_g1 = [p[0] for p in per], [p[1] for p in per]
+    rep.side_g2 = [c[0] for c in curv]
+    rep.g2, rep.occ_g2_gap = max(rep.side_g2), max(c[1] for c in curv)
+    rep.construction, rep.method = "iso", "plate"
     return fill, occ_faces
 
 
@@ -376,6 +427,17 @@ def model_holes(shape: Any, all_loops: bool = False) -> ModelHoles:
     return ModelHoles(sewn, edge_face_map(sewn), _model_size(sewn), find_loops(sewn, all_loops))
 
 
+#: What ``continuity`` takes (``fill_model``, ``fill_loop``, ``occsurf fill --continuity``).
+CONTINUITIES = ("G1", "G2")
+
+
+def check_continuity(continuity: object) -> str:
+    """``continuity`` if it is one of :data:`CONTINUITIES`, else an ``InvalidGeometryError`` naming them."""
+    if continuity not in CONTINUITIES:
+        raise InvalidGeometryError(f"continuity: expected one of {', '.join(CONTINUITIES)}, got {continuity!r}")
+    return str(continuity)
+
+
 def _check_samples(samples: object) -> int:
     """``samples`` per joint: an integer >= 2 whose arrays (points, normals, feet and OCC's values,
     ~64 floats a sample) fit ``tolerances.MAX_ARRAY_BYTES``; refused before any hole is filled."""
@@ -385,9 +447,13 @@ def _check_samples(samples: object) -> int:
 
 
 @_occ.quiet_messages()
-def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True,
-              samples: int = ASSESS_SAMPLES) -> tuple[HoleReport, HoleFill | PlateFill | None, list[Any]]:
+def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True, samples: int = ASSESS_SAMPLES,
+              continuity: str = "G1") -> tuple[HoleReport, HoleFill | PlateFill | None, list[Any]]:
     """Fill hole ``k`` of ``holes`` and measure it (and OCC's filler on it with ``compare_occ``).
+
+    ``continuity``: ``'G1'`` (tangent continuous) or ``'G2'`` (curvature continuous, where the
+    neighbours' edges are iso-boundaries: :func:`_fill_loop`); OCC's filler is then asked for
+    ``GeomAbs_G2`` on every edge.
 
     Never raises for the hole: a failure is the report's ``status``/``reason``.
 
@@ -397,8 +463,9 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True,
         The report; our fill and its OCC faces (``None`` and ``[]`` unless filled).
     """
     _check_samples(samples)  # a bad argument, not a failure of the hole
+    check_continuity(continuity)
     edges, outer = holes.loops[k]
-    rep = HoleReport(index=k, sides=len(edges), status="outer" if outer else "failed")
+    rep = HoleReport(index=k, sides=len(edges), status="outer" if outer else "failed", continuity=continuity)
     if outer:
         rep.reason = "outer boundary of its shell (not filled; use --all-loops)"
         return rep, None, []
@@ -407,7 +474,7 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True,
     occ_faces: list[Any] = []
     try:
         t0 = time.perf_counter()
-        fill, occ_faces = _fill_loop(edges, nb, holes.size, samples, rep)
+        fill, occ_faces = _fill_loop(edges, nb, holes.size, samples, rep, continuity)
         rep.seconds = time.perf_counter() - t0
         if isinstance(fill, PlateFill):  # rep.method 'plate' or 'wrap'
             from .plate import plate_quality
@@ -428,11 +495,18 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True,
     if compare_occ and all(f is not None for f in nb):
         try:
             t0 = time.perf_counter()
-            of = occ_fill(edges, nb)
+            of = occ_fill(edges, nb, continuity)
             rep.occ_seconds = time.perf_counter() - t0
             s_o = BRep_Tool.Surface_s(of)
             per = [assess_joint(e, f, [s_o], samples) for e, f in zip(edges, nb)]
             rep.occ_g0, rep.occ_g1 = max(p[0] for p in per), max(p[1] for p in per)
+            if continuity == "G2":
+                from occsurf.algorithms import tolerances
+
+                from .joints import assess_curvature
+
+                floor = tolerances.CONTINUITY_CURVATURE_FLOOR / holes.size
+                rep.occ_g2 = max(assess_curvature(e, f, [s_o], floor, samples)[0] for e, f in zip(edges, nb))
             rep.occ_status = "ok"
         except Exception as err:  # noqa: BLE001
             rep.occ_status, rep.occ_reason = "failed", one_line(err, expected=(OccsurfError,))
@@ -454,7 +528,7 @@ def sew_fills(holes: ModelHoles, new_faces: list[Any]) -> tuple[Any, int]:
 
 @_occ.quiet_messages()  # OCC's printers at the caller's levels again afterwards
 def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
-               samples: int = ASSESS_SAMPLES, as_: str | None = None) -> FillResult:
+               samples: int = ASSESS_SAMPLES, as_: str | None = None, continuity: str = "G1") -> FillResult:
     """Fill every hole of ``shape``; see the module.
 
     Parameters
@@ -466,6 +540,8 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
         The type of ``FillResult.shape``: OCC's ``TopoDS_Shape`` (default), or a build123d / cadquery
         object, a ``Solid`` when the filled shell is closed, else a ``Shell`` (a ``Compound`` when the
         faces sew into several shells); :func:`occsurf.bridge.exchange.objects.shape_object`.
+    continuity : {'G1', 'G2'}
+        Tangent (default) or curvature continuity to the neighbours (:func:`fill_loop`).
 
     Returns
     -------
@@ -477,12 +553,13 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
 
     check_as(as_)
     _check_samples(samples)
+    check_continuity(continuity)
     holes = model_holes(as_shape(shape, "shape"), all_loops)
     reports: list[HoleReport] = []
     fills: list[HoleFill | PlateFill | None] = []
     new_faces: list[Any] = []
     for k in range(len(holes.loops)):
-        rep, fill, occ_faces = fill_loop(holes, k, compare_occ=compare_occ, samples=samples)
+        rep, fill, occ_faces = fill_loop(holes, k, compare_occ=compare_occ, samples=samples, continuity=continuity)
         reports.append(rep)
         fills.append(fill)
         new_faces += occ_faces

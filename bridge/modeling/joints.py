@@ -25,7 +25,7 @@ from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from occsurf.algorithms.errors import KernelError
 
-__all__ = ["assess_joint", "edge_samples", "edge_curve_points", "surface_feet", "surfaces_joint", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
+__all__ = ["assess_joint", "assess_curvature", "edge_samples", "edge_curve_points", "surface_feet", "surfaces_joint", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
 
 #: Tolerance of ``BRepBuilderAPI_Sewing`` (model units), for finding free edges and for the result.
 SEW_TOLERANCE: float = 1e-5
@@ -113,6 +113,86 @@ def assess_joint(edge: Any, face: Any, fill_surfaces: list[Any], samples: int = 
         gap, ang = _local_analysis(s_n, uv, best[1], best[2], best[3])
         g0, g1 = max(g0, gap), max(g1, ang)
     return g0, g1
+
+
+def assess_curvature(edge: Any, face: Any, fill_surfaces: list[Any], floor: float, samples: int = ASSESS_SAMPLES,
+                     locate: Locator | None = None) -> tuple[float, float]:
+    """Curvature continuity (G2) along ``edge`` between its neighbour ``face`` and the fill, by OCC:
+    the largest relative jump of the normal curvature across the edge, and the largest
+    ``G2CurvatureGap`` of ``LocalAnalysis_SurfaceContinuity`` at order G2.
+
+    The relative jump is CATIA's G2 ratio ``|k1 - k2| / max(|k1|, |k2|)`` (a fraction; 0 where both
+    curvatures are below ``floor``), each ``k`` the normal curvature in the direction ``n x T``
+    across the edge (``T`` the edge's tangent), by Euler's formula from OCC's principal curvatures
+    and directions (``GeomLProp_SLProps``), the fill's normal turned to agree with the neighbour's.
+    OCC's ``G2CurvatureGap`` is another measure (of the principal curvatures and frames); both are
+    reported. ``locate`` as for :func:`assess_joint` (without it, the points are projected).
+    """
+    from OCP.GeomLProp import GeomLProp_SLProps
+    from OCP.gp import gp_Vec2d
+
+    from ..conversion.shapes import as_edge, as_face
+
+    edge, face = as_edge(edge, "edge"), as_face(face, "face")
+    s_n, uvs, pts = edge_samples(edge, face, samples)
+    pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+    a, b = BRep_Tool.Range_s(edge, face)
+    idx, us, vs = locate(pts) if locate is not None else _nearest_feet(fill_surfaces, pts)
+    worst_rel = worst_gap = 0.0
+    p2, d2 = gp_Pnt2d(), gp_Vec2d()
+    for t, uv, k, u, v in zip(_fractions(samples), uvs, idx, us, vs):
+        s_f = fill_surfaces[int(k)]
+        pn = GeomLProp_SLProps(s_n, uv.X(), uv.Y(), 2, 1e-9)
+        pf = GeomLProp_SLProps(s_f, float(u), float(v), 2, 1e-9)
+        if not (pn.IsNormalDefined() and pf.IsNormalDefined() and pn.IsCurvatureDefined() and pf.IsCurvatureDefined()):
+            continue  # a pole or an umbilic OCC cannot resolve: no curvature to compare there
+        pc.D1(a + t * (b - a), p2, d2)
+        T = np.array(pn.D1U().Coord()) * d2.X() + np.array(pn.D1V().Coord()) * d2.Y()
+        nn = np.array(pn.Normal().Coord())
+        nf = np.array(pf.Normal().Coord())
+        sign = 1.0 if nn @ nf >= 0 else -1.0
+        cross = np.cross(nn, T)
+        cross /= max(float(np.linalg.norm(cross)), 1e-300)
+        kn, kf = (_normal_curvature(pr, cross) for pr in (pn, pf))
+        kf *= sign
+        den = max(abs(kn), abs(kf), floor)
+        if max(abs(kn), abs(kf)) >= floor:
+            worst_rel = max(worst_rel, abs(kn - kf) / den)
+        la = LocalAnalysis_SurfaceContinuity(s_n, uv.X(), uv.Y(), s_f, float(u), float(v), GeomAbs_Shape.GeomAbs_G2)
+        if la.IsDone():
+            worst_gap = max(worst_gap, la.G2CurvatureGap())
+    return worst_rel, worst_gap
+
+
+def _nearest_feet(surfaces: list[Any], pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(surface index, u, v)`` of each point's nearest foot on the Geom ``surfaces`` (OCC's fill)."""
+    projs = [_projector(s) for s in surfaces]
+    out = np.zeros((len(pts), 3))
+    for k, p in enumerate(pts):
+        best = None
+        for j, pr in enumerate(projs):
+            pr.Perform(gp_Pnt(*p))
+            if pr.NbPoints() and (best is None or pr.LowerDistance() < best[0]):
+                best = (pr.LowerDistance(), j, *pr.LowerDistanceParameters())
+        if best is None:
+            raise KernelError("cannot project a boundary point onto the fill")
+        out[k] = best[1:]
+    return out[:, 0].astype(int), out[:, 1], out[:, 2]
+
+
+def _normal_curvature(props: Any, direction: np.ndarray) -> float:
+    """Euler's formula: the normal curvature of an OCC ``GeomLProp_SLProps`` in a tangent ``direction``
+    (unit), ``k_max cos^2 + k_min sin^2`` of its angle to the maximum direction; signed by the
+    surface's own normal."""
+    from OCP.gp import gp_Dir
+
+    if props.IsUmbilic():  # a sphere's point: every direction bends alike (and has no principal frame)
+        return float(props.MeanCurvature())
+    dmax, dmin = gp_Dir(), gp_Dir()
+    props.CurvatureDirections(dmax, dmin)
+    c = float(np.dot(direction, dmax.Coord()))
+    s = float(np.dot(direction, dmin.Coord()))
+    return props.MaxCurvature() * c * c + props.MinCurvature() * s * s
 
 
 def _fractions(samples: int) -> np.ndarray:

@@ -28,7 +28,8 @@ from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.nsided import HoleSide, count_folds
 from occsurf.algorithms.topology.nsided_sides import fit_boundary, side_from_normals
-from occsurf.algorithms.topology.plate_fill import _widest_cap_axis, fill_plate, plate_plane
+from occsurf.algorithms.topology.plate_fill import fill_plate
+from occsurf.algorithms.topology.plate_plane import _widest_cap_axis, plate_plane
 
 DEG = np.radians
 STRIP = [(-70, 0.0), (80, 0.0), (80, 0.005), (-40, 0.02), (-40, 0.1), (-70, 0.1), (-70, 0.066), (-70, 0.033)]
