@@ -232,29 +232,34 @@ def _knots(lo: float, hi: float, spans: int, degree: int) -> Array:
 
 def _rows(ku: Array, kv: Array, p: int, u: Array, v: Array) -> tuple[Array, Array, Array, Array]:
     """Per point: values, d/du and d/dv of the (p+1)^2 non-zero tensor basis functions, and their columns."""
-    val, du, dv, _, _, _, cols = _rows2(ku, kv, p, u, v, 1)
+    nu, nv = ku.size - p - 1, kv.size - p - 1
+    su, sv = find_span(ku, p, nu, u), find_span(kv, p, nv, v)
+    Du, Dv = basis_derivatives(ku, p, su, u, 1), basis_derivatives(kv, p, sv, v, 1)  # (m, 2, p+1)
+    val = (Du[:, 0, :, None] * Dv[:, 0, None, :]).reshape(u.size, -1)
+    du = (Du[:, 1, :, None] * Dv[:, 0, None, :]).reshape(u.size, -1)
+    dv = (Du[:, 0, :, None] * Dv[:, 1, None, :]).reshape(u.size, -1)
+    cols = ((su[:, None] - p + np.arange(p + 1))[:, :, None] * nv
+            + (sv[:, None] - p + np.arange(p + 1))[:, None, :]).reshape(u.size, -1)
     return val, du, dv, cols
 
 
-def _rows2(ku: Array, kv: Array, p: int, u: Array, v: Array,
-           order: int = 2) -> tuple[Array, Array, Array, Array | None, Array | None, Array | None, Array]:
-    """:func:`_rows` and, with ``order`` 2, the rows of d2/du2, d2/dudv and d2/dv2 (else ``None``)."""
+def _rows2(ku: Array, kv: Array, p: int, u: Array,
+           v: Array) -> tuple[Array, Array, Array, Array, Array, Array, Array]:
+    """:func:`_rows` and the rows of d2/du2, d2/dudv and d2/dv2: ``(val, du, dv, duu, duv, dvv, cols)``."""
     nu, nv = ku.size - p - 1, kv.size - p - 1
     su, sv = find_span(ku, p, nu, u), find_span(kv, p, nv, v)
-    Du, Dv = basis_derivatives(ku, p, su, u, order), basis_derivatives(kv, p, sv, v, order)  # (m, order+1, p+1)
+    Du, Dv = basis_derivatives(ku, p, su, u, 2), basis_derivatives(kv, p, sv, v, 2)  # (m, 3, p+1)
 
     def tensor(i: int, j: int) -> Array:
         return (Du[:, i, :, None] * Dv[:, j, None, :]).reshape(u.size, -1)
 
     cols = ((su[:, None] - p + np.arange(p + 1))[:, :, None] * nv
             + (sv[:, None] - p + np.arange(p + 1))[:, None, :]).reshape(u.size, -1)
-    if order < 2:
-        return tensor(0, 0), tensor(1, 0), tensor(0, 1), None, None, None, cols
     return tensor(0, 0), tensor(1, 0), tensor(0, 1), tensor(2, 0), tensor(1, 1), tensor(0, 2), cols
 
 
-def _gram(knots: Array, p: int) -> list[sp.csr_matrix]:
-    """``G_k[i, j] = integral N_i^(k) N_j^(k)`` for k = 0, 1, 2 (exact: p+1 Gauss points per span)."""
+def _gram(knots: Array, p: int, top: int = 2) -> list[sp.csr_matrix]:
+    """``G_k[i, j] = integral N_i^(k) N_j^(k)`` for k = 0 .. ``top`` (exact: p+1 Gauss points per span)."""
     n = knots.size - p - 1
     brk = np.unique(knots)
     x, w = np.polynomial.legendre.leggauss(p + 1)
@@ -262,10 +267,10 @@ def _gram(knots: Array, p: int) -> list[sp.csr_matrix]:
     t = (0.5 * (a + b) + 0.5 * (b - a) * x).ravel()
     wt = (0.5 * (b - a) * w).ravel()
     span = find_span(knots, p, n, t)
-    D = basis_derivatives(knots, p, span, t, 2)  # (m, 3, p+1)
+    D = basis_derivatives(knots, p, span, t, top)  # (m, top+1, p+1)
     cols = span[:, None] - p + np.arange(p + 1)
     out = []
-    for k in range(3):
+    for k in range(top + 1):
         B = sp.csr_matrix((D[:, k].ravel(), cols.ravel(), np.arange(0, t.size * (p + 1) + 1, p + 1)), shape=(t.size, n))
         out.append((B.T @ sp.diags(wt) @ B).tocsr())
     return out
@@ -414,8 +419,13 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             k = rows_v.shape[1]
             A = sp.csr_matrix((rows_v.ravel(), cols_all.ravel(), np.arange(0, rows_v.shape[0] * k + 1, k)),
                               shape=(rows_v.shape[0], n))
-            Gu, Gv = _gram(ku, p), _gram(kv, p)
-            E = sp.kron(Gu[2], Gv[0]) + 2.0 * sp.kron(Gu[1], Gv[1]) + sp.kron(Gu[0], Gv[2])
+            if g2f.any():  # the curvature-variation energy (Moreton & Sequin's MVS, on a height): zero on quadrics
+                Gu, Gv = _gram(ku, p, 3), _gram(kv, p, 3)
+                E = (sp.kron(Gu[3], Gv[0]) + 3.0 * sp.kron(Gu[2], Gv[1]) + 3.0 * sp.kron(Gu[1], Gv[2])
+                     + sp.kron(Gu[0], Gv[3]))
+            else:
+                Gu, Gv = _gram(ku, p), _gram(kv, p)
+                E = sp.kron(Gu[2], Gv[0]) + 2.0 * sp.kron(Gu[1], Gv[1]) + sp.kron(Gu[0], Gv[2])
             AtA = (A.T @ A).tocsc()
             eps = tolerances.FILL_PLATE_SMOOTHING * AtA.diagonal().sum() / max(E.diagonal().sum(), 1e-300)
             eps0 = (eps, len(X)) if eps0 is None else eps0

@@ -313,7 +313,7 @@ def neighbour_face(m: TopTools_IndexedDataMapOfShapeListOfShape, edge: Any) -> A
     return TopoDS.Face_s(lst.First()) if lst.Size() >= 1 else None
 
 
-def _locator(fill: HoleFill, side: int) -> Locator:
+def _locator(fill: HoleFill | PlateFill, side: int) -> Locator:
     def locate(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         idx, u, v, _ = fill.locate_input(side, points)  # the distance is judged by OCC's C0Value
         return idx, u, v

@@ -172,10 +172,10 @@ def normals_on(edge: Any, face: Any, ts: np.ndarray) -> tuple[np.ndarray, np.nda
     nrm = np.cross(DU, DV)
     floor = tolerances.FILL_EDGE_NORMAL_DEGENERATE * np.maximum(
         np.linalg.norm(DU, axis=1) * np.linalg.norm(DV, axis=1), 1e-300)
-    for k in np.flatnonzero((np.linalg.norm(nrm, axis=1) <= floor) | ~np.all(np.isfinite(nrm), axis=1)):
+    for j in np.flatnonzero((np.linalg.norm(nrm, axis=1) <= floor) | ~np.all(np.isfinite(nrm), axis=1)):
         # a degenerate point (a pole of the surface): the normal by its limit, where OCC defines one
-        pr = GeomLProp_SLProps(s, uvs[k].X(), uvs[k].Y(), 1, tolerances.FILL_EDGE_NORMAL_RESOLUTION)
-        nrm[k] = np.array(pr.Normal().Coord()) if pr.IsNormalDefined() else np.full(3, np.nan)
+        pr = GeomLProp_SLProps(s, uvs[j].X(), uvs[j].Y(), 1, tolerances.FILL_EDGE_NORMAL_RESOLUTION)
+        nrm[j] = np.array(pr.Normal().Coord()) if pr.IsNormalDefined() else np.full(3, np.nan)
     N = nrm * sign
     good = np.all(np.isfinite(N), axis=1) & (np.linalg.norm(N, axis=1) > 0)
     if good.sum() < int(tolerances.FILL_EDGE_MIN_NORMALS):
