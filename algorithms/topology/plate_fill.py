@@ -431,7 +431,11 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             eps0 = (eps, len(X)) if eps0 is None else eps0
             if held:  # the first stage's weight, grown with the sample count only (see the module)
                 eps = eps0[0] * len(X) / eps0[1]
-            lu = spla.splu((AtA + eps * E).tocsc())
+            if g2f.any():  # symmetric positive definite: minimum degree on K + K^T, diagonal pivots
+                lu = spla.splu((AtA + eps * E).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                               options={"SymmetricMode": True})
+            else:  # the G1 plate keeps its factorisation: its system is near singular (see the module)
+                lu = spla.splu((AtA + eps * E).tocsc())
             ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
                              g2=g2f, kfloor=kfloor, g2_tol=g2_tol)
             c = lu.solve(A.T @ rhs)

@@ -75,19 +75,21 @@ def test_the_second_cross_derivative_is_the_surface_s(rational: bool, edge: str)
 @pytest.mark.parametrize(("n", "rational"), [(3, False), (4, False), (6, False), (5, True)])
 def test_g2_plate_meets_the_curvature_of_a_smooth_ring(n: int, rational: bool) -> None:
     """A hole in a smooth ring: the G2 plate meets all three targets (G0 1e-7 of the size, G1 0.01
-    deg, curvature jump 1 %) at its samples; measured densely its jump stays within 1 % (measured
-    0.3-0.5 %) and is at least 5 times below the G1 plate's on the same hole (the G1 plate leaves the
-    curvature across the side to the thin-plate energy: 2-10 %)."""
+    deg, curvature jump 1 %) at its samples; measured densely its jump stays within 0.1 % (measured
+    0.009-0.018 %), its G0 within 1e-8 of the size (measured 1.7e-9 to 3.6e-9), and the jump is at
+    least 100 times below the G1 plate's on the same hole (the G1 plate leaves the curvature across
+    the side to the thin-plate energy: 4-37 %, 260 to 4100 times ours)."""
     m = ring_model(n, rational=rational, bump=0)
     size = _size(m.sides)
     g2 = fill_plate(m.sides, g2=[True] * n)
     assert g2.met and np.all(g2.g2) and g2.side_g2.max() <= tolerances.FILL_FIT_G2_REL
     assert g2.side_g0.max() <= tolerances.FILL_FIT_G0 * size and np.nanmax(g2.side_g1) <= tolerances.FILL_FIT_ANGLE
     dense = dense_jumps(g2, m.sides, size)
-    assert dense.max() <= tolerances.FILL_FIT_G2_REL, dense
+    assert dense.max() <= 0.1 * tolerances.FILL_FIT_G2_REL, dense
+    assert g2.side_g0.max() <= 1e-8 * size
     g1 = fill_plate(m.sides)
     assert np.isnan(g1.side_g2).all() and not g1.g2.any()
-    assert dense.max() * 5 <= dense_jumps(g1, m.sides, size).max()
+    assert dense.max() * 100 <= dense_jumps(g1, m.sides, size).max()
 
 
 def _sphere_patch(R: float) -> BSplineSurface:
