@@ -71,12 +71,13 @@ def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
         sys.stdout.write(line + "\n")
     sys.stdout.write("  (G0 gap in model units, G1 angle between tangent planes: max along the hole's boundary, "
                      "OCC LocalAnalysis_SurfaceContinuity)\n")
-    for h in holes:
+    for k, h in enumerate(holes):
+        name = f"hole {h.get('index', k)}" if "faces" not in h else f"faces {' '.join(map(str, h['faces']))}"
         if h.get("continuity") == "G2" and h.get("g2") is not None:
-            sys.stdout.write(f"  hole {h['index']}: G2 curvature jump across the boundary {100 * h['g2']:.2f} % "
+            sys.stdout.write(f"  {name}: G2 curvature jump across the boundary {100 * h['g2']:.2f} % "
                              f"(|k1 - k2| / max |k|, OCC's principal curvatures)\n")
         elif h.get("continuity") == "G2" and h["status"] == "filled":
-            sys.stdout.write(f"  hole {h['index']}: {h.get('reason') or 'filled G1'}\n")
+            sys.stdout.write(f"  {name}: {h.get('reason') or 'filled G1'}\n")
     n_filled = sum(h["status"] == "filled" for h in all_holes)
     if n_filled and result["free_loops_after"] is None:  # --faces
         faces = ", ".join(" ".join(map(str, h["faces"])) for h in all_holes if h["status"] == "filled")
@@ -100,9 +101,6 @@ def run(ns: argparse.Namespace) -> int:
     item = {"input": str(src), "output": str(out), "all_loops": ns.all_loops, "compare_occ": not ns.no_occ,
             "faces": list(ns.faces or []), "strict": ns.strict, "pictures": not ns.no_pictures,
             "continuity": ns.continuity}
-    if ns.faces and ns.continuity != "G1":
-        error("--continuity G2 fills holes of the model (not --faces refills, which are G1 for now)")
-        return EXIT_ERROR
     jobs = default_jobs() if ns.jobs is None else ns.jobs
     outcome = fill_file(item, jobs=jobs, timeout=ns.timeout, isolate=not ns.in_process)
     if outcome_problem(outcome, src, ns.timeout, "reading and filling this file"):
@@ -147,9 +145,10 @@ def add_parser(sub: Any) -> None:
                    help="remove these faces (numbered as in inspect's table) and refill the hole(s) they leave: "
                         "adjacent faces make one hole; G1 is asked where the original was tangent-continuous")
     f.add_argument("--continuity", choices=("G1", "G2"), default="G1",  # modeling.fill.CONTINUITIES (tested)
-                   help="G1: tangent continuous (n patches, exact boundary); G2: curvature continuous too "
-                        "(one plate matching the neighbours' curvature across every edge; iso-boundary "
-                        "neighbours only, others G1 with the reason). OCC's filler is asked the same")
+                   help="G1: tangent continuous (n patches, exact boundary); G2: curvature continuous too, "
+                        "by one plate matching the neighbours' curvature across the edges (holes: every edge "
+                        "of iso-boundary neighbours; --faces: the edges where the removed faces were G2 "
+                        "within 2 %%); where it cannot be made, G1 with the reason")
     f.add_argument("--no-occ", action="store_true", help="do not run OCC's filler for comparison")
     f.add_argument("--no-pictures", action="store_true",
                    help="do not write the zebra before/after picture of each hole (OUT_STEM.holeK.png)")

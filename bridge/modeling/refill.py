@@ -48,6 +48,7 @@ from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.topology.nsided import fill_folds
 
 from ..messages import one_line
+from .fill import check_continuity
 from .joints import unique_faces
 from .refill_candidates import OCC_DEFAULT, OCC_TUNED, PLATE_MARGIN, fill_method, fitted_fill, occ_filling, occ_variant
 from .refill_loop import (
@@ -103,6 +104,11 @@ class RefillReport:
     folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; see FillQuality.folds)
     method: str | None = None  # 'central' (fill_hole's n patches), 'plate' (one trimmed plate, fill_plate) or 'wrap' (a plate about an axis, fill_wrapped_plate)
     occ: dict[str, dict[str, Any]] = field(default_factory=dict)
+    continuity: str = "G1"  # asked: 'G1', or 'G2' where the removed faces were curvature continuous (issue 31)
+    original_g2: list[float | None] = field(default_factory=list)  # G2 asked: the removed faces' jump per edge
+    g2_edges: int = 0  # edges filled G2
+    g2: float | None = None  # largest relative curvature jump over those edges (OCC's principal curvatures)
+    side_g2: list[float | None] = field(default_factory=list)  # ... per edge (None: not asked G2)
     if TYPE_CHECKING:  # set on a filled report for refill_model and the pictures: plain attributes at run
         # time, not dataclass fields (asdict, the JSON, leaves them out); declared for the type checker
         _fill_faces: list[Any] = field(init=False)  # the fill's OCC faces
@@ -111,7 +117,8 @@ class RefillReport:
 
 
 def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool = True, check: bool = True,
-                 occ_variants: dict[str, dict[str, Any]] | None = None) -> tuple[RefillReport, Any]:
+                 occ_variants: dict[str, dict[str, Any]] | None = None,
+                 continuity: str = "G1") -> tuple[RefillReport, Any]:
     """Remove ``faces`` (inspect numbering) and fill the hole; returns the report and the new shape.
 
     Parameters
@@ -125,6 +132,10 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         ``{"default": OCC_DEFAULT, "tuned": OCC_TUNED}``) and measure it alike.
     check : bool
         Sew the fill in, check the result with ``BRepCheck_Analyzer`` and round-trip it through STEP.
+    continuity : {'G1', 'G2'}
+        ``'G2'``: where the removed faces met a neighbour curvature continuously (within
+        :data:`.refill_g2.G2_REL`) the fill does too, by the G2 plate (:func:`.refill_g2.g2_fill`);
+        where that plate cannot be made the fill is G1 as by default, and ``reason`` says why.
 
     Returns
     -------
@@ -150,7 +161,13 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
     g1 = [False] * len(edges)
     try:
         t0 = time.perf_counter()
-        occ_faces, g1, rep.fit_g1, rep.side_g0, rep.side_g1, fill, _ = fitted_fill(edges, nbs, owners, model.size)
+        g2_try = _g2_attempt(rep, edges, nbs, owners, model.size, check_continuity(continuity))
+        if g2_try is not None:
+            occ_faces, g1, rep.fit_g1, rep.side_g0, rep.side_g1, rep.side_g2, fill = g2_try
+            rep.g2_edges = sum(a is not None for a in rep.side_g2)
+            rep.g2 = max([a for a in rep.side_g2 if a is not None], default=None)
+        else:
+            occ_faces, g1, rep.fit_g1, rep.side_g0, rep.side_g1, fill, _ = fitted_fill(edges, nbs, owners, model.size)
         rep.folds = fill_folds(fill)  # measured for a plate too (inside its trim)
         rep.method = fill_method(fill)
         rep.seconds = time.perf_counter() - t0
@@ -174,6 +191,32 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         for name, params in (occ_variants or {"default": OCC_DEFAULT, "tuned": OCC_TUNED}).items():
             rep.occ[name] = occ_variant(edges, nbs, g1, params)
     return rep, shape
+
+
+def _g2_attempt(rep: RefillReport, edges: list[Any], nbs: list[Any], owners: list[Any], size: float,
+                continuity: str) -> tuple | None:
+    """With ``continuity='G2'``: the G2 plate's result (:func:`.refill_g2.g2_fill`) where an edge's
+    removed face was curvature continuous to its neighbour, else ``None`` (the G1 refill then), the
+    reason on ``rep``."""
+    rep.continuity = continuity
+    if continuity != "G2":
+        return None
+    from occsurf.algorithms import tolerances
+
+    from .joints import ASSESS_SAMPLES
+    from .refill_g2 import g2_fill, original_g2
+
+    floor = tolerances.CONTINUITY_CURVATURE_FLOOR / size
+    orig = [original_g2(e, nb, own, floor, ASSESS_SAMPLES) for e, nb, own in zip(edges, nbs, owners)]
+    rep.original_g2 = [None if np.isnan(j) else float(j) for _, j in orig]
+    if not any(ok for ok, _ in orig):
+        rep.reason = "G2 asked: no edge of the removed faces was curvature continuous to its neighbour; filled G1"
+        return None
+    try:
+        return g2_fill(edges, nbs, owners, size, [ok for ok, _ in orig], ASSESS_SAMPLES)
+    except OccsurfError as err:
+        rep.reason = f"G2 plate not made ({one_line(err, expected=(OccsurfError,))}); filled G1"
+        return None
 
 
 def _safe_joint(e: Any, own: Any, nb: Any) -> bool:

@@ -94,8 +94,7 @@ def test_continuity_names_are_checked_and_the_cli_offers_the_same(ring) -> None:
 
 def test_cli_fills_g2_and_says_the_jump(tmp_path: Path, ring) -> None:
     """``occsurf fill --continuity G2``: the JSON carries ``continuity``, ``g2``, ``side_g2``,
-    ``occ_g2``; the table says the jump in percent. ``--faces`` with G2 is one line, exit 2 (refills
-    stay G1 for now); so is an unknown continuity."""
+    ``occ_g2``; the table says the jump in percent. An unknown continuity is one line, exit 2."""
     from occsurf.bridge.exchange.step_iges import write_step
 
     src = write_step(tmp_path / "ring.step", ring)
@@ -107,8 +106,36 @@ def test_cli_fills_g2_and_says_the_jump(tmp_path: Path, ring) -> None:
     assert h["continuity"] == "G2" and h["g2"] <= 0.01 and len(h["side_g2"]) == 4 and h["occ_g2"] > 0.1
     table = subprocess.run(cmd + ["--jobs", "1", "--no-occ"], capture_output=True, text=True, timeout=300)
     assert table.returncode == 0 and "G2 curvature jump across the boundary" in table.stdout, table.stdout
-    for extra in (["--faces", "0"], ["--continuity", "G3"]):
+    for extra in (["--continuity", "G3"],):
         bad = subprocess.run(cmd + extra, capture_output=True, text=True, timeout=120)
         assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
         assert "Traceback" not in bad.stderr
     assert np.isfinite(h["g1"])
+
+
+def test_refill_keeps_the_curvature_continuity_the_removed_face_had(bearing) -> None:
+    """A real model (OCC's bearing, IGES): fillet face 4 meets faces 8 and 166 curvature continuously
+    (the check's G2 edges; jump 0.0) and its other two neighbours only tangentially (100 %: a fillet
+    of radius r against a plane). Refilled with ``continuity='G2'`` the plate is asked G2 on those
+    two edges only, and its jump there is 5.3 % and 8.3 % (the issue's 1 % is not met on this 90 deg
+    fillet strip); the G1 refill (the central split) leaves 199 % there, its curvature turned the
+    other way."""
+    from OCP.BRep import BRep_Tool
+
+    from occsurf.bridge.modeling.joints import assess_curvature
+    from occsurf.bridge.modeling.refill import refill_faces
+    from occsurf.bridge.modeling.refill_loop import hole_loop
+
+    rep, _ = refill_faces(bearing, [4], compare_occ=False, check=False, continuity="G2")
+    assert rep.status == "filled" and rep.method == "plate" and rep.continuity == "G2", rep.reason
+    orig = np.array(rep.original_g2, float)
+    assert np.array_equal(orig <= 0.02, [True, False, True, False]), orig
+    assert rep.g2_edges == 2 and [a is None for a in rep.side_g2] == [False, True, False, True]
+    assert rep.g2 is not None and rep.g2 <= 0.15, rep.side_g2
+    g1, _ = refill_faces(bearing, [4], compare_occ=False, check=False)
+    assert g1.continuity == "G1" and g1.g2 is None and g1.method == "central"
+    edges, nbs, _ = hole_loop(bearing, [4])
+    surfs = [BRep_Tool.Surface_s(f) for f in g1._fill_faces]
+    floor = tolerances.CONTINUITY_CURVATURE_FLOOR / bearing.size
+    jumps = [assess_curvature(edges[k], nbs[k], surfs, floor)[0] for k in (0, 2)]
+    assert min(jumps) > 1.0, jumps
