@@ -12,12 +12,13 @@ import html.parser
 import importlib
 import json
 import re
-import shutil
 import sys
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
 import pytest
+
+from .browser import chrome, needs_chromium
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -119,16 +120,11 @@ def test_the_course_map_covers_every_section_of_the_table_of_contents():
     assert not missing, f"{len(missing)} sections not on the course map: {missing[:10]}"
 
 
-def _chromium() -> tuple[str, str] | None:
-    browser = shutil.which("chromium") or shutil.which("chromium-browser")
-    driver = shutil.which("chromedriver")
-    return (browser, driver) if browser and driver else None
 
 
 @needs_site
 @pytest.mark.slow
-@pytest.mark.skipif(_chromium() is None, reason="Debian packages chromium and chromium-driver not installed "
-                                               "(.ci/run installs them)")
+@needs_chromium
 @pytest.mark.parametrize("page", ["index.html", "api/generated/occsurf.algorithms.kernel.BSplineSurface.html",
                                   "auto_gallery/plot_10_figures.html"])
 def test_pages_open_in_headless_chromium(page, tmp_path):
@@ -137,16 +133,9 @@ def test_pages_open_in_headless_chromium(page, tmp_path):
     import numpy as np
     from PIL import Image
 
-    webdriver = pytest.importorskip("selenium.webdriver")
+    drv = chrome(size=(1280, 1000))
     from selenium.webdriver.common.by import By
 
-    browser, driver_path = _chromium()
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = browser
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1280,1000",
-                "--host-resolver-rules=MAP * ~NOTFOUND"):
-        opts.add_argument(arg)
-    drv = webdriver.Chrome(service=webdriver.ChromeService(executable_path=driver_path), options=opts)
     try:
         drv.get((SITE / page).resolve().as_uri())
         assert "occsurf" in drv.title

@@ -67,10 +67,12 @@ from ..messages import one_line
 from .joints import (  # noqa: F401 - re-exported
     ASSESS_END_SAMPLES,
     ASSESS_SAMPLES,
+    CONTINUITIES,
     SEW_TOLERANCE,
     Locator,
     _local_analysis,
     assess_joint,
+    check_continuity,
     edge_face_map,
     edge_samples,
     unique_faces,
@@ -425,17 +427,6 @@ def model_holes(shape: Any, all_loops: bool = False) -> ModelHoles:
         raise InvalidGeometryError("shape: the model has no faces")
     sewn = sew_faces(faces)
     return ModelHoles(sewn, edge_face_map(sewn), _model_size(sewn), find_loops(sewn, all_loops))
-
-
-#: What ``continuity`` takes (``fill_model``, ``fill_loop``, ``occsurf fill --continuity``).
-CONTINUITIES = ("G1", "G2")
-
-
-def check_continuity(continuity: object) -> str:
-    """``continuity`` if it is one of :data:`CONTINUITIES`, else an ``InvalidGeometryError`` naming them."""
-    if continuity not in CONTINUITIES:
-        raise InvalidGeometryError(f"continuity: expected one of {', '.join(CONTINUITIES)}, got {continuity!r}")
-    return str(continuity)
 
 
 def _check_samples(samples: object) -> int:

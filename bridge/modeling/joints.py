@@ -23,9 +23,9 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
-from occsurf.algorithms.errors import KernelError
+from occsurf.algorithms.errors import InvalidGeometryError, KernelError
 
-__all__ = ["assess_joint", "assess_curvature", "edge_samples", "edge_curve_points", "surface_feet", "surfaces_joint", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
+__all__ = ["assess_joint", "assess_curvature", "CONTINUITIES", "check_continuity", "edge_samples", "edge_curve_points", "surface_feet", "surfaces_joint", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
 
 #: Tolerance of ``BRepBuilderAPI_Sewing`` (model units), for finding free edges and for the result.
 SEW_TOLERANCE: float = 1e-5
@@ -193,6 +193,17 @@ def _normal_curvature(props: Any, direction: np.ndarray) -> float:
     c = float(np.dot(direction, dmax.Coord()))
     s = float(np.dot(direction, dmin.Coord()))
     return props.MaxCurvature() * c * c + props.MinCurvature() * s * s
+
+
+#: What ``continuity`` takes (``fill_model``, ``fill_loop``, ``refill_faces``, ``occsurf fill --continuity``).
+CONTINUITIES = ("G1", "G2")
+
+
+def check_continuity(continuity: object) -> str:
+    """``continuity`` if it is one of :data:`CONTINUITIES`, else an ``InvalidGeometryError`` naming them."""
+    if continuity not in CONTINUITIES:
+        raise InvalidGeometryError(f"continuity: expected one of {', '.join(CONTINUITIES)}, got {continuity!r}")
+    return str(continuity)
 
 
 def _fractions(samples: int) -> np.ndarray:

@@ -48,8 +48,7 @@ from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.topology.nsided import fill_folds
 
 from ..messages import one_line
-from .fill import check_continuity
-from .joints import unique_faces
+from .joints import check_continuity, unique_faces
 from .refill_candidates import OCC_DEFAULT, OCC_TUNED, PLATE_MARGIN, fill_method, fitted_fill, occ_filling, occ_variant
 from .refill_loop import (
     G1_EDGE_DEG,

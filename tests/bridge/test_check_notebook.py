@@ -4,7 +4,6 @@ in headless Chromium, and ``quality_overlays`` as coloured build123d Compounds."
 from __future__ import annotations
 
 import io
-import shutil
 import time
 from pathlib import Path
 
@@ -13,6 +12,8 @@ import pytest
 
 from occsurf.bridge.quality.export import OVERLAY_COLORS, quality_overlays
 from occsurf.bridge.quality.pictures import EDGE_COLORS
+
+from ..browser import chrome, needs_chromium
 
 SAMPLES = Path(__file__).resolve().parents[2] / "step_samples"
 
@@ -51,35 +52,21 @@ def test_overlays_of_a_build123d_part_show_its_tangent_and_sharp_edges():
     assert {"edges sharp", "edges G1"} <= labels  # the bottom's corners, the fillets' tangent joints
 
 
-def _chromium() -> tuple[str, str] | None:
-    browser = shutil.which("chromium") or shutil.which("chromium-browser")
-    driver = shutil.which("chromedriver")
-    return (browser, driver) if browser and driver else None
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(_chromium() is None, reason="Debian packages chromium and chromium-driver not installed "
-                                               "(.ci/run installs them)")
+@needs_chromium
 def test_repr_html_shows_the_viewer_inline_in_chromium(loft_report, tmp_path):
     """A notebook cell's output (the report's ``_repr_html_`` in a page) opened in headless Chromium:
     the framed page's viewer script finishes, its 3-D canvas is not blank, the tables are there."""
     from PIL import Image
-
-    webdriver = pytest.importorskip("selenium.webdriver")
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import WebDriverWait
 
     cell = tmp_path / "cell.html"
     cell.write_text("<!doctype html><html><body><p>In [1]: check_model(part)</p>" + loft_report._repr_html_()
                     + "</body></html>", encoding="utf-8")
-    browser, driver_path = _chromium()
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = browser
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
-                "--enable-unsafe-swiftshader", "--disable-background-networking", "--window-size=1300,1000",
-                "--host-resolver-rules=MAP * ~NOTFOUND"):
-        opts.add_argument(arg)
-    drv = webdriver.Chrome(service=webdriver.ChromeService(executable_path=driver_path), options=opts)
+    drv = chrome(webgl=True)
     try:
         drv.get(cell.resolve().as_uri())
         drv.switch_to.frame(drv.find_element(By.TAG_NAME, "iframe"))

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import base64
 import io
-import shutil
 import time
 from pathlib import Path
 
@@ -22,6 +21,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from occsurf.bridge.quality.html import PULL_CHOICES, VIEWER_INDICATORS, viewer_payload, write_html
+
+from ..browser import chrome, needs_chromium
 
 SAMPLES = Path(__file__).resolve().parents[2] / "step_samples"
 BACKGROUND = np.array([0xF4, 0xF6, 0xFA])
@@ -123,14 +124,6 @@ def test_payload_draft_is_asin_of_the_normal_along_the_pull_and_lines_are_packed
 
 
 # ---------------------------------------------------------------------------------------- browser
-def _chromium() -> tuple[str, str] | None:
-    browser = shutil.which("chromium") or shutil.which("chromium-browser")
-    driver = shutil.which("chromedriver")
-    return (browser, driver) if browser and driver else None
-
-
-needs_chromium = pytest.mark.skipif(_chromium() is None, reason="Debian packages chromium and chromium-driver not "
-                                                                "installed (.ci/run installs them)")
 
 
 @pytest.fixture(scope="module")
@@ -149,16 +142,7 @@ def page(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def browser():
-    webdriver = pytest.importorskip("selenium.webdriver")
-    path, driver_path = _chromium()
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = path
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
-                "--enable-unsafe-swiftshader", "--disable-background-networking", "--window-size=1300,1000",
-                "--host-resolver-rules=MAP * ~NOTFOUND"):
-        opts.add_argument(arg)
-    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    drv = webdriver.Chrome(service=webdriver.ChromeService(executable_path=driver_path), options=opts)
+    drv = chrome(webgl=True, browser_log=True)
     yield drv
     drv.quit()
 

@@ -15,6 +15,8 @@ import pytest
 
 from occsurf.bridge.cli import main
 
+from ..browser import chrome, needs_chromium
+
 SAMPLES = Path(__file__).resolve().parents[2] / "step_samples"
 REALDATA = Path(__file__).resolve().parents[3] / "shared" / "realdata"
 FACE_KEYS = {"index", "type", "k_min", "k_max", "flags"}
@@ -120,15 +122,10 @@ def test_model_without_shared_edges(tmp_path, capsys) -> None:
 
 
 # ---------------------------------------------------------------------------------------- browser
-def _chromium() -> tuple[str, str] | None:
-    browser = shutil.which("chromium") or shutil.which("chromium-browser")
-    driver = shutil.which("chromedriver")
-    return (browser, driver) if browser and driver else None
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(_chromium() is None, reason="Debian packages chromium and chromium-driver not installed "
-                                               "(.ci/run installs them)")
+@needs_chromium
 def test_page_in_headless_chromium(loft_out) -> None:
     """Open index.html from the file system in headless Chromium (WebGL through SwiftShader, the
     network cut off): the viewer script finishes, the 3-D canvas shows the model (a screenshot of
@@ -138,21 +135,12 @@ def test_page_in_headless_chromium(loft_out) -> None:
     import time
 
     from PIL import Image
-
-    webdriver = pytest.importorskip("selenium.webdriver")
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import Select, WebDriverWait
 
     out, proc = loft_out
     assert proc.returncode == 0
-    browser, driver_path = _chromium()
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = browser
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
-                "--enable-unsafe-swiftshader", "--disable-background-networking", "--window-size=1300,1000",
-                "--host-resolver-rules=MAP * ~NOTFOUND"):
-        opts.add_argument(arg)
-    drv = webdriver.Chrome(service=webdriver.ChromeService(executable_path=driver_path), options=opts)
+    drv = chrome(webgl=True)
     try:
         drv.get((out / "index.html").resolve().as_uri())
         WebDriverWait(drv, 60).until(lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-viewer") == "ready")
