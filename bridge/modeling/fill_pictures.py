@@ -180,7 +180,7 @@ def hole_pictures(out: str | Path, reports: Sequence[Any], holes: Sequence[dict[
         try:
             path = zebra_before_after(out.with_name(f"{out.stem}.hole{k}.png"), r._removed if refill else [],
                                       r._neighbours, r._fill_faces, label=f"before (hole {k})",
-                                      after_label=f"after: occsurf fill, {len(r._fill_faces)} patches")
+                                      after_label=_after_label(h, len(r._fill_faces)))
             h["picture"] = str(path)
         except Exception as err:  # noqa: BLE001 - a picture must not cost the fill
             h["picture"], h["picture_error"] = None, one_line(err)
@@ -194,3 +194,12 @@ def _size(faces: Sequence[Any]) -> float:
     for f in faces:
         BRepBndLib.Add_s(f, box)
     return float(np.sqrt(box.SquareExtent())) if not box.IsVoid() else 1.0
+
+
+def _after_label(hole: dict[str, Any], n_faces: int) -> str:
+    """The caption of a fill's zebra picture: how many faces, and the continuity asked (and got)."""
+    faces = "1 face" if n_faces == 1 else f"{n_faces} patches"
+    if hole.get("continuity") == "G2" and hole.get("g2") is not None:
+        return f"after: occsurf fill, {faces}, G2 (curvature jump {100 * hole['g2']:.2g} %)"
+    return f"after: occsurf fill, {faces}"
+
