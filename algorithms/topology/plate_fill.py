@@ -129,6 +129,11 @@ class PlateFill:
         the others.
     g2_tol : float
         The G2 target (a fraction; ``tolerances.FILL_FIT_G2_REL``).
+    corner_g2 : ndarray, shape (n,)
+        At the corner where side ``i`` ends (and side ``i + 1`` begins), when both are G2: how far the
+        two neighbours' curvatures disagree there, ``|H_i - H_(i+1)| / max |H|`` of their Hessians as
+        heights over the plate's plane (0 where the neighbours are curvature continuous to each
+        other at the corner; no fill is G2 to both beyond it). ``nan`` elsewhere.
     """
 
     surface: BSplineSurface
@@ -150,6 +155,7 @@ class PlateFill:
     g2: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
     side_g2: Array = field(default_factory=lambda: np.zeros(0))
     g2_tol: float = 0.01
+    corner_g2: Array = field(default_factory=lambda: np.zeros(0))
 
     @property
     def patches(self) -> list[BSplineSurface]:
@@ -473,7 +479,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
     surf, trimmed = _build(c, ku, kv, p, o, e1, e2, N, L, sides)
     return PlateFill(surf, trimmed, sides, flags, g0_side, g1_side, o, e1, e2, N,
                      (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean,
-                     g2=g2f, side_g2=g2_side, g2_tol=g2_tol)
+                     g2=g2f, side_g2=g2_side, g2_tol=g2_tol, corner_g2=_corner_g2(sides, g2f, o, R, L, kfloor))
 
 
 def _build(c: Array, ku: Array, kv: Array, p: int, o: Array, e1: Array, e2: Array, N: Array, L: float,
@@ -613,6 +619,19 @@ def _curvature_rows(sides: list[HoleSide], g2: NDArray[np.bool_], ts: list[Array
         cols += [cl, cl, cl]
         rhs += [H[:, 0] * w, r2 * H[:, 1] * w, H[:, 2] * w]
     return np.vstack(rows), np.vstack(cols), np.concatenate(rhs)
+
+
+def _corner_g2(sides: list[HoleSide], g2: NDArray[np.bool_], o: Array, R: Array, L: float, kfloor: float) -> Array:
+    """:attr:`PlateFill.corner_g2`: the two G2 neighbours' Hessians (heights over the plane) at each
+    corner, their relative difference (Frobenius; ``kfloor`` the least scale)."""
+    out = np.full(len(sides), np.nan)
+    for i in np.flatnonzero(g2 & np.roll(g2, -1)):
+        a, b = sides[i], sides[(i + 1) % len(sides)]
+        Ha = _local_jet(a, np.array([a.curve.domain[1]]), o, R, L)[4][0]
+        Hb = _local_jet(b, np.array([b.curve.domain[0]]), o, R, L)[4][0]
+        norm = lambda H: float(np.sqrt(H[0] ** 2 + 2 * H[1] ** 2 + H[2] ** 2))  # noqa: E731
+        out[i] = norm(Ha - Hb) / max(norm(Ha), norm(Hb), kfloor)
+    return out
 
 
 def _g2_flags(sides: list[HoleSide], g2: Sequence[bool] | NDArray[np.bool_] | None) -> NDArray[np.bool_]:

@@ -120,6 +120,7 @@ class HoleReport:
     side_g2: list[float] = field(default_factory=list)  # ... per side
     occ_g2_gap: float | None = None  # ... and OCC LocalAnalysis' G2CurvatureGap, max over the boundary
     occ_g2: float | None = None  # G2 asked: OCC's filler's relative curvature jump (measured as g2)
+    corner_g2: list[float | None] = field(default_factory=list)  # G2 asked: the neighbours' own curvature mismatch per corner (PlateFill.corner_g2)
 
 
 @dataclass
@@ -395,6 +396,7 @@ def _g2_fill(edges: list[Any], nb: list[Any | None], sides: list[HoleSide], size
     rep.side_g0, rep.side_g1 = [p[0] for p in per], [p[1] for p in per]
     rep.side_g2 = [c[0] for c in curv]
     rep.g2, rep.occ_g2_gap = max(rep.side_g2), max(c[1] for c in curv)
+    rep.corner_g2 = [None if np.isnan(c) else float(c) for c in fill.corner_g2]
     rep.construction, rep.method = "iso", "plate"
     return fill, occ_faces
 

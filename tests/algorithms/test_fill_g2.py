@@ -176,3 +176,18 @@ def test_base_surfaces_are_what_the_rings_are_cut_from() -> None:
         a, b = m.hole[0], m.hole[1]
         Q = G.evaluate((1 - s) * a[0] + s * b[0], (1 - s) * a[1] + s * b[1])
         assert np.abs(P - Q).max() <= 1e-12
+
+
+def test_corners_where_the_neighbours_disagree_in_curvature_are_reported() -> None:
+    """Corner compatibility: in a G2 ring the two neighbours of every corner have one Hessian there
+    (``corner_g2`` 0 to round-off; so with the bump, whose faces stay G2 to each other). A ring whose
+    faces meet only G1 (``bump_order=1``) forces a mismatch (measured 126-188 %): no fill is G2 to
+    both neighbours there, and the jump the fill is left with says so (88-115 % at 128 spans; the
+    test stops the plates at 16, which the corners' numbers do not depend on)."""
+    smooth = fill_plate(ring_model(4, bump=0).sides, g2=[True] * 4)
+    bumped = fill_plate(ring_model(4).sides, g2=[True] * 4, max_spans=16)  # the corners' data need no fine plate
+    assert np.abs(smooth.corner_g2).max() <= 1e-9 and np.abs(bumped.corner_g2).max() <= 1e-9
+    g1_ring = fill_plate(ring_model(4, bump_order=1).sides, g2=[True] * 4, max_spans=16)
+    assert g1_ring.corner_g2.min() > 0.5 and g1_ring.side_g2.min() > 0.5
+    some = fill_plate(ring_model(4, bump=0).sides, g2=[True, True, False, True])
+    assert list(np.isnan(some.corner_g2)) == [False, True, True, False]
