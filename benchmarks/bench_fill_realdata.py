@@ -27,8 +27,24 @@ then and not now, or worse in G0 or G1 beyond round-off (G0 by more than 1e-9 of
 1 % of the old value, G1 by more than 1e-6 degrees or 1 %), is listed as a regression and the
 command exits 1.
 
+Curvature continuity (``--continuity G2``; issue 31): every face set is refilled by
+``refill_faces(..., continuity='G2')``, which asks G2 (the G2 plate) on the edges where the removed
+faces met their neighbour within 2 % of relative curvature jump (``RefillReport.original_g2``) and G1
+as before elsewhere; the tables above are then of those fills. For each hole with such an edge three
+fills are set side by side on the edges filled G2 (where the G2 plate was not made: the originally
+curvature-continuous edges): ours G2 (its ``g2``: the largest relative jump of the normal curvature
+across those edges, OCC's principal curvatures at the plate's own parameters), ours G1 (the same
+face set refilled with ``continuity='G1'``, neither checked nor compared with OCC) and OCC's
+MakeFilling (cadquery's defaults, ``OCC_DEFAULT``) asked for curvature on those edges
+(``GeomAbs_C1``, its curvature order: an OCC defect makes its ``GeomAbs_G2`` throw), G1 with the
+neighbour on the other tangent edges and C0 on the sharp ones; the jumps of these two by
+``joints.assess_curvature`` with the boundary points projected onto the fill. Then how many holes
+had a G2 edge and were filled G2, the median and worst jump of each, and the median over those
+holes of our time G2 / G1. ``--only-g2`` refills only the face sets with such an edge (``original_g2``
+per hole edge, measured before any fill).
+
 Run:  python benchmarks/bench_fill_realdata.py [--pairs | --only-pairs] [--skip N] [--max-holes N] [--files F ...]
-      [--json OUT] [--baseline OLD.json]
+      [--json OUT] [--baseline OLD.json] [--continuity G1|G2] [--only-g2]
 """
 
 from __future__ import annotations
@@ -61,7 +77,7 @@ def load(path: Path):
 
 
 def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only_pairs: bool = False,
-             on_row=None) -> list[dict]:
+             on_row=None, continuity: str = "G1", only_g2: bool = False) -> list[dict]:
     from OCP.BRep import BRep_Tool
     from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
 
@@ -74,10 +90,18 @@ def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only
                                                           if pairs or only_pairs else [])
     rows = []
     for faces in sets[skip:][:max_holes]:
+        if only_g2 and not had_g2_edge(model, faces):
+            continue
         t0 = time.perf_counter()
-        rep, _ = refill_faces(model, faces)
+        rep, _ = refill_faces(model, faces, continuity=continuity)
         row = asdict(rep)
         row.update(file=path.name, wall=time.perf_counter() - t0, size=model.size)
+        if continuity == "G2" and _g2_edges_of(row):
+            try:
+                row["g2_compare"] = g2_compare(model, rep)
+            except Exception as err:  # noqa: BLE001 - listed under the G2 table; the other holes go on
+                row["g2_compare_error"] = f"{type(err).__name__}: {err}"
+            row["wall"] = time.perf_counter() - t0
         rows.append(row)
         if on_row is not None:
             on_row(row)
@@ -86,7 +110,135 @@ def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only
               f"step {rep.step_round_trip} | OCC {o.get('status')} {o.get('g0')} {o.get('g1')} | tuned "
               f"{t.get('status')} {t.get('g0')} {t.get('g1')} | {row['wall']:.1f} s | {rep.reason or ''}",
               file=sys.stderr, flush=True)
+        if "g2_compare" in row:
+            print("    " + " | ".join(_g2_cells(row)[2:]), file=sys.stderr, flush=True)
     return rows
+
+
+def had_g2_edge(model, faces: list[int]) -> bool:
+    """Whether the removed ``faces`` met a neighbour curvature continuously along an edge of their hole
+    (:func:`occsurf.bridge.modeling.refill_g2.original_g2`, as ``refill_faces(continuity='G2')``
+    measures it); ``False`` where they leave no closed loop."""
+    from occsurf.algorithms import tolerances
+    from occsurf.algorithms.errors import OccsurfError
+    from occsurf.bridge.modeling.joints import ASSESS_SAMPLES
+    from occsurf.bridge.modeling.refill_g2 import original_g2
+    from occsurf.bridge.modeling.refill_loop import hole_loop
+
+    try:
+        edges, nbs, owners = hole_loop(model, sorted(faces))
+    except OccsurfError:
+        return False
+    floor = tolerances.CONTINUITY_CURVATURE_FLOOR / model.size
+    return any(original_g2(e, nb, own, floor, ASSESS_SAMPLES)[0] for e, nb, own in zip(edges, nbs, owners))
+
+
+def _g2_edges_of(row: dict) -> list[int]:
+    """The hole edges the G2 comparison is made on: those filled G2, else (no G2 plate) those where the
+    removed faces were curvature continuous (``original_g2`` within ``G2_REL``)."""
+    from occsurf.bridge.modeling.refill_g2 import G2_REL
+
+    filled = [k for k, a in enumerate(row.get("side_g2") or []) if a is not None]
+    return filled or [k for k, j in enumerate(row.get("original_g2") or []) if j is not None and j <= G2_REL]
+
+
+def occ_curvature_filling(edges: list, nbs: list, orders: list[str], params: dict):
+    """OCC's ``BRepOffsetAPI_MakeFilling`` with ``params`` (:data:`refill_candidates.OCC_DEFAULT`'s keys),
+    each edge constrained by ``orders[k]``: 'G2' (``GeomAbs_C1``, the curvature order: OCC hands the
+    enum's value on as the order, so its ``GeomAbs_G2`` throws), 'G1' (with the neighbour) or 'G0'."""
+    from OCP.BRepOffsetAPI import BRepOffsetAPI_MakeFilling
+    from OCP.GeomAbs import GeomAbs_Shape
+    from OCP.TopoDS import TopoDS
+
+    from occsurf.algorithms.errors import InvalidGeometryError
+    from occsurf.bridge import _occ
+
+    o = params
+    mk = BRepOffsetAPI_MakeFilling(o["degree"], o["nb_pts_on_cur"], o["nb_iter"], o["anisotropy"], o["tol2d"],
+                                   o["tol3d"], o["tol_ang"], o["tol_curv"], o["max_deg"], o["max_segments"])
+    with _occ.kernel_errors("BRepOffsetAPI_MakeFilling"):
+        for e, f, order in zip(edges, nbs, orders):
+            if order == "G2":
+                mk.Add(e, f, GeomAbs_Shape.GeomAbs_C1, True)
+            elif order == "G1":
+                mk.Add(e, f, GeomAbs_Shape.GeomAbs_G1, True)
+            else:
+                mk.Add(e, GeomAbs_Shape.GeomAbs_C0, True)
+        mk.Build()
+        if not mk.IsDone():
+            raise InvalidGeometryError("BRepOffsetAPI_MakeFilling: not done")
+        return TopoDS.Face_s(mk.Shape())
+
+
+def _jump(edges: list, nbs: list, on: list[int], surfs: list, floor: float) -> float:
+    """Largest relative curvature jump (fraction) across the edges ``on`` between their neighbours and
+    the fill (Geom ``surfs``), the boundary points projected onto it (``assess_curvature``, ``locate=None``)."""
+    from occsurf.bridge.modeling.joints import ASSESS_SAMPLES, assess_curvature
+
+    return max(assess_curvature(edges[k], nbs[k], surfs, floor, ASSESS_SAMPLES, locate=None)[0] for k in on)
+
+
+def g2_compare(model, rep) -> dict:
+    """Beside the G2 refill ``rep`` (a hole with an originally curvature-continuous edge): our G1 refill
+    of the same faces and OCC's filler asked for curvature, with their jumps on the same edges."""
+    from OCP.BRep import BRep_Tool
+
+    from occsurf.algorithms import tolerances
+    from occsurf.algorithms.errors import OccsurfError
+    from occsurf.bridge.messages import one_line
+    from occsurf.bridge.modeling.joints import ASSESS_SAMPLES, assess_joint
+    from occsurf.bridge.modeling.refill import refill_faces
+    from occsurf.bridge.modeling.refill_candidates import OCC_DEFAULT
+    from occsurf.bridge.modeling.refill_loop import G1_EDGE_DEG, hole_loop, joint_angle
+
+    edges, nbs, owners = hole_loop(model, rep.faces)
+    on = _g2_edges_of(asdict(rep))
+    floor = tolerances.CONTINUITY_CURVATURE_FLOOR / model.size
+    out: dict = {"edges": on}
+    if rep.status == "filled":  # where the G2 plate was not made, our (G1) fill's jump there, projected
+        try:  # projected for the plate too: the same measure as the other two (g2 is at its own parameters)
+            out["ours_g2_jump_projected"] = _jump(edges, nbs, on, [BRep_Tool.Surface_s(f) for f in rep._fill_faces],
+                                                  floor)
+        except Exception as err:  # noqa: BLE001 - a measure failing on one hole must not stop the others
+            out["ours_g2_jump_error"] = one_line(err, expected=(OccsurfError,))
+        out["ours_g2_jump"] = rep.g2 if rep.g2_edges else out.get("ours_g2_jump_projected")
+    g1rep, _ = refill_faces(model, rep.faces, compare_occ=False, check=False, continuity="G1")
+    ours = {"status": g1rep.status, "reason": g1rep.reason, "method": g1rep.method, "seconds": g1rep.seconds,
+            "g0": g1rep.g0, "g1": g1rep.g1}
+    if g1rep.status == "filled":
+        try:
+            ours["jump"] = _jump(edges, nbs, on, [BRep_Tool.Surface_s(f) for f in g1rep._fill_faces], floor)
+        except Exception as err:  # noqa: BLE001 - a measure failing on one hole must not stop the others
+            ours["jump_error"] = one_line(err, expected=(OccsurfError,))
+    out["ours_g1"] = ours
+    # OCC: curvature on those edges, G1 (with the neighbour) where the fill was asked tangency, C0 elsewhere
+    asked = next((r.side_g1 for r in (rep, g1rep) if r.status == "filled"), None)
+    if asked is not None:
+        tangent = [a is not None for a in asked]
+    else:
+        tangent = [own is not None and _tangent(joint_angle, e, own, nb, G1_EDGE_DEG)
+                   for e, nb, own in zip(edges, nbs, owners)]
+    orders = ["G2" if k in on else "G1" if tangent[k] else "G0" for k in range(len(edges))]
+    t0 = time.perf_counter()
+    try:
+        face = occ_curvature_filling(edges, nbs, orders, OCC_DEFAULT)
+        secs = time.perf_counter() - t0
+        surfs = [BRep_Tool.Surface_s(face)]
+        joints = [assess_joint(e, nb, surfs, ASSESS_SAMPLES) for e, nb in zip(edges, nbs)]
+        out["occ"] = {"status": "ok", "seconds": secs, "g0": max(a for a, _ in joints),
+                      "g1": max([b for (_, b), o in zip(joints, orders) if o != "G0"], default=0.0),
+                      "jump": _jump(edges, nbs, on, surfs, floor)}
+    except Exception as err:  # noqa: BLE001 - an OCC failure on one hole must not stop the others
+        out["occ"] = {"status": "failed", "reason": one_line(err, expected=(OccsurfError,)),
+                      "seconds": time.perf_counter() - t0}
+    return out
+
+
+def _tangent(joint_angle, e, own, nb, limit: float) -> bool:
+    try:
+        return joint_angle(e, own, nb) <= limit
+    except Exception:  # noqa: BLE001
+        return False
 
 
 def _quantiles(vals: list[float]) -> str:
@@ -217,6 +369,106 @@ def _short(reason: str | None) -> str:
     return re.sub(r"[-+]?\d[\d.e+-]*", "#", reason or "?")[:140]
 
 
+def _pct(j: float | None) -> str:
+    return "-" if j is None else f"{100 * j:.3g} %"
+
+
+def _num(x: float | None, fmt: str = ".1e") -> str:
+    return "-" if x is None else format(x, fmt)
+
+
+def _g2_cells(r: dict) -> list[str]:
+    """One hole's cells of :func:`g2_table`."""
+    c = r["g2_compare"]
+    g1, o = c["ours_g1"], c["occ"]
+    ours = (f"{r['status']} {r.get('method') or '-'}{'' if r.get('g2_edges') else ' (G1)'}, "
+            f"{_num(r.get('seconds'), '.2f')} s, G0 {_num(r.get('g0'))}, G1 {_num(r.get('g1'), '.2g')} deg, "
+            f"jump {_pct(c.get('ours_g2_jump'))}")
+    mine = (f"{g1['status']} {g1.get('method') or '-'}, {_num(g1.get('seconds'), '.2f')} s, "
+            f"G0 {_num(g1.get('g0'))}, G1 {_num(g1.get('g1'), '.2g')} deg, jump {_pct(g1.get('jump'))}")
+    occ = (f"{o['status']}, {o['seconds']:.2f} s, G0 {_num(o.get('g0'))}, G1 {_num(o.get('g1'), '.2g')} deg, "
+           f"jump {_pct(o.get('jump'))}")
+    return [r["file"].split("__")[-1], str(r["faces"]),
+            f"{sum(j is not None and j <= 0.02 for j in r['original_g2'])} ({len(c['edges'])})", ours, mine, occ,
+            "; ".join(_g2_notes(r))]
+
+
+def _g2_notes(r: dict) -> list[str]:
+    """What looks wrong in one hole of :func:`g2_table`: a slow G2 fill, G0/G1 worse than the G1 refill's
+    beyond round-off (as :func:`compare_baseline` judges), a fall-back's reason, a failure."""
+    c = r["g2_compare"]
+    g1 = c["ours_g1"]
+    notes = []
+    if (r.get("seconds") or 0.0) > 60:
+        notes.append(f"G2 fill {r['seconds']:.0f} s")
+    if r["status"] == "filled" and g1["status"] == "filled":
+        size = r.get("size") or 1.0
+        if r["g0"] > g1["g0"] + max(1e-9 * size, 0.01 * g1["g0"]):
+            notes.append(f"G0 worse than G1 refill ({r['g0']:.1e} vs {g1['g0']:.1e})")
+        if r["g1"] > g1["g1"] + max(1e-6, 0.01 * g1["g1"]):
+            notes.append(f"G1 worse than G1 refill ({r['g1']:.2g} vs {g1['g1']:.2g} deg)")
+    if r.get("folds"):
+        notes.append(f"folds {r['folds']}")
+    if r["status"] != "filled" or not r.get("g2_edges"):
+        notes.append(_short(r.get("reason"))[:100])
+    if g1["status"] != "filled":
+        notes.append("G1 refill: " + _short(g1.get("reason"))[:80])
+    proj, own = c.get("ours_g2_jump_projected"), c.get("ours_g2_jump")
+    if r.get("g2_edges") and proj is not None and own is not None and abs(proj - own) > max(0.01, 0.5 * own):
+        notes.append(f"G2 jump projected {_pct(proj)}")
+    if "ours_g2_jump_error" in c:
+        notes.append("G2 jump: " + c["ours_g2_jump_error"][:80])
+    if "jump_error" in g1:
+        notes.append("G1 jump: " + g1["jump_error"][:80])
+    if c["occ"]["status"] != "ok":
+        notes.append("OCC: " + _short(c["occ"].get("reason"))[:80])
+    return notes
+
+
+def g2_table(rows: list[dict]) -> str:
+    """Per hole with an originally curvature-continuous edge: ours G2, ours G1 and OCC asked for
+    curvature, their jumps on the same edges; then the counts, the jumps' median / worst and the times."""
+    g2 = [r for r in rows if "g2_compare" in r]
+    out = [f"curvature continuity (G2): {len(rows)} face sets refilled G2, {len(g2)} with an edge the removed "
+           "faces met curvature continuously (within 2 %)", "",
+           "| file | faces | G2 edges (compared) | ours G2: status method, s, G0, G1, jump | "
+           "ours G1: status method, s, G0, G1, jump | OCC curvature-asked: status, s, G0, G1, jump | notes |",
+           "|---|---|---|---|---|---|---|"]
+    out += ["| " + " | ".join(_g2_cells(r)) + " |" for r in g2]
+    made = [r for r in g2 if r["status"] == "filled" and r.get("g2_edges") and r.get("method") == "plate"]
+    out += ["", f"face sets with a G2 edge: {len(g2)}; filled G2 (the G2 plate): {len(made)}"]
+    jumps = {"ours G2": [r["g2_compare"].get("ours_g2_jump") for r in made],
+             "ours G1": [r["g2_compare"]["ours_g1"].get("jump") for r in made],
+             "OCC curvature-asked": [r["g2_compare"]["occ"].get("jump") for r in made]}
+    out.append(f"jump median / worst on the holes filled G2 ({len(made)}): " + "; ".join(
+        f"{name} {_jumps(v)}" for name, v in jumps.items()))
+    every = {"ours G2": [r["g2_compare"].get("ours_g2_jump") for r in g2],
+             "ours G1": [r["g2_compare"]["ours_g1"].get("jump") for r in g2],
+             "OCC curvature-asked": [r["g2_compare"]["occ"].get("jump") for r in g2]}
+    out.append(f"jump median / worst on every hole with a G2 edge ({len(g2)}; ours G2 fell back to G1 on "
+               f"{len(g2) - len(made)}): " + "; ".join(f"{name} {_jumps(v)}" for name, v in every.items()))
+    ratio = [r["seconds"] / r["g2_compare"]["ours_g1"]["seconds"] for r in made
+             if r["g2_compare"]["ours_g1"].get("seconds")]
+    if ratio:
+        out.append(f"time ours G2 / ours G1, median over the holes filled G2: {statistics.median(ratio):.1f} "
+                   f"(min {min(ratio):.1f}, max {max(ratio):.1f}); ours G2 median "
+                   f"{statistics.median([r['seconds'] for r in made]):.2f} s, ours G1 median "
+                   f"{statistics.median([r['g2_compare']['ours_g1']['seconds'] for r in made]):.2f} s")
+    broken = [r for r in rows if "g2_compare_error" in r]
+    if broken:
+        out.append("comparison failed on: " + ", ".join(f"{r['file'].split('__')[-1]} {r['faces']}: "
+                                                        f"{r['g2_compare_error'][:100]}" for r in broken))
+    occ_ok = [r["g2_compare"]["occ"]["seconds"] for r in g2 if r["g2_compare"]["occ"]["status"] == "ok"]
+    out.append(f"OCC curvature-asked: {len(occ_ok)} / {len(g2)} made, time median "
+               f"{statistics.median(occ_ok) if occ_ok else 0:.2f} s")
+    return "\n".join(out)
+
+
+def _jumps(vals: list[float | None]) -> str:
+    v = [x for x in vals if x is not None]
+    return f"{_pct(statistics.median(v))} / {_pct(max(v))} (of {len(v)})" if v else "-"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pairs", action="store_true", help="also remove each pair of adjacent free-form faces")
@@ -227,6 +479,11 @@ def main() -> None:
     ap.add_argument("--json", default=None, help="write the per-hole rows here (rewritten after every hole)")
     ap.add_argument("--baseline", default=None, metavar="JSON",
                     help="compare our G0/G1 per hole with rows saved earlier (--json); exit 1 on a regression")
+    ap.add_argument("--continuity", choices=("G1", "G2"), default="G1",
+                    help="G2: refill curvature continuously where the removed faces were, beside our G1 "
+                         "refill and OCC's filler asked for curvature")
+    ap.add_argument("--only-g2", action="store_true",
+                    help="only the face sets with an edge the removed faces met curvature continuously")
     ap.add_argument("--merge", nargs="+", default=None, metavar="JSON",
                     help="print the table of rows saved by earlier runs (--json) instead of running")
     ns = ap.parse_args()
@@ -249,7 +506,8 @@ def main() -> None:
             tmp.replace(ns.json)
 
     for p in files:
-        holes_of(p, ns.pairs, ns.max_holes, ns.skip, ns.only_pairs, on_row=save)
+        holes_of(p, ns.pairs, ns.max_holes, ns.skip, ns.only_pairs, on_row=save, continuity=ns.continuity,
+                 only_g2=ns.only_g2)
     code = report(rows, ns.baseline)
     print(f"\n(total {time.perf_counter() - t0:.0f} s)")
     sys.exit(code)
@@ -260,6 +518,9 @@ def report(rows: list[dict], baseline: str | None) -> int:
     print(summary(rows))
     print()
     print(time_table(rows))
+    if any(r.get("continuity") == "G2" for r in rows):
+        print()
+        print(g2_table(rows))
     if baseline is None:
         return 0
     text, bad = compare_baseline(rows, json.loads(Path(baseline).read_text()))

@@ -19,33 +19,58 @@ Array = NDArray[np.float64]
 
 # ===================================================================================== the plane
 def _crossings(Q: Array) -> tuple[int, int] | None:
-    """A pair of non-adjacent segments of the closed polyline ``Q`` (shape (m, 2)) that cross, or None."""
+    """A pair of non-adjacent segments of the closed polyline ``Q`` (shape (m, 2)) that cross, or None:
+    the first ``(i, j)``, ``i < j``, in lexicographic order.
+
+    Candidate pairs come from a uniform grid (cells about twice the median segment long): each
+    segment is entered in every cell its bounding box touches, and only segments sharing a cell are
+    compared (boxes that overlap share a cell). The all-pairs box test it replaces cost O(m^2):
+    0.4 s a plane for the 2048-point loop, 90 % of a small plate fill (three planes are judged)."""
     A, B = Q, np.roll(Q, -1, axis=0)
     m = len(Q)
     lo, hi = np.minimum(A, B), np.maximum(A, B)
-    idx = np.arange(m)
+    ext = float(np.max(hi.max(axis=0) - lo.min(axis=0)))
+    seg = np.linalg.norm(B - A, axis=1)
+    h = 2.0 * float(np.median(seg))
+    if not (h > 0 and np.isfinite(h)):
+        h = ext if ext > 0 else 1.0
+    h = max(h, ext / 4096.0)  # at most 4096 cells a side
+    origin = lo.min(axis=0)
+    c0 = np.floor((lo - origin) / h).astype(np.int64)
+    c1 = np.floor((hi - origin) / h).astype(np.int64)
+    nx, ny = c1[:, 0] - c0[:, 0] + 1, c1[:, 1] - c0[:, 1] + 1
+    count = nx * ny
+    owner = np.repeat(np.arange(m), count)
+    k = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)  # index within the segment's cells
+    cx = c0[owner, 0] + k % nx[owner]
+    cy = c0[owner, 1] + k // nx[owner]
+    cell = cx * (int(c1[:, 1].max()) + 2) + cy
+    order = np.lexsort((owner, cell))
+    cell, owner = cell[order], owner[order]
+    start = np.r_[0, np.flatnonzero(np.diff(cell)) + 1]
+    size = np.diff(np.r_[start, cell.size])
+    grp_end = np.repeat(start + size, size)
+    pos = np.arange(cell.size)
+    later = grp_end - pos - 1  # members after this one in its cell
+    first = np.repeat(pos, later)
+    second = first + 1 + (np.arange(later.sum()) - np.repeat(np.cumsum(later) - later, later))
+    i, j = owner[first], owner[second]
+    i, j = np.minimum(i, j), np.maximum(i, j)
+    key = np.unique(i * m + j)
+    i, j = key // m, key % m
+    gap = j - i
+    keep = (gap > 1) & (gap < m - 1) & np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
+    i, j = i[keep], j[keep]
 
     def orient(p: Array, q: Array, r: Array) -> Array:
         return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0])
 
-    block = 256
-    for s in range(0, m, block):  # blocks of segments against all (memory bound, vectorised inside)
-        i = idx[s:s + block]
-        box = np.all((lo[i, None] <= hi[None]) & (lo[None] <= hi[i, None]), axis=2)
-        gap = np.abs(i[:, None] - idx[None])
-        box &= (gap > 1) & (gap < m - 1) & (i[:, None] < idx[None])
-        ii, jj = np.nonzero(box)
-        if ii.size == 0:
-            continue
-        a, b = A[i[ii]], B[i[ii]]
-        c, d = A[jj], B[jj]
-        o1, o2 = orient(a, b, c), orient(a, b, d)
-        o3, o4 = orient(c, d, a), orient(c, d, b)
-        hit = (o1 * o2 < 0) & (o3 * o4 < 0)
-        if hit.any():
-            k = int(np.argmax(hit))
-            return int(i[ii[k]]), int(jj[k])
-    return None
+    a, b, c, d = A[i], B[i], A[j], B[j]
+    hit = (orient(a, b, c) * orient(a, b, d) < 0) & (orient(c, d, a) * orient(c, d, b) < 0)
+    if not hit.any():
+        return None
+    n = int(np.argmax(hit))  # keys are sorted: the first hit is the lexicographically first pair
+    return int(i[n]), int(j[n])
 
 
 def _widest_cap_axis(M: Array, iterations: int = 400) -> Array:
