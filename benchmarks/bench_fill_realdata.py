@@ -410,9 +410,9 @@ def _g2_notes(r: dict) -> list[str]:
     if r.get("folds"):
         notes.append(f"folds {r['folds']}")
     if r["status"] != "filled" or not r.get("g2_edges"):
-        notes.append(_short(r.get("reason"))[:100])
+        notes.append((r.get("reason") or "?")[:110])
     if g1["status"] != "filled":
-        notes.append("G1 refill: " + _short(g1.get("reason"))[:80])
+        notes.append("G1 refill: " + (g1.get("reason") or "?")[:80])
     proj, own = c.get("ours_g2_jump_projected"), c.get("ours_g2_jump")
     if r.get("g2_edges") and proj is not None and own is not None and abs(proj - own) > max(0.01, 0.5 * own):
         notes.append(f"G2 jump projected {_pct(proj)}")
@@ -421,7 +421,7 @@ def _g2_notes(r: dict) -> list[str]:
     if "jump_error" in g1:
         notes.append("G1 jump: " + g1["jump_error"][:80])
     if c["occ"]["status"] != "ok":
-        notes.append("OCC: " + _short(c["occ"].get("reason"))[:80])
+        notes.append("OCC: " + (c["occ"].get("reason") or "?")[:80])
     return notes
 
 

@@ -396,6 +396,11 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
     for held in (False, True):  # the energy's weight: per stage (of the traces); held (after a ripple)
         if held and not rippled:
             break
+        if held and g2f.any() and best is not None and best[6] == 0:
+            # a G2 plate redoes the refinement with the weight held only when its best stage folds:
+            # its coarse first stages may fold where the finer ones do not (bump rings: 8 x 7, 16 x 14),
+            # and the held pass then only repeated the costliest stages (half of the time) to lose
+            break
         ku = _knots(lo[0], hi[0], min(start[0], max_spans), p)
         kv = _knots(lo[1], hi[1], min(start[1], max_spans), p)
         stalled, eps0, top = 0, None, np.inf  # top: this pass's best score (for the stall test)
