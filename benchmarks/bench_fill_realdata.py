@@ -404,9 +404,9 @@ def _g2_notes(r: dict) -> list[str]:
     if r["status"] == "filled" and g1["status"] == "filled":
         size = r.get("size") or 1.0
         if r["g0"] > g1["g0"] + max(1e-9 * size, 0.01 * g1["g0"]):
-            notes.append(f"G0 worse than G1 refill ({r['g0']:.1e} vs {g1['g0']:.1e})")
+            notes.append(f"G0 worse than G1 refill ({r['g0']:.2e} vs {g1['g0']:.2e})")
         if r["g1"] > g1["g1"] + max(1e-6, 0.01 * g1["g1"]):
-            notes.append(f"G1 worse than G1 refill ({r['g1']:.2g} vs {g1['g1']:.2g} deg)")
+            notes.append(f"G1 worse than G1 refill ({r['g1']:.3g} vs {g1['g1']:.3g} deg)")
     if r.get("folds"):
         notes.append(f"folds {r['folds']}")
     if r["status"] != "filled" or not r.get("g2_edges"):
@@ -442,6 +442,10 @@ def g2_table(rows: list[dict]) -> str:
              "OCC curvature-asked": [r["g2_compare"]["occ"].get("jump") for r in made]}
     out.append(f"jump median / worst on the holes filled G2 ({len(made)}): " + "; ".join(
         f"{name} {_jumps(v)}" for name, v in jumps.items()))
+    within = [j for j in jumps["ours G2"] if j is not None and j <= 0.02]
+    out.append(f"holes filled G2 whose jump is within 2 %: {len(within)} / {len(made)}; ours G1 "
+               f"{sum(j is not None and j <= 0.02 for j in jumps['ours G1'])}, OCC "
+               f"{sum(j is not None and j <= 0.02 for j in jumps['OCC curvature-asked'])}")
     every = {"ours G2": [r["g2_compare"].get("ours_g2_jump") for r in g2],
              "ours G1": [r["g2_compare"]["ours_g1"].get("jump") for r in g2],
              "OCC curvature-asked": [r["g2_compare"]["occ"].get("jump") for r in g2]}
@@ -450,10 +454,20 @@ def g2_table(rows: list[dict]) -> str:
     ratio = [r["seconds"] / r["g2_compare"]["ours_g1"]["seconds"] for r in made
              if r["g2_compare"]["ours_g1"].get("seconds")]
     if ratio:
-        out.append(f"time ours G2 / ours G1, median over the holes filled G2: {statistics.median(ratio):.1f} "
-                   f"(min {min(ratio):.1f}, max {max(ratio):.1f}); ours G2 median "
+        out.append(f"time ours G2 / ours G1, median over the holes filled G2: {statistics.median(ratio):.2g} "
+                   f"(min {min(ratio):.2g}, max {max(ratio):.2g}); ours G2 median "
                    f"{statistics.median([r['seconds'] for r in made]):.2f} s, ours G1 median "
                    f"{statistics.median([r['g2_compare']['ours_g1']['seconds'] for r in made]):.2f} s")
+    both = [(r, r["g2_compare"]["ours_g1"]) for r in made if r["g2_compare"]["ours_g1"]["status"] == "filled"]
+    if both:
+        out.append(f"G0 / G1 on the holes filled G2 ({len(both)}), each median / worst: ours G2 G0 "
+                   f"{_stats([r['g0'] for r, _ in both])}, G1 {_stats([r['g1'] for r, _ in both])} deg; ours G1 G0 "
+                   f"{_stats([g['g0'] for _, g in both])}, G1 {_stats([g['g1'] for _, g in both])} deg; ours G2 worse "
+                   f"than ours G1 (beyond round-off) in G0 on {sum(any(n.startswith('G0 worse') for n in _g2_notes(r)) for r, _ in both)}, "
+                   f"in G1 on {sum(any(n.startswith('G1 worse') for n in _g2_notes(r)) for r, _ in both)}")
+    slow = [r for r in g2 if (r.get("seconds") or 0.0) > 60]
+    out.append(f"G2 refills over 60 s: {len(slow)}" + (" (" + ", ".join(
+        f"{r['file'].split('__')[-1]} {r['faces']} {r['seconds']:.0f} s" for r in slow) + ")" if slow else ""))
     broken = [r for r in rows if "g2_compare_error" in r]
     if broken:
         out.append("comparison failed on: " + ", ".join(f"{r['file'].split('__')[-1]} {r['faces']}: "

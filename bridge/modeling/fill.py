@@ -344,11 +344,10 @@ def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int
     (the exact second cross derivative); elsewhere the fill is G1 and ``rep.reason`` says why."""
     if continuity == "G2":
         try:
-            sides = hole_sides(edges, nb)
-        except InvalidGeometryError as err:
+            return _g2_fill(edges, nb, hole_sides(edges, nb), size, samples, rep)
+        except OccsurfError as err:  # trimmed neighbours (no exact S_tt), or no plane the hole is a height over
             rep.reason = f"G2 not available, filled G1: {one_line(err, expected=(OccsurfError,))}"
-        else:
-            return _g2_fill(edges, nb, sides, size, samples, rep)
+            rep.side_g2, rep.g2, rep.occ_g2_gap, rep.corner_g2 = [], None, None, []
     try:
         fill = fill_hole(hole_sides(edges, nb))
     except InvalidGeometryError as exact_err:

@@ -139,3 +139,21 @@ def test_refill_keeps_the_curvature_continuity_the_removed_face_had(bearing) -> 
     floor = tolerances.CONTINUITY_CURVATURE_FLOOR / bearing.size
     jumps = [assess_curvature(edges[k], nbs[k], surfs, floor)[0] for k in (0, 2)]
     assert min(jumps) > 1.0, jumps
+
+
+def test_a_hole_no_plate_can_fill_g2_is_filled_g1_with_the_reason(ring, monkeypatch) -> None:
+    """Where the G2 plate cannot be made (here its refusal is forced: a hole that is a height over no
+    plane, as a thread strip), the hole is still filled, G1 by the central split, and the report says
+    why; no G2 numbers are left behind."""
+    import occsurf.bridge.modeling.plate as plate
+    from occsurf.bridge.modeling.fill import fill_model
+
+    def refuse(*args, **kwargs):
+        raise InvalidGeometryError("plate fill: not a height field over any plane tried (forced)")
+
+    monkeypatch.setattr(plate, "fill_plate", refuse)
+    res = fill_model(ring, continuity="G2", compare_occ=False)
+    (h,) = [h for h in res.holes if h.status != "outer"]
+    assert h.status == "filled" and h.method == "central" and h.continuity == "G2"
+    assert h.reason == "G2 not available, filled G1: plate fill: not a height field over any plane tried (forced)"
+    assert h.g2 is None and h.side_g2 == [] and h.corner_g2 == [] and h.g1 <= 1e-6
