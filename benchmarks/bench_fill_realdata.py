@@ -501,6 +501,10 @@ def main() -> None:
     ap.add_argument("--merge", nargs="+", default=None, metavar="JSON",
                     help="print the table of rows saved by earlier runs (--json) instead of running")
     ns = ap.parse_args()
+    if ns.baseline and ns.continuity == "G2":  # the baselines hold G1 refills: G2 rows would read as regressions
+        ap.error("--baseline compares G1 refills; leave it out with --continuity G2")
+    if ns.only_g2 and ns.continuity != "G2":
+        ap.error("--only-g2 goes with --continuity G2")
     if ns.merge:
         rows = [r for f in ns.merge for r in json.loads(Path(f).read_text())]
         sys.exit(report(rows, ns.baseline))
