@@ -122,15 +122,26 @@ def _refuse_nonfinite(p: Path, shapes: Any) -> None:
     """Refuse a face or curve whose coordinates are infinite or NaN (a pole of 1e308 in a file in feet
     overflows when read into millimetres): OCC would print ``INF``."""
     from OCP.Bnd import Bnd_Box
+    from OCP.BRep import BRep_Tool
     from OCP.BRepBndLib import BRepBndLib
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
     from OCP.TopExp import TopExp
+    from OCP.TopoDS import TopoDS
     from OCP.TopTools import TopTools_IndexedMapOfShape
 
     def finite(shape: Any) -> bool:
         box = Bnd_Box()
         BRepBndLib.Add_s(shape, box, False)
-        return box.IsVoid() or all(math.isfinite(v) for v in box.Get())
+        if not (box.IsVoid() or all(math.isfinite(v) for v in box.Get())):
+            return False
+        # The box covers the part of a surface its face uses: a pole of a B-spline or Bezier surface
+        # outside that part (a mutated torus pole at 1e308 km, inf in mm) is written all the same.
+        m = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(shape, TopAbs_FACE, m)
+        for i in range(1, m.Extent() + 1):
+            if not _poles_finite(BRep_Tool.Surface_s(TopoDS.Face_s(m.FindKey(i)))):
+                return False
+        return True
 
     for k, shape in enumerate(shapes):
         if shape is None or shape.IsNull() or finite(shape):
@@ -143,6 +154,18 @@ def _refuse_nonfinite(p: Path, shapes: Any) -> None:
                     raise ExchangeError(f"{p}: object {k}, {what} {i - 1}: coordinates not finite (infinite or NaN); "
                                         "nothing written")
         raise ExchangeError(f"{p}: object {k}: coordinates not finite (infinite or NaN); nothing written")
+
+
+def _poles_finite(surface: Any) -> bool:
+    """Whether every pole (and weight) of a B-spline or Bezier surface is finite; other surfaces:
+    ``True`` (their box says it)."""
+    if surface is None or not hasattr(surface, "NbUPoles"):
+        return True
+    for i in range(1, surface.NbUPoles() + 1):
+        for j in range(1, surface.NbVPoles() + 1):
+            if not (all(map(math.isfinite, surface.Pole(i, j).Coord())) and math.isfinite(surface.Weight(i, j))):
+                return False
+    return True
 
 
 def check_iges_bytes(p: Path, data: bytes, objects: Any, items: Any) -> None:

@@ -186,3 +186,17 @@ def test_mutated_degrees_multiplicities_and_units_are_named_never_silent(tmp_pat
     lines = proc.stderr.decode("utf-8", "replace").splitlines()  # one line per message, the refusal last
     assert lines and all(ln.startswith("occsurf: ") for ln in lines), lines
     _log(counts)
+
+
+def test_a_non_finite_pole_outside_the_face_s_range_is_not_written(tmp_path) -> None:
+    """Found by the mutation test above in CI37: the torus's pole (0, 2) at 1e308 km, inf once read in
+    millimetres, lies outside the part of the surface its face uses, so the face's bounding box was
+    finite and ``convert`` wrote an IGES file holding ``inf`` (exit 0). The write check now reads the
+    surface's poles too: one line naming the face, exit 2, nothing written."""
+    src = C.write(tmp_path, "unit_torus", C.mutate("step", (REPO / "step_samples" / "nurbs_torus.step").read_bytes(),
+                                                    "unit", 0, 1))
+    out = tmp_path / "converted.igs"
+    proc = subprocess.run([sys.executable, "-m", "occsurf.bridge.cli", "convert", str(src), str(out)],
+                          capture_output=True, text=True, cwd=REPO, timeout=600)
+    assert proc.returncode == 2 and not out.exists(), (proc.returncode, proc.stderr)
+    assert proc.stderr.strip().splitlines()[-1].endswith("face 0: coordinates not finite (infinite or NaN); nothing written")
