@@ -142,34 +142,6 @@ def _g2_edges_of(row: dict) -> list[int]:
     return filled or [k for k, j in enumerate(row.get("original_g2") or []) if j is not None and j <= G2_REL]
 
 
-def occ_curvature_filling(edges: list, nbs: list, orders: list[str], params: dict):
-    """OCC's ``BRepOffsetAPI_MakeFilling`` with ``params`` (:data:`refill_candidates.OCC_DEFAULT`'s keys),
-    each edge constrained by ``orders[k]``: 'G2' (``GeomAbs_C1``, the curvature order: OCC hands the
-    enum's value on as the order, so its ``GeomAbs_G2`` throws), 'G1' (with the neighbour) or 'G0'."""
-    from OCP.BRepOffsetAPI import BRepOffsetAPI_MakeFilling
-    from OCP.GeomAbs import GeomAbs_Shape
-    from OCP.TopoDS import TopoDS
-
-    from occsurf.algorithms.errors import InvalidGeometryError
-    from occsurf.bridge import _occ
-
-    o = params
-    mk = BRepOffsetAPI_MakeFilling(o["degree"], o["nb_pts_on_cur"], o["nb_iter"], o["anisotropy"], o["tol2d"],
-                                   o["tol3d"], o["tol_ang"], o["tol_curv"], o["max_deg"], o["max_segments"])
-    with _occ.kernel_errors("BRepOffsetAPI_MakeFilling"):
-        for e, f, order in zip(edges, nbs, orders):
-            if order == "G2":
-                mk.Add(e, f, GeomAbs_Shape.GeomAbs_C1, True)
-            elif order == "G1":
-                mk.Add(e, f, GeomAbs_Shape.GeomAbs_G1, True)
-            else:
-                mk.Add(e, GeomAbs_Shape.GeomAbs_C0, True)
-        mk.Build()
-        if not mk.IsDone():
-            raise InvalidGeometryError("BRepOffsetAPI_MakeFilling: not done")
-        return TopoDS.Face_s(mk.Shape())
-
-
 def _jump(edges: list, nbs: list, on: list[int], surfs: list, floor: float) -> float:
     """Largest relative curvature jump (fraction) across the edges ``on`` between their neighbours and
     the fill (Geom ``surfs``), the boundary points projected onto it (``assess_curvature``, ``locate=None``)."""
@@ -188,7 +160,7 @@ def g2_compare(model, rep) -> dict:
     from occsurf.bridge.messages import one_line
     from occsurf.bridge.modeling.joints import ASSESS_SAMPLES, assess_joint
     from occsurf.bridge.modeling.refill import refill_faces
-    from occsurf.bridge.modeling.refill_candidates import OCC_DEFAULT
+    from occsurf.bridge.modeling.refill_candidates import OCC_DEFAULT, occ_filling
     from occsurf.bridge.modeling.refill_loop import G1_EDGE_DEG, hole_loop, joint_angle
 
     edges, nbs, owners = hole_loop(model, rep.faces)
@@ -221,7 +193,7 @@ def g2_compare(model, rep) -> dict:
     orders = ["G2" if k in on else "G1" if tangent[k] else "G0" for k in range(len(edges))]
     t0 = time.perf_counter()
     try:
-        face = occ_curvature_filling(edges, nbs, orders, OCC_DEFAULT)
+        face = occ_filling(edges, nbs, orders, OCC_DEFAULT)
         secs = time.perf_counter() - t0
         surfs = [BRep_Tool.Surface_s(face)]
         joints = [assess_joint(e, nb, surfs, ASSESS_SAMPLES) for e, nb in zip(edges, nbs)]

@@ -41,7 +41,6 @@ from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
 from OCP.BRepOffsetAPI import BRepOffsetAPI_MakeFilling
 from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
-from OCP.GeomAbs import GeomAbs_Shape
 from OCP.ShapeAnalysis import ShapeAnalysis_FreeBounds
 from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
@@ -75,6 +74,7 @@ from .joints import (  # noqa: F401 - re-exported
     check_continuity,
     edge_face_map,
     edge_samples,
+    filling_order,
     unique_faces,
 )
 
@@ -285,12 +285,9 @@ def hole_sides(edges: list[Any], faces: list[Any | None]) -> list[HoleSide]:
 
 # ---------------------------------------------------------------------------------------- assessment
 def occ_fill(edges: list[Any], faces: list[Any], continuity: str = "G1") -> Any:
-    """OCC's ``BRepOffsetAPI_MakeFilling`` on the hole (G1, or ``GeomAbs_G2`` with ``continuity='G2'``,
-    to the faces), cadquery's defaults."""
-    # OCC defect: BRepFill_Filling hands the GeomAbs_Shape's enum value on as the constraint's order
-    # (0..2), so GeomAbs_G2 (3) throws "The continuity is not G0 G1 or G2"; GeomAbs_C1 (2) is the
-    # curvature constraint (tests/bridge/test_fill_g2.py keeps the literal G2 as a strict xfail).
-    order = GeomAbs_Shape.GeomAbs_C1 if check_continuity(continuity) == "G2" else GeomAbs_Shape.GeomAbs_G1
+    """OCC's ``BRepOffsetAPI_MakeFilling`` on the hole (G1, or curvature with ``continuity='G2'``, to
+    the faces: :func:`.joints.filling_order`), cadquery's defaults."""
+    order = filling_order(continuity)  # GeomAbs_C1 for G2: an OCC defect, see there
     o = OCC_FILL_DEFAULTS
     mk = BRepOffsetAPI_MakeFilling(o["degree"], o["nb_pts_on_cur"], o["nb_iter"], o["anisotropy"], o["tol2d"],
                                    o["tol3d"], o["tol_ang"], o["tol_curv"], o["max_deg"], o["max_segments"])

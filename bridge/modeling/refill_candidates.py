@@ -30,7 +30,7 @@ from occsurf.algorithms.topology.plate_fill import PlateFill
 from .. import _occ
 from ..conversion.splines import make_face
 from ..messages import one_line
-from .joints import ASSESS_SAMPLES, SEW_TOLERANCE, assess_joint
+from .joints import ASSESS_SAMPLES, SEW_TOLERANCE, assess_joint, filling_order
 from .plate import plate_fill_faces, revolution_axes, wrapped_fill_faces
 from .refill_sides import refill_side_variants, refill_sides
 
@@ -47,14 +47,17 @@ OCC_DEFAULT = dict(degree=3, nb_pts_on_cur=15, nb_iter=2, anisotropy=False, tol2
 OCC_TUNED = dict(OCC_DEFAULT, nb_pts_on_cur=30, nb_iter=4, tol3d=1e-6, tol_ang=1e-3)
 
 
-def occ_filling(edges: list[Any], nbs: list[Any], g1: list[bool], params: dict[str, Any]) -> Any:
+def occ_filling(edges: list[Any], nbs: list[Any], g1: list[bool] | list[str], params: dict[str, Any]) -> Any:
+    """OCC's ``BRepOffsetAPI_MakeFilling`` with ``params`` (:data:`OCC_DEFAULT`'s keys); per edge ``g1[k]``:
+    ``True`` or ``'G1'`` (tangent to its neighbour), ``'G2'`` (curvature, :func:`.joints.filling_order`),
+    ``False`` or ``'G0'`` (through the edge only)."""
     o = params
     mk = BRepOffsetAPI_MakeFilling(o["degree"], o["nb_pts_on_cur"], o["nb_iter"], o["anisotropy"], o["tol2d"],
                                    o["tol3d"], o["tol_ang"], o["tol_curv"], o["max_deg"], o["max_segments"])
     with _occ.kernel_errors("BRepOffsetAPI_MakeFilling"):
         for e, f, t in zip(edges, nbs, g1):
-            if t:
-                mk.Add(e, f, GeomAbs_Shape.GeomAbs_G1, True)
+            if t is True or t in ("G1", "G2"):
+                mk.Add(e, f, filling_order("G1" if t is True else str(t)), True)
             else:
                 mk.Add(e, GeomAbs_Shape.GeomAbs_C0, True)
         mk.Build()
