@@ -92,6 +92,7 @@ L. Piegl, W. Tiller, The NURBS Book, 2nd ed., 1997, A2.3 (derivatives), §10 (G1
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Literal, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -107,6 +108,7 @@ from .nsided_patches import corner_patch
 from .nsided_poly import cart
 from .nsided_prepare import choose_split, split_short_loop, working_sides
 from .nsided_types import FillQuality, HoleFill, HoleSide, side_from_surface
+from .plate_fill import PlateFill, fill_plate
 
 __all__ = [
     "HoleSide",
@@ -115,6 +117,7 @@ __all__ = [
     "side_from_surface",
     "closest_parameters",
     "fill_hole",
+    "CONTINUITIES",
     "measure_fill",
     "count_folds",
     "fill_folds",
@@ -122,9 +125,22 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
+#: The continuities :func:`fill_hole` (and the bridge's fills and refills) take: tangent (``'G1'``)
+#: or curvature (``'G2'``) continuous to the neighbours.
+CONTINUITIES: tuple[str, ...] = ("G1", "G2")
 
-def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
-    """Fill an n-sided hole with n four-sided patches, G1 to the neighbours and to each other.
+
+@overload
+def fill_hole(sides: Sequence[HoleSide], continuity: Literal["G1"] = ...) -> HoleFill: ...
+@overload
+def fill_hole(sides: Sequence[HoleSide], continuity: Literal["G2"]) -> PlateFill: ...
+@overload
+def fill_hole(sides: Sequence[HoleSide], continuity: str) -> HoleFill | PlateFill: ...
+
+
+def fill_hole(sides: Sequence[HoleSide], continuity: str = "G1") -> HoleFill | PlateFill:
+    """Fill an n-sided hole: G1 with n four-sided patches, G1 to the neighbours and to each other;
+    G2 with one curvature-continuous plate.
 
     Parameters
     ----------
@@ -133,16 +149,25 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
         (:func:`side_from_surface` builds them from neighbour surfaces). One closed side (a round
         hole) is cut at the quarters of its arc length, two sides (a slot end) at their halves
         (:attr:`HoleFill.source` maps the fill's sides back).
+    continuity : {'G1', 'G2'}
+        ``'G1'`` (default): the central split below. ``'G2'`` (issue 31; course §8-3): curvature
+        continuous to the neighbour on every side, by the thin plate with second-order boundary
+        data (:func:`.plate_fill.fill_plate` with ``g2`` on every side): each side must then carry
+        the neighbour's second cross derivative (``HoleSide.cross2``; :func:`side_from_surface`
+        gives it exactly), and the hole must be a height field over some plane. The plate's
+        :attr:`~.plate_fill.PlateFill.side_g2` holds the relative curvature jump reached per side.
 
     Returns
     -------
-    HoleFill
-        The patches (rational if any side is) and the corner diagnostics.
+    HoleFill or PlateFill
+        G1: the patches (rational if any side is) and the corner diagnostics. G2: the plate, its
+        trimmed face and what it reached per side (G0, G1, G2, the corners' curvature mismatch).
 
     Raises
     ------
     InvalidGeometryError
-        No side, a loop that is not closed (``tolerances.FILL_CLOSURE_TOL``), a degenerate cross
+        ``continuity`` not one of :data:`CONTINUITIES`; with ``'G2'``, a side without ``cross2`` or a
+        hole that is no height field over any plane tried (the plate's reasons). G1: no side, a loop that is not closed (``tolerances.FILL_CLOSURE_TOL``), a degenerate cross
         field (``tolerances.FILL_MIN_CORNER_ANGLE``; a neighbour's pole at a corner), neighbours
         meeting at a sharp edge at a corner
         (``tolerances.FILL_CORNER_PLANE_TOL``), a kink inside a side, or a fill that would turn back
@@ -167,6 +192,16 @@ def fill_hole(sides: Sequence[HoleSide]) -> HoleFill:
     (:func:`.nsided_edges.internal_edge`) and, last, one patch per hole corner
     (:func:`.nsided_patches.corner_patch`).
     """
+    if continuity not in CONTINUITIES:
+        raise InvalidGeometryError(f"continuity: expected one of {', '.join(CONTINUITIES)}, got {continuity!r}")
+    if continuity == "G2":
+        sides = list(sides)
+        missing = [i for i, sd in enumerate(sides) if isinstance(sd, HoleSide) and sd.cross2 is None]
+        if missing:
+            raise InvalidGeometryError(
+                f"sides{missing}: continuity 'G2' needs each side's second cross derivative (cross2), "
+                "e.g. from side_from_surface; these have none")
+        return fill_plate(sides, g2=[True] * len(sides))
     unit, S, rational, size, origin = working_sides(sides)
     source = np.array([(k, 0.0, 1.0) for k in range(len(unit))])
     if len(unit) < 3:  # a round hole or a slot end: four sides meeting at flat corners

@@ -78,7 +78,8 @@ from ..kernel.basis import basis_derivatives, find_span
 from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
-from .nsided import HoleSide, count_folds
+from .nsided_measure import count_folds
+from .nsided_types import HoleSide
 from .plate_plane import plate_plane
 from .side_jets import cross_curvature, graph_jet, relative_jump, side_jet
 

@@ -116,10 +116,10 @@ def _fill_one(ctx: _Context, k: int, item: dict[str, Any]) -> Any:
         from ..modeling.refill import refill_faces
 
         return refill_faces(ctx.sewn, ctx.components[k], compare_occ=bool(item["compare_occ"]), check=False,
-                            continuity=item.get("continuity", "G1"))[0]
+                            continuity=item.get("continuity", "auto"))[0]
     from ..modeling.fill import fill_loop
 
-    return fill_loop(ctx.holes, k, compare_occ=bool(item["compare_occ"]), continuity=item.get("continuity", "G1"))[0]
+    return fill_loop(ctx.holes, k, compare_occ=bool(item["compare_occ"]), continuity=item.get("continuity", "auto"))[0]
 
 
 def _refill_row(k: int, r: Any) -> dict[str, Any]:

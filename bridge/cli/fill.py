@@ -73,10 +73,11 @@ def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
                      "OCC LocalAnalysis_SurfaceContinuity)\n")
     for k, h in enumerate(holes):
         name = f"hole {h.get('index', k)}" if "faces" not in h else f"faces {' '.join(map(str, h['faces']))}"
-        if h.get("continuity") == "G2" and h.get("g2") is not None:
-            sys.stdout.write(f"  {name}: G2 curvature jump across the boundary {100 * h['g2']:.2f} % "
+        if h.get("g2") is not None:
+            on = f" on {h['g2_edges']} of {h['sides']} edges" if "g2_edges" in h else ""
+            sys.stdout.write(f"  {name}: G2{on}, curvature jump across the boundary {100 * h['g2']:.2f} % "
                              f"(|k1 - k2| / max |k|, OCC's principal curvatures)\n")
-        elif h.get("continuity") == "G2" and h["status"] == "filled":
+        elif h["status"] == "filled" and (h.get("continuity") == "G2" or h.get("reason")):
             sys.stdout.write(f"  {name}: {h.get('reason') or 'filled G1'}\n")
     n_filled = sum(h["status"] == "filled" for h in all_holes)
     if n_filled and result["free_loops_after"] is None:  # --faces
@@ -144,11 +145,13 @@ def add_parser(sub: Any) -> None:
     f.add_argument("--faces", type=int, nargs="+", metavar="I", default=None,
                    help="remove these faces (numbered as in inspect's table) and refill the hole(s) they leave: "
                         "adjacent faces make one hole; G1 is asked where the original was tangent-continuous")
-    f.add_argument("--continuity", choices=("G1", "G2"), default="G1",  # modeling.fill.CONTINUITIES (tested)
+    f.add_argument("--continuity", choices=("auto", "G1", "G2"), default="auto",  # modeling.fill.CONTINUITIES (tested)
                    help="G1: tangent continuous (n patches, exact boundary); G2: curvature continuous too, "
                         "by one plate matching the neighbours' curvature across the edges (holes: every edge "
                         "of iso-boundary neighbours; --faces: the edges where the removed faces were G2 "
-                        "within 2 %%); where it cannot be made, G1 with the reason")
+                        "within 2 %%, G1 where tangent, G0 elsewhere); where it cannot be made, G1 with the "
+                        "reason. auto (default): what the original gave, i.e. as G2 with --faces and as G1 "
+                        "for holes (no face was there)")
     f.add_argument("--no-occ", action="store_true", help="do not run OCC's filler for comparison")
     f.add_argument("--no-pictures", action="store_true",
                    help="do not write the zebra before/after picture of each hole (OUT_STEM.holeK.png)")

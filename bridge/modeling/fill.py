@@ -75,6 +75,7 @@ from .joints import (  # noqa: F401 - re-exported
     edge_face_map,
     edge_samples,
     filling_order,
+    hole_continuity,
     unique_faces,
 )
 
@@ -115,7 +116,7 @@ class HoleReport:
     occ_seconds: float | None = None
     occ_g0: float | None = None
     occ_g1: float | None = None
-    continuity: str = "G1"  # asked: 'G1' or 'G2' (issue 31)
+    continuity: str = "auto"  # asked: 'auto' (a hole: G1), 'G1' or 'G2' (issue 31)
     g2: float | None = None  # G2 asked: largest relative curvature jump across the boundary (OCC's principal curvatures)
     side_g2: list[float] = field(default_factory=list)  # ... per side
     occ_g2_gap: float | None = None  # ... and OCC LocalAnalysis' G2CurvatureGap, max over the boundary
@@ -437,12 +438,13 @@ def _check_samples(samples: object) -> int:
 
 @_occ.quiet_messages()
 def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True, samples: int = ASSESS_SAMPLES,
-              continuity: str = "G1") -> tuple[HoleReport, HoleFill | PlateFill | None, list[Any]]:
+              continuity: str = "auto") -> tuple[HoleReport, HoleFill | PlateFill | None, list[Any]]:
     """Fill hole ``k`` of ``holes`` and measure it (and OCC's filler on it with ``compare_occ``).
 
     ``continuity``: ``'G1'`` (tangent continuous) or ``'G2'`` (curvature continuous, where the
     neighbours' edges are iso-boundaries: :func:`_fill_loop`); OCC's filler is then asked for
-    ``GeomAbs_G2`` on every edge.
+    ``GeomAbs_G2`` on every edge. ``'auto'`` (the default) is ``'G1'`` for a hole of the model: no
+    removed face says what the joint was (:func:`.joints.hole_continuity`).
 
     Never raises for the hole: a failure is the report's ``status``/``reason``.
 
@@ -452,9 +454,9 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True, samples: i
         The report; our fill and its OCC faces (``None`` and ``[]`` unless filled).
     """
     _check_samples(samples)  # a bad argument, not a failure of the hole
-    check_continuity(continuity)
+    asked, continuity = continuity, hole_continuity(continuity)
     edges, outer = holes.loops[k]
-    rep = HoleReport(index=k, sides=len(edges), status="outer" if outer else "failed", continuity=continuity)
+    rep = HoleReport(index=k, sides=len(edges), status="outer" if outer else "failed", continuity=asked)
     if outer:
         rep.reason = "outer boundary of its shell (not filled; use --all-loops)"
         return rep, None, []
@@ -517,7 +519,7 @@ def sew_fills(holes: ModelHoles, new_faces: list[Any]) -> tuple[Any, int]:
 
 @_occ.quiet_messages()  # OCC's printers at the caller's levels again afterwards
 def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
-               samples: int = ASSESS_SAMPLES, as_: str | None = None, continuity: str = "G1") -> FillResult:
+               samples: int = ASSESS_SAMPLES, as_: str | None = None, continuity: str = "auto") -> FillResult:
     """Fill every hole of ``shape``; see the module.
 
     Parameters
@@ -529,8 +531,9 @@ def fill_model(shape: Any, *, all_loops: bool = False, compare_occ: bool = True,
         The type of ``FillResult.shape``: OCC's ``TopoDS_Shape`` (default), or a build123d / cadquery
         object, a ``Solid`` when the filled shell is closed, else a ``Shell`` (a ``Compound`` when the
         faces sew into several shells); :func:`occsurf.bridge.exchange.objects.shape_object`.
-    continuity : {'G1', 'G2'}
-        Tangent (default) or curvature continuity to the neighbours (:func:`fill_loop`).
+    continuity : {'auto', 'G1', 'G2'}
+        Tangent or curvature continuity to the neighbours (:func:`fill_loop`); ``'auto'`` (default)
+        is tangent: a hole has no original joint to follow (:func:`.joints.check_continuity`).
 
     Returns
     -------

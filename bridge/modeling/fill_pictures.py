@@ -199,7 +199,7 @@ def _size(faces: Sequence[Any]) -> float:
 def _after_label(hole: dict[str, Any], n_faces: int) -> str:
     """The caption of a fill's zebra picture: how many faces, and the continuity asked (and got)."""
     faces = "1 face" if n_faces == 1 else f"{n_faces} patches"
-    if hole.get("continuity") == "G2" and hole.get("g2") is not None:
+    if hole.get("g2") is not None:
         return f"after: occsurf fill, {faces}, G2 (curvature jump {100 * hole['g2']:.2g} %)"
     return f"after: occsurf fill, {faces}"
 

@@ -24,8 +24,9 @@ from OCP.TopoDS import TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
 from occsurf.algorithms.errors import InvalidGeometryError, KernelError
+from occsurf.algorithms.topology.nsided import CONTINUITIES as NSIDED_CONTINUITIES
 
-__all__ = ["assess_joint", "assess_curvature", "CONTINUITIES", "check_continuity", "filling_order", "edge_samples", "edge_curve_points", "surface_feet", "surfaces_joint", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
+__all__ = ["assess_joint", "assess_curvature", "CONTINUITIES", "check_continuity", "hole_continuity", "filling_order", "edge_samples", "edge_curve_points", "surface_feet", "surfaces_joint", "edge_face_map", "unique_faces", "SEW_TOLERANCE", "ASSESS_SAMPLES", "ASSESS_END_SAMPLES"]
 
 #: Tolerance of ``BRepBuilderAPI_Sewing`` (model units), for finding free edges and for the result.
 SEW_TOLERANCE: float = 1e-5
@@ -195,12 +196,19 @@ def _normal_curvature(props: Any, direction: np.ndarray) -> float:
     return props.MaxCurvature() * c * c + props.MinCurvature() * s * s
 
 
-#: What ``continuity`` takes (``fill_model``, ``fill_loop``, ``refill_faces``, ``occsurf fill --continuity``).
-CONTINUITIES = ("G1", "G2")
+#: What ``continuity`` takes (``fill_model``, ``fill_loop``, ``refill_faces``, ``occsurf fill --continuity``):
+#: ``'auto'`` (the default: per edge what the original model gave, issue 31) and the algorithms' own
+#: (:data:`occsurf.algorithms.topology.nsided.CONTINUITIES`, ``fill_hole``'s).
+CONTINUITIES: tuple[str, ...] = ("auto", *NSIDED_CONTINUITIES)
 
 
 def check_continuity(continuity: object) -> str:
-    """``continuity`` if it is one of :data:`CONTINUITIES`, else an ``InvalidGeometryError`` naming them."""
+    """``continuity`` if it is one of :data:`CONTINUITIES`, else an ``InvalidGeometryError`` naming them.
+
+    ``'auto'`` asks per edge what the original model gave: a refill is G2 where the removed face met
+    its neighbour curvature continuously (within :data:`.refill_g2.G2_REL`, the ``catia`` preset's
+    ``g2_rel``), else G1 where tangent, else G0 (as ``'G2'`` asks); a hole of the model, where
+    nothing was there to ask, is filled G1 (as ``'G1'`` asks)."""
     if continuity not in CONTINUITIES:
         raise InvalidGeometryError(f"continuity: expected one of {', '.join(CONTINUITIES)}, got {continuity!r}")
     return str(continuity)
@@ -213,6 +221,12 @@ def filling_order(continuity: str) -> Any:
     ``GeomAbs_C1`` (2) is its curvature constraint (tests/bridge/test_fill_g2.py keeps the literal G2
     as a strict xfail)."""
     return GeomAbs_Shape.GeomAbs_C1 if check_continuity(continuity) == "G2" else GeomAbs_Shape.GeomAbs_G1
+
+
+def hole_continuity(continuity: str) -> str:
+    """What ``continuity`` asks of a hole of the model (no removed faces to follow): ``'auto'`` is
+    ``'G1'`` there (:func:`check_continuity`)."""
+    return "G1" if check_continuity(continuity) == "auto" else continuity
 
 
 def _fractions(samples: int) -> np.ndarray:

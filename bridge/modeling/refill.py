@@ -103,7 +103,7 @@ class RefillReport:
     folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; see FillQuality.folds)
     method: str | None = None  # 'central' (fill_hole's n patches), 'plate' (one trimmed plate, fill_plate) or 'wrap' (a plate about an axis, fill_wrapped_plate)
     occ: dict[str, dict[str, Any]] = field(default_factory=dict)
-    continuity: str = "G1"  # asked: 'G1', or 'G2' where the removed faces were curvature continuous (issue 31)
+    continuity: str = "auto"  # asked: 'auto'/'G2' (G2 where the removed faces were curvature continuous), or 'G1' (issue 31)
     original_g2: list[float | None] = field(default_factory=list)  # G2 asked: the removed faces' jump per edge
     g2_edges: int = 0  # edges filled G2
     g2: float | None = None  # largest relative curvature jump over those edges (OCC's principal curvatures)
@@ -117,7 +117,7 @@ class RefillReport:
 
 def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool = True, check: bool = True,
                  occ_variants: dict[str, dict[str, Any]] | None = None,
-                 continuity: str = "G1") -> tuple[RefillReport, Any]:
+                 continuity: str = "auto") -> tuple[RefillReport, Any]:
     """Remove ``faces`` (inspect numbering) and fill the hole; returns the report and the new shape.
 
     Parameters
@@ -131,10 +131,13 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         ``{"default": OCC_DEFAULT, "tuned": OCC_TUNED}``) and measure it alike.
     check : bool
         Sew the fill in, check the result with ``BRepCheck_Analyzer`` and round-trip it through STEP.
-    continuity : {'G1', 'G2'}
-        ``'G2'``: where the removed faces met a neighbour curvature continuously (within
-        :data:`.refill_g2.G2_REL`) the fill does too, by the G2 plate (:func:`.refill_g2.g2_fill`);
-        where that plate cannot be made the fill is G1 as by default, and ``reason`` says why.
+    continuity : {'auto', 'G1', 'G2'}
+        Per edge, what the removed faces gave (issue 31). ``'auto'`` (default) and ``'G2'``: where
+        they met a neighbour curvature continuously (within :data:`.refill_g2.G2_REL`, the ``catia``
+        preset's ``g2_rel``) the fill does too, by the G2 plate (:func:`.refill_g2.g2_fill`), G1
+        where they were tangent, G0 elsewhere; where that plate cannot be made the fill is G1 and
+        ``reason`` says why (``'G2'`` also when no edge was curvature continuous). ``'G1'``: G1
+        where the removed faces were tangent, G0 elsewhere (:func:`fitted_fill`).
 
     Returns
     -------
@@ -149,6 +152,7 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
     bad = [i for i in faces if not (isinstance(i, (int, np.integer)) and 0 <= i < n)]
     if bad or not faces:
         raise InvalidGeometryError(f"faces: expected indices 0..{n - 1} (as numbered by inspect), got {faces}")
+    check_continuity(continuity)  # a bad argument, not a failure of the hole
     rep = RefillReport(faces=sorted(int(i) for i in faces), status="refused")
     try:
         edges, nbs, owners = hole_loop(model, rep.faces)
@@ -160,7 +164,7 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
     g1 = [False] * len(edges)
     try:
         t0 = time.perf_counter()
-        g2_try = _g2_attempt(rep, edges, nbs, owners, model.size, check_continuity(continuity))
+        g2_try = _g2_attempt(rep, edges, nbs, owners, model.size, continuity)
         if g2_try is not None:
             occ_faces, g1, rep.fit_g1, rep.side_g0, rep.side_g1, rep.side_g2, fill = g2_try
             rep.g2_edges = sum(a is not None for a in rep.side_g2)
@@ -194,11 +198,12 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
 
 def _g2_attempt(rep: RefillReport, edges: list[Any], nbs: list[Any], owners: list[Any], size: float,
                 continuity: str) -> tuple | None:
-    """With ``continuity='G2'``: the G2 plate's result (:func:`.refill_g2.g2_fill`) where an edge's
-    removed face was curvature continuous to its neighbour, else ``None`` (the G1 refill then), the
-    reason on ``rep``."""
+    """With ``continuity='G2'`` or ``'auto'``: the G2 plate's result (:func:`.refill_g2.g2_fill`) where
+    an edge's removed face was curvature continuous to its neighbour, else ``None`` (the G1 refill
+    then), the reason on ``rep`` (with ``'auto'`` only where a G2 edge was not met: G1 everywhere
+    is what the original asked when no edge was G2)."""
     rep.continuity = continuity
-    if continuity != "G2":
+    if continuity == "G1":
         return None
     from occsurf.algorithms import tolerances
 
@@ -209,7 +214,8 @@ def _g2_attempt(rep: RefillReport, edges: list[Any], nbs: list[Any], owners: lis
     orig = [original_g2(e, nb, own, floor, ASSESS_SAMPLES) for e, nb, own in zip(edges, nbs, owners)]
     rep.original_g2 = [None if np.isnan(j) else float(j) for _, j in orig]
     if not any(ok for ok, _ in orig):
-        rep.reason = "G2 asked: no edge of the removed faces was curvature continuous to its neighbour; filled G1"
+        if continuity == "G2":
+            rep.reason = "G2 asked: no edge of the removed faces was curvature continuous to its neighbour; filled G1"
         return None
     try:
         return g2_fill(edges, nbs, owners, size, [ok for ok, _ in orig], ASSESS_SAMPLES)
@@ -225,8 +231,10 @@ def _safe_joint(e: Any, own: Any, nb: Any) -> bool:
         return False
 
 
-def refill_model(shape: Any, faces: list[int], *, compare_occ: bool = True) -> tuple[list[RefillReport], Any]:
-    """Remove ``faces`` (inspect numbering) and fill every hole they leave (one per edge-connected set).
+def refill_model(shape: Any, faces: list[int], *, compare_occ: bool = True,
+                 continuity: str = "auto") -> tuple[list[RefillReport], Any]:
+    """Remove ``faces`` (inspect numbering) and fill every hole they leave (one per edge-connected set),
+    each with ``continuity`` (:func:`refill_faces`: by default, per edge what the removed faces gave).
 
     Returns
     -------
@@ -242,7 +250,7 @@ def refill_model(shape: Any, faces: list[int], *, compare_occ: bool = True) -> t
     from ..conversion.shapes import as_shape
 
     model = SewnModel(as_shape(shape, "shape"))
-    reports = [refill_faces(model, comp, compare_occ=compare_occ, check=False)[0]
+    reports = [refill_faces(model, comp, compare_occ=compare_occ, check=False, continuity=continuity)[0]
                for comp in refill_components(model, faces)]
     return reports, sew_refills(model, reports)
 

@@ -53,11 +53,17 @@ def model_faces(shape: Any) -> list[Any]:
 
 
 class SewnModel:
-    """The model's faces sewn once; original face ``i`` -> sewn face; the edge -> faces map."""
+    """The model's faces sewn once; original face ``i`` -> sewn face; the edge -> faces map.
+
+    ``shape``: a ``TopoDS_Shape``, a model read by :mod:`occsurf.bridge.exchange` or a build123d /
+    cadquery object (:func:`occsurf.bridge.conversion.shapes.as_shape`; anything else is an
+    ``InvalidGeometryError`` naming it)."""
 
     @_occ.quiet_messages()
     def __init__(self, shape: Any) -> None:
-        self.original = model_faces(shape)
+        from ..conversion.shapes import as_shape
+
+        self.original = model_faces(as_shape(shape, "shape"))
         sew = BRepBuilderAPI_Sewing(SEW_TOLERANCE)
         for f in self.original:
             sew.Add(f)

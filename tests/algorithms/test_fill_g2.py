@@ -191,3 +191,24 @@ def test_corners_where_the_neighbours_disagree_in_curvature_are_reported() -> No
     assert g1_ring.corner_g2.min() > 0.5 and g1_ring.side_g2.min() > 0.5
     some = fill_plate(ring_model(4, bump=0).sides, g2=[True, True, False, True])
     assert list(np.isnan(some.corner_g2)) == [False, True, True, False]
+
+
+def test_fill_hole_takes_the_continuity() -> None:
+    """``fill_hole(sides, 'G2')`` is the G2 plate on every side (the same surface, pole for pole, as
+    :func:`fill_plate` asked G2 everywhere: one construction, not two), ``'G1'`` (the default) the
+    central split; anything else, or G2 on sides without ``cross2``, is refused naming the problem."""
+    from occsurf.algorithms.topology.nsided import CONTINUITIES, HoleFill, fill_hole
+
+    assert CONTINUITIES == ("G1", "G2")
+    m = ring_model(5, bump=0)
+    g2 = fill_hole(m.sides, "G2")
+    ref = fill_plate(m.sides, g2=[True] * 5)
+    assert isinstance(g2, PlateFill) and g2.g2.all() and g2.met
+    assert np.array_equal(g2.surface.control_points, ref.surface.control_points)
+    assert dense_jumps(g2, m.sides, _size(m.sides)).max() <= 0.01
+    assert isinstance(fill_hole(m.sides), HoleFill) and isinstance(fill_hole(m.sides, "G1"), HoleFill)
+    with pytest.raises(InvalidGeometryError, match=r"continuity: expected one of G1, G2, got 'C2'"):
+        fill_hole(m.sides, "C2")
+    bare = [HoleSide(s.curve, s.cross) for s in m.sides]
+    with pytest.raises(InvalidGeometryError, match=r"sides\[1, 3\]: continuity 'G2' needs each side's second"):
+        fill_hole([m.sides[0], bare[1], m.sides[2], bare[3], m.sides[4]], "G2")

@@ -238,6 +238,19 @@ def test_bad_objects_are_refused_naming_the_argument(bad, match):
         bridge.fill_model(bad)
     with pytest.raises(InvalidGeometryError):
         as_model(bad)
+    from occsurf.bridge.modeling.refill import SewnModel
+
+    with pytest.raises(InvalidGeometryError, match=match):
+        SewnModel(bad)
+
+
+def test_sewn_model_takes_what_refill_takes():
+    """``SewnModel`` (sewn once for many refills) takes a model as read, not only its ``TopoDS_Shape``."""
+    from occsurf.bridge.exchange.step_iges import read_step
+    from occsurf.bridge.modeling.refill import SewnModel
+
+    model = read_step(Path(__file__).resolve().parents[2] / "step_samples" / "loft.step")
+    assert len(SewnModel(model).faces) == len(SewnModel(model.shape).faces) == len(model.faces) > 0
 
 
 def test_no_bridge_module_unwraps_objects_itself():
