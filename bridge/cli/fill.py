@@ -55,6 +55,8 @@ _HEADER = ("hole", "sides", "status", "G0 gap", "G1 angle", "time", "OCC G0 gap"
 
 
 def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
+    from ..modeling.refill_g2 import shortfall
+
     all_holes = result["holes"]
     holes = [h for h in all_holes if h["status"] != "outer"]
     n_outer = len(all_holes) - len(holes)
@@ -79,6 +81,9 @@ def _write_table(src: Path, out: Path, result: dict[str, Any]) -> None:
                              f"(|k1 - k2| / max |k|, OCC's principal curvatures)\n")
         elif h["status"] == "filled" and (h.get("continuity") == "G2" or h.get("reason")):
             sys.stdout.write(f"  {name}: {h.get('reason') or 'filled G1'}\n")
+        short = shortfall(h.get("edge_asked") or [], h.get("edge_continuity") or [], h.get("side_g2") or [])
+        if h["status"] == "filled" and short:
+            sys.stdout.write(f"  {name}: {short}\n")
     n_filled = sum(h["status"] == "filled" for h in all_holes)
     if n_filled and result["free_loops_after"] is None:  # --faces
         faces = ", ".join(" ".join(map(str, h["faces"])) for h in all_holes if h["status"] == "filled")

@@ -122,6 +122,8 @@ class HoleReport:
     occ_g2_gap: float | None = None  # ... and OCC LocalAnalysis' G2CurvatureGap, max over the boundary
     occ_g2: float | None = None  # G2 asked: OCC's filler's relative curvature jump (measured as g2)
     corner_g2: list[float | None] = field(default_factory=list)  # G2 asked: the neighbours' own curvature mismatch per corner (PlateFill.corner_g2)
+    edge_asked: list[str] = field(default_factory=list)  # per edge: 'G2', 'G1' or 'G0' (G0: no neighbour face)
+    edge_continuity: list[str] = field(default_factory=list)  # per edge: what the fill reached (refill_g2.edge_classes)
 
 
 @dataclass
@@ -478,6 +480,10 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True, samples: i
             rep.folds = int(q.folds.sum())
         rep.g0, rep.g1 = max(rep.side_g0), max(rep.side_g1)
         rep.status = "filled"
+        from .refill_g2 import edge_classes
+
+        rep.edge_asked = ["G0" if f is None else continuity for f in nb]
+        rep.edge_continuity = edge_classes(list(rep.side_g1), list(rep.side_g2))
         # for pictures; not dataclass fields, so asdict() leaves them out
         rep._fill_faces, rep._neighbours = occ_faces, unique_faces(nb)  # type: ignore[attr-defined]
     except Exception as err:  # noqa: BLE001 - one hole's failure must not stop the others

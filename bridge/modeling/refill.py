@@ -50,6 +50,7 @@ from occsurf.algorithms.topology.nsided import fill_folds
 from ..messages import one_line
 from .joints import check_continuity, unique_faces
 from .refill_candidates import OCC_DEFAULT, OCC_TUNED, PLATE_MARGIN, fill_method, fitted_fill, occ_filling, occ_variant
+from .refill_g2 import G2_REL, edge_classes
 from .refill_loop import (
     G1_EDGE_DEG,
     SewnModel,
@@ -108,6 +109,8 @@ class RefillReport:
     g2_edges: int = 0  # edges filled G2
     g2: float | None = None  # largest relative curvature jump over those edges (OCC's principal curvatures)
     side_g2: list[float | None] = field(default_factory=list)  # ... per edge (None: not asked G2)
+    edge_asked: list[str] = field(default_factory=list)  # per edge: 'G2', 'G1' or 'G0' (what the original gave, capped by continuity)
+    edge_continuity: list[str] = field(default_factory=list)  # per edge: what the fill reached (refill_g2.edge_classes)
     if TYPE_CHECKING:  # set on a filled report for refill_model and the pictures: plain attributes at run
         # time, not dataclass fields (asdict, the JSON, leaves them out); declared for the type checker
         _fill_faces: list[Any] = field(init=False)  # the fill's OCC faces
@@ -177,6 +180,10 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         rep.g1_edges = sum(g1)
         rep.g0 = max(rep.side_g0)
         rep.g1 = max([a for a in rep.side_g1 if a is not None], default=0.0)
+        # asked: G2 where the removed face met its neighbour within G2_REL (original_g2's rule)
+        was_g2 = [j is not None and j <= G2_REL for j in rep.original_g2] + [False] * len(edges)
+        rep.edge_asked = ["G2" if was_g2[k] else "G1" if g1[k] else "G0" for k in range(len(edges))]
+        rep.edge_continuity = edge_classes(rep.side_g1, rep.side_g2)
         rep.status = "filled"
         rep._fill_faces = occ_faces  # for refill_model and the pictures (not fields: not serialised)
         rep._removed = [model.faces[i] for i in rep.faces]

@@ -30,12 +30,43 @@ from occsurf.algorithms.topology.nsided import HoleSide, closest_parameters
 
 from .joints import assess_curvature, edge_samples
 
-__all__ = ["G2_REL", "original_g2", "with_cross2", "g2_fill"]
+__all__ = ["G2_REL", "original_g2", "with_cross2", "g2_fill", "edge_classes", "shortfall"]
 
 #: An edge the removed face met within this relative curvature jump is refilled G2 (CATIA's
 #: Connect Checker default, 2 %: the check's ``catia`` preset).
 G2_REL: float = 0.02
 _SAMPLES_PER_EDGE = 64
+
+
+def edge_classes(side_g1: list[float | None], side_g2: list[float | None]) -> list[str]:
+    """Per edge, the continuity a fill reached (``'G2'``, ``'G1'`` or ``'G0'``), by the rules that
+    classify the original model's joints for a refill: G1 within :data:`.refill_loop.G1_EDGE_DEG`
+    (1 deg) of the neighbour's tangent plane, G2 also within :data:`G2_REL` (2 %) in curvature.
+    ``side_g1``/``side_g2`` are OCC's measures per edge; ``None`` where not measured (an edge asked
+    less), which claims nothing beyond what was asked."""
+    from .refill_loop import G1_EDGE_DEG
+
+    g2s = list(side_g2) + [None] * (len(side_g1) - len(side_g2))
+    out = []
+    for a, b in zip(side_g1, g2s):
+        tangent = a is not None and a <= G1_EDGE_DEG
+        out.append("G2" if tangent and b is not None and b <= G2_REL else "G1" if tangent else "G0")
+    return out
+
+
+def shortfall(asked: list[str], got: list[str], side_g2: list[float | None]) -> str | None:
+    """One line naming the edges whose fill reached less than was asked (``None`` when none did):
+    ``'edges 0, 2 asked G2 got G1 (jump 5.2 %, 8.4 %)'``, grouped by what was asked and got."""
+    groups: dict[tuple[str, str], list[int]] = {}
+    for k, (a, g) in enumerate(zip(asked, got)):
+        if g < a:  # 'G0' < 'G1' < 'G2'
+            groups.setdefault((a, g), []).append(k)
+    parts = []
+    for (a, g), ks in groups.items():
+        jumps = [j for j in (side_g2[k] for k in ks if k < len(side_g2)) if j is not None]
+        extra = f" (jump {', '.join(f'{100 * j:.2g} %' for j in jumps)})" if a == "G2" and jumps else ""
+        parts.append(f"edge{'s' if len(ks) > 1 else ''} {', '.join(map(str, ks))} asked {a} got {g}{extra}")
+    return "; ".join(parts) or None
 
 
 def original_g2(edge: Any, nb: Any, owner: Any | None, floor: float, samples: int) -> tuple[bool, float]:

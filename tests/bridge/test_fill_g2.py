@@ -53,8 +53,10 @@ def test_g2_fill_is_curvature_continuous_by_occ_s_measures(ring, filled) -> None
     assert h.g2 is not None and h.g2 <= tolerances.FILL_FIT_G2_REL and len(h.side_g2) == 4
     assert h.g1 <= tolerances.FILL_FIT_ANGLE and h.g0 <= 1e-6
     assert h.occ_status == "ok" and h.occ_g2 is not None and h.occ_g2 > 10 * h.g2
+    assert h.edge_asked == h.edge_continuity == ["G2"] * 4
     (k,) = [k for k in g1.holes if k.status != "outer"]
     assert k.continuity == "G1" and k.g2 is None and k.method == "central"
+    assert k.edge_asked == k.edge_continuity == ["G1"] * 4
     holes = model_holes(ring)
     edges = holes.loops[k.index][0]
     surfs = [BRep_Tool.Surface_s(f) for f in k._fill_faces]
@@ -100,6 +102,7 @@ def test_a_hole_is_filled_g1_by_default(ring) -> None:
     (h,) = [h for h in fill_model(ring, compare_occ=False).holes if h.status != "outer"]
     assert h.status == "filled" and h.continuity == "auto" and h.method == "central" and h.reason is None
     assert h.g2 is None and h.side_g2 == [] and h.g1 <= tolerances.FILL_FIT_ANGLE
+    assert h.edge_asked == h.edge_continuity == ["G1"] * 4
 
 
 def test_cli_fills_g2_and_says_the_jump(tmp_path: Path, ring) -> None:
@@ -134,6 +137,7 @@ def test_refill_keeps_the_curvature_continuity_the_removed_face_had(bearing) -> 
 
     from occsurf.bridge.modeling.joints import assess_curvature
     from occsurf.bridge.modeling.refill import refill_faces
+    from occsurf.bridge.modeling.refill_g2 import shortfall
     from occsurf.bridge.modeling.refill_loop import hole_loop
 
     rep, _ = refill_faces(bearing, [4], compare_occ=False, check=False, continuity="G2")
@@ -145,8 +149,13 @@ def test_refill_keeps_the_curvature_continuity_the_removed_face_had(bearing) -> 
     auto, _ = refill_faces(bearing, [4], compare_occ=False, check=False)
     assert auto.continuity == "auto" and auto.method == "plate" and auto.reason is None
     assert auto.side_g2 == rep.side_g2 and auto.original_g2 == rep.original_g2
+    # per edge what was asked and what the fill reached (G1 within 1 deg, G2 also within 2 %): the two
+    # G2 edges reach G1 only, and the report says so
+    assert rep.edge_asked == ["G2", "G1", "G2", "G1"] and rep.edge_continuity == ["G1"] * 4
+    assert shortfall(rep.edge_asked, rep.edge_continuity, rep.side_g2).startswith("edges 0, 2 asked G2 got G1 (jump ")
     g1, _ = refill_faces(bearing, [4], compare_occ=False, check=False, continuity="G1")
     assert g1.continuity == "G1" and g1.g2 is None and g1.method == "central"
+    assert g1.edge_asked == g1.edge_continuity == ["G1"] * 4
     edges, nbs, _ = hole_loop(bearing, [4])
     surfs = [BRep_Tool.Surface_s(f) for f in g1._fill_faces]
     floor = tolerances.CONTINUITY_CURVATURE_FLOOR / bearing.size
@@ -170,3 +179,17 @@ def test_a_hole_no_plate_can_fill_g2_is_filled_g1_with_the_reason(ring, monkeypa
     assert h.status == "filled" and h.method == "central" and h.continuity == "G2"
     assert h.reason == "G2 not available, filled G1: plate fill: not a height field over any plane tried (forced)"
     assert h.g2 is None and h.side_g2 == [] and h.corner_g2 == [] and h.g1 <= 1e-6
+    assert h.edge_asked == ["G2"] * 4 and h.edge_continuity == ["G1"] * 4  # said per edge, not silently
+
+
+def test_edge_classes_and_the_shortfall_line() -> None:
+    """What a fill reached per edge, by the rules that classify the original joints (G1 within 1 deg,
+    G2 also within 2 %; an edge not measured in G2 claims G1 at most, one not measured in G1 G0),
+    and the one line that names the edges short of what was asked."""
+    from occsurf.bridge.modeling.refill_g2 import edge_classes, shortfall
+
+    got = edge_classes([0.001, 0.5, 1.5, None, 0.002], [0.019, 0.021, 0.0, None, None])
+    assert got == ["G2", "G1", "G0", "G0", "G1"]
+    assert shortfall(["G2", "G2", "G1", "G0", "G1"], got, [0.019, 0.021, 0.0, None, None]) == \
+        "edge 1 asked G2 got G1 (jump 2.1 %); edge 2 asked G1 got G0"
+    assert shortfall(["G1", "G1"], ["G2", "G1"], []) is None  # more than asked is no shortfall
