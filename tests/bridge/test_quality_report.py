@@ -385,3 +385,45 @@ def test_sections_end_on_the_trim(tmp_path) -> None:
     assert (on_hole < tol).sum() >= 2  # cuts through the hole end on its circle
     if fld.trim is None:
         pytest.skip("the reader gave no exact trim for this face: checked against the mesh's mask only")
+
+
+def test_a_face_s_mesh_mask_is_built_only_when_a_section_needs_it(monkeypatch, tmp_path) -> None:
+    """Faces without the reader's exact trim are masked by their mesh's triangle finder (a few MB
+    each: 3.5 MB for a 4191-vertex fillet torus, 2.5 GB over the 361 fillets of a 1089-face plate
+    when every face's was built up front). It is built on the mask's first call, once, and gives
+    what ``uv_mask`` gives; faces no section plane reaches never build one, and the sections are
+    the same as with every mask built first."""
+    from build123d import Box, Cylinder, GeomType, Pos, fillet
+
+    import occsurf.bridge.quality.report as R
+
+    part = Box(40.0, 10.0, 4.0) - Pos(-15, 0, 0) * Cylinder(1.5, 4.0) - Pos(15, 0, 0) * Cylinder(1.5, 4.0)
+    part = fillet([e for e in part.edges() if e.geom_type == GeomType.CIRCLE and abs(e.center().Z - 2) < 1e-6], 0.5)
+    rep = check_model(read_step(_write(part, tmp_path, "holes.step")), edges=False, flags=False)
+    fields = [rep.fields[k] for k in sorted(rep.fields)]
+    built: list[int] = []
+    real = R.uv_mask
+
+    def counting(mesh):
+        built.append(mesh.index)
+        return real(mesh)
+
+    monkeypatch.setattr(R, "uv_mask", counting)
+    meshed = [f for f in fields if f.trim is None]
+    assert meshed, "every face had an exact trim: nothing to test"
+    masks = {f.mesh.index: f.mask() for f in meshed}
+    assert built == []  # nothing built yet
+    f0 = meshed[0]
+    u, v = f0.mesh.uv[:5, 0], f0.mesh.uv[:5, 1]
+    assert np.array_equal(masks[f0.mesh.index](u, v), real(f0.mesh)(u, v))
+    masks[f0.mesh.index](u, v)
+    assert built == [f0.mesh.index] and f0.mask() is masks[f0.mesh.index]  # built once, kept
+    built.clear()
+    lines = P.section_lines(fields, rep.size)[0][0]
+    assert len(built) < len(meshed)  # some faces were never reached by a plane
+    monkeypatch.setattr(R, "uv_mask", real)
+    fresh = check_model(read_step(tmp_path / "holes.step"), edges=False, flags=False)
+    for f in fresh.fields.values():
+        f.mask()(np.zeros(1), np.zeros(1))  # every mask built up front, as before
+    again = P.section_lines([fresh.fields[k] for k in sorted(fresh.fields)], fresh.size)[0][0]
+    assert len(again) == len(lines) and all(np.array_equal(a, b) for a, b in zip(lines, again))
