@@ -41,6 +41,9 @@ ANGULAR_DEFLECTION = 0.1
 #: surface is accepted within twice that deflection.
 NEWTON_STEPS = 12
 INVERSION_TOL = 2 * LINEAR_DEFLECTION
+#: A node whose Newton step moved it by at most this fraction of the parameter box has converged
+#: (the next step, quadratic, would be below round-off) and is not iterated further.
+NEWTON_STILL = 1e-13
 
 
 @dataclass
@@ -144,14 +147,21 @@ def _occ_triangulation(occ_face: Any) -> tuple[np.ndarray, np.ndarray, np.ndarra
 def _invert(surface: BSplineSurface, target: np.ndarray, uv0: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
     """Newton point inversion ``S(u, v) = target`` (least squares, clamped to the domain), vectorised.
 
+    At most :data:`NEWTON_STEPS` steps; a node stops once a step moved it by at most
+    :data:`NEWTON_STILL` of the parameter box (converged: its further steps only change round-off).
+
     Returns ``(uv (n, 2), ok (n,) bool)``.
     """
     (u0, u1), (v0, v1) = surface.domain
     lo, hi = np.array([u0, v0]), np.array([u1, v1])
     uv = np.clip(uv0, lo, hi)
+    still = NEWTON_STILL * float(max(u1 - u0, v1 - v0))
+    live = np.arange(len(uv))  # nodes still moving: a converged node's further steps are round-off
     for _ in range(NEWTON_STEPS):
-        D = surface.derivatives(uv[:, 0], uv[:, 1], 1)
-        r = D[:, 0, 0] - target
+        if live.size == 0:
+            break
+        D = surface.derivatives(uv[live, 0], uv[live, 1], 1)
+        r = D[:, 0, 0] - target[live]
         J = np.stack([D[:, 1, 0], D[:, 0, 1]], axis=-1)  # (n, 3, 2)
         JtJ = np.einsum("nki,nkj->nij", J, J)
         Jtr = np.einsum("nki,nk->ni", J, r)
@@ -160,7 +170,10 @@ def _invert(surface: BSplineSurface, target: np.ndarray, uv0: np.ndarray, tol: f
         inv = np.zeros_like(JtJ)
         inv[good, 0, 0], inv[good, 1, 1] = JtJ[good, 1, 1] / det[good], JtJ[good, 0, 0] / det[good]
         inv[good, 0, 1] = inv[good, 1, 0] = -JtJ[good, 0, 1] / det[good]
-        uv = np.clip(uv - np.einsum("nij,nj->ni", inv, Jtr), lo, hi)
+        new = np.clip(uv[live] - np.einsum("nij,nj->ni", inv, Jtr), lo, hi)
+        moved = np.abs(new - uv[live]).max(axis=1)
+        uv[live] = new
+        live = live[moved > still]
     err = np.linalg.norm(surface.evaluate(uv[:, 0], uv[:, 1]) - target, axis=-1)
     return uv, err <= tol
 
