@@ -8,6 +8,8 @@ vectorised in blocks of bounded memory.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -15,7 +17,7 @@ from .. import _validate as V
 from .. import tolerances
 from .curve import BSplineCurve
 
-__all__ = ["INSIDE", "ON", "OUTSIDE", "classify_points", "loop_polyline", "curve_polyline", "span_samples",
+__all__ = ["INSIDE", "ON", "OUTSIDE", "classify_points", "SegmentBands", "segment_bands", "loop_polyline", "curve_polyline", "span_samples",
            "signed_area", "Loop"]
 
 Array = NDArray[np.float64]
@@ -76,7 +78,50 @@ def _point_segment_distance(P: Array, A: Array, B: Array) -> Array:
     return np.linalg.norm(P - (A + t[:, None] * d), axis=1)
 
 
-def classify_points(points: ArrayLike, seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0) -> NDArray[np.int8]:
+@dataclass(frozen=True)
+class SegmentBands:
+    """Segments binned into horizontal bands for :func:`classify_points` (:func:`segment_bands`):
+    what depends on the segments and ``tol`` only, so a region classified many times (the sections
+    of a face with hundreds of holes: ~1e6 segments) bins them once."""
+
+    A: Array
+    B: Array
+    tol: float
+    y0: float
+    y1: float
+    h: float
+    nb: int
+    seg_sorted: NDArray[np.intp]
+    start: NDArray[np.intp]
+
+
+def segment_bands(seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0) -> SegmentBands:
+    """The segments ``seg_a[i] -> seg_b[i]`` (shape (k, 2) each) binned into ``k`` horizontal bands
+    of their ``v`` range, each segment in every band its ``v`` range widened by ``tol`` meets."""
+    A = np.asarray(seg_a, float).reshape(-1, 2)
+    B = np.asarray(seg_b, float).reshape(-1, 2)
+    k = A.shape[0]
+    if k == 0:
+        empty = np.zeros(0, np.intp)
+        return SegmentBands(A, B, float(tol), 0.0, 0.0, 1.0, 1, empty, np.zeros(2, np.intp))
+    ylo = np.minimum(A[:, 1], B[:, 1]) - tol
+    yhi = np.maximum(A[:, 1], B[:, 1]) + tol
+    y0, y1 = float(ylo.min()), float(yhi.max())
+    nb = int(np.clip(k, 1, 1 << 20))
+    h = (y1 - y0) / nb if y1 > y0 else 1.0
+    b0 = np.clip(((ylo - y0) / h).astype(np.int64), 0, nb - 1)
+    b1 = np.clip(((yhi - y0) / h).astype(np.int64), 0, nb - 1)
+    cnt = b1 - b0 + 1
+    seg_of = np.repeat(np.arange(k), cnt)
+    band_of = np.repeat(b0, cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+    order = np.argsort(band_of, kind="stable")
+    seg_sorted = seg_of[order]
+    start = np.searchsorted(band_of[order], np.arange(nb + 1))
+    return SegmentBands(A, B, float(tol), y0, y1, h, nb, seg_sorted, start)
+
+
+def classify_points(points: ArrayLike, seg_a: ArrayLike | None = None, seg_b: ArrayLike | None = None,
+                    tol: float = 0.0, *, bands: SegmentBands | None = None) -> NDArray[np.int8]:
     """Crossing-number point-in-polygon test against a set of segments, vectorised.
 
     Parameters
@@ -86,6 +131,9 @@ def classify_points(points: ArrayLike, seg_a: ArrayLike, seg_b: ArrayLike, tol: 
         Segment ends; the segments of all closed loops of the region (even-odd rule).
     tol : float
         Points within ``tol`` of a segment are :data:`ON`.
+    bands : SegmentBands, optional
+        The segments already binned (:func:`segment_bands`; its segments and ``tol`` are used, and
+        ``seg_a``, ``seg_b``, ``tol`` are ignored): the same result, without binning them again.
 
     Returns
     -------
@@ -100,26 +148,16 @@ def classify_points(points: ArrayLike, seg_a: ArrayLike, seg_b: ArrayLike, tol: 
     (a segment in every band its ``v`` range, widened by ``tol``, meets); each point meets only the
     segments of its band, in blocks of at most ``2**22`` point-segment pairs.
     """
+    if bands is None:
+        bands = segment_bands(np.zeros((0, 2)) if seg_a is None else seg_a,
+                              np.zeros((0, 2)) if seg_b is None else seg_b, tol)
     P = np.asarray(points, float).reshape(-1, 2)
-    A = np.asarray(seg_a, float).reshape(-1, 2)
-    B = np.asarray(seg_b, float).reshape(-1, 2)
+    A, B, tol = bands.A, bands.B, bands.tol
     m, k = P.shape[0], A.shape[0]
     state = np.full(m, OUTSIDE, np.int8)
     if m == 0 or k == 0:
         return state
-    ylo = np.minimum(A[:, 1], B[:, 1]) - tol
-    yhi = np.maximum(A[:, 1], B[:, 1]) + tol
-    y0, y1 = float(ylo.min()), float(yhi.max())
-    nb = int(np.clip(k, 1, 1 << 20))
-    h = (y1 - y0) / nb if y1 > y0 else 1.0
-    b0 = np.clip(((ylo - y0) / h).astype(np.int64), 0, nb - 1)
-    b1 = np.clip(((yhi - y0) / h).astype(np.int64), 0, nb - 1)
-    cnt = b1 - b0 + 1
-    seg_of = np.repeat(np.arange(k), cnt)
-    band_of = np.repeat(b0, cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
-    order = np.argsort(band_of, kind="stable")
-    seg_sorted = seg_of[order]
-    start = np.searchsorted(band_of[order], np.arange(nb + 1))
+    y0, y1, h, nb, seg_sorted, start = bands.y0, bands.y1, bands.h, bands.nb, bands.seg_sorted, bands.start
     in_range = (P[:, 1] >= y0) & (P[:, 1] <= y1)
     idx = np.flatnonzero(in_range)
     pb = np.clip(((P[idx, 1] - y0) / h).astype(np.int64), 0, nb - 1)

@@ -44,7 +44,16 @@ from .. import tolerances
 from ..errors import InvalidGeometryError, ParameterError
 from ._common import FORMAT_VERSION
 from .curve import BSplineCurve
-from .point_in_loops import INSIDE, ON, OUTSIDE, classify_points, loop_polyline, signed_area, span_samples
+from .point_in_loops import (
+    INSIDE,
+    ON,
+    OUTSIDE,
+    classify_points,
+    loop_polyline,
+    segment_bands,
+    signed_area,
+    span_samples,
+)
 from .surface import BSplineSurface
 
 if TYPE_CHECKING:
@@ -259,8 +268,10 @@ class TrimmedSurface:
         on_tol = self._tol(tol, tolerances.TRIM_ON, "tol")
         line_tol = min(on_tol, tolerances.TRIM_POLYLINE * self._diag()) if on_tol > 0 else \
             tolerances.TRIM_POLYLINE * self._diag()
-        A, B = self._segments(line_tol)
-        state = classify_points(np.column_stack([a, b]), A, B, on_tol)
+        key = ("bands", line_tol, on_tol)  # the segments binned once per tolerance (many calls: sections)
+        if key not in self._cache:
+            self._cache[key] = segment_bands(*self._segments(line_tol), on_tol)
+        state = classify_points(np.column_stack([a, b]), bands=self._cache[key])
         (u0, u1), (v0, v1) = self.domain
         out_box = (a < u0 - on_tol) | (a > u1 + on_tol) | (b < v0 - on_tol) | (b > v1 + on_tol)
         state[out_box] = OUTSIDE

@@ -113,6 +113,28 @@ def test_classify_points_even_odd_and_on_band():
     assert list(st_) == [INSIDE, OUTSIDE, ON, ON]
 
 
+@test_settings(max_examples=10)
+@given(seed=st.integers(0, 2**16), tol=st.sampled_from([0.0, 1e-9, 1e-4]))
+def test_binned_segments_are_reused_with_the_same_answers(seed, tol):
+    """The segments binned once (``segment_bands``, kept per tolerance by ``TrimmedSurface.classify``:
+    the sections call it thousands of times on a face with hundreds of holes) give exactly what
+    binning them on every call gives; a second tolerance gets its own bins."""
+    from occsurf.algorithms.kernel.point_in_loops import segment_bands
+
+    rng = np.random.default_rng(seed)
+    t = _plate()
+    P = rng.uniform(-0.2, 4.2, (500, 2))
+    A, B = t._segments(tolerances.TRIM_POLYLINE * t._diag())
+    bands = segment_bands(A, B, tol)
+    assert np.array_equal(classify_points(P, bands=bands), classify_points(P, A, B, tol))
+    first = t.classify(P[:, 0], P[:, 1], tol=tol if tol > 0 else None)
+    other = t.classify(P[:, 0], P[:, 1], tol=1e-3)  # another tolerance, other bins
+    fresh = _plate()
+    assert np.array_equal(t.classify(P[:, 0], P[:, 1], tol=tol if tol > 0 else None), first)
+    assert np.array_equal(fresh.classify(P[:, 0], P[:, 1], tol=tol if tol > 0 else None), first)
+    assert np.array_equal(fresh.classify(P[:, 0], P[:, 1], tol=1e-3), other)
+
+
 def test_evaluation_respects_the_trims():
     t = _plate()
     assert_allclose(t.evaluate(0.1, 0.1), [0.4, 0.4, 0.0], atol=1e-15)
