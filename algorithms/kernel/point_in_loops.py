@@ -107,7 +107,13 @@ def segment_bands(seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0) -> Segme
     ylo = np.minimum(A[:, 1], B[:, 1]) - tol
     yhi = np.maximum(A[:, 1], B[:, 1]) + tol
     y0, y1 = float(ylo.min()), float(yhi.max())
-    nb = int(np.clip(k, 1, 1 << 20))
+    # As many bands as segments, but no more than keep the entries (a segment once per band it
+    # meets) within ~4 k: a face with hundreds of small holes has short, steep segments, each of
+    # which met ~22 of k bands (34 M entries, 300 MB, for the 1e6 segments of a 361-hole plate).
+    # Fewer, taller bands hold as many segments per band there; the answers do not depend on it.
+    extent = float((yhi - ylo).sum())
+    nb = k if extent <= 0 else min(k, int(3.0 * k * (y1 - y0) / extent) + 1)
+    nb = int(np.clip(nb, 1, 1 << 20))
     h = (y1 - y0) / nb if y1 > y0 else 1.0
     b0 = np.clip(((ylo - y0) / h).astype(np.int64), 0, nb - 1)
     b1 = np.clip(((yhi - y0) / h).astype(np.int64), 0, nb - 1)
@@ -144,9 +150,10 @@ def classify_points(points: ArrayLike, seg_a: ArrayLike | None = None, seg_b: Ar
     -----
     A ray from each point towards ``+u`` crosses a segment ``(a, b)`` when ``(a_v > p_v) !=
     (b_v > p_v)`` and the crossing lies right of the point (half-open rule: a vertex on the ray
-    is counted once). Segments are binned into ``k`` horizontal bands of the ``v`` range
-    (a segment in every band its ``v`` range, widened by ``tol``, meets); each point meets only the
-    segments of its band, in blocks of at most ``2**22`` point-segment pairs.
+    is counted once). Segments are binned into at most ``k`` horizontal bands of the ``v`` range
+    (a segment in every band its ``v`` range, widened by ``tol``, meets; fewer bands where the
+    segments are steep, :func:`segment_bands`); each point meets only the segments of its band, in
+    blocks of at most ``2**22`` point-segment pairs.
     """
     if bands is None:
         bands = segment_bands(np.zeros((0, 2)) if seg_a is None else seg_a,

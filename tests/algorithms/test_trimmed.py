@@ -135,6 +135,32 @@ def test_binned_segments_are_reused_with_the_same_answers(seed, tol):
     assert np.array_equal(fresh.classify(P[:, 0], P[:, 1], tol=1e-3), other)
 
 
+@test_settings(max_examples=15)
+@given(seed=st.integers(0, 2**16), holes=st.integers(0, 40), tol=st.sampled_from([0.0, 1e-6, 1e-3]))
+def test_banded_classification_equals_testing_every_segment(seed, holes, tol):
+    """However the segments are binned (fewer, taller bands where they are steep: a plate with many
+    small round holes), each point gets exactly the answer of the crossing number over every
+    segment, and ON within ``tol`` of any segment."""
+    from occsurf.algorithms.kernel.point_in_loops import _point_segment_distance
+
+    rng = np.random.default_rng(seed)
+    loops = [np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]], float)]
+    th = np.linspace(0, 2 * np.pi, 97)
+    for c, r in zip(rng.uniform(1, 9, (holes, 2)), rng.uniform(0.05, 0.4, holes)):
+        loops.append(np.c_[c[0] + r * np.cos(th), c[1] + r * np.sin(th)])
+    A = np.concatenate([p[:-1] for p in loops])
+    B = np.concatenate([p[1:] for p in loops])
+    P = np.r_[rng.uniform(-1, 11, (400, 2)), A[rng.integers(0, len(A), 50)]]  # on the loops too
+    got = classify_points(P, A, B, tol)
+    cross = ((A[None, :, 1] > P[:, None, 1]) != (B[None, :, 1] > P[:, None, 1]))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        x = A[None, :, 0] + (P[:, None, 1] - A[None, :, 1]) * (B[None, :, 0] - A[None, :, 0]) / (B[None, :, 1] - A[None, :, 1])
+    inside = ((cross & (P[:, None, 0] < x)).sum(axis=1) % 2) == 1
+    d = np.array([_point_segment_distance(np.repeat(p[None], len(A), 0), A, B).min() for p in P])
+    want = np.where((d <= tol) if tol > 0 else np.zeros(len(P), bool), ON, np.where(inside, INSIDE, OUTSIDE))
+    assert np.array_equal(got, want)
+
+
 def test_evaluation_respects_the_trims():
     t = _plate()
     assert_allclose(t.evaluate(0.1, 0.1), [0.4, 0.4, 0.0], atol=1e-15)
