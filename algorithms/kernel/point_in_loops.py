@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
+from ..errors import InvalidGeometryError
 from .curve import BSplineCurve
 
 __all__ = ["INSIDE", "ON", "OUTSIDE", "classify_points", "SegmentBands", "segment_bands", "loop_polyline", "curve_polyline", "span_samples",
@@ -156,8 +157,9 @@ def classify_points(points: ArrayLike, seg_a: ArrayLike | None = None, seg_b: Ar
     blocks of at most ``2**22`` point-segment pairs.
     """
     if bands is None:
-        bands = segment_bands(np.zeros((0, 2)) if seg_a is None else seg_a,
-                              np.zeros((0, 2)) if seg_b is None else seg_b, tol)
+        if seg_a is None or seg_b is None:
+            raise InvalidGeometryError("seg_a, seg_b: expected the segments' ends (or bands=segment_bands(...))")
+        bands = segment_bands(seg_a, seg_b, tol)
     P = np.asarray(points, float).reshape(-1, 2)
     A, B, tol = bands.A, bands.B, bands.tol
     m, k = P.shape[0], A.shape[0]

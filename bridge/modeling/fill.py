@@ -78,6 +78,7 @@ from .joints import (  # noqa: F401 - re-exported
     hole_continuity,
     unique_faces,
 )
+from .refill_g2 import edge_classes
 
 __all__ = ["HoleReport", "FillResult", "fill_model", "ModelHoles", "model_holes", "fill_loop", "sew_fills",
            "hole_neighbours", "find_loops", "hole_sides", "assess_joint",
@@ -480,8 +481,6 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True, samples: i
             rep.folds = int(q.folds.sum())
         rep.g0, rep.g1 = max(rep.side_g0), max(rep.side_g1)
         rep.status = "filled"
-        from .refill_g2 import edge_classes
-
         rep.edge_asked = ["G0" if f is None else continuity for f in nb]
         rep.edge_continuity = edge_classes(list(rep.side_g1), list(rep.side_g2))
         # for pictures; not dataclass fields, so asdict() leaves them out

@@ -50,7 +50,7 @@ from occsurf.algorithms.topology.nsided import fill_folds
 from ..messages import one_line
 from .joints import check_continuity, unique_faces
 from .refill_candidates import OCC_DEFAULT, OCC_TUNED, PLATE_MARGIN, fill_method, fitted_fill, occ_filling, occ_variant
-from .refill_g2 import G2_REL, edge_classes
+from .refill_g2 import G2_REL, edge_classes, g2_fill, original_g2
 from .refill_loop import (
     G1_EDGE_DEG,
     SewnModel,
@@ -181,8 +181,8 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         rep.g0 = max(rep.side_g0)
         rep.g1 = max([a for a in rep.side_g1 if a is not None], default=0.0)
         # asked: G2 where the removed face met its neighbour within G2_REL (original_g2's rule)
-        was_g2 = [j is not None and j <= G2_REL for j in rep.original_g2] + [False] * len(edges)
-        rep.edge_asked = ["G2" if was_g2[k] else "G1" if g1[k] else "G0" for k in range(len(edges))]
+        jumps = rep.original_g2 or [None] * len(edges)  # not measured with continuity='G1'
+        rep.edge_asked = ["G2" if j is not None and j <= G2_REL else "G1" if t else "G0" for j, t in zip(jumps, g1)]
         rep.edge_continuity = edge_classes(rep.side_g1, rep.side_g2)
         rep.status = "filled"
         rep._fill_faces = occ_faces  # for refill_model and the pictures (not fields: not serialised)
@@ -215,7 +215,6 @@ def _g2_attempt(rep: RefillReport, edges: list[Any], nbs: list[Any], owners: lis
     from occsurf.algorithms import tolerances
 
     from .joints import ASSESS_SAMPLES
-    from .refill_g2 import g2_fill, original_g2
 
     floor = tolerances.CONTINUITY_CURVATURE_FLOOR / size
     orig = [original_g2(e, nb, own, floor, ASSESS_SAMPLES) for e, nb, own in zip(edges, nbs, owners)]

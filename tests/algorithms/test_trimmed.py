@@ -111,6 +111,8 @@ def test_classify_points_even_odd_and_on_band():
     sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]], float)
     st_ = classify_points([[0.5, 0.5], [2, 0.5], [1.0, 0.5], [0.5, 1e-9]], sq[:-1], sq[1:], tol=1e-8)
     assert list(st_) == [INSIDE, OUTSIDE, ON, ON]
+    with pytest.raises(InvalidGeometryError, match="seg_a, seg_b: expected the segments"):
+        classify_points([[0.5, 0.5]])  # neither segments nor bands: refused, not "outside"
 
 
 @test_settings(max_examples=10)
