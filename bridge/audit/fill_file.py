@@ -131,7 +131,8 @@ def _refill_row(k: int, r: Any) -> dict[str, Any]:
             "valid": r.valid, "step_round_trip": r.step_round_trip,
             "occ_status": d.get("status"), "occ_reason": d.get("reason"), "occ_seconds": d.get("seconds"),
             "occ_g0": d.get("g0"), "occ_g1": d.get("g1"), "occ_tuned": t or None, "folds": r.folds,
-            "method": r.method}
+            "method": r.method, "continuity": r.continuity, "original_g2": r.original_g2, "g2_edges": r.g2_edges,
+            "g2": r.g2, "side_g2": r.side_g2, "edge_asked": r.edge_asked, "edge_continuity": r.edge_continuity}
 
 
 def _finish(ctx: _Context, item: dict[str, Any], reports: list[Any]) -> dict[str, Any]:

@@ -260,3 +260,26 @@ def test_fill_faces_out_of_range_is_one_line_and_writes_nothing(capsys, tmp_path
     rc, stdout, stderr = run_main(capsys, "fill", str(_LENS), "--out", str(out), "--faces", "1", "99", "--in-process")
     assert rc == 2 and not out.exists()
     assert stderr.count("\n") == 1 and "faces: expected face indices 0..8" in stderr and "Traceback" not in stderr
+
+
+@pytest.mark.slow
+def test_fill_faces_reports_the_continuity_per_edge(capsys, tmp_path: Path) -> None:
+    """``occsurf fill --faces`` carries the refill's continuity keys in its JSON (issue 31: the rows
+    once left them out): by default (``auto``) the bearing's fillet face 4 is asked G2 on its two
+    edges where it met its neighbours curvature continuously, reaches G1 there (5.2 %, 8.4 %), and
+    the table says so in one line."""
+    bearing = REPO.parent / "shared" / "realdata" / "occt__bearing.iges"
+    if not bearing.is_file():
+        pytest.skip(f"{bearing} is absent (public real models)")
+    args = ("fill", str(bearing), "--out", str(tmp_path / "b.step"), "--faces", "4", "--no-occ", "--no-pictures",
+            "--in-process")
+    rc, stdout, stderr = run_main(capsys, *args, "--json")
+    assert rc == 0, stderr
+    [h] = json.loads(stdout)["holes"]
+    assert h["continuity"] == "auto" and h["g2_edges"] == 2 and len(h["original_g2"]) == 4
+    assert h["edge_asked"] == ["G2", "G1", "G2", "G1"] and h["edge_continuity"] == ["G1"] * 4
+    assert [a is None for a in h["side_g2"]] == [False, True, False, True] and h["g2"] == max(h["side_g2"][::2])
+    rc, stdout, stderr = run_main(capsys, *args)
+    assert rc == 0, stderr
+    assert "faces 4: G2 on 2 of 4 edges, curvature jump" in stdout
+    assert re.search(r"faces 4: edges 0, 2 asked G2 got G1 \(jump [0-9.]+ %, [0-9.]+ %\)", stdout), stdout
