@@ -51,8 +51,12 @@ def closest_parameters(curve: BSplineCurve, points: Array, samples: int = 401,
     else:
         grid = np.linspace(lo, hi, samples)
         dense = curve.evaluate(grid)
-        d2 = np.einsum("mkd,mkd->mk", P[:, None] - dense[None], P[:, None] - dense[None])
-        t = grid[np.argmin(d2, axis=1)]
+        nearest = np.empty(len(P), dtype=np.intp)
+        step = max(1, (1 << 18) // (samples * P.shape[1]))  # points a block: ~2 MB of differences, in cache
+        for a in range(0, len(P), step):  # (16 000 points x 401 samples at once were 150 MB a temporary)
+            diff = P[a:a + step, None] - dense[None]
+            nearest[a:a + step] = np.argmin(np.einsum("mkd,mkd->mk", diff, diff), axis=1)
+        t = grid[nearest]
     for _ in range(iterations):
         D = curve.derivatives(t, 2)
         r = D[:, 0] - P

@@ -45,7 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ..kernel.basis import basis_matrix
+from ..kernel.banded_lstsq import spline_lstsq
 from ..kernel.curve import BSplineCurve
 from .nsided import HoleSide
 
@@ -123,11 +123,9 @@ def _check_inputs(curve: BSplineCurve, params: ArrayLike, normals: ArrayLike) ->
 
 
 def _lsq(knots: Array, degree: int, s: Array, Y: Array, w: Array) -> Array:
-    n = len(knots) - degree - 1
-    A = basis_matrix(knots, degree, n, s)[0]
-    sw = np.sqrt(w)[:, None]
-    coef, *_ = np.linalg.lstsq(A * sw, Y * sw, rcond=None)
-    return coef
+    """Weighted least squares by band accumulation (:func:`~occsurf.algorithms.kernel.banded_lstsq.spline_lstsq`:
+    the dense ``lstsq`` it replaced took 0.2-0.4 s a fit for the 16 000 samples of a linkrods side)."""
+    return spline_lstsq(knots, degree, s, Y, w)
 
 
 def _sampled_knots(inner: Array, s: Array, lo: float, hi: float, least: int = 2) -> Array:

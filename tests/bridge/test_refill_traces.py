@@ -332,3 +332,18 @@ def test_side_variants_are_refill_sides_and_one_where_following_keeps_every_curv
     for follow, result in variants:
         assert _same_sides(result, alone[follow])
     assert _same_sides(alone[True], alone[False]) == (count == 1)
+
+
+def test_closest_parameters_in_blocks_are_those_of_the_whole_at_once() -> None:
+    """The nearest grid sample is found a block of points at a time (the whole 16 000 x 401 at once
+    was a 150 MB temporary, 1.7 s, on linkrods face 22's traces): the same parameters, bit for bit,
+    as the former single einsum over every point, for many points and across block boundaries."""
+    rng = np.random.default_rng(0)
+    knots = np.r_[[0.0] * 4, np.linspace(0, 1, 40)[1:-1], [1.0] * 4]
+    c = BSplineCurve(3, knots, rng.normal(size=(42, 3)))
+    P = c.evaluate(rng.uniform(0, 1, 3001)) + rng.normal(size=(3001, 3)) * 0.01
+    grid = np.linspace(0.0, 1.0, 401)
+    dense = c.evaluate(grid)
+    whole = grid[np.argmin(np.einsum("mkd,mkd->mk", P[:, None] - dense[None], P[:, None] - dense[None]), axis=1)]
+    t, _ = closest_parameters(c, P, iterations=0)
+    np.testing.assert_array_equal(t, whole)
