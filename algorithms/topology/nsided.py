@@ -241,6 +241,6 @@ def fill_hole(sides: Sequence[HoleSide], continuity: str = "G1") -> HoleFill | P
                 pass
     if best is None:
         raise err if err is not None else InvalidGeometryError("sides: no layout of the central split could be built")
-    patches, corners, _, C = best
+    patches, corners, folds, C = best
     return HoleFill(patches, unit, sig, C + origin, corners.residual, corners.twist, size, flat=corners.flat,
-                    source=source)
+                    source=source, folds=int(folds))

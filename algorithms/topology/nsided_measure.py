@@ -162,6 +162,9 @@ def fill_folds(fill: Any) -> int:
     """Folds of a fill (:func:`count_folds`): summed over a :class:`HoleFill`'s patches; for a fill
     that is one trimmed surface (a :class:`~.plate_fill.PlateFill`: its ``trimmed`` attribute),
     counted on the face only, inside its trim."""
+    kept = getattr(fill, "folds", None)
+    if kept is not None:  # counted as the fill was made (the same count_folds on the same surfaces)
+        return int(kept)
     trimmed = getattr(fill, "trimmed", None)
     if isinstance(trimmed, TrimmedSurface):
         return count_folds(trimmed)

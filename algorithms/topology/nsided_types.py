@@ -81,6 +81,9 @@ class HoleFill:
         Per side of the fill: ``(input side, t0, t1)``, the part ``[t0, t1]`` (on ``[0, 1]``) of the
         input side it is. The identity unless the input had fewer than 3 sides and was split
         (:func:`.nsided.fill_hole`).
+    folds : int or None
+        The patches' fold count (:func:`.nsided_measure.fill_folds`), counted while the fill was
+        chosen and kept so that it is not counted again; ``None``: not counted yet.
     """
 
     patches: list[BSplineSurface]
@@ -94,6 +97,7 @@ class HoleFill:
     method: str = field(default="quads")
     flat: Array = field(default_factory=lambda: np.zeros(0, bool))
     source: Array = field(default_factory=lambda: np.zeros((0, 3)))
+    folds: int | None = None
 
     def locate_input(self, side: int, points: Array) -> tuple[NDArray[np.intp], Array, Array, Array]:
         """:meth:`locate` for points of *input* side ``side`` (the same unless the loop was split):

@@ -136,6 +136,10 @@ class PlateFill:
         two neighbours' curvatures disagree there, ``|H_i - H_(i+1)| / max |H|`` of their Hessians as
         heights over the plate's plane (0 where the neighbours are curvature continuous to each
         other at the corner; no fill is G2 to both beyond it). ``nan`` elsewhere.
+    folds : int or None
+        Folds of ``trimmed`` (:func:`.nsided_measure.count_folds`), counted when its stage was
+        fitted and kept so that :func:`.nsided_measure.fill_folds` does not count them again;
+        ``None``: not counted (a plate made otherwise, e.g. mapped back from an unrolled one).
     """
 
     surface: BSplineSurface
@@ -158,6 +162,7 @@ class PlateFill:
     side_g2: Array = field(default_factory=lambda: np.zeros(0))
     g2_tol: float = 0.01
     corner_g2: Array = field(default_factory=lambda: np.zeros(0))
+    folds: int | None = None
 
     @property
     def patches(self) -> list[BSplineSurface]:
@@ -476,12 +481,13 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             ku, kv = ku2, kv2
     if best is None:  # the first stage of the first pass always sets it
         raise RuntimeError("fill_plate: no stage was fitted")
-    score, c, ku, kv, g0_side, g1_side, _, g2_side = best
+    score, c, ku, kv, g0_side, g1_side, folds, g2_side = best
     met = score <= 1.0
     surf, trimmed = _build(c, ku, kv, p, o, e1, e2, N, L, sides)
     return PlateFill(surf, trimmed, sides, flags, g0_side, g1_side, o, e1, e2, N,
                      (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean,
-                     g2=g2f, side_g2=g2_side, g2_tol=g2_tol, corner_g2=_corner_g2(sides, g2f, o, R, L, kfloor))
+                     g2=g2f, side_g2=g2_side, g2_tol=g2_tol, corner_g2=_corner_g2(sides, g2f, o, R, L, kfloor),
+                     folds=int(folds))
 
 
 class _SPDFactor:

@@ -178,3 +178,23 @@ def test_very_long_thin_sector_still_folds_and_says_so() -> None:
     assert abs(np.degrees(np.arctan2(fill.center[1], fill.center[0])) - 75.0) < 0.5
     assert q.boundary_gap.max() <= GAP_REL * fill.size and q.boundary_angle.max() <= ANGLE_DEG
     assert q.folds.sum() > 0
+
+
+def test_the_fold_count_kept_with_a_fill_is_the_count_made_afresh() -> None:
+    """``fill_hole`` and ``fill_plate`` keep the fold count they chose the fill by (``folds``), and
+    ``fill_folds`` returns it instead of counting again (the bridge scores every candidate by its
+    folds, then reports the winner's: each count was made two or three times). The kept number is
+    the fresh count, on a fill that folds (the 150 deg sector) and on ones that do not."""
+    from dataclasses import replace
+
+    from occsurf.algorithms.topology.nsided import fill_folds
+    from occsurf.algorithms.topology.plate_fill import fill_plate
+
+    folded = fill_hole(_sector(150.0, 1.75))
+    plain = fill_hole(_sector(90.0, 1.0))
+    plate = fill_plate(_sector(150.0, 1.75))
+    assert folded.folds is not None and folded.folds > 0 and plain.folds == 0 and plate.folds is not None
+    for fill in (folded, plain, plate):
+        assert fill_folds(fill) == fill.folds == fill_folds(replace(fill, folds=None))
+    assert fill_folds(replace(folded, folds=None)) == sum(count_folds(p) for p in folded.patches)
+    assert fill_folds(replace(plate, folds=None)) == count_folds(plate.trimmed)
