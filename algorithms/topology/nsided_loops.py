@@ -21,7 +21,7 @@ from ..errors import InvalidGeometryError
 from ..kernel.curve import BSplineCurve
 
 __all__ = ["closest_parameters", "arc_length_parameters", "check_simple_loop", "mean_plane", "turns_inward",
-           "inner_point", "harmonic_centre", "harmonic_picture", "HarmonicPicture"]
+           "inner_point", "harmonic_centre", "harmonic_picture", "HarmonicPicture", "grid_inside"]
 
 Array = NDArray[np.float64]
 
@@ -383,6 +383,25 @@ class HarmonicPicture:
         return self.origin + p @ self.to3.T, np.einsum("ag,mgd->mad", self.to3, Jinv), ok
 
 
+def grid_inside(polygon: Array, gx: Array, gy: Array) -> NDArray[np.bool_]:
+    """Which nodes ``(gx[i], gy[j])`` of a grid lie inside the closed ``polygon`` (m, 2), shape
+    ``(len(gx), len(gy))``, by the crossing number: the edges ``a -> b`` with ``(a_y > y) != (b_y > y)``
+    whose crossing ``x`` lies right of the node, counted odd.
+
+    A grid row shares its ``y``: the edges it straddles and their crossings are found once per row
+    and the nodes counted by a sorted search, where testing every node against every edge (4 000
+    nodes x 2 000 edges, 0.1 s a hole) made arrays of both at once. The crossings are the same
+    floating-point numbers and the comparisons the same, so the answer is the same, node for node."""
+    a, b = polygon, np.roll(polygon, -1, axis=0)
+    straddle = (a[None, :, 1] > gy[:, None]) != (b[None, :, 1] > gy[:, None])  # (rows, edges)
+    inside = np.zeros((len(gx), len(gy)), bool)
+    for j in np.flatnonzero(straddle.any(axis=1)):  # a loop over grid rows, each vectorised
+        k = np.flatnonzero(straddle[j])
+        cross_x = np.sort(a[k, 0] + (b[k, 0] - a[k, 0]) * (gy[j] - a[k, 1]) / (b[k, 1] - a[k, 1]))
+        inside[:, j] = (k.size - np.searchsorted(cross_x, gx, side="right")) % 2 == 1
+    return inside
+
+
 def harmonic_picture(loop: Array, targets: Array, normals: Array, cells: int = 4000) -> HarmonicPicture | None:
     """The discrete harmonic map of a hole onto the fill's domain polygon (course §8-3 central split).
 
@@ -421,16 +440,10 @@ def harmonic_picture(loop: Array, targets: Array, normals: Array, cells: int = 4
     h = max(np.sqrt(area / cells), float((hi - lo).max()) / 400.0)
     nx, ny = (np.floor((hi - lo) / h).astype(int) + 1)
     gx, gy = lo[0] + h * np.arange(nx + 1), lo[1] + h * np.arange(ny + 1)
-    G = np.stack(np.meshgrid(gx, gy, indexing="ij"), -1).reshape(-1, 2)
-    a, b = q, np.roll(q, -1, axis=0)
-    px, py = G[:, :1], G[:, 1:]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cross_x = a[:, 0] + (b[:, 0] - a[:, 0]) * (py - a[:, 1]) / (b[:, 1] - a[:, 1])
-    inside = (((a[:, 1] > py) != (b[:, 1] > py)) & (px < cross_x)).sum(1) % 2 == 1
+    inside = grid_inside(q, gx, gy)
     if not inside.any():
         return None
     shape = (nx + 1, ny + 1)
-    inside = inside.reshape(shape)
     index = np.full(shape, -1)
     index[inside] = np.arange(int(inside.sum()))
     I, J = np.nonzero(inside)
