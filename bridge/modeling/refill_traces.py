@@ -75,9 +75,9 @@ def edge_normals(e: Any, nb: Any, own: Any, curve: Any) -> tuple[np.ndarray, np.
     tangent = own is None or joint_angle(e, own, nb) <= G1_EDGE_DEG
     src = nb if tangent or own is None else own
     P, N, uvs = normals_on(e, src, edge_params(e, src, FIT_SAMPLES))
-    s, _ = closest_parameters(curve, P)
     k = len(P) // 2
-    T = curve.derivatives(s[k:k + 1], 1)[0, 1]
+    s, _ = closest_parameters(curve, P[k:k + 1])  # the middle point's only: it orients the normals
+    T = curve.derivatives(s, 1)[0, 1]
     into = np.cross(T, N[k])  # must point into nb (G1 edge) or out of the removed face (sharp edge)
     if _side_of(src, uvs[k], into) != (1 if src is nb else -1):
         N = -N
