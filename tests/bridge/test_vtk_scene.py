@@ -246,3 +246,28 @@ def test_one_window_cache_for_scenes_and_warn_pictures() -> None:
     assert cam == vtk_scene.fit_camera("top", P.min(axis=0), P.max(axis=0), 1.3)
     with pytest.raises(ValueError, match="camera: expected one of iso, top, bottom"):
         s.render_array(size=(208, 160), camera="diagonal")
+
+
+@pytest.mark.parametrize("cmap", [*COLORMAPS, "stripes"])
+def test_lookup_tables_map_as_entry_by_entry_tables(cmap: str) -> None:
+    """``_lut`` sets its RGBA bytes at once (``SetTable``); a table filled entry by entry with
+    ``SetTableValue``, as it was, gives every value the same colour and opacity: across the range,
+    outside it, NaN and infinities, for a range and for a single value."""
+    from vtkmodules.vtkCommonCore import vtkLookupTable
+
+    for stripes in (1, 5):
+        for lo, hi in ((-1.0, 2.0), (0.3, 0.3)):
+            table = vtk_scene._table(cmap, stripes)
+            ref = vtkLookupTable()
+            ref.SetNumberOfTableValues(len(table))
+            for k, (r, g, b) in enumerate(table):
+                ref.SetTableValue(k, float(r), float(g), float(b), 1.0)
+            ref.SetRange(lo, hi if hi > lo else lo + 1.0)
+            ref.SetNanColor(*vtk_scene.NAN_COLOR, 1.0)
+            ref.Build()
+            lut = vtk_scene._lut(cmap, lo, hi, stripes)
+            for v in np.r_[np.linspace(-2.0, 3.0, 501), np.nan, -np.inf, np.inf]:
+                got, want = [0.0] * 3, [0.0] * 3
+                lut.GetColor(float(v), got)
+                ref.GetColor(float(v), want)
+                assert got == want and lut.GetOpacity(float(v)) == ref.GetOpacity(float(v)), (cmap, stripes, v)
