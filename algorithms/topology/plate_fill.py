@@ -504,7 +504,9 @@ class _SPDFactor:
     9e-16 relative); its solutions agree within 2e-5 of the largest coefficient with unscaled
     symmetric and scaled default factorisations, where the unscaled default one differed from all
     three by up to 4.5e-3 (in the directions the data hardly pin: the scaling is what makes them
-    reproducible).
+    reproducible). The G2 plate's system, factored in the symmetric mode before, is scaled too: its
+    fills move by round-off (the G2 tests, which bound its jumps, G0 and G1 at what was measured,
+    pass unchanged).
     """
 
     def __init__(self, K: sp.spmatrix) -> None:
