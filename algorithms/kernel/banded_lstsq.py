@@ -87,7 +87,7 @@ def spline_lstsq(knots: Array, degree: int, s: Array, Y: Array, w: Array) -> Arr
             R[col] = T[0]
             T = np.vstack([np.hstack([T[1:, 1:p + 1], np.zeros((p, 1)), T[1:, p + 1:]]), np.zeros((1, p + 1 + d))])
             col += 1
-        r = np.linalg.qr(np.vstack([T, rows[lo:hi]]), mode="r")
+        r: Array = np.asarray(np.linalg.qr(np.vstack([T, rows[lo:hi]]), mode="r"))  # R alone (mode "r")
         T = np.zeros_like(T)
         k = min(r.shape[0], p + 1)
         T[:k] = r[:k]
