@@ -343,14 +343,23 @@ def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int
     ``continuity='G2'``: curvature continuous to the neighbours (issue 31), by the plate with the
     neighbours' curvature across each side (:func:`_g2_fill`), where every edge is an iso-boundary
     (the exact second cross derivative); elsewhere the fill is G1 and ``rep.reason`` says why."""
+    sides: list[HoleSide] | OccsurfError  # the exact sides, made once for the G2 plate and the central split
+    try:
+        sides = hole_sides(edges, nb)
+    except OccsurfError as err:  # trimmed neighbours: no exact sides (raised again below where they are needed)
+        sides = err
     if continuity == "G2":
         try:
-            return _g2_fill(edges, nb, hole_sides(edges, nb), size, samples, rep)
+            if isinstance(sides, OccsurfError):
+                raise sides
+            return _g2_fill(edges, nb, sides, size, samples, rep)
         except OccsurfError as err:  # trimmed neighbours (no exact S_tt), or no plane the hole is a height over
             rep.reason = f"G2 not available, filled G1: {one_line(err, expected=(OccsurfError,))}"
             rep.side_g2, rep.g2, rep.occ_g2_gap, rep.corner_g2 = [], None, None, []
     try:
-        fill = fill_hole(hole_sides(edges, nb))
+        if isinstance(sides, OccsurfError):
+            raise sides
+        fill = fill_hole(sides)
     except InvalidGeometryError as exact_err:
         if any(f is None for f in nb):
             raise

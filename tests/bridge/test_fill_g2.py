@@ -182,6 +182,40 @@ def test_a_hole_no_plate_can_fill_g2_is_filled_g1_with_the_reason(ring, monkeypa
     assert h.edge_asked == ["G2"] * 4 and h.edge_continuity == ["G1"] * 4  # said per edge, not silently
 
 
+def test_the_exact_sides_are_made_once_for_the_g2_attempt_and_the_g1_fallback(ring, monkeypatch) -> None:
+    """A G2 attempt that falls back to G1 fills from the same exact sides (``hole_sides`` once, where it
+    was made again for the fallback); where no exact sides exist the G2 attempt says so and the
+    fill goes on to the fitted sides, as before."""
+    import occsurf.bridge.modeling.fill as fill_mod
+    import occsurf.bridge.modeling.plate as plate
+    from occsurf.bridge.modeling.fill import fill_model
+
+    calls = []
+    real = fill_mod.hole_sides
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    def refuse(*args, **kwargs):
+        raise InvalidGeometryError("plate fill: not a height field over any plane tried (forced)")
+
+    monkeypatch.setattr(fill_mod, "hole_sides", counted)
+    monkeypatch.setattr(plate, "fill_plate", refuse)
+    (h,) = [h for h in fill_model(ring, continuity="G2", compare_occ=False).holes if h.status != "outer"]
+    assert h.status == "filled" and h.method == "central" and len(calls) == 1
+
+    def no_sides(*args, **kwargs):
+        calls.append(1)
+        raise InvalidGeometryError("edge 0: the neighbour is trimmed across it (forced)")
+
+    calls.clear()
+    monkeypatch.setattr(fill_mod, "hole_sides", no_sides)
+    (h,) = [h for h in fill_model(ring, continuity="G2", compare_occ=False).holes if h.status != "outer"]
+    assert h.status == "filled" and h.construction == "fitted" and len(calls) == 1
+    assert h.reason == "G2 not available, filled G1: edge 0: the neighbour is trimmed across it (forced)"
+
+
 def test_edge_classes_and_the_shortfall_line() -> None:
     """What a fill reached per edge, by the rules that classify the original joints (G1 within 1 deg,
     G2 also within 2 %; an edge not measured in G2 claims G1 at most, one not measured in G1 G0),
