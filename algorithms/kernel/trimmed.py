@@ -207,6 +207,28 @@ class TrimmedSurface:
         return (f"TrimmedSurface({self.surface!r}, loops={len(self.loops)}, p-curves={self.n_edges}"
                 f"{', reversed' if self.reversed else ''})")
 
+    def on_surface(self, surface: BSplineSurface) -> TrimmedSurface:
+        """The same trim on another ``surface`` of this one's parameter domain.
+
+        The loops are kept as checked and oriented, and so is what was drawn from them: their
+        polylines and binned segments depend on the loops and the domain only, and are shared with
+        this face (a surface refitted in one domain again and again, as the stages of a plate fill
+        are, classifies its points without redrawing its loops: 17 % of a bearing plate's time).
+
+        Raises
+        ------
+        InvalidGeometryError
+            ``surface`` is not a BSplineSurface or has another parameter domain.
+        """
+        if not isinstance(surface, BSplineSurface):
+            raise InvalidGeometryError(f"surface: expected a BSplineSurface, got {type(surface).__name__}")
+        if surface.domain != self.surface.domain:
+            raise InvalidGeometryError(f"surface: expected the domain {self.surface.domain} of the trim's surface, got "
+                                       f"{surface.domain}")
+        obj = _trusted(surface, self.outer, self.inner, self.reversed)
+        object.__setattr__(obj, "_cache", self._cache)
+        return obj
+
     # ------------------------------------------------------------------ polylines
     def polylines(self, tol: float | None = None) -> tuple[Array, ...]:
         """The loops as closed polylines in ``(u, v)``, within ``tol`` of the p-curves.

@@ -399,6 +399,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
     tol1 = np.radians(angle_tol)
     kfloor = tolerances.CONTINUITY_CURVATURE_FLOOR / size * L  # curvatures below it count as flat (local units)
     best = None  # (score, c, knots, g0 per side, g1 per side, folds): the best stage is returned
+    trim: TrimmedSurface | None = None  # the first stage's face: its loops (and their polylines) serve every stage
     rippled = False
     for held in (False, True):  # the energy's weight: per stage (of the traces); held (after a ripple)
         if held and not rippled:
@@ -467,7 +468,9 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             c = stage[1]
             g0_side, g1_side, bu, bv = ev.measure(c, g0_tol, angle_tol)
             g2_side = ev.side_g2(c)
-            folds = count_folds(_build(c, ku, kv, p, o, e1, e2, N, L, sides)[1])
+            stage_trim = _build(c, ku, kv, p, o, e1, e2, N, L, sides, trim)[1]
+            trim = trim or stage_trim
+            folds = count_folds(stage_trim)
             rippled |= folds > 0
             stalled = stalled + 1 if stage[0] > 0.9 * top else 0
             top = min(top, stage[0])
@@ -483,7 +486,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
         raise RuntimeError("fill_plate: no stage was fitted")
     score, c, ku, kv, g0_side, g1_side, folds, g2_side = best
     met = score <= 1.0
-    surf, trimmed = _build(c, ku, kv, p, o, e1, e2, N, L, sides)
+    surf, trimmed = _build(c, ku, kv, p, o, e1, e2, N, L, sides, trim)
     return PlateFill(surf, trimmed, sides, flags, g0_side, g1_side, o, e1, e2, N,
                      (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean,
                      g2=g2f, side_g2=g2_side, g2_tol=g2_tol, corner_g2=_corner_g2(sides, g2f, o, R, L, kfloor),
@@ -522,14 +525,18 @@ class _SPDFactor:
 
 
 def _build(c: Array, ku: Array, kv: Array, p: int, o: Array, e1: Array, e2: Array, N: Array, L: float,
-           sides: list[HoleSide]) -> tuple[BSplineSurface, TrimmedSurface]:
+           sides: list[HoleSide], trim: TrimmedSurface | None = None) -> tuple[BSplineSurface, TrimmedSurface]:
     """The height field of coefficients ``c`` in model units (``u``, ``v``: lengths along ``e1``, ``e2``
-    from ``o``) and its face trimmed by the sides' p-curves."""
+    from ``o``) and its face trimmed by the sides' p-curves. ``trim``: an earlier stage's face (the
+    same p-curves, the same domain ``[lo, hi]``), whose loops and their polylines are reused
+    (:meth:`~occsurf.algorithms.kernel.trimmed.TrimmedSurface.on_surface`)."""
     nu, nv = ku.size - p - 1, kv.size - p - 1
     gu, gv = _greville(ku, p), _greville(kv, p)
     U, V = np.meshgrid(gu, gv, indexing="ij")
     poles = o + L * (U[..., None] * e1 + V[..., None] * e2 + c.reshape(nu, nv)[..., None] * N)
     surf = BSplineSurface((p, p), (ku * L, kv * L), poles)
+    if trim is not None and trim.surface.domain == surf.domain:
+        return surf, trim.on_surface(surf)
     pcurves = []
     for s in sides:
         cp = (s.curve.control_points - o) @ np.c_[e1, e2]

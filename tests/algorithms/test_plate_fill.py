@@ -374,3 +374,20 @@ def test_the_plate_systems_are_solved_to_round_off(monkeypatch: pytest.MonkeyPat
     np.testing.assert_allclose(fill.side_g1, before.side_g1, rtol=1e-5)
     size = np.ptp(np.concatenate([s.curve.control_points for s in sides]), axis=0).max()
     assert np.abs(fill.surface.control_points - before.surface.control_points).max() <= 1e-6 * size
+
+
+def test_stages_share_their_trim_and_the_fill_is_the_same(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every stage's face reuses the first stage's loops and their polylines (``on_surface``): the
+    fill is the one made with a fresh TrimmedSurface per stage, pole for pole, with the same
+    measures and fold count."""
+    from occsurf.algorithms.kernel.trimmed import TrimmedSurface
+
+    sides = _torus_l(0.8)
+    shared = fill_plate(sides)
+    monkeypatch.setattr(TrimmedSurface, "on_surface",
+                        lambda self, surface: TrimmedSurface(surface, self.outer, list(self.inner)))
+    fresh = fill_plate(sides)
+    assert shared.spans == fresh.spans and shared.folds == fresh.folds
+    np.testing.assert_array_equal(shared.surface.control_points, fresh.surface.control_points)
+    np.testing.assert_array_equal(shared.side_g0, fresh.side_g0)
+    np.testing.assert_array_equal(shared.side_g1, fresh.side_g1)

@@ -277,3 +277,27 @@ def test_trimmed_surface_is_a_lazy_top_level_name():
             "print(json.dumps([before] + [m in sys.modules for m in ('occsurf.algorithms', 'OCP', 'occsurf.bridge')]))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
     assert json.loads(out.stdout) == [False, True, False, False]
+
+
+def test_the_same_trim_on_another_surface_of_the_domain_keeps_its_drawn_loops():
+    """``on_surface``: the trim moved to another surface of the same domain (a plate fill's next
+    stage) classifies, evaluates and measures as a TrimmedSurface made afresh there, sharing the
+    polylines and binned segments already drawn; another domain or a non-surface is refused."""
+    face = _plate()
+    rng = np.random.default_rng(5)
+    u, v = rng.uniform(-0.1, 1.1, 4000), rng.uniform(-0.1, 1.1, 4000)
+    first = face.classify(u, v)
+    other = _dome()
+    moved = face.on_surface(other)
+    fresh = TrimmedSurface(other, face.outer, list(face.inner))
+    assert moved.surface is other and moved.loops == face.loops and moved._cache is face._cache
+    np.testing.assert_array_equal(moved.classify(u, v), fresh.classify(u, v))
+    np.testing.assert_array_equal(moved.classify(u, v), first)
+    assert moved.area() == fresh.area()
+    for p_moved, p_fresh in zip(moved.polylines(), fresh.polylines()):
+        np.testing.assert_array_equal(p_moved, p_fresh)
+    wider = BSplineSurface((1, 1), ([0, 0, 2, 2], [0, 0, 1, 1]), np.zeros((2, 2, 3)))
+    with pytest.raises(InvalidGeometryError, match="expected the domain"):
+        face.on_surface(wider)
+    with pytest.raises(InvalidGeometryError, match="expected a BSplineSurface"):
+        face.on_surface(face)
