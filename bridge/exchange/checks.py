@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import re
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -493,6 +494,7 @@ def scan_iges(p: Path, data: bytes) -> IgesScan:
     rec_end = ";"
     scan = IgesScan()
     loose = 0
+    refs: list[tuple[int, int, int]] = []  # pointers (from D line, to D line, type) of _IGES_POINTERS' types
     d, par = by_sec["D"], by_sec["P"]
     for k in range(0, len(d) - 1, 2):
         a, b = d[k], d[k + 1]
@@ -518,12 +520,90 @@ def scan_iges(p: Path, data: bytes) -> IgesScan:
         if head != str(etype):  # OCC parses the data as the directory's type: it hung on such files
             raise ExchangeError(f"{p}: damaged IGES file (directory entry D{seq} is of type {etype}, its parameter "
                                 f"data P{ptr} of type {head or '(none)'!s})")
+        if etype in _IGES_POINTERS:
+            for target in _IGES_POINTERS[etype](_iges_numbers(text, delim, 10**6)[1:]):
+                refs.append((seq, target, etype))
         if etype not in (126, 128):
             continue
         fields = _iges_numbers(text, delim, 10**9)
         _check_bspline(p, seq, etype, fields)
+    _iges_cycle_error(p, refs, len(d) // 2)
     scan.face_instances = scan.types[510] if scan.types[510] else loose
     return scan
+
+
+def _ints(fields: list[str], a: int, b: int) -> list[int]:
+    """``fields[a:b]`` as integers (a field that is not one ends the list: no pointers are read past it)."""
+    out = []
+    for x in fields[a:b]:
+        try:
+            out.append(int(x))
+        except ValueError:
+            break
+    return out
+
+
+def _count(fields: list[str], i: int) -> int:
+    got = _ints(fields, i, i + 1)
+    return max(0, min(got[0], len(fields))) if got else 0
+
+
+def _boundary_curves(f: list[str]) -> list[int]:
+    """141's model-space curves and their parameter-space curves: TYPE, PREF, SPTR, N, then per curve
+    CRVPT, SENSE, K, PSCPT1..K."""
+    out, i = _ints(f, 2, 3), 4
+    for _ in range(_count(f, 3)):
+        head = _ints(f, i, i + 3)
+        if len(head) < 3:
+            break
+        k = max(0, min(head[2], len(f)))
+        out += [head[0]] + _ints(f, i + 3, i + 3 + k)
+        i += 3 + k
+    return out
+
+
+#: Per IGES entity type, the pointer fields of its parameter data (after the type number) by the IGES
+#: 5.3 schema: the references a reader follows to build it. A cycle through them (a trimmed surface
+#: whose base surface is itself, after one swapped pointer) sends OCC's transfer round it until its
+#: stack overflows (SIGSEGV), so :func:`scan_iges` refuses it first.
+_IGES_POINTERS: dict[int, Callable[[list[str]], list[int]]] = {
+    102: lambda f: _ints(f, 1, 1 + _count(f, 0)),  # composite curve: N, its curves
+    118: lambda f: _ints(f, 0, 2),  # ruled surface: its two curves
+    120: lambda f: _ints(f, 0, 2),  # surface of revolution: axis, generatrix
+    122: lambda f: _ints(f, 0, 1),  # tabulated cylinder: directrix
+    140: lambda f: _ints(f, 4, 5),  # offset surface: NX, NY, NZ, D, the surface
+    141: _boundary_curves,
+    142: lambda f: _ints(f, 1, 4),  # curve on surface: CRTN, the surface, the parameter and model curves
+    143: lambda f: _ints(f, 1, 2) + _ints(f, 3, 3 + _count(f, 2)),  # bounded surface: TYPE, surface, N, boundaries
+    144: lambda f: _ints(f, 0, 1) + _ints(f, 3, 4 + _count(f, 2)),  # trimmed surface: surface, N1, N2, outer, inner
+    510: lambda f: _ints(f, 0, 1) + _ints(f, 3, 3 + _count(f, 1)),  # face: surface, N, OF, its loops
+}
+
+
+def _iges_cycle_error(p: Path, refs: list[tuple[int, int, int]], n: int) -> None:
+    """Refuse pointers (``refs``: from directory line, to directory line, the pointing entity's type)
+    that form a cycle; pointers to no entry (0, or out of range) are left to the reader."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    edges = [(a, b, t) for a, b, t in refs if b > 0 and b % 2 == 1 and (b - 1) // 2 < n]
+    for a, b, t in edges:
+        if a == b:
+            raise ExchangeError(f"{p}: damaged IGES file (directory entry D{a}, type {t}, points to itself)")
+    if not edges:
+        return
+    rows = np.array([(a - 1) // 2 for a, _, _ in edges])
+    cols = np.array([(b - 1) // 2 for _, b, _ in edges])
+    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n, n)).tocsr()
+    n_comp, labels = connected_components(graph, directed=True, connection="strong")
+    if n_comp == n:
+        return
+    sizes = np.bincount(labels)
+    members = np.flatnonzero(labels == int(np.argmax(sizes)))
+    type_of = {(a - 1) // 2: t for a, _, t in edges}
+    shown = ", ".join(f"D{2 * k + 1} type {type_of.get(int(k), '?')}" for k in members[:6]) + \
+        (" ..." if len(members) > 6 else "")
+    raise ExchangeError(f"{p}: damaged IGES file (a cycle of pointers through {len(members)} entities: {shown})")
 
 
 def _check_bspline(p: Path, seq: int, etype: int, fields: list[str]) -> None:
