@@ -153,24 +153,30 @@ def _check_parentheses(p: Path, masked: bytes, start: int, stop: int, semis: lis
         raise ExchangeError(f"{p}: damaged STEP file ({ids_at(where)}: unbalanced parentheses)")
 
 
-def _cycle_error(p: Path, ids: np.ndarray, rows: np.ndarray, cols: np.ndarray, types: list[str]) -> None:
-    """Refuse a reference graph with a cycle (OCC's parser recurses round it until it dies)."""
+def _largest_cycle(n: int, rows: np.ndarray, cols: np.ndarray) -> np.ndarray | None:
+    """The nodes of the largest cycle of the directed graph ``rows[i] -> cols[i]`` on ``n`` nodes (its
+    largest strongly connected component of two or more), or ``None`` when it has none."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    n = len(ids)
+    if n == 0 or len(rows) == 0:
+        return None
+    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n, n)).tocsr()
+    n_comp, labels = connected_components(graph, directed=True, connection="strong")
+    if n_comp == n:
+        return None
+    return np.flatnonzero(labels == int(np.argmax(np.bincount(labels))))
+
+
+def _cycle_error(p: Path, ids: np.ndarray, rows: np.ndarray, cols: np.ndarray, types: list[str]) -> None:
+    """Refuse a reference graph with a cycle (OCC's parser recurses round it until it dies)."""
     self_loops = rows[rows == cols]
     if len(self_loops):
         k = int(self_loops[0])
         raise ExchangeError(f"{p}: damaged STEP file (#{ids[k]} {types[k]} refers to itself)")
-    if n == 0 or len(rows) == 0:
+    members = _largest_cycle(len(ids), rows, cols)
+    if members is None:
         return
-    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n, n)).tocsr()
-    n_comp, labels = connected_components(graph, directed=True, connection="strong")
-    if n_comp == n:
-        return
-    sizes = np.bincount(labels)
-    members = np.flatnonzero(labels == int(np.argmax(sizes)))
     shown = ", ".join(f"#{ids[k]} {types[k]}" for k in members[:6]) + (" ..." if len(members) > 6 else "")
     raise ExchangeError(f"{p}: damaged STEP file (a cycle of references through {len(members)} instances: "
                         f"{shown})")
@@ -583,23 +589,14 @@ _IGES_POINTERS: dict[int, Callable[[list[str]], list[int]]] = {
 def _iges_cycle_error(p: Path, refs: list[tuple[int, int, int]], n: int) -> None:
     """Refuse pointers (``refs``: from directory line, to directory line, the pointing entity's type)
     that form a cycle; pointers to no entry (0, or out of range) are left to the reader."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     edges = [(a, b, t) for a, b, t in refs if b > 0 and b % 2 == 1 and (b - 1) // 2 < n]
     for a, b, t in edges:
         if a == b:
             raise ExchangeError(f"{p}: damaged IGES file (directory entry D{a}, type {t}, points to itself)")
-    if not edges:
+    members = _largest_cycle(n, np.array([(a - 1) // 2 for a, _, _ in edges], dtype=np.int64),
+                             np.array([(b - 1) // 2 for _, b, _ in edges], dtype=np.int64))
+    if members is None:
         return
-    rows = np.array([(a - 1) // 2 for a, _, _ in edges])
-    cols = np.array([(b - 1) // 2 for _, b, _ in edges])
-    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(n, n)).tocsr()
-    n_comp, labels = connected_components(graph, directed=True, connection="strong")
-    if n_comp == n:
-        return
-    sizes = np.bincount(labels)
-    members = np.flatnonzero(labels == int(np.argmax(sizes)))
     type_of = {(a - 1) // 2: t for a, _, t in edges}
     shown = ", ".join(f"D{2 * k + 1} type {type_of.get(int(k), '?')}" for k in members[:6]) + \
         (" ..." if len(members) > 6 else "")
