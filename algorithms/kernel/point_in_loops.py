@@ -3,7 +3,8 @@
 A loop of p-curves becomes a closed polyline within a chordal tolerance (:func:`loop_polyline`,
 sampled per knot span and bisected where a chord strays); :func:`classify_points` tells points
 inside, on or outside a region bounded by such polylines by the crossing number (even-odd rule),
-vectorised in blocks of bounded memory.
+vectorised in blocks of bounded memory; :func:`grid_inside` is the same rule, exact (no boundary
+band), for the nodes of a grid, one grid row at a time.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from ..errors import InvalidGeometryError
 from .curve import BSplineCurve
 
 __all__ = ["INSIDE", "ON", "OUTSIDE", "classify_points", "SegmentBands", "segment_bands", "loop_polyline", "curve_polyline", "span_samples",
-           "signed_area", "Loop"]
+           "signed_area", "Loop", "grid_inside"]
 
 Array = NDArray[np.float64]
 Loop = tuple[BSplineCurve, ...]
@@ -205,3 +206,22 @@ def _classify_block(P: Array, A: Array, B: Array, tol: float, pts: NDArray[np.in
         near = _point_segment_distance(np.c_[pu[box], pv[box]], A[ab], B[ab]) <= tol
         on[local[box[near]]] = True
     state[pts] = np.where(on, ON, np.where(inside, INSIDE, OUTSIDE))
+
+
+def grid_inside(polygon: Array, gx: Array, gy: Array) -> NDArray[np.bool_]:
+    """Which nodes ``(gx[i], gy[j])`` of a grid lie inside the closed ``polygon`` (m, 2), shape
+    ``(len(gx), len(gy))``, by the crossing number: the edges ``a -> b`` with ``(a_y > y) != (b_y > y)``
+    whose crossing ``x`` lies right of the node, counted odd.
+
+    A grid row shares its ``y``: the edges it straddles and their crossings are found once per row
+    and the nodes counted by a sorted search, where testing every node against every edge (4 000
+    nodes x 2 000 edges, 0.1 s a hole) made arrays of both at once. The crossings are the same
+    floating-point numbers and the comparisons the same, so the answer is the same, node for node."""
+    a, b = polygon, np.roll(polygon, -1, axis=0)
+    straddle = (a[None, :, 1] > gy[:, None]) != (b[None, :, 1] > gy[:, None])  # (rows, edges)
+    inside = np.zeros((len(gx), len(gy)), bool)
+    for j in np.flatnonzero(straddle.any(axis=1)):  # a loop over grid rows, each vectorised
+        k = np.flatnonzero(straddle[j])
+        cross_x = np.sort(a[k, 0] + (b[k, 0] - a[k, 0]) * (gy[j] - a[k, 1]) / (b[k, 1] - a[k, 1]))
+        inside[:, j] = (k.size - np.searchsorted(cross_x, gx, side="right")) % 2 == 1
+    return inside

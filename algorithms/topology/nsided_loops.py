@@ -19,9 +19,10 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidGeometryError
 from ..kernel.curve import BSplineCurve
+from ..kernel.point_in_loops import grid_inside
 
 __all__ = ["closest_parameters", "arc_length_parameters", "check_simple_loop", "mean_plane", "turns_inward",
-           "inner_point", "harmonic_centre", "harmonic_picture", "HarmonicPicture", "grid_inside"]
+           "inner_point", "harmonic_centre", "harmonic_picture", "HarmonicPicture"]
 
 Array = NDArray[np.float64]
 
@@ -381,25 +382,6 @@ class HarmonicPicture:
         step = np.where(size > 2 * self.h, step * 2 * self.h / np.maximum(size, 1e-300), step)
         p = self.lo + self.h * np.c_[i0, j0] + step
         return self.origin + p @ self.to3.T, np.einsum("ag,mgd->mad", self.to3, Jinv), ok
-
-
-def grid_inside(polygon: Array, gx: Array, gy: Array) -> NDArray[np.bool_]:
-    """Which nodes ``(gx[i], gy[j])`` of a grid lie inside the closed ``polygon`` (m, 2), shape
-    ``(len(gx), len(gy))``, by the crossing number: the edges ``a -> b`` with ``(a_y > y) != (b_y > y)``
-    whose crossing ``x`` lies right of the node, counted odd.
-
-    A grid row shares its ``y``: the edges it straddles and their crossings are found once per row
-    and the nodes counted by a sorted search, where testing every node against every edge (4 000
-    nodes x 2 000 edges, 0.1 s a hole) made arrays of both at once. The crossings are the same
-    floating-point numbers and the comparisons the same, so the answer is the same, node for node."""
-    a, b = polygon, np.roll(polygon, -1, axis=0)
-    straddle = (a[None, :, 1] > gy[:, None]) != (b[None, :, 1] > gy[:, None])  # (rows, edges)
-    inside = np.zeros((len(gx), len(gy)), bool)
-    for j in np.flatnonzero(straddle.any(axis=1)):  # a loop over grid rows, each vectorised
-        k = np.flatnonzero(straddle[j])
-        cross_x = np.sort(a[k, 0] + (b[k, 0] - a[k, 0]) * (gy[j] - a[k, 1]) / (b[k, 1] - a[k, 1]))
-        inside[:, j] = (k.size - np.searchsorted(cross_x, gx, side="right")) % 2 == 1
-    return inside
 
 
 def harmonic_picture(loop: Array, targets: Array, normals: Array, cells: int = 4000) -> HarmonicPicture | None:

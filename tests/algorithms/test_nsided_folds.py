@@ -207,7 +207,7 @@ def test_grid_inside_is_the_crossing_number_of_every_node(n: int, seed: int, sna
     number tested node by node against every edge, as ``harmonic_picture`` did: equal, node for
     node, on random polygons (self-intersecting ones too), with vertices on grid rows and columns
     (``snap``: the half-open rule's ties)."""
-    from occsurf.algorithms.topology.nsided_loops import grid_inside
+    from occsurf.algorithms.kernel.point_in_loops import grid_inside
 
     rng = np.random.default_rng(seed)
     gx, gy = np.linspace(-1.0, 1.0, 37), np.linspace(-1.2, 0.9, 23)
