@@ -26,8 +26,11 @@ to Splines*, 1978, BSPLVD (derivatives of all basis functions by differentiating
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import os
 import threading
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -35,14 +38,16 @@ from numpy.typing import NDArray
 
 from . import tolerances
 
-__all__ = ["ENV_DISABLE", "span_bounds", "span_table", "surface_args", "enabled", "applies", "run", "load", "loaded",
-           "kernel", "jit", "readonly"]
+__all__ = ["ENV_DISABLE", "span_bounds", "span_table", "surface_args", "enabled", "applies", "batch", "run", "load",
+           "loaded", "kernel", "jit", "readonly"]
 
 #: Environment variable that, set to anything but ``""``/``"0"``, forces the NumPy paths.
 ENV_DISABLE = "OCCSURF_NO_NUMBA"
 
 _lock = threading.Lock()
 _state: dict[str, Any] = {"loaded": False, "kernels": None}
+#: True inside :func:`batch` blocks whose work reached NUMBA_MIN_POINTS (per thread and task).
+_in_batch: contextvars.ContextVar[bool] = contextvars.ContextVar("occsurf_numba_batch", default=False)
 
 
 def span_bounds(knots: np.ndarray, degree: int, n_poles: int) -> tuple[int, int]:
@@ -530,6 +535,158 @@ def surface_derivatives(  # pragma: no cover
             _tensor_partials(H, su - p, sv - q, Du, Dv, T, out, m)
 
 
+def _partials_at(  # pragma: no cover - compiled
+    U: _F, p: int, fu: int, lu: int, tu: _I, u0: float, cu: float,
+    V: _F, q: int, fv: int, lv: int, tv: _I, v0: float, cv: float,
+    H: _F, rational: bool, x: float, y: float, order: int, Du: _F, Dv: _F, Nt: _F, inv: _F, left: _F, right: _F,
+    T: _F, h4: _F, start: _I, src: _I, wi: _I, coef: _F, o: _F, out: _F,
+) -> None:
+    """One point of :func:`surface_derivatives` into ``out`` (1, order+1, order+1, d)."""
+    su = _span(U, fu, lu, tu, u0, cu, x)
+    sv = _span(V, fv, lv, tv, v0, cv, y)
+    _basis_ders(U, p, su, x, order, Du, Nt, inv, left, right)
+    _basis_ders(V, q, sv, y, order, Dv, Nt, inv, left, right)
+    if rational:
+        r1 = order + 1
+        _tensor_partials(H, su - p, sv - q, Du, Dv, T, h4, 0)
+        _surface_quotient(h4.reshape(r1 * r1, H.shape[2]), start, src, wi, coef, o,
+                          out.reshape(1, r1 * r1, out.shape[3]), 0)
+    else:
+        _tensor_partials(H, su - p, sv - q, Du, Dv, T, out, 0)
+
+
+def _dot3(a: _F, b: _F) -> float:  # pragma: no cover - compiled
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def surface_project(  # pragma: no cover
+    U: _F, p: int, fu: int, lu: int, tu: _I, u0: float, cu: float,
+    V: _F, q: int, fv: int, lv: int, tv: _I, v0: float, cv: float,
+    H: _F, rational: bool, X: _F, a0: _F, b0: _F, D0: _F, box: _F, max_iter: int, stop: float, out: _F,
+) -> None:
+    """Foot points of ``X`` (m, 3) on a 3-D surface by damped Newton: ``out[i] = (u, v, |S - X|^2)``.
+
+    Per point, the algorithm of :func:`occsurf.algorithms.fitting._common.project_points` (whose
+    vectorised form is the reference): from ``(a0, b0)`` with partials ``D0`` (m, 3, 3, 3), the
+    Newton step of ``|S - X|^2 / 2`` (exact Hessian where positive definite, else Gauss-Newton;
+    ``det`` floored at 1e-300), stop when the step is not above ``stop``; the full step clipped to
+    ``box`` = (u_lo, u_hi, v_lo, v_hi) is taken if ``f`` does not increase, else it is halved up to
+    seven times; stop when no step was accepted or the move was not above ``stop``; at most
+    ``max_iter`` steps.
+    """
+    k = H.shape[2]
+    r1 = 3
+    pq = max(p, q) + 1
+    Du = np.empty((r1, p + 1))
+    Dv = np.empty((r1, q + 1))
+    Nt = np.empty((pq, pq))
+    inv = np.empty((pq, pq))
+    left = np.empty(pq)
+    right = np.empty(pq)
+    T = np.empty((p + 1, r1, k))
+    h4 = np.empty((1, r1, r1, k))
+    o = np.empty((r1 * r1, k))
+    start, src, wi, coef = _quotient_plan(r1)
+    Dc = np.empty((1, r1, r1, 3))
+    Dt = np.empty((1, r1, r1, 3))
+    Nu = np.empty(p + 1)
+    Nv = np.empty(q + 1)
+    acc = np.empty(k)
+    pt = np.empty((1, 3))
+    Hf = H.reshape(H.size)
+    rowstride = np.uint64(H.shape[1] * k)
+    uk = np.uint64(k)
+    r = np.empty(3)
+    ulo, uhi, vlo, vhi = box[0], box[1], box[2], box[3]
+    for m in range(X.shape[0]):
+        x = X[m]
+        a = a0[m]
+        b = b0[m]
+        for i in range(r1):
+            for j in range(r1):
+                for c in range(3):
+                    Dc[0, i, j, c] = D0[m, i, j, c]
+        for c in range(3):
+            r[c] = Dc[0, 0, 0, c] - x[c]
+        f = _dot3(r, r)
+        for _it in range(max_iter):
+            for c in range(3):
+                r[c] = Dc[0, 0, 0, c] - x[c]
+            Su = Dc[0, 1, 0]
+            Sv = Dc[0, 0, 1]
+            g1 = _dot3(r, Su)
+            g2 = _dot3(r, Sv)
+            h11 = _dot3(Su, Su)
+            h12 = _dot3(Su, Sv)
+            h22 = _dot3(Sv, Sv)
+            e11 = h11 + _dot3(r, Dc[0, 2, 0])
+            e12 = h12 + _dot3(r, Dc[0, 1, 1])
+            e22 = h22 + _dot3(r, Dc[0, 0, 2])
+            if e11 > 0 and e11 * e22 - e12 * e12 > 0:
+                h11 = e11
+                h12 = e12
+                h22 = e22
+            det = h11 * h22 - h12 * h12
+            if not abs(det) > 1e-300:
+                det = 1e-300
+            du = -(h22 * g1 - h12 * g2) / det
+            dv = -(h11 * g2 - h12 * g1) / det
+            adu = abs(du)
+            adv = abs(dv)
+            if du != du or dv != dv or not (adu > stop or adv > stop):
+                break
+            ta = min(max(a + du, ulo), uhi)
+            tb = min(max(b + dv, vlo), vhi)
+            _partials_at(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, rational, ta, tb, 2,
+                         Du, Dv, Nt, inv, left, right, T, h4, start, src, wi, coef, o, Dt)
+            ft = ((Dt[0, 0, 0, 0] - x[0]) * (Dt[0, 0, 0, 0] - x[0]) + (Dt[0, 0, 0, 1] - x[1]) * (Dt[0, 0, 0, 1] - x[1])
+                  + (Dt[0, 0, 0, 2] - x[2]) * (Dt[0, 0, 0, 2] - x[2]))
+            full = ft <= f
+            accepted = full
+            na = a
+            nb = b
+            if full:
+                na = ta
+                nb = tb
+                f = ft
+            else:
+                step = 0.5
+                for _half in range(7):
+                    ta = min(max(a + step * du, ulo), uhi)
+                    tb = min(max(b + step * dv, vlo), vhi)
+                    su = _span(U, fu, lu, tu, u0, cu, ta)
+                    sv = _span(V, fv, lv, tv, v0, cv, tb)
+                    _basis(U, p, su, ta, Nu, left, right)
+                    _basis(V, q, sv, tb, Nv, left, right)
+                    _net_point(Hf, np.uint64(su - p) * rowstride + np.uint64(sv - q) * uk, rowstride, k, Nu, Nv, acc)
+                    _store_point(acc, rational, pt, 0)
+                    ft = ((pt[0, 0] - x[0]) * (pt[0, 0] - x[0]) + (pt[0, 1] - x[1]) * (pt[0, 1] - x[1])
+                          + (pt[0, 2] - x[2]) * (pt[0, 2] - x[2]))
+                    if ft <= f:
+                        na = ta
+                        nb = tb
+                        f = ft
+                        accepted = True
+                        break
+                    step *= 0.5
+            moved = max(abs(na - a), abs(nb - b))
+            a = na
+            b = nb
+            if not (accepted and moved > stop):
+                break
+            if full:
+                for i in range(r1):
+                    for j in range(r1):
+                        for c in range(3):
+                            Dc[0, i, j, c] = Dt[0, i, j, c]
+            else:
+                _partials_at(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, rational, a, b, 2,
+                             Du, Dv, Nt, inv, left, right, T, h4, start, src, wi, coef, o, Dc)
+        out[m, 0] = a
+        out[m, 1] = b
+        out[m, 2] = f
+
+
 def _band_point(  # pragma: no cover - compiled
     Du: _F, a: int, s0: int, p: int, G: _F, b: int, O: _F, oa: int, ob: int,
 ) -> None:
@@ -597,8 +754,10 @@ def grid_partials_rational(Du: _F, su: _I, p: int, G: _F, k: int, out: _F) -> No
 
 _HELPERS = (
     "_span", "_basis", "_basis_ders", "_binomials", "_quotient_plan", "_curve_quotient", "_surface_quotient",
-    "_tensor_partials", "_band_point", "_store_point", "_net_point",
+    "_tensor_partials", "_band_point", "_store_point", "_net_point", "_dot3",
 )
+#: Helpers compiled as calls, not inlined (numba cannot inline a function with this many arguments).
+_CALLED = ("_partials_at",)
 _KERNELS = (
     "curve_points",
     "curve_derivatives",
@@ -606,6 +765,7 @@ _KERNELS = (
     "surface_derivatives",
     "grid_partials",
     "grid_partials_rational",
+    "surface_project",
 )
 
 
@@ -638,6 +798,8 @@ def load() -> dict[str, Any] | None:
             # Helpers first: kernels resolve them as globals when they compile.
             for name in _HELPERS:  # inlined into the kernels: a call per point costs ~20 ns
                 g[name] = jit(numba, g[name], inline="always")
+            for name in _CALLED:
+                g[name] = jit(numba, g[name])
             kernels = {name: jit(numba, g[name]) for name in _KERNELS}
         _state["kernels"] = kernels
         _state["loaded"] = True
@@ -682,10 +844,32 @@ def applies(n_points: int) -> bool:
     :data:`~occsurf.algorithms.tolerances.NUMBA_MIN_POINTS`. The first True answer in a process
     imports numba.
     """
-    if n_points < tolerances.NUMBA_MIN_POINTS or not enabled():
+    if (n_points < tolerances.NUMBA_MIN_POINTS and not _in_batch.get()) or not enabled():
         return False
     kernels = _state["kernels"] if _state["loaded"] else load()
     return kernels is not None
+
+
+@contextlib.contextmanager
+def batch(n_points: int) -> Iterator[None]:
+    """Inside the block, :func:`applies` is true at every size when ``n_points`` (the work the
+    caller is about to do, e.g. the data of a fit) reaches
+    :data:`~occsurf.algorithms.tolerances.NUMBA_MIN_POINTS`.
+
+    An iterative algorithm that starts on many points continues on fewer (the points of a
+    projection still moving, the data of one overlay): with the size rule alone those later
+    evaluations fall back to the NumPy path, which costs 4-6x more per point from ~100 points on
+    (``bench_evaluation.py``). The choice depends on ``n_points`` only, never on what ran before
+    in the process, so a call's results do not change with history. Nested blocks keep the
+    outer choice when it is on.
+    """
+    on = n_points >= tolerances.NUMBA_MIN_POINTS and enabled()
+    token = _in_batch.set(True) if on else None
+    try:
+        yield
+    finally:
+        if token is not None:
+            _in_batch.reset(token)
 
 
 def run(name: str, *args: Any) -> bool:

@@ -176,6 +176,10 @@ _DEFAULTS: dict[str, float] = {
     # FIT_PROJECTION_MAX_ITER steps.
     "FIT_PROJECTION_STEP": 1e-12,
     "FIT_PROJECTION_MAX_ITER": 30,
+    # An adaptive fit evaluates each datum about this many times (candidate bases, the Newton steps
+    # of every measurement, backfitting sweeps, level reports; 21 on Franke 200 x 200): from
+    # NUMBA_MIN_POINTS / FIT_EVALUATIONS_PER_DATUM data on, the whole fit uses the numba kernels.
+    "FIT_EVALUATIONS_PER_DATUM": 10,
     # Gridded distances are measured in blocks of about this many points (the starting partials of
     # a block by tensor-product evaluation; memory O(block), not O(data)).
     "FIT_MEASURE_BLOCK": 262144,
@@ -574,6 +578,7 @@ FIT_MISSING_SMOOTHING: float
 FIT_SCATTERED_SMOOTHING: float
 FIT_PROJECTION_STEP: float
 FIT_PROJECTION_MAX_ITER: int
+FIT_EVALUATIONS_PER_DATUM: int
 FIT_MEASURE_BLOCK: int
 FIT_ADAPTIVE_MAX_LEVELS: int
 FIT_ADAPTIVE_MARGIN: int

@@ -322,7 +322,7 @@ def refine(hs: HierarchicalSurface, fitter: OverlayFitter, dist: Array, tol: flo
         dist = measure(hs.flatten())
         if progress is not None:
             progress(f"round {rnd}: {len(new)} overlays added (depth {hs.depth}), "
-                     f"{hs.pole_counts()['stored']} control points, max error {np.nanmax(dist):.3g}")
+                     f"{hs.pole_counts()['stored']} control points, max error {np.nanmax(error(dist)):.3g}")
     return dist
 
 

@@ -40,6 +40,7 @@ with hierarchical splines", ACM TOG 14 (1995) 134-161.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -48,6 +49,7 @@ import numpy as np
 import scipy.linalg as sla
 from numpy.typing import ArrayLike, NDArray
 
+from .. import _numba_kernels as _nk
 from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..hierarchical.core import Overlay
@@ -72,7 +74,8 @@ from ._refine import (
 )
 from .gridded import GridFit, _grid_data, _pair_of, fit_grid
 
-__all__ = ["LevelReport", "AdaptiveFit", "fit_adaptive", "measure_grid", "normal_deviation", "boundary_error"]
+__all__ = ["LevelReport", "AdaptiveFit", "fit_adaptive", "measure_grid", "measure_heights", "graph_bounds",
+           "normal_deviation", "boundary_error"]
 
 Array = NDArray[np.float64]
 
@@ -135,6 +138,159 @@ def measure_grid(surface: BSplineSurface, points: Array, u: Array, v: Array, *, 
             _, _, d = project_points(surface, Q[I, J], u[sl][I], v[J], initial=D[I, J])
             blk[I, J] = d
         out[sl] = blk
+    return out
+
+
+def graph_bounds(surface: BSplineSurface) -> tuple[float, float]:
+    """``(L, eps)`` for a polynomial 3-D surface meant as a height field ``x = u, y = v`` (a fit of
+    heights): ``|grad z(u, v)| <= L`` and ``|(x(u, v) - u, y(u, v) - v)| <= eps`` on the domain.
+
+    Both by the convex hull property: the partials of ``z`` are B-splines whose coefficients are
+    the scaled differences ``p (z_{i+1,j} - z_ij) / (t_{i+p+1} - t_{i+1})`` of the net (The NURBS
+    Book, eq. 3.17), and ``x(u, v) - u = sum (x_ij - xi_i) N_i(u) N_j(v)`` with ``xi_i`` the
+    Greville abscissae (linear precision), so ``eps`` is the largest deviation of the net's x and
+    y from them (round-off for a height fit).
+    """
+    if surface.is_rational or surface.dim != 3:
+        raise InvalidGeometryError("graph_bounds: expected a polynomial 3-D surface")
+    (p, q), (U, Vk) = surface.degree, surface.knots
+    P = surface.control_points
+    grads = []
+    for ax, (deg, t) in enumerate(((p, U), (q, Vk))):
+        n = P.shape[ax]
+        if deg == 0 or n < 2:
+            grads.append(0.0)
+            continue
+        dz = np.diff(P[..., 2], axis=ax)
+        h = t[deg + 1:n + deg] - t[1:n]  # t_{i+p+1} - t_{i+1}, i = 0 .. n-2
+        h = h[:, None] if ax == 0 else h[None, :]
+        c = np.where(h > 0, deg * dz / np.where(h > 0, h, 1.0), 0.0)
+        grads.append(float(np.abs(c).max()))
+    gu, gv = surface.greville()
+    eps = float(np.hypot(np.abs(P[..., 0] - gu[:, None]).max(), np.abs(P[..., 1] - gv[None, :]).max()))
+    return math.hypot(*grads), eps
+
+
+def _project_grid(surface: BSplineSurface, points: Array, u: Array, v: Array, mask: NDArray[np.bool_]) -> Array:
+    """The projected distances (:func:`measure_grid`'s values, bit for bit: the same starting
+    partials, by rows) of the grid points in ``mask``, in ``mask``'s row-major order."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    n = points.shape[1]
+    step = max(1, int(tolerances.FIT_MEASURE_BLOCK) // max(n, 1))
+    out = []
+    for k in range(0, rows.size, step):
+        blk = rows[k:k + step]
+        I, J = np.nonzero(mask[blk])
+        D = surface.derivatives_grid(u[blk], v, 2)
+        out.append(project_points(surface, points[blk][I, J], u[blk][I], v[J], initial=D[I, J])[2])
+    return np.concatenate(out) if out else np.empty(0)
+
+
+def cell_labels(hs: HierarchicalSurface, u: Array, v: Array) -> NDArray[np.intp]:
+    """Per grid point, a label of the knot span cell that a flag on it would mark: the cell of
+    its owner's level (the deepest node whose region holds it, :func:`_owner`; the spans as
+    :func:`_regions` bins them), distinct across nodes; shape (m, n), -1 where none."""
+    nodes, own, _ = _owner(hs, u, v)
+    labels = np.full(own.shape, -1, dtype=np.intp)
+    offset = 0
+    for k, node in enumerate(nodes):
+        knots = hs.level_surface(node).knots
+        (ua, ub), (va, vb) = hs.domain if node is None else node.region
+        ku, iu, _ = _cells(knots[0], ua, ub, u)
+        kv, iv, _ = _cells(knots[1], va, vb, v)
+        mine = (own == k) & (iu >= 0)[:, None] & (iv >= 0)[None, :]
+        labels[mine] = (offset + iu[:, None] * (kv.size - 1) + iv[None, :])[mine]
+        offset += (ku.size - 1) * (kv.size - 1)
+    return labels
+
+
+def measure_heights(surface: BSplineSurface, points: Array, u: Array, v: Array, tol: float, greed: float,
+                    cells: NDArray[np.intp] | None = None) -> Array:
+    """The distances of a height fit's grid points that decide its refinement (exact, as
+    :func:`measure_grid` with ``above=tol``), and bounds for the others.
+
+    The adaptive fit uses a distance array ``dist`` only through ``err = boundary_error(dist)``:
+    its maximum ``W`` and the flags ``err > max(tol, greed W)``. Those come out the same as
+    with every point projected while most points are not:
+
+    - each point gets ``r = |Q - S(u, v)|`` at its parameters (one grid evaluation), an upper
+      bound of its distance ``d`` (the projection never increases the distance from its start);
+    - a lower bound: with ``(L, eps)`` of :func:`graph_bounds`, a data point ``Q = (u_i, v_j, z)``
+      and any surface point ``S(a, b)``, ``rho = |(a, b) - (u_i, v_j)|``: the horizontal gap is at
+      least ``rho - eps`` and the vertical one at least ``r_z - L rho`` (``r_z = |z - S_z(u_i, v_j)|``,
+      the domain being convex), so ``|Q - S(a, b)|^2 >= sigma^2 + (r_z - L eps - L sigma)^2`` with
+      ``sigma = max(0, rho - eps)``, whose minimum over ``sigma >= 0`` is
+      ``lo = max(0, r_z - L eps)^2 / (1 + L^2)``: ``d >= lo``. ``1e-12`` of the data's size is
+      taken off ``r_z`` for the round-off of the evaluation;
+    - the points within ``tol`` at their parameters keep ``r`` (as :func:`measure_grid`); the
+      border rows are projected (``boundary_error`` raises them to ``r``, but ``max(dist)`` is
+      reported);
+    - ``W``: the interior points are projected in decreasing ``r``, first the largest 1/64,
+      then every one whose ``r`` exceeds the largest error found (no other can exceed it);
+    - with ``thr = max(tol, greed W)``: a point with ``r <= thr`` is not flagged (``d <= r``) and
+      keeps ``r``; one with ``lo > thr`` is flagged (``d >= lo``) and gets ``lo`` (``<= d <= W``:
+      the maximum stays ``W``); only the others are projected;
+    - with ``cells`` (:func:`cell_labels`): the flags are used only as "some point of this knot
+      span cell is flagged" (:func:`_regions`), so the undecided points of a cell that holds a
+      flagged point already are not projected either; they keep ``r`` (``<= W``).
+
+    So every point above the threshold is flagged or lies in a cell flagged anyway, and no point
+    below it is flagged but in such a cell: the maximum and the marked cells, hence the fit, are
+    those of the distances of every point. The values of the points not projected are bounds,
+    never reported (:func:`fit_adaptive` reports distances from :func:`measure_grid`).
+    """
+    m, n = points.shape[:2]
+    R = points - surface.evaluate_grid(u, v)
+    r = np.linalg.norm(R, axis=-1)  # NaN on missing cells
+    ok = np.isfinite(r)
+    L, eps = graph_bounds(surface)
+    size = max(1.0, float(np.nanmax(np.abs(points))))
+    lower = np.maximum(np.abs(R[..., 2]) - L * eps - 1e-12 * size, 0.0) / np.hypot(1.0, L)
+    out = np.where(ok, r, np.nan)
+    done = ~ok | (r <= tol)
+
+    def project(mask: NDArray[np.bool_]) -> None:
+        if mask.any():
+            out[mask] = _project_grid(surface, points, u, v, mask)
+            done[mask] = True
+
+    border = np.zeros((m, n), bool)
+    border[[0, -1], :] = True
+    border[:, [0, -1]] = True
+    project(border & ~done)
+    worst_border = float(np.max(r[border & ok], initial=0.0))  # boundary_error raises the border to r
+    todo = np.flatnonzero(~done)
+    if todo.size:
+        first = np.zeros((m, n), bool)
+        first.flat[todo[np.argsort(-r.flat[todo], kind="stable")[:max(1024, todo.size // 1024)]]] = True
+        project(first)
+    interior = ~border & ok
+    worst = max(worst_border, float(np.max(out[interior & done], initial=0.0)))
+    project(~done & (r > worst))  # only these could exceed the largest error found
+    worst = max(worst_border, float(np.max(out[interior & done], initial=0.0)))
+    thr = max(tol, greed * worst)
+    sure = ~done & (lower > thr)
+    out[sure] = lower[sure]
+    undecided = ~done & (r > thr) & ~sure
+    if cells is not None and undecided.any():
+        marked = np.zeros(int(cells.max()) + 2, bool)  # index -1 (no cell) lands on the spare last entry
+
+        def unmarked() -> NDArray[np.bool_]:
+            marked[cells[sure | (done & (out > thr))]] = True
+            marked[-1] = False
+            return undecided & ~done & ~marked[cells]
+
+        # first the most likely flags: the points of largest r of each cell not marked yet
+        idx = np.flatnonzero(unmarked())
+        c = cells.flat[idx]
+        order = np.lexsort((-r.flat[idx], c))
+        c, idx = c[order], idx[order]
+        rank = np.arange(c.size) - np.searchsorted(c, c)  # position within its cell
+        first = np.zeros((m, n), bool)
+        first.flat[idx[rank < 16]] = True
+        project(first)
+        undecided = unmarked()
+    project(undecided)
     return out
 
 
@@ -260,6 +416,16 @@ def _level_reports(hs: HierarchicalSurface, P3: Array, u: Array, v: Array
     return level_reports(hs, lambda flat: measure_grid(flat, P3, u, v))
 
 
+def _measure(flat: BSplineSurface, hs: HierarchicalSurface, P3: Array, u: Array, v: Array, tol: float,
+             heights: bool) -> Array:
+    """The distances of ``flat`` (``hs.flatten()``) that decide a round (:func:`~._refine.refine`):
+    :func:`measure_heights` for a height fit, else :func:`measure_grid` with the points within
+    ``tol`` at their parameters skipped."""
+    if heights:
+        return measure_heights(flat, P3, u, v, tol, float(tolerances.FIT_ADAPTIVE_GREED), cells=cell_labels(hs, u, v))
+    return measure_grid(flat, P3, u, v, above=tol)
+
+
 def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, int], tol: float,
                opts: dict[str, Any], progress: Callable[[str], None] | None) -> tuple[GridFit, Array, Array]:
     """The base fit, its spans multiplied by 1.5 while the places to refine cover more than
@@ -270,8 +436,7 @@ def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, 
     ``-log(e_new / e) / log(n_new / n)``; both when none gains 0.1): data that vary along one
     direction only (a ruled or extruded face) do not pay for poles along the other. The candidates
     are compared by the first-order distance :func:`normal_deviation` (cheap); the base chosen is
-    measured by projection (:func:`measure_grid`, points within ``tol`` at their parameters
-    skipped), which decides whether to grow further.
+    measured by projection (:func:`_measure`), which decides whether to grow further.
     """
     m, n = Q.shape[:2]
     data = Q[..., 0] if heights else Q
@@ -285,7 +450,7 @@ def _grow_base(Q: Array, heights: bool, poles: tuple[int, int], deg: tuple[int, 
 
     def measured(fit: tuple[GridFit, Array]) -> tuple[Array, Array]:
         (base_, P3_), u_, v_ = fit, fit[0].u_params, fit[0].v_params
-        dist_ = measure_grid(base_.surface, P3_, u_, v_, above=tol)
+        dist_ = _measure(base_.surface, HierarchicalSurface(base_.surface, "frame"), P3_, u_, v_, tol, heights)
         return dist_, boundary_error(base_.surface, P3_, u_, v_, dist_)
 
     def regions(fit: tuple[GridFit, Array], flagged: NDArray[np.bool_]) -> tuple[HierarchicalSurface, list[Region]]:
@@ -346,7 +511,19 @@ def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3,
         base_poles = (min(pu + 5, m), min(pv + 5, n))
     opts: dict[str, Any] = dict(x=xs if heights else None, y=ys if heights else None, u_params=u_params, v_params=v_params,
                 method=method, smoothing=smoothing, fix_boundary=fix_boundary)
-    base, P3, dist = _grow_base(Q, heights, _pair_of(base_poles, "base_poles"), (pu, pv), tol, opts, progress)
+    # every datum is evaluated ~20 times (candidate bases, Newton steps of each measurement, sweeps,
+    # level reports; 849 190 scattered evaluations for Franke 200 x 200): a fit of a few thousand
+    # points repays numba's loading, and its smaller evaluations (overlays, the points of a
+    # projection still moving) keep the kernels
+    with _nk.batch(int(tolerances.FIT_EVALUATIONS_PER_DATUM) * m * n):
+        return _fit(Q, heights, _pair_of(base_poles, "base_poles"), (pu, pv), tol, depth_max, opts, progress)
+
+
+def _fit(Q: Array, heights: bool, base_poles: tuple[int, int], deg: tuple[int, int], tol: float, depth_max: int,
+         opts: dict[str, Any], progress: Callable[[str], None] | None) -> AdaptiveFit:
+    """:func:`fit_adaptive` on checked arguments."""
+    pu, pv = deg
+    base, P3, dist = _grow_base(Q, heights, base_poles, deg, tol, opts, progress)
     u, v = base.u_params, base.v_params
     knots = base.surface.knots
 
@@ -359,7 +536,7 @@ def fit_adaptive(data: ArrayLike, tol: float, degree: int | tuple[int, int] = 3,
     fitter = _Fitter(hs, P3, u, v, heights, refit_base)
     dist = refine(hs, fitter, dist, tol, depth_max, error=lambda d: boundary_error(hs.flatten(), P3, u, v, d),
                   owners=lambda h: _owner(h, u, v), regions=lambda node, mine: _regions(hs, node, mine, u, v),
-                  measure=lambda flat: measure_grid(flat, P3, u, v, above=tol), progress=progress)
+                  measure=lambda flat: _measure(flat, hs, P3, u, v, tol, heights), progress=progress)
     reports, surfs, dists = _level_reports(hs, P3, u, v)
     border = float(np.nanmax(boundary_error(surfs[-1], P3, u, v, dists[-1])))
     return AdaptiveFit(hs, tuple(reports), dists[-1], u, v, tol, border <= tol, tuple(surfs), tuple(dists))

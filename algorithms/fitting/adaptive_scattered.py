@@ -43,6 +43,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
+from .. import _numba_kernels as _nk
 from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError, ParameterError
@@ -355,12 +356,22 @@ def fit_adaptive_scattered(points: ArrayLike, tol: float, degree: int | tuple[in
     lam = float(tolerances.FIT_SCATTERED_SMOOTHING) if smoothing is None else float(smoothing)
     if not (np.isfinite(lam) and lam >= 0):
         raise ParameterError(f"smoothing: expected a number >= 0, got {smoothing!r}")
-    u, v = _parameters(X, params, base, int(corrections))
+    with _nk.batch(int(tolerances.FIT_EVALUATIONS_PER_DATUM) * X.shape[0]):  # as fit_adaptive
+        return _fit(X, params, base, (pu, pv), tol, depth_max, lam, base_poles, knots, int(corrections), progress)
+
+
+def _fit(X: Array, params: ArrayLike | None, base: BSplineSurface | None, deg: tuple[int, int], tol: float,
+         depth_max: int, lam: float, base_poles: int | tuple[int, int] | None,
+         knots: tuple[ArrayLike, ArrayLike] | None, corrections: int,
+         progress: Callable[[str], None] | None) -> ScatteredAdaptiveFit:
+    """:func:`fit_adaptive_scattered` on checked arguments."""
+    pu, pv = deg
+    u, v = _parameters(X, params, base, corrections)
     if not (u.max() > u.min() and v.max() > v.min()):
         raise InvalidGeometryError("params: the points' parameters span no area (collinear or coincident points)")
     poles = _pair_of(base_poles, "base_poles") if base_poles is not None else (pu + 5, pv + 5)
     check_fit_size(poles, (pu, pv), "base_poles")
-    for _ in range(int(corrections)):
+    for _ in range(corrections):
         u, v = _corrected(X, u, v, poles, (pu, pv), lam)
     if knots is None:
         surf, dist = _grow_base(X, u, v, poles, (pu, pv), tol, lam, progress)

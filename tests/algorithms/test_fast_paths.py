@@ -347,3 +347,69 @@ def test_grid_equals_scattered_on_random_surfaces(s):
     rho = 1.0 if s.weights is None else s.weights.max() / s.weights.min()
     floor = scale * np.outer(*fac) * rho ** (ij + 1) * np.array([1, 1, 2, 6, 24])[ij]
     assert_partials_close(s.derivatives_grid(us, vs, 2), s.derivatives(us[:, None], vs[None, :], 2), 2, floor)
+
+
+# ----------------------------------------------------------- the fused projection kernel
+
+
+@needs_numba
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("degree", [1, 2, 3, 5])
+def test_projection_kernel_matches_the_vectorised_newton(monkeypatch, degree, kind):
+    """``surface_project`` runs project_points' damped Newton per point: the same foot points.
+
+    Points near the surface (a fit's case) and far from it (steps halved, feet on the boundary),
+    starts off the foot by up to a tenth of the domain. The two paths differ by round-off in each
+    step, so one may take one more step below the stopping threshold (1e-12 of the domain): near
+    points' distances agree to 1e-12 of the surface's size, their parameters to 1e-7 of the domain
+    (a foot point is flat to first order along the surface, so its parameters are far less
+    settled). A far point whose foot slides along a boundary converges linearly there and stops
+    when a step no longer lowers ``f`` in the last bits: the two paths stop at different places of
+    that slide, measured up to 4e-10 of the distance (2.2) for one point of the 1200; 1e-8 of
+    the distance is allowed.
+    """
+    from occsurf.algorithms.fitting._common import project_points
+
+    s = make_surface(degree, kind, seed=31 * degree + len(kind))
+    rng = np.random.default_rng(degree)
+    (u0, u1), (v0, v1) = s.domain
+    k = 600
+    u, v = rng.uniform(u0, u1, k), rng.uniform(v0, v1, k)
+    D = s.derivatives(u, v, 1)
+    n = np.cross(D[:, 1, 0], D[:, 0, 1])
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    off = np.r_[rng.normal(0, 1e-3, k // 2), rng.normal(0, 2.0, k - k // 2)]
+    X = D[:, 0, 0] + off[:, None] * n
+    su = np.clip(u + rng.normal(0, 0.1 * (u1 - u0), k), u0, u1)
+    sv = np.clip(v + rng.normal(0, 0.1 * (v1 - v0), k), v0, v1)
+    calls: list[str] = []
+    real_run = nk.run
+    monkeypatch.setattr(nk, "run", lambda name, *a: calls.append(name) or real_run(name, *a))
+    ref, fast = both_paths(monkeypatch, lambda: project_points(s, X, su, sv))
+    assert "surface_project" in calls
+    size = float(np.ptp(s.control_points.reshape(-1, 3), axis=0).max())
+    near = slice(0, k // 2)
+    assert np.abs(fast[2] - ref[2])[near].max() <= 1e-12 * size
+    assert np.abs(fast[0] - ref[0])[near].max() <= 1e-7 * (u1 - u0)
+    assert np.abs(fast[1] - ref[1])[near].max() <= 1e-7 * (v1 - v0)
+    assert np.all(np.abs(fast[2] - ref[2]) <= 1e-8 * ref[2] + 1e-12 * size)
+    assert np.all(fast[2] <= np.linalg.norm(s.evaluate(su, sv) - X, axis=-1) + 1e-15 * size)  # never worse than the start
+
+
+@needs_numba
+def test_batch_keeps_the_kernels_for_small_evaluations_and_depends_on_the_work_only(monkeypatch):
+    """Inside ``batch(n)`` with n >= NUMBA_MIN_POINTS every size takes the kernels; below, the
+    size rule applies whatever ran before (a call's results never depend on history)."""
+    monkeypatch.delenv(nk.ENV_DISABLE, raising=False)
+    nk.load()
+    assert not nk.applies(100)
+    with nk.batch(tolerances.NUMBA_MIN_POINTS):
+        assert nk.applies(1) and nk.applies(100)
+        with nk.batch(10):  # an inner, small block keeps the outer choice
+            assert nk.applies(100)
+    assert not nk.applies(100)
+    with nk.batch(tolerances.NUMBA_MIN_POINTS - 1):
+        assert not nk.applies(100)
+    monkeypatch.setenv(nk.ENV_DISABLE, "1")
+    with nk.batch(10**9):
+        assert not nk.applies(10**9)

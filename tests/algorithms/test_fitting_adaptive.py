@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from occsurf.algorithms import BSplineSurface, tolerances
 from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
@@ -19,6 +21,8 @@ from occsurf.algorithms.fitting._common import project_points
 from occsurf.algorithms.fitting.adaptive import fit_adaptive, measure_grid
 from occsurf.algorithms.fitting.gridded import fit_grid
 from occsurf.algorithms.hierarchical import HierarchicalSurface
+
+from .strategies import test_settings
 
 EXACT = 1e-12
 
@@ -209,3 +213,73 @@ def test_measure_grid_by_blocks_and_partially_is_exact_where_it_counts():
     nd = normal_deviation(s, P3, x, x)[1:-1, 1:-1]  # inside (a border point's foot may be clamped)
     small = full[1:-1, 1:-1] < 1e-4
     np.testing.assert_allclose(nd[small], full[1:-1, 1:-1][small], rtol=0.1, atol=1e-7)
+
+
+# ------------------------------------------- measure_heights: projecting only what decides
+
+
+def _height_case(seed: int, m: int, poles: int, holes: bool):
+    """A coarse least-squares fit of rough heights (steep, wavy, noisy) and its grid points."""
+    rng = np.random.default_rng(seed)
+    x = np.sort(np.r_[0.0, rng.uniform(0, 1, m - 2), 1.0])
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    a, b, c = rng.uniform(1, 8, 3)
+    Z = 0.3 * np.sin(a * X) * np.cos(b * Y) + 0.5 * np.exp(-((X - 0.6) ** 2 + (Y - 0.4) ** 2) / (0.002 * c))
+    Z = Z + 1e-3 * rng.standard_normal(Z.shape)
+    if holes:
+        Z[rng.integers(1, m - 1, 5), rng.integers(1, m - 1, 5)] = np.nan
+    fit = fit_grid(Z, poles, 3, x=x, y=x)
+    P3 = np.stack(np.broadcast_arrays(x[:, None], x[None, :], Z), -1)
+    return fit.surface, P3, x
+
+
+@test_settings(25)
+@given(seed=st.integers(0, 10**6), poles=st.integers(5, 14), holes=st.booleans())
+def test_graph_bounds_bound_the_slope_the_offset_and_the_distance(seed, poles, holes):
+    from occsurf.algorithms.fitting.adaptive import graph_bounds
+
+    s, P3, x = _height_case(seed, 41, poles, holes)
+    L, eps = graph_bounds(s)
+    g = np.linspace(0, 1, 301)
+    D = s.derivatives_grid(g, g, 1)
+    slope = np.hypot(D[:, :, 1, 0, 2], D[:, :, 0, 1, 2])
+    assert slope.max() <= L * (1 + 1e-12)
+    assert np.abs(D[:, :, 0, 0, 0] - g[:, None]).max() <= eps + 1e-15
+    assert np.abs(D[:, :, 0, 0, 1] - g[None, :]).max() <= eps + 1e-15
+    assert eps <= 1e-14  # a height fit: x = u, y = v up to round-off
+    # the lower bound of measure_heights never exceeds the (projected) distance
+    ok = np.isfinite(P3[..., 2])
+    d = measure_grid(s, P3, x, x)
+    rz = np.abs(P3[..., 2] - s.evaluate_grid(x, x)[..., 2])
+    lo = np.maximum(rz - L * eps, 0.0) / np.hypot(1.0, L)
+    assert np.all(lo[ok] <= d[ok] * (1 + 1e-12))
+
+
+@test_settings(25)
+@given(seed=st.integers(0, 10**6), poles=st.integers(5, 12), holes=st.booleans(),
+       tol=st.sampled_from([3e-4, 1e-3, 1e-2]), greed=st.sampled_from([0.0, 0.1, 0.5]), overlays=st.booleans())
+def test_measure_heights_decides_as_if_every_point_were_projected(seed, poles, holes, tol, greed, overlays):
+    """The maximum of ``boundary_error`` and the knot-span cells holding a flagged point (what the
+    refinement uses) are those of every point projected; without cells, every point's flag."""
+    from occsurf.algorithms.fitting.adaptive import boundary_error, cell_labels, measure_heights
+
+    s, P3, x = _height_case(seed, 61, poles, holes)
+    hs = HierarchicalSurface(s, "frame")
+    if overlays:  # owners at two levels: the cells are the owner's level's spans
+        (u0, u1), _ = hs.domain
+        ov = hs.add_overlay((0.3, 0.8), (0.2, 0.7))
+        hs.add_overlay((0.45, 0.65), (0.3, 0.5), ov)
+    cells = cell_labels(hs, x, x)
+    full = boundary_error(s, P3, x, x, measure_grid(s, P3, x, x, above=tol))
+    worst = float(np.nanmax(full))
+    thr = max(tol, greed * worst)
+    for with_cells in (False, True):
+        fast = boundary_error(s, P3, x, x, measure_heights(s, P3, x, x, tol, greed, cells=cells if with_cells else None))
+        assert float(np.nanmax(fast)) == worst
+        ok = np.isfinite(full)
+        assert np.array_equal(np.isfinite(fast), ok)
+        if with_cells:
+            lab = cells[ok]
+            assert set(lab[(full > thr)[ok]]) == set(lab[(fast > thr)[ok]])
+        else:
+            np.testing.assert_array_equal(fast > thr, full > thr)
