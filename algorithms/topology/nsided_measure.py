@@ -143,16 +143,16 @@ def count_folds(surface: BSplineSurface | TrimmedSurface, grid: int = 41) -> int
         gu = gv = grid
     # per grid point: meshgrids, derivatives (homogeneous, flattened, result), normals and the trim test
     Val.check_size((gu, gv, 40), f"grid = {grid}: a {gu} x {gv} grid")
-    U, V = np.meshgrid(np.linspace(u0, u1, gu), np.linspace(v0, v1, gv), indexing="ij")
-    D = surface.derivatives(U.ravel(), V.ravel(), 1)
-    N = np.cross(D[:, 1, 0], D[:, 0, 1]).reshape(gu, gv, 3)
+    us, vs = np.linspace(u0, u1, gu), np.linspace(v0, v1, gv)
+    D = surface.derivatives_grid(us, vs, 1)  # tensor-product partials: ~30x cheaper than scattered
+    N = np.cross(D[:, :, 1, 0], D[:, :, 0, 1])
     length = np.linalg.norm(N, axis=2)
     # a degenerate point (flat hole corner) has no side
     N[length <= tolerances.FILL_FOLD_DEGENERATE * np.median(length)] = 0.0
     du = np.einsum("ijk,ijk->ij", N[1:], N[:-1]) < 0
     dv = np.einsum("ijk,ijk->ij", N[:, 1:], N[:, :-1]) < 0
     if trimmed is not None:  # only pairs on the face
-        inside = trimmed.contains(U, V)
+        inside = trimmed.contains(*np.meshgrid(us, vs, indexing="ij"))
         du &= inside[1:] & inside[:-1]
         dv &= inside[:, 1:] & inside[:, :-1]
     return int(du.sum() + dv.sum())

@@ -100,6 +100,9 @@ class HoleReport:
     sides: int
     status: str  # 'filled', 'failed', 'outer'
     reason: str | None = None
+    # our fill's construction: sides, patches or plate, OCC faces (as occ_seconds is OCC's Add +
+    # Build), not the OCC measurement of the result made for this report afterwards; a fitted fill
+    # measures its candidates to choose one, and that counts
     seconds: float | None = None
     g0: float | None = None  # OCC LocalAnalysis, max over the boundary
     g1: float | None = None
@@ -334,11 +337,14 @@ def _model_size(shape: Any) -> float:
 
 
 def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int,
-               rep: HoleReport, continuity: str = "G1") -> tuple[HoleFill | PlateFill, list[Any]]:
+               rep: HoleReport, continuity: str = "G1", started: float | None = None
+               ) -> tuple[HoleFill | PlateFill, list[Any]]:
     """Fill one loop: exactly from the neighbours' iso-boundaries when every edge is one, else with
     sides fitted to the neighbours along the edges' p-curves (trimming curves; G1 to 0.01 deg,
     :func:`occsurf.bridge.modeling.refill.fitted_fill`). Records the per-edge OCC measurements and
     the construction (``'iso'``, ``'fitted'``) on ``rep``; returns the fill and its OCC faces.
+    With ``started`` (a ``time.perf_counter()`` value), ``rep.seconds`` is set once the fill and its
+    faces exist, before the measurements made only for the report.
 
     ``continuity='G2'``: curvature continuous to the neighbours (issue 31), by the plate with the
     neighbours' curvature across each side (:func:`_g2_fill`), where every edge is an iso-boundary
@@ -352,7 +358,7 @@ def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int
         try:
             if isinstance(sides, OccsurfError):
                 raise sides
-            return _g2_fill(edges, nb, sides, size, samples, rep)
+            return _g2_fill(edges, nb, sides, size, samples, rep, started)
         except OccsurfError as err:  # trimmed neighbours (no exact S_tt), or no plane the hole is a height over
             rep.reason = f"G2 not available, filled G1: {one_line(err, expected=(OccsurfError,))}"
             rep.side_g2, rep.g2, rep.occ_g2_gap, rep.corner_g2 = [], None, None, []
@@ -374,6 +380,8 @@ def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int
         rep.side_g0, rep.side_g1 = [float(a) for a in s0], [float(a) for a in s1]
         return fill, occ_faces
     occ_faces = [make_face(p, 1e-7) for p in fill.patches]
+    if started is not None:
+        rep.seconds = time.perf_counter() - started
     occ_surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
     per = [assess_joint(e, f, occ_surfs, samples, locate=_locator(fill, i)) for i, (e, f) in enumerate(zip(edges, nb))]
     rep.side_g0, rep.side_g1 = [p[0] for p in per], [p[1] for p in per]
@@ -382,7 +390,7 @@ def _fill_loop(edges: list[Any], nb: list[Any | None], size: float, samples: int
 
 
 def _g2_fill(edges: list[Any], nb: list[Any | None], sides: list[HoleSide], size: float, samples: int,
-             rep: HoleReport) -> tuple[PlateFill, list[Any]]:
+             rep: HoleReport, started: float | None = None) -> tuple[PlateFill, list[Any]]:
     """The G2 plate of a loop with exact sides (:func:`occsurf.algorithms.topology.plate_fill.fill_plate`
     with ``g2``), its face, and the OCC measures per edge: G0, G1 (:func:`.joints.assess_joint`) and
     the curvature jump (:func:`.joints.assess_curvature`)."""
@@ -395,6 +403,8 @@ def _g2_fill(edges: list[Any], nb: list[Any | None], sides: list[HoleSide], size
     flags = [True] * len(sides)
     fill, occ_faces = plate_fill_faces(sides, flags, g0_tol, gap=max(BRep_Tool.Tolerance_s(e) for e in edges),
                                        g2=flags)
+    if started is not None:
+        rep.seconds = time.perf_counter() - started
     surfs = [BRep_Tool.Surface_s(f) for f in occ_faces]
     floor = tolerances.CONTINUITY_CURVATURE_FLOOR / size
     per, curv = [], []
@@ -477,8 +487,9 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True, samples: i
     occ_faces: list[Any] = []
     try:
         t0 = time.perf_counter()
-        fill, occ_faces = _fill_loop(edges, nb, holes.size, samples, rep, continuity)
-        rep.seconds = time.perf_counter() - t0
+        fill, occ_faces = _fill_loop(edges, nb, holes.size, samples, rep, continuity, started=t0)
+        if rep.seconds is None:  # a fitted fill: its measurements chose it
+            rep.seconds = time.perf_counter() - t0
         if isinstance(fill, PlateFill):  # rep.method 'plate' or 'wrap'
             from .plate import plate_quality
 
@@ -496,7 +507,7 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True, samples: i
         rep._fill_faces, rep._neighbours = occ_faces, unique_faces(nb)  # type: ignore[attr-defined]
     except Exception as err:  # noqa: BLE001 - one hole's failure must not stop the others
         rep.status, rep.reason = "failed", one_line(err, expected=(OccsurfError,))
-        fill, occ_faces = None, []
+        rep.seconds, fill, occ_faces = None, None, []
     if compare_occ and all(f is not None for f in nb):
         try:
             t0 = time.perf_counter()
