@@ -412,6 +412,11 @@ def face_deviation(fitted: BSplineSurface, occ_surface: Any, samples: int = 41) 
     Both are needed: on ``occt__bearing.iges`` face 2 (a patch with a collapsed corner row)
     ``GeomAPI_ProjectPointOnSurf`` reports 1.7e-3 for a point *on* the surface, where
     ``ValueOfUV`` finds 7e-18; elsewhere the extrema search is the safer one.
+
+    Only the maximum of the per-point minimum is returned, so the extrema search (0.19 ms a
+    point, the dearer one) runs only where it can raise it: points in decreasing ``ValueOfUV``
+    gap, stopping at the first whose gap is not above the largest minimum found (its minimum,
+    and every later one, can only be smaller). The same value as both projections everywhere.
     """
     from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
     from OCP.gp import gp_Pnt
@@ -419,16 +424,20 @@ def face_deviation(fitted: BSplineSurface, occ_surface: Any, samples: int = 41) 
 
     (u0, u1), (v0, v1) = fitted.domain
     P = fitted.evaluate_grid(np.linspace(u0, u1, samples), np.linspace(v0, v1, samples)).reshape(-1, 3)
+    pts = [gp_Pnt(float(x), float(y), float(z)) for x, y, z in P]
+    sas = ShapeAnalysis_Surface(occ_surface)
+    gaps = np.empty(len(pts))
+    for i, p in enumerate(pts):  # OCC projects one point per call
+        sas.ValueOfUV(p, 1e-12)
+        gaps[i] = float(sas.Gap())
     worst = 0.0
     proj = GeomAPI_ProjectPointOnSurf()
-    sas = ShapeAnalysis_Surface(occ_surface)
-    for x, y, z in P:  # OCC projects one point per call
-        p = gp_Pnt(float(x), float(y), float(z))
-        proj.Init(p, occ_surface)
+    for i in np.argsort(-gaps, kind="stable"):
+        if not gaps[i] > worst:
+            break
+        proj.Init(pts[i], occ_surface)
         d = float(proj.LowerDistance()) if proj.NbPoints() else np.inf
-        sas.ValueOfUV(p, 1e-12)
-        d = min(d, float(sas.Gap()))
-        worst = max(worst, d)
+        worst = max(worst, min(d, float(gaps[i])))
     return worst
 
 
