@@ -279,8 +279,12 @@ _DEFAULTS: dict[str, float] = {
     # computations of a generalized-surface control point fixed by two sides; round-off gives
     # ~1e-15, larger means a bug, and raises.
     "GENERALIZED_CONSISTENCY_TOL": 1e-9,
-    # n-sided fill: relative singular-value cut-off of the small least-squares solves (anything out
-    # of the fields' plane, a corner incompatibility, is dropped, not amplified) ...
+    # n-sided fill: the interior fairing systems of the central split's patches with at most this
+    # many free poles keep their factors (least recently used, 32 systems): a hole's patches share
+    # one layout.
+    "FILL_FAIR_CACHE_FREE": 4096,
+    # Relative singular-value cut-off of the small least-squares solves (anything out of the
+    # fields' plane, a corner incompatibility, is dropped, not amplified) ...
     "FILL_RCOND": 1e-9,
     # ... and the fraction of the largest singular value below which one counts as zero in the kite
     # domain relation.
@@ -611,6 +615,7 @@ SPATCH_REDUCTION_TOL: float
 SPATCH_CHECK_SAMPLES: int
 MAX_VALENCE: int
 GENERALIZED_CONSISTENCY_TOL: float
+FILL_FAIR_CACHE_FREE: int
 FILL_RCOND: float
 FILL_NULL_RTOL: float
 FILL_CLOSURE_TOL: float

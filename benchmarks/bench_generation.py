@@ -22,6 +22,9 @@ outside the timing); ours include input validation. The ratio is OCC time / our 
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import common  # noqa: F401  (pins BLAS threads before NumPy)
 import numpy as np  # noqa: E402
 from common import Row, best_of, machine_note, print_table  # noqa: E402
@@ -50,6 +53,7 @@ def inputs():
 def main() -> None:
     from OCP.GeomConvert import GeomConvert
 
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the OCC builders live beside the tests
     import tests.bridge.generation_occ as G
     from occsurf.bridge import to_occ
 

@@ -129,22 +129,22 @@ def count_folds(surface: BSplineSurface | TrimmedSurface, grid: int = 41) -> int
     int
     """
     trimmed = surface if isinstance(surface, TrimmedSurface) else None
+    base: BSplineSurface = surface.surface if isinstance(surface, TrimmedSurface) else surface
     if trimmed is not None:
-        surface = trimmed.surface
         uv = np.concatenate([np.asarray(c.evaluate(np.linspace(*c.domain, 65)), float)[:, :2] for c in trimmed.outer])
         (u0, v0), (u1, v1) = uv.min(axis=0), uv.max(axis=0)
-        (a0, a1), (b0, b1) = surface.domain
+        (a0, a1), (b0, b1) = base.domain
         u0, u1, v0, v1 = max(u0, a0), min(u1, a1), max(v0, b0), min(v1, b1)
-        ku, kv = (np.unique(k) for k in surface.knots)  # at least two grid points per span
+        ku, kv = (np.unique(k) for k in base.knots)  # at least two grid points per span
         gu = max(grid, 2 * int(np.count_nonzero((ku > u0) & (ku < u1))) + 3)
         gv = max(grid, 2 * int(np.count_nonzero((kv > v0) & (kv < v1))) + 3)
     else:
-        (u0, u1), (v0, v1) = surface.domain
+        (u0, u1), (v0, v1) = base.domain
         gu = gv = grid
     # per grid point: meshgrids, derivatives (homogeneous, flattened, result), normals and the trim test
     Val.check_size((gu, gv, 40), f"grid = {grid}: a {gu} x {gv} grid")
     us, vs = np.linspace(u0, u1, gu), np.linspace(v0, v1, gv)
-    D = surface.derivatives_grid(us, vs, 1)  # tensor-product partials: ~30x cheaper than scattered
+    D = base.derivatives_grid(us, vs, 1)  # tensor-product partials: ~30x cheaper than scattered
     N = np.cross(D[:, :, 1, 0], D[:, :, 0, 1])
     length = np.linalg.norm(N, axis=2)
     # a degenerate point (flat hole corner) has no side

@@ -152,3 +152,33 @@ def test_symmetric_mode_agrees_with_the_default_factorisation_and_leaves_no_larg
     def residual(x: np.ndarray) -> float:
         return float(np.linalg.norm(Kff @ x - rhs) / np.linalg.norm(rhs))
     assert residual(ours) <= residual(default), (residual(ours), residual(default))
+
+
+@test_settings(20)
+@given(patch, st.integers(0, 2**32 - 1))
+def test_kept_factors_give_the_poles_of_a_fresh_factorisation_bit_for_bit(args, seed2):
+    """Small fairing systems keep their factors (tolerances.FILL_FAIR_CACHE_FREE): a second patch
+    of the same layout, solved with them, gets exactly the poles a fresh factorisation gives; a
+    different free mask is a different system."""
+    from occsurf.algorithms import tolerances
+    from occsurf.algorithms.topology.nsided_patches import _fair_system_cached
+
+    degree, knots, nu, nv, rng = _patch(*args)
+    free = _free_interior(nu, nv)
+    H1, H2 = rng.uniform(-10, 10, (2, nu, nv, 4))
+    _fair_system_cached.cache_clear()
+    with tolerances.override(FILL_FAIR_CACHE_FREE=0):  # no cache: factored on every call
+        fresh = [_fair_interior(H, free, degree, knots) for H in (H1, H2)]
+    assert _fair_system_cached.cache_info().currsize == 0
+    kept = [_fair_interior(H, free, degree, knots) for H in (H1, H2)]
+    info = _fair_system_cached.cache_info()
+    assert (info.misses, info.hits) == (1, 1)
+    for a, b in zip(fresh, kept):
+        assert np.array_equal(a, b)
+    other = free.copy()
+    other[tuple(np.argwhere(free)[np.random.default_rng(seed2).integers(free.sum())])] = False  # one pole fixed
+    if other.any():
+        with tolerances.override(FILL_FAIR_CACHE_FREE=0):
+            want = _fair_interior(H1, other, degree, knots)
+        np.testing.assert_array_equal(_fair_interior(H1, other, degree, knots), want)
+        assert _fair_system_cached.cache_info().misses == 2
