@@ -27,6 +27,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from occsurf.algorithms import _numba_kernels as _nk
+
 from ..exchange.reading import SUFFIXES, expand, folder_entries, read_model, shown_path, sniff_format
 
 if TYPE_CHECKING:
@@ -101,10 +103,7 @@ def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, fac
     reason, "pictures": {file name: reason}, "mesh_each": bool}``; ``trace(stage)`` is called
     before each piece of work (see :func:`~occsurf.bridge.quality.report.check_model`).
     """
-    from ..exchange.files import atomic_write
-    from .html import viewer_payload
-    from .pictures import PICTURE_CHOICES, WORST_FACES, render_report_pictures
-    from .report import check_model, worst_faces
+    from .pictures import PICTURE_CHOICES
 
     choice = {True: "all", False: "none"}.get(pictures, pictures) if isinstance(pictures, bool) else pictures
     if choice not in PICTURE_CHOICES:
@@ -116,6 +115,21 @@ def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, fac
     note("read")
     model = read_model(p, sniff_format(p), strict=strict)  # strict: warnings refuse the file
     t_read = time.perf_counter() - t0
+    # every face is sampled on a 41 x 41 grid and more: a model of 20 faces or more repays numba's
+    # loading, and then its many small evaluations (sections, trims, flags) keep the kernels too
+    with _nk.batch(len(model.faces) * 41 * 41):
+        return _check_read(model, path, out, t0, t_read, faces, preset, choice, progress, skip, note)
+
+
+def _check_read(model: Any, path: str | os.PathLike[str], out: str | os.PathLike[str], t0: float, t_read: float,
+                faces: list[int] | None, preset: str, choice: str, progress: Callable[[str, int, int], None] | None,
+                skip: dict[str, Any], note: Callable[[str], None]) -> dict[str, Any]:
+    """:func:`check_file` after reading the model."""
+    from ..exchange.files import atomic_write
+    from .html import viewer_payload
+    from .pictures import WORST_FACES, render_report_pictures
+    from .report import check_model, worst_faces
+
     report = check_model(model, faces=faces, preset=preset,
                          progress=None if progress is None else (lambda k, n: progress("faces", k, n)),
                          skip={int(k): v for k, v in (skip.get("faces") or {}).items()},
