@@ -299,8 +299,15 @@ def normal_deviation(surface: BSplineSurface, points: Array, u: Array, v: Array)
     first-order distance of each point to the surface (the deviation along the normal; exact for
     a plane). Cheap (tensor-product partials), used to compare candidate fits, never reported."""
     D = surface.derivatives_grid(u, v, 1)
-    N = np.cross(D[:, :, 1, 0], D[:, :, 0, 1])
-    N /= np.maximum(np.linalg.norm(N, axis=-1, keepdims=True), 1e-300)
+    # np.cross and np.linalg.norm written out (the same operations in the same order, bit for bit,
+    # without their strided temporaries)
+    a, b = D[:, :, 1, 0], D[:, :, 0, 1]
+    N = np.empty(a.shape)
+    N[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    N[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    N[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    length = np.sqrt(N[..., 0] * N[..., 0] + N[..., 1] * N[..., 1] + N[..., 2] * N[..., 2])
+    N /= np.maximum(length, 1e-300)[..., None]
     return np.abs(np.einsum("ijk,ijk->ij", points - D[:, :, 0, 0], N))
 
 

@@ -283,3 +283,16 @@ def test_measure_heights_decides_as_if_every_point_were_projected(seed, poles, h
             assert set(lab[(full > thr)[ok]]) == set(lab[(fast > thr)[ok]])
         else:
             np.testing.assert_array_equal(fast > thr, full > thr)
+
+
+@test_settings(10)
+@given(seed=st.integers(0, 10**6), poles=st.integers(5, 14))
+def test_normal_deviation_is_the_cross_product_formula_bit_for_bit(seed, poles):
+    from occsurf.algorithms.fitting.adaptive import normal_deviation
+
+    s, P3, x = _height_case(seed, 41, poles, holes=False)
+    D = s.derivatives_grid(x, x, 1)
+    N = np.cross(D[:, :, 1, 0], D[:, :, 0, 1])
+    N /= np.maximum(np.linalg.norm(N, axis=-1, keepdims=True), 1e-300)
+    want = np.abs(np.einsum("ijk,ijk->ij", P3 - D[:, :, 0, 0], N))
+    np.testing.assert_array_equal(normal_deviation(s, P3, x, x), want)
