@@ -220,8 +220,8 @@ def measure_heights(surface: BSplineSurface, points: Array, u: Array, v: Array, 
       least ``rho - eps`` and the vertical one at least ``r_z - L rho`` (``r_z = |z - S_z(u_i, v_j)|``,
       the domain being convex), so ``|Q - S(a, b)|^2 >= sigma^2 + (r_z - L eps - L sigma)^2`` with
       ``sigma = max(0, rho - eps)``, whose minimum over ``sigma >= 0`` is
-      ``lo = max(0, r_z - L eps)^2 / (1 + L^2)``: ``d >= lo``. ``1e-12`` of the data's size is
-      taken off ``r_z`` for the round-off of the evaluation;
+      ``max(0, r_z - L eps)^2 / (1 + L^2)``: ``d >= lo = max(0, r_z - L eps) / sqrt(1 + L^2)``.
+      ``1e-12`` of the data's size is taken off ``r_z`` for the round-off of the evaluation;
     - the points within ``tol`` at their parameters keep ``r`` (as :func:`measure_grid`); the
       border rows are projected (``boundary_error`` raises them to ``r``, but ``max(dist)`` is
       reported);
