@@ -27,8 +27,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from occsurf.algorithms import _numba_kernels as _nk
-
 from ..exchange.reading import SUFFIXES, expand, folder_entries, read_model, shown_path, sniff_format
 
 if TYPE_CHECKING:
@@ -117,6 +115,8 @@ def check_file(path: str | os.PathLike[str], out: str | os.PathLike[str], *, fac
     t_read = time.perf_counter() - t0
     # every face is sampled on a 41 x 41 grid and more: a model of 20 faces or more repays numba's
     # loading, and then its many small evaluations (sections, trims, flags) keep the kernels too
+    from occsurf.algorithms import _numba_kernels as _nk  # not at module level: the CLI imports this module
+
     with _nk.batch(len(model.faces) * 41 * 41):
         return _check_read(model, path, out, t0, t_read, faces, preset, choice, progress, skip, note)
 
