@@ -280,9 +280,10 @@ _DEFAULTS: dict[str, float] = {
     # ~1e-15, larger means a bug, and raises.
     "GENERALIZED_CONSISTENCY_TOL": 1e-9,
     # n-sided fill: the interior fairing systems of the central split's patches with at most this
-    # many free poles keep their factors (least recently used, 32 systems): a hole's patches share
-    # one layout.
-    "FILL_FAIR_CACHE_FREE": 4096,
+    # many free poles keep their factors (least recently used, 16 systems: a hole's patches share
+    # one layout). A 1024-unknown system's coupling block and factors take ~2.1 MB (3600: 12 MB),
+    # so the cache stays under ~35 MB.
+    "FILL_FAIR_CACHE_FREE": 1024,
     # Relative singular-value cut-off of the small least-squares solves (anything out of the
     # fields' plane, a corner incompatibility, is dropped, not amplified) ...
     "FILL_RCOND": 1e-9,

@@ -222,7 +222,7 @@ def _fair_system(ku: bytes, kv: bytes, degree: tuple[int, int], free: NDArray[np
     return Kf[:, ~f], lu
 
 
-@functools.lru_cache(maxsize=32)
+@functools.lru_cache(maxsize=16)
 def _fair_system_cached(ku: bytes, kv: bytes, degree: tuple[int, int], shape: tuple[int, int], free: bytes
                         ) -> tuple[sparse.csr_matrix, SuperLU]:
     """:func:`_fair_system` kept for small systems: a hole's patches share one layout (the same
