@@ -23,7 +23,7 @@ source file of each kernel, and the helpers are inlined into the kernels, so a k
 file would keep its cached copy of a helper after the helper changed here. One file, one cache.
 Besides evaluation it holds :func:`surface_project`, the point projection of
 :func:`occsurf.algorithms.fitting._common.project_points` per point (first use compiles it, about
-11 s once per machine; cached after).
+17 s once per machine; cached after).
 
 References
 ----------
@@ -507,27 +507,49 @@ def _tensor_partials(  # pragma: no cover - compiled
                 O[m, i, j, e3] = t3
 
 
+def _partials_scratch(p: int, q: int, r1: int, k: int) -> tuple:  # pragma: no cover - compiled
+    """Work arrays of :func:`_partials_at` for degrees ``(p, q)``, ``r1 = order + 1`` and ``k``
+    homogeneous coordinates: ``(Du, Dv, Nt, inv, left, right, T, h4, hf, o, start, src, wi, coef)``
+    (``hf`` is ``h4`` as (r1^2, k), made here once rather than per point)."""
+    pq = max(p, q) + 1
+    start, src, wi, coef = _quotient_plan(r1)
+    h4 = np.empty((1, r1, r1, k))
+    return (np.empty((r1, p + 1)), np.empty((r1, q + 1)), np.empty((pq, pq)), np.empty((pq, pq)), np.empty(pq),
+            np.empty(pq), np.empty((p + 1, r1, k)), h4, h4.reshape(r1 * r1, k), np.empty((r1 * r1, k)),
+            start, src, wi, coef)
+
+
+def _partials_at(  # pragma: no cover - compiled
+    U: _F, p: int, fu: int, lu: int, tu: _I, u0: float, cu: float,
+    V: _F, q: int, fv: int, lv: int, tv: _I, v0: float, cv: float,
+    H: _F, rational: bool, x: float, y: float, order: int, scratch: tuple, out: _F, out3: _F, m: int,
+) -> None:
+    """The partials up to ``order`` at ``(x, y)`` into ``out[m]`` (``out``: (M, order+1, order+1, d),
+    ``out3`` the same array as (M, (order+1)^2, d), which the quotient rule writes); ``scratch`` from
+    :func:`_partials_scratch`. Spans and basis derivatives (A2.1 by table, BSPLVD), the tensor
+    contraction, the quotient rule (A4.4) for a rational net."""
+    Du, Dv, Nt, inv, left, right, T, h4, hf, o, start, src, wi, coef = scratch
+    su = _span(U, fu, lu, tu, u0, cu, x)
+    sv = _span(V, fv, lv, tv, v0, cv, y)
+    _basis_ders(U, p, su, x, order, Du, Nt, inv, left, right)
+    _basis_ders(V, q, sv, y, order, Dv, Nt, inv, left, right)
+    if rational:
+        _tensor_partials(H, su - p, sv - q, Du, Dv, T, h4, 0)
+        _surface_quotient(hf, start, src, wi, coef, o, out3, m)
+    else:
+        _tensor_partials(H, su - p, sv - q, Du, Dv, T, out, m)
+
+
 def surface_derivatives(  # pragma: no cover
     U: _F, p: int, fu: int, lu: int, tu: _I, u0: float, cu: float,
     V: _F, q: int, fv: int, lv: int, tv: _I, v0: float, cv: float,
     H: _F, u: _F, v: _F, order: int, rational: bool, out: _F,
 ) -> None:
     """All partials ``d^{i+j}/du^i dv^j`` with ``i, j <= order``: ``out`` (m, order+1, order+1, d)."""
-    k = H.shape[2]
     r1 = order + 1
-    pq = max(p, q) + 1
-    Du = np.empty((r1, p + 1))
-    Dv = np.empty((r1, q + 1))
-    Nt = np.empty((pq, pq))
-    inv = np.empty((pq, pq))
-    left = np.empty(pq)
-    right = np.empty(pq)
-    T = np.empty((p + 1, r1, k))
-    h4 = np.empty((1, r1, r1, k))
-    hf = h4.reshape(r1 * r1, k)
-    o = np.empty((r1 * r1, k))
-    start, src, wi, coef = _quotient_plan(r1)
+    Du, Dv, Nt, inv, left, right, T, h4, hf, o, start, src, wi, coef = _partials_scratch(p, q, r1, H.shape[2])
     out3 = out.reshape(out.shape[0], r1 * r1, out.shape[3])
+    # the body of _partials_at written out: through the helper the polynomial case ran ~8 % slower
     for m in range(u.shape[0]):
         x = u[m]
         y = v[m]
@@ -540,26 +562,6 @@ def surface_derivatives(  # pragma: no cover
             _surface_quotient(hf, start, src, wi, coef, o, out3, m)
         else:
             _tensor_partials(H, su - p, sv - q, Du, Dv, T, out, m)
-
-
-def _partials_at(  # pragma: no cover - compiled
-    U: _F, p: int, fu: int, lu: int, tu: _I, u0: float, cu: float,
-    V: _F, q: int, fv: int, lv: int, tv: _I, v0: float, cv: float,
-    H: _F, rational: bool, x: float, y: float, order: int, Du: _F, Dv: _F, Nt: _F, inv: _F, left: _F, right: _F,
-    T: _F, h4: _F, start: _I, src: _I, wi: _I, coef: _F, o: _F, out: _F,
-) -> None:
-    """One point of :func:`surface_derivatives` into ``out`` (1, order+1, order+1, d)."""
-    su = _span(U, fu, lu, tu, u0, cu, x)
-    sv = _span(V, fv, lv, tv, v0, cv, y)
-    _basis_ders(U, p, su, x, order, Du, Nt, inv, left, right)
-    _basis_ders(V, q, sv, y, order, Dv, Nt, inv, left, right)
-    if rational:
-        r1 = order + 1
-        _tensor_partials(H, su - p, sv - q, Du, Dv, T, h4, 0)
-        _surface_quotient(h4.reshape(r1 * r1, H.shape[2]), start, src, wi, coef, o,
-                          out.reshape(1, r1 * r1, out.shape[3]), 0)
-    else:
-        _tensor_partials(H, su - p, sv - q, Du, Dv, T, out, 0)
 
 
 def _dot3(a: _F, b: _F) -> float:  # pragma: no cover - compiled
@@ -583,19 +585,13 @@ def surface_project(  # pragma: no cover
     """
     k = H.shape[2]
     r1 = 3
-    pq = max(p, q) + 1
-    Du = np.empty((r1, p + 1))
-    Dv = np.empty((r1, q + 1))
-    Nt = np.empty((pq, pq))
-    inv = np.empty((pq, pq))
-    left = np.empty(pq)
-    right = np.empty(pq)
-    T = np.empty((p + 1, r1, k))
-    h4 = np.empty((1, r1, r1, k))
-    o = np.empty((r1 * r1, k))
-    start, src, wi, coef = _quotient_plan(r1)
+    scratch = _partials_scratch(p, q, r1, k)
+    left = scratch[4]
+    right = scratch[5]
     Dc = np.empty((1, r1, r1, 3))
     Dt = np.empty((1, r1, r1, 3))
+    Dc3 = Dc.reshape(1, r1 * r1, 3)
+    Dt3 = Dt.reshape(1, r1 * r1, 3)
     Nu = np.empty(p + 1)
     Nv = np.empty(q + 1)
     acc = np.empty(k)
@@ -644,8 +640,7 @@ def surface_project(  # pragma: no cover
                 break
             ta = min(max(a + du, ulo), uhi)
             tb = min(max(b + dv, vlo), vhi)
-            _partials_at(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, rational, ta, tb, 2,
-                         Du, Dv, Nt, inv, left, right, T, h4, start, src, wi, coef, o, Dt)
+            _partials_at(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, rational, ta, tb, 2, scratch, Dt, Dt3, 0)
             ft = ((Dt[0, 0, 0, 0] - x[0]) * (Dt[0, 0, 0, 0] - x[0]) + (Dt[0, 0, 0, 1] - x[1]) * (Dt[0, 0, 0, 1] - x[1])
                   + (Dt[0, 0, 0, 2] - x[2]) * (Dt[0, 0, 0, 2] - x[2]))
             full = ft <= f
@@ -687,8 +682,7 @@ def surface_project(  # pragma: no cover
                         for c in range(3):
                             Dc[0, i, j, c] = Dt[0, i, j, c]
             else:
-                _partials_at(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, rational, a, b, 2,
-                             Du, Dv, Nt, inv, left, right, T, h4, start, src, wi, coef, o, Dc)
+                _partials_at(U, p, fu, lu, tu, u0, cu, V, q, fv, lv, tv, v0, cv, H, rational, a, b, 2, scratch, Dc, Dc3, 0)
         out[m, 0] = a
         out[m, 1] = b
         out[m, 2] = f
@@ -761,9 +755,10 @@ def grid_partials_rational(Du: _F, su: _I, p: int, G: _F, k: int, out: _F) -> No
 
 _HELPERS = (
     "_span", "_basis", "_basis_ders", "_binomials", "_quotient_plan", "_curve_quotient", "_surface_quotient",
-    "_tensor_partials", "_band_point", "_store_point", "_net_point", "_dot3",
+    "_tensor_partials", "_band_point", "_store_point", "_net_point", "_dot3", "_partials_scratch",
 )
-#: Helpers compiled as calls, not inlined (numba cannot inline a function with this many arguments).
+#: Helpers compiled as calls, not inlined: inlined into surface_project, _partials_at took the
+#: kernel's first compile from 17 s to 29 s for a projection 5-25 % faster.
 _CALLED = ("_partials_at",)
 _KERNELS = (
     "curve_points",
