@@ -144,3 +144,79 @@ def test_realdata_faces_of_every_type_refit_at_1e_4_of_their_size(name):
         # within tol at the samples; between them the benchmark measured at most 8.3e-5 x size over
         # every face of these files, so 3 x tol is a bound with room, not a guess
         assert res.face_deviation <= 3e-4 * size, (name, k, res.face_deviation / size)
+
+
+@pytest.mark.skipif(not REALDATA.is_dir(), reason="../shared/realdata (public CAD files) is absent")
+@pytest.mark.parametrize("name, face", [("occt__bearing.iges", 2), ("occt__bearing.iges", 5),
+                                        ("pythonocc-core__sunglasses_lens.igs", 1)])
+def test_face_deviation_equals_both_projections_on_every_point(name, face):
+    """face_deviation runs OCC's extrema search only where it can raise the maximum; the value is
+    exactly the largest over all points of the smaller of the two OCC projections (bearing face 2:
+    the collapsed corner row where GeomAPI reports 1.7e-3 for a point on the surface)."""
+    from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+    from OCP.gp import gp_Pnt
+    from OCP.ShapeAnalysis import ShapeAnalysis_Surface
+
+    from occsurf.algorithms.fitting import fit_grid
+    from occsurf.bridge.modeling.fit import face_deviation, read_fit_input
+
+    inp = read_fit_input(REALDATA / name, face=face)
+    fitted = fit_grid(inp.data, 8, 3).surface  # a coarse fit: deviations of every size
+    (u0, u1), (v0, v1) = fitted.domain
+    P = fitted.evaluate_grid(np.linspace(u0, u1, 41), np.linspace(v0, v1, 41)).reshape(-1, 3)
+    proj, sas = GeomAPI_ProjectPointOnSurf(), ShapeAnalysis_Surface(inp.face)
+    both = []
+    for x, y, z in P:
+        p = gp_Pnt(float(x), float(y), float(z))
+        proj.Init(p, inp.face)
+        a = float(proj.LowerDistance()) if proj.NbPoints() else np.inf
+        sas.ValueOfUV(p, 1e-12)
+        both.append(min(a, float(sas.Gap())))
+    assert face_deviation(fitted, inp.face) == max(both)
+
+
+def test_face_deviation_pruning_keeps_the_maximum_of_the_minimum(monkeypatch):
+    """The pruning alone, with OCC's two projections replaced by given distances per point: the
+    result is max_i min(a_i, b_i) however the two disagree, and the extrema search is called only on
+    points whose ValueOfUV gap exceeds the largest minimum found before them."""
+    import OCP.GeomAPI
+    import OCP.ShapeAnalysis
+
+    from occsurf.algorithms import BSplineSurface
+    from occsurf.bridge.modeling.fit import face_deviation
+
+    rng = np.random.default_rng(5)
+    s = BSplineSurface((1, 1), ([0, 0, 1, 1], [0, 0, 1, 1]), [[[0, 0, 0], [0, 1, 0]], [[1, 0, 0], [1, 1, 0]]])
+    g = np.linspace(0, 1, 41)
+    P = s.evaluate_grid(g, g).reshape(-1, 3)
+    index = {tuple(p): i for i, p in enumerate(P)}
+    gap, ext = rng.uniform(0, 1, len(P)), rng.uniform(0, 1, len(P))
+    ext[rng.integers(len(P), size=50)] = np.inf  # no extremum found: the gap counts
+    calls: list[int] = []
+
+    class Surface:
+        def __init__(self, surface):
+            self.last = 0
+
+        def ValueOfUV(self, p, tol):  # noqa: N802 (OCC's names)
+            self.last = index[p.Coord()]
+
+        def Gap(self):  # noqa: N802
+            return float(gap[self.last])
+
+    class Project:
+        def Init(self, p, surface):  # noqa: N802
+            self.i = index[p.Coord()]
+            calls.append(self.i)
+
+        def NbPoints(self):  # noqa: N802
+            return 0 if np.isinf(ext[self.i]) else 1
+
+        def LowerDistance(self):  # noqa: N802
+            return float(ext[self.i])
+
+    monkeypatch.setattr(OCP.ShapeAnalysis, "ShapeAnalysis_Surface", Surface)
+    monkeypatch.setattr(OCP.GeomAPI, "GeomAPI_ProjectPointOnSurf", Project)
+    want = float(np.max(np.minimum(gap, ext)))
+    assert face_deviation(s, None) == want
+    assert 0 < len(calls) < len(P) and all(gap[i] > 0 for i in calls)
