@@ -284,6 +284,11 @@ _DEFAULTS: dict[str, float] = {
     # one layout). A 1024-unknown system's coupling block and factors take ~2.1 MB (3600: 12 MB),
     # so the cache stays under ~35 MB.
     "FILL_FAIR_CACHE_FREE": 1024,
+    # Larger systems are kept for one hole only (:class:`~.topology.nsided_patches.FairSystems`: the
+    # central split's two layouts share its patches' knots and free poles, so their factors), up to
+    # this many factor entries in all: SuperLU's factors took 10-21 bytes an entry on linkrods'
+    # patches (a 100 344-unknown system: 23.4 million entries, 260 MB), so ~400 MB at most.
+    "FILL_FAIR_KEEP_NNZ": 32_000_000,
     # Relative singular-value cut-off of the small least-squares solves (anything out of the
     # fields' plane, a corner incompatibility, is dropped, not amplified) ...
     "FILL_RCOND": 1e-9,
@@ -617,6 +622,7 @@ SPATCH_CHECK_SAMPLES: int
 MAX_VALENCE: int
 GENERALIZED_CONSISTENCY_TOL: float
 FILL_FAIR_CACHE_FREE: int
+FILL_FAIR_KEEP_NNZ: int
 FILL_RCOND: float
 FILL_NULL_RTOL: float
 FILL_CLOSURE_TOL: float

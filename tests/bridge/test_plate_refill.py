@@ -109,6 +109,7 @@ def test_refill_falls_back_to_the_plate_where_the_central_split_refuses(monkeypa
     def refuse(sides):
         raise InvalidGeometryError("refused for the test")
     monkeypatch.setattr(refill_candidates, "fill_hole", refuse)  # where _our_fill looks it up
+    monkeypatch.setattr(refill_candidates, "fold_free_fill", refuse)  # and fitted_fill's first try
     r = IGESControl_Reader()
     assert int(r.ReadFile(str(LENS))) == 1
     r.TransferRoots()
