@@ -63,6 +63,7 @@ References: course §8-3 (filling n-sided holes); Duchon 1977; OCC's GeomPlate (
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -271,22 +272,53 @@ def _rows2(ku: Array, kv: Array, p: int, u: Array,
     return tensor(0, 0), tensor(1, 0), tensor(0, 1), tensor(2, 0), tensor(1, 1), tensor(0, 2), cols
 
 
-def _gram(knots: Array, p: int, top: int = 2) -> list[sp.csr_matrix]:
-    """``G_k[i, j] = integral N_i^(k) N_j^(k)`` for k = 0 .. ``top`` (exact: p+1 Gauss points per span)."""
+def _gram(knots: Array, p: int, top: int = 2) -> tuple[sp.csr_matrix, ...]:
+    """``G_k[i, j] = integral N_i^(k) N_j^(k)`` for k = 0 .. ``top`` (exact: p+1 Gauss points per span).
+
+    Kept per knot vector (:func:`_gram_cached`): a refinement that splits spans in one direction
+    only keeps the other's knots, and the held pass starts again from the first stage's (bearing
+    faces 163, 65 and 197 asked 98 times for 0.42 s). The matrices are shared: never change them."""
+    return _gram_cached(np.ascontiguousarray(knots, float).tobytes(), int(p), int(top))
+
+
+@functools.lru_cache(maxsize=64)
+def _gram_cached(knots_key: bytes, p: int, top: int) -> tuple[sp.csr_matrix, ...]:
+    """:func:`_gram` for knots given as bytes.
+
+    Each entry is summed straight into the band (``np.bincount``, which adds in input order): the
+    terms ``(w_q N_i^(k)(t_q)) N_j^(k)(t_q)`` over the Gauss points ``t_q`` in increasing order from
+    0, exact zeros dropped, which is what the sparse product ``B^T diag(w) B`` computes, bit for bit
+    (tests/algorithms/test_plate_gram.py), at a third to a quarter of its time (0.5-0.8 ms
+    against 2.1-2.4 ms for 10 to 128 spans)."""
+    knots = np.frombuffer(knots_key)
     n = knots.size - p - 1
     brk = np.unique(knots)
-    x, w = np.polynomial.legendre.leggauss(p + 1)
+    x, w = _leggauss(p + 1)
     a, b = brk[:-1, None], brk[1:, None]
     t = (0.5 * (a + b) + 0.5 * (b - a) * x).ravel()
     wt = (0.5 * (b - a) * w).ravel()
     span = find_span(knots, p, n, t)
     D = basis_derivatives(knots, p, span, t, top)  # (m, top+1, p+1)
     cols = span[:, None] - p + np.arange(p + 1)
+    h = 2 * p + 1  # band of N_i N_j: |i - j| <= p
+    slot = (cols[:, :, None] * h + (cols[:, None, :] - cols[:, :, None] + p)).ravel()  # point-major
+    row = np.repeat(np.arange(n), h)
+    col = row + np.tile(np.arange(-p, p + 1), n)
+    inside = (col >= 0) & (col < n)
     out = []
     for k in range(top + 1):
-        B = sp.csr_matrix((D[:, k].ravel(), cols.ravel(), np.arange(0, t.size * (p + 1) + 1, p + 1)), shape=(t.size, n))
-        out.append((B.T @ sp.diags(wt) @ B).tocsr())
-    return out
+        Dk = D[:, k]
+        band = np.bincount(slot, weights=((wt[:, None] * Dk)[:, :, None] * Dk[:, None, :]).ravel(), minlength=n * h)
+        keep = inside & (band != 0)
+        indptr = np.r_[0, np.cumsum(keep.reshape(n, h).sum(axis=1))]
+        out.append(sp.csr_matrix((band[keep], col[keep], indptr), shape=(n, n)))
+    return tuple(out)
+
+
+@functools.lru_cache(maxsize=8)
+def _leggauss(m: int) -> tuple[Array, Array]:
+    """Gauss-Legendre nodes and weights of order ``m`` on ``[-1, 1]`` (cached)."""
+    return np.polynomial.legendre.leggauss(m)
 
 
 def _bisect(knots: Array, p: int, x: Array, limit: int) -> Array:
