@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import partial
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -152,6 +152,20 @@ class BSplineCurve(HomogeneousPoles, ControlPointValue):
         return f"BSplineCurve({kind}degree={self.degree}, poles={self.n_poles}, dim={self.dim}, domain={self.domain})"
 
     # ------------------------------------------------------------------ evaluation
+    def _span_table(self) -> tuple[Any, ...]:
+        """The numba kernels' span table (:func:`.._numba_kernels.span_table`), made once per curve
+        (it never changes)."""
+        kept = self.__dict__.get("_spans")
+        if kept is None:
+            kept = _nk.span_table(self.knots, self.degree, self.n_poles)
+            object.__setattr__(self, "_spans", kept)
+        return kept
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state.pop("_spans", None)  # made again on first use: pickles stay the size of the curve
+        return state
+
     def _params(self, u: ArrayLike, name: str = "u") -> tuple[Array, tuple[int, ...]]:
         a = V.check_parameters(u, *self.domain, name=name)
         return a.reshape(-1), a.shape
@@ -181,7 +195,7 @@ class BSplineCurve(HomogeneousPoles, ControlPointValue):
         p, n = self.degree, self.n_poles
         if _nk.applies(flat.shape[0]):
             out = np.empty((flat.shape[0], self.dim))
-            args = (self.knots, p, *_nk.span_table(self.knots, p, n), self._hpoles, flat, self.is_rational, out)
+            args = (self.knots, p, *self._span_table(), self._hpoles, flat, self.is_rational, out)
             if _nk.run("curve_points", *args):
                 return out.reshape(shape + (self.dim,))
         span = find_span(self.knots, p, n, flat)
@@ -215,7 +229,7 @@ class BSplineCurve(HomogeneousPoles, ControlPointValue):
                      f"{flat.shape[0]} points")
         if _nk.applies(flat.shape[0]):
             out = np.empty((flat.shape[0], order + 1, self.dim))
-            args = (self.knots, p, *_nk.span_table(self.knots, p, n), self._hpoles, flat, order, self.is_rational, out)
+            args = (self.knots, p, *self._span_table(), self._hpoles, flat, order, self.is_rational, out)
             if _nk.run("curve_derivatives", *args):
                 return out.reshape(shape + (order + 1, self.dim))
         span = find_span(self.knots, p, n, flat)

@@ -265,6 +265,32 @@ def test_uncachable_kernel_source_still_compiles():
     assert f(21) == 42
 
 
+@needs_numba
+def test_span_tables_are_made_once_per_spline_and_not_pickled(monkeypatch):
+    """A curve's and a surface's span tables (the kernels' arguments) are made on the first kernel
+    call and kept: later calls give the same values bit for bit without making them again; a pickle
+    leaves them out and its copy makes its own."""
+    import pickle
+
+    monkeypatch.delenv(nk.ENV_DISABLE, raising=False)
+    c = make_curve(3, "rational", seed=21)
+    s = make_surface(3, "clamped", seed=22)
+    u = np.linspace(*c.domain, 9)
+    made: list[int] = []
+    real = nk.span_table
+    monkeypatch.setattr(nk, "span_table", lambda *a: made.append(1) or real(*a))
+    with tolerances.override(NUMBA_MIN_POINTS=1):
+        first = c.derivatives(u, 2), s.derivatives(u, u, 2)
+        assert len(made) == 1 + 2  # the curve's, the surface's two
+        again = c.derivatives(u, 2), c.evaluate(u), s.derivatives(u, u, 2), s.evaluate(u, u)
+        assert len(made) == 3
+        assert np.array_equal(again[0], first[0]) and np.array_equal(again[2], first[1])
+        c2, s2 = pickle.loads(pickle.dumps(c)), pickle.loads(pickle.dumps(s))
+        assert "_spans" not in c2.__dict__ and "_kargs" not in s2.__dict__
+        assert np.array_equal(c2.derivatives(u, 2), first[0]) and np.array_equal(s2.derivatives(u, u, 2), first[1])
+        assert len(made) == 6
+
+
 def test_span_table_matches_find_span():
     rng = np.random.default_rng(11)
     for degree in DEGREES:
