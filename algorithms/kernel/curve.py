@@ -154,17 +154,9 @@ class BSplineCurve(HomogeneousPoles, ControlPointValue):
     # ------------------------------------------------------------------ evaluation
     def _span_table(self) -> tuple[Any, ...]:
         """The numba kernels' span table (:func:`.._numba_kernels.span_table`), made once per curve
-        (it never changes)."""
-        kept = self.__dict__.get("_spans")
-        if kept is None:
-            kept = _nk.span_table(self.knots, self.degree, self.n_poles)
-            object.__setattr__(self, "_spans", kept)
-        return kept
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = dict(self.__dict__)
-        state.pop("_spans", None)  # made again on first use: pickles stay the size of the curve
-        return state
+        (:meth:`_kept`)."""
+        table: tuple[Any, ...] = self._kept("span_table", lambda: _nk.span_table(self.knots, self.degree, self.n_poles))
+        return table
 
     def _params(self, u: ArrayLike, name: str = "u") -> tuple[Array, tuple[int, ...]]:
         a = V.check_parameters(u, *self.domain, name=name)

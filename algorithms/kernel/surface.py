@@ -192,18 +192,9 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
 
     def _kernel_args(self) -> tuple[Any, ...]:
         """Knots, degrees, span bounds and homogeneous net, as the numba kernels take them; made
-        once per surface (it never changes): the span tables took 77 us a call, 0.63 s of a check
-        of the bearing (8128 calls)."""
-        kept = self.__dict__.get("_kargs")
-        if kept is None:
-            kept = _nk.surface_args(self)
-            object.__setattr__(self, "_kargs", kept)
-        return kept
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = dict(self.__dict__)
-        state.pop("_kargs", None)  # made again on first use: pickles stay the size of the surface
-        return state
+        once per surface (:meth:`_kept`)."""
+        args: tuple[Any, ...] = self._kept("kernel_args", lambda: _nk.surface_args(self))
+        return args
 
     def _scattered(self, u: Array, v: Array, order: int) -> Array:
         """Homogeneous partials ``(m, r+1, r+1, k)`` at scattered points, in bounded-memory chunks.
