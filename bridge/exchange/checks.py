@@ -501,6 +501,7 @@ def scan_iges(p: Path, data: bytes) -> IgesScan:
     scan = IgesScan()
     loose = 0
     refs: list[tuple[int, int, int]] = []  # pointers (from D line, to D line, type) of _IGES_POINTERS' types
+    axes: list[tuple[int, int]] = []  # surfaces of revolution 120: (D line, their axis's D line)
     d, par = by_sec["D"], by_sec["P"]
     for k in range(0, len(d) - 1, 2):
         a, b = d[k], d[k + 1]
@@ -527,13 +528,16 @@ def scan_iges(p: Path, data: bytes) -> IgesScan:
             raise ExchangeError(f"{p}: damaged IGES file (directory entry D{seq} is of type {etype}, its parameter "
                                 f"data P{ptr} of type {head or '(none)'!s})")
         if etype in _IGES_POINTERS:
-            for target in _IGES_POINTERS[etype](_iges_numbers(text, delim, 10**6)[1:]):
-                refs.append((seq, target, etype))
+            targets = _IGES_POINTERS[etype](_iges_numbers(text, delim, 10**6)[1:])
+            refs.extend((seq, target, etype) for target in targets)
+            if etype == 120:
+                axes.append((seq, targets[0] if targets else 0))
         if etype not in (126, 128):
             continue
         fields = _iges_numbers(text, delim, 10**9)
         _check_bspline(p, seq, etype, fields)
     _iges_cycle_error(p, refs, len(d) // 2)
+    _iges_axis_error(p, axes, d)
     scan.face_instances = scan.types[510] if scan.types[510] else loose
     return scan
 
@@ -601,6 +605,21 @@ def _iges_cycle_error(p: Path, refs: list[tuple[int, int, int]], n: int) -> None
     shown = ", ".join(f"D{2 * k + 1} type {type_of.get(int(k), '?')}" for k in members[:6]) + \
         (" ..." if len(members) > 6 else "")
     raise ExchangeError(f"{p}: damaged IGES file (a cycle of pointers through {len(members)} entities: {shown})")
+
+
+def _iges_axis_error(p: Path, axes: list[tuple[int, int]], d: list[str]) -> None:
+    """Refuse a surface of revolution (120) whose axis is not a line (110), as IGES 5.3 (section 4.18)
+    requires: OCC's transfer takes the axis as a line unchecked and the reading process died of
+    SIGSEGV where it was a composite curve, no entry (0) or a directory entry's second line (the
+    mutation fuzz's ``swap`` 1, 8194 on a filleted box, CI of 2026-12-05)."""
+    for seq, axis in axes:
+        k = axis - 1
+        kind = d[k][0:8].strip() if axis > 0 and axis % 2 == 1 and k < len(d) else None
+        if kind != "110":
+            what = f"D{axis}, of type {kind}" if kind else (f"D{axis}, not the start of a directory entry" if axis
+                                                            else "none")
+            raise ExchangeError(f"{p}: damaged IGES file (surface of revolution 120 at D{seq}: its axis is {what}; "
+                                "it must be a line, type 110)")
 
 
 def _check_bspline(p: Path, seq: int, etype: int, fields: list[str]) -> None:

@@ -6,6 +6,10 @@ recursed round it until the reading process died of SIGSEGV, in-process (the fuz
 the CLI's worker. :func:`occsurf.bridge.exchange.checks.scan_iges` now follows the pointer fields of
 the entities a reader builds recursively (the IGES 5.3 schema of 102, 118, 120, 122, 140-144, 510)
 and refuses a cycle through them in one line; the real files read as before.
+
+A surface of revolution (120) whose axis is not a line (110) killed OCC's reader too (``swap`` 1,
+8194 made the box's fillet's axis pointer 10, the second line of a directory entry; a composite
+curve or no entry did the same): refused in one line as well.
 """
 
 from __future__ import annotations
@@ -69,3 +73,22 @@ def test_the_clean_box_and_the_real_files_read_as_before(box: bytes, tmp_path: P
     for name, faces in (("occt__bearing.iges", 213), ("pythonocc-core__sunglasses_lens.igs", 9)):
         model = read_iges(REALDATA / name)
         assert len(model.faces) == faces and not model.warnings
+
+
+@pytest.mark.parametrize("axis, said", [(b"9,", "D9, of type 102"), (b"58", "D58, not the start of a directory entry"),
+                                        (b"0,", "none")])
+def test_a_surface_of_revolution_without_a_line_for_its_axis_is_refused_not_a_crash(box: bytes, tmp_path: Path,
+                                                                                    axis: bytes, said: str) -> None:
+    old = b"120,57,59,4.71238898,6.283185307;"
+    new = b"120," + axis + (b"59,4.71238898,6.283185307;" if axis.endswith(b",") else b",59,4.71238898,6.283185307;")
+    new = new.ljust(len(old))
+    bad = _edited(box, old, new, tmp_path / "axis.igs")
+    with pytest.raises(ExchangeError, match=rf"surface of revolution 120 at D53: its axis is {said}; it must be a line"):
+        read_iges(bad)
+    (out,) = run_jobs(READ_JOB, [{"path": str(bad), "format": "iges", "out": str(bad) + ".brep"}], timeout=120,
+                      preload=READ_PRELOAD)
+    assert out.status != CRASHED, out.exit_reason  # killed by SIGSEGV before the check
+    proc = subprocess.run([sys.executable, "-m", "occsurf.bridge.cli", "inspect", str(bad)], capture_output=True,
+                          text=True, cwd=REPO, timeout=300)
+    assert proc.returncode == 2 and "it must be a line" in proc.stderr and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
