@@ -64,7 +64,7 @@ def test_fold_free_fill_is_fill_hole_or_none_where_that_folds(angle, r0, folds) 
         assert np.array_equal(got.center, full.center) and np.array_equal(got.split, full.split)
 
 
-@settings(max_examples=8, deadline=None)
+@settings(max_examples=5, deadline=None)
 @given(angle=st.floats(100.0, 320.0), r0=st.floats(1.3, 1.85))
 def test_fold_free_fill_agrees_with_fill_hole_on_crescents(angle, r0) -> None:
     sides = _crescent(angle, r0)
