@@ -13,10 +13,13 @@ functions), A2.3 (derivatives). C. de Boor, *A Practical Guide to Splines*, 1978
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "gauss_legendre",
     "find_span",
     "basis_functions",
     "basis_derivatives",
@@ -232,3 +235,14 @@ def greville(knots: ArrayLike, degree: int) -> NDArray[np.float64]:
     n = t.shape[0] - degree - 1
     c = np.concatenate(([0.0], np.cumsum(t)))
     return (c[degree + 1 : degree + 1 + n] - c[1 : 1 + n]) / degree
+
+
+@functools.lru_cache(maxsize=16)
+def gauss_legendre(m: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Gauss-Legendre nodes and weights of order ``m`` on ``[-1, 1]`` (``numpy``'s), made once per
+    order and shared read-only: the Gram matrices of the fill patches and of the plate ask for them
+    on every knot vector."""
+    x, w = np.polynomial.legendre.leggauss(m)
+    x.flags.writeable = False
+    w.flags.writeable = False
+    return x, w

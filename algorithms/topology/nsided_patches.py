@@ -22,7 +22,7 @@ from scipy.sparse.linalg import SuperLU, splu
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ..kernel.basis import basis_matrix
+from ..kernel.basis import basis_matrix, gauss_legendre
 from ..kernel.sparse_kron import kron_sum
 from ..kernel.surface import BSplineSurface
 from .nsided_corners import CornerFit
@@ -205,18 +205,12 @@ def _corner_knot(K: Array, degree: int) -> Array:
 
 
 # ==================================================================================== fairing
-@functools.lru_cache(maxsize=16)
-def _leggauss(m: int) -> tuple[Array, Array]:
-    """Gauss-Legendre nodes and weights of order ``m`` on ``[-1, 1]`` (cached)."""
-    return np.polynomial.legendre.leggauss(m)
-
-
 @functools.lru_cache(maxsize=64)
 def _gram_cached(knots_key: bytes, degree: int, order: int) -> Array:
     """:func:`_gram` for the knots as bytes (hashable); the result is read-only, shared by the cache."""
     knots = np.frombuffer(knots_key)
     n = len(knots) - degree - 1
-    xg, wg = _leggauss(degree + 1)
+    xg, wg = gauss_legendre(degree + 1)
     br = np.unique(knots)
     a, b = br[:-1], br[1:]
     x = (0.5 * (b - a)[:, None] * (xg + 1) + a[:, None]).ravel()

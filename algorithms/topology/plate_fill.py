@@ -75,7 +75,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..fitting._common import check_fit_size
-from ..kernel.basis import basis_derivatives, find_span
+from ..kernel.basis import basis_derivatives, find_span, gauss_legendre
 from ..kernel.curve import BSplineCurve
 from ..kernel.sparse_kron import kron_sum
 from ..kernel.surface import BSplineSurface
@@ -293,7 +293,7 @@ def _gram_cached(knots_key: bytes, p: int, top: int) -> tuple[sp.csr_matrix, ...
     knots = np.frombuffer(knots_key)
     n = knots.size - p - 1
     brk = np.unique(knots)
-    x, w = _leggauss(p + 1)
+    x, w = gauss_legendre(p + 1)
     a, b = brk[:-1, None], brk[1:, None]
     t = (0.5 * (a + b) + 0.5 * (b - a) * x).ravel()
     wt = (0.5 * (b - a) * w).ravel()
@@ -313,12 +313,6 @@ def _gram_cached(knots_key: bytes, p: int, top: int) -> tuple[sp.csr_matrix, ...
         indptr = np.r_[0, np.cumsum(keep.reshape(n, h).sum(axis=1))]
         out.append(sp.csr_matrix((band[keep], col[keep], indptr), shape=(n, n)))
     return tuple(out)
-
-
-@functools.lru_cache(maxsize=8)
-def _leggauss(m: int) -> tuple[Array, Array]:
-    """Gauss-Legendre nodes and weights of order ``m`` on ``[-1, 1]`` (cached)."""
-    return np.polynomial.legendre.leggauss(m)
 
 
 def _bisect(knots: Array, p: int, x: Array, limit: int) -> Array:
