@@ -53,7 +53,7 @@ def find_span(knots: NDArray[np.float64], degree: int, n_poles: int, u: NDArray[
     t_end = knots[n_poles]
     last = int(np.searchsorted(knots, t_end, side="left")) - 1
     first = int(np.searchsorted(knots, knots[degree], side="right")) - 1
-    return np.clip(s, first, last)
+    return np.minimum(np.maximum(s, first), last)  # np.clip's integer result, without its wrapper's ~4 us
 
 
 def _left_right(knots: NDArray[np.float64], p: int, span: NDArray[np.intp], u: NDArray[np.float64]
@@ -143,7 +143,7 @@ def basis_derivatives(
     for k in range(1, n + 1):
         ders[k] *= factor
         factor *= p - k
-    return np.moveaxis(ders, 2, 0).copy()
+    return ders.transpose(2, 0, 1).copy()
 
 
 def basis_matrix(
