@@ -170,23 +170,36 @@ def _cross_rows(S: BSplineSurface, v: Array, r: int) -> Array:
     return A.reshape(r + 1, m, (r + 1) * nv)
 
 
-def _equations(R: Array, Sj: Array, tg: Jets, r: int) -> tuple[Array, Array]:
-    """Residuals ``F`` (n_eq,) and Jacobian ``J`` (n_eq, n_poles * 3) of the G0..Gr conditions."""
-    m, n = R.shape[1], R.shape[2]
-    F = [(Sj[0] - tg.P).ravel()]
-    J = [np.einsum("ki,cd->kcid", R[0], np.eye(3)).reshape(3 * m, 3 * n)]
+def _equations(R: Array, Sj: Array, tg: Jets, r: int, lo: int = 0, poles: slice = slice(None)
+               ) -> tuple[Array, Array]:
+    """Residuals ``F`` and Jacobian ``J`` of the G``lo``..G``r`` conditions, ``J``'s columns those of
+    the poles ``poles`` (a slice of ``R``'s last axis, three columns a pole).
+
+    With ``lo = 0`` and every pole these are all the conditions' rows, shape ``(n_eq,)`` and
+    ``(n_eq, n_poles * 3)``; a caller that solves for some pole rows under some orders asks for
+    just those (:func:`_solve`): each entry is the same product either way, so the block is the
+    same as slicing the whole, bit for bit, without building the G0 block (``3 m`` rows, the
+    largest) and the columns it then drops."""
+    Rp = R[..., poles]
+    m, n = Rp.shape[1], Rp.shape[2]
+    F: list[Array] = []
+    J: list[Array] = []
     N, E = tg.N, tg.E
 
     def rows(terms: list[tuple[int, Array]]) -> Array:
-        return sum(np.einsum("ki,kc->kic", R[j], g) for j, g in terms).reshape(m, 3 * n)
+        return sum(np.einsum("ki,kc->kic", Rp[j], g) for j, g in terms).reshape(m, 3 * n)
 
-    if r >= 1:
+    if lo <= 0:
+        F.append((Sj[0] - tg.P).ravel())
+        J.append(np.einsum("ki,cd->kcid", Rp[0], np.eye(3)).reshape(3 * m, 3 * n))
+    if lo <= 1 <= r:
         F.append(np.einsum("kc,kc->k", N, Sj[1]))
         J.append(rows([(1, N)]))
     if r >= 2:
         assert tg.H2 is not None
         xi1 = np.einsum("kac,kc->ka", E, Sj[1])
         Hx1 = np.einsum("kab,kb->ka", tg.H2, xi1)
+    if lo <= 2 <= r:
         F.append(np.einsum("kc,kc->k", N, Sj[2]) - np.einsum("ka,ka->k", Hx1, xi1))
         J.append(rows([(2, N), (1, -2.0 * np.einsum("ka,kac->kc", Hx1, E))]))
     if r >= 3:
@@ -240,13 +253,11 @@ def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) ->
     tg = target.corresponding(S, v)
     nv = S.n_poles[1]
     P0 = S.control_points[: r + 1].reshape(-1, 3)
-    x = np.zeros(P0.size)
-    m = v.shape[0]
-    start = [0, 3 * m] + [3 * m + j * m for j in range(1, r + 1)]
 
-    def residual(x: Array, j: int = r) -> tuple[Array, Array]:
+    def residual(x: Array, j: int = r, lo: int = 0, poles: slice = slice(None)) -> tuple[Array, Array]:
+        """Order ``lo``..``j``'s residuals and their Jacobian in the columns of ``poles``."""
         Sj = np.einsum("jki,ic->jkc", R[: j + 1], P0 + x.reshape(P0.shape))
-        return _equations(R[: j + 1], Sj, tg, j)
+        return _equations(R[: j + 1], Sj, tg, j, lo, poles)
 
     def rowwise(x: Array) -> Array:
         """Row j's minimum-norm correction for order j's conditions, j = 0..r in turn."""
@@ -255,9 +266,8 @@ def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) ->
         Sj = np.einsum("ki,ic->kc", R[0], P0 + x.reshape(P0.shape))
         x[: 3 * nv] += _lstsq(R[0][:, :nv], -(Sj - tg.P)).ravel()
         for j in range(1, r + 1):
-            F, J = residual(x, j)
-            rows, cols = slice(start[j], start[j + 1]), slice(3 * j * nv, 3 * (j + 1) * nv)
-            x[cols] += _lstsq(J[rows, cols], -F[rows])
+            F, J = residual(x, j, j, slice(j * nv, (j + 1) * nv))  # order j's rows, row j's columns
+            x[3 * j * nv: 3 * (j + 1) * nv] += _lstsq(J, -F)
         return x
 
     x = rowwise(np.zeros(P0.size))
@@ -265,11 +275,10 @@ def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) ->
         # row 0 is fixed by G0 alone (its change is already the least one): the steps move rows
         # 1..r under the conditions of orders 1..r only, a third smaller system
         y = x.copy()
-        rows, cols = slice(start[1], None), slice(3 * nv, None)
+        cols = slice(3 * nv, None)
         for _ in range(tolerances.MATCH_MAX_ITERATIONS):
-            F, J = residual(y)
-            Jr = J[rows, cols]
-            z = _lstsq(Jr, Jr @ y[cols] - F[rows])
+            F, Jr = residual(y, r, 1, slice(nv, None))  # orders 1..r, rows 1..r
+            z = _lstsq(Jr, Jr @ y[cols] - F)
             step = float(np.max(np.abs(z - y[cols])))
             y[cols] = z
             if step <= 1e-12 * size:

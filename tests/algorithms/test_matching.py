@@ -290,3 +290,30 @@ def test_max_poles_caps_the_refinement():
     for bad in (0, -3, 2.5, True):
         with pytest.raises(InvalidGeometryError, match="max_poles"):
             match_surface(S4, T, "u0", "G1", max_poles=bad)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 10_000), r=st.integers(0, 3), nv=st.integers(4, 9), kink=st.floats(-8.0, 8.0))
+def test_equation_blocks_are_the_slices_of_the_whole_system_bit_for_bit(seed, r, nv, kink):
+    """``_solve`` asks ``_equations`` for one order's rows and one pole row's columns (the rows in
+    turn) or for orders 1..r and rows 1..r (the Gauss-Newton steps) instead of building the whole
+    system and slicing it: the blocks must be those slices exactly, F and J alike."""
+    from occsurf.algorithms.manipulation.match_targets import SurfaceSide
+    from occsurf.algorithms.manipulation.matching import _cross_rows, _equations, _solve_params
+
+    T, S = _pair(kink, nu_s=7, seed=seed, nv=nv)
+    v = _solve_params(S)
+    R = _cross_rows(S, v, r)
+    tg = SurfaceSide(T).corresponding(S, v)
+    x = np.random.default_rng(seed).normal(scale=1e-3, size=(r + 1) * nv * 3)
+    Sj = np.einsum("jki,ic->jkc", R, S.control_points[: r + 1].reshape(-1, 3) + x.reshape(-1, 3))
+    F, J = _equations(R, Sj, tg, r)
+    m = v.shape[0]
+    start = [0, 3 * m] + [3 * m + j * m for j in range(1, r + 1)]
+    for lo in range(r + 1):
+        for a, b in ((0, None), (lo * nv, (lo + 1) * nv), (lo * nv, None)):
+            Fb, Jb = _equations(R, Sj, tg, r, lo, slice(a, b))
+            cols = slice(3 * a, None if b is None else 3 * b)
+            assert np.array_equal(Fb, F[start[lo]:]) and np.array_equal(Jb, J[start[lo]:, cols])
+            assert Fb.tobytes() == F[start[lo]:].tobytes()  # signed zeros too
+            assert Jb.tobytes() == np.ascontiguousarray(J[start[lo]:, cols]).tobytes()
