@@ -7,9 +7,10 @@ their shared edge (:func:`occsurf.bridge.modeling.matching.match_faces`, in a wo
 :func:`occsurf.bridge.audit.match_file.match_file`), writes ``OUT`` (STEP) and prints the edge
 before and after as OCC's ``LocalAnalysis`` measures it. Faces are numbered as ``occsurf inspect`` and
 ``occsurf check`` number them. Exit status 0 when the model was written; 2 (one line on stderr,
-nothing written) for faces that share no edge, a face number out of range, a sharp edge, an edge
-that does not run along a side of the face's surface, a continuity the degree cannot carry,
-tolerances not met or a result ``BRepCheck_Analyzer`` finds invalid.
+nothing written) for faces that share no edge, a face number out of range, a sharp edge, G2 or G3
+along an edge inside the face's surface (a face trimmed across its surface is matched G0 or G1
+there), a continuity the degree cannot carry, tolerances not met or a result
+``BRepCheck_Analyzer`` finds invalid.
 
 ``--json`` prints ``{"face", "target", "continuity", "g0_max", "g1_max_deg", "g2_max_rel",
 "max_change", "knots_added", "opposite_g1_max_deg", ...}`` (``g2_max_rel`` a fraction: 0.01 is

@@ -11,9 +11,12 @@ continuity along their shared edge, and is put back in place of the old face wit
 2. the edge is sampled on the target face (its p-curve), and OCC's ``LocalAnalysis`` gives the
    angle before: an edge at or above ``sharp_deg`` is a crease by design and is refused;
 3. the face's surface (converted exactly when it is not a B-spline, and raised in degree then when
-   the order needs it), or its piece on the face's UV box (cut exactly), must have a side along the
-   edge (a trimmed face whose edge crosses its surface's interior is refused, with the distance);
-   the target is the target face's surface
+   the order needs it), or its piece on the face's UV box (cut exactly), has a side along the
+   edge; where it has none (a face trimmed across its surface, as most faces of solid modellers'
+   files are), the face is matched G0 or G1 along the edge inside its surface
+   (:func:`~occsurf.algorithms.manipulation.match_along`, at the edge's p-curve on a B-spline face,
+   at the edge's points projected onto the exact conversion of an analytic one; G2 and G3 are
+   refused there, with the reason); the target is the target face's surface
    where the edge runs along one of its sides too, else samples of it along the edge
    (:class:`~occsurf.algorithms.manipulation.MatchTarget`: points, normals, cross curvatures from
    OCC's second derivatives);
@@ -38,14 +41,15 @@ import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepTools import BRepTools
-from OCP.gp import gp_Pnt, gp_Vec
+from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
 from OCP.TopAbs import TopAbs_REVERSED
 from threadpoolctl import ThreadpoolController
 
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError
+from occsurf.algorithms.fitting import project_points
 from occsurf.algorithms.kernel.surface import BSplineSurface
-from occsurf.algorithms.manipulation import MatchTarget, match_surface
+from occsurf.algorithms.manipulation import MatchTarget, match_along, match_surface
 from occsurf.algorithms.manipulation.match_targets import height_jets
 from occsurf.algorithms.manipulation.matching import CONTINUITIES, side_along
 
@@ -193,6 +197,57 @@ def _sampled_target(face: Any, edge: Any) -> MatchTarget:
     return MatchTarget(pts, n, H2[:, 1, 1])
 
 
+def _feet_on(surface: BSplineSurface, points: np.ndarray, start: np.ndarray, tol: float) -> np.ndarray:
+    """``(u, v)`` of ``points`` on our ``surface`` (the exact conversion of an analytic face: the
+    same parameter box as OCC's, another parametrisation inside it): Newton's projection from the
+    face's own (u, v) ``start`` and from the nearest of a 48 x 48 grid, the nearer foot of the two
+    (from the grid alone, points beside a periodic surface's seam stopped on its other side)."""
+    (u0, u1), (v0, v1) = surface.domain
+    us, vs = np.linspace(u0, u1, 48), np.linspace(v0, v1, 48)
+    grid = surface.evaluate_grid(us, vs).reshape(-1, 3)
+    k = np.argmin(((points[:, None, :] - grid[None]) ** 2).sum(-1), axis=1)
+    a = project_points(surface, points, np.clip(start[:, 0], u0, u1), np.clip(start[:, 1], v0, v1))
+    b = project_points(surface, points, us[k // 48], vs[k % 48])
+    near = a[2] <= b[2]
+    u, v, d = (np.where(near, x, y) for x, y in zip(a, b))
+    if np.max(d) > tol:
+        raise InvalidGeometryError(f"the shared edge lies {float(np.max(d)):.3g} off the face's converted surface "
+                                   f"(more than {tol:.3g}); it cannot be matched inside it")
+    return np.stack([u, v], 1)
+
+
+def _inside_samples(face: Any, target: Any, edges: list[Any], converted: BSplineSurface | None = None
+                    ) -> tuple[np.ndarray, MatchTarget]:
+    """The shared ``edges`` sampled at the same parameters on both faces (their p-curves; a sewn
+    edge is same-parameter): the (u, v) on ``face``'s surface and the target face's points and
+    oriented normals there, consecutive samples closer than round-off dropped. ``converted``: our
+    exact conversion of an analytic face, on which the points of ``face`` are found by projection
+    (its parameters are not the p-curve's)."""
+    uv, pts, nrm = [], [], []
+    for e in edges:
+        _, uvs_i, p_i = edge_samples(e, face, EDGE_SAMPLES)
+        if converted is not None:
+            tol = max(10.0 * BRep_Tool.Tolerance_s(e), 1e-9 * float(np.ptp(p_i, axis=0).max()))
+            start = np.array([[q.X(), q.Y()] for q in uvs_i])
+            uvs_i = [gp_Pnt2d(a, b) for a, b in _feet_on(converted, p_i, start, tol)]
+        s, uvs_j, p = edge_samples(e, target, EDGE_SAMPLES)
+        n = np.zeros_like(p)
+        for k, q in enumerate(uvs_j):
+            pt, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
+            s.D1(q.X(), q.Y(), pt, du, dv)
+            n[k] = du.Crossed(dv).Coord()
+        n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+        uv.append(np.array([[q.X(), q.Y()] for q in uvs_i]))
+        pts.append(p)
+        nrm.append(-n if target.Orientation() == TopAbs_REVERSED else n)
+    UV, P, N = np.concatenate(uv), np.concatenate(pts), np.concatenate(nrm)
+    step = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    keep = np.concatenate([[True], step > 1e-9 * max(float(np.ptp(P, axis=0).max()), 1e-300)])
+    if keep.sum() < 2:
+        raise InvalidGeometryError("the shared edge is degenerate on the target face (all its samples coincide)")
+    return UV[keep], MatchTarget(P[keep], N[keep])
+
+
 @dataclass
 class _Pair:
     """What matching face i to face j needs that does not depend on the continuity asked."""
@@ -208,6 +263,8 @@ class _Pair:
     target_surface: BSplineSurface | None = None
     target_side: str | None = None
     sampled: MatchTarget | None = None
+    #: A face trimmed across its surface: the edge's parameters on it and the target along it.
+    inside: tuple[np.ndarray, MatchTarget] | None = None
     notes: list[str] = field(default_factory=list)
 
 
@@ -266,9 +323,16 @@ class FaceMatcher:
         S, side, dist, cover = _along(_elevated(*ed.surface(i), order), fi, pts, tol_side)
         pair.converted = conv_i
         if side is None:
-            pair.error = InvalidGeometryError(
-                f"the edge between faces {i} and {j} does not run along a side of face {i}'s surface (it lies "
-                f"{dist:.3g} from the nearest side, more than {tol_side:.3g}): the face is trimmed across its surface")
+            # trimmed across its surface: matched along the edge inside it (G0, G1)
+            pair.surface, pair.side = ed.surface(i)[0], "inside"
+            pair.target_surface = ed.surface(j)[0]
+            try:
+                pair.inside = _inside_samples(fi, fj, edges, None if conv_i is None else pair.surface)
+            except InvalidGeometryError as err:
+                pair.error = err
+                return pair
+            pair.notes.append(f"the edge runs inside face {i}'s surface ({dist:.3g} from its nearest side): matched "
+                              "along it (G0, G1)")
             return pair
         if cover < 1.0 - COVER_SLACK:
             pair.error = InvalidGeometryError(
@@ -365,13 +429,20 @@ class FaceMatcher:
             raise pair.error
         assert pair.surface is not None and pair.side is not None and pair.target_surface is not None
         fj = ed.faces[j]
-        if pair.target_side is None:
+        if pair.inside is not None:
+            if order >= 2 or average:
+                raise InvalidGeometryError(
+                    f"the edge between faces {i} and {j} runs inside face {i}'s surface (trimmed across it): "
+                    + ("matching both faces (average) needs it along a side of each" if average else
+                       f"{continuity} needs it along a side of the surface; G0 and G1 are matched inside"))
+            tgt: BSplineSurface | MatchTarget = pair.inside[1]
+        elif pair.target_side is None:
             if average:
                 raise InvalidGeometryError(f"average needs the edge along a side of face {j}'s surface too; it is "
                                            "trimmed across it")
             if pair.sampled is None:
                 pair.sampled = _sampled_target(fj, max(pair.edges, key=lambda e: BRep_Tool.Tolerance_s(e)))
-            tgt: BSplineSurface | MatchTarget = pair.sampled
+            tgt = pair.sampled
         else:
             tgt = pair.target_surface
         # asked for 1e-7 of the size (or tol_g0), accepted within the edge's own tolerance where that
@@ -383,9 +454,14 @@ class FaceMatcher:
         g0_tol = max(pair.etol, g0_ask)
         # one BLAS thread: the systems are small, and threads cost more than they save (MATCH_BLAS_THREADS)
         with _blas_controller().limit(limits=MATCH_BLAS_THREADS, user_api="blas"):
-            res = match_surface(pair.surface, tgt, pair.side, continuity, preserve_opposite=preserve_opposite,
-                                average=average, tol_g0=g0_ask, tol_g1_deg=tol_g1_deg, tol_g2_rel=tol_g2_rel,
-                                refine=refine, max_poles=max_poles)
+            if pair.inside is not None:
+                assert isinstance(tgt, MatchTarget)
+                res = match_along(pair.surface, tgt, pair.inside[0], continuity, tol_g0=g0_ask, tol_g1_deg=tol_g1_deg,
+                                  refine=refine, max_poles=max_poles)
+            else:
+                res = match_surface(pair.surface, tgt, pair.side, continuity, preserve_opposite=preserve_opposite,
+                                    average=average, tol_g0=g0_ask, tol_g1_deg=tol_g1_deg, tol_g2_rel=tol_g2_rel,
+                                    refine=refine, max_poles=max_poles)
         # the match's own measures, G0 within the accepted tolerance
         own_met = bool(res.g0_max <= g0_tol and (order < 1 or res.g1_max_deg <= tol_g1_deg)
                        and (order < 2 or np.nan_to_num(res.g2_max_rel) <= tol_g2_rel))
@@ -485,9 +561,9 @@ def match_faces(shape: Any, face: int, target: int, continuity: str = "G1", *, p
     Raises
     ------
     InvalidGeometryError
-        A face number out of range, the same face twice, faces that share no edge, a sharp edge, an
-        edge that does not run along a side of the face's surface; from the match: a continuity the
-        degree cannot carry.
+        A face number out of range, the same face twice, faces that share no edge, a sharp edge, G2
+        or G3 (or ``average``) along an edge inside the face's surface, a side that runs on past the
+        edge; from the match: a continuity the degree cannot carry.
     """
     if isinstance(continuity, str) and continuity not in CONTINUITIES:
         raise InvalidGeometryError(f"continuity: expected one of {', '.join(CONTINUITIES)}, got {continuity!r}")

@@ -291,3 +291,59 @@ def test_the_change_limit_is_on_a_faces_changes_together():
     assert again.refused is not None and "in all" in again.refused and m.version[1] == 1
     ok = matcher.match(1, 0, "G1", strict=True, max_change=2.0 * c)
     assert ok.refused is None and m.version[1] == 2
+
+
+def _trimmed_across_pair(kink_deg: float = 3.0):
+    """Face 0: the plane z = 0 as a bicubic B-spline over [0, 1]^2 trimmed to the triangle x >= y
+    (its diagonal edge crosses the surface's interior); face 1: a bicubic plane through the
+    diagonal on the other side, tilted by ``kink_deg`` about it. Sewn: they share the diagonal."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeWire
+    from OCP.BRepLib import BRepLib
+    from OCP.Geom2d import Geom2d_Line
+    from OCP.gp import gp_Dir2d, gp_Pnt2d
+
+    from occsurf.bridge.conversion.splines import to_occ
+
+    g = np.linspace(0, 1, 4)
+    X, Y = np.meshgrid(g, g, indexing="ij")
+    A = BSplineSurface((3, 3), (CUBIC, CUBIC), np.stack([X, Y, 0 * X], -1))
+    geom = to_occ(A)
+
+    def edge(p, q):
+        L = float(np.hypot(q[0] - p[0], q[1] - p[1]))
+        e = BRepBuilderAPI_MakeEdge(Geom2d_Line(gp_Pnt2d(*p), gp_Dir2d(q[0] - p[0], q[1] - p[1])), geom, 0.0, L).Edge()
+        BRepLib.BuildCurves3d_s(e)
+        return e
+
+    wire = BRepBuilderAPI_MakeWire(edge((0, 0), (1, 0)), edge((1, 0), (1, 1)), edge((1, 1), (0, 0))).Wire()
+    face_a = BRepBuilderAPI_MakeFace(geom, wire, True).Face()
+    th = np.radians(kink_deg)
+    d = np.array([-np.cos(th) / np.sqrt(2), np.cos(th) / np.sqrt(2), np.sin(th)])
+    S, W = np.meshgrid(g, g, indexing="ij")
+    B = BSplineSurface((3, 3), (CUBIC, CUBIC), np.stack([S, S, 0 * S], -1) + 0.5 * W[..., None] * d)
+    sew = BRepBuilderAPI_Sewing(1e-6)
+    sew.Add(face_a)
+    sew.Add(make_face(B))
+    sew.Perform()
+    return sew.SewedShape()
+
+
+@pytest.mark.parametrize("continuity", ["G0", "G1"])
+def test_face_trimmed_across_its_surface_is_matched_along_the_edge_inside_it(tmp_path: Path, continuity: str):
+    """The edge runs inside face 0's surface (no side carries it): the match is made along the
+    edge's p-curve (``match_along``), measured by OCC along the edge and round-tripped through STEP."""
+    shape = _trimmed_across_pair(3.0)
+    assert _occ_edge(shape, 0, 1)[1] > 2.9
+    rep, out = match_faces(shape, 0, 1, continuity)
+    assert rep.side == "inside" and rep.valid and rep.met
+    assert any("inside face 0's surface" in n for n in rep.notes)
+    if continuity == "G1":
+        assert rep.g1_before_deg > 2.9 and rep.g1_max_deg <= 0.01
+    assert rep.g0_max <= 1e-6
+    write_step(tmp_path / "m.step", out)
+    back = read_step(tmp_path / "m.step").shape
+    assert len(model_faces(back)) == 2 and BRepCheck_Analyzer(back).IsValid()
+    if continuity == "G1":
+        assert _occ_edge(back, 0, 1)[1] <= 0.01
+    with pytest.raises(InvalidGeometryError, match="runs inside face 0's surface.*G2 needs it along a side"):
+        match_faces(shape, 0, 1, "G2")
