@@ -347,3 +347,19 @@ def test_face_trimmed_across_its_surface_is_matched_along_the_edge_inside_it(tmp
         assert _occ_edge(back, 0, 1)[1] <= 0.01
     with pytest.raises(InvalidGeometryError, match="runs inside face 0's surface.*G2 needs it along a side"):
         match_faces(shape, 0, 1, "G2")
+
+
+@pytest.mark.skipif(not REALDATA.is_dir(), reason=f"public CAD files not present at {REALDATA}")
+def test_linkrods_face_trimmed_inside_its_surface_matched_by_occs_measure(tmp_path: Path):
+    """OCCT linkrods faces 35 and 34 meet at 0.052 deg along an edge 1.2e-4 inside face 35's
+    B-spline surface (no side carries it): matched G1 inside, OCC measures 1e-8 deg after."""
+    shape = read_step(REALDATA / "occt__linkrods.step").shape
+    rep, out = match_faces(shape, 35, 34, "G1")
+    assert rep.side == "inside" and rep.converted is None
+    assert rep.g1_before_deg > 0.05 and rep.met and rep.valid and rep.g1_max_deg < 1e-6 and rep.g0_max < 1e-9
+    assert rep.opposite_g1_max_deg <= rep.opposite_g1_before_deg + 1e-6  # its other edges no worse
+    a, b = rep.faces_out
+    assert _occ_edge(out, a, b)[1] < 1e-6
+    write_step(tmp_path / "l.step", out)
+    back = read_step(tmp_path / "l.step").shape
+    assert len(model_faces(back)) == len(model_faces(shape)) and BRepCheck_Analyzer(back).IsValid()
