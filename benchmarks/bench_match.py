@@ -8,6 +8,8 @@ Run from the repository root::
 
 * ``match_surface`` G0 / G1 / G2 / G3 of a bicubic 20 x 20-pole face to a 20 x 20-pole neighbour
   sharing its side, kinked by 2 deg, best of several runs. Target: G1 < 50 ms. OCC has no edge matching to compare with.
+* ``match_along`` G0 / G1 of the same face along a curve across its interior (161 samples, a 2 deg
+  kink): a trimmed face's edge.
 * ``match_faces`` on the same pair as an OCC model (conversion, the new face on the old wires,
   BRepCheck, OCC LocalAnalysis before and after).
 * With ``--repair``: ``repair_model`` of ``occt__bearing.iges`` (catia) against the library call
@@ -72,6 +74,25 @@ def main() -> None:
         t = best_of(lambda c=c: match_surface(S, T, "u0", c), repeat=5, budget=5.0)
         print(f"  {c}: {t:7.1f} ms  (knots added {res.knots_added}, G0 {res.g0_max:.1e}, "
               f"G1 {res.g1_max_deg:.1e} deg, G2 {res.g2_max_rel:.1e}, met {res.met})")
+    # inside: the same face matched along a curve across its interior (a trimmed face's edge)
+    from occsurf.algorithms.manipulation import MatchTarget, match_along
+
+    t = np.linspace(0.0, 1.0, 161)
+    uv = np.stack([0.1 + 0.8 * t, 0.3 + 0.4 * t * t], 1)
+    D = S.derivatives(uv[:, 0], uv[:, 1], 1)
+    n = np.cross(D[:, 1, 0], D[:, 0, 1])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    tan = np.gradient(D[:, 0, 0], axis=0)
+    tan /= np.linalg.norm(tan, axis=1)[:, None]
+    th = np.radians(2.0)  # the normals turned 2 deg about the curve (Rodrigues)
+    N = n * np.cos(th) + np.cross(tan, n) * np.sin(th) + tan * np.einsum("ij,ij->i", tan, n)[:, None] * (1 - np.cos(th))
+    inside = MatchTarget(D[:, 0, 0], N)
+    print("match_along, the same face, a 2 deg kink along a curve across it (161 samples):")
+    for c in ("G0", "G1"):
+        res = match_along(S, inside, uv, c, tol_g0=1e-6)
+        t_in = best_of(lambda c=c: match_along(S, inside, uv, c, tol_g0=1e-6), repeat=5, budget=5.0)
+        print(f"  {c}: {t_in:7.1f} ms  (knots added {res.knots_added}, G0 {res.g0_max:.1e}, G1 {res.g1_max_deg:.1e} deg, "
+              f"change {res.max_change:.2e}, met {res.met})")
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
 
     from occsurf.bridge.conversion.splines import make_face
