@@ -43,7 +43,7 @@ from ..kernel.basis import basis_derivatives, find_span
 from ..kernel.surface import BSplineSurface
 from .linalg import ConstraintError
 from .match_targets import MatchTarget
-from .matching import CONTINUITIES, MatchResult, _lstsq, _size, surface_change
+from .matching import CONTINUITIES, MatchResult, pole_size, robust_min_norm, surface_change
 
 __all__ = ["match_along"]
 
@@ -101,7 +101,7 @@ def _solve(S: BSplineSurface, uv: Array, P: Array, N: Array, r: int) -> tuple[ND
     if r >= 1:
         F += [np.einsum("kc,kc->k", N, D[:, 1, 0]), np.einsum("kc,kc->k", N, D[:, 0, 1])]
         J += [np.einsum("ka,kc->kac", Au, N).reshape(m, 3 * n), np.einsum("ka,kc->kac", Av, N).reshape(m, 3 * n)]
-    x = _lstsq(np.concatenate(J), -np.concatenate(F))
+    x = robust_min_norm(np.concatenate(J), -np.concatenate(F))
     return cols, x.reshape(n, 3)
 
 
@@ -174,7 +174,7 @@ def match_along(surface: BSplineSurface, target: MatchTarget, uv: ArrayLike, con
         raise InvalidGeometryError(f"uv: expected shape ({P.shape[0]}, 2), one pair per target point, got {UV.shape}")
     (u0, u1), (v0, v1) = surface.domain
     UV = np.stack([V.check_parameters(UV[:, 0], u0, u1, "uv[:, 0]"), V.check_parameters(UV[:, 1], v0, v1, "uv[:, 1]")], 1)
-    size = max(_size(surface), float(np.linalg.norm(np.ptp(P, axis=0))))
+    size = max(pole_size(surface), float(np.linalg.norm(np.ptp(P, axis=0))))
     t0 = tolerances.MATCH_G0_RTOL * size if tol_g0 is None else float(tol_g0)
     if not (np.isfinite(t0) and t0 > 0) or not (np.isfinite(tol_g1_deg) and tol_g1_deg > 0):
         raise InvalidGeometryError(f"tol_g0, tol_g1_deg: expected positive numbers, got {tol_g0!r}, {tol_g1_deg!r}")

@@ -56,7 +56,8 @@ from ..kernel.surface import BSplineSurface
 from .linalg import ConstraintError
 from .match_targets import Jets, MatchTarget, SampledCurve, SurfaceSide, height_jets
 
-__all__ = ["MatchResult", "MatchTarget", "match_surface", "side_along", "surface_change", "SIDES", "CONTINUITIES"]
+__all__ = ["MatchResult", "MatchTarget", "match_surface", "side_along", "surface_change", "robust_min_norm", "pole_size",
+           "SIDES", "CONTINUITIES"]
 
 Array = NDArray[np.float64]
 _Target: TypeAlias = "SurfaceSide | SampledCurve | _AverageSide"
@@ -214,7 +215,7 @@ def _equations(R: Array, Sj: Array, tg: Jets, r: int, lo: int = 0, poles: slice 
     return np.concatenate(F), np.concatenate(J)
 
 
-def _lstsq(J: Array, rhs: Array) -> Array:
+def robust_min_norm(J: Array, rhs: Array) -> Array:
     """Minimum-norm least-squares solution, rows divided by their norms, noise directions dropped
     (``rhs`` one vector, or one column per right-hand side).
 
@@ -264,10 +265,10 @@ def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) ->
         x = x.copy()
         # G0 alone: the same conditions for each coordinate, one solve with three right-hand sides
         Sj = np.einsum("ki,ic->kc", R[0], P0 + x.reshape(P0.shape))
-        x[: 3 * nv] += _lstsq(R[0][:, :nv], -(Sj - tg.P)).ravel()
+        x[: 3 * nv] += robust_min_norm(R[0][:, :nv], -(Sj - tg.P)).ravel()
         for j in range(1, r + 1):
             F, J = residual(x, j, j, slice(j * nv, (j + 1) * nv))  # order j's rows, row j's columns
-            x[3 * j * nv: 3 * (j + 1) * nv] += _lstsq(J, -F)
+            x[3 * j * nv: 3 * (j + 1) * nv] += robust_min_norm(J, -F)
         return x
 
     x = rowwise(np.zeros(P0.size))
@@ -278,7 +279,7 @@ def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) ->
         cols = slice(3 * nv, None)
         for _ in range(tolerances.MATCH_MAX_ITERATIONS):
             F, Jr = residual(y, r, 1, slice(nv, None))  # orders 1..r, rows 1..r
-            z = _lstsq(Jr, Jr @ y[cols] - F)
+            z = robust_min_norm(Jr, Jr @ y[cols] - F)
             step = float(np.max(np.abs(z - y[cols])))
             y[cols] = z
             if step <= 1e-12 * size:
@@ -488,7 +489,9 @@ def _check_tol(value: object, name: str, default: float) -> float:
     return x
 
 
-def _size(*surfaces: BSplineSurface) -> float:
+def pole_size(*surfaces: BSplineSurface) -> float:
+    """The diagonal of the poles' bounding box of ``surfaces`` together (1 where it is 0): the size
+    that the matches' relative tolerances scale with."""
     P = np.concatenate([s.control_points.reshape(-1, s.dim) for s in surfaces])
     return float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))) or 1.0
 
@@ -677,7 +680,7 @@ def match_surface(surface: BSplineSurface, target: BSplineSurface | MatchTarget,
             raise InvalidGeometryError("continuity='G3' needs a surface target: a MatchTarget carries curvature only")
         if r >= 2 and target.cross_curvatures is None:
             raise InvalidGeometryError("continuity='G2' needs MatchTarget.cross_curvatures")
-    size = _size(surface, *([target] if isinstance(target, BSplineSurface) else []))
+    size = pole_size(surface, *([target] if isinstance(target, BSplineSurface) else []))
     if isinstance(target, MatchTarget):
         P = target.points
         size = max(size, float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))))
