@@ -22,8 +22,12 @@ halved only while it holds ``2 (p + 1)`` samples, so that every basis function k
 and the surface kinks between the samples). The caller samples densely: a face's edge is checked
 by OCC afterwards at points among the samples (:func:`occsurf.bridge.modeling.joints.assess_joint`).
 
-G2 across a curve inside a surface needs the cross direction's second derivative along a curve that
-is not an iso-line; it is not offered here (``match_surface`` carries G2 and G3 along sides).
+G2 and G3 are not offered here (``match_surface`` carries them along sides). Posed at every sample
+they fail: a tensor-product spline restricted to a curve that crosses its cells diagonally has the
+freedom of a spline of degree ``p + q`` along it, so dense position and tangent-plane conditions pin
+nearly every pole of the band that reaches the curve (rank 510 of 543 on a 36 x 36 bicubic with 161
+samples), and a change of the curvature across it is left only directions that hardly reach the
+samples (pole moves of 1e5). G2 needs its conditions posed in a spline space along the curve.
 
 References
 ----------
