@@ -41,7 +41,7 @@ import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepTools import BRepTools
-from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
+from OCP.gp import gp_Pnt, gp_Vec
 from OCP.TopAbs import TopAbs_REVERSED
 from threadpoolctl import ThreadpoolController
 
@@ -169,16 +169,22 @@ def _along(surface: BSplineSurface, face: Any, pts: np.ndarray, tol: float
     return surface, side, min(dist, dist2), cover
 
 
+def _distinct(pts: np.ndarray) -> np.ndarray:
+    """Mask of the samples ``pts`` (k, 3) that are not within round-off of the one before (an edge
+    that stalls at a pole carries nothing there); refused where fewer than two are left."""
+    step = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    keep = np.concatenate([[True], step > 1e-9 * max(float(np.ptp(pts, axis=0).max()), 1e-300)])
+    if keep.sum() < 2:
+        raise InvalidGeometryError("the shared edge is degenerate on the target face (all its samples coincide)")
+    return keep
+
+
 def _sampled_target(face: Any, edge: Any) -> MatchTarget:
     """The target face along ``edge``: points, oriented normals and curvature across the edge, from
     OCC's derivatives of its surface at the edge's p-curve."""
     s, uvs, pts = edge_samples(edge, face, EDGE_SAMPLES)
-    # samples closer than round-off to the previous one (an edge that stalls at a pole) carry nothing
-    step = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-    keep = np.concatenate([[True], step > 1e-9 * max(float(np.ptp(pts, axis=0).max()), 1e-300)])
+    keep = _distinct(pts)
     uvs, pts = [uv for uv, k in zip(uvs, keep) if k], pts[keep]
-    if len(pts) < 2:
-        raise InvalidGeometryError("the shared edge is degenerate on the target face (all its samples coincide)")
     D = np.zeros((len(uvs), 3, 3, 3))
     for k, uv in enumerate(uvs):
         p, du, dv, duu, dvv, duv = gp_Pnt(), gp_Vec(), gp_Vec(), gp_Vec(), gp_Vec(), gp_Vec()
@@ -226,10 +232,10 @@ def _inside_samples(face: Any, target: Any, edges: list[Any], converted: BSpline
     uv, pts, nrm = [], [], []
     for e in edges:
         _, uvs_i, p_i = edge_samples(e, face, EDGE_SAMPLES)
+        uv_i = np.array([[q.X(), q.Y()] for q in uvs_i])
         if converted is not None:
             tol = max(10.0 * BRep_Tool.Tolerance_s(e), 1e-9 * float(np.ptp(p_i, axis=0).max()))
-            start = np.array([[q.X(), q.Y()] for q in uvs_i])
-            uvs_i = [gp_Pnt2d(a, b) for a, b in _feet_on(converted, p_i, start, tol)]
+            uv_i = _feet_on(converted, p_i, uv_i, tol)
         s, uvs_j, p = edge_samples(e, target, EDGE_SAMPLES)
         n = np.zeros_like(p)
         for k, q in enumerate(uvs_j):
@@ -237,14 +243,11 @@ def _inside_samples(face: Any, target: Any, edges: list[Any], converted: BSpline
             s.D1(q.X(), q.Y(), pt, du, dv)
             n[k] = du.Crossed(dv).Coord()
         n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
-        uv.append(np.array([[q.X(), q.Y()] for q in uvs_i]))
+        uv.append(uv_i)
         pts.append(p)
         nrm.append(-n if target.Orientation() == TopAbs_REVERSED else n)
     UV, P, N = np.concatenate(uv), np.concatenate(pts), np.concatenate(nrm)
-    step = np.linalg.norm(np.diff(P, axis=0), axis=1)
-    keep = np.concatenate([[True], step > 1e-9 * max(float(np.ptp(P, axis=0).max()), 1e-300)])
-    if keep.sum() < 2:
-        raise InvalidGeometryError("the shared edge is degenerate on the target face (all its samples coincide)")
+    keep = _distinct(P)
     return UV[keep], MatchTarget(P[keep], N[keep])
 
 
@@ -325,7 +328,6 @@ class FaceMatcher:
         if side is None:
             # trimmed across its surface: matched along the edge inside it (G0, G1)
             pair.surface, pair.side = ed.surface(i)[0], "inside"
-            pair.target_surface = ed.surface(j)[0]
             try:
                 pair.inside = _inside_samples(fi, fj, edges, None if conv_i is None else pair.surface)
             except InvalidGeometryError as err:
@@ -427,7 +429,7 @@ class FaceMatcher:
                 f"(>= {sharp_deg:g}), a crease by design; asking it to be {continuity} needs a larger sharp_deg")
         if pair.error is not None:
             raise pair.error
-        assert pair.surface is not None and pair.side is not None and pair.target_surface is not None
+        assert pair.surface is not None and pair.side is not None
         fj = ed.faces[j]
         if pair.inside is not None:
             if order >= 2 or average:
@@ -444,6 +446,7 @@ class FaceMatcher:
                 pair.sampled = _sampled_target(fj, max(pair.edges, key=lambda e: BRep_Tool.Tolerance_s(e)))
             tgt = pair.sampled
         else:
+            assert pair.target_surface is not None
             tgt = pair.target_surface
         # asked for 1e-7 of the size (or tol_g0), accepted within the edge's own tolerance where that
         # is larger: the model's own gaps are its edges' tolerances, and samples of a trimmed target
