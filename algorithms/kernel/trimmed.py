@@ -565,17 +565,26 @@ def _green_area(surface: BSplineSurface, c: BSplineCurve, pieces: int, anchor: f
     kb = np.unique(U[p:nu + 1])  # the surface's u breakpoints
     a = np.repeat(kb[:-1], pieces) + np.tile(np.arange(pieces), kb.size - 1) * np.repeat(np.diff(kb), pieces) / pieces
     b = np.r_[a[1:], kb[-1]]
-    F = np.zeros(us.size)
-    block = max(1, (1 << 20) // max(1, a.size * x.size))
-    for lo in range(0, us.size, block):
-        ue = us[lo:lo + block, None]
-        start = np.maximum(a[None, :], np.minimum(ue, anchor))
-        length = np.maximum(np.minimum(b[None, :], np.maximum(ue, anchor)) - start, 0.0)  # (n, L)
-        t = start[:, :, None] + length[:, :, None] * (x + 1.0) / 2.0  # (n, L, g)
-        vv = np.broadcast_to(vs[lo:lo + block, None, None], t.shape)
+    # Each node's inner integral runs over [lo, hi] = [min(u, anchor), max(u, anchor)]: only the
+    # pieces that overlap it (a contiguous run, b_l > lo and a_l < hi) are evaluated; the others
+    # added exact zeros before (the same points and weights, so the same value to round-off).
+    lo, hi = np.minimum(us, anchor), np.maximum(us, anchor)
+    first = np.searchsorted(b, lo, side="right")
+    count = np.maximum(np.searchsorted(a, hi, side="left") - first, 0)
+    node = np.repeat(np.arange(us.size), count)
+    piece = np.arange(node.size) - np.repeat(np.cumsum(count) - count, count) + np.repeat(first, count)
+    start = np.maximum(a[piece], lo[node])
+    length = np.maximum(np.minimum(b[piece], hi[node]) - start, 0.0)
+    G = np.empty(node.size)
+    block = max(1, (1 << 20) // x.size)
+    for k in range(0, node.size, block):
+        sl = slice(k, k + block)
+        t = start[sl, None] + length[sl, None] * (x + 1.0) / 2.0  # (pairs, g)
+        vv = np.broadcast_to(vs[node[sl], None], t.shape)
         Ds = surface.derivatives(t.ravel(), vv.ravel(), 1)
         J = np.linalg.norm(np.cross(Ds[:, 1, 0], Ds[:, 0, 1]), axis=-1).reshape(t.shape)
-        F[lo:lo + block] = np.sign(ue[:, 0] - anchor) * np.einsum("nlg,g,nl->n", J, w, length / 2.0)
+        G[sl] = (J @ w) * (length[sl] / 2.0)
+    F = np.sign(us - anchor) * np.bincount(node, weights=G, minlength=us.size)
     return float(np.sum(ws * F * dv))
 
 
