@@ -24,7 +24,6 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import numpy as np
-import scipy.ndimage as ndi
 from numpy.typing import NDArray
 
 from .. import tolerances
@@ -112,6 +111,8 @@ def stats(dist: Array) -> tuple[float, float]:
 def boxes(marks: NDArray[np.bool_]) -> list[tuple[int, int, int, int]]:
     """Bounding boxes (i0, i1, j0, j1), end-exclusive, of the connected groups of ``marks``, merged
     until no two overlap."""
+    import scipy.ndimage as ndi  # here: ~50 ms at the start of every process importing the fitting
+
     lab, _ = ndi.label(marks, structure=np.ones((3, 3)))
     out = [(s[0].start, s[0].stop, s[1].start, s[1].stop) for s in ndi.find_objects(lab) if s is not None]
     merged = True
@@ -148,6 +149,8 @@ def rectangles(marks: NDArray[np.bool_], ku: Array, kv: Array) -> list[Region]:
         return []
     margin = int(tolerances.FIT_ADAPTIVE_MARGIN)
     if margin > 0:
+        import scipy.ndimage as ndi
+
         marks = ndi.binary_dilation(marks, structure=np.ones((3, 3)), iterations=margin)
     return [((float(ku[i0]), float(ku[i1])), (float(kv[j0]), float(kv[j1]))) for i0, i1, j0, j1 in boxes(marks)]
 

@@ -49,7 +49,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.optimize
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
@@ -286,6 +285,8 @@ def choose_smoothing(score: Callable[[float], float]) -> tuple[float, float]:
     a, b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
     if not b > a:
         return 10.0 ** float(grid[i]), float(vals[i])
+    import scipy.optimize  # here: ~50 ms at every process's start otherwise
+
     res = scipy.optimize.minimize_scalar(lambda g: score(10.0 ** g), bounds=(a, b), method="bounded",
                                          options={"xatol": 1e-3})
     best = (float(res.x), float(res.fun)) if res.fun < vals[i] else (float(grid[i]), float(vals[i]))

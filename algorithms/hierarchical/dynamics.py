@@ -54,7 +54,6 @@ import math
 from typing import Any
 
 import numpy as np
-import scipy.fft
 import scipy.linalg
 from numpy.typing import NDArray
 
@@ -161,11 +160,15 @@ class SoftTissue:
     # ------------------------------------------------------------------ pieces
     def _to_modes(self, x: Array) -> Array:
         """World vectors (n, 3) on the net -> modal coordinates (n, 3) (orthonormal: Q^T x)."""
+        import scipy.fft  # here, as in _from_modes: not at every process's start
+
         X = scipy.fft.dctn(x.reshape(self.shape + (3,)), type=2, norm="ortho", axes=(0, 1))
         return np.asarray(X).reshape(-1, 3)
 
     def _from_modes(self, m: Array) -> Array:
         """Modal coordinates (n, 3) -> world vectors (n, 3) (Q m)."""
+        import scipy.fft
+
         X = scipy.fft.idctn(m.reshape(self.shape + (3,)), type=2, norm="ortho", axes=(0, 1))
         return np.asarray(X).reshape(-1, 3)
 

@@ -10,9 +10,10 @@ All functions take control points of shape ``(n + 1, ...)`` and are vectorised o
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import comb
 
 __all__ = ["bernstein", "de_casteljau", "bezier_blossom", "subdivide", "elevate_bezier"]
 
@@ -28,7 +29,8 @@ def bernstein(degree: int, t: ArrayLike) -> Array:
     """
     t = np.atleast_1d(np.asarray(t, dtype=float))
     i = np.arange(degree + 1)
-    return comb(degree, i) * t[:, None] ** i * (1.0 - t[:, None]) ** (degree - i)
+    binom = np.array([float(math.comb(degree, k)) for k in range(degree + 1)])  # exact, then rounded once
+    return binom * t[:, None] ** i * (1.0 - t[:, None]) ** (degree - i)
 
 
 def de_casteljau(control_points: ArrayLike, t: ArrayLike) -> Array:

@@ -29,8 +29,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import make_interp_spline
-from scipy.spatial import cKDTree
 
 from .. import _validate as V
 from ..errors import InvalidGeometryError
@@ -234,6 +232,11 @@ class SampledCurve:
 
     def __init__(self, c: Array, P: Array, N: Array, cross: Array | None = None, H2: Array | None = None,
                  H3: Array | None = None) -> None:
+        # imported here: scipy.interpolate and scipy.spatial cost ~0.3 s at the start of every
+        # process that imports the package (every command's worker), matching or not
+        from scipy.interpolate import make_interp_spline
+        from scipy.spatial import cKDTree
+
         k = min(3, len(c) - 1)
         self.k = k
         self.curve = make_interp_spline(c, P, k=k)

@@ -22,7 +22,6 @@ from typing import Any
 import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.gp import gp_Pnt, gp_Vec
-from scipy.interpolate import make_lsq_spline
 
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.kernel.curve import BSplineCurve
@@ -95,6 +94,8 @@ def with_cross2(side: HoleSide, edges: list[Any], nbs: list[Any]) -> HoleSide:
     InvalidGeometryError
         The neighbour's parametrisation is degenerate at a sample (a pole: ``S_u x S_v = 0``).
     """
+    from scipy.interpolate import make_lsq_spline  # here: not at the start of every fill worker
+
     c, X = side.curve, side.cross
     s_all, G_all = [], []
     for e, nb in zip(edges, nbs):
