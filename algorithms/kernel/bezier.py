@@ -10,7 +10,7 @@ All functions take control points of shape ``(n + 1, ...)`` and are vectorised o
 
 from __future__ import annotations
 
-import math
+from math import comb
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -29,7 +29,7 @@ def bernstein(degree: int, t: ArrayLike) -> Array:
     """
     t = np.atleast_1d(np.asarray(t, dtype=float))
     i = np.arange(degree + 1)
-    binom = np.array([float(math.comb(degree, k)) for k in range(degree + 1)])  # exact, then rounded once
+    binom = np.array([comb(degree, k) for k in range(degree + 1)], dtype=float)  # exact, then rounded once
     return binom * t[:, None] ** i * (1.0 - t[:, None]) ** (degree - i)
 
 

@@ -13,7 +13,7 @@ the Leibniz rule on ``A = w C``:
 
 from __future__ import annotations
 
-import math
+from math import comb
 
 import numpy as np
 from numpy.typing import NDArray
@@ -69,7 +69,7 @@ def curve_quotient_rule(hders: Array) -> Array:
     for k in range(r + 1):
         v = A[:, k].copy()
         for i in range(1, k + 1):
-            v -= math.comb(k, i) * w[:, i, None] * out[:, k - i]
+            v -= comb(k, i) * w[:, i, None] * out[:, k - i]
         out[:, k] = v * inv_w
     return out
 
@@ -95,10 +95,10 @@ def surface_quotient_rule(hders: Array) -> Array:
         for l in range(r + 1):
             v = A[..., k, l, :].copy()
             for j in range(1, l + 1):
-                v -= math.comb(l, j) * w[..., 0, j, None] * out[..., k, l - j, :]
+                v -= comb(l, j) * w[..., 0, j, None] * out[..., k, l - j, :]
             for i in range(1, k + 1):
-                v -= math.comb(k, i) * w[..., i, 0, None] * out[..., k - i, l, :]
+                v -= comb(k, i) * w[..., i, 0, None] * out[..., k - i, l, :]
                 for j in range(1, l + 1):
-                    v -= math.comb(k, i) * math.comb(l, j) * w[..., i, j, None] * out[..., k - i, l - j, :]
+                    v -= comb(k, i) * comb(l, j) * w[..., i, j, None] * out[..., k - i, l - j, :]
             out[..., k, l, :] = v * inv_w
     return out
