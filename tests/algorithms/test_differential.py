@@ -204,6 +204,10 @@ def _curvature_roundoff(c: BSplineCurve, u: np.ndarray, shift: float) -> np.ndar
                    [[0, 2**-24, 2**-24], [2**-24, 1, 2**-24], [2**-24, 2**-24, 2**-24], [3, 2**-24, 2**-24],
                     [2**-24, 2**-24, 2**-24], [2**-24, 2**-24, 2**-24], [2**-24, 2**-24, 2**-24]]),
     f=[0.0], angle=0.0, shift=1.0)
+@example(  # C' and C'' 1.5e-9 off parallel near a C1 knot: curvature 7.4e-6 moves 2.5e-13 on elevation
+    c=BSplineCurve(5, [1] * 6 + [5] * 4 + [6.90625] * 2 + [7.90625, 8.90625, 9.90625, 10.90625, 11.90625],
+                   [[1, 0, 0], [0, 0, 0], [0, 0, 0], [2, 1, 0]] + [[0, 0, 0]] * 7),
+    f=[0.67578125], angle=0.0, shift=0.0)
 def test_curvature_invariant_under_rigid_motion_and_refinement(c, f, angle, shift):
     lo, hi = c.domain
     u = lo + np.asarray(f) * (hi - lo)
@@ -230,9 +234,14 @@ def test_curvature_invariant_under_rigid_motion_and_refinement(c, f, angle, shif
     d1, d2 = np.linalg.norm(d[:, 1], axis=-1), np.linalg.norm(d[:, 2], axis=-1)
     sine = np.linalg.norm(np.cross(d[:, 1], d[:, 2]), axis=-1) / np.maximum(d1 * d2, 1e-300)
     near = sine <= 10 * tolerances.CURVATURE_ZERO
-    elevated = curvature(c.elevate_degree(), u)
+    raised = c.elevate_degree()
+    elevated = curvature(raised, u)
     clear = good & ~near
-    assert_allclose(elevated[clear], k0.curvature[clear], rtol=1e-8, atol=1e-10 * scale)
+    # Degree elevation rounds each new pole (a convex combination of the old ones) by a few ulps, as
+    # the rigid motion does without its shift: the same first-order bound, for both representations.
+    lifted = _curvature_roundoff(c, u, 0.0) + _curvature_roundoff(raised, u, 0.0)
+    assert np.all(np.abs(elevated - k0.curvature)[clear]
+                  <= (1e-8 * k0.curvature + 1e-10 * scale + lifted)[clear])
     bound = 10 * tolerances.CURVATURE_ZERO * d2 / np.maximum(d1, 1e-300) ** 2 * (1 + 1e-8)
     assert np.all(elevated[good & near] <= bound[good & near])
     assert np.all(k0.curvature[good & near] <= bound[good & near])
