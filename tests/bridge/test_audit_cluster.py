@@ -309,7 +309,13 @@ def _signal_trial(tmp_path: Path, corpus: Path, env: dict[str, str], n_files: in
                 os.killpg(proc.pid, sig)  # Ctrl-C in a terminal: the whole group
             else:
                 proc.send_signal(sig)  # a client killed by its supervisor
-        proc.wait(timeout=60)  # not communicate(): the thread reads stderr
+        try:
+            proc.wait(timeout=60)  # not communicate(): the thread reads stderr
+        except subprocess.TimeoutExpired:  # seen once in a loaded full run (12-05), not reproduced: keep the evidence
+            tree = subprocess.run(["ps", "-o", "pid,ppid,stat,wchan:20,etime,args", "-s", str(proc.pid)],
+                                  capture_output=True, text=True).stdout
+            raise AssertionError(f"trial {trial} ({sig.name} {delay:.3f} s in) still running 60 s after the "
+                                 f"signal; its processes:\n{tree}\nits stderr so far:\n{''.join(lines)}") from None
         stdout = proc.stdout.read()
     finally:
         if proc.poll() is None:
