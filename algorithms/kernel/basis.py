@@ -84,12 +84,14 @@ def basis_functions(
     N[0] = 1.0
     left, right = _left_right(knots, p, span, u)
     for j in range(1, p + 1):
-        saved = np.zeros(m)
-        for r in range(j):
-            temp = N[r] / (right[r + 1] + left[j - r])
-            N[r] = saved + right[r + 1] * temp
-            saved = left[j - r] * temp
-        N[j] = saved
+        # A2.2's inner loop over r = 0..j-1 as whole rows: every temp comes from the old N[r], and
+        # N[r] = saved + right[r+1] temp[r] with saved = left[j-r+1] temp[r-1] (0 for r = 0)
+        temp = N[:j] / (right[1:j + 1] + left[j:0:-1])
+        rt = right[1:j + 1] * temp
+        lt = left[j:0:-1] * temp
+        N[j] = lt[j - 1]
+        N[1:j] = lt[:j - 1] + rt[1:]
+        N[0] = rt[0] + 0.0
     return N.T.copy()
 
 
@@ -109,35 +111,36 @@ def basis_derivatives(
     ndu = np.empty((p + 1, p + 1, m))
     ndu[0, 0] = 1.0
     left, right = _left_right(knots, p, span, u)
-    for j in range(1, p + 1):
-        saved = np.zeros(m)
-        for r in range(j):
-            ndu[j, r] = right[r + 1] + left[j - r]
-            temp = ndu[r, j - 1] / ndu[j, r]
-            ndu[r, j] = saved + right[r + 1] * temp
-            saved = left[j - r] * temp
-        ndu[j, j] = saved
+    for j in range(1, p + 1):  # the triangle of A2.2, r = 0..j-1 as whole rows (see basis_functions)
+        ndu[j, :j] = right[1:j + 1] + left[j:0:-1]
+        temp = ndu[:j, j - 1] / ndu[j, :j]
+        rt = right[1:j + 1] * temp
+        lt = left[j:0:-1] * temp
+        ndu[j, j] = lt[j - 1]
+        ndu[1:j, j] = lt[:j - 1] + rt[1:]
+        ndu[0, j] = rt[0] + 0.0
     ders = np.zeros((order + 1, p + 1, m))
     ders[0] = ndu[:, p]
-    a = np.empty((2, p + 1, m))
-    for r in range(p + 1):
-        s1, s2 = 0, 1
+    if n:
+        # A2.3's coefficients a[s, j, r] for every r at once. For derivative k, term j is present for
+        # a contiguous run of r: j = 0 for r >= k, 0 < j < k for k - j <= r <= p - j, j = k for
+        # r <= p - k; each r's terms are added in A2.3's order (j increasing), its first replacing 0.
+        a = np.empty((2, p + 1, p + 1, m))
         a[0, 0] = 1.0
+        s1, s2 = 0, 1
         for k in range(1, n + 1):
-            d = np.zeros(m)
-            rk, pk = r - k, p - k
-            if r >= k:
-                a[s2, 0] = a[s1, 0] / ndu[pk + 1, rk]
-                d = a[s2, 0] * ndu[rk, pk]
-            j1 = 1 if rk >= -1 else -rk
-            j2 = k - 1 if r - 1 <= pk else p - r
-            for j in range(j1, j2 + 1):
-                a[s2, j] = (a[s1, j] - a[s1, j - 1]) / ndu[pk + 1, rk + j]
-                d = d + a[s2, j] * ndu[rk + j, pk]
-            if r <= pk:
-                a[s2, k] = -a[s1, k - 1] / ndu[pk + 1, r]
-                d = d + a[s2, k] * ndu[r, pk]
-            ders[k, r] = d
+            pk = p - k
+            a1, a2 = a[s1], a[s2]
+            d = np.zeros((p + 1, m))
+            a2[0, k:] = a1[0, k:] / ndu[pk + 1, :p + 1 - k]
+            d[k:] = a2[0, k:] * ndu[:p + 1 - k, pk]
+            for j in range(1, k):
+                lo, hi = k - j, p - j + 1  # r in [lo, hi); ndu's rows r - k + j
+                a2[j, lo:hi] = (a1[j, lo:hi] - a1[j - 1, lo:hi]) / ndu[pk + 1, lo - k + j:hi - k + j]
+                d[lo:hi] = d[lo:hi] + a2[j, lo:hi] * ndu[lo - k + j:hi - k + j, pk]
+            a2[k, :pk + 1] = -a1[k - 1, :pk + 1] / ndu[pk + 1, :pk + 1]
+            d[:pk + 1] = d[:pk + 1] + a2[k, :pk + 1] * ndu[:pk + 1, pk]
+            ders[k] = d
             s1, s2 = s2, s1
     factor = float(p)
     for k in range(1, n + 1):

@@ -154,6 +154,92 @@ def test_basis_matrix_matches_scipy_design_matrix(data, p, extra):
     assert_allclose(basis_matrix(t, p, n, u, 0)[0], ref, rtol=0, atol=1e-14)
 
 
+
+def _textbook_a22(knots, p, span, u):
+    """A2.2 as The NURBS Book writes it (a loop over r), on whole arrays of parameters."""
+    m = u.shape[0]
+    N = np.zeros((p + 1, m))
+    N[0] = 1.0
+    left, right = np.zeros((p + 1, m)), np.zeros((p + 1, m))
+    for j in range(1, p + 1):
+        left[j] = u - knots[span + 1 - j]
+        right[j] = knots[span + j] - u
+        saved = np.zeros(m)
+        for r in range(j):
+            temp = N[r] / (right[r + 1] + left[j - r])
+            N[r] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        N[j] = saved
+    return N.T
+
+
+def _textbook_a23(knots, p, span, u, order):
+    """A2.3 as The NURBS Book writes it (loops over j, r, k and the coefficients' j)."""
+    m, n = u.shape[0], min(order, p)
+    ndu = np.empty((p + 1, p + 1, m))
+    ndu[0, 0] = 1.0
+    left, right = np.zeros((p + 1, m)), np.zeros((p + 1, m))
+    for j in range(1, p + 1):
+        left[j] = u - knots[span + 1 - j]
+        right[j] = knots[span + j] - u
+        saved = np.zeros(m)
+        for r in range(j):
+            ndu[j, r] = right[r + 1] + left[j - r]
+            temp = ndu[r, j - 1] / ndu[j, r]
+            ndu[r, j] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        ndu[j, j] = saved
+    ders = np.zeros((order + 1, p + 1, m))
+    ders[0] = ndu[:, p]
+    a = np.empty((2, p + 1, m))
+    for r in range(p + 1):
+        s1, s2 = 0, 1
+        a[0, 0] = 1.0
+        for k in range(1, n + 1):
+            d = np.zeros(m)
+            rk, pk = r - k, p - k
+            if r >= k:
+                a[s2, 0] = a[s1, 0] / ndu[pk + 1, rk]
+                d = a[s2, 0] * ndu[rk, pk]
+            j1 = 1 if rk >= -1 else -rk
+            j2 = k - 1 if r - 1 <= pk else p - r
+            for j in range(j1, j2 + 1):
+                a[s2, j] = (a[s1, j] - a[s1, j - 1]) / ndu[pk + 1, rk + j]
+                d = d + a[s2, j] * ndu[rk + j, pk]
+            if r <= pk:
+                a[s2, k] = -a[s1, k - 1] / ndu[pk + 1, r]
+                d = d + a[s2, k] * ndu[r, pk]
+            ders[k, r] = d
+            s1, s2 = s2, s1
+    factor = float(p)
+    for k in range(1, n + 1):
+        ders[k] *= factor
+        factor *= p - k
+    return ders.transpose(2, 0, 1)
+
+
+@SETTINGS
+@given(data=st.data(), p=st.integers(1, 10), extra=st.integers(0, 7), order=st.integers(0, 12),
+       on_knots=st.booleans())
+def test_basis_is_the_textbook_loops_bit_for_bit(data, p, extra, order, on_knots):
+    """basis_functions and basis_derivatives take A2.2's and A2.3's inner loops over r as whole rows
+    (for speed on a few points: 1.3-2.7x on 1-41 points of degree 3-9); the operations on each
+    value are the textbook's, in its order, so every bit (the sign of zero too) is the loops'."""
+    n = p + 1 + extra
+    t = data.draw(knot_vectors(p, n))
+    lo, hi = t[p], t[n]
+    u = np.clip(lo + np.array(data.draw(st.lists(fractions, min_size=1, max_size=40))) * (hi - lo), lo, hi)
+    if on_knots:  # knots inside the domain, of any multiplicity the strategy drew
+        u = np.concatenate([u, t[(t >= lo) & (t <= hi)]])
+    span = find_span(t, p, n, u)
+    N, D = basis_functions(t, p, span, u), basis_derivatives(t, p, span, u, order)
+    N0, D0 = _textbook_a22(t, p, span, u), _textbook_a23(t, p, span, u, order)
+    assert_array_equal(N, N0)
+    assert_array_equal(np.signbit(N), np.signbit(N0))
+    assert_array_equal(D, D0)
+    assert_array_equal(np.signbit(D), np.signbit(D0))
+
+
 # ------------------------------------------------------------------------------------- oracles
 @SETTINGS
 @given(data=st.data())
