@@ -107,7 +107,7 @@ from .nsided_measure import count_folds, fill_folds, measure_fill
 from .nsided_patches import FairSystems, corner_patch, patch_poles
 from .nsided_poly import cart
 from .nsided_prepare import choose_split, split_short_loop, working_sides
-from .nsided_types import FillQuality, HoleFill, HoleSide, side_from_surface
+from .nsided_types import FillQuality, HoleFill, HoleSide, boundary_curve, side_from_surface
 from .plate_fill import PlateFill, fill_plate
 
 __all__ = [
@@ -115,6 +115,7 @@ __all__ = [
     "HoleFill",
     "FillQuality",
     "side_from_surface",
+    "boundary_curve",
     "closest_parameters",
     "fill_hole",
     "fold_free_fill",

@@ -20,7 +20,7 @@ from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 from .nsided_loops import closest_parameters
 
-__all__ = ["HoleSide", "HoleFill", "FillQuality", "side_from_surface"]
+__all__ = ["HoleSide", "HoleFill", "FillQuality", "side_from_surface", "boundary_curve"]
 
 Array = NDArray[np.float64]
 
@@ -181,6 +181,28 @@ def side_from_surface(surface: BSplineSurface, edge: str, reverse: bool = False)
         the surface (homogeneous for a rational surface), The NURBS Book eq. (3.17) applied to the
         first two rows of homogeneous poles.
     """
+    s, H, (p, Kb), (q, Kc) = _boundary_net(surface, edge)
+    row, cross, cross2 = _start_jet(H, Kc, q)
+    curve = _row_curve(s, p, Kb, row)
+    X = BSplineCurve(p, Kb, cross)
+    X2 = BSplineCurve(p, Kb, cross2)
+    if reverse:
+        curve, X, X2 = curve.reverse(), X.reverse(), X2.reverse()
+    return HoleSide(curve, X, X2)
+
+
+def boundary_curve(surface: BSplineSurface, edge: str) -> BSplineCurve:
+    """The curve of :func:`side_from_surface` (``reverse=False``) alone: the same poles, knots and
+    weights, without the cross derivatives (a caller choosing among a surface's four boundaries)."""
+    s, H, (p, Kb), _ = _boundary_net(surface, edge)
+    return _row_curve(s, p, Kb, H[:, 0])
+
+
+def _boundary_net(surface: BSplineSurface, edge: str) -> tuple[BSplineSurface, Array, tuple[int, Array],
+                                                                 tuple[int, Array]]:
+    """``surface`` clamped, its homogeneous net turned so that ``edge`` is the first row of the second
+    index (the far rows first and the parameter reflected for ``'u1'``, ``'v1'``), and the degree and
+    knots along the edge and across it."""
     if not isinstance(surface, BSplineSurface):
         raise InvalidGeometryError(f"surface: expected a BSplineSurface, got {type(surface).__name__}")
     if edge not in ("u0", "u1", "v0", "v1"):
@@ -196,16 +218,14 @@ def side_from_surface(surface: BSplineSurface, edge: str, reverse: bool = False)
         (p, q), (Kb, Kc) = s.degree, s.knots
     if edge[1] == "1":  # the far rows first, the parameter reflected: derivatives into the surface
         H, Kc = H[:, ::-1], -Kc[::-1]
-    row, cross, cross2 = _start_jet(H, Kc, q)
+    return s, H, (p, Kb), (q, Kc)
+
+
+def _row_curve(s: BSplineSurface, p: int, Kb: Array, row: Array) -> BSplineCurve:
+    """The boundary curve of the homogeneous pole row ``row`` of ``s``."""
     if s.is_rational:
-        curve = BSplineCurve(p, Kb, row[:, :3] / row[:, 3:], row[:, 3])
-    else:
-        curve = BSplineCurve(p, Kb, row)
-    X = BSplineCurve(p, Kb, cross)
-    X2 = BSplineCurve(p, Kb, cross2)
-    if reverse:
-        curve, X, X2 = curve.reverse(), X.reverse(), X2.reverse()
-    return HoleSide(curve, X, X2)
+        return BSplineCurve(p, Kb, row[:, :3] / row[:, 3:], row[:, 3])
+    return BSplineCurve(p, Kb, row)
 
 
 def _start_jet(H: Array, K: Array, q: int) -> tuple[Array, Array, Array]:

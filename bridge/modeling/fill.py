@@ -52,6 +52,7 @@ from occsurf.algorithms.kernel.surface import BSplineSurface
 from occsurf.algorithms.topology.nsided import (
     HoleFill,
     HoleSide,
+    boundary_curve,
     closest_parameters,
     fill_hole,
     measure_fill,
@@ -234,11 +235,11 @@ def _iso_side(surf: BSplineSurface, pts: np.ndarray) -> HoleSide:
     length = max(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()), 1e-300)
     cands = []
     for e in ("u0", "u1", "v0", "v1"):  # the nearest iso-boundary on a coarse sampling ...
-        side = side_from_surface(surf, e)
-        dense = side.curve.evaluate(np.linspace(*side.curve.domain, 201))
+        curve = boundary_curve(surf, e)  # side_from_surface's curve, without its cross fields
+        dense = curve.evaluate(np.linspace(*curve.domain, 201))
         coarse = float(np.sqrt(((pts[:, None] - dense[None]) ** 2).sum(-1).min(axis=1)).max())
-        cands.append((coarse, side))
-    side = min(cands, key=lambda c: c[0])[1]
+        cands.append((coarse, e))
+    side = side_from_surface(surf, min(cands, key=lambda c: c[0])[1])
     t, dist = closest_parameters(side.curve, pts)  # ... then its exact distances
     worst = float(dist.max())
     if worst > max(ISO_TOLERANCE * length, 1e-7):

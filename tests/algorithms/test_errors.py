@@ -8,6 +8,8 @@ import dataclasses
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 from numpy.testing import assert_array_equal
 
 from occsurf.algorithms import (
@@ -19,6 +21,7 @@ from occsurf.algorithms import (
     ToleranceError,
     tolerances,
 )
+from occsurf.algorithms._validate import check_knots
 
 # A valid cubic: 5 poles, one interior knot.
 P = np.array([[0.0, 0.0], [1.0, 2.0], [2.0, -1.0], [3.0, 2.0], [4.0, 0.0]])
@@ -72,6 +75,44 @@ def test_valid_reference_objects_construct():
 def test_bad_knots(knots, match):
     with pytest.raises(InvalidGeometryError, match=match):
         curve(knots=knots)
+
+
+
+def _knots_reference(t: np.ndarray, degree: int) -> str | None:
+    """check_knots' order and multiplicity rules as first written (np.diff, np.unique's counts)."""
+    d = np.diff(t)
+    if np.any(d < 0):
+        i = int(np.argmax(d < 0))
+        return f"must be non-decreasing, but knot {i + 1} = {float(t[i + 1])!r} < knot {i} = {float(t[i])!r}"
+    vals, counts = np.unique(t, return_counts=True)
+    if np.any(counts > degree + 1):
+        i = int(np.argmax(counts))
+        return f"multiplicity of knot {float(vals[i])!r} is {counts[i]}, more than degree + 1 = {degree + 1}"
+    return None
+
+
+@given(degree=st.integers(1, 6), runs=st.lists(st.tuples(st.sampled_from([-1.0, -0.0, 0.0, 0.25, 0.5, 1.0, 2.0]),
+                                                          st.integers(1, 8)), min_size=1, max_size=8),
+       ordered=st.booleans())
+@settings(max_examples=300, deadline=None)
+def test_knot_order_and_multiplicity_rules_as_first_written(degree, runs, ordered):
+    """The order test compares neighbours and the multiplicity test ``t[i] == t[i + p + 1]`` (no sort):
+    on knot vectors of any runs (unsorted ones, signed zeros), the same verdict and message as
+    np.diff and np.unique's counts give."""
+    if ordered:  # the runs in increasing order: valid vectors, or too many repeats of one knot
+        runs = sorted(runs, key=lambda r: r[0])
+    t = np.array([v for v, k in runs for _ in range(k)])
+    assume(t.size >= 2 * degree + 2)  # at least degree + 1 poles, as every caller has
+    want = _knots_reference(t, degree)
+    try:
+        check_knots(t, degree, t.size - degree - 1)
+        got = None
+    except InvalidGeometryError as err:
+        got = str(err).removeprefix("knots: ")
+    if want is None:  # the later checks (length, empty domain) may still refuse
+        assert got is None or not got.startswith(("must be non-decreasing", "multiplicity"))
+    else:
+        assert got == want
 
 
 def test_empty_domain():
