@@ -28,17 +28,40 @@ __all__ = ["kron_sum"]
 MAX_HALF_BAND = 16
 
 
-def _band(M: sp.spmatrix, h: int) -> np.ndarray:
-    """``M`` as its band: ``out[i, d + h] = M[i, i + d]`` for ``|d| <= h`` (zero outside ``M``)."""
-    C = sp.coo_matrix(M)
+def _band(M: sp.spmatrix | np.ndarray, h: int) -> np.ndarray:
+    """``M`` as its band: ``out[i, d + h] = M[i, i + d]`` for ``|d| <= h`` (zero outside ``M``); a
+    dense ``M`` is read in place (its zeros are the zeros a sparse copy would leave out)."""
     out = np.zeros((M.shape[0], 2 * h + 1))
+    if isinstance(M, np.ndarray):
+        i, j = _band_index(M.shape[0], h)
+        inside = (j >= 0) & (j < M.shape[1])
+        out[inside] = M[np.broadcast_to(i, j.shape)[inside], j[inside]]
+        return out
+    C = sp.coo_matrix(M)
     out[C.row, C.col - C.row + h] = C.data
     return out
 
 
-def _half_band(M: sp.spmatrix) -> int:
+def _band_index(m: int, h: int) -> tuple[np.ndarray, np.ndarray]:
+    """Rows ``(m, 1)`` and columns ``(m, 2 h + 1)`` of the band's entries."""
+    i = np.arange(m)[:, None]
+    return i, i + np.arange(-h, h + 1)[None, :]
+
+
+def _half_band(M: sp.spmatrix | np.ndarray) -> int:
+    """The largest ``|i - j|`` of a non-zero entry (0 for none)."""
+    if isinstance(M, np.ndarray):
+        r, c = np.nonzero(M)
+        return int(np.abs(c - r).max(initial=0))
     C = sp.coo_matrix(M)
     return int(np.abs(C.col.astype(np.int64) - C.row).max(initial=0))
+
+
+def _square(M: sp.spmatrix | np.ndarray) -> sp.spmatrix | np.ndarray:
+    """A dense 2-D float array as it is (read in place), anything else as CSR."""
+    if isinstance(M, np.ndarray) and M.ndim == 2 and M.dtype == np.float64:
+        return M
+    return sp.csr_matrix(M)
 
 
 def kron_sum(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix | np.ndarray]]) -> sp.csr_matrix:
@@ -69,8 +92,8 @@ def kron_sum(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix 
     """
     if not terms:
         raise InvalidGeometryError("kron_sum: expected at least one term, got none")
-    As = [sp.csr_matrix(a) for _, a, _ in terms]
-    Bs = [sp.csr_matrix(b) for _, _, b in terms]
+    As = [_square(a) for _, a, _ in terms]
+    Bs = [_square(b) for _, _, b in terms]
     m, n = As[0].shape[0], Bs[0].shape[0]
     if any(a.shape != (m, m) for a in As) or any(b.shape != (n, n) for b in Bs):
         raise InvalidGeometryError(f"kron_sum: expected square A_k of one size and B_k of one size, got "
@@ -79,7 +102,7 @@ def kron_sum(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix 
     if max(ha, hb) > MAX_HALF_BAND:
         total = None
         for (c, _, _), a, b in zip(terms, As, Bs):
-            k = sp.kron(a, b)
+            k = sp.kron(sp.csr_matrix(a), sp.csr_matrix(b))
             k = k if c == 1 else c * k
             total = k if total is None else total + k
         out = sp.csr_matrix(total)

@@ -259,7 +259,7 @@ def _fair_system(ku: bytes, kv: bytes, degree: tuple[int, int], free: NDArray[np
                  ) -> tuple[sparse.csr_matrix, SuperLU]:
     """The thin-plate energy's free-by-fixed block and the free block's factors
     (:func:`_fair_interior`), for knots given as bytes."""
-    G = [[sparse.csr_matrix(_gram(np.frombuffer(k), degree[d], o)) for o in range(3)] for d, k in enumerate((ku, kv))]
+    G = [[_gram(np.frombuffer(k), degree[d], o) for o in range(3)] for d, k in enumerate((ku, kv))]  # dense, read by kron_sum
     K = kron_sum([(1, G[0][2], G[1][0]), (2, G[0][1], G[1][1]), (1, G[0][0], G[1][2])])
     f = free.ravel()
     Kf = K[f]

@@ -12,6 +12,7 @@ shared by the fill's modules: homogeneous to Cartesian points and tangents, unit
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -44,7 +45,7 @@ class Poly:
         Y = np.array([np.asarray(c[2], float) for c in conds])
         for row, (t, k, _) in enumerate(conds):
             for c in range(k, m):
-                A[row, c] = np.prod(np.arange(c - k + 1, c + 1)) * t ** (c - k)
+                A[row, c] = math.prod(range(c - k + 1, c + 1)) * t ** (c - k)
         return cls(np.linalg.solve(A, Y.reshape(m, -1)))
 
     def __call__(self, t: float | Array, k: int = 0) -> Array:
@@ -52,7 +53,7 @@ class Poly:
         t = np.asarray(t, float)
         out = np.zeros(t.shape + self.coef.shape[1:])
         for c in range(k, self.coef.shape[0]):
-            out += np.multiply.outer(np.prod(np.arange(c - k + 1, c + 1)) * t ** (c - k), self.coef[c])
+            out += np.multiply.outer(math.prod(range(c - k + 1, c + 1)) * t ** (c - k), self.coef[c])
         return out
 
     def __mul__(self, other: Poly) -> Poly:
