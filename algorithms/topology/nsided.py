@@ -242,6 +242,8 @@ def _central_split(sides: Sequence[HoleSide], stop_at_fold: bool) -> HoleFill | 
         unit, S, rational, size, origin = working_sides(split)
     n = len(S)
     sig = np.array([choose_split(sd) for sd in S])
+    for sd, t in zip(S, sig):  # the corners and the split point: asked about by every layout
+        sd.prime(np.array([0.0, t, 1.0]))
     vdom, pdom = domain_picture(sig)
     mid = midpoints(S, sig, rational)
     loop = np.concatenate([cart(sd.B.evaluate(np.linspace(0.0, 1.0, 49)[:-1]), rational) for sd in S])

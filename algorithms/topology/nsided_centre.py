@@ -62,7 +62,7 @@ def midpoints(S: list[Side], sig: Array, rational: bool) -> Midpoints:
     n = len(S)
     Fm = [sd.fields(sig[i]) for i, sd in enumerate(S)]
     mh = np.array([S[i].B.evaluate(sig[i]) for i in range(n)])
-    mder = np.array([S[i].B.derivatives(sig[i], 1)[1] for i in range(n)])
+    mder = np.array([S[i].tangent(sig[i]) for i in range(n)])
     mc = cart(mh, rational)
     normals = np.zeros((n, 3))
     for i in range(n):

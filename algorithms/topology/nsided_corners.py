@@ -110,8 +110,8 @@ def _corner(i: int, S: list[Side], sig: Array, rational: bool,
     tau_j = 1.0 - sig[j]
     (Fa,), (dFa,) = S[i].fields(0.0)  # (nf, w) fields of side i at s=0
     (Fb,), (dFb,) = S[j].fields(1.0)  # of side i-1 at s=1
-    ta = sig[i] * S[i].B.derivatives(0.0, 1)[1]  # a'(0)
-    tb = -tau_j * S[j].B.derivatives(1.0, 1)[1]  # b'(0)
+    ta = sig[i] * S[i].tangent(0.0)  # a'(0)
+    tb = -tau_j * S[j].tangent(1.0)  # b'(0)
     h0 = S[i].B.evaluate(0.0)  # the corner (homogeneous, weight 1)
     flat = _check_corner_angles(i, j, h0, cart_tangent(h0, ta, rational), cart_tangent(h0, tb, rational), Fa, Fb,
                                 rational)

@@ -33,12 +33,34 @@ class Side:
     def __init__(self, B: BSplineCurve, X: BSplineCurve, rational: bool) -> None:
         self.B, self.X, self.rational = B, X, rational
         self.nf = 3 if rational else 2
+        #: What :meth:`prime` evaluated, per parameter: (fields, their derivatives, B's derivatives to order 1).
+        self._primed: dict[float, tuple[Array, Array, Array]] = {}
+
+    def prime(self, s: Array) -> None:
+        """Evaluate the side once at the parameters ``s`` (the corners and the split point) for the
+        fill's many questions there: :meth:`fields` and :meth:`tangent` at each ``s[k]`` then return
+        what one call at ``s[k]`` would, bit for bit (the evaluation of a point does not depend on the
+        other points of its call, and the first derivative on the highest order asked)."""
+        s = np.asarray(s, float)
+        DB = self.B.derivatives(s, 2)
+        F, dF = self._fields(DB, self.X.derivatives(s, 1))
+        for k, sk in enumerate(s):
+            self._primed[float(sk)] = (F[k:k + 1], dF[k:k + 1], DB[k, :2])
+
+    def tangent(self, s: float) -> Array:
+        """``B'(s)``: ``B.derivatives(s, 1)[1]`` (from :meth:`prime` where it evaluated ``s``)."""
+        kept = self._primed.get(float(s))
+        return kept[2][1] if kept is not None else self.B.derivatives(s, 1)[1]
 
     def fields(self, s: float | Array) -> tuple[Array, Array]:
         """Fields ``[X, B', (B)]`` and their s-derivatives at ``s``: each (m, nf, w)."""
+        if np.ndim(s) == 0 and float(s) in self._primed:
+            F, dF, _ = self._primed[float(s)]
+            return F, dF
         s = np.atleast_1d(np.asarray(s, float))
-        DB = self.B.derivatives(s, 2)
-        DX = self.X.derivatives(s, 1)
+        return self._fields(self.B.derivatives(s, 2), self.X.derivatives(s, 1))
+
+    def _fields(self, DB: Array, DX: Array) -> tuple[Array, Array]:
         if self.rational:
             F = np.stack([DX[:, 0], DB[:, 1], DB[:, 0]], 1)
             dF = np.stack([DX[:, 1], DB[:, 2], DB[:, 1]], 1)

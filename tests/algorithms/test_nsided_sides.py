@@ -204,3 +204,31 @@ def test_bad_input_is_reported() -> None:
         side_from_normals("not a curve", s, N)  # type: ignore[arg-type]
     with pytest.raises(InvalidGeometryError, match="increasing"):
         fit_boundary(s[::-1], N, 1e-6)
+
+
+@test_settings(40)
+@given(rational=st.booleans(), degree=st.integers(1, 7), extra=st.integers(0, 5), split=st.floats(0.05, 0.95),
+       seed=st.integers(0, 2 ** 16))
+def test_primed_side_answers_as_unprimed_bit_for_bit(rational, degree, extra, split, seed):
+    """Side.prime evaluates a side once at its corners and split point (one call for several
+    parameters, order 2); fields() and tangent() there must then equal a fresh single-point call to
+    the bit, which the fill's choices (corner twists, midpoints) rely on. Fails if prime keeps the
+    wrong point's row or tangent() reads the second derivative."""
+    from occsurf.algorithms.topology.nsided_prepare import Side
+
+    rng = np.random.default_rng(seed)
+    n = degree + 1 + extra
+    kn = np.r_[[0.0] * (degree + 1), np.sort(rng.random(extra)), [1.0] * (degree + 1)]
+    P = rng.normal(size=(n, 3)) * 10.0 ** rng.uniform(-2, 2)
+    if rational:  # working coordinates: the boundary homogeneous (w P, w), a polynomial curve in 4-D
+        w = rng.uniform(0.5, 2.0, (n, 1))
+        P = np.c_[w * P, w]
+    B = BSplineCurve(degree, kn, P)
+    X = BSplineCurve(degree, kn, rng.normal(size=(n, 4 if rational else 3)))
+    fresh, primed = Side(B, X, rational), Side(B, X, rational)
+    primed.prime(np.array([0.0, split, 1.0]))
+    for s in (0.0, split, 1.0):
+        for a, b in zip(fresh.fields(s), primed.fields(s)):
+            assert a.shape == b.shape and np.array_equal(a, b)
+        assert np.array_equal(fresh.tangent(s), primed.tangent(s))
+        assert np.array_equal(primed.tangent(s), B.derivatives(s, 1)[1])
