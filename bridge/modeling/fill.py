@@ -233,13 +233,7 @@ def find_loops(shape: TopoDS_Shape, all_loops: bool = False) -> list[tuple[list[
 def _iso_side(surf: BSplineSurface, pts: np.ndarray) -> HoleSide:
     """The iso-boundary of ``surf`` on which the edge points ``pts`` lie, as a HoleSide."""
     length = max(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()), 1e-300)
-    cands = []
-    for e in ("u0", "u1", "v0", "v1"):  # the nearest iso-boundary on a coarse sampling ...
-        curve = boundary_curve(surf, e)  # side_from_surface's curve, without its cross fields
-        dense = curve.evaluate(np.linspace(*curve.domain, 201))
-        coarse = float(np.sqrt(((pts[:, None] - dense[None]) ** 2).sum(-1).min(axis=1)).max())
-        cands.append((coarse, e))
-    side = side_from_surface(surf, min(cands, key=lambda c: c[0])[1])
+    side = side_from_surface(surf, _nearest_boundary(surf, pts))
     t, dist = closest_parameters(side.curve, pts)  # ... then its exact distances
     worst = float(dist.max())
     if worst > max(ISO_TOLERANCE * length, 1e-7):
@@ -254,6 +248,37 @@ def _iso_side(surf: BSplineSurface, pts: np.ndarray) -> HoleSide:
         side = HoleSide(side.curve.segment(t0, t1), side.cross.segment(t0, t1),
                         None if side.cross2 is None else side.cross2.segment(t0, t1))
     return side
+
+
+def _nearest_boundary(surf: BSplineSurface, pts: np.ndarray) -> str:
+    """Which iso-boundary of ``surf`` (``'u0'``, ``'u1'``, ``'v0'``, ``'v1'``) the points ``pts`` (m, 3)
+    lie nearest to on a coarse sampling: the largest distance of a point from 201 samples of the
+    boundary, the least over the four (the first of equals), as :func:`_iso_side` chooses.
+
+    A boundary is sampled only where it could win: it lies (with its samples) in its poles' box, so
+    the farthest point's distance to that box is a lower bound of its number; boundaries are taken
+    by that bound and the rest left once it exceeds the best number (bearing and ring holes: one or
+    two of the four sampled)."""
+    order = ("u0", "u1", "v0", "v1")
+    curves = {e: boundary_curve(surf, e) for e in order}  # side_from_surface's curves alone
+    bound = {e: _box_distance(c.control_points, pts) for e, c in curves.items()}
+    best: tuple[float, int] | None = None
+    for e in sorted(order, key=lambda e: bound[e]):
+        if best is not None and bound[e] > best[0]:
+            break  # this boundary and the rest are farther than the best one: none can win
+        c = curves[e]
+        dense = c.evaluate(np.linspace(*c.domain, 201))
+        coarse = float(np.sqrt(((pts[:, None] - dense[None]) ** 2).sum(-1).min(axis=1)).max())
+        if best is None or (coarse, order.index(e)) < best:
+            best = (coarse, order.index(e))
+    assert best is not None
+    return order[best[1]]
+
+
+def _box_distance(poles: np.ndarray, pts: np.ndarray) -> float:
+    """The largest distance of the points ``pts`` (m, 3) from the axis-aligned box of ``poles`` (n, 3)."""
+    lo, hi = poles.min(axis=0), poles.max(axis=0)
+    return float(np.linalg.norm(np.maximum(lo - pts, 0.0) + np.maximum(pts - hi, 0.0), axis=1).max())
 
 
 def hole_sides(edges: list[Any], faces: list[Any | None]) -> list[HoleSide]:

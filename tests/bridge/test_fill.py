@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.bridge.conversion.splines import make_face
@@ -240,3 +242,45 @@ def test_round_hole_with_a_trimming_edge_is_capped(bump: float) -> None:
     dev = np.abs(P[:, 2] - bump * (P[:, 0] ** 2 + P[:, 1] ** 2) / 8.0).max()
     assert dev <= (1e-12 if bump == 0 else 2.4e-3)
     assert np.hypot(P[:, 0], P[:, 1]).max() <= 0.5 + 1e-5
+
+
+def _nearest_boundary_by_sampling_all(surf, pts):
+    """The first choice of ``_iso_side`` as first written: every boundary sampled at 201 points."""
+    from occsurf.algorithms.topology.nsided import side_from_surface
+
+    cands = []
+    for e in ("u0", "u1", "v0", "v1"):
+        c = side_from_surface(surf, e).curve
+        dense = c.evaluate(np.linspace(*c.domain, 201))
+        cands.append((float(np.sqrt(((pts[:, None] - dense[None]) ** 2).sum(-1).min(axis=1)).max()), e))
+    return min(cands, key=lambda c: c[0])[1]
+
+
+@given(seed=st.integers(0, 2 ** 16), rational=st.booleans(), edge=st.sampled_from(["u0", "u1", "v0", "v1"]),
+       part=st.tuples(st.floats(0.0, 0.4), st.floats(0.6, 1.0)), collapse=st.booleans(), bend=st.floats(0.0, 3.0),
+       scatter=st.sampled_from([0.0, 0.0, 0.1, 0.5, 1.5]))
+@settings(max_examples=80, deadline=None)
+def test_nearest_boundary_samples_only_boundaries_that_could_win(seed, rational, edge, part, collapse, bend, scatter):
+    """_nearest_boundary samples a boundary only when its poles' box is no farther from the edge points than
+    the best boundary sampled so far: on surfaces bent onto themselves (boundaries close together),
+    with a boundary collapsed to a point, the edge covering part of a boundary and points scattered
+    off it (where several boundaries come close), it picks the boundary that sampling all four picks
+    (the first of equals)."""
+    from occsurf.algorithms import BSplineSurface
+    from occsurf.algorithms.topology.nsided import boundary_curve
+    from occsurf.bridge.modeling.fill import _nearest_boundary
+
+    rng = np.random.default_rng(seed)
+    nu, nv = 4 + int(rng.integers(0, 3)), 4 + int(rng.integers(0, 3))
+    U, V = np.meshgrid(np.linspace(0, 1, nu), np.linspace(0, 1, nv), indexing="ij")
+    P = np.stack([np.cos(bend * U) * (1 + V), np.sin(bend * U) * (1 + V), 0.3 * V], -1)
+    P += 0.05 * rng.normal(size=P.shape)
+    if collapse:
+        P[:, 0] = P[:, 0].mean(axis=0)  # boundary v0 a pole
+    w = rng.uniform(0.5, 2.0, (nu, nv)) if rational else None
+    kn = lambda n: np.r_[[0.0] * 4, np.linspace(0, 1, n - 2)[1:-1], [1.0] * 4]  # noqa: E731
+    surf = BSplineSurface((3, 3), (kn(nu), kn(nv)), P, w)
+    c = boundary_curve(surf, edge)
+    pts = c.evaluate(np.linspace(*part, 41)) + scatter * rng.normal(size=(41, 3))  # off it too: close calls
+    assume(float(np.ptp(pts, axis=0).max()) > 1e-6)  # not the collapsed boundary itself
+    assert _nearest_boundary(surf, pts) == _nearest_boundary_by_sampling_all(surf, pts)
