@@ -206,8 +206,10 @@ def _corner_knot(K: Array, degree: int) -> Array:
 
 # ==================================================================================== fairing
 @functools.lru_cache(maxsize=64)
-def _gram_cached(knots_key: bytes, degree: int, order: int) -> Array:
-    """:func:`_gram` for the knots as bytes (hashable); the result is read-only, shared by the cache."""
+def _gram_cached(knots_key: bytes, degree: int) -> tuple[Array, Array, Array]:
+    """The Gram matrices of orders 0, 1 and 2 (:func:`_gram`) for the knots as bytes (hashable), from
+    one evaluation of the basis and its derivatives at the Gauss points (each order's values are
+    those a call for that order alone gives); read-only, shared by the cache."""
     knots = np.frombuffer(knots_key)
     n = len(knots) - degree - 1
     xg, wg = gauss_legendre(degree + 1)
@@ -215,15 +217,19 @@ def _gram_cached(knots_key: bytes, degree: int, order: int) -> Array:
     a, b = br[:-1], br[1:]
     x = (0.5 * (b - a)[:, None] * (xg + 1) + a[:, None]).ravel()
     wt = (0.5 * (b - a)[:, None] * wg).ravel()
-    D = basis_matrix(knots, degree, n, x, order)[order]
-    G = D.T @ (wt[:, None] * D)
-    G.flags.writeable = False
-    return G
+    B = basis_matrix(knots, degree, n, x, 2)
+    out = []
+    for D in B:
+        G = D.T @ (wt[:, None] * D)
+        G.flags.writeable = False
+        out.append(G)
+    return out[0], out[1], out[2]
 
 
 def _gram(knots: Array, degree: int, order: int) -> Array:
-    """``G[i, j] = int N_i^(order) N_j^(order)`` by Gauss-Legendre per span (cached per space)."""
-    return _gram_cached(np.ascontiguousarray(knots, float).tobytes(), int(degree), int(order))
+    """``G[i, j] = int N_i^(order) N_j^(order)`` by Gauss-Legendre per span (cached per space), for
+    ``order`` 0, 1 or 2."""
+    return _gram_cached(np.ascontiguousarray(knots, float).tobytes(), int(degree))[order]
 
 
 def _fair_interior(H: Array, free: NDArray[np.bool_], degree: tuple[int, int], knots: tuple[Array, Array],

@@ -23,7 +23,7 @@ from __future__ import annotations
 import tracemalloc
 
 import numpy as np
-from hypothesis import given
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from occsurf.algorithms.kernel.basis import greville
@@ -182,3 +182,26 @@ def test_kept_factors_give_the_poles_of_a_fresh_factorisation_bit_for_bit(args, 
             want = _fair_interior(H1, other, degree, knots)
         np.testing.assert_array_equal(_fair_interior(H1, other, degree, knots), want)
         assert _fair_system_cached.cache_info().misses == 2
+
+
+@given(p=st.integers(1, 10), inner=st.lists(st.floats(0.01, 0.99), max_size=10), snap=st.booleans())
+@settings(max_examples=60, deadline=None)
+def test_grams_of_one_basis_evaluation_equal_each_order_alone(p, inner, snap):
+    """The fairing's Gram matrices of orders 0-2 come from one evaluation of the basis to order 2 at
+    the Gauss points; each equals, bit for bit, the matrix from an evaluation to its own order only."""
+    from occsurf.algorithms.kernel.basis import basis_matrix, gauss_legendre
+    from occsurf.algorithms.topology.nsided_patches import _gram_cached
+
+    t = np.sort(np.round(np.array(inner) * 4) / 4 if snap else np.array(inner))
+    knots = np.r_[[0.0] * (p + 1), t, [1.0] * (p + 1)]
+    assume(np.all(np.unique(knots, return_counts=True)[1][1:-1] <= p))
+    n = len(knots) - p - 1
+    xg, wg = gauss_legendre(p + 1)
+    br = np.unique(knots)
+    a, b = br[:-1], br[1:]
+    x = (0.5 * (b - a)[:, None] * (xg + 1) + a[:, None]).ravel()
+    wt = (0.5 * (b - a)[:, None] * wg).ravel()
+    _gram_cached.cache_clear()
+    for order in range(3):
+        D = basis_matrix(knots, p, n, x, order)[order]
+        assert np.array_equal(_gram(knots, p, order), D.T @ (wt[:, None] * D))
