@@ -98,13 +98,15 @@ LOOP_FLATNESS = 1.0 / 32
 LOOP_MAX_SEGMENTS = 1 << 18
 
 
-def _side_polyline(curve: BSplineCurve, samples: int, seg_len: float, budget: int) -> tuple[Array, Array, Array]:
+def _side_polyline(curve: BSplineCurve, samples: int, seg_len: float, budget: int,
+                   start: Array | None = None) -> tuple[Array, Array, Array]:
     """Parameters (N+1,), points (N+1, 3) and midpoint chord deviations (N,) of one side's polyline:
     ``samples`` uniform parameters, segments bisected (all of a round at once) until each is at most
     ``seg_len`` long and deviates from the curve at its midpoint by at most ``LOOP_FLATNESS`` of its
-    length (or the segment budget is spent, or a segment's parameter width reaches round-off)."""
+    length (or the segment budget is spent, or a segment's parameter width reaches round-off).
+    ``start``: the curve's points at those ``samples`` parameters, where the caller has them."""
     t = np.linspace(0.0, 1.0, samples)
-    p = curve.evaluate(t)
+    p = curve.evaluate(t) if start is None else start
     while True:
         tm = 0.5 * (t[1:] + t[:-1])
         pm = curve.evaluate(tm)
@@ -224,12 +226,12 @@ def check_simple_loop(unit: list, tol: float, samples: int = 65) -> None:
 
     n = len(unit)
     curves = [sd.curve for sd in unit]
-    coarse = np.concatenate([c.evaluate(np.linspace(0.0, 1.0, samples)) for c in curves])
-    size = float(np.linalg.norm(np.ptp(coarse, axis=0)))
+    uniform = [c.evaluate(np.linspace(0.0, 1.0, samples)) for c in curves]
+    size = float(np.linalg.norm(np.ptp(np.concatenate(uniform), axis=0)))
     if not size > 0:
         return
     budget = LOOP_MAX_SEGMENTS // n
-    lines = [_side_polyline(c, samples, LOOP_SEGMENT_FRACTION * size, budget) for c in curves]
+    lines = [_side_polyline(c, samples, LOOP_SEGMENT_FRACTION * size, budget, u) for c, u in zip(curves, uniform)]
     T0 = np.concatenate([t[:-1] for t, _, _ in lines])
     T1 = np.concatenate([t[1:] for t, _, _ in lines])
     lo = np.concatenate([t[np.maximum(np.arange(len(t) - 1) - 2, 0)] for t, _, _ in lines])

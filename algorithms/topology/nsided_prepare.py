@@ -133,9 +133,9 @@ def working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[Side]
         rational |= sd.curve.is_rational
     unit = [HoleSide(sd.curve.clamp().reparametrize(0.0, 1.0), sd.cross.clamp().reparametrize(0.0, 1.0))
             for sd in sides]
-    ends = np.array([[sd.curve.evaluate(0.0), sd.curve.evaluate(1.0)] for sd in unit])
-    size = float(np.linalg.norm(np.ptp(np.concatenate([sd.curve.evaluate(np.linspace(0, 1, 33)) for sd in unit]),
-                                       axis=0)))
+    dense = [sd.curve.evaluate(np.linspace(0, 1, 33)) for sd in unit]  # a point evaluates alike in any call
+    ends = np.array([[d[0], d[-1]] for d in dense])
+    size = float(np.linalg.norm(np.ptp(np.concatenate(dense), axis=0)))
     size = max(size, 1e-300)
     closure_tol = tolerances.FILL_CLOSURE_TOL
     for k in range(n):

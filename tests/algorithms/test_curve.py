@@ -779,3 +779,19 @@ def test_dict_format_is_unchanged(text):
             assert value != kinds[other["type"]].from_dict(other)
     with pytest.raises(TypeError):
         hash(value)
+
+
+@SETTINGS
+@given(c=curves(), fs=st.lists(fractions, min_size=1, max_size=12), k=st.integers(0, 11), order=st.integers(1, 4))
+def test_a_point_evaluates_alike_in_any_call(c, fs, k, order):
+    """evaluate and derivatives give a parameter the same bits whatever else the call evaluates, and
+    the derivatives up to ``order - 1`` do not depend on the ``order`` asked: the n-sided fill reuses
+    one call's rows for single-point questions (its sides primed at corners and split points, the
+    loop's ends from its samples)."""
+    lo, hi = c.domain
+    u = lo + np.array(fs) * (hi - lo)
+    k = k % len(u)
+    assert_array_equal(c.evaluate(u)[k], c.evaluate(u[k]))
+    D = c.derivatives(u, order)
+    assert_array_equal(D[k], c.derivatives(u[k], order))
+    assert_array_equal(D[k, :order], c.derivatives(u[k], order - 1))
