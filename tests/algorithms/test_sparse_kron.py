@@ -5,7 +5,8 @@ The contract is bit-identity of the values: the matrix is the one ``scipy.sparse
 ``c_0 kron(A_0, B_0) + c_1 kron(A_1, B_1) + ...`` (compared with ``==``, no tolerance), with the
 same sorted pattern but for explicit zeros, which it never stores. Checked on the Gram matrices of
 B-spline spaces (the uses), on random banded matrices with negative values, holes in their band and
-cancelling terms (Hypothesis), and through the fallback for wide bands. What that does to the fills:
+cancelling terms (Hypothesis; given dense, so read in place: the central split passes its dense
+Gram matrices), and through the fallback for wide bands. What that does to the fills:
 the plate's system drops the zeros anyway (``A^T A + eps E``), so the plate is bit-identical; the
 central split's fairing factored explicit zeros where scipy had built a product in blocks (a Gram
 matrix of at most ~12 poles), so its poles move by round-off there (bound 1e-9 of the hole's size,
