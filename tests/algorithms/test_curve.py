@@ -155,27 +155,10 @@ def test_basis_matrix_matches_scipy_design_matrix(data, p, extra):
 
 
 
-def _textbook_a22(knots, p, span, u):
-    """A2.2 as The NURBS Book writes it (a loop over r), on whole arrays of parameters."""
+def _textbook_triangle(knots, p, span, u):
+    """A2.2's triangle as The NURBS Book's A2.3 keeps it (loops over j and r), on whole arrays of
+    parameters: ``ndu[r, j]`` the basis functions of degree ``j``, ``ndu[j, r]`` the knot differences."""
     m = u.shape[0]
-    N = np.zeros((p + 1, m))
-    N[0] = 1.0
-    left, right = np.zeros((p + 1, m)), np.zeros((p + 1, m))
-    for j in range(1, p + 1):
-        left[j] = u - knots[span + 1 - j]
-        right[j] = knots[span + j] - u
-        saved = np.zeros(m)
-        for r in range(j):
-            temp = N[r] / (right[r + 1] + left[j - r])
-            N[r] = saved + right[r + 1] * temp
-            saved = left[j - r] * temp
-        N[j] = saved
-    return N.T
-
-
-def _textbook_a23(knots, p, span, u, order):
-    """A2.3 as The NURBS Book writes it (loops over j, r, k and the coefficients' j)."""
-    m, n = u.shape[0], min(order, p)
     ndu = np.empty((p + 1, p + 1, m))
     ndu[0, 0] = 1.0
     left, right = np.zeros((p + 1, m)), np.zeros((p + 1, m))
@@ -189,6 +172,18 @@ def _textbook_a23(knots, p, span, u, order):
             ndu[r, j] = saved + right[r + 1] * temp
             saved = left[j - r] * temp
         ndu[j, j] = saved
+    return ndu
+
+
+def _textbook_a22(knots, p, span, u):
+    """A2.2 (the triangle's last column: the same operations as its own loop)."""
+    return _textbook_triangle(knots, p, span, u)[:, p].T
+
+
+def _textbook_a23(knots, p, span, u, order):
+    """A2.3 as The NURBS Book writes it (loops over j, r, k and the coefficients' j)."""
+    m, n = u.shape[0], min(order, p)
+    ndu = _textbook_triangle(knots, p, span, u)
     ders = np.zeros((order + 1, p + 1, m))
     ders[0] = ndu[:, p]
     a = np.empty((2, p + 1, m))
