@@ -49,10 +49,17 @@ def find_span(knots: NDArray[np.float64], degree: int, n_poles: int, u: NDArray[
         so evaluation there is a limit from the left, as in OCC.
     """
     s = np.searchsorted(knots, u, side="right") - 1
-    # The last non-empty span of the domain: largest s <= n-1 with t_s < t_n.
-    t_end = knots[n_poles]
-    last = int(np.searchsorted(knots, t_end, side="left")) - 1
-    first = int(np.searchsorted(knots, knots[degree], side="right")) - 1
+    # The last non-empty span of the domain: largest s <= n-1 with t_s < t_n; the first: the last knot
+    # equal to t_p. Where the domain's end spans are not empty (clamped knots) those are n-1 and p
+    # themselves, which two comparisons say (two searches of ~3 us each otherwise).
+    if knots[n_poles - 1] < knots[n_poles]:
+        last = n_poles - 1
+    else:
+        last = int(np.searchsorted(knots, knots[n_poles], side="left")) - 1
+    if knots[degree] < knots[degree + 1]:
+        first = degree
+    else:
+        first = int(np.searchsorted(knots, knots[degree], side="right")) - 1
     return np.minimum(np.maximum(s, first), last)  # np.clip's integer result, without its wrapper's ~4 us
 
 

@@ -790,3 +790,24 @@ def test_a_point_evaluates_alike_in_any_call(c, fs, k, order):
     D = c.derivatives(u, order)
     assert_array_equal(D[k], c.derivatives(u[k], order))
     assert_array_equal(D[k, :order], c.derivatives(u[k], order - 1))
+
+
+@SETTINGS
+@given(p=st.integers(1, 7), extra=st.integers(0, 8), quarters=st.lists(st.integers(0, 8), min_size=2, max_size=24),
+       clamped=st.booleans(), fs=st.lists(fractions, min_size=1, max_size=8))
+def test_find_span_takes_the_end_spans_without_searching_where_they_are_not_empty(p, extra, quarters, clamped, fs):
+    """find_span's first and last spans by two comparisons where the domain's end spans are not
+    empty, by searching otherwise: the same spans as the search alone, on knots with repeats at and
+    next to the domain's ends (clamped or not), at knots and between them."""
+    n = p + 1 + extra
+    if clamped:
+        inner = sorted(q / 8 for q in (quarters * n)[: n - p - 1])
+        t = np.r_[[0.0] * (p + 1), inner, [1.0] * (p + 1)]
+    else:
+        t = np.sort(np.array((quarters * (n + p + 1))[: n + p + 1], float) / 4)
+    assume(t[p] < t[n])
+    u = np.r_[t[p] + np.array(fs) * (t[n] - t[p]), t[p:n + 1]]
+    s = np.searchsorted(t, u, side="right") - 1
+    last = int(np.searchsorted(t, t[n], side="left")) - 1
+    first = int(np.searchsorted(t, t[p], side="right")) - 1
+    assert_array_equal(find_span(t, p, n, u), np.minimum(np.maximum(s, first), last))
