@@ -391,9 +391,15 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
                 done = _nk.run("grid_partials", Du, su, p, G3, out.reshape(mu, mv, r1, r1 * k))
             if done:
                 return out
+        if not self.is_rational:
+            for sel, s in span_groups(su):
+                out[sel] = self._grid_u(s, Du, G, sel)
+            return out
+        # the quotient rule once over the whole grid (per point, so the same values as per span group)
+        H = np.empty((mu, mv, r1, r1, d + 1))
         for sel, s in span_groups(su):
-            h = self._grid_u(s, Du, G, sel)
-            out[sel] = surface_quotient_rule(h) if self.is_rational else h
+            H[sel] = self._grid_u(s, Du, G, sel)
+        out[...] = surface_quotient_rule(H)
         return out
 
     def normal(self, u: ArrayLike, v: ArrayLike) -> Array:

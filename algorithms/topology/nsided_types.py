@@ -222,10 +222,11 @@ def _boundary_net(surface: BSplineSurface, edge: str) -> tuple[BSplineSurface, A
 
 
 def _row_curve(s: BSplineSurface, p: int, Kb: Array, row: Array) -> BSplineCurve:
-    """The boundary curve of the homogeneous pole row ``row`` of ``s``."""
+    """The boundary curve of the homogeneous pole row ``row`` of ``s`` (valid as ``s`` is: its knots
+    and degree along the row, its finite poles and positive weights; built unchecked)."""
     if s.is_rational:
-        return BSplineCurve(p, Kb, row[:, :3] / row[:, 3:], row[:, 3])
-    return BSplineCurve(p, Kb, row)
+        return BSplineCurve._trusted(p, Kb, row[:, :3] / row[:, 3:], row[:, 3])
+    return BSplineCurve._trusted(p, Kb, row)
 
 
 def _start_jet(H: Array, K: Array, q: int) -> tuple[Array, Array, Array]:

@@ -521,3 +521,16 @@ def test_to_dict_json_round_trip_is_exact(s):
         assert_array_equal(a, b)
     assert_array_equal(back.control_points, s.control_points)
     assert json.loads(json.dumps(back.to_dict())) == json.loads(text)
+
+
+@SETTINGS
+@given(s=surfaces(), fu=st.lists(fractions, min_size=1, max_size=9), fv=st.lists(fractions, min_size=1, max_size=6),
+       order=st.integers(1, 3), k=st.integers(0, 8))
+def test_grid_partials_of_a_row_do_not_depend_on_the_other_rows(s, fu, fv, order, k):
+    """derivatives_grid's rows (u values) are computed span group by span group, a rational
+    surface's quotient rule once over the whole grid: a row's values are the same bits as the grid
+    of that row alone (a count of folds or a curvature map does not depend on the grid's extent)."""
+    (u0, u1), (v0, v1) = s.domain
+    us, vs = u0 + np.array(fu) * (u1 - u0), v0 + np.array(fv) * (v1 - v0)
+    k %= len(us)
+    assert_array_equal(s.derivatives_grid(us, vs, order)[k], s.derivatives_grid(us[k:k + 1], vs, order)[0])
