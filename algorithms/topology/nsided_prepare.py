@@ -35,6 +35,7 @@ class Side:
         self.nf = 3 if rational else 2
         #: What :meth:`prime` evaluated, per parameter: (fields, their derivatives, B's derivatives to order 1).
         self._primed: dict[float, tuple[Array, Array, Array]] = {}
+        self._continuity: dict[float, int] | None = None
 
     def prime(self, s: Array) -> None:
         """Evaluate the side once at the parameters ``s`` (the corners and the split point) for the
@@ -70,13 +71,16 @@ class Side:
         return F, dF
 
     def continuity(self) -> dict[float, int]:
-        """Interior knot -> continuity order of the fields (B' and X) there."""
-        out: dict[float, int] = {}
-        for k, m in mult_map(self.B.knots, self.B.degree).items():
-            out[k] = min(out.get(k, 99), self.B.degree - 1 - m)
-        for k, m in mult_map(self.X.knots, self.X.degree).items():
-            out[k] = min(out.get(k, 99), self.X.degree - m)
-        return out
+        """Interior knot -> continuity order of the fields (B' and X) there (made once: the split
+        point and every patch's knot space ask)."""
+        if self._continuity is None:
+            out: dict[float, int] = {}
+            for k, m in mult_map(self.B.knots, self.B.degree).items():
+                out[k] = min(out.get(k, 99), self.B.degree - 1 - m)
+            for k, m in mult_map(self.X.knots, self.X.degree).items():
+                out[k] = min(out.get(k, 99), self.X.degree - m)
+            self._continuity = out
+        return dict(self._continuity)
 
     @property
     def degree(self) -> int:
