@@ -257,8 +257,8 @@ def _nearest_boundary(surf: BSplineSurface, pts: np.ndarray) -> str:
 
     A boundary is sampled only where it could win: it lies (with its samples) in its poles' box, so
     the farthest point's distance to that box is a lower bound of its number; boundaries are taken
-    by that bound and the rest left once it exceeds the best number (bearing and ring holes: one or
-    two of the four sampled)."""
+    by that bound and the rest left once it exceeds the best number (the 66 hole edges of the ring
+    models, n = 3..8, polynomial and rational: one of the four sampled for each)."""
     order = ("u0", "u1", "v0", "v1")
     curves = {e: boundary_curve(surf, e) for e in order}  # side_from_surface's curves alone
     bound = {e: _box_distance(c.control_points, pts) for e, c in curves.items()}
