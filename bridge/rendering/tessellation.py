@@ -136,9 +136,12 @@ def _occ_triangulation(occ_face: Any) -> tuple[np.ndarray, np.ndarray, np.ndarra
     tri = BRep_Tool.Triangulation_s(occ_face, loc)
     if tri is None or tri.NbTriangles() == 0 or not tri.HasUVNodes():
         return None
-    trsf = loc.Transformation()
     n, m = tri.NbNodes(), tri.NbTriangles()
-    xyz = np.array([tri.Node(i).Transformed(trsf).Coord() for i in range(1, n + 1)], float)
+    if loc.IsIdentity():  # gp_Pnt::Transform leaves a point as it is under the identity
+        xyz = np.array([tri.Node(i).Coord() for i in range(1, n + 1)], float)
+    else:
+        trsf = loc.Transformation()
+        xyz = np.array([tri.Node(i).Transformed(trsf).Coord() for i in range(1, n + 1)], float)
     uv = np.array([tri.UVNode(i).Coord() for i in range(1, n + 1)], float)
     tris = np.array([tri.Triangle(i).Get() for i in range(1, m + 1)], np.int64) - 1
     return uv, xyz, tris
