@@ -524,13 +524,19 @@ def test_to_dict_json_round_trip_is_exact(s):
 
 
 @SETTINGS
-@given(s=surfaces(), fu=st.lists(fractions, min_size=1, max_size=9), fv=st.lists(fractions, min_size=1, max_size=6),
-       order=st.integers(1, 3), k=st.integers(0, 8))
-def test_grid_partials_of_a_row_do_not_depend_on_the_other_rows(s, fu, fv, order, k):
-    """derivatives_grid's rows (u values) are computed span group by span group, a rational
-    surface's quotient rule once over the whole grid: a row's values are the same bits as the grid
-    of that row alone (a count of folds or a curvature map does not depend on the grid's extent)."""
-    (u0, u1), (v0, v1) = s.domain
-    us, vs = u0 + np.array(fu) * (u1 - u0), v0 + np.array(fv) * (v1 - v0)
-    k %= len(us)
-    assert_array_equal(s.derivatives_grid(us, vs, order)[k], s.derivatives_grid(us[k:k + 1], vs, order)[0])
+@given(data=st.data(), m=st.integers(1, 12), order=st.integers(0, 3), d=st.integers(2, 3), k=st.integers(0, 11))
+def test_the_quotient_rule_of_a_point_does_not_depend_on_the_other_points(data, m, order, d, k):
+    """A rational surface's grid partials apply the quotient rule (A4.4) once over the whole grid,
+    where they applied it per group of rows sharing a u-span: the rule works point by point, so a
+    point's partials are the same bits whichever points share the call. (The grid's homogeneous
+    partials themselves come from a matrix product per span group, whose summation order BLAS may
+    choose by the group's size: that part is unchanged.)"""
+    from occsurf.algorithms.kernel.rational import surface_quotient_rule
+
+    r1 = order + 1
+    vals = st.floats(-1e3, 1e3, allow_nan=False, allow_subnormal=False)
+    H = np.array(data.draw(st.lists(vals, min_size=m * r1 * r1 * (d + 1), max_size=m * r1 * r1 * (d + 1))))
+    H = H.reshape(m, r1, r1, d + 1)
+    H[:, 0, 0, -1] = np.abs(H[:, 0, 0, -1]) + 0.1  # a positive weight at each point
+    k %= m
+    assert_array_equal(surface_quotient_rule(H)[k], surface_quotient_rule(H[k:k + 1])[0])
