@@ -40,8 +40,10 @@ class Side:
     def prime(self, s: Array) -> None:
         """Evaluate the side once at the parameters ``s`` (the corners and the split point) for the
         fill's many questions there: :meth:`fields` and :meth:`tangent` at each ``s[k]`` then return
-        what one call at ``s[k]`` would, bit for bit (the evaluation of a point does not depend on the
-        other points of its call, and the first derivative on the highest order asked)."""
+        what one call at ``s[k]`` would, bit for bit: a curve's points and derivatives are computed
+        point by point (the basis per parameter, ``einsum``'s sums per point; the numba kernels, from
+        ``tolerances.NUMBA_MIN_POINTS`` points or inside a ``batch``, likewise), and the first
+        derivative does not depend on the highest order asked (tests/algorithms/test_curve.py)."""
         s = np.asarray(s, float)
         DB = self.B.derivatives(s, 2)
         F, dF = self._fields(DB, self.X.derivatives(s, 1))
@@ -137,7 +139,7 @@ def working_sides(sides: Sequence[HoleSide]) -> tuple[list[HoleSide], list[Side]
         rational |= sd.curve.is_rational
     unit = [HoleSide(sd.curve.clamp().reparametrize(0.0, 1.0), sd.cross.clamp().reparametrize(0.0, 1.0))
             for sd in sides]
-    dense = [sd.curve.evaluate(np.linspace(0, 1, 33)) for sd in unit]  # a point evaluates alike in any call
+    dense = [sd.curve.evaluate(np.linspace(0, 1, 33)) for sd in unit]  # point by point: ends as evaluate(0), (1)
     ends = np.array([[d[0], d[-1]] for d in dense])
     size = float(np.linalg.norm(np.ptp(np.concatenate(dense), axis=0)))
     size = max(size, 1e-300)

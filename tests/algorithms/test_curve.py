@@ -779,10 +779,13 @@ def test_dict_format_is_unchanged(text):
 @SETTINGS
 @given(c=curves(), fs=st.lists(fractions, min_size=1, max_size=12), k=st.integers(0, 11), order=st.integers(1, 4))
 def test_a_point_evaluates_alike_in_any_call(c, fs, k, order):
-    """evaluate and derivatives give a parameter the same bits whatever else the call evaluates, and
-    the derivatives up to ``order - 1`` do not depend on the ``order`` asked: the n-sided fill reuses
-    one call's rows for single-point questions (its sides primed at corners and split points, the
-    loop's ends from its samples)."""
+    """evaluate and derivatives give a parameter the same bits whatever else the call evaluates (on
+    the NumPy path, below ``tolerances.NUMBA_MIN_POINTS`` points: the basis per parameter, einsum's
+    sums per point; a surface grid's per-span matrix products are another matter, see
+    test_surface.py), and the derivatives up to ``order - 1`` do not depend on the ``order`` asked:
+    the n-sided fill reuses one call's rows for single-point questions (its sides primed at corners
+    and split points, the loop's ends from its samples). 20 000 random curves (degree 1-10, 1-4
+    dimensions, 1-60 points, rational or not) showed no exception before this test was written."""
     lo, hi = c.domain
     u = lo + np.array(fs) * (hi - lo)
     k = k % len(u)
