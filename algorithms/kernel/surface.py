@@ -322,16 +322,10 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
         T = D.reshape(g * r1, p + 1) @ G.reshape(nu, mv * r1 * k)[su - p : su + 1]  # [a, i, b, j, c]
         return T.reshape(g, r1, mv, r1, k).transpose(0, 2, 1, 3, 4)
 
-    def _grid_h(self, us: ArrayLike, vs: ArrayLike, order: int) -> Array:
-        """Homogeneous partials ``(m_u, m_v, r+1, r+1, k)`` on the grid (NumPy path).
-
-        Two banded products (:func:`band_product`): the net with the v-basis once, then each
-        group of u-parameters sharing a span with its ``p + 1`` rows of the result.
-        """
-        a, b = self._grid_params(us, vs)
-        G = self._grid_v(b, order)
-        su, Du = self._grid_basis(0, a, order)
-        out = np.empty((a.shape[0], b.shape[0], order + 1, order + 1, G.shape[3]))
+    def _grid_rows(self, su: NDArray[np.intp], Du: Array, G: Array, out: Array) -> Array:
+        """``out`` (m_u, m_v, r+1, r+1, k) filled with the grid's homogeneous partials (NumPy path):
+        one product per group of u-parameters sharing a span (:meth:`_grid_u`), ``su`` and ``Du``
+        their spans and basis rows (:meth:`_grid_basis`), ``G`` :meth:`_grid_v`."""
         for sel, s in span_groups(su):
             out[sel] = self._grid_u(s, Du, G, sel)
         return out
@@ -392,14 +386,9 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
             if done:
                 return out
         if not self.is_rational:
-            for sel, s in span_groups(su):
-                out[sel] = self._grid_u(s, Du, G, sel)
-            return out
-        # the quotient rule once over the whole grid (per point, so the same values as per span group)
-        H = np.empty((mu, mv, r1, r1, d + 1))
-        for sel, s in span_groups(su):
-            H[sel] = self._grid_u(s, Du, G, sel)
-        out[...] = surface_quotient_rule(H)
+            return self._grid_rows(su, Du, G, out)
+        # the quotient rule once over the whole grid (point by point: the values it gave per span group)
+        out[...] = surface_quotient_rule(self._grid_rows(su, Du, G, np.empty((mu, mv, r1, r1, d + 1))))
         return out
 
     def normal(self, u: ArrayLike, v: ArrayLike) -> Array:

@@ -233,7 +233,7 @@ def find_loops(shape: TopoDS_Shape, all_loops: bool = False) -> list[tuple[list[
 def _iso_side(surf: BSplineSurface, pts: np.ndarray) -> HoleSide:
     """The iso-boundary of ``surf`` on which the edge points ``pts`` lie, as a HoleSide."""
     length = max(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()), 1e-300)
-    side = side_from_surface(surf, _nearest_boundary(surf, pts))
+    side = side_from_surface(surf, _nearest_boundary(surf, pts))  # on a coarse sampling ...
     t, dist = closest_parameters(side.curve, pts)  # ... then its exact distances
     worst = float(dist.max())
     if worst > max(ISO_TOLERANCE * length, 1e-7):
