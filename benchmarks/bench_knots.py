@@ -114,8 +114,8 @@ def main() -> int:
     print("\n(the target is the issue's s.refine(knots, direction='u'); the v row is for information: our v-refinement")
     print(" transposes the net before and after the u kernel)")
     ok = check_targets([
-        ("refine 100 knots along u within 1.5x of OCC's one call (OCC time / ours)",
-         results["u"].peers["OCC Insert*Knots"] / results["u"].ours, 1 / 1.5),
+        ("refine 100 knots along u within 1.2x of OCC's one call (OCC time / ours; issue 30)",
+         results["u"].peers["OCC Insert*Knots"] / results["u"].ours, 1 / 1.2),
     ])
     return 0 if ok else 1
 

@@ -51,16 +51,25 @@ def blossom_basis(
     p = degree
     N = np.zeros((p + 1, m))
     N[0] = 1.0
+    if p == 0:
+        return N.T.copy()
+    # The knots the recurrence reads, once: lo_all[k] = t[span - p + 1 + k], hi_all[r] = t[span + 1 + r].
+    offsets = np.arange(1 - p, p + 1)
+    ks = knots[span[None, :] + offsets[:, None]]
+    lo_all, hi_all = ks[:p], ks[p:]
     for j in range(1, p + 1):
+        # The inner loop over r = 0..j-1 as whole rows (as in basis_functions): every temp comes from
+        # the old N[r], and N[r] = saved + (hi - x) temp[r] with saved = (x - lo) temp[r-1] (0 for
+        # r = 0); the same operations on each value, so the same bits.
         x = args[:, j - 1]
-        saved = np.zeros(m)
-        for r in range(j):
-            lo = knots[span + 1 - j + r]
-            hi = knots[span + 1 + r]
-            temp = N[r] / (hi - lo)
-            N[r] = saved + (hi - x) * temp
-            saved = (x - lo) * temp
-        N[j] = saved
+        lo = lo_all[p - j:]
+        hi = hi_all[:j]
+        temp = N[:j] / (hi - lo)
+        rt = (hi - x) * temp
+        lt = (x - lo) * temp
+        N[j] = lt[j - 1]
+        N[1:j] = lt[:j - 1] + rt[1:]
+        N[0] = rt[0] + 0.0
     return N.T.copy()
 
 

@@ -29,6 +29,7 @@ from .knots import (
     clamp_poles,
     insert_knot_boehm,
     merge_knots,
+    most_repeated,
     multiplicity,
     refine_poles,
     remove_knot_lsq,
@@ -329,11 +330,10 @@ class BSplineCurve(HomogeneousPoles, ControlPointValue):
             raise ParameterError(f"knots: {bad!r} must lie strictly inside the domain ({lo!r}, {hi!r})")
         x = snap_knots(self.knots, x)
         tau = merge_knots(self.knots, x)
-        vals, counts = np.unique(tau, return_counts=True)
-        if np.any(counts > self.degree + 1):
-            i = int(np.argmax(counts))
+        excess = most_repeated(tau, self.degree + 1)
+        if excess is not None:
             raise InvalidGeometryError(
-                f"knots: knot {float(vals[i])!r} would get multiplicity {counts[i]}, above degree + 1 = {self.degree + 1}"
+                f"knots: knot {excess[0]!r} would get multiplicity {excess[1]}, above degree + 1 = {self.degree + 1}"
             )
         H = refine_poles(self.knots, self.degree, self._hpoles, tau)
         return self._rebuild(self.degree, tau, H)

@@ -51,10 +51,13 @@ def elevate_poles(knots: Array, degree: int, poles: Array, times: int = 1) -> tu
         mu = support_span(knots, tau, j)  # clamped: a domain span, p <= mu < len(poles)
         idx = mu[:, None] - p + np.arange(p + 1)
         gathered = poles[idx]  # (n2, p+1, ...)
+        # The p + 1 blossoms with one argument dropped, in one call (row by row, so the same values
+        # as one call per dropped argument): drop[i] lists the argument columns without i.
+        drop = np.array([[c for c in range(p + 1) if c != i] for i in range(p + 1)], dtype=np.intp)
+        A_all = blossom_basis(knots, p, np.tile(mu, p + 1), args[:, drop].transpose(1, 0, 2).reshape((p + 1) * n2, p))
         acc = np.zeros((n2,) + poles.shape[1:])
         for i in range(p + 1):
-            A = blossom_basis(knots, p, mu, np.delete(args, i, axis=1))
-            acc += np.einsum("mk,mk...->m...", A, gathered)
+            acc += np.einsum("mk,mk...->m...", A_all[i * n2:(i + 1) * n2], gathered)
         poles = acc / (p + 1)
         knots = tau
         p += 1

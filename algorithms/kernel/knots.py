@@ -32,6 +32,7 @@ __all__ = [
     "insert_knot_boehm",
     "refinement_matrix",
     "refine_poles",
+    "most_repeated",
     "remove_knot_lsq",
     "clamp_poles",
     "bezier_poles",
@@ -131,11 +132,16 @@ def refinement_matrix(knots: Array, degree: int, new_knots: Array) -> Array:
     # copies of each end knot so that every span has p + 1 columns, and drop the padding's
     # columns. Each column is one basis function's blossom, unaffected by the padding; every
     # denominator of the recurrence contains the non-empty span mu, so none vanishes.
+    T = np.zeros((n2, n))
+    if mu[0] >= p and mu[-1] <= n - 1:  # mu is non-decreasing in i
+        # Every span in the domain (a clamped knot vector's case): p + 1 columns each, no padding.
+        A = blossom_basis(knots, p, mu, args)
+        T[i[:, None], mu[:, None] - p + np.arange(p + 1)] = A
+        return T
     padded = np.concatenate((np.full(p, knots[0]), knots, np.full(p, knots[-1])))
     A = blossom_basis(padded, p, mu + p, args)
     cols = mu[:, None] - p + np.arange(p + 1)
     real = (cols >= 0) & (cols < n)
-    T = np.zeros((n2, n))
     T[np.broadcast_to(i[:, None], cols.shape)[real], cols[real]] = A[real]
     return T
 
@@ -181,6 +187,20 @@ def refine_poles(knots: Array, degree: int, poles: Array, new_knots: Array) -> A
 def merge_knots(knots: Array, extra: Array) -> Array:
     """The knot vector with ``extra`` values added (sorted merge)."""
     return np.sort(np.concatenate((knots, extra)), kind="stable")
+
+
+def most_repeated(knots: Array, limit: int) -> tuple[float, int] | None:
+    """The knot value of a sorted knot vector repeated more than ``limit`` times, and its count.
+
+    ``None`` when no value exceeds ``limit``. In a sorted vector a value occurs more than ``limit``
+    times exactly where ``t[i] == t[i + limit]``, one comparison per knot; the counts (a sort of
+    their own) are taken only for the message of a vector that fails.
+    """
+    if knots.shape[0] <= limit or not np.any(knots[limit:] == knots[:-limit]):
+        return None
+    vals, counts = np.unique(knots, return_counts=True)
+    i = int(np.argmax(counts))
+    return float(vals[i]), int(counts[i])
 
 
 def remove_knot_lsq(

@@ -30,6 +30,7 @@ from .knots import (
     clamp_poles,
     insert_knot_boehm,
     merge_knots,
+    most_repeated,
     multiplicity,
     refine_poles,
     remove_knot_lsq,
@@ -499,11 +500,10 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
             raise ParameterError(f"knots: {bad!r} must lie strictly inside the {direction} domain ({lo!r}, {hi!r})")
         x = snap_knots(self.knots[ax], x)
         tau = merge_knots(self.knots[ax], x)
-        vals, counts = np.unique(tau, return_counts=True)
-        if np.any(counts > self.degree[ax] + 1):
-            i = int(np.argmax(counts))
+        excess = most_repeated(tau, self.degree[ax] + 1)
+        if excess is not None:
             raise InvalidGeometryError(
-                f"knots: {direction}-knot {float(vals[i])!r} would get multiplicity {counts[i]} > degree + 1"
+                f"knots: {direction}-knot {excess[0]!r} would get multiplicity {excess[1]} > degree + 1"
             )
         return self._apply(direction, lambda t, p, H: (tau, refine_poles(t, p, H, tau)))
 

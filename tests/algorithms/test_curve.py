@@ -23,6 +23,9 @@ from scipy.special import comb
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface
 from occsurf.algorithms.kernel.basis import basis_derivatives, basis_functions, basis_matrix, find_span
+from occsurf.algorithms.kernel.blossom import blossom_basis
+from occsurf.algorithms.kernel.degree import elevate_poles
+from occsurf.algorithms.kernel.knots import clamp_poles, distinct_knots, refinement_matrix, support_span
 from occsurf.algorithms.topology.spatch import SPatch
 
 from .strategies import affine_maps, curves, fractions, knot_vectors, parameters, test_settings
@@ -233,6 +236,90 @@ def test_basis_is_the_textbook_loops_bit_for_bit(data, p, extra, order, on_knots
     assert_array_equal(np.signbit(N), np.signbit(N0))
     assert_array_equal(D, D0)
     assert_array_equal(np.signbit(D), np.signbit(D0))
+
+
+def _textbook_blossom(knots, p, span, args):
+    """The blossom's de Boor recurrence with one loop over r per level (the form before the rows)."""
+    m = span.shape[0]
+    N = np.zeros((p + 1, m))
+    N[0] = 1.0
+    for j in range(1, p + 1):
+        x = args[:, j - 1]
+        saved = np.zeros(m)
+        for r in range(j):
+            lo, hi = knots[span + 1 - j + r], knots[span + 1 + r]
+            temp = N[r] / (hi - lo)
+            N[r] = saved + (hi - x) * temp
+            saved = (x - lo) * temp
+        N[j] = saved
+    return N.T
+
+
+@SETTINGS
+@given(data=st.data(), p=st.integers(1, 10), extra=st.integers(0, 7), equal=st.booleans())
+def test_blossom_rows_are_the_loops_bit_for_bit(data, p, extra, equal):
+    """blossom_basis runs the recurrence's loop over r as whole rows (2-4x on the Oslo and degree
+    raising matrices of a few dozen rows); each value gets the loop's operations in its order, so
+    the same bits and signs of zero. Arguments anywhere (the blossom is a polynomial in each), or
+    all equal to a parameter (then the basis functions)."""
+    n = p + 1 + extra
+    t = data.draw(knot_vectors(p, n))
+    spans = np.array([s for s in range(p, n) if t[s] < t[s + 1]], dtype=np.intp)
+    idx = np.array(data.draw(st.lists(st.integers(0, spans.size - 1), min_size=1, max_size=30)))
+    span = spans[idx]
+    lo, hi = t[0], t[-1]
+    x = lo - 1 + (hi - lo + 2) * np.array(data.draw(st.lists(fractions, min_size=span.size * p,
+                                                             max_size=span.size * p)))
+    args = np.repeat(x[: span.size, None], p, axis=1) if equal else x.reshape(span.size, p)
+    # Knots as arguments (as in the Oslo matrix): differences that vanish exactly, signs of zero.
+    on_knot = np.array(data.draw(st.lists(st.booleans(), min_size=args.size, max_size=args.size))).reshape(args.shape)
+    args = np.where(on_knot, t[np.clip(span[:, None] + np.arange(p) - p // 2, 0, t.size - 1)], args)
+    A, A0 = blossom_basis(t, p, span, args), _textbook_blossom(t, p, span, args)
+    assert_array_equal(A, A0)
+    assert_array_equal(np.signbit(A), np.signbit(A0))
+
+
+@SETTINGS
+@given(data=st.data(), p=st.integers(1, 8), extra=st.integers(0, 7), times=st.integers(1, 2),
+       clamped=st.booleans())
+def test_oslo_and_raising_matrices_take_the_short_paths_bit_for_bit(data, p, extra, times, clamped):
+    """refinement_matrix skips the end padding when every span it needs is in the domain, and
+    elevate_poles evaluates its p + 1 blossoms (one argument dropped each) in one call: both give
+    what the general paths give, bit for bit (the padded knot vector reads the same knots there;
+    the blossom is computed row by row)."""
+    n = p + 1 + extra
+    t = data.draw(knot_vectors(p, n))
+    if not clamped:
+        t = np.concatenate((t[0] - np.cumsum(np.full(p, 0.25))[::-1], t[p:n + 1], t[n] + np.cumsum(np.full(p, 0.25))))
+    x = t[p] + (t[n] - t[p]) * np.array(data.draw(st.lists(st.floats(0.01, 0.99), min_size=1, max_size=12)))
+    tau = np.sort(np.concatenate((t, x)))
+    assume(np.all(tau[p + 1:] > tau[:-p - 1]) if p else True)
+    mu = support_span(t, tau, np.arange(tau.size - p - 1))
+    padded = np.concatenate((np.full(p, t[0]), t, np.full(p, t[-1])))
+    A = blossom_basis(padded, p, mu + p, tau[np.arange(tau.size - p - 1)[:, None] + 1 + np.arange(p)])
+    cols = mu[:, None] - p + np.arange(p + 1)
+    real = (cols >= 0) & (cols < n)
+    T0 = np.zeros((tau.size - p - 1, n))
+    T0[np.broadcast_to(np.arange(T0.shape[0])[:, None], cols.shape)[real], cols[real]] = A[real]
+    assert_array_equal(refinement_matrix(t, p, tau), T0)
+    P = np.array(data.draw(st.lists(st.floats(-3, 3), min_size=3 * n, max_size=3 * n))).reshape(n, 3)
+    knots, Q = elevate_poles(t, p, P, times)
+    # The general form: one blossom per dropped argument, accumulated in the same order.
+    (k0, P0), q = clamp_poles(t, p, P), p
+    for _ in range(times):
+        vals, mult = distinct_knots(k0)
+        tau2 = np.repeat(vals, mult + 1)
+        n2 = tau2.size - q - 2
+        j = np.arange(n2)
+        args = tau2[j[:, None] + 1 + np.arange(q + 1)]
+        mu2 = support_span(k0, tau2, j)
+        gathered = P0[mu2[:, None] - q + np.arange(q + 1)]
+        acc = np.zeros((n2, 3))
+        for i in range(q + 1):
+            acc += np.einsum("mk,mk...->m...", blossom_basis(k0, q, mu2, np.delete(args, i, axis=1)), gathered)
+        P0, k0, q = acc / (q + 1), tau2, q + 1
+    assert_array_equal(knots, k0)
+    assert_array_equal(Q, P0)
 
 
 # ------------------------------------------------------------------------------------- oracles

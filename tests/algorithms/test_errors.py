@@ -282,6 +282,9 @@ def test_insert_beyond_multiplicity():
         c.refine([0.5] * 4)
     with pytest.raises(InvalidGeometryError, match=r"^times: v-knot 0.5 has multiplicity 0; 3 more exceeds"):
         surface().insert_knot(0.5, 3, direction="v")
+    with pytest.raises(InvalidGeometryError, match=r"^knots: u-knot 0.25 would get multiplicity 5 > degree \+ 1"):
+        surface().refine([0.25] * 5, direction="u")
+    c.refine([0.25] * 3)  # multiplicity 3, at the limit of a cubic's interior knots: fine
 
 
 def test_elevate_above_25():
