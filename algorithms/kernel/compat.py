@@ -90,7 +90,7 @@ def missing_knots(knots: np.ndarray, target: np.ndarray, tol: float | None = Non
     K = np.asarray(knots, float)
     reps, labels = _clusters(T, eps * (float(T[-1] - T[0]) or 1.0))
     want = np.bincount(labels, minlength=reps.size)
-    idx = np.clip(np.searchsorted(reps, K), 0, reps.size - 1)
+    idx = np.minimum(np.searchsorted(reps, K), reps.size - 1)  # searchsorted is never negative
     near = np.where((idx > 0) & (np.abs(reps[idx - 1] - K) < np.abs(reps[idx] - K)), idx - 1, idx)
     have = np.bincount(near, minlength=reps.size)
     return np.repeat(reps, np.maximum(want - have, 0))

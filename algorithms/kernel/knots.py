@@ -63,7 +63,7 @@ def snap_knot(knots: Array, u: float) -> float:
 def snap_knots(knots: Array, values: Array) -> Array:
     """Vectorised :func:`snap_knot`: each value replaced by an existing knot within tolerance."""
     tol = knot_tol(knots)
-    i = np.clip(np.searchsorted(knots, values), 1, knots.shape[0] - 1)
+    i = np.minimum(np.maximum(np.searchsorted(knots, values), 1), knots.shape[0] - 1)  # np.clip without its wrapper
     left, right = knots[i - 1], knots[i]
     nearest = np.where(np.abs(values - left) <= np.abs(right - values), left, right)
     return np.where(np.abs(nearest - values) <= tol, nearest, values)
