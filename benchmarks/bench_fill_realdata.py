@@ -147,7 +147,7 @@ def _jump(edges: list, nbs: list, on: list[int], surfs: list, floor: float) -> f
     the fill (Geom ``surfs``), the boundary points projected onto it (``assess_curvature``, ``locate=None``)."""
     from occsurf.bridge.modeling.joints import ASSESS_SAMPLES, assess_curvature
 
-    return max(assess_curvature(edges[k], nbs[k], surfs, floor, ASSESS_SAMPLES, locate=None)[0] for k in on)
+    return max(assess_curvature(edges[k], nbs[k], surfs, floor, ASSESS_SAMPLES, locate=None, gap=False)[0] for k in on)
 
 
 def g2_compare(model, rep) -> dict:

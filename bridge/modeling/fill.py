@@ -548,7 +548,7 @@ def fill_loop(holes: ModelHoles, k: int, *, compare_occ: bool = True, samples: i
                 from .joints import assess_curvature
 
                 floor = tolerances.CONTINUITY_CURVATURE_FLOOR / holes.size
-                rep.occ_g2 = max(assess_curvature(e, f, [s_o], floor, samples)[0] for e, f in zip(edges, nb))
+                rep.occ_g2 = max(assess_curvature(e, f, [s_o], floor, samples, gap=False)[0] for e, f in zip(edges, nb))
             rep.occ_status = "ok"
         except Exception as err:  # noqa: BLE001
             rep.occ_status, rep.occ_reason = "failed", one_line(err, expected=(OccsurfError,))

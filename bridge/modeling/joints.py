@@ -117,7 +117,7 @@ def assess_joint(edge: Any, face: Any, fill_surfaces: list[Any], samples: int = 
 
 
 def assess_curvature(edge: Any, face: Any, fill_surfaces: list[Any], floor: float, samples: int = ASSESS_SAMPLES,
-                     locate: Locator | None = None) -> tuple[float, float]:
+                     locate: Locator | None = None, *, gap: bool = True) -> tuple[float, float]:
     """Curvature continuity (G2) along ``edge`` between its neighbour ``face`` and the fill, by OCC:
     the largest relative jump of the normal curvature across the edge, and the largest
     ``G2CurvatureGap`` of ``LocalAnalysis_SurfaceContinuity`` at order G2.
@@ -127,10 +127,16 @@ def assess_curvature(edge: Any, face: Any, fill_surfaces: list[Any], floor: floa
     across the edge (``T`` the edge's tangent), by Euler's formula from OCC's principal curvatures
     and directions (``GeomLProp_SLProps``), the fill's normal turned to agree with the neighbour's.
     OCC's ``G2CurvatureGap`` is another measure (of the principal curvatures and frames); both are
-    reported. ``locate`` as for :func:`assess_joint` (without it, the points are projected).
+    reported, the gap only with ``gap`` (else 0: a ``LocalAnalysis`` per sample that callers wanting
+    the jump alone do not pay for). ``locate`` as for :func:`assess_joint` (without it, the points
+    are projected).
+
+    OCC is asked per sample (its properties are the measure); the arithmetic on what it returns
+    (the edge's tangent, the direction across it, Euler's formula, the ratios) runs on all samples
+    at once.
     """
     from OCP.GeomLProp import GeomLProp_SLProps
-    from OCP.gp import gp_Vec2d
+    from OCP.gp import gp_Dir, gp_Vec2d
 
     from ..conversion.shapes import as_edge, as_face
 
@@ -139,8 +145,9 @@ def assess_curvature(edge: Any, face: Any, fill_surfaces: list[Any], floor: floa
     pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
     a, b = BRep_Tool.Range_s(edge, face)
     idx, us, vs = locate(pts) if locate is not None else _nearest_feet(fill_surfaces, pts)
-    worst_rel = worst_gap = 0.0
-    p2, d2 = gp_Pnt2d(), gp_Vec2d()
+    worst_gap = 0.0
+    p2, d2, dmax, dmin = gp_Pnt2d(), gp_Vec2d(), gp_Dir(), gp_Dir()
+    rows: list[tuple[float, ...]] = []  # per sample with both curvatures defined: see the columns below
     for t, uv, k, u, v in zip(_fractions(samples), uvs, idx, us, vs):
         s_f = fill_surfaces[int(k)]
         pn = GeomLProp_SLProps(s_n, uv.X(), uv.Y(), 2, 1e-9)
@@ -148,20 +155,31 @@ def assess_curvature(edge: Any, face: Any, fill_surfaces: list[Any], floor: floa
         if not (pn.IsNormalDefined() and pf.IsNormalDefined() and pn.IsCurvatureDefined() and pf.IsCurvatureDefined()):
             continue  # a pole or an umbilic OCC cannot resolve: no curvature to compare there
         pc.D1(a + t * (b - a), p2, d2)
-        T = np.array(pn.D1U().Coord()) * d2.X() + np.array(pn.D1V().Coord()) * d2.Y()
-        nn = np.array(pn.Normal().Coord())
-        nf = np.array(pf.Normal().Coord())
-        sign = 1.0 if nn @ nf >= 0 else -1.0
-        cross = np.cross(nn, T)
-        cross /= max(float(np.linalg.norm(cross)), 1e-300)
-        kn, kf = (_normal_curvature(pr, cross) for pr in (pn, pf))
-        kf *= sign
-        den = max(abs(kn), abs(kf), floor)
-        if max(abs(kn), abs(kf)) >= floor:
-            worst_rel = max(worst_rel, abs(kn - kf) / den)
-        la = LocalAnalysis_SurfaceContinuity(s_n, uv.X(), uv.Y(), s_f, float(u), float(v), GeomAbs_Shape.GeomAbs_G2)
-        if la.IsDone():
-            worst_gap = max(worst_gap, la.G2CurvatureGap())
+        row = [*pn.D1U().Coord(), *pn.D1V().Coord(), d2.X(), d2.Y(), *pn.Normal().Coord(), *pf.Normal().Coord()]
+        for pr in (pn, pf):  # Euler's formula's data: umbilic (mean), else the principal frame
+            if pr.IsUmbilic():  # a sphere's point: every direction bends alike (and has no principal frame)
+                row += [1.0, float(pr.MeanCurvature()), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+            else:
+                pr.CurvatureDirections(dmax, dmin)
+                row += [0.0, 0.0, *dmax.Coord(), *dmin.Coord(), pr.MaxCurvature(), pr.MinCurvature()]
+        rows.append(tuple(row))
+        if gap:
+            la = LocalAnalysis_SurfaceContinuity(s_n, uv.X(), uv.Y(), s_f, float(u), float(v), GeomAbs_Shape.GeomAbs_G2)
+            if la.IsDone():
+                worst_gap = max(worst_gap, la.G2CurvatureGap())
+    if not rows:
+        return 0.0, worst_gap
+    R = np.array(rows)
+    T = R[:, 0:3] * R[:, 6:7] + R[:, 3:6] * R[:, 7:8]  # the edge's tangent: S_u du + S_v dv
+    nn, nf = R[:, 8:11], R[:, 11:14]
+    sign = np.where(np.einsum("ij,ij->i", nn, nf) >= 0, 1.0, -1.0)
+    across = np.cross(nn, T)
+    across /= np.maximum(np.linalg.norm(across, axis=1), 1e-300)[:, None]
+    kn, kf = (_normal_curvatures(R[:, c:c + 10], across) for c in (14, 24))
+    kf = kf * sign
+    big = np.maximum(np.abs(kn), np.abs(kf))
+    rel = np.abs(kn - kf) / np.maximum(big, floor)
+    worst_rel = float(rel[big >= floor].max(initial=0.0))
     return worst_rel, worst_gap
 
 
@@ -181,19 +199,15 @@ def _nearest_feet(surfaces: list[Any], pts: np.ndarray) -> tuple[np.ndarray, np.
     return out[:, 0].astype(int), out[:, 1], out[:, 2]
 
 
-def _normal_curvature(props: Any, direction: np.ndarray) -> float:
-    """Euler's formula: the normal curvature of an OCC ``GeomLProp_SLProps`` in a tangent ``direction``
-    (unit), ``k_max cos^2 + k_min sin^2`` of its angle to the maximum direction; signed by the
-    surface's own normal."""
-    from OCP.gp import gp_Dir
-
-    if props.IsUmbilic():  # a sphere's point: every direction bends alike (and has no principal frame)
-        return float(props.MeanCurvature())
-    dmax, dmin = gp_Dir(), gp_Dir()
-    props.CurvatureDirections(dmax, dmin)
-    c = float(np.dot(direction, dmax.Coord()))
-    s = float(np.dot(direction, dmin.Coord()))
-    return props.MaxCurvature() * c * c + props.MinCurvature() * s * s
+def _normal_curvatures(props: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """Euler's formula on rows of OCC's curvature data ``(umbilic, mean, dmax (3), dmin (3), k_max,
+    k_min)`` (:func:`assess_curvature`): the normal curvature in each unit tangent ``direction``,
+    ``k_max cos^2 + k_min sin^2`` of its angle to the maximum direction (the mean curvature at an
+    umbilic, where every direction bends alike); signed by the surface's own normal."""
+    c = np.einsum("ij,ij->i", direction, props[:, 2:5])
+    s = np.einsum("ij,ij->i", direction, props[:, 5:8])
+    euler = props[:, 8] * c * c + props[:, 9] * s * s
+    return np.where(props[:, 0] > 0, props[:, 1], euler)
 
 
 #: What ``continuity`` takes (``fill_model``, ``fill_loop``, ``refill_faces``, ``occsurf fill --continuity``):

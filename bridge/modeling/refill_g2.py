@@ -81,7 +81,7 @@ def original_g2(edge: Any, nb: Any, owner: Any | None, floor: float, samples: in
     def locate(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return np.zeros(len(points), int), u, v
 
-    jump, _ = assess_curvature(edge, nb, [BRep_Tool.Surface_s(owner)], floor, samples, locate=locate)
+    jump, _ = assess_curvature(edge, nb, [BRep_Tool.Surface_s(owner)], floor, samples, locate=locate, gap=False)
     return jump <= G2_REL, jump
 
 
@@ -188,6 +188,6 @@ def g2_fill(edges: list[Any], nbs: list[Any], owners: list[Any], size: float, g2
         a, b = assess_joint(e, nb, surfs, samples, locate=locate)
         s0.append(a)
         s1.append(b if g1_side[j] else None)
-        s2.append(assess_curvature(e, nb, surfs, floor, samples, locate=locate)[0] if g2_side[j] else None)
+        s2.append(assess_curvature(e, nb, surfs, floor, samples, locate=locate, gap=False)[0] if g2_side[j] else None)
     g1_edges = [g1_side[side_of_edge[k]] for k in range(len(edges))]
     return faces, g1_edges, fit, s0, s1, s2, fill

@@ -227,3 +227,85 @@ def test_edge_classes_and_the_shortfall_line() -> None:
     assert shortfall(["G2", "G2", "G1", "G0", "G1"], got, [0.019, 0.021, 0.0, None, None]) == \
         "edge 1 asked G2 got G1 (jump 2.1 %); edge 2 asked G1 got G0"
     assert shortfall(["G1", "G1"], ["G2", "G1"], []) is None  # more than asked is no shortfall
+
+
+def _curvature_one_by_one(edge, face, fill_surfaces, floor, locate):
+    """assess_curvature as it was written before its arithmetic ran on all samples at once: Euler's
+    formula and the ratio sample by sample (the reference the vectorised form is held to)."""
+    from OCP.BRep import BRep_Tool
+    from OCP.GeomAbs import GeomAbs_Shape
+    from OCP.GeomLProp import GeomLProp_SLProps
+    from OCP.gp import gp_Dir, gp_Pnt2d, gp_Vec2d
+    from OCP.LocalAnalysis import LocalAnalysis_SurfaceContinuity
+
+    from occsurf.bridge.modeling.joints import ASSESS_SAMPLES, _fractions, edge_samples
+
+    def normal_curvature(props, direction):
+        if props.IsUmbilic():
+            return float(props.MeanCurvature())
+        dmax, dmin = gp_Dir(), gp_Dir()
+        props.CurvatureDirections(dmax, dmin)
+        c, s = float(np.dot(direction, dmax.Coord())), float(np.dot(direction, dmin.Coord()))
+        return props.MaxCurvature() * c * c + props.MinCurvature() * s * s
+
+    s_n, uvs, pts = edge_samples(edge, face, ASSESS_SAMPLES)
+    pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+    a, b = BRep_Tool.Range_s(edge, face)
+    idx, us, vs = locate(pts)
+    worst_rel = worst_gap = 0.0
+    p2, d2 = gp_Pnt2d(), gp_Vec2d()
+    for t, uv, k, u, v in zip(_fractions(ASSESS_SAMPLES), uvs, idx, us, vs):
+        s_f = fill_surfaces[int(k)]
+        pn = GeomLProp_SLProps(s_n, uv.X(), uv.Y(), 2, 1e-9)
+        pf = GeomLProp_SLProps(s_f, float(u), float(v), 2, 1e-9)
+        if not (pn.IsNormalDefined() and pf.IsNormalDefined() and pn.IsCurvatureDefined() and pf.IsCurvatureDefined()):
+            continue
+        pc.D1(a + t * (b - a), p2, d2)
+        T = np.array(pn.D1U().Coord()) * d2.X() + np.array(pn.D1V().Coord()) * d2.Y()
+        nn, nf = np.array(pn.Normal().Coord()), np.array(pf.Normal().Coord())
+        cross = np.cross(nn, T)
+        cross /= max(float(np.linalg.norm(cross)), 1e-300)
+        kn, kf = normal_curvature(pn, cross), normal_curvature(pf, cross) * (1.0 if nn @ nf >= 0 else -1.0)
+        if max(abs(kn), abs(kf)) >= floor:
+            worst_rel = max(worst_rel, abs(kn - kf) / max(abs(kn), abs(kf), floor))
+        la = LocalAnalysis_SurfaceContinuity(s_n, uv.X(), uv.Y(), s_f, float(u), float(v), GeomAbs_Shape.GeomAbs_G2)
+        if la.IsDone():
+            worst_gap = max(worst_gap, la.G2CurvatureGap())
+    return worst_rel, worst_gap
+
+
+def test_curvature_jumps_on_all_samples_at_once_are_the_per_sample_ones(bearing) -> None:
+    """assess_curvature asks OCC per sample and does the arithmetic (tangent, the direction across,
+    Euler's formula, the ratio) on all samples at once: the same jumps as sample by sample to 1e-13
+    (the direction's norm and Euler's dot products are summed in another order: a few ulps on each
+    curvature, so ~1e-16 on the ratio; where the jump is small, 2.4e-7 on bearing face 80, that is
+    a relative 1.7e-9 of it), the same OCC gaps, and
+    without ``gap`` no LocalAnalysis at all (0). On the bearing's fillet face 4 (two G2 edges, two
+    G1): the original face (and it with its normal turned) and the G1 refill against the neighbours."""
+    from OCP.BRep import BRep_Tool
+
+    from occsurf.bridge.modeling.joints import ASSESS_SAMPLES, _nearest_feet, assess_curvature, edge_samples
+    from occsurf.bridge.modeling.refill import refill_faces
+    from occsurf.bridge.modeling.refill_loop import hole_loop
+
+    edges, nbs, owners = hole_loop(bearing, [4])
+    floor = tolerances.CONTINUITY_CURVATURE_FLOOR / bearing.size
+    g1, _ = refill_faces(bearing, [4], compare_occ=False, check=False, continuity="G1")
+    fill_surfs = [BRep_Tool.Surface_s(f) for f in g1._fill_faces]
+    checked = 0
+    for e, nb, own in zip(edges, nbs, owners):
+        _, uvs, _ = edge_samples(e, own, ASSESS_SAMPLES)
+        u, v = np.array([p.X() for p in uvs]), np.array([p.Y() for p in uvs])
+        s_own = BRep_Tool.Surface_s(own)
+        flipped = s_own.UReversed()  # the same surface, its normal turned: the fill's sign is then -1
+        ur = np.array([s_own.UReversedParameter(x) for x in u])
+        for surfs, locate in (([s_own], lambda pts, u=u, v=v: (np.zeros(len(pts), int), u, v)),
+                              ([flipped], lambda pts, ur=ur, v=v: (np.zeros(len(pts), int), ur, v)),
+                              (fill_surfs, lambda pts: _nearest_feet(fill_surfs, pts))):
+            ref = _curvature_one_by_one(e, nb, surfs, floor, locate)
+            got = assess_curvature(e, nb, surfs, floor, ASSESS_SAMPLES, locate=locate)
+            assert abs(got[0] - ref[0]) <= 1e-13, (got, ref)  # a fraction: each k is off by ulps, so the ratio by ~1e-16
+            assert got[1] == ref[1]
+            assert assess_curvature(e, nb, surfs, floor, ASSESS_SAMPLES, locate=locate, gap=False) == (got[0], 0.0)
+            checked += 1
+    assert checked == 12
