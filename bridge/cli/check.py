@@ -295,7 +295,9 @@ def run(ns: argparse.Namespace) -> int:
             sys.stdout.write(json.dumps(summary, indent=1, allow_nan=False) + "\n")
         elif not ns.jsonl:
             n = summary["n_files"]
-            counts = ", ".join(f"{c} {k}" for k, c in summary["counts"].items())
+            # the status words of report.json ("failed": breaks the preset) said as what they mean
+            words = {"failed": f"break{'s' if summary['counts'].get('failed') == 1 else ''} {summary['preset']}"}
+            counts = ", ".join(f"{c} {words.get(k, k)}" for k, c in summary["counts"].items())
             gate = f"  --fail-on {ns.fail_on}: {'passed' if summary['passed'] else 'FAILED'}\n" if ns.fail_on else ""
             sys.stdout.write(f"{n} file{'' if n == 1 else 's'}: {counts}\n  index:  {out / 'index.html'}\n"
                              f"  data:   {out / 'report.json'}\n{gate}")

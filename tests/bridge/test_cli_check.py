@@ -239,6 +239,9 @@ def test_folders_recursively_with_an_index(tmp_path, capsys) -> None:
     assert main(["check", str(src / "sub"), "--out", str(tmp_path / "q"), "--no-pictures", "--fail-on",
                  "mechanical"]) == 0
     assert "1 file: 1 ok" in capsys.readouterr().out
+    # the summary line says what report.json's "failed" means: the file breaks the preset (it was read)
+    assert main(["check", str(src / "loft.step"), str(src / "sub"), "--out", str(tmp_path / "r"), "--no-pictures"]) == 0
+    assert "2 files: 1 breaks catia, 1 ok" in capsys.readouterr().out
     # --faces names faces of one model
     assert main(["check", str(src), "--faces", "1"]) == 2
     assert "--faces" in _one_error_line(capsys.readouterr().err)
