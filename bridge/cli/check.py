@@ -1,5 +1,5 @@
 """``occsurf check FILE_OR_DIR ... [--out DIR] [--json | --jsonl] [--faces ...] [--fail-on PRESET]
-[--pictures worst|all|none] [--timeout S] [--strict] [--in-process]``: the surface-quality report.
+[--pictures worst|all|none] [--jobs N] [--timeout S] [--strict] [--in-process]``: the surface-quality report.
 
 Reads each STEP or IGES model in a worker process (:func:`occsurf.bridge.isolation.run_jobs`, as
 ``occsurf inspect`` does: a crash or a hang inside OCC costs that file, not the terminal, and the
@@ -18,7 +18,9 @@ for several files (or a folder) each file gets those in a folder of its own belo
 relative to the folder given, ``.`` of the suffix made ``_``: ``DIR/sub/part_step/``), and ``DIR``
 gets an ``index.html`` and a ``report.json`` over all files (per file: status, faces, edges, the
 worst G1 edge, flags by kind, violations, seconds, crashed faces). Everything is written atomically.
-A progress bar runs on stderr when it is a terminal.
+Several files are checked by ``--jobs`` workers at once (default one per core; each worker checks
+its share of the files one after the other, OCC loaded once), their lines still printed in the order
+of the arguments. A progress bar runs on stderr when it is a terminal (with one worker at a time).
 
 Crash isolation per face: the worker notes on a file which piece it is working on (the mesh, a
 face, the edges, a picture) before each step. When the worker dies (a segmentation fault inside
@@ -67,6 +69,7 @@ from ._common import (
     InOrder,
     add_strict_option,
     error,
+    jobs_arg,
     timeout_arg,
     worker_failure,
     write_json_line,
@@ -190,6 +193,12 @@ def _failure_reason(outcome: Any, ns: argparse.Namespace, path: Path) -> str:
     return strip_path(reason or "failed", path.resolve())
 
 
+def _default_jobs() -> int:
+    from ..audit.fill_file import default_jobs
+
+    return default_jobs()
+
+
 def run(ns: argparse.Namespace) -> int:
     """``occsurf check``: validate the arguments, run the worker per file, write the pages and the JSON."""
     from ..isolation import OK
@@ -241,8 +250,16 @@ def run(ns: argparse.Namespace) -> int:
     rows: dict[int, dict[str, Any]] = {}
     code = EXIT_OK
     failed = False
-    # --jsonl: each file's row as soon as it and the files before it are done (a crashed file is re-run later)
-    stream = InOrder(len(entries), lambda k, row: write_json_line(row) if ns.jsonl else None)
+    # each file's lines (or its --jsonl row) as soon as it and the files before it are done: a crashed
+    # file is re-run later, and with several workers files finish in any order
+    def emit(k: int, done: tuple[dict[str, Any], str | None]) -> None:
+        row, text = done
+        if ns.jsonl:
+            write_json_line(row)
+        elif text:
+            write_out(text)
+
+    stream = InOrder(len(entries), emit)
 
     def finish(j: int, outcome: Any) -> None:
         nonlocal code, failed
@@ -252,7 +269,7 @@ def run(ns: argparse.Namespace) -> int:
             error(f"{shown}: {_failure_reason(outcome, ns, path)}")
             rows[k] = file_summary(shown, None, error_text=_failure_reason(outcome, ns, path))
             code = EXIT_ERROR
-            stream.put(k, rows[k])
+            stream.put(k, (rows[k], None))
             return
         result = outcome.value
         result["report"]["path"] = shown
@@ -262,7 +279,7 @@ def run(ns: argparse.Namespace) -> int:
             error(f"--out {folder}: {error_line(err)}")
             rows[k] = file_summary(shown, None, error_text=f"report not written: {error_line(err)}")
             code = EXIT_ERROR
-            stream.put(k, rows[k])
+            stream.put(k, (rows[k], None))
             return
         doc = result["report"]
         for w in doc.get("warnings") or []:  # what the reading read around, as inspect, convert and fill say it
@@ -270,21 +287,21 @@ def run(ns: argparse.Namespace) -> int:
         failed |= not doc.get("passed", True)
         rows[k] = file_summary(shown, "." if single else name, doc, crashed=items[j].get("skip"),
                                thumbnail=(result.get("pictures") or {}).get("mean"))
-        if not (ns.json or ns.jsonl):
-            write_out(_summary(doc, folder, ns.fail_on))
         if single and ns.json:
             write_out(json.dumps(doc, indent=1, allow_nan=False) + "\n")
-        stream.put(k, rows[k])
+        stream.put(k, (rows[k], None if ns.json or ns.jsonl else _summary(doc, folder, ns.fail_on)))
 
     for k, (shown, path, why, _) in enumerate(entries):
         if path is None:
             error(f"{shown}: {why}")
             rows[k] = file_summary(shown, None, error_text=why)
             code = EXIT_ERROR
-            stream.put(k, rows[k])
+            stream.put(k, (rows[k], None))
     try:
-        with _Progress(scratch[0], enabled=sys.stderr.isatty() and not (ns.json or ns.jsonl)):
-            run_checks(items, timeout=ns.timeout, isolate=not ns.in_process, on_outcome=finish)
+        jobs = min(_default_jobs() if ns.jobs is None else ns.jobs, max(1, len(items)))
+        # the progress file holds the stage of the worker that wrote last: a bar with one worker only
+        with _Progress(scratch[0], enabled=sys.stderr.isatty() and not (ns.json or ns.jsonl) and jobs == 1):
+            run_checks(items, timeout=ns.timeout, isolate=not ns.in_process, on_outcome=finish, jobs=jobs)
     finally:
         for f in scratch:
             with contextlib.suppress(OSError):
@@ -345,6 +362,9 @@ def add_parser(sub: Any) -> None:
                            f"{WORST_FACES} worst faces' (by flags and violations), 'all' every face's too, 'none' "
                            "(the page keeps its tables and 3-D view)")
     pics.add_argument("--no-pictures", action="store_true", help="the same as --pictures none: a faster CI gate")
+    p.add_argument("--jobs", type=jobs_arg, default=None, metavar="N",
+                   help="check this many files at once, each worker process its share one after the other "
+                        "(default: one per core; the lines keep the order of the arguments)")
     p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop the checker after this long (default {DEFAULT_TIMEOUT:g})")
     add_strict_option(p, writes=True)
