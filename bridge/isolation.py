@@ -86,7 +86,6 @@ from .messages import error_line
 __all__ = [
     "Outcome",
     "run_jobs",
-    "kill_workers",
     "serve",
     "worker_env",
     "worker_command",
@@ -424,23 +423,6 @@ class _Watchdog:
             self._proc.kill()
 
 
-#: The workers :func:`run_jobs` is running now (several at once when callers run it from threads),
-#: for :func:`kill_workers`.
-_LIVE: set[subprocess.Popen[str]] = set()
-_LIVE_LOCK = threading.Lock()
-
-
-def kill_workers() -> None:
-    """Kill every worker process that :func:`run_jobs` is running in this process now (what a caller
-    running several ``run_jobs`` from threads does on Ctrl-C: the main thread takes the signal, the
-    workers may not, and each thread would otherwise wait for its worker's current item)."""
-    with _LIVE_LOCK:
-        live = list(_LIVE)
-    for proc in live:
-        with contextlib.suppress(OSError):
-            proc.kill()
-
-
 def _run_one_worker(job: str, items: list[Any], todo: list[int], preload: Sequence[str], timeout: float | None,
                     emit: Callable[[Outcome], None]) -> list[int]:
     """Run the items ``todo`` in one worker; returns the items still to run in a new worker."""
@@ -456,8 +438,6 @@ def _run_one_worker(job: str, items: list[Any], todo: list[int], preload: Sequen
             for k in todo:
                 emit(Outcome(k, FAILED, error=str(err)))
             return []
-        with _LIVE_LOCK:
-            _LIVE.add(proc)
         watchdog = _Watchdog(proc, timeout)
         current: int | None = None
         started = 0.0
@@ -498,8 +478,6 @@ def _run_one_worker(job: str, items: list[Any], todo: list[int], preload: Sequen
             if proc.stdout is not None:
                 proc.stdout.close()
             code = proc.wait()
-            with _LIVE_LOCK:
-                _LIVE.discard(proc)
         detail = _last_line(err_log)
     remaining = [k for k in todo if k not in done]
     if not remaining:
@@ -527,7 +505,6 @@ def run_jobs(
     isolate: bool = True,
     preload: Sequence[str] = (),
     on_outcome: Callable[[Outcome], None] | None = None,
-    stop: threading.Event | None = None,
 ) -> list[Outcome]:
     """Run ``job`` on every item in a worker process; a crash or a hang costs one item only.
 
@@ -549,14 +526,11 @@ def run_jobs(
         Modules the worker imports before its first item (failures ignored).
     on_outcome : callable, optional
         Called with each :class:`Outcome` as soon as it is known, in the order of ``items``.
-    stop : threading.Event, optional
-        Once set, no new worker is started: the items not run by then get no outcome (a caller
-        running several ``run_jobs`` from threads sets it on Ctrl-C, then :func:`kill_workers`).
 
     Returns
     -------
     list of Outcome
-        One per item, in the order of ``items`` (without the items ``stop`` left out).
+        One per item, in the order of ``items``.
 
     Raises
     ------
@@ -584,7 +558,7 @@ def run_jobs(
         _run_here(job, wire, preload, emit)
     else:
         todo = list(range(len(wire)))
-        while todo and not (stop is not None and stop.is_set()):
+        while todo:
             todo = _run_one_worker(job, wire, todo, preload, timeout, emit)
     return sorted(outcomes, key=lambda o: o.index)
 

@@ -44,7 +44,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, cast
 
-from ..isolation import CRASHED, ERROR, FAILED, OK, TIMEOUT, Outcome, run_jobs
+from ..isolation import CRASHED, ERROR, OK, TIMEOUT, Outcome, run_jobs
 from .reader import Reader
 
 __all__ = ["fill_file", "fill_job", "plan_job", "hole_job", "sew_job", "default_jobs", "PRELOAD", "FILL_JOB"]
@@ -326,16 +326,7 @@ def fill_file(item: dict[str, Any], *, jobs: int = 1, timeout: float | None = No
 
 def _outcome(reader: Reader, job: str, item: dict[str, Any], timeout: float | None) -> Outcome:
     """``job`` run on ``item`` by ``reader``, as :func:`run_jobs` would report it."""
-    try:
-        reply = reader.run(job, item, timeout)
-    except RuntimeError as err:  # the worker could not start
-        return Outcome(0, FAILED, error=str(err))
-    if reply.status == OK:
-        return Outcome(0, OK, value=reply.value, seconds=reply.seconds)
-    if reply.status == ERROR:
-        return Outcome(0, ERROR, error=reply.error, seconds=reply.seconds)
-    return Outcome(0, CRASHED if reply.status == CRASHED else TIMEOUT, error=reply.error, exit_code=reply.exit_code,
-                   seconds=reply.seconds)
+    return reader.outcome(job, item, timeout)
 
 
 def _fill_holes(item: dict[str, Any], plan: dict[str, Any], workers: list[Reader],

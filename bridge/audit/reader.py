@@ -41,7 +41,19 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from ..isolation import MARK, describe_exit, quiet_native_stdout, worker_command, worker_env
+from ..isolation import (
+    CRASHED,
+    ERROR,
+    FAILED,
+    MARK,
+    OK,
+    TIMEOUT,
+    Outcome,
+    describe_exit,
+    quiet_native_stdout,
+    worker_command,
+    worker_env,
+)
 from ..messages import error_line
 
 __all__ = ["Reader", "Reply", "reader_for_thread", "STARTUP_TIMEOUT"]
@@ -190,6 +202,22 @@ class Reader:
         why = describe_exit(code) if code is not None else "no exit status"
         return Reply("crashed", error=f"the reader process died ({why})" + (f": {detail}" if detail and code and code > 0 else ""),
                      signal=_signal_name(code), exit_code=code, seconds=seconds)
+
+
+    def outcome(self, job: str, item: Any, timeout: float | None, index: int = 0) -> Outcome:
+        """:meth:`run` reported as :func:`occsurf.bridge.isolation.run_jobs` reports an item (``index``:
+        the item's position), so that callers of either word a failure alike; a reader that cannot
+        start is a ``failed`` outcome."""
+        try:
+            reply = self.run(job, item, timeout)
+        except RuntimeError as err:  # the worker could not start
+            return Outcome(index, FAILED, error=str(err))
+        if reply.status == OK:
+            return Outcome(index, OK, value=reply.value, seconds=reply.seconds)
+        if reply.status == ERROR:
+            return Outcome(index, ERROR, error=reply.error, seconds=reply.seconds)
+        return Outcome(index, CRASHED if reply.status == CRASHED else TIMEOUT, error=reply.error,
+                       exit_code=reply.exit_code, seconds=reply.seconds)
 
 
 _local = threading.local()

@@ -18,9 +18,10 @@ for several files (or a folder) each file gets those in a folder of its own belo
 relative to the folder given, ``.`` of the suffix made ``_``: ``DIR/sub/part_step/``), and ``DIR``
 gets an ``index.html`` and a ``report.json`` over all files (per file: status, faces, edges, the
 worst G1 edge, flags by kind, violations, seconds, crashed faces). Everything is written atomically.
-Several files are checked by ``--jobs`` workers at once (default one per core; each worker checks
-its share of the files one after the other, OCC loaded once), their lines still printed in the order
-of the arguments. A progress bar runs on stderr when it is a terminal (with one worker at a time).
+Several files are checked by ``--jobs`` workers at once (default one per core; each worker takes the
+next file as soon as it is free, OCC loaded once: :mod:`occsurf.bridge.audit.check_pool`), their
+lines still printed in the order of the arguments. A progress bar runs on stderr when it is a
+terminal (with one worker at a time).
 
 Crash isolation per face: the worker notes on a file which piece it is working on (the mesh, a
 face, the edges, a picture) before each step. When the worker dies (a segmentation fault inside
@@ -298,10 +299,15 @@ def run(ns: argparse.Namespace) -> int:
             code = EXIT_ERROR
             stream.put(k, (rows[k], None))
     try:
-        jobs = min(_default_jobs() if ns.jobs is None else ns.jobs, max(1, len(items)))
+        jobs = 1 if ns.in_process else min(_default_jobs() if ns.jobs is None else ns.jobs, max(1, len(items)))
         # the progress file holds the stage of the worker that wrote last: a bar with one worker only
         with _Progress(scratch[0], enabled=sys.stderr.isatty() and not (ns.json or ns.jsonl) and jobs == 1):
-            run_checks(items, timeout=ns.timeout, isolate=not ns.in_process, on_outcome=finish, jobs=jobs)
+            if jobs > 1:
+                from ..audit.check_pool import check_files
+
+                check_files(items, jobs=jobs, timeout=ns.timeout, on_outcome=finish)
+            else:
+                run_checks(items, timeout=ns.timeout, isolate=not ns.in_process, on_outcome=finish)
     finally:
         for f in scratch:
             with contextlib.suppress(OSError):
@@ -363,8 +369,8 @@ def add_parser(sub: Any) -> None:
                            "(the page keeps its tables and 3-D view)")
     pics.add_argument("--no-pictures", action="store_true", help="the same as --pictures none: a faster CI gate")
     p.add_argument("--jobs", type=jobs_arg, default=None, metavar="N",
-                   help="check this many files at once, each worker process its share one after the other "
-                        "(default: one per core; the lines keep the order of the arguments)")
+                   help="check this many files at once, in as many worker processes, each taking the next file "
+                        "when it is free (default: one per core; the lines keep the order of the arguments)")
     p.add_argument("--timeout", type=timeout_arg, default=DEFAULT_TIMEOUT, metavar="SECONDS",
                    help=f"stop the checker after this long (default {DEFAULT_TIMEOUT:g})")
     add_strict_option(p, writes=True)

@@ -208,8 +208,7 @@ def crash_skip(stage: str, reason: str, skip: dict[str, Any]) -> dict[str, Any] 
 
 
 def run_checks(items: list[dict[str, Any]], *, timeout: float | None, isolate: bool = True,
-               on_outcome: Callable[[int, Outcome], None] | None = None, job: str | None = None,
-               jobs: int = 1) -> list[Outcome]:
+               on_outcome: Callable[[int, Outcome], None] | None = None, job: str | None = None) -> list[Outcome]:
     """Run :func:`check_job` on every item in a worker process (:func:`~occsurf.bridge.isolation.run_jobs`);
     an item whose worker crashed is run again without the piece at fault (:func:`crash_skip`, from the
     item's ``trace`` file), up to :data:`MAX_RETRIES` times.
@@ -224,78 +223,22 @@ def run_checks(items: list[dict[str, Any]], *, timeout: float | None, isolate: b
     isolate : bool, default True
         False: run in this process (no protection against a crash).
     on_outcome : callable, optional
-        ``on_outcome(k, outcome)`` with each item's final outcome, as soon as it is known (one call
-        at a time, also with several jobs; with several jobs not in the order of ``items``).
+        ``on_outcome(k, outcome)`` with each item's final outcome, as soon as it is known.
     job : str, optional
         The job's ``"module:function"`` (default :data:`CHECK_JOB`, read at call time).
-    jobs : int, default 1
-        Worker processes at once (``occsurf check --jobs``): the items are dealt out in turn, item
-        ``k`` to worker ``k % jobs``, each worker checking its files one after the other (OCC
-        loaded once per worker), from threads of this process (OCC is not thread-safe, so the
-        checking itself is in the processes). Ctrl-C stops every worker at once.
 
     Returns
     -------
     list of Outcome
         The final outcomes, in the order of ``items``.
-
-    Raises
-    ------
-    ValueError
-        ``jobs`` not a positive whole number.
     """
-    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
-        raise ValueError(f"jobs: expected a positive number of worker processes, got {jobs!r}")
-    n = len(items)
-    if jobs == 1 or n < 2 or not isolate:
-        return _run_checks(items, timeout=timeout, isolate=isolate, on_outcome=on_outcome, job=job)
-    import threading
-    from concurrent.futures import ThreadPoolExecutor
-
-    from ..isolation import kill_workers
-
-    groups = [list(range(j, n, jobs)) for j in range(min(jobs, n))]
-    lock, stop = threading.Lock(), threading.Event()
-
-    def one(idx: list[int]) -> list[Outcome]:
-        sub = [items[k] for k in idx]
-
-        def settle(j: int, o: Outcome) -> None:
-            with lock:
-                items[idx[j]] = sub[j]  # with the skip of a re-run, for the caller
-                if on_outcome is not None:
-                    on_outcome(idx[j], o)
-
-        return _run_checks(sub, timeout=timeout, isolate=True, on_outcome=settle, job=job, stop=stop)
-
-    pool = ThreadPoolExecutor(max_workers=len(groups), thread_name_prefix="occsurf-check")
-    try:
-        results = list(pool.map(one, groups))
-    except BaseException:  # Ctrl-C, ...: the main thread takes the signal; stop the workers now
-        stop.set()
-        kill_workers()
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    finally:
-        pool.shutdown(wait=True)
-    final: list[Outcome | None] = [None] * n
-    for idx, outs in zip(groups, results):
-        for k, o in zip(idx, outs):
-            final[k] = o
-    return [o for o in final if o is not None]
-
-
-def _run_checks(items: list[dict[str, Any]], *, timeout: float | None, isolate: bool,
-                on_outcome: Callable[[int, Outcome], None] | None, job: str | None,
-                stop: Any = None) -> list[Outcome]:
-    """:func:`run_checks` in one worker at a time (``stop``: :func:`~occsurf.bridge.isolation.run_jobs`'s)."""
     from ..isolation import CRASHED, run_jobs
 
     spec = CHECK_JOB if job is None else job
     final: dict[int, Outcome] = {}
     todo = list(range(len(items)))
     for attempt in range(MAX_RETRIES + 1):
-        if not todo or (stop is not None and stop.is_set()):
+        if not todo:
             break
         batch = [items[k] for k in todo]
         again: list[int] = []
@@ -317,9 +260,9 @@ def _run_checks(items: list[dict[str, Any]], *, timeout: float | None, isolate: 
             if on_outcome is not None:
                 on_outcome(k, o)
 
-        run_jobs(spec, batch, timeout=timeout, isolate=isolate, preload=PRELOAD, on_outcome=settle, stop=stop)
+        run_jobs(spec, batch, timeout=timeout, isolate=isolate, preload=PRELOAD, on_outcome=settle)
         todo = sorted(again)
-    return [final[k] for k in range(len(items)) if k in final]
+    return [final[k] for k in range(len(items))]
 
 
 # ---------------------------------------------------------------------------------------- outputs

@@ -17,13 +17,13 @@ if os.environ.get("OCCSURF_TEST_IMPORT_DELAY"):
 
 def behave(item: dict[str, Any]) -> dict[str, Any]:
     """Append the item's name to ``item["log"]`` (if given), then do what ``item["do"]`` says:
-    ``'segv'`` (a segmentation fault), ``'sleep'`` (``item["seconds"]``, default an hour),
+    ``'segv'`` (a segmentation fault; ``'segv_once'``: unless ``item["skip"]`` names something), ``'sleep'`` (``item["seconds"]``, default an hour),
     ``'raise'``, ``'chatter'`` (write to stdout, Python and fd 1), ``'nan'``; else return."""
     if item.get("log"):
         with open(item["log"], "a", encoding="utf-8") as fh:
             fh.write(item["name"] + "\n")
     action = item.get("do")
-    if action == "segv":
+    if action == "segv" or (action == "segv_once" and not item.get("skip")):  # once: until a piece is skipped
         os.kill(os.getpid(), signal.SIGSEGV)
     elif action == "sleep":
         time.sleep(float(item.get("seconds", 3600)))

@@ -1,7 +1,6 @@
-"""``occsurf check --jobs N``: several files checked by N worker processes at once
-(:func:`occsurf.bridge.quality.check_files.run_checks` with ``jobs``), each worker its share of the
-files one after the other; the lines and reports as with one worker, in the order of the arguments;
-Ctrl-C stops every worker at once.
+"""``occsurf check --jobs N``: several files checked by N reader processes at once
+(:func:`occsurf.bridge.audit.check_pool.check_files`), each taking the next file when it is free; the
+lines and reports as with one worker, in the order of the arguments; Ctrl-C stops every reader at once.
 
 The worker jobs of the isolation tests (``isolation_jobs.py``: a segmentation fault, an hour's
 sleep) stand in for files where the behaviour of the pool, not of the checker, is tested.
@@ -18,17 +17,16 @@ from pathlib import Path
 
 import pytest
 
-from occsurf.bridge import isolation
+from occsurf.bridge.audit import check_pool
 from occsurf.bridge.cli import main
 from occsurf.bridge.isolation import CRASHED, OK, Outcome
-from occsurf.bridge.quality.check_files import run_checks
 
 SAMPLES = Path(__file__).resolve().parents[2] / "step_samples"
 JOB = "tests.bridge.isolation_jobs:behave"
 
 
 def _items(tmp_path: Path, *specs: str | tuple[str, str], **extra) -> list[dict]:
-    """Items for ``behave`` with what run_checks reads of a check item (an empty ``trace`` file: a
+    """Items for ``behave`` with what check_files reads of a check item (an empty ``trace`` file: a
     crash names no piece to leave out, so the item is not run again)."""
     trace = tmp_path / "trace"
     trace.write_text("")
@@ -40,10 +38,12 @@ def _items(tmp_path: Path, *specs: str | tuple[str, str], **extra) -> list[dict]
 
 
 @pytest.mark.skipif(os.name != "posix", reason="needs POSIX signals")
-def test_two_workers_run_every_item_once_and_report_each_in_its_place(tmp_path: Path) -> None:
-    """Items dealt out in turn to two workers: each run once, a crash costs its item only, the
-    outcomes in the order of the items (and each reported once, as it came, under its own index)."""
-    items = _items(tmp_path, "a", "b", ("c", "segv"), "d", "e")
+def test_two_readers_run_every_item_once_and_report_each_in_its_place(tmp_path: Path) -> None:
+    """Five items, two readers: each item run once, a crash costs its item only (its reader starts
+    again for the next), the outcomes in the order of the items and each reported once, as it came,
+    under its own index; a reader takes the next item when it is free, so the one that sleeps
+    through its item leaves the rest to the other."""
+    items = _items(tmp_path, ("a", "sleep"), "b", ("c", "segv"), "d", "e", seconds=8)
     seen: dict[int, Outcome] = {}
     lock_free = threading.Lock()
 
@@ -56,22 +56,33 @@ def test_two_workers_run_every_item_once_and_report_each_in_its_place(tmp_path: 
         finally:
             lock_free.release()
 
-    outcomes = run_checks(items, timeout=60, on_outcome=on_outcome, job=JOB, jobs=2)
-    assert [o.status for o in outcomes] == [OK, OK, CRASHED, OK, OK]
+    outcomes = check_pool.check_files(items, jobs=2, timeout=60, on_outcome=on_outcome, job=JOB)
+    assert [o.status for o in outcomes] == [OK, OK, CRASHED, OK, OK] and [o.index for o in outcomes] == [0, 1, 2, 3, 4]
+    assert outcomes[2].exit_reason == "killed by SIGSEGV"
     assert sorted(seen) == [0, 1, 2, 3, 4] and all(seen[k] is outcomes[k] for k in seen)
     assert sorted((tmp_path / "log").read_text().split()) == ["a", "b", "c", "d", "e"]
-    names = [o.value["name"] for o in outcomes if o.ok]
-    assert names == ["a", "b", "d", "e"]
+    assert [o.value["name"] for o in outcomes if o.ok] == ["a", "b", "d", "e"]
     pids = {o.value["name"]: o.value["pid"] for o in outcomes if o.ok}
-    # item k goes to worker k % 2: a, e (after c's crash a new one) on the first; b, d on the second
-    assert pids["b"] == pids["d"] and pids["a"] != pids["b"] and os.getpid() not in pids.values()
+    # a sleeps 8 s in one reader; b, c (crash), d, e all go to the other (restarted after c)
+    assert pids["a"] not in (pids["b"], pids["d"], pids["e"]) and pids["d"] == pids["e"] != pids["b"]
+    assert seen[0] is outcomes[0] and list(seen)[-1] == 0  # a finished last
+
+
+def test_a_crash_is_checked_again_without_the_piece_at_fault(tmp_path: Path) -> None:
+    """As run_checks: a reader that dies with a piece named in the item's trace file runs the item
+    again with that piece in ``skip`` (the caller's list gets the grown item)."""
+    items = _items(tmp_path, "a", ("b", "segv_once"), "c")
+    (tmp_path / "trace").write_text("face 3\n")
+    outcomes = check_pool.check_files(items, jobs=2, timeout=60, job=JOB)
+    assert [o.status for o in outcomes] == [OK, OK, OK]
+    assert "not evaluated" in items[1]["skip"]["faces"]["3"] and items[0]["skip"] == {} == items[2]["skip"]
 
 
 @pytest.mark.skipif(os.name != "posix", reason="needs POSIX signals")
 def test_ctrl_c_stops_every_worker_at_once(tmp_path: Path) -> None:
-    """Ctrl-C reaches the main thread only (here: SIGINT to this process, not to the workers): the
-    pool stops starting workers and kills the running ones instead of waiting for their items (40 s
-    of sleep each)."""
+    """Ctrl-C reaches the main thread only (here: SIGINT to this process, not to the readers): the
+    pool starts no more items and kills the readers instead of waiting for their items (40 s of
+    sleep each)."""
     items = _items(tmp_path, ("a", "sleep"), ("b", "sleep"), "c", "d", seconds=40)
     log = tmp_path / "log"
 
@@ -84,11 +95,23 @@ def test_ctrl_c_stops_every_worker_at_once(tmp_path: Path) -> None:
     watcher = threading.Thread(target=interrupt_when_both_sleep, daemon=True)
     t0 = time.monotonic()
     watcher.start()
-    with pytest.raises(KeyboardInterrupt):
-        run_checks(items, timeout=None, job=JOB, jobs=2)
-    assert time.monotonic() - t0 < 20  # not the 40 s of the sleeps: the workers were killed
+    readers: list = []
+    real = check_pool.Reader
+
+    class Kept(real):  # type: ignore[misc, valid-type]
+        def __init__(self, *args, **kwargs) -> None:
+            super().__init__(*args, **kwargs)
+            readers.append(self)
+
+    check_pool.Reader = Kept
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            check_pool.check_files(items, jobs=2, timeout=None, job=JOB)
+    finally:
+        check_pool.Reader = real
+    assert time.monotonic() - t0 < 20  # not the 40 s of the sleeps: the readers were killed
     assert sorted(log.read_text().split()) == ["a", "b"]  # c and d never started
-    assert not isolation._LIVE  # both workers killed and reaped
+    assert len(readers) == 2 and all(r.proc is None for r in readers)  # both stopped and reaped
 
 
 def test_cli_jobs_two_writes_what_one_writes_in_the_same_order(tmp_path: Path, capsys) -> None:
@@ -123,7 +146,7 @@ def test_cli_bad_jobs_is_one_line(bad: str, tmp_path: Path, capsys) -> None:
     assert not (tmp_path / "o").exists()
 
 
-def test_run_checks_refuses_bad_jobs() -> None:
+def test_check_files_refuses_bad_jobs() -> None:
     for jobs in (0, -1, 1.5, True):
         with pytest.raises(ValueError, match="jobs: expected a positive number of worker processes"):
-            run_checks([], timeout=None, jobs=jobs)  # type: ignore[arg-type]
+            check_pool.check_files([], jobs=jobs, timeout=None)  # type: ignore[arg-type]

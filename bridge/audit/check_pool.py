@@ -1,0 +1,108 @@
+"""Check several STEP/IGES files at once, in worker processes (``occsurf check --jobs N``).
+
+:func:`check_files` runs :func:`occsurf.bridge.quality.check_files.check_job` on every item, as
+:func:`~occsurf.bridge.quality.check_files.run_checks` does one file after the other, but in ``jobs``
+persistent reader processes (:class:`occsurf.bridge.audit.reader.Reader`: OCC imported once per
+reader) fed from a thread pool (:class:`concurrent.futures.ThreadPoolExecutor`), a file at a time:
+a reader takes the next file as soon as it is free, so a long file does not hold up the others (OCC
+is not thread-safe, so the checking is in the processes, the threads only wait for them). A file
+whose reader crashes is checked again without the piece at fault
+(:func:`~occsurf.bridge.quality.check_files.crash_skip`, from the item's ``trace`` file), up to
+:data:`~occsurf.bridge.quality.check_files.MAX_RETRIES` times, as by ``run_checks``; its outcome is
+worded as ``run_jobs`` words it (:meth:`Reader.outcome`), so a failure reads the same with any
+number of jobs. Ctrl-C stops every reader at once.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+from ..isolation import CRASHED, Outcome
+from ..quality.check_files import CHECK_JOB, MAX_RETRIES, PRELOAD, crash_skip
+from .reader import Reader
+
+__all__ = ["check_files"]
+
+
+def check_files(items: list[dict[str, Any]], *, jobs: int, timeout: float | None,
+                on_outcome: Callable[[int, Outcome], None] | None = None, job: str | None = None) -> list[Outcome]:
+    """Run :func:`~occsurf.bridge.quality.check_files.check_job` on every item in ``jobs`` reader
+    processes at once (see the module).
+
+    Parameters
+    ----------
+    items : list of dict
+        ``check_job``'s items. An item run again is replaced in this list by a copy whose ``skip``
+        names what was left out (so the caller can report it), before its outcome is reported.
+    jobs : int
+        Reader processes (at most one per item).
+    timeout : float or None
+        Seconds a reader may take per item (its start-up not counted).
+    on_outcome : callable, optional
+        ``on_outcome(k, outcome)`` with each item's final outcome as soon as it is known: one call
+        at a time, in the order the items finish.
+    job : str, optional
+        The job's ``"module:function"`` (default :data:`~occsurf.bridge.quality.check_files.CHECK_JOB`).
+
+    Returns
+    -------
+    list of Outcome
+        The final outcomes, in the order of ``items`` (``index``: the item's position).
+
+    Raises
+    ------
+    ValueError
+        ``jobs`` not a positive whole number.
+    """
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ValueError(f"jobs: expected a positive number of worker processes, got {jobs!r}")
+    spec = CHECK_JOB if job is None else job
+    readers = [Reader(tuple(PRELOAD)) for _ in range(max(1, min(jobs, len(items))))]
+    idle: queue.SimpleQueue[Reader] = queue.SimpleQueue()
+    for r in readers:
+        idle.put(r)
+    lock, stopping = threading.Lock(), threading.Event()
+
+    def one(k: int) -> Outcome | None:
+        for attempt in range(MAX_RETRIES + 1):
+            if stopping.is_set():
+                return None
+            reader = idle.get()
+            try:
+                o = reader.outcome(spec, items[k], timeout, index=k)
+            finally:
+                idle.put(reader)
+            if o.status == CRASHED and attempt < MAX_RETRIES:
+                try:
+                    stage = Path(items[k]["trace"]).read_text("utf-8").strip()
+                except OSError:
+                    stage = ""
+                grown = crash_skip(stage, o.exit_reason or "crashed", items[k].get("skip") or {})
+                if grown is not None:
+                    items[k] = dict(items[k], skip=grown)
+                    continue
+            if on_outcome is not None:
+                with lock:
+                    on_outcome(k, o)
+            return o
+        return None  # not reached: the last attempt always reports
+
+    pool = ThreadPoolExecutor(max_workers=len(readers), thread_name_prefix="occsurf-check")
+    try:
+        outcomes = list(pool.map(one, range(len(items))))
+    except BaseException:  # Ctrl-C, ...: stop the readers now rather than wait for their files
+        stopping.set()
+        pool.shutdown(wait=False, cancel_futures=True)
+        for r in readers:
+            r.stop()
+        raise
+    finally:
+        pool.shutdown(wait=True)
+        for r in readers:
+            r.stop()
+    return [o for o in outcomes if o is not None]
