@@ -157,7 +157,8 @@ def _compare_surface(ours, occ, good, noise, label=""):
         err = np.abs(getattr(ours, name)[good] - occ[key][good]) / sc[good] ** power
         assert np.all(err <= RTOL), (label, name, err.max())
     assert_allclose(ours.normal[good], occ["n"][good], atol=RTOL, err_msg=label)
-    gap = (occ["k1"] - occ["k2"]) / sc
+    with np.errstate(invalid="ignore", divide="ignore"):  # OCC's nan curvatures off ``good`` (not compared)
+        gap = (occ["k1"] - occ["k2"]) / sc
     sep = good & (gap >= 1e-3)
     for ours_d, occ_d in ((ours.dir1, occ["d1"]), (ours.dir2, occ["d2"])):
         sin = np.linalg.norm(np.cross(ours_d[sep], occ_d[sep]), axis=-1)
