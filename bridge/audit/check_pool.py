@@ -5,7 +5,8 @@
 persistent reader processes (:class:`occsurf.bridge.audit.reader.Reader`: OCC imported once per
 reader) fed from a thread pool (:class:`concurrent.futures.ThreadPoolExecutor`), a file at a time:
 a reader takes the next file as soon as it is free, so a long file does not hold up the others (OCC
-is not thread-safe, so the checking is in the processes, the threads only wait for them). A file
+is not thread-safe, so the checking is in the processes, the threads only wait for them:
+:func:`~occsurf.bridge.audit.reader.on_free_readers`, shared with ``fill --jobs``). A file
 whose reader crashes is checked again without the piece at fault
 (:func:`~occsurf.bridge.quality.check_files.crash_skip`, from the item's ``trace`` file), up to
 :data:`~occsurf.bridge.quality.check_files.MAX_RETRIES` times, as by ``run_checks``; its outcome is
@@ -15,16 +16,14 @@ number of jobs. Ctrl-C stops every reader at once.
 
 from __future__ import annotations
 
-import queue
 import threading
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
 from ..isolation import CRASHED, Outcome
 from ..quality.check_files import CHECK_JOB, MAX_RETRIES, PRELOAD, crash_skip
-from .reader import Reader
+from .reader import Reader, on_free_readers
 
 __all__ = ["check_files"]
 
@@ -63,20 +62,11 @@ def check_files(items: list[dict[str, Any]], *, jobs: int, timeout: float | None
         raise ValueError(f"jobs: expected a positive number of worker processes, got {jobs!r}")
     spec = CHECK_JOB if job is None else job
     readers = [Reader(tuple(PRELOAD)) for _ in range(max(1, min(jobs, len(items))))]
-    idle: queue.SimpleQueue[Reader] = queue.SimpleQueue()
-    for r in readers:
-        idle.put(r)
-    lock, stopping = threading.Lock(), threading.Event()
+    lock = threading.Lock()
 
-    def one(k: int) -> Outcome | None:
+    def check(reader: Reader, k: int) -> Outcome | None:
         for attempt in range(MAX_RETRIES + 1):
-            if stopping.is_set():
-                return None
-            reader = idle.get()
-            try:
-                o = reader.outcome(spec, items[k], timeout, index=k)
-            finally:
-                idle.put(reader)
+            o = reader.outcome(spec, items[k], timeout, index=k)  # a crashed reader starts again here
             if o.status == CRASHED and attempt < MAX_RETRIES:
                 try:
                     stage = Path(items[k]["trace"]).read_text("utf-8").strip()
@@ -92,17 +82,9 @@ def check_files(items: list[dict[str, Any]], *, jobs: int, timeout: float | None
             return o
         return None  # not reached: the last attempt always reports
 
-    pool = ThreadPoolExecutor(max_workers=len(readers), thread_name_prefix="occsurf-check")
     try:
-        outcomes = list(pool.map(one, range(len(items))))
-    except BaseException:  # Ctrl-C, ...: stop the readers now rather than wait for their files
-        stopping.set()
-        pool.shutdown(wait=False, cancel_futures=True)
-        for r in readers:
-            r.stop()
-        raise
+        outcomes = on_free_readers(readers, len(items), check, lambda k: None, name="check")
     finally:
-        pool.shutdown(wait=True)
         for r in readers:
             r.stop()
     return [o for o in outcomes if o is not None]

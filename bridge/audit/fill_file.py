@@ -36,16 +36,13 @@ from __future__ import annotations
 import base64
 import io
 import os
-import queue
-import threading
 import warnings
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, cast
 
 from ..isolation import CRASHED, ERROR, OK, TIMEOUT, Outcome, run_jobs
-from .reader import Reader
+from .reader import Reader, on_free_readers
 
 __all__ = ["fill_file", "fill_job", "plan_job", "hole_job", "sew_job", "default_jobs", "PRELOAD", "FILL_JOB"]
 
@@ -332,35 +329,17 @@ def _outcome(reader: Reader, job: str, item: dict[str, Any], timeout: float | No
 def _fill_holes(item: dict[str, Any], plan: dict[str, Any], workers: list[Reader],
                 timeout: float | None) -> list[dict[str, Any]]:
     """Every hole of the plan through :func:`hole_job`, one per worker at a time; results in hole order."""
-    n = int(plan["holes"])
-    idle: queue.SimpleQueue[Reader] = queue.SimpleQueue()
-    for r in workers:
-        idle.put(r)
-    stopping = threading.Event()
 
-    def one(k: int) -> dict[str, Any]:
-        if stopping.is_set():
-            return {"report": _failed_report(plan, k, "interrupted"), "faces": None}
-        reader = idle.get()
-        try:
-            outcome = _outcome(reader, HOLE_JOB, {**item, "hole": k}, timeout)
-        finally:
-            idle.put(reader)
+    def fill(reader: Reader, k: int) -> dict[str, Any]:
+        outcome = _outcome(reader, HOLE_JOB, {**item, "hole": k}, timeout)
         if outcome.ok:
             return cast(dict[str, Any], outcome.value)
         return {"report": _failed_report(plan, k, _hole_failure(outcome, timeout)), "faces": None}
 
-    pool = ThreadPoolExecutor(max_workers=len(workers), thread_name_prefix="occsurf-fill")
-    try:
-        return list(pool.map(one, range(n)))
-    except BaseException:  # Ctrl-C, ...: stop the workers now rather than wait for their holes
-        stopping.set()
-        pool.shutdown(wait=False, cancel_futures=True)
-        for r in workers:
-            r.stop()
-        raise
-    finally:
-        pool.shutdown(wait=True)
+    def stopped(k: int) -> dict[str, Any]:
+        return {"report": _failed_report(plan, k, "interrupted"), "faces": None}
+
+    return on_free_readers(workers, int(plan["holes"]), fill, stopped, name="fill")
 
 
 def _hole_failure(outcome: Outcome, timeout: float | None) -> str:

@@ -38,8 +38,9 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 from ..isolation import (
     CRASHED,
@@ -56,11 +57,12 @@ from ..isolation import (
 )
 from ..messages import error_line
 
-__all__ = ["Reader", "Reply", "reader_for_thread", "STARTUP_TIMEOUT"]
+__all__ = ["Reader", "Reply", "reader_for_thread", "on_free_readers", "STARTUP_TIMEOUT"]
 
 #: Seconds a reader may take to start and import its preload modules (OCC: ~2 s unloaded).
 STARTUP_TIMEOUT = 180.0
 _MODULE = "occsurf.bridge.audit.reader"
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -218,6 +220,43 @@ class Reader:
             return Outcome(index, ERROR, error=reply.error, seconds=reply.seconds)
         return Outcome(index, CRASHED if reply.status == CRASHED else TIMEOUT, error=reply.error,
                        exit_code=reply.exit_code, seconds=reply.seconds)
+
+
+def on_free_readers(readers: list[Reader], n: int, work: Callable[[Reader, int], T], stopped: Callable[[int], T], *,
+                    name: str) -> list[T]:
+    """``work(reader, k)`` for ``k`` in ``0 .. n - 1``, each on whichever of ``readers`` is free first
+    (one thread per reader: the work is in the reader processes, the threads wait for them); the
+    results in the order of ``k``. On Ctrl-C (or any exception here) the items not started get
+    ``stopped(k)`` and every reader is stopped at once rather than waited for; the exception is raised
+    again. How ``fill --jobs`` fills holes and ``check --jobs`` checks files."""
+    from concurrent.futures import ThreadPoolExecutor
+    from queue import SimpleQueue
+
+    idle: SimpleQueue[Reader] = SimpleQueue()
+    for r in readers:
+        idle.put(r)
+    stopping = threading.Event()
+
+    def one(k: int) -> T:
+        if stopping.is_set():
+            return stopped(k)
+        reader = idle.get()
+        try:
+            return work(reader, k)
+        finally:
+            idle.put(reader)
+
+    pool = ThreadPoolExecutor(max_workers=max(1, len(readers)), thread_name_prefix=f"occsurf-{name}")
+    try:
+        return list(pool.map(one, range(n)))
+    except BaseException:  # Ctrl-C, ...: stop the readers now rather than wait for their items
+        stopping.set()
+        pool.shutdown(wait=False, cancel_futures=True)
+        for r in readers:
+            r.stop()
+        raise
+    finally:
+        pool.shutdown(wait=True)
 
 
 _local = threading.local()
