@@ -224,7 +224,7 @@ class Reader:
 
 def on_free_readers(readers: list[Reader], n: int, work: Callable[[Reader, int], T], stopped: Callable[[int], T], *,
                     name: str) -> list[T]:
-    """``work(reader, k)`` for ``k`` in ``0 .. n - 1``, each on whichever of ``readers`` is free first
+    """Run ``work(reader, k)`` for every ``k < n``, each on whichever of ``readers`` is free first
     (one thread per reader: the work is in the reader processes, the threads wait for them); the
     results in the order of ``k``. On Ctrl-C (or any exception here) the items not started get
     ``stopped(k)`` and every reader is stopped at once rather than waited for; the exception is raised
