@@ -8,7 +8,7 @@ a reader takes the next file as soon as it is free, so a long file does not hold
 is not thread-safe, so the checking is in the processes, the threads only wait for them:
 :func:`~occsurf.bridge.audit.reader.on_free_readers`, shared with ``fill --jobs``). A file
 whose reader crashes is checked again without the piece at fault
-(:func:`~occsurf.bridge.quality.check_files.crash_skip`, from the item's ``trace`` file), up to
+(:func:`~occsurf.bridge.quality.check_files.rerun_without_fault`, from the item's ``trace`` file), up to
 :data:`~occsurf.bridge.quality.check_files.MAX_RETRIES` times, as by ``run_checks``; its outcome is
 worded as ``run_jobs`` words it (:meth:`Reader.outcome`), so a failure reads the same with any
 number of jobs. Ctrl-C stops every reader at once.
@@ -18,11 +18,10 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
-from ..isolation import CRASHED, Outcome
-from ..quality.check_files import CHECK_JOB, MAX_RETRIES, PRELOAD, crash_skip
+from ..isolation import Outcome
+from ..quality.check_files import CHECK_JOB, MAX_RETRIES, PRELOAD, rerun_without_fault
 from .reader import Reader, on_free_readers
 
 __all__ = ["check_files"]
@@ -67,15 +66,10 @@ def check_files(items: list[dict[str, Any]], *, jobs: int, timeout: float | None
     def check(reader: Reader, k: int) -> Outcome | None:
         for attempt in range(MAX_RETRIES + 1):
             o = reader.outcome(spec, items[k], timeout, index=k)  # a crashed reader starts again here
-            if o.status == CRASHED and attempt < MAX_RETRIES:
-                try:
-                    stage = Path(items[k]["trace"]).read_text("utf-8").strip()
-                except OSError:
-                    stage = ""
-                grown = crash_skip(stage, o.exit_reason or "crashed", items[k].get("skip") or {})
-                if grown is not None:
-                    items[k] = dict(items[k], skip=grown)
-                    continue
+            rerun = rerun_without_fault(items[k], o) if attempt < MAX_RETRIES else None
+            if rerun is not None:
+                items[k] = rerun
+                continue
             if on_outcome is not None:
                 with lock:
                     on_outcome(k, o)

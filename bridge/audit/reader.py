@@ -205,7 +205,6 @@ class Reader:
         return Reply("crashed", error=f"the reader process died ({why})" + (f": {detail}" if detail and code and code > 0 else ""),
                      signal=_signal_name(code), exit_code=code, seconds=seconds)
 
-
     def outcome(self, job: str, item: Any, timeout: float | None, index: int = 0) -> Outcome:
         """:meth:`run` reported as :func:`occsurf.bridge.isolation.run_jobs` reports an item (``index``:
         the item's position), so that callers of either word a failure alike; a reader that cannot

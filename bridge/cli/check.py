@@ -194,12 +194,6 @@ def _failure_reason(outcome: Any, ns: argparse.Namespace, path: Path) -> str:
     return strip_path(reason or "failed", path.resolve())
 
 
-def _default_jobs() -> int:
-    from ..audit.fill_file import default_jobs
-
-    return default_jobs()
-
-
 def run(ns: argparse.Namespace) -> int:
     """``occsurf check``: validate the arguments, run the worker per file, write the pages and the JSON."""
     from ..isolation import OK
@@ -299,7 +293,9 @@ def run(ns: argparse.Namespace) -> int:
             code = EXIT_ERROR
             stream.put(k, (rows[k], None))
     try:
-        jobs = 1 if ns.in_process else min(_default_jobs() if ns.jobs is None else ns.jobs, max(1, len(items)))
+        from ..audit.fill_file import default_jobs
+
+        jobs = 1 if ns.in_process else min(default_jobs() if ns.jobs is None else ns.jobs, max(1, len(items)))
         # the progress file holds the stage of the worker that wrote last: a bar with one worker only
         with _Progress(scratch[0], enabled=sys.stderr.isatty() and not (ns.json or ns.jsonl) and jobs == 1):
             if jobs > 1:

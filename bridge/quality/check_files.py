@@ -32,7 +32,7 @@ from ..exchange.reading import SUFFIXES, expand, folder_entries, read_model, sho
 if TYPE_CHECKING:
     from ..isolation import Outcome
 
-__all__ = ["check_file", "check_job", "run_checks", "crash_skip", "write_outputs", "collect_files", "file_summary",
+__all__ = ["check_file", "check_job", "run_checks", "rerun_without_fault", "crash_skip", "write_outputs", "collect_files", "file_summary",
            "write_summary", "CHECK_JOB", "PRELOAD", "MAX_RETRIES"]
 
 #: The job the worker process runs per file (``"module:function"`` for :func:`~occsurf.bridge.isolation.run_jobs`).
@@ -207,6 +207,23 @@ def crash_skip(stage: str, reason: str, skip: dict[str, Any]) -> dict[str, Any] 
     return None if new == skip else new
 
 
+def rerun_without_fault(item: dict[str, Any], outcome: Outcome) -> dict[str, Any] | None:
+    """The item to check again after ``outcome``: ``item`` with the piece its ``trace`` file names
+    (the stage the worker was in when it died) added to ``skip`` (:func:`crash_skip`); ``None`` when
+    the worker did not crash, or the trace names nothing left to skip. What :func:`run_checks` and
+    ``check --jobs`` (:func:`occsurf.bridge.audit.check_pool.check_files`) do after a crash."""
+    from ..isolation import CRASHED
+
+    if outcome.status != CRASHED:
+        return None
+    try:
+        stage = Path(item["trace"]).read_text("utf-8").strip()
+    except OSError:
+        stage = ""
+    grown = crash_skip(stage, outcome.exit_reason or "crashed", item.get("skip") or {})
+    return None if grown is None else dict(item, skip=grown)
+
+
 def run_checks(items: list[dict[str, Any]], *, timeout: float | None, isolate: bool = True,
                on_outcome: Callable[[int, Outcome], None] | None = None, job: str | None = None) -> list[Outcome]:
     """Run :func:`check_job` on every item in a worker process (:func:`~occsurf.bridge.isolation.run_jobs`);
@@ -232,7 +249,7 @@ def run_checks(items: list[dict[str, Any]], *, timeout: float | None, isolate: b
     list of Outcome
         The final outcomes, in the order of ``items``.
     """
-    from ..isolation import CRASHED, run_jobs
+    from ..isolation import run_jobs
 
     spec = CHECK_JOB if job is None else job
     final: dict[int, Outcome] = {}
@@ -243,19 +260,13 @@ def run_checks(items: list[dict[str, Any]], *, timeout: float | None, isolate: b
         batch = [items[k] for k in todo]
         again: list[int] = []
 
-        def settle(o: Outcome, todo: list[int] = todo, batch: list[dict[str, Any]] = batch,
-                   again: list[int] = again, attempt: int = attempt) -> None:
+        def settle(o: Outcome, todo: list[int] = todo, again: list[int] = again, attempt: int = attempt) -> None:
             k = todo[o.index]
-            if o.status == CRASHED and attempt < MAX_RETRIES:
-                try:
-                    stage = Path(batch[o.index]["trace"]).read_text("utf-8").strip()
-                except OSError:
-                    stage = ""
-                grown = crash_skip(stage, o.exit_reason or "crashed", batch[o.index].get("skip") or {})
-                if grown is not None:
-                    items[k] = dict(items[k], skip=grown)
-                    again.append(k)
-                    return
+            rerun = rerun_without_fault(items[k], o) if attempt < MAX_RETRIES else None
+            if rerun is not None:
+                items[k] = rerun
+                again.append(k)
+                return
             final[k] = o
             if on_outcome is not None:
                 on_outcome(k, o)
