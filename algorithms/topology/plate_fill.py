@@ -25,7 +25,8 @@ tangent plane has gradient ``g_i = -(m_1, m_2) / m_3`` for its normal ``m``; the
 energy of Duchon's thin-plate splines, "Splines minimizing rotation-invariant semi-norms in
 Sobolev spaces", 1977, which OCC's ``GeomPlate_BuildPlateSurface`` also minimises), with the Gram
 matrices of the energy exact (Gauss quadrature per knot span) and the sparse normal equations
-solved by ``scipy.sparse`` (one factorisation per knot vector: :class:`_SPDFactor`). The data rows are weighted by the
+solved by a sparse Cholesky factorisation in nested-dissection order of the plate's grid (one per knot
+vector: :class:`_SPDFactor`, :class:`~occsurf.algorithms.kernel.grid_cholesky.GridCholesky`). The data rows are weighted by the
 targets (``g0_tol``, ``angle_tol``), so a residual of 1 is "just met"; the energy weight
 ``tolerances.FILL_PLATE_SMOOTHING`` (of the data term's trace) decides the coefficients no sample
 reaches (the plate's inside), and its bias on the data is taken off by iterated Tikhonov
@@ -77,6 +78,7 @@ from ..errors import InvalidGeometryError
 from ..fitting._common import check_fit_size
 from ..kernel.basis import basis_derivatives, find_span, gauss_legendre
 from ..kernel.curve import BSplineCurve
+from ..kernel.grid_cholesky import GridCholesky, NotPositiveDefinite
 from ..kernel.sparse_kron import kron_sum
 from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
@@ -475,7 +477,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             eps0 = (eps, len(X)) if eps0 is None else eps0
             if held:  # the first stage's weight, grown with the sample count only (see the module)
                 eps = eps0[0] * len(X) / eps0[1]
-            lu = _SPDFactor(AtA + eps * E)
+            lu = _SPDFactor(AtA + eps * E, (nu, nv), p)
             ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
                              g2=g2f, kfloor=kfloor, g2_tol=g2_tol)
             c = lu.solve(A.T @ rhs)
@@ -520,33 +522,45 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
 
 
 class _SPDFactor:
-    """The plate's system ``K = A^T A + eps E`` factored once for the solves of a stage.
+    """The plate's system ``K = A^T A + eps E`` on its ``nu x nv`` grid of coefficients, factored once
+    for the solves of a stage.
 
     ``K`` is symmetric positive definite (``E`` is positive semi-definite with the linear functions
     as its null space, on which the G0 rows of ``A`` are positive definite), but badly scaled: its
     diagonal spans 13 decades (basis functions outside the loop are held by ``eps E`` alone). It is
     scaled symmetrically to a unit diagonal (Jacobi: ``D^-1/2 K D^-1/2``, which leaves the solution
-    unchanged) and factored by SuperLU in its symmetric mode (minimum degree on ``K + K^T``, diagonal
-    pivots; stable for a positive definite matrix, and no pivot search). On linkrods face 20's G1
-    plates (up to 17161 unknowns) that is 6-7x faster than SuperLU's default (column minimum degree,
-    partial pivoting), which the G1 plate used before, with a smaller residual (3-5e-16 against
-    9e-16 relative); its solutions agree within 2e-5 of the largest coefficient with unscaled
-    symmetric and scaled default factorisations, where the unscaled default one differed from all
-    three by up to 4.5e-3 (in the directions the data hardly pin: the scaling is what makes them
-    reproducible). The G2 plate's system, factored in the symmetric mode before, is scaled too: its
-    fills move by round-off (the G2 tests, which bound its jumps, G0 and G1 at what was measured,
-    pass unchanged).
+    unchanged) and factored by Cholesky in the nested-dissection order of the grid
+    (:class:`~occsurf.algorithms.kernel.grid_cholesky.GridCholesky`: a coefficient couples with
+    those at most ``p`` apart in each index). Before 2026-12-06 it was SuperLU's LU in its symmetric
+    mode (minimum degree on ``K + K^T``, diagonal pivots; 6-7x faster than SuperLU's default, which
+    the G1 plate used until 2026-12-05): 0.29-0.46 s against 0.15-0.22 s on linkrods face 35's
+    17 161 unknowns, with solutions that agree within the system's round-off (3.5e-10 of the largest
+    coefficient there; its condition number ~1e8). The unscaled default LU differed from the scaled
+    factorisations by up to 4.5e-3 in the directions the data hardly pin: the scaling is what makes
+    the plate reproducible.
+
+    Where Cholesky meets a pivot <= 0, the symmetric-mode LU is used as before: a G2 plate's
+    curvature-variation energy can hold the coefficients far outside the loop so loosely that the
+    scaled ``K`` is indefinite to working precision (one stage of the 3-sided bump ring, 119 x 104:
+    the LU's pivots include three negative ones, the least -0.25 against a unit diagonal). The LU
+    solves such a system as it did, and that stage, hence the fill, is the one it was.
     """
 
-    def __init__(self, K: sp.spmatrix) -> None:
-        K = sp.csc_matrix(K)
-        self.s = 1.0 / np.sqrt(K.diagonal())
-        S = sp.diags(self.s)
-        self.lu = spla.splu((S @ K @ S).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                            options={"SymmetricMode": True})
+    def __init__(self, K: sp.spmatrix, shape: tuple[int, int], p: int) -> None:
+        self.chol: GridCholesky | None = None
+        try:
+            self.chol = GridCholesky(K, shape, p)
+        except NotPositiveDefinite:
+            K = sp.csc_matrix(K)
+            self.s = 1.0 / np.sqrt(K.diagonal())
+            S = sp.diags(self.s)
+            self.lu = spla.splu((S @ K @ S).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                                options={"SymmetricMode": True})
 
     def solve(self, b: Array) -> Array:
         """``K^-1 b``."""
+        if self.chol is not None:
+            return self.chol.solve(b)
         return self.s * self.lu.solve(self.s * b)
 
 

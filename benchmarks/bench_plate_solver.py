@@ -1,0 +1,161 @@
+"""The plate fill's sparse factorisation: ours (``kernel.grid_cholesky``) against SciPy's SuperLU.
+
+    python benchmarks/bench_plate_solver.py [--realdata]
+
+Every stage of a plate fill solves ``K c = b`` with ``K = A^T A + eps E`` (course §8-3), one
+factorisation per knot vector. The systems are recorded as the fills of this script's holes make
+them (``fill_model``), then each is factored again by both solvers in the same run:
+
+* ours: :class:`~occsurf.algorithms.kernel.grid_cholesky.GridCholesky` (multifrontal Cholesky in the
+  nested-dissection order of the coefficient grid, Jacobi-scaled), what the plate uses since
+  2026-12-06;
+* SuperLU: ``scipy.sparse.linalg.splu`` of the Jacobi-scaled ``K`` in its symmetric mode (minimum
+  degree on ``K + K^T``, diagonal pivots), what the plate used before.
+
+Times are the best of three factorisations (ms) and of five solves; "agree" is the largest
+difference of the two solutions relative to the largest coefficient (the systems' round-off: their
+condition numbers after scaling reach ~1e8). Systems that SuperLU factors with negative pivots
+(indefinite to working precision; the plate then keeps SuperLU's LU) are counted, not timed.
+
+Holes: the 6-sided bump ring of ``examples/hole_models.py`` and the four holes of
+``step_samples/holes/dome_holes.step`` filled G2 (quartic plates); with ``--realdata``, linkrods face
+35 refilled (bicubic G1 plates, up to 131 x 131 coefficients; ``../shared/realdata``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+import common  # noqa: F401 - pins BLAS threads before NumPy
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from occsurf.algorithms.kernel.grid_cholesky import GridCholesky, NotPositiveDefinite
+from occsurf.algorithms.topology import plate_fill
+from occsurf.bridge.conversion.splines import make_face
+from occsurf.bridge.exchange.step_iges import read_step
+from occsurf.bridge.modeling.fill import fill_model, sew_faces
+from occsurf.examples.hole_models import ring_model
+
+ROOT = Path(__file__).resolve().parents[1]
+DOME = ROOT / "step_samples" / "holes" / "dome_holes.step"
+REALDATA = ROOT.parent / "shared" / "realdata"
+
+
+def record(make: Any) -> list[tuple[sp.csc_matrix, tuple[int, int], int]]:
+    """The plate systems ``make()`` factors, as ``(K, (nu, nv), p)``."""
+    systems = []
+    factor = plate_fill._SPDFactor
+
+    class Recorded(factor):  # type: ignore[misc, valid-type]
+        def __init__(self, K: Any, shape: tuple[int, int], p: int) -> None:
+            systems.append((sp.csc_matrix(K, copy=True), shape, p))
+            super().__init__(K, shape, p)
+
+    plate_fill._SPDFactor = Recorded
+    try:
+        make()
+    finally:
+        plate_fill._SPDFactor = factor
+    return systems
+
+
+def _best(fn: Any, repeat: int) -> tuple[float, Any]:
+    best, out = np.inf, None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return 1e3 * best, out
+
+
+def superlu(K: sp.spmatrix) -> Any:
+    """The former plate factorisation: Jacobi-scaled, SuperLU in symmetric mode."""
+    s = 1.0 / np.sqrt(K.diagonal())
+    S = sp.diags(s)
+    lu = spla.splu((S @ K @ S).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                   options={"SymmetricMode": True})
+    return s, lu
+
+
+def one(K: sp.csc_matrix, shape: tuple[int, int], p: int, b: np.ndarray) -> tuple | None:
+    """Both factorisations of one system: ``(SuperLU ms, ours ms, SuperLU solve ms, ours solve ms,
+    agreement)``; ``None`` where SuperLU meets a pivot <= 0 (indefinite to working precision)."""
+    t_lu, (s, lu) = _best(lambda: superlu(K), 3)
+    if (lu.U.diagonal() <= 0).any():
+        return None
+    t_ours, g = _best(lambda: GridCholesky(K, shape, p), 3)
+    ts_lu, x_lu = _best(lambda: s * lu.solve(s * b), 5)
+    ts_ours, x = _best(lambda: g.solve(b), 5)
+    return t_lu, t_ours, ts_lu, ts_ours, float(np.abs(x - x_lu).max() / np.abs(x_lu).max())
+
+
+def compare(label: str, systems: list) -> dict:
+    """Both factorisations of each system; a table row per system of at least 2000 unknowns."""
+    rng = np.random.default_rng(common.SEED)
+    tot_ours = tot_lu = 0.0
+    worst = 0.0
+    indefinite = 0
+    print(f"\n{label}: {len(systems)} systems")
+    print("| grid | degree | unknowns | SuperLU factor (ms) | ours (ms) | ratio | SuperLU solve (ms) | ours | agree |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for K, shape, p in systems:
+        try:
+            got = one(K, shape, p, rng.standard_normal(K.shape[0]))
+        except NotPositiveDefinite:  # SuperLU's pivots were all positive: not expected
+            print(f"| {shape[0]} x {shape[1]} | {p} | {K.shape[0]} | Cholesky refused a system SuperLU factored |")
+            continue
+        if got is None:
+            indefinite += 1
+            continue
+        t_lu, t_ours, ts_lu, ts_ours, agree = got
+        worst = max(worst, agree)
+        tot_ours += t_ours
+        tot_lu += t_lu
+        if K.shape[0] >= 2000:
+            print(f"| {shape[0]} x {shape[1]} | {p} | {K.shape[0]} | {t_lu:.1f} | {t_ours:.1f} | {t_lu / t_ours:.2f}x "
+                  f"| {ts_lu:.2f} | {ts_ours:.2f} | {agree:.1e} |")
+    ratio = tot_lu / tot_ours if tot_ours else float("nan")
+    print(f"all {len(systems) - indefinite} positive definite systems: SuperLU {tot_lu:.0f} ms, ours {tot_ours:.0f} ms "
+          f"({ratio:.2f}x); solutions agree within {worst:.1e}; indefinite to working precision (SuperLU kept): "
+          f"{indefinite}")
+    return {"case": label, "superlu_ms": tot_lu, "ours_ms": tot_ours, "ratio": ratio, "indefinite": indefinite}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--realdata", action="store_true", help="also linkrods face 35's G1 plates (../shared/realdata)")
+    args = ap.parse_args()
+    print(f"{datetime.datetime.now().isoformat(timespec='seconds')}; {common.machine_note()}; "
+          f"load {os.getloadavg()[0]:.2f}")
+    rows = []
+    ring = sew_faces([make_face(f, 1e-7) for f in ring_model(6).faces])
+    rows.append(compare("G2 plate, bump ring n = 6", record(lambda: fill_model(ring, continuity="G2",
+                                                                               compare_occ=False))))
+    dome = read_step(DOME)
+    rows.append(compare("G2 plates, dome_holes.step (4 holes)",
+                        record(lambda: fill_model(dome, continuity="G2", compare_occ=False))))
+    if args.realdata:
+        path = REALDATA / "occt__linkrods.step"
+        if not path.exists():
+            print(f"\n--realdata: {path} is absent; skipped")
+        else:
+            from occsurf.bridge.modeling.refill import SewnModel, refill_faces
+            model = SewnModel(read_step(path))
+            rows.append(compare("G1 plates, linkrods face 35 refilled",
+                                record(lambda: refill_faces(model, [35], compare_occ=False, check=False))))
+    print("\n| case | SuperLU (ms) | ours (ms) | ratio |")
+    print("|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['case']} | {r['superlu_ms']:.0f} | {r['ours_ms']:.0f} | {r['ratio']:.2f}x |")
+    print(f"load average after: {os.getloadavg()}")
+
+
+if __name__ == "__main__":
+    main()
