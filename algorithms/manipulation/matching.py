@@ -56,7 +56,7 @@ from ..kernel.surface import BSplineSurface
 from .linalg import ConstraintError
 from .match_targets import Jets, MatchTarget, SampledCurve, SurfaceSide, height_jets
 
-__all__ = ["MatchResult", "MatchTarget", "match_surface", "side_along", "surface_change", "robust_min_norm", "pole_size",
+__all__ = ["MatchResult", "MatchTarget", "match_surface", "side_along", "surface_change", "robust_min_norm", "row_svd", "pole_size",
            "SIDES", "CONTINUITIES"]
 
 Array = NDArray[np.float64]
@@ -215,7 +215,16 @@ def _equations(R: Array, Sj: Array, tg: Jets, r: int, lo: int = 0, poles: slice 
     return np.concatenate(F), np.concatenate(J)
 
 
-def robust_min_norm(J: Array, rhs: Array) -> Array:
+def row_svd(J: Array) -> tuple[Array, Array, Array, Array]:
+    """The SVD :func:`robust_min_norm` takes of ``J``: ``(row norms, U, singular values, V^T)`` of
+    ``J`` with its rows divided by their norms (a zero row by 1)."""
+    s = np.linalg.norm(J, axis=1)
+    s = np.where(s > 0, s, 1.0)
+    U, sv, Vt = sla.svd(J / s[:, None], full_matrices=False, lapack_driver="gesdd")
+    return s, U, sv, Vt
+
+
+def robust_min_norm(J: Array, rhs: Array, svd: tuple[Array, Array, Array, Array] | None = None) -> Array:
     """Minimum-norm least-squares solution, rows divided by their norms, noise directions dropped
     (``rhs`` one vector, or one column per right-hand side).
 
@@ -223,10 +232,9 @@ def robust_min_norm(J: Array, rhs: Array) -> Array:
     solution of a consistent system) and above ``tolerances.MATCH_RCOND`` of it. The first is kept
     unless it is more than twice as long as the second: then it buys its smaller residual by
     fitting noise, such as the collapse ``S_u -> 0`` that homogeneous G1 conditions reach on
-    data consistent only to interpolation error."""
-    s = np.linalg.norm(J, axis=1)
-    s = np.where(s > 0, s, 1.0)
-    U, sv, Vt = sla.svd(J / s[:, None], full_matrices=False, lapack_driver="gesdd")
+    data consistent only to interpolation error. ``svd``: :func:`row_svd` of this ``J``, where the
+    caller solves with the same matrix again (the same solution, bit for bit)."""
+    s, U, sv, Vt = row_svd(J) if svd is None else svd
     if sv.size == 0 or sv[0] == 0:
         return np.zeros((J.shape[1],) + rhs.shape[1:])
     c = U.T @ (rhs / (s if rhs.ndim == 1 else s[:, None]))
@@ -260,15 +268,21 @@ def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) ->
         Sj = np.einsum("jki,ic->jkc", R[: j + 1], P0 + x.reshape(P0.shape))
         return _equations(R[: j + 1], Sj, tg, j, lo, poles)
 
+    # G0's matrix (row 0's basis values) and G1's for row 1 (the target's normals times row 1's
+    # derivative values) do not depend on the poles: their SVDs serve both passes of rowwise
+    kept: dict[int, tuple[Array, Array, Array, Array]] = {}
+
     def rowwise(x: Array) -> Array:
         """Row j's minimum-norm correction for order j's conditions, j = 0..r in turn."""
         x = x.copy()
         # G0 alone: the same conditions for each coordinate, one solve with three right-hand sides
         Sj = np.einsum("ki,ic->kc", R[0], P0 + x.reshape(P0.shape))
-        x[: 3 * nv] += robust_min_norm(R[0][:, :nv], -(Sj - tg.P)).ravel()
+        A0 = R[0][:, :nv]
+        x[: 3 * nv] += robust_min_norm(A0, -(Sj - tg.P), kept[0] if 0 in kept else kept.setdefault(0, row_svd(A0))).ravel()
         for j in range(1, r + 1):
             F, J = residual(x, j, j, slice(j * nv, (j + 1) * nv))  # order j's rows, row j's columns
-            x[3 * j * nv: 3 * (j + 1) * nv] += robust_min_norm(J, -F)
+            svd = (kept[1] if 1 in kept else kept.setdefault(1, row_svd(J))) if j == 1 else None
+            x[3 * j * nv: 3 * (j + 1) * nv] += robust_min_norm(J, -F, svd)
         return x
 
     x = rowwise(np.zeros(P0.size))
