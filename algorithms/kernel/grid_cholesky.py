@@ -62,7 +62,8 @@ class _Node:
     stop: int
     ring: Index  # the ring's points (eliminated later), in the order of the parent's front
     children: tuple[int, ...]
-    child_pos: tuple[Index, ...]  # each child's ring as positions in this front (increasing)
+    child_runs: tuple[tuple[tuple[int, int, int], ...], ...]  # each child's ring in this front, as runs of
+    # consecutive positions (start in this front, start in the child's ring, length), increasing
     front_flat: NDArray[np.integer]  # assembly: F.flat[front_flat] = stencil[stencil_at] (F[:, :own] = K[front, own])
     stencil_at: NDArray[np.integer]
     size: int  # own points + ring
@@ -88,6 +89,13 @@ def _ring(box: tuple[int, int, int, int], nu: int, nv: int, reach: int) -> Index
     ii, jj = np.meshgrid(np.arange(a0, a1), np.arange(b0, b1), indexing="ij")
     out = ~((ii >= i0) & (ii < i1) & (jj >= j0) & (jj < j1))
     return (ii[out] * nv + jj[out]).astype(np.intp)
+
+
+def _runs(pos: Index) -> tuple[tuple[int, int, int], ...]:
+    """Increasing positions as runs of consecutive ones: ``(first position, its index in pos, length)``."""
+    starts = np.flatnonzero(np.r_[True, np.diff(pos) != 1])
+    ends = np.r_[starts[1:], pos.size]
+    return tuple((int(pos[a]), int(a), int(b - a)) for a, b in zip(starts, ends))
 
 
 def _compact(index: Index) -> NDArray[np.integer]:
@@ -156,7 +164,7 @@ def _plan(nu: int, nv: int, reach: int, leaf: int) -> _Plan:
         at[inside] = where[(ni * nv + nj)[inside]]
         a, s = np.nonzero(at >= 0)  # own point a, stencil offset s
         flat, sten = at[a, s] * front.size + a, own[a] * width * width + s
-        nodes[k] = _Node(int(bounds[k]), int(bounds[k + 1]), rank[rings[k]], kids[k], tuple(pos),
+        nodes[k] = _Node(int(bounds[k]), int(bounds[k + 1]), rank[rings[k]], kids[k], tuple(_runs(at) for at in pos),
                          _compact(flat), _compact(sten), int(front.size))
         where[front] = -1
     return _Plan(order, tuple(n for n in nodes if n is not None))
@@ -164,26 +172,38 @@ def _plan(nu: int, nv: int, reach: int, leaf: int) -> _Plan:
 
 def _stencil(K: sp.spmatrix, nu: int, nv: int, reach: int, scale: Array | None) -> Array:
     """``K`` (scaled: ``scale[r] K[r, c] scale[c]``) as stencil rows: ``out[r * w^2 + (di + reach) * w +
-    dj + reach] = K[r, r + (di, dj)]`` (``w = 2 reach + 1``); refuses an entry outside the stencil."""
+    dj + reach] = K[r, r + (di, dj)]`` (``w = 2 reach + 1``); refuses an entry outside the stencil.
+
+    An entry's offset ``d = c - r = di nv + dj`` is split by rounding ``d / nv`` (exact where
+    ``|dj| <= reach < nv / 2``; an entry beyond the stencil either splits with an offset beyond
+    ``reach`` or with a column that leaves the grid, which are refused alike), which saves the
+    integer divisions of every entry; narrower grids divide."""
     C = K if sp.issparse(K) and K.format in ("csr", "csc") else sp.csr_matrix(K)
-    if not C.has_canonical_format:
-        C = C.copy()
-        C.sum_duplicates()
-    lines = np.repeat(np.arange(C.shape[0], dtype=np.intp), np.diff(C.indptr))
+    counts = np.diff(C.indptr)
+    lines = np.repeat(np.arange(C.shape[0], dtype=np.intp), counts)
     other = C.indices.astype(np.intp)
     row, col = (lines, other) if C.format == "csr" else (other, lines)
     width = 2 * reach + 1
-    ri, rj = np.divmod(row, nv)
-    ci, cj = np.divmod(col, nv)
-    di, dj = ci - ri + reach, cj - rj + reach
-    bad = (di < 0) | (di >= width) | (dj < 0) | (dj >= width)
+    if nv > 2 * reach:
+        d = col - row
+        di = np.rint(d / nv).astype(np.intp)
+        dj = d - di * nv
+        j = np.repeat(np.arange(C.shape[0], dtype=np.intp) % nv, counts)  # the line's grid column
+        j = j + dj if C.format == "csr" else j - dj  # the other point's: it must stay on the grid
+        bad = (np.abs(di) > reach) | (np.abs(dj) > reach) | (j < 0) | (j >= nv)
+    else:
+        ri, rj = np.divmod(row, nv)
+        ci, cj = np.divmod(col, nv)
+        di, dj = ci - ri, cj - rj
+        bad = (np.abs(di) > reach) | (np.abs(dj) > reach)
     if bad.any():
         k = int(np.argmax(bad))
         raise InvalidGeometryError(f"K: entry ({row[k]}, {col[k]}) couples grid points more than {reach} apart "
                                    f"on a {nu} x {nv} grid")
-    out = np.zeros(nu * nv * width * width)
-    out[(row * width + di) * width + dj] = C.data if scale is None else scale[row] * C.data * scale[col]
-    return out
+    # summed per entry (a matrix that is not canonical repeats some); an entry's single value is itself
+    out = np.bincount((row * width + di + reach) * width + dj + reach,
+                      C.data if scale is None else scale[row] * C.data * scale[col], minlength=nu * nv * width * width)
+    return np.asarray(out, dtype=np.float64)  # float64 already (weights): for the type checker
 
 
 class GridCholesky:
@@ -238,10 +258,11 @@ class GridCholesky:
         for k, nd in enumerate(plan.nodes):
             F = np.zeros((nd.size, nd.size))
             F.flat[nd.front_flat] = stencil[nd.stencil_at]
-            for c, pos in zip(nd.children, nd.child_pos):
-                rows = F[pos]
-                rows[:, pos] += updates.pop(c)  # the lower triangle is what counts (pos increases)
-                F[pos] = rows
+            for c, runs in zip(nd.children, nd.child_runs):
+                U = updates.pop(c)
+                for a, (fa, ua, na) in enumerate(runs):  # the lower triangle is what counts: the blocks
+                    for fb, ub, nb in runs[:a + 1]:  # on and below the diagonal (the positions increase)
+                        F[fa:fa + na, fb:fb + nb] += U[ua:ua + na, ub:ub + nb]
             own = nd.stop - nd.start
             L11, info = lapack.dpotrf(F[:own, :own], lower=1, clean=1)
             if info != 0:
