@@ -285,15 +285,14 @@ class GridCholesky:
             y = self._scale * y
         y = y[plan.order]
         for nd, (L11, L21) in zip(plan.nodes, self._factors):
-            yo = blas.dtrsv(L11, y[nd.start:nd.stop], lower=1)
-            y[nd.start:nd.stop] = yo
+            yo = blas.dtrsv(L11, y[nd.start:nd.stop], lower=1, overwrite_x=1)  # in place (a contiguous view)
             if nd.ring.size:
                 y[nd.ring] -= L21 @ yo
         for nd, (L11, L21) in zip(reversed(plan.nodes), reversed(self._factors)):
-            r = y[nd.start:nd.stop]
+            yo = y[nd.start:nd.stop]
             if nd.ring.size:
-                r = r - L21.T @ y[nd.ring]
-            y[nd.start:nd.stop] = blas.dtrsv(L11, r, lower=1, trans=1)
+                yo -= L21.T @ y[nd.ring]
+            blas.dtrsv(L11, yo, lower=1, trans=1, overwrite_x=1)
         x = np.empty_like(y)
         x[plan.order] = y
         return x if self._scale is None else self._scale * x
