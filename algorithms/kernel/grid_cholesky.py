@@ -138,18 +138,29 @@ def _plan(nu: int, nv: int, reach: int, leaf: int) -> _Plan:
     rank[order] = np.arange(order.size)
     bounds = np.cumsum([0] + [o.size for o in owns])
     width = 2 * reach + 1
+    # positions in the front are looked up on the grid padded by ``reach`` (-1 in the padding and
+    # outside the front): a point's stencil neighbours are then its padded index plus fixed offsets
+    pv = nv + 2 * reach
     di, dj = (a.ravel() for a in np.meshgrid(np.arange(-reach, reach + 1), np.arange(-reach, reach + 1), indexing="ij"))
+    offsets = di * pv + dj
+
+    def padded(index: Index) -> Index:
+        i, j = np.divmod(index, nv)
+        return (i + reach) * pv + j + reach
+
     rings: list[Index] = [np.zeros(0, np.intp)] * len(owns)
     nodes: list[_Node | None] = [None] * len(owns)
-    where = np.full(nu * nv, -1, np.intp)
+    where = np.full((nu + 2 * reach) * pv, -1, np.intp)
     for k in range(root, -1, -1):  # parents before children: a child's ring takes its parent's front order
         own = owns[k]
         front = np.r_[own, rings[k]]
-        where[front] = np.arange(front.size)
+        own_p = padded(own)
+        front_p = np.r_[own_p, padded(rings[k])]
+        where[front_p] = np.arange(front.size)
         pos = []
         for c in kids[k]:
             ring = _ring(boxes[c], nu, nv, reach)
-            at = where[ring]  # every ring point of a child is in this front (the tree's invariant)
+            at = where[padded(ring)]  # every ring point of a child is in this front (the tree's invariant)
             if (at < 0).any():
                 raise RuntimeError(f"grid_cholesky: a ring point of box {boxes[c]} is not in its parent's front")
             sort = np.argsort(at)
@@ -157,16 +168,12 @@ def _plan(nu: int, nv: int, reach: int, leaf: int) -> _Plan:
             pos.append(at)
         # F[:, :own] = K[front, own]: each own point's stencil neighbours that are in the front (the
         # others, in the box below the separator, were eliminated in the children's fronts)
-        oi, oj = np.divmod(own, nv)
-        ni, nj = oi[:, None] + di[None, :], oj[:, None] + dj[None, :]
-        inside = (ni >= 0) & (ni < nu) & (nj >= 0) & (nj < nv)
-        at = np.full(ni.shape, -1, np.intp)
-        at[inside] = where[(ni * nv + nj)[inside]]
+        at = where[own_p[:, None] + offsets[None, :]]
         a, s = np.nonzero(at >= 0)  # own point a, stencil offset s
         flat, sten = at[a, s] * front.size + a, own[a] * width * width + s
         nodes[k] = _Node(int(bounds[k]), int(bounds[k + 1]), rank[rings[k]], kids[k], tuple(_runs(at) for at in pos),
                          _compact(flat), _compact(sten), int(front.size))
-        where[front] = -1
+        where[front_p] = -1
     return _Plan(order, tuple(n for n in nodes if n is not None))
 
 
