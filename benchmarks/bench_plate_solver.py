@@ -54,9 +54,9 @@ def record(make: Any) -> list[tuple[sp.csc_matrix, tuple[int, int], int]]:
     factor = plate_fill._SPDFactor
 
     class Recorded(factor):  # type: ignore[misc, valid-type]
-        def __init__(self, K: Any, shape: tuple[int, int], p: int) -> None:
-            systems.append((sp.csc_matrix(K, copy=True), shape, p))
-            super().__init__(K, shape, p)
+        def __init__(self, stencil: Any, sparse: Any) -> None:
+            systems.append((sp.csc_matrix(sparse(), copy=True), stencil.shape[:2], stencil.shape[2] // 2))
+            super().__init__(stencil, sparse)
 
     plate_fill._SPDFactor = Recorded
     try:

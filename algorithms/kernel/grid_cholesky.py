@@ -39,7 +39,7 @@ from scipy.linalg import blas, lapack
 
 from ..errors import InvalidGeometryError
 
-__all__ = ["GridCholesky", "NotPositiveDefinite", "LEAF_POINTS"]
+__all__ = ["GridCholesky", "NotPositiveDefinite", "grid_stencil", "LEAF_POINTS"]
 
 Array = NDArray[np.float64]
 Index = NDArray[np.intp]
@@ -213,6 +213,30 @@ def _stencil(K: sp.spmatrix, nu: int, nv: int, reach: int, scale: Array | None) 
     return np.asarray(out, dtype=np.float64)  # float64 already (weights): for the type checker
 
 
+def grid_stencil(K: sp.spmatrix, shape: tuple[int, int], reach: int) -> Array:
+    """``K``'s rows as a stencil on the ``nu x nv`` grid of its unknowns (:meth:`GridCholesky.from_stencil`'s
+    layout): ``out[i, j, di + reach, dj + reach] = K[(i, j), (i + di, j + dj)]``, zero where ``K`` has no
+    entry or the point leaves the grid.
+
+    Raises
+    ------
+    InvalidGeometryError
+        An entry couples points more than ``reach`` apart.
+    """
+    nu, nv = (int(x) for x in shape)
+    w = 2 * int(reach) + 1
+    return _stencil(K, nu, nv, int(reach), None).reshape(nu, nv, w, w)
+
+
+def _jacobi(diag: Array, nu: int, nv: int) -> Array:
+    """``1 / sqrt(diag)``; a diagonal entry <= 0 is :class:`NotPositiveDefinite` (naming its grid point)."""
+    if not (diag > 0).all():
+        bad = int(np.argmin(diag > 0))
+        raise NotPositiveDefinite(f"K: not positive definite (diagonal {float(diag[bad])!r} at grid point "
+                                  f"{divmod(bad, nv)} of a {nu} x {nv} grid)")
+    return 1.0 / np.sqrt(diag)
+
+
 class GridCholesky:
     """The Cholesky factor of a symmetric positive definite matrix whose unknowns are the points of an
     ``nu x nv`` grid, each coupled only with points at most ``reach`` apart in either index (see the
@@ -252,14 +276,42 @@ class GridCholesky:
             raise InvalidGeometryError(f"K: expected shape ({nu * nv}, {nu * nv}) for a {nu} x {nv} grid "
                                        f"and a reach >= 0, got {K.shape} and reach {reach}")
         reach = max(reach, 1)  # a diagonal K is cut by separators one line wide, as a reach-1 stencil
-        plan = _plan(nu, nv, reach, int(leaf))
         diag = np.asarray(K.diagonal(), float)
-        if not (diag > 0).all():
-            bad = int(np.argmin(diag > 0))
-            raise NotPositiveDefinite(f"K: not positive definite (diagonal {float(diag[bad])!r} at grid point "
-                                       f"{divmod(bad, nv)} of a {nu} x {nv} grid)")
-        self._scale = 1.0 / np.sqrt(diag) if jacobi else None
-        stencil = _stencil(K, nu, nv, reach, self._scale)
+        self._scale = _jacobi(diag, nu, nv) if jacobi else None
+        self._factor(_stencil(K, nu, nv, reach, self._scale), nu, nv, reach, int(leaf))
+
+    @classmethod
+    def from_stencil(cls, stencil: Array, *, jacobi: bool = True, leaf: int = LEAF_POINTS) -> GridCholesky:
+        """The factor of the matrix given as stencil rows (:func:`.sparse_kron.kron_stencil`'s layout):
+        ``stencil[i, j, di + reach, dj + reach]`` is the entry ``((i, j), (i + di, j + dj))``, zero
+        where that leaves the grid; shape ``(nu, nv, w, w)``, ``w = 2 reach + 1 >= 3``. The same factor
+        as from the sparse matrix of these entries, bit for bit, without building it.
+
+        Raises
+        ------
+        InvalidGeometryError
+            Not such an array.
+        NotPositiveDefinite
+            As the constructor.
+        """
+        S = np.asarray(stencil, float)
+        if S.ndim != 4 or S.shape[2] != S.shape[3] or S.shape[2] % 2 == 0 or S.shape[2] < 3 or min(S.shape[:2]) < 1:
+            raise InvalidGeometryError(f"stencil: expected shape (nu, nv, w, w) with w odd and >= 3, got {S.shape}")
+        nu, nv, w = S.shape[0], S.shape[1], S.shape[2]
+        reach = w // 2
+        self = object.__new__(cls)
+        self._scale = _jacobi(S[:, :, reach, reach].ravel(), nu, nv) if jacobi else None
+        if self._scale is not None:  # scale[row] K scale[col], in the order the sparse path takes
+            sc = self._scale.reshape(nu, nv)
+            pad = np.zeros((nu + 2 * reach, nv + 2 * reach))
+            pad[reach:reach + nu, reach:reach + nv] = sc
+            S = (sc[:, :, None, None] * S) * np.lib.stride_tricks.sliding_window_view(pad, (w, w))
+        self._factor(S.ravel(), nu, nv, reach, int(leaf))
+        return self
+
+    def _factor(self, stencil: Array, nu: int, nv: int, reach: int, leaf: int) -> None:
+        """Factor the (scaled) stencil rows, front by front."""
+        plan = _plan(nu, nv, reach, leaf)
         factors: list[tuple[Array, Array]] = []
         updates: dict[int, Array] = {}
         for k, nd in enumerate(plan.nodes):
@@ -275,7 +327,7 @@ class GridCholesky:
             if info != 0:
                 bad = int(plan.order[nd.start + abs(int(info)) - 1])
                 raise NotPositiveDefinite(f"K: not positive definite (pivot at grid point {divmod(bad, nv)} "
-                                           f"of a {nu} x {nv} grid)")
+                                          f"of a {nu} x {nv} grid)")
             if nd.size > own:
                 L21 = blas.dtrsm(1.0, L11, F[own:, :own], side=1, lower=1, trans_a=1)
                 updates[k] = blas.dsyrk(-1.0, L21, beta=1.0, c=F[own:, own:], lower=1)

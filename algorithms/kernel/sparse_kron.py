@@ -15,14 +15,14 @@ time (so that the temporaries stay in cache) and without the coordinate arrays o
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InvalidGeometryError
 
-__all__ = ["kron_sum"]
+__all__ = ["kron_sum", "kron_stencil"]
 
 #: Half-bandwidths above this are summed by ``scipy.sparse`` (the band would hold mostly zeros).
 MAX_HALF_BAND = 16
@@ -110,15 +110,36 @@ def kron_sum(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix 
         out.sort_indices()
         return out
     wa, wb = 2 * ha + 1, 2 * hb + 1
-    bands = [(c, _band(a, ha), _band(b, hb)) for (c, _, _), a, b in zip(terms, As, Bs)]
     ka = np.arange(m)[:, None] + np.arange(-ha, ha + 1)[None, :]  # (m, wa): the column of A
     lb = np.arange(n)[:, None] + np.arange(-hb, hb + 1)[None, :]  # (n, wb)
     in_a = (ka >= 0) & (ka < m)
     in_b = ((lb >= 0) & (lb < n))[None, :, None, :]
     index_dtype = np.int32 if m * n * wa * wb < 2 ** 31 else np.int64
     cols_b = lb[None, :, None, :].astype(index_dtype)
-    step = max(1, 2 ** 17 // (n * wa * wb))  # rows of A per block: ~1 MB of values, kept in cache
     data, indices, counts = [], [], []
+    for i0, i1, acc in _band_products(terms, As, Bs, ha, hb):
+        keep = (acc != 0) & in_a[i0:i1, None, :, None] & in_b
+        data.append(acc[keep])
+        cols = (ka[i0:i1, None, :, None] * n).astype(index_dtype) + cols_b  # increasing along (wa, wb)
+        indices.append(cols[keep])
+        counts.append(keep.reshape((i1 - i0) * n, -1).sum(axis=1))
+    indptr = np.zeros(m * n + 1, dtype=np.int64)
+    np.cumsum(np.concatenate(counts), out=indptr[1:])
+    out = sp.csr_matrix((np.concatenate(data), np.concatenate(indices), indptr.astype(index_dtype)),
+                        shape=(m * n, m * n))
+    out.has_sorted_indices = True
+    return out
+
+
+def _band_products(terms: Sequence[tuple[float, object, object]], As: list, Bs: list, ha: int,
+                   hb: int) -> Iterator[tuple[int, int, np.ndarray]]:
+    """``(i0, i1, acc)`` per block of rows of ``A``: ``acc[i - i0, j, da, db]`` is the sum's entry
+    ``((i, j), (i + da - ha, j + db - hb))``, ``(c_0 (a_0 b_0) + c_1 (a_1 b_1)) + ...`` (zero where a
+    band runs off its matrix)."""
+    m, n = As[0].shape[0], Bs[0].shape[0]
+    wa, wb = 2 * ha + 1, 2 * hb + 1
+    bands = [(c, _band(a, ha), _band(b, hb)) for (c, _, _), a, b in zip(terms, As, Bs)]
+    step = max(1, 2 ** 17 // (n * wa * wb))  # rows of A per block: ~1 MB of values, kept in cache
     for i0 in range(0, m, step):
         i1 = min(m, i0 + step)
         acc = np.empty((i1 - i0, n, wa, wb))
@@ -130,14 +151,34 @@ def kron_sum(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix 
                 out *= c
             if k:
                 acc += prod
-        keep = (acc != 0) & in_a[i0:i1, None, :, None] & in_b
-        data.append(acc[keep])
-        cols = (ka[i0:i1, None, :, None] * n).astype(index_dtype) + cols_b  # increasing along (wa, wb)
-        indices.append(cols[keep])
-        counts.append(keep.reshape((i1 - i0) * n, -1).sum(axis=1))
-    indptr = np.zeros(m * n + 1, dtype=np.int64)
-    np.cumsum(np.concatenate(counts), out=indptr[1:])
-    out = sp.csr_matrix((np.concatenate(data), np.concatenate(indices), indptr.astype(index_dtype)),
-                        shape=(m * n, m * n))
-    out.has_sorted_indices = True
+        yield i0, i1, acc
+
+
+def kron_stencil(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix | np.ndarray]],
+                 reach: int) -> np.ndarray:
+    """:func:`kron_sum` as the rows of a stencil on the ``m x n`` grid of its unknowns:
+    ``out[i, j, di + reach, dj + reach]`` is the entry ``((i, j), (i + di, j + dj))`` (``|di|, |dj| <=
+    reach``; zero where that leaves the grid), the same values bit for bit, without building the
+    sparse matrix (the layout :class:`~occsurf.algorithms.kernel.grid_cholesky.GridCholesky` reads).
+
+    Raises
+    ------
+    InvalidGeometryError
+        As :func:`kron_sum`, or a band wider than ``reach``.
+    """
+    if not terms:
+        raise InvalidGeometryError("kron_stencil: expected at least one term, got none")
+    As = [_square(a) for _, a, _ in terms]
+    Bs = [_square(b) for _, _, b in terms]
+    m, n = As[0].shape[0], Bs[0].shape[0]
+    if any(a.shape != (m, m) for a in As) or any(b.shape != (n, n) for b in Bs):
+        raise InvalidGeometryError(f"kron_stencil: expected square A_k of one size and B_k of one size, got "
+                                   f"{[a.shape for a in As]} and {[b.shape for b in Bs]}")
+    ha, hb = max(_half_band(a) for a in As), max(_half_band(b) for b in Bs)
+    if max(ha, hb) > reach:
+        raise InvalidGeometryError(f"kron_stencil: half-bandwidths {ha}, {hb} exceed the stencil's reach {reach}")
+    w = 2 * reach + 1
+    out = np.zeros((m, n, w, w))
+    for i0, i1, acc in _band_products(terms, As, Bs, ha, hb):
+        out[i0:i1, :, reach - ha:reach + ha + 1, reach - hb:reach + hb + 1] = acc
     return out

@@ -65,7 +65,7 @@ References: course §8-3 (filling n-sided holes); Duchon 1977; OCC's GeomPlate (
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -78,8 +78,8 @@ from ..errors import InvalidGeometryError
 from ..fitting._common import check_fit_size
 from ..kernel.basis import basis_derivatives, find_span, gauss_legendre
 from ..kernel.curve import BSplineCurve
-from ..kernel.grid_cholesky import GridCholesky, NotPositiveDefinite
-from ..kernel.sparse_kron import kron_sum
+from ..kernel.grid_cholesky import GridCholesky, NotPositiveDefinite, grid_stencil
+from ..kernel.sparse_kron import kron_stencil, kron_sum
 from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
 from .nsided_measure import count_folds
@@ -468,16 +468,18 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
                               shape=(rows_v.shape[0], n))
             if g2f.any():  # the curvature-variation energy (Moreton & Sequin's MVS, on a height): zero on quadrics
                 Gu, Gv = _gram(ku, p, 3), _gram(kv, p, 3)
-                E = kron_sum([(1, Gu[3], Gv[0]), (3.0, Gu[2], Gv[1]), (3.0, Gu[1], Gv[2]), (1, Gu[0], Gv[3])])
+                terms = [(1, Gu[3], Gv[0]), (3.0, Gu[2], Gv[1]), (3.0, Gu[1], Gv[2]), (1, Gu[0], Gv[3])]
             else:
                 Gu, Gv = _gram(ku, p), _gram(kv, p)
-                E = kron_sum([(1, Gu[2], Gv[0]), (2.0, Gu[1], Gv[1]), (1, Gu[0], Gv[2])])
+                terms = [(1, Gu[2], Gv[0]), (2.0, Gu[1], Gv[1]), (1, Gu[0], Gv[2])]
+            E = kron_stencil(terms, p)  # the energy's rows on the coefficient grid (nu, nv, 2p+1, 2p+1)
             AtA = (A.T @ A).tocsc()
-            eps = tolerances.FILL_PLATE_SMOOTHING * AtA.diagonal().sum() / max(E.diagonal().sum(), 1e-300)
+            eps = tolerances.FILL_PLATE_SMOOTHING * AtA.diagonal().sum() / max(_centre(E).sum(), 1e-300)
             eps0 = (eps, len(X)) if eps0 is None else eps0
             if held:  # the first stage's weight, grown with the sample count only (see the module)
                 eps = eps0[0] * len(X) / eps0[1]
-            lu = _SPDFactor(AtA + eps * E, (nu, nv), p)
+            lu = _SPDFactor(grid_stencil(AtA, (nu, nv), p) + eps * E,
+                            functools.partial(_sparse_system, AtA, eps, terms))
             ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
                              g2=g2f, kfloor=kfloor, g2_tol=g2_tol)
             c = lu.solve(A.T @ rhs)
@@ -546,12 +548,14 @@ class _SPDFactor:
     solves such a system as it did, and that stage, hence the fill, is the one it was.
     """
 
-    def __init__(self, K: sp.spmatrix, shape: tuple[int, int], p: int) -> None:
+    def __init__(self, stencil: Array, sparse: Callable[[], sp.spmatrix]) -> None:
+        """``stencil``: ``K``'s rows on the grid (:meth:`GridCholesky.from_stencil`); ``sparse()``:
+        the same ``K`` as a sparse matrix (made only for the LU)."""
         self.chol: GridCholesky | None = None
         try:
-            self.chol = GridCholesky(K, shape, p)
+            self.chol = GridCholesky.from_stencil(stencil)
         except NotPositiveDefinite:
-            K = sp.csc_matrix(K)
+            K = sp.csc_matrix(sparse())
             self.s = 1.0 / np.sqrt(K.diagonal())
             S = sp.diags(self.s)
             self.lu = spla.splu((S @ K @ S).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
@@ -562,6 +566,17 @@ class _SPDFactor:
         if self.chol is not None:
             return self.chol.solve(b)
         return self.s * self.lu.solve(self.s * b)
+
+
+def _centre(stencil: Array) -> Array:
+    """The diagonal of a system given as stencil rows (contiguous, in the unknowns' order)."""
+    r = stencil.shape[2] // 2
+    return np.ascontiguousarray(stencil[:, :, r, r]).ravel()
+
+
+def _sparse_system(AtA: sp.spmatrix, eps: float, terms: list) -> sp.spmatrix:
+    """The plate's ``K = A^T A + eps E`` as a sparse matrix (the stencil's entries, the same values)."""
+    return AtA + eps * kron_sum(terms)
 
 
 def _build(c: Array, ku: Array, kv: Array, p: int, o: Array, e1: Array, e2: Array, N: Array, L: float,

@@ -88,3 +88,21 @@ def test_refusals_name_the_problem() -> None:
         GridCholesky(K.tocsr(), (5, 5), 3)
     with pytest.raises(InvalidGeometryError, match=r"expected shape \(12, 12\) for a 3 x 4 grid"):
         GridCholesky(sp.identity(10, format="csr"), (3, 4), 1)
+
+
+@settings(max_examples=30, deadline=None)
+@given(nu=st.integers(1, 30), nv=st.integers(1, 30), reach=st.integers(1, 4), spread=st.sampled_from([0.0, 4.0]),
+       seed=st.integers(0, 2 ** 31))
+def test_the_stencil_form_gives_the_same_factor_bit_for_bit(nu: int, nv: int, reach: int, spread: float,
+                                                             seed: int) -> None:
+    """``from_stencil`` on ``grid_stencil(K)`` (the plate gives its system so, without the sparse
+    matrix) solves exactly as the factor of ``K`` itself: the same scaled entries, the same bits."""
+    from occsurf.algorithms.kernel.grid_cholesky import grid_stencil
+
+    K = _stencil_spd(nu, nv, reach, seed, spread)
+    b = np.random.default_rng(seed + 2).standard_normal(nu * nv)
+    want = GridCholesky(K, (nu, nv), reach).solve(b)
+    got = GridCholesky.from_stencil(grid_stencil(K, (nu, nv), reach)).solve(b)
+    assert got.tobytes() == want.tobytes()
+    with pytest.raises(InvalidGeometryError, match=r"expected shape \(nu, nv, w, w\) with w odd"):
+        GridCholesky.from_stencil(np.zeros((nu, nv, 2, 2)))

@@ -113,3 +113,24 @@ def test_central_split_poles_move_by_round_off_only(n: int, monkeypatch: pytest.
     size = np.ptp(np.concatenate([p.control_points.reshape(-1, 3) for p in now.patches]), axis=0).max()
     for a, b in zip(now.patches, before.patches):
         assert np.abs(a.control_points - b.control_points).max() <= 1e-9 * size
+
+
+@test_settings(40)
+@given(data=st.data(), m=st.integers(1, 7), n=st.integers(1, 7), ha=st.integers(0, 3), hb=st.integers(0, 3),
+       extra=st.integers(0, 2), coefs=st.lists(st.sampled_from([1, 2, 3.0, -1.0, 0.5]), min_size=1, max_size=4))
+def test_the_stencil_form_holds_the_same_values(data, m, n, ha, hb, extra, coefs) -> None:
+    """``kron_stencil`` (the rows on the grid, for the plate's grid Cholesky) holds the values of
+    ``kron_sum`` bit for bit (``==``: a product that is -0.0 counts as the zero ``kron_sum`` drops), on
+    a stencil as wide as the bands or wider, zero off the grid; a reach below a band is refused."""
+    from occsurf.algorithms.kernel.grid_cholesky import grid_stencil
+    from occsurf.algorithms.kernel.sparse_kron import kron_stencil
+
+    terms = [(c, data.draw(_banded(m, ha)), data.draw(_banded(n, hb))) for c in coefs]
+    reach = max(ha, hb, 1) + extra
+    got = kron_stencil(terms, reach)
+    want = grid_stencil(kron_sum(terms), (m, n), reach)
+    assert got.shape == (m, n, 2 * reach + 1, 2 * reach + 1)
+    assert np.array_equal(got, want)
+    if max(ha, hb) > 0 and any(np.abs(np.subtract(*np.nonzero(t[1]))).max(initial=0) == ha > 0 for t in terms):
+        with pytest.raises(InvalidGeometryError, match="exceed the stencil's reach"):
+            kron_stencil(terms, ha - 1)
