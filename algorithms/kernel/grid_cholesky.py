@@ -21,7 +21,9 @@ work of Cholesky and its memory) whose orderings do not know the grid; the fast 
 (CHOLMOD, through scikit-sparse or cvxopt) are GPL or ship without wheels, and QDLDL (Apache) is
 slower than SuperLU here. On the 17 161-unknown plate of linkrods face 35 (bicubic, a 131 x 131
 grid): SuperLU in symmetric mode 0.29-0.42 s, this factorisation 0.11-0.13 s; QDLDL 0.52 s; the
-solves take as long as SuperLU's (8-9 ms).
+solves take as long as SuperLU's (8-9 ms). Where it loses: thin grids with a wide stencil (the
+central split's degree-6 fairing systems, 38 x 363 or 108 x 568: 2.5-3.5x slower than SuperLU's
+minimum degree, which finds the band there), which therefore stay with SuperLU.
 
 The order of the arithmetic differs from SuperLU's, so the solutions agree to the system's round-off
 (its conditioning times the machine epsilon), not bit for bit.
