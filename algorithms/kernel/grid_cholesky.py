@@ -1,6 +1,6 @@
 """Sparse Cholesky factorisation of positive definite systems on a tensor-product grid.
 
-The normal equations of a tensor-product B-spline fit (the plate fill's ``A^T A + eps E``, course
+The normal equations of a tensor-product B-spline fit (the G1 plate fill's ``A^T A + eps E``, course
 §8-3) couple the coefficient ``(i, j)`` with ``(k, l)`` only where ``|i - k| <= p`` and ``|j - l| <= p``
 (two basis functions overlap). Their unknowns are the points of an ``nu x nv`` grid and the matrix a
 ``(2 p + 1)^2``-point stencil on it. Such a matrix is factored here by the multifrontal method in the

@@ -472,14 +472,19 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             else:
                 Gu, Gv = _gram(ku, p), _gram(kv, p)
                 terms = [(1, Gu[2], Gv[0]), (2.0, Gu[1], Gv[1]), (1, Gu[0], Gv[2])]
-            E = kron_stencil(terms, p)  # the energy's rows on the coefficient grid (nu, nv, 2p+1, 2p+1)
+            # G1: the energy's rows on the coefficient grid (nu, nv, 2p+1, 2p+1) for the grid Cholesky;
+            # G2: the sparse matrix for SuperLU's LU (see _SPDFactor)
+            E = kron_sum(terms) if g2f.any() else kron_stencil(terms, p)
             AtA = (A.T @ A).tocsc()
-            eps = tolerances.FILL_PLATE_SMOOTHING * AtA.diagonal().sum() / max(_centre(E).sum(), 1e-300)
+            eps = tolerances.FILL_PLATE_SMOOTHING * AtA.diagonal().sum() / max(_diagonal(E).sum(), 1e-300)
             eps0 = (eps, len(X)) if eps0 is None else eps0
             if held:  # the first stage's weight, grown with the sample count only (see the module)
                 eps = eps0[0] * len(X) / eps0[1]
-            lu = _SPDFactor(grid_stencil(AtA, (nu, nv), p) + eps * E,
-                            functools.partial(_sparse_system, AtA, eps, terms))
+            if g2f.any():
+                lu = _SPDFactor(None, functools.partial(_sparse_sum, AtA, eps, E))
+            else:
+                lu = _SPDFactor(grid_stencil(AtA, (nu, nv), p) + eps * E,
+                                functools.partial(_sparse_system, AtA, eps, terms))
             ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
                              g2=g2f, kfloor=kfloor, g2_tol=g2_tol)
             c = lu.solve(A.T @ rhs)
@@ -541,20 +546,28 @@ class _SPDFactor:
     factorisations by up to 4.5e-3 in the directions the data hardly pin: the scaling is what makes
     the plate reproducible.
 
-    Where Cholesky meets a pivot <= 0, the symmetric-mode LU is used as before: a G2 plate's
-    curvature-variation energy can hold the coefficients far outside the loop so loosely that the
-    scaled ``K`` is indefinite to working precision (one stage of the 3-sided bump ring, 119 x 104:
-    the LU's pivots include three negative ones, the least -0.25 against a unit diagonal). The LU
-    solves such a system as it did, and that stage, hence the fill, is the one it was.
+    The G2 plate's systems stay with the symmetric-mode LU. Its curvature-variation energy holds the
+    coefficients far outside the loop so loosely that two exact factorisations agree only to 7e-3 of
+    the largest coefficient, one stage of the 3-sided bump ring is even indefinite to working
+    precision (119 x 104: the LU meets three negative pivots, the least -0.25 against a unit
+    diagonal), and the refinement's choices follow that round-off: with Cholesky the G2 refills of
+    the bearing's 90-degree fillets (faces 4, 8, 23) came out with jumps of 8.3, 10.8 and 11.1 %
+    where the LU gives 8.0, 8.94 and 9.49 % (and 2-3x faster, by taking other stages). A speed-up
+    must not change the fills, so G2 plates are factored as they were; the synthetic G2 holes of
+    ``bench_fill_g2.py`` had not shown it. Where Cholesky meets a pivot <= 0 on a G1 plate (none
+    seen), the LU is used as well.
     """
 
-    def __init__(self, stencil: Array, sparse: Callable[[], sp.spmatrix]) -> None:
-        """``stencil``: ``K``'s rows on the grid (:meth:`GridCholesky.from_stencil`); ``sparse()``:
-        the same ``K`` as a sparse matrix (made only for the LU)."""
+    def __init__(self, stencil: Array | None, sparse: Callable[[], sp.spmatrix]) -> None:
+        """``stencil``: ``K``'s rows on the grid (:meth:`GridCholesky.from_stencil`), ``None`` for the
+        LU (a G2 plate); ``sparse()``: the same ``K`` as a sparse matrix (made only for the LU)."""
         self.chol: GridCholesky | None = None
-        try:
-            self.chol = GridCholesky.from_stencil(stencil)
-        except NotPositiveDefinite:
+        if stencil is not None:
+            try:
+                self.chol = GridCholesky.from_stencil(stencil)
+            except NotPositiveDefinite:
+                pass  # the LU below
+        if self.chol is None:
             K = sp.csc_matrix(sparse())
             self.s = 1.0 / np.sqrt(K.diagonal())
             S = sp.diags(self.s)
@@ -568,15 +581,23 @@ class _SPDFactor:
         return self.s * self.lu.solve(self.s * b)
 
 
-def _centre(stencil: Array) -> Array:
-    """The diagonal of a system given as stencil rows (contiguous, in the unknowns' order)."""
-    r = stencil.shape[2] // 2
-    return np.ascontiguousarray(stencil[:, :, r, r]).ravel()
+def _diagonal(E: Array | sp.spmatrix) -> Array:
+    """The diagonal of a sparse matrix or of a system given as stencil rows (contiguous, in the
+    unknowns' order: the same array either way)."""
+    if sp.issparse(E):
+        return np.asarray(E.diagonal())
+    r = E.shape[2] // 2
+    return np.ascontiguousarray(E[:, :, r, r]).ravel()
 
 
 def _sparse_system(AtA: sp.spmatrix, eps: float, terms: list) -> sp.spmatrix:
     """The plate's ``K = A^T A + eps E`` as a sparse matrix (the stencil's entries, the same values)."""
-    return AtA + eps * kron_sum(terms)
+    return _sparse_sum(AtA, eps, kron_sum(terms))
+
+
+def _sparse_sum(AtA: sp.spmatrix, eps: float, E: sp.spmatrix) -> sp.spmatrix:
+    """``A^T A + eps E``."""
+    return AtA + eps * E
 
 
 def _build(c: Array, ku: Array, kv: Array, p: int, o: Array, e1: Array, e2: Array, N: Array, L: float,

@@ -212,3 +212,21 @@ def test_fill_hole_takes_the_continuity() -> None:
     bare = [HoleSide(s.curve, s.cross) for s in m.sides]
     with pytest.raises(InvalidGeometryError, match=r"sides\[1, 3\]: continuity 'G2' needs each side's second"):
         fill_hole([m.sides[0], bare[1], m.sides[2], bare[3], m.sides[4]], "G2")
+
+
+def test_g2_plates_keep_superlus_lu_and_g1_plates_use_the_grid_cholesky(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The G2 plate's systems are factored by SuperLU's LU as before 2026-12-06, the G1 plate's by the
+    grid Cholesky: the G2 refinement follows the round-off of its ill-conditioned systems (with
+    Cholesky the bearing's fillet refills, faces 4, 8 and 23, reached other stages and jumps of 8.3,
+    10.8, 11.1 % instead of 8.0, 8.94, 9.49 %), so a speed-up there would change the fills."""
+    from occsurf.algorithms.kernel.grid_cholesky import GridCholesky
+
+    calls = []
+    original = GridCholesky.from_stencil.__func__  # type: ignore[attr-defined]
+    monkeypatch.setattr(GridCholesky, "from_stencil",
+                        classmethod(lambda cls, st, **kw: calls.append(st.shape) or original(cls, st, **kw)))
+    m = ring_model(4, bump=0)
+    fill_plate(m.sides, g2=[True] * 4)
+    assert calls == []
+    fill_plate(m.sides)
+    assert calls and all(s[2] == 7 for s in calls)  # bicubic: a 7 x 7 stencil
