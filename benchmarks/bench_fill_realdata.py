@@ -25,7 +25,9 @@ Quality against a baseline (``--baseline benchmarks/baselines/fill_realdata.json
 ``--json`` on an earlier version): per hole in both, our G0 and G1 now against then; a hole filled
 then and not now, or worse in G0 or G1 beyond round-off (G0 by more than 1e-9 of the model size or
 1 % of the old value, G1 by more than 1e-6 degrees or 1 %), is listed as a regression and the
-command exits 1.
+command exits 1. A ``--continuity G2`` run takes a baseline of G2 rows (and a G1 run one of G1
+rows) and also compares the largest curvature jump of each hole filled G2 then: more than 1 % (or
+1e-6) above it, or no G2 fill now, is a regression too.
 
 Curvature continuity (``--continuity G2``; issue 31): every face set is refilled by
 ``refill_faces(..., continuity='G2')``, which asks G2 (the G2 plate) on the edges where the removed
@@ -257,11 +259,17 @@ def compare_baseline(rows: list[dict], base: list[dict]) -> tuple[str, int]:
         size = r.get("size") or 1.0
         worse_g0 = r["g0"] > o["g0"] + max(1e-9 * size, 0.01 * o["g0"])
         worse_g1 = r["g1"] > o["g1"] + max(1e-6, 0.01 * o["g1"])
-        if worse_g0 or worse_g1:
+        j_then, j_now = o.get("g2"), r.get("g2")  # G2 rows: the largest relative curvature jump (a fraction)
+        worse_g2 = j_then is not None and (j_now is None or j_now > j_then + max(1e-6, 0.01 * j_then))
+        better_g2 = j_then is not None and j_now is not None and j_now < j_then - max(1e-6, 0.01 * j_then)
+        if worse_g0 or worse_g1 or worse_g2:
             bad += 1
+            jump = "" if j_then is None else f", jump {100 * j_then:.3g} % -> " + (
+                "none (not filled G2)" if j_now is None else f"{100 * j_now:.3g} %")
             lines.append(f"REGRESSION {r['file']} {r['faces']}: G0 {o['g0']:.2e} -> {r['g0']:.2e}, "
-                         f"G1 {o['g1']:.2e} -> {r['g1']:.2e} deg")
-        elif r["g0"] < o["g0"] - max(1e-9 * size, 0.01 * o["g0"]) or r["g1"] < o["g1"] - max(1e-6, 0.01 * o["g1"]):
+                         f"G1 {o['g1']:.2e} -> {r['g1']:.2e} deg{jump}")
+        elif (r["g0"] < o["g0"] - max(1e-9 * size, 0.01 * o["g0"]) or r["g1"] < o["g1"] - max(1e-6, 0.01 * o["g1"])
+              or better_g2):
             better += 1
         else:
             same += 1
@@ -473,8 +481,11 @@ def main() -> None:
     ap.add_argument("--merge", nargs="+", default=None, metavar="JSON",
                     help="print the table of rows saved by earlier runs (--json) instead of running")
     ns = ap.parse_args()
-    if ns.baseline and ns.continuity == "G2":  # the baselines hold G1 refills: G2 rows would read as regressions
-        ap.error("--baseline compares G1 refills; leave it out with --continuity G2")
+    if ns.baseline and not ns.merge:  # G1 refills against G1 rows, G2 against G2 (jumps compared too)
+        kinds = {r.get("continuity") == "G2" for r in json.loads(Path(ns.baseline).read_text())}
+        if kinds != {ns.continuity == "G2"}:
+            ap.error(f"--baseline {ns.baseline} holds {'G2' if True in kinds else 'G1'} refills"
+                     f"{' and G1 ones' if len(kinds) > 1 else ''}; this run makes {ns.continuity} refills")
     if ns.only_g2 and ns.continuity != "G2":
         ap.error("--only-g2 goes with --continuity G2")
     if ns.merge:
