@@ -109,9 +109,9 @@ def _compact(index: Index) -> NDArray[np.integer]:
 def _plan(nu: int, nv: int, reach: int, leaf: int) -> _Plan:
     """Nested dissection of the ``nu x nv`` grid with separators ``reach`` wide, and its fronts.
 
-    Kept for the last four grids (a plate's held pass and its other boundary variant repeat the
-    first stages' grids): the assembly maps take ~8 bytes per stencil entry, 7-11 MB for a 131 x 131
-    grid of reach 3-4."""
+    Kept for the last four grids only: a plate's stages seldom repeat a grid (linkrods face 35's 29
+    stages made 29 plans, 3-30 ms each), and a plan's assembly maps take ~8 bytes per stencil entry,
+    7 MB for a 131 x 131 grid of reach 3."""
     boxes: list[tuple[int, int, int, int]] = []
     owns: list[Index] = []
     kids: list[tuple[int, ...]] = []
