@@ -35,7 +35,6 @@ from typing import Any
 import common  # noqa: F401 - pins BLAS threads before NumPy
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from occsurf.algorithms.kernel.grid_cholesky import GridCholesky, NotPositiveDefinite
 from occsurf.algorithms.topology import plate_fill
@@ -76,22 +75,18 @@ def _best(fn: Any, repeat: int) -> tuple[float, Any]:
 
 
 def superlu(K: sp.spmatrix) -> Any:
-    """The former plate factorisation: Jacobi-scaled, SuperLU in symmetric mode."""
-    s = 1.0 / np.sqrt(K.diagonal())
-    S = sp.diags(s)
-    lu = spla.splu((S @ K @ S).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                   options={"SymmetricMode": True})
-    return s, lu
+    """The plate's LU (the G1 plate's before, the G2 plate's still): ``_SPDFactor`` without a stencil."""
+    return plate_fill._SPDFactor(None, lambda: K)
 
 
 def one(K: sp.csc_matrix, shape: tuple[int, int], p: int, b: np.ndarray) -> tuple | None:
     """Both factorisations of one system: ``(SuperLU ms, ours ms, SuperLU solve ms, ours solve ms,
     agreement)``; ``None`` where SuperLU meets a pivot <= 0 (indefinite to working precision)."""
-    t_lu, (s, lu) = _best(lambda: superlu(K), 3)
-    if (lu.U.diagonal() <= 0).any():
+    t_lu, lu = _best(lambda: superlu(K), 3)
+    if (lu.lu.U.diagonal() <= 0).any():
         return None
     t_ours, g = _best(lambda: GridCholesky(K, shape, p), 3)
-    ts_lu, x_lu = _best(lambda: s * lu.solve(s * b), 5)
+    ts_lu, x_lu = _best(lambda: lu.solve(b), 5)
     ts_ours, x = _best(lambda: g.solve(b), 5)
     return t_lu, t_ours, ts_lu, ts_ours, float(np.abs(x - x_lu).max() / np.abs(x_lu).max())
 

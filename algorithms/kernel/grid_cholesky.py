@@ -179,14 +179,23 @@ def _plan(nu: int, nv: int, reach: int, leaf: int) -> _Plan:
     return _Plan(order, tuple(n for n in nodes if n is not None))
 
 
-def _stencil(K: sp.spmatrix, nu: int, nv: int, reach: int, scale: Array | None) -> Array:
-    """``K`` (scaled: ``scale[r] K[r, c] scale[c]``) as stencil rows: ``out[r * w^2 + (di + reach) * w +
-    dj + reach] = K[r, r + (di, dj)]`` (``w = 2 reach + 1``); refuses an entry outside the stencil.
+def grid_stencil(K: sp.spmatrix, shape: tuple[int, int], reach: int) -> Array:
+    """``K``'s rows as a stencil on the ``nu x nv`` grid of its unknowns (:meth:`GridCholesky.from_stencil`'s
+    layout): ``out[i, j, di + reach, dj + reach] = K[(i, j), (i + di, j + dj)]``, zero where ``K`` has no
+    entry or the point leaves the grid; repeated entries of a non-canonical ``K`` are summed.
 
     An entry's offset ``d = c - r = di nv + dj`` is split by rounding ``d / nv`` (exact where
     ``|dj| <= reach < nv / 2``; an entry beyond the stencil either splits with an offset beyond
     ``reach`` or with a column that leaves the grid, which are refused alike), which saves the
-    integer divisions of every entry; narrower grids divide."""
+    integer divisions of every entry; narrower grids divide.
+
+    Raises
+    ------
+    InvalidGeometryError
+        An entry couples points more than ``reach`` apart.
+    """
+    nu, nv = (int(x) for x in shape)
+    reach = int(reach)
     C = K if sp.issparse(K) and K.format in ("csr", "csc") else sp.csr_matrix(K)
     counts = np.diff(C.indptr)
     lines = np.repeat(np.arange(C.shape[0], dtype=np.intp), counts)
@@ -210,24 +219,8 @@ def _stencil(K: sp.spmatrix, nu: int, nv: int, reach: int, scale: Array | None) 
         raise InvalidGeometryError(f"K: entry ({row[k]}, {col[k]}) couples grid points more than {reach} apart "
                                    f"on a {nu} x {nv} grid")
     # summed per entry (a matrix that is not canonical repeats some); an entry's single value is itself
-    out = np.bincount((row * width + di + reach) * width + dj + reach,
-                      C.data if scale is None else scale[row] * C.data * scale[col], minlength=nu * nv * width * width)
-    return np.asarray(out, dtype=np.float64)  # float64 already (weights): for the type checker
-
-
-def grid_stencil(K: sp.spmatrix, shape: tuple[int, int], reach: int) -> Array:
-    """``K``'s rows as a stencil on the ``nu x nv`` grid of its unknowns (:meth:`GridCholesky.from_stencil`'s
-    layout): ``out[i, j, di + reach, dj + reach] = K[(i, j), (i + di, j + dj)]``, zero where ``K`` has no
-    entry or the point leaves the grid.
-
-    Raises
-    ------
-    InvalidGeometryError
-        An entry couples points more than ``reach`` apart.
-    """
-    nu, nv = (int(x) for x in shape)
-    w = 2 * int(reach) + 1
-    return _stencil(K, nu, nv, int(reach), None).reshape(nu, nv, w, w)
+    out = np.bincount((row * width + di + reach) * width + dj + reach, C.data, minlength=nu * nv * width * width)
+    return np.asarray(out, dtype=np.float64).reshape(nu, nv, width, width)  # float64 already (weights)
 
 
 def _jacobi(diag: Array, nu: int, nv: int) -> Array:
@@ -278,9 +271,7 @@ class GridCholesky:
             raise InvalidGeometryError(f"K: expected shape ({nu * nv}, {nu * nv}) for a {nu} x {nv} grid "
                                        f"and a reach >= 0, got {K.shape} and reach {reach}")
         reach = max(reach, 1)  # a diagonal K is cut by separators one line wide, as a reach-1 stencil
-        diag = np.asarray(K.diagonal(), float)
-        self._scale = _jacobi(diag, nu, nv) if jacobi else None
-        self._factor(_stencil(K, nu, nv, reach, self._scale), nu, nv, reach, int(leaf))
+        self._setup(grid_stencil(K, (nu, nv), reach), jacobi, int(leaf))
 
     @classmethod
     def from_stencil(cls, stencil: Array, *, jacobi: bool = True, leaf: int = LEAF_POINTS) -> GridCholesky:
@@ -299,17 +290,22 @@ class GridCholesky:
         S = np.asarray(stencil, float)
         if S.ndim != 4 or S.shape[2] != S.shape[3] or S.shape[2] % 2 == 0 or S.shape[2] < 3 or min(S.shape[:2]) < 1:
             raise InvalidGeometryError(f"stencil: expected shape (nu, nv, w, w) with w odd and >= 3, got {S.shape}")
+        self = object.__new__(cls)
+        self._setup(S, jacobi, int(leaf))
+        return self
+
+    def _setup(self, S: Array, jacobi: bool, leaf: int) -> None:
+        """Scale the stencil rows ``S`` (shape ``(nu, nv, w, w)``) to a unit diagonal where asked
+        (``scale[row] K scale[col]``) and factor them."""
         nu, nv, w = S.shape[0], S.shape[1], S.shape[2]
         reach = w // 2
-        self = object.__new__(cls)
         self._scale = _jacobi(S[:, :, reach, reach].ravel(), nu, nv) if jacobi else None
-        if self._scale is not None:  # scale[row] K scale[col], in the order the sparse path takes
+        if self._scale is not None:
             sc = self._scale.reshape(nu, nv)
             pad = np.zeros((nu + 2 * reach, nv + 2 * reach))
             pad[reach:reach + nu, reach:reach + nv] = sc
             S = (sc[:, :, None, None] * S) * np.lib.stride_tricks.sliding_window_view(pad, (w, w))
-        self._factor(S.ravel(), nu, nv, reach, int(leaf))
-        return self
+        self._factor(S.ravel(), nu, nv, reach, leaf)
 
     def _factor(self, stencil: Array, nu: int, nv: int, reach: int, leaf: int) -> None:
         """Factor the (scaled) stencil rows, front by front."""

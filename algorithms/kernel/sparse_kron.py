@@ -64,6 +64,21 @@ def _square(M: sp.spmatrix | np.ndarray) -> sp.spmatrix | np.ndarray:
     return sp.csr_matrix(M)
 
 
+def _operands(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix | np.ndarray]],
+              name: str) -> tuple[list, list, int, int]:
+    """The terms' ``A_k`` and ``B_k`` (:func:`_square`) and their largest half-bandwidths, checked:
+    at least one term, every ``A_k`` square and of one size, every ``B_k`` too."""
+    if not terms:
+        raise InvalidGeometryError(f"{name}: expected at least one term, got none")
+    As = [_square(a) for _, a, _ in terms]
+    Bs = [_square(b) for _, _, b in terms]
+    m, n = As[0].shape[0], Bs[0].shape[0]
+    if any(a.shape != (m, m) for a in As) or any(b.shape != (n, n) for b in Bs):
+        raise InvalidGeometryError(f"{name}: expected square A_k of one size and B_k of one size, got "
+                                   f"{[a.shape for a in As]} and {[b.shape for b in Bs]}")
+    return As, Bs, max(_half_band(a) for a in As), max(_half_band(b) for b in Bs)
+
+
 def kron_sum(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix | np.ndarray]]) -> sp.csr_matrix:
     """``c_0 kron(A_0, B_0) + c_1 kron(A_1, B_1) + ...`` for square banded ``A_k`` (``m x m``) and
     ``B_k`` (``n x n``), as a canonical CSR matrix (sorted indices, no explicit zeros).
@@ -90,15 +105,8 @@ def kron_sum(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix 
     InvalidGeometryError
         No terms, or matrices that are not square or differ in size.
     """
-    if not terms:
-        raise InvalidGeometryError("kron_sum: expected at least one term, got none")
-    As = [_square(a) for _, a, _ in terms]
-    Bs = [_square(b) for _, _, b in terms]
+    As, Bs, ha, hb = _operands(terms, "kron_sum")
     m, n = As[0].shape[0], Bs[0].shape[0]
-    if any(a.shape != (m, m) for a in As) or any(b.shape != (n, n) for b in Bs):
-        raise InvalidGeometryError(f"kron_sum: expected square A_k of one size and B_k of one size, got "
-                                   f"{[a.shape for a in As]} and {[b.shape for b in Bs]}")
-    ha, hb = max(_half_band(a) for a in As), max(_half_band(b) for b in Bs)
     if max(ha, hb) > MAX_HALF_BAND:
         total = None
         for (c, _, _), a, b in zip(terms, As, Bs):
@@ -166,15 +174,8 @@ def kron_stencil(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmat
     InvalidGeometryError
         As :func:`kron_sum`, or a band wider than ``reach``.
     """
-    if not terms:
-        raise InvalidGeometryError("kron_stencil: expected at least one term, got none")
-    As = [_square(a) for _, a, _ in terms]
-    Bs = [_square(b) for _, _, b in terms]
+    As, Bs, ha, hb = _operands(terms, "kron_stencil")
     m, n = As[0].shape[0], Bs[0].shape[0]
-    if any(a.shape != (m, m) for a in As) or any(b.shape != (n, n) for b in Bs):
-        raise InvalidGeometryError(f"kron_stencil: expected square A_k of one size and B_k of one size, got "
-                                   f"{[a.shape for a in As]} and {[b.shape for b in Bs]}")
-    ha, hb = max(_half_band(a) for a in As), max(_half_band(b) for b in Bs)
     if max(ha, hb) > reach:
         raise InvalidGeometryError(f"kron_stencil: half-bandwidths {ha}, {hb} exceed the stencil's reach {reach}")
     w = 2 * reach + 1

@@ -270,19 +270,21 @@ def _solve(S: BSplineSurface, target: _Target, r: int, v: Array, size: float) ->
 
     # G0's matrix (row 0's basis values) and G1's for row 1 (the target's normals times row 1's
     # derivative values) do not depend on the poles: their SVDs serve both passes of rowwise
-    kept: dict[int, tuple[Array, Array, Array, Array]] = {}
+    A0 = R[0][:, :nv]
+    svd0 = row_svd(A0)
+    svd1: list[tuple[Array, Array, Array, Array]] = []  # row 1's, from its first pass
 
     def rowwise(x: Array) -> Array:
         """Row j's minimum-norm correction for order j's conditions, j = 0..r in turn."""
         x = x.copy()
         # G0 alone: the same conditions for each coordinate, one solve with three right-hand sides
         Sj = np.einsum("ki,ic->kc", R[0], P0 + x.reshape(P0.shape))
-        A0 = R[0][:, :nv]
-        x[: 3 * nv] += robust_min_norm(A0, -(Sj - tg.P), kept[0] if 0 in kept else kept.setdefault(0, row_svd(A0))).ravel()
+        x[: 3 * nv] += robust_min_norm(A0, -(Sj - tg.P), svd0).ravel()
         for j in range(1, r + 1):
             F, J = residual(x, j, j, slice(j * nv, (j + 1) * nv))  # order j's rows, row j's columns
-            svd = (kept[1] if 1 in kept else kept.setdefault(1, row_svd(J))) if j == 1 else None
-            x[3 * j * nv: 3 * (j + 1) * nv] += robust_min_norm(J, -F, svd)
+            if j == 1 and not svd1:
+                svd1.append(row_svd(J))
+            x[3 * j * nv: 3 * (j + 1) * nv] += robust_min_norm(J, -F, svd1[0] if j == 1 else None)
         return x
 
     x = rowwise(np.zeros(P0.size))

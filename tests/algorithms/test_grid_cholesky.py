@@ -96,7 +96,8 @@ def test_refusals_name_the_problem() -> None:
 def test_the_stencil_form_gives_the_same_factor_bit_for_bit(nu: int, nv: int, reach: int, spread: float,
                                                              seed: int) -> None:
     """``from_stencil`` on ``grid_stencil(K)`` (the plate gives its system so, without the sparse
-    matrix) solves exactly as the factor of ``K`` itself: the same scaled entries, the same bits."""
+    matrix) solves exactly as the factor of ``K`` itself, byte for byte (the constructor goes through
+    the stencil: one scaling for both)."""
     from occsurf.algorithms.kernel.grid_cholesky import grid_stencil
 
     K = _stencil_spd(nu, nv, reach, seed, spread)
