@@ -151,7 +151,7 @@ def count_folds(surface: BSplineSurface | TrimmedSurface, grid: int = 41) -> int
     N[length <= tolerances.FILL_FOLD_DEGENERATE * np.median(length)] = 0.0
     du = np.einsum("ijk,ijk->ij", N[1:], N[:-1]) < 0
     dv = np.einsum("ijk,ijk->ij", N[:, 1:], N[:, :-1]) < 0
-    if trimmed is not None:  # only pairs on the face
+    if trimmed is not None and (du.any() or dv.any()):  # only pairs on the face (none to sort: 0 either way)
         inside = trimmed.contains(*np.meshgrid(us, vs, indexing="ij"))
         du &= inside[1:] & inside[:-1]
         dv &= inside[:, 1:] & inside[:, :-1]

@@ -164,11 +164,24 @@ def _jacobian_apply(P: Array, V: Array, c: Array, a: Array, e1: Array, r0: float
     return np.c_[r0 / r * np.einsum("ij,ij->i", et, V), V @ a, np.einsum("ij,ij->i", er, V)]
 
 
-def _roll_back(X: Array, c: Array, a: Array, e1: Array, r0: float) -> Array:
-    """``Phi``: points of the unrolled space back in the model."""
+def _roll_back(X: Array, c: Array, a: Array, e1: Array, r0: float, block: int = 32768) -> Array:
+    """``Phi``: points of the unrolled space back in the model.
+
+    ``c + y a + z (cos(x / r0) e1 + sin(x / r0) e2)`` coordinate by coordinate, ``block`` points at
+    a time: the same operations in the same order as broadcasting over the last axis (the same
+    values), on whole rows instead of rows of three and on blocks that stay in the cache (the
+    map-back's grids reach 1.7 million points: 0.2-0.3 s a call broadcast, 0.05 s so)."""
     e2 = np.cross(a, e1)
-    th = X[..., 0] / r0
-    return c + X[..., 1, None] * a + X[..., 2, None] * (np.cos(th)[..., None] * e1 + np.sin(th)[..., None] * e2)
+    flat = np.asarray(X, float).reshape(-1, 3)
+    out = np.empty(flat.shape)
+    for s in range(0, len(flat), block):
+        x, o = flat[s:s + block], out[s:s + block]
+        th = x[:, 0] / r0
+        cs, sn = np.cos(th), np.sin(th)
+        y, z = x[:, 1], x[:, 2]
+        for k in range(3):
+            o[:, k] = c[k] + y * a[k] + z * (cs * e1[k] + sn * e2[k])
+    return out.reshape(np.shape(X))
 
 
 # ===================================================================================== the axis

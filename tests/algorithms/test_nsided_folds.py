@@ -222,3 +222,42 @@ def test_grid_inside_is_the_crossing_number_of_every_node(n: int, seed: int, sna
         cross_x = a[:, 0] + (b[:, 0] - a[:, 0]) * (py - a[:, 1]) / (b[:, 1] - a[:, 1])
     every = ((((a[:, 1] > py) != (b[:, 1] > py)) & (px < cross_x)).sum(1) % 2 == 1).reshape(gx.size, gy.size)
     np.testing.assert_array_equal(grid_inside(poly, gx, gy), every)
+
+
+def _loop(*corners: tuple[float, float]) -> list[BSplineCurve]:
+    """The polygon through ``corners`` (counter-clockwise) as straight p-curves."""
+    c = [*corners, corners[0]]
+    return [BSplineCurve(1, [0, 0, 1, 1], [c[k], c[k + 1]]) for k in range(len(corners))]
+
+
+def test_the_trim_is_consulted_only_where_normals_oppose(monkeypatch) -> None:
+    """Issue 27: ``count_folds`` of a trimmed surface tests grid points against the trim only when
+    some neighbouring normals oppose (a plate's stages were classified in full, 0.4 s of the screw
+    run-out's fill, mostly to count 0). A cubic patch whose x doubles back along u near the corner
+    (1, 1) folds there (every opposing pair has u + v >= 1.275 on the grid): the trim that holds it
+    all counts what the untrimmed patch does, the triangle u + v <= 1 counts none (the trim
+    consulted: its box holds the fold), and a patch without a fold leaves the trim alone."""
+    from occsurf.algorithms.kernel.surface import BSplineSurface
+    from occsurf.algorithms.kernel.trimmed import TrimmedSurface
+
+    U, V = np.meshgrid(np.linspace(0, 1, 4), np.linspace(0, 1, 4), indexing="ij")
+    X = U.copy()
+    X[:, 2], X[:, 3] = [0, 1 / 3, 1.5, 0.6], [0, 1 / 3, 2.0, 0.2]
+    knots = [0, 0, 0, 0, 1, 1, 1, 1]
+    surf = BSplineSurface((3, 3), (knots, knots), np.stack([X, V, 0.1 * U * V], axis=-1))
+    folded = count_folds(surf)
+    assert folded > 0
+    calls = []
+    real = TrimmedSurface.contains
+
+    def spy(self, *a, **k):
+        calls.append(1)
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(TrimmedSurface, "contains", spy)
+    assert count_folds(TrimmedSurface(surf, _loop((0, 0), (1, 0), (1, 1), (0, 1)))) == folded and calls
+    calls.clear()
+    assert count_folds(TrimmedSurface(surf, _loop((0, 0), (1, 0), (0, 1)))) == 0 and calls
+    calls.clear()
+    flat = BSplineSurface((3, 3), (knots, knots), np.stack([U, V, 0.1 * U * V], axis=-1))
+    assert count_folds(TrimmedSurface(flat, _loop((0, 0), (1, 0), (0, 1)))) == 0 and not calls

@@ -310,3 +310,28 @@ def test_map_back_least_squares_agree_with_scipy(seed: int, spans: int, columns:
     F = rng.normal(size=(x.size, columns)) * 10.0 ** rng.uniform(-3, 3)
     ref = make_lsq_spline(x, F, t, k=3).c
     assert np.abs(_lsq_columns(x, F, t, 3) - ref).max() <= 1e-13 * np.abs(ref).max()
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.integers(1, 60), st.integers(1, 9), st.integers(1, 17))
+def test_roll_back_by_blocks_is_the_broadcast_formula_bit_for_bit(seed: int, rows: int, cols: int, block: int) -> None:
+    """Issue 27: ``_roll_back`` (the unrolling's inverse, called on map-back grids of up to 1.7
+    million points) works coordinate by coordinate on blocks of points; the values are those of
+    ``c + y a + z (cos(x / r0) e1 + sin(x / r0) e2)`` broadcast over the last axis, bit for bit,
+    whatever the grid's shape and wherever the blocks end (a block of 1 to 17 points here)."""
+    from occsurf.algorithms.topology.plate_wrap import _frame, _roll_back
+
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=(rows, cols, 3)) * 10.0 ** rng.uniform(-3, 3, 3)
+    c = rng.normal(size=3)
+    a = rng.normal(size=3)
+    a /= np.linalg.norm(a)
+    e1, _ = _frame(a)
+    r0 = float(rng.uniform(0.1, 10.0))
+    e2 = np.cross(a, e1)
+    th = X[..., 0] / r0
+    ref = c + X[..., 1, None] * a + X[..., 2, None] * (np.cos(th)[..., None] * e1 + np.sin(th)[..., None] * e2)
+    got = _roll_back(X, c, a, e1, r0, block=block)
+    assert got.shape == X.shape
+    np.testing.assert_array_equal(got, ref)
+    np.testing.assert_array_equal(_roll_back(X.reshape(-1, 3), c, a, e1, r0), ref.reshape(-1, 3))
