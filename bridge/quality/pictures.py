@@ -133,7 +133,7 @@ def section_lines(fields: Sequence[FaceField], size: float) -> tuple[Lines, dict
 
     :data:`N_SECTIONS` planes normal to the longest side of the faces' bounding box, cut by
     :func:`occsurf.algorithms.quality.plane_sections` on the faces' own surfaces (trimmed by
-    :func:`uv_mask`), chained across face boundaries; every cut carries its curvature comb. The
+    :func:`~.uv_masks.uv_mask`), chained across face boundaries; every cut carries its curvature comb. The
     per-face lines are the pieces of the same cuts on that face (one family of planes, as a
     surfacer reads sections).
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..messages import error_line
 from .choices import face_scores
+from .uv_masks import MeshMask, uv_mask
 
 if TYPE_CHECKING:
     from occsurf.algorithms import BSplineSurface
@@ -93,23 +94,14 @@ class FaceField:
     def mask(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
         """``mask(u, v) -> bool``: inside the trimmed face. The face's exact trim
         (:attr:`trim`, a ``TrimmedSurface``: its loops of p-curves) where the reader gave one, else
-        :func:`uv_mask` of the mesh (OCC's triangulation: its boundary within the mesh's deflection
-        of the trim); built once (the model's and the face's sections share it), and only when first
-        called: most faces of a large model are missed by every section plane (ruled out by their
-        control net), and a mesh's triangle finder holds a few megabytes (3.5 MB for a fillet
-        torus of 4191 vertices: 2.5 GB over the 361 fillets of a 1089-face plate when built up front)."""
+        :func:`~.uv_masks.uv_mask` of the mesh (OCC's triangulation: its boundary within the mesh's
+        deflection of the trim), a :class:`~.uv_masks.MeshMask`: its triangle finder is built only
+        when first called (most faces of a large model are missed by every section plane, ruled
+        out by their control net) and held only while it is among the last
+        :data:`~.uv_masks.MESH_MASKS_KEPT` used (a finder holds a few megabytes: 3.5 MB for a
+        fillet torus of 4191 vertices; the 477 a 1089-face plate's sections reach held 1.36 GB)."""
         if self._mask is None:
-            if self.trim is not None:
-                self._mask = self.trim.contains
-            else:
-                built: list[Callable[[np.ndarray, np.ndarray], np.ndarray]] = []
-
-                def mask(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-                    if not built:
-                        built.append(uv_mask(self.mesh))
-                    return built[0](u, v)
-
-                self._mask = mask
+            self._mask = self.trim.contains if self.trim is not None else MeshMask(self.mesh)
         return self._mask
 
 
@@ -266,51 +258,6 @@ def _ranges(field_: FaceField) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------------------------- faces
-def uv_mask(mesh: FaceMesh) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    """``mask(u, v) -> bool array``: parameters inside the trimmed face, i.e. inside a triangle of
-    its mesh in our parameter space (OCC's trimmed triangulation; matplotlib's triangle finder)."""
-    from matplotlib.tri import Triangulation
-
-    uv = mesh.uv
-    tris = mesh.triangles[:, ::-1] if mesh.reversed else mesh.triangles
-    a, b, c = uv[tris[:, 0]], uv[tris[:, 1]], uv[tris[:, 2]]
-    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    span = float(np.ptp(uv, axis=0).prod()) or 1.0
-    tris = tris[np.abs(area) > 1e-14 * span]  # collapsed triangles (poles, seams) confuse the finder
-    tris = np.where((area[np.abs(area) > 1e-14 * span] < 0)[:, None], tris[:, ::-1], tris)
-    try:
-        finder = Triangulation(uv[:, 0], uv[:, 1], tris).get_trifinder()
-    except (RuntimeError, ValueError):  # overlapping triangles in the parameter plane (a face across its seam)
-        return _triangle_mask(uv, tris)
-
-    def mask(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
-        return np.asarray(finder(u.ravel(), v.ravel())).reshape(u.shape) >= 0
-
-    return mask
-
-
-def _triangle_mask(uv: np.ndarray, tris: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    """The same mask by brute force: a point is inside when it is inside one triangle
-    (barycentric test, vectorised over points in blocks against every triangle)."""
-    a, b, c = uv[tris[:, 0]], uv[tris[:, 1]], uv[tris[:, 2]]
-    det = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-
-    def mask(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
-        q = np.column_stack([u.ravel(), v.ravel()])
-        out = np.zeros(len(q), bool)
-        for s in range(0, len(q), 256):
-            dx = q[s:s + 256, None, 0] - a[None, :, 0]
-            dy = q[s:s + 256, None, 1] - a[None, :, 1]
-            l1 = (dx * (c[:, 1] - a[:, 1]) - dy * (c[:, 0] - a[:, 0])) / det
-            l2 = (dy * (b[:, 0] - a[:, 0]) - dx * (b[:, 1] - a[:, 1])) / det
-            out[s:s + 256] = np.any((l1 >= -1e-12) & (l2 >= -1e-12) & (l1 + l2 <= 1 + 1e-12), axis=1)
-        return out.reshape(u.shape)
-
-    return mask
-
-
 def _flags_of(face: ImportedFace, mesh: FaceMesh, samples: int) -> list[dict[str, Any]]:
     """:func:`occsurf.algorithms.quality.face_flags` of the face's surface on a ``samples`` grid,
     masked to the trimmed face (its loops' classification, ``ImportedFace.trimmed``; else the

@@ -395,7 +395,7 @@ def test_a_face_s_mesh_mask_is_built_only_when_a_section_needs_it(monkeypatch, t
     the same as with every mask built first."""
     from build123d import Box, Cylinder, GeomType, Pos, fillet
 
-    import occsurf.bridge.quality.report as R
+    import occsurf.bridge.quality.uv_masks as R
 
     part = Box(40.0, 10.0, 4.0) - Pos(-15, 0, 0) * Cylinder(1.5, 4.0) - Pos(15, 0, 0) * Cylinder(1.5, 4.0)
     part = fillet([e for e in part.edges() if e.geom_type == GeomType.CIRCLE and abs(e.center().Z - 2) < 1e-6], 0.5)
@@ -476,3 +476,67 @@ def test_mesh_inversion_stops_converged_nodes_without_changing_them(tmp_path) ->
     for (uv, ok), (uv_ref, ok_ref), ((u0, u1), (v0, v1)) in calls:
         assert np.array_equal(ok, ok_ref)
         assert np.abs(uv - uv_ref).max() <= 1e-12 * max(u1 - u0, v1 - v0)
+
+
+def test_mesh_masks_held_at_once_are_bounded_and_rebuilt_alike(monkeypatch, tmp_path) -> None:
+    """Issue 28: a 1089-face plate's sections build 477 triangle finders (faces without an exact
+    trim; up to ~7 MB each, in C++), all held to the end: 1.36 GB of the check's 2.6 GB peak. A
+    mesh mask now gives its finder up once ``MESH_MASKS_KEPT`` others were used after it, and builds
+    it again when called again, with the same answers; the sections of a model are the same whether
+    one finder or every finder is held."""
+    from build123d import Box, Cylinder, GeomType, Pos, fillet
+
+    import occsurf.bridge.quality.uv_masks as M
+
+    part = Box(40.0, 10.0, 4.0)
+    for x in (-15, -5, 5, 15):
+        part = part - Pos(x, 0, 0) * Cylinder(1.5, 4.0)
+    part = fillet([e for e in part.edges() if e.geom_type == GeomType.CIRCLE and abs(e.center().Z - 2) < 1e-6], 0.5)
+    rep = check_model(read_step(_write(part, tmp_path, "four.step")), edges=False, flags=False)
+    fields = [rep.fields[k] for k in sorted(rep.fields)]
+    meshed = [f.mask() for f in fields if f.trim is None]
+    assert len(meshed) >= 4 and all(isinstance(m, M.MeshMask) for m in meshed), "too few faces without a trim"
+    probe = [(f.mesh.uv[::7, 0], f.mesh.uv[::7, 1]) for f in fields if f.trim is None]
+    first = [m(*q) for m, q in zip(meshed, probe)]
+    monkeypatch.setattr(M, "MESH_MASKS_KEPT", 2)
+    for m, q in zip(meshed, probe):
+        m(*q)
+    assert [m.built for m in meshed].count(True) == 2 and meshed[-1].built and not meshed[0].built
+    again = [m(*q) for m, q in zip(meshed, probe)]  # each built again: the same answers
+    assert all(np.array_equal(a, b) for a, b in zip(first, again)) and any(a.any() for a in first)
+    monkeypatch.setattr(M, "MESH_MASKS_KEPT", 1)
+    few = P.section_lines(fields, rep.size)[0][0]
+    assert sum(m.built for m in meshed) <= 1
+    monkeypatch.setattr(M, "MESH_MASKS_KEPT", 10**6)
+    fresh = check_model(read_step(tmp_path / "four.step"), edges=False, flags=False)
+    many = P.section_lines([fresh.fields[k] for k in sorted(fresh.fields)], fresh.size)[0][0]
+    assert len(few) == len(many) > 0 and all(np.array_equal(a, b) for a, b in zip(few, many))
+
+
+def test_a_released_mesh_mask_frees_its_finder_at_once(tmp_path) -> None:
+    """The triangle finder is made directly, not by ``Triangulation.get_trifinder()``, which keeps it
+    on the triangulation: a reference cycle that only a full garbage collection frees (the plate's
+    released finders stayed in memory that way). Released, nothing refers to the finder any more."""
+    import gc
+    import weakref
+
+    from build123d import Box, Cylinder, Pos
+
+    part = Box(20.0, 10.0, 4.0) - Pos(0, 0, 0) * Cylinder(2.0, 4.0)
+    rep = check_model(read_step(_write(part, tmp_path, "one.step")), edges=False, flags=False)
+    masks = [f.mask() for f in rep.fields.values() if f.trim is None]
+    if not masks:
+        pytest.skip("every face had an exact trim: no mesh mask to test")
+    m = masks[0]
+    m(m.mesh.uv[:3, 0], m.mesh.uv[:3, 1])
+    held = [c.cell_contents for c in m._finder.__closure__ or ()]
+    trap = [c for c in held if type(c).__name__ == "TrapezoidMapTriFinder"]
+    assert len(trap) == 1, held
+    finder = weakref.ref(trap[0])
+    del held, trap
+    gc.disable()
+    try:
+        m.release()
+        assert finder() is None  # freed by reference counting, no cycle left for the collector
+    finally:
+        gc.enable()
