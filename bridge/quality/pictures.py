@@ -112,16 +112,31 @@ def _scale(values: Sequence[np.ndarray], kind: str, size: float = 1.0) -> tuple[
 
 def _hedgehog_points(fields: Sequence[FaceField], size: float) -> tuple[np.ndarray, np.ndarray]:
     """About evenly spread vertices for the normals: one per cell of a grid of side
-    ``size / HEDGEHOG_CELLS`` (small faces get few, large faces many)."""
-    P = np.concatenate([f.mesh.points for f in fields])
-    N = np.concatenate([f.mesh.normals for f in fields])
-    ok = np.all(np.isfinite(N), axis=1)
-    P, N = P[ok], N[ok]
-    if not len(P):
-        return P, N
-    keys = np.floor((P - P.min(axis=0)) / (size / HEDGEHOG_CELLS)).astype(np.int64)
-    _, first = np.unique(keys, axis=0, return_index=True)
-    return P[first], N[first]
+    ``size / HEDGEHOG_CELLS`` (small faces get few, large faces many): of the vertices (with a
+    normal) in a cell, the first in the faces' order, the cells sorted.
+
+    Face by face, then over the faces' picks (the first vertex of a cell is the first of its
+    face's, and the earliest face's pick comes first): the same points as over all vertices at
+    once without the copies of every vertex (1.8 million for a 1089-face model, ~250 MB)."""
+    picks = []
+    for f in fields:
+        ok = np.all(np.isfinite(f.mesh.normals), axis=1)
+        picks.append((f.mesh.points[ok], f.mesh.normals[ok]))
+    lows = [p.min(axis=0) for p, _ in picks if len(p)]
+    if not lows:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    low, cell = np.min(lows, axis=0), size / HEDGEHOG_CELLS
+    keys, P, N = [], [], []
+    for p, n in picks:
+        if not len(p):
+            continue
+        k = np.floor((p - low) / cell).astype(np.int64)
+        kk, first = np.unique(k, axis=0, return_index=True)
+        keys.append(kk)
+        P.append(p[first])
+        N.append(n[first])
+    _, first = np.unique(np.concatenate(keys), axis=0, return_index=True)
+    return np.concatenate(P)[first], np.concatenate(N)[first]
 
 
 Lines = tuple[list[np.ndarray], list[np.ndarray], np.ndarray]

@@ -271,3 +271,41 @@ def test_lookup_tables_map_as_entry_by_entry_tables(cmap: str) -> None:
                 lut.GetColor(float(v), got)
                 ref.GetColor(float(v), want)
                 assert got == want and lut.GetOpacity(float(v)) == ref.GetOpacity(float(v)), (cmap, stripes, v)
+
+
+def test_compact_cells_and_float32_normals_draw_the_same_picture(tmp_path, monkeypatch) -> None:
+    """Issue 28 (memory): a mesh's triangles are stored with 32-bit ids, its normals as float32 and
+    of every prop only its extent is kept for framing (the 1089-face plate's model pictures held its
+    1.8 million points twice, and 64-bit cells). The cells are the same, and so are the pictures,
+    byte for byte, against 64-bit cells and float64 normals (as ``polydata`` makes them by default)."""
+    import vtkmodules.util.numpy_support as ns
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    P, T, N = _sphere()
+    compact, wide = vtk_scene.polydata(P, T, "triangles", ids32=True), vtk_scene.polydata(P, T, "triangles")
+    assert not compact.GetPolys().IsStorage64Bit() and wide.GetPolys().IsStorage64Bit()
+    for get in ("GetConnectivityArray", "GetOffsetsArray"):
+        a, b = (vtk_to_numpy(getattr(pd.GetPolys(), get)()) for pd in (compact, wide))
+        assert a.dtype == np.int32 and np.array_equal(a, b)
+
+    def draw(path):
+        s = Scene()
+        s.add_mesh(P, T, normals=N, scalars=P[:, 2], cmap="diverging")
+        s.add_lines([P[:50]], color=(0.1, 0.1, 0.1))
+        s.add_points(P[::97])
+        s.render(path, size=SIZE)
+        return path.read_bytes()
+
+    new = draw(tmp_path / "new.png")
+    real_polydata, real_to_vtk = vtk_scene.polydata, ns.numpy_to_vtk
+    monkeypatch.setattr(vtk_scene, "polydata", lambda p, c, k, ids32=False: real_polydata(p, c, k))  # 64-bit cells
+    monkeypatch.setattr(ns, "numpy_to_vtk", lambda a, deep=False, array_type=None: real_to_vtk(  # float64 normals
+        np.ascontiguousarray(a, np.float64) if np.asarray(a).dtype == np.float32 else a, deep=deep, array_type=array_type))
+    old = draw(tmp_path / "old.png")
+    probe = Scene()
+    probe.add_mesh(P, T, normals=N)
+    actors = probe._renderer.GetActors()
+    actors.InitTraversal()
+    pd = actors.GetNextActor().GetMapper().GetInput()
+    assert pd.GetPointData().GetNormals().GetDataTypeAsString() == "double" and pd.GetPolys().IsStorage64Bit()
+    assert new == old and len(new) > 1000
