@@ -342,3 +342,31 @@ def test_the_same_trim_on_another_surface_of_the_domain_keeps_its_drawn_loops():
         face.on_surface(wider)
     with pytest.raises(InvalidGeometryError, match="expected a BSplineSurface"):
         face.on_surface(face)
+
+
+@test_settings(max_examples=30)
+@given(seed=st.integers(0, 2**16), holes=st.integers(0, 60), tol=st.sampled_from([0.0, 1e-6, 1e-3]))
+def test_segment_bands_in_int32_are_the_int64_bands(seed, holes, tol):
+    """Issue 28 (memory): ``segment_bands`` keeps its entries' segment ids as int32 and builds the
+    bands in place (a face with 361 holes: ~6e6 entries, +345 MB of int64 temporaries). The bands are
+    the ones the int64 construction gives, entry for entry."""
+    from occsurf.algorithms.kernel.point_in_loops import segment_bands
+
+    rng = np.random.default_rng(seed)
+    loops = [np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]], float)]
+    th = np.linspace(0, 2 * np.pi, int(rng.integers(5, 200)))
+    for c, r in zip(rng.uniform(1, 9, (holes, 2)), rng.uniform(0.05, 0.4, holes)):
+        loops.append(np.c_[c[0] + r * np.cos(th), c[1] + r * np.sin(th)])
+    A = np.concatenate([p[:-1] for p in loops])
+    B = np.concatenate([p[1:] for p in loops])
+    bands = segment_bands(A, B, tol)
+    assert bands.seg_sorted.dtype == np.int32
+    ylo, yhi = np.minimum(A[:, 1], B[:, 1]) - tol, np.maximum(A[:, 1], B[:, 1]) + tol
+    b0 = np.clip(((ylo - bands.y0) / bands.h).astype(np.int64), 0, bands.nb - 1)
+    b1 = np.clip(((yhi - bands.y0) / bands.h).astype(np.int64), 0, bands.nb - 1)
+    cnt = b1 - b0 + 1
+    seg_of = np.repeat(np.arange(len(A)), cnt)
+    band_of = np.repeat(b0, cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+    order = np.argsort(band_of, kind="stable")
+    assert np.array_equal(bands.seg_sorted, seg_of[order])
+    assert np.array_equal(bands.start, np.searchsorted(band_of[order], np.arange(bands.nb + 1)))
