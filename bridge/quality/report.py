@@ -98,7 +98,7 @@ class FaceField:
         deflection of the trim), a :class:`~.uv_masks.MeshMask`: its triangle finder is built only
         when first called (most faces of a large model are missed by every section plane, ruled
         out by their control net) and held only while it is among the last
-        :data:`~.uv_masks.MESH_MASKS_KEPT` used (a finder holds a few megabytes: 3.5 MB for a
+        :data:`~.uv_masks.MESH_MASKS_KEPT` used (a finder holds a few megabytes: ~7 MB for a
         fillet torus of 4191 vertices; the 477 a 1089-face plate's sections reach held 1.36 GB)."""
         if self._mask is None:
             self._mask = self.trim.contains if self.trim is not None else MeshMask(self.mesh)

@@ -13,6 +13,7 @@ masks' memory is bounded whatever the model's size.
 
 from __future__ import annotations
 
+import threading
 import weakref
 from collections import OrderedDict
 from collections.abc import Callable
@@ -31,6 +32,7 @@ __all__ = ["uv_mask", "MeshMask", "MESH_MASKS_KEPT"]
 MESH_MASKS_KEPT = 16
 
 _recent: OrderedDict[int, weakref.ref[MeshMask]] = OrderedDict()
+_lock = threading.Lock()
 
 
 def uv_mask(mesh: FaceMesh) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
@@ -111,10 +113,11 @@ def _used(mask: MeshMask) -> None:
     """``mask`` is the most recently used; the least recently used beyond :data:`MESH_MASKS_KEPT`
     give their finders up (masks no longer referenced anywhere drop out by themselves)."""
     key = id(mask)
-    _recent[key] = weakref.ref(mask)
-    _recent.move_to_end(key)
-    while len(_recent) > max(int(MESH_MASKS_KEPT), 1):
-        _, ref = _recent.popitem(last=False)
-        old = ref()
-        if old is not None:
-            old.release()
+    with _lock:  # masks may be called from several threads (a notebook's, a server's)
+        _recent[key] = weakref.ref(mask)
+        _recent.move_to_end(key)
+        while len(_recent) > max(int(MESH_MASKS_KEPT), 1):
+            _, ref = _recent.popitem(last=False)
+            old = ref()
+            if old is not None:
+                old.release()
