@@ -10,6 +10,7 @@ band), for the nodes of a grid, one grid row at a time.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -123,7 +124,7 @@ def segment_bands(seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0) -> Segme
     n = int(cnt.sum())
     # the entries' segment and band as int32 where they fit, the band built in place: a face with
     # 361 holes has ~6e6 entries, whose int64 temporaries took +345 MB while its bands were made
-    it = np.int32 if max(n, k, nb) < 2 ** 31 - 1 else np.int64
+    it: type[np.signedinteger[Any]] = np.int32 if max(n, k, nb) < 2 ** 31 - 1 else np.int64
     seg_of = np.repeat(np.arange(k, dtype=it), cnt)
     band_of = np.arange(n, dtype=it)
     band_of -= np.repeat((np.cumsum(cnt) - cnt).astype(it), cnt)  # the entry's place in its segment's run
