@@ -31,8 +31,8 @@ from .viewer_js import VIEWER_CSS, VIEWER_JS
 if TYPE_CHECKING:
     from .report import QualityReport
 
-__all__ = ["render_html", "viewer_payload", "write_html", "VIEWER_INDICATORS", "viewer_script", "render_index_html",
-           "write_index_html"]
+__all__ = ["render_html", "viewer_payload", "write_html", "VIEWER_INDICATORS", "PER_PIXEL", "viewer_script",
+           "render_index_html", "write_index_html"]
 
 #: Indicators the 3-D view can switch between: (key, label, colour map, symmetric scale).
 VIEWER_INDICATORS: tuple[tuple[str, str, str, bool], ...] = (
@@ -45,6 +45,9 @@ VIEWER_INDICATORS: tuple[tuple[str, str, str, bool], ...] = (
     ("draft", "draft angle, deg (pull direction below)", "diverging", True),
     ("shaded", "shaded", "grey", False),
 )
+#: Indicators the page draws per pixel from the normals (a shader): their per-vertex values are not
+#: sent (on the OCCT bearing they were 0.9 of its 7.6 MB page).
+PER_PIXEL = ("zebra", "isophote")
 #: Vertices above which the 3-D view's mesh is thinned (every k-th triangle kept is not an
 #: option: faces would get holes; instead big models are sent whole and the page stays usable
 #: up to a few hundred thousand vertices).
@@ -90,10 +93,12 @@ def viewer_payload(report: QualityReport) -> dict[str, Any]:
     -------
     dict
         ``faces``: per face ``index``, ``n`` (vertices), ``points`` and ``normals`` (base64 float32,
-        shape (n, 3), little-endian), ``triangles`` (base64 uint32, (m, 3)), ``values``: one base64
-        float32 array (n,) per indicator of :data:`VIEWER_INDICATORS` the face has (NaN kept,
-        the report's :class:`~occsurf.bridge.quality.report.FaceField` values); empty when the model
-        has more than :data:`MAX_VIEWER_VERTICES` vertices (``skipped``).
+        shape (n, 3), little-endian), ``triangles`` (base64, (m, 3), of ``triangles_dtype``:
+        ``"uint16"`` when ``n <= 65536``, else ``"uint32"``), ``values``: one base64 float32 array
+        (n,) per coloured indicator of :data:`VIEWER_INDICATORS` the face has (NaN kept, the report's
+        :class:`~occsurf.bridge.quality.report.FaceField` values; not the :data:`PER_PIXEL` ones,
+        which the page draws from the normals); empty when the model has more than
+        :data:`MAX_VIEWER_VERTICES` vertices (``skipped``).
         ``ranges``: each coloured indicator's common colour range (symmetric about 0 where the
         value has a sign). ``pull``: the pull direction of the stored draft values.
         ``zebra_pairs``, ``isophote_pairs``: the stripe counts the view starts with.
@@ -114,11 +119,14 @@ def viewer_payload(report: QualityReport) -> dict[str, Any]:
     if total <= MAX_VIEWER_VERTICES:
         for f in fields:
             N = np.nan_to_num(f.mesh.normals, nan=0.0)
+            small = f.mesh.n_vertices <= 1 << 16  # the indices fit 16 bits: half the bytes, as WebGL takes them
             faces.append({
                 "index": f.mesh.index, "n": f.mesh.n_vertices,
                 "points": _b64(f.mesh.points, "<f4"), "normals": _b64(N, "<f4"),
-                "triangles": _b64(f.mesh.triangles, "<u4"),
-                "values": {k: _b64(f.values[k], "<f4") for k, *_ in VIEWER_INDICATORS if k in f.values},
+                "triangles": _b64(f.mesh.triangles, "<u2" if small else "<u4"),
+                "triangles_dtype": "uint16" if small else "uint32",
+                "values": {k: _b64(f.values[k], "<f4") for k, *_ in VIEWER_INDICATORS
+                           if k in f.values and k not in PER_PIXEL},
             })
     ranges = {}
     for key, _, _, _ in VIEWER_INDICATORS:

@@ -12,15 +12,18 @@ indicators (:func:`~occsurf.bridge.quality.report.face_fields`); degenerate poin
 from __future__ import annotations
 
 from collections.abc import Callable, Collection, Sequence
+from concurrent.futures import Future
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 
 from ..messages import error_line
+from ..rendering.png import PngWriter
 from .choices import PICTURE_CHOICES, WORST_FACES
 
 if TYPE_CHECKING:
+    from ..rendering.vtk_scene import Scene
     from .report import FaceField, QualityReport
 
 __all__ = ["render_report_pictures", "render_picture", "MODEL_PICTURES", "FACE_PICTURES", "PICTURE_KINDS",
@@ -255,7 +258,23 @@ def render_picture(fields: Sequence[FaceField], kind: str, path: Path, *, size: 
                    title: str = "", model_size: float = 1.0, scale: tuple[float, float] | None = None,
                    flags: np.ndarray | None = None, edges: Sequence[tuple[str, np.ndarray]] = (),
                    sections: Callable[[], tuple[list, list, np.ndarray]] | None = None) -> Path:
-    """One picture of ``kind`` (a key of :data:`PICTURE_KINDS`) of some faces, written to ``path``."""
+    """One picture of ``kind`` (a key of :data:`PICTURE_KINDS`) of some faces, written to ``path``
+    (keywords as :func:`picture_scene`)."""
+    from ..rendering.png import write_png_file
+
+    scene = picture_scene(fields, kind, title=title, model_size=model_size, scale=scale, flags=flags, edges=edges,
+                          sections=sections)
+    return write_png_file(path, scene.render_array(size=size, camera="iso"))
+
+
+def picture_scene(fields: Sequence[FaceField], kind: str, *, title: str = "", model_size: float = 1.0,
+                  scale: tuple[float, float] | None = None, flags: np.ndarray | None = None,
+                  edges: Sequence[tuple[str, np.ndarray]] = (),
+                  sections: Callable[[], tuple[list, list, np.ndarray]] | None = None) -> Scene:
+    """The scene of one picture of ``kind`` (a key of :data:`PICTURE_KINDS`) of some faces: their
+    meshes coloured by the kind's value (or striped per pixel), the legend, and the kind's lines
+    (``sections()``'s lines, comb teeth and inflections; the ``edges`` of each continuity class),
+    ``flags`` as red points and ``title``."""
     from ..rendering.vtk_scene import Scene
 
     if kind not in PICTURE_KINDS:
@@ -291,7 +310,7 @@ def render_picture(fields: Sequence[FaceField], kind: str, path: Path, *, size: 
         scene.add_points(flags, color=(0.95, 0.05, 0.05), size=11)
     if title:
         scene.set_title(title)
-    return scene.render(path, size=size, camera="iso")
+    return scene
 
 
 def _violation_points(report: QualityReport) -> np.ndarray:
@@ -332,53 +351,79 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
     note = trace if trace is not None else (lambda stage: None)
     axis = model_section_axis(fields)
     done = 0
-    for kind in model_pictures:
-        name = f"model_{kind}.png"
-        value = PICTURE_KINDS[kind][0]
-        if name in skip:
-            report.warnings.append(f"picture {kind} not drawn: {skip[name]}")
-            done += 1
-            continue
-        note(f"picture {name}")
-        try:
-            render_picture(fields, kind, out / name, size=MODEL_SIZE, model_size=report.size,
-                           scale=scales.get(value or ""),
-                           flags=flags_all if kind == "mean" else (_violation_points(report) if kind == "edges" else None),
-                           edges=report.edge_lines,
-                           title=f"{Path(report.path).name}: {PICTURE_KINDS[kind][3]}",
-                           sections=lambda: model_sections(report))
-            shown[kind] = name
-        except Exception as err:  # noqa: BLE001
-            report.warnings.append(f"picture {kind} not drawn: {error_line(err)}")
-        done += 1
-        if progress is not None:
-            progress(done, total)
-    by_index = {f.index: f for f in report.faces}
-    for fld in drawn:
-        row = by_index[fld.mesh.index]
-        for kind in face_pictures:
-            name = f"face_{row.index}_{kind}.png"
+    # each picture is encoded and written on a background thread while the next one renders
+    # (rendering.png); a picture that fails there is noted once every file is written, in order
+    written: list[tuple[Future[Path], Callable[[], None], Callable[[str], None]]] = []
+    with PngWriter() as writer:
+        for kind in model_pictures:
+            name = f"model_{kind}.png"
+            value = PICTURE_KINDS[kind][0]
             if name in skip:
-                row.notes.append(f"picture {kind} not drawn: {skip[name]}")
+                report.warnings.append(f"picture {kind} not drawn: {skip[name]}")
                 done += 1
                 continue
             note(f"picture {name}")
             try:
-                own: list[Lines] = []
-                if kind == "sections":
-                    own.append(face_section_lines(fld, axis))
-                    if not own[0][0]:
-                        row.notes.append(f"no section through this face: {N_FACE_SECTIONS} planes through its own "
-                                         "extent found no intersection inside its trim")
-                render_picture([fld], kind, out / name, size=FACE_SIZE, model_size=report.size,
-                               flags=_flag_points(report, {row.index}) if kind == "mean" else None,
-                               title=f"face {row.index} ({row.type}): {kind}",
-                               sections=_returning(own[0]) if own else None)
-                row.pictures[kind] = name
+                scene = picture_scene(
+                    fields, kind, model_size=report.size, scale=scales.get(value or ""),
+                    flags=flags_all if kind == "mean" else (_violation_points(report) if kind == "edges" else None),
+                    edges=report.edge_lines, title=f"{Path(report.path).name}: {PICTURE_KINDS[kind][3]}",
+                    sections=lambda: model_sections(report))
+                written.append((writer.write(out / name, scene.render_array(size=MODEL_SIZE, camera="iso")),
+                                _setter(shown, kind, name), _appender(report.warnings, f"picture {kind} not drawn: ")))
             except Exception as err:  # noqa: BLE001
-                row.notes.append(f"picture {kind} not drawn: {error_line(err)}")
+                report.warnings.append(f"picture {kind} not drawn: {error_line(err)}")
             done += 1
             if progress is not None:
                 progress(done, total)
+        by_index = {f.index: f for f in report.faces}
+        for fld in drawn:
+            row = by_index[fld.mesh.index]
+            for kind in face_pictures:
+                name = f"face_{row.index}_{kind}.png"
+                if name in skip:
+                    row.notes.append(f"picture {kind} not drawn: {skip[name]}")
+                    done += 1
+                    continue
+                note(f"picture {name}")
+                try:
+                    own: list[Lines] = []
+                    if kind == "sections":
+                        own.append(face_section_lines(fld, axis))
+                        if not own[0][0]:
+                            row.notes.append(f"no section through this face: {N_FACE_SECTIONS} planes through its "
+                                             "own extent found no intersection inside its trim")
+                    scene = picture_scene([fld], kind, model_size=report.size,
+                                          flags=_flag_points(report, {row.index}) if kind == "mean" else None,
+                                          title=f"face {row.index} ({row.type}): {kind}",
+                                          sections=_returning(own[0]) if own else None)
+                    written.append((writer.write(out / name, scene.render_array(size=FACE_SIZE, camera="iso")),
+                                    _setter(row.pictures, kind, name),
+                                    _appender(row.notes, f"picture {kind} not drawn: ")))
+                except Exception as err:  # noqa: BLE001
+                    row.notes.append(f"picture {kind} not drawn: {error_line(err)}")
+                done += 1
+                if progress is not None:
+                    progress(done, total)
+    for fut, ok, failed in written:  # all done: the writer's block waited for them
+        problem = fut.exception()
+        if problem is None:
+            ok()
+        else:
+            failed(error_line(problem))
     return shown
+
+
+def _setter(target: dict[str, str], key: str, value: str) -> Callable[[], None]:
+    def put() -> None:
+        target[key] = value
+
+    return put
+
+
+def _appender(target: list[str], prefix: str) -> Callable[[str], None]:
+    def add(reason: str) -> None:
+        target.append(prefix + reason)
+
+    return add
 

@@ -103,7 +103,7 @@ for (const f of DATA.faces){
   const N = dec(f.normals, Float32Array);
   g.setAttribute('position', new THREE.BufferAttribute(dec(f.points, Float32Array), 3));
   g.setAttribute('normal', new THREE.BufferAttribute(N, 3));
-  g.setIndex(new THREE.BufferAttribute(dec(f.triangles, Uint32Array), 1));
+  g.setIndex(new THREE.BufferAttribute(dec(f.triangles, f.triangles_dtype==='uint16' ? Uint16Array : Uint32Array), 1));
   g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(3*f.n), 3));
   g.computeBoundingSphere();
   const vals = {}; for (const k in f.values) vals[k] = dec(f.values[k], Float32Array);

@@ -37,12 +37,12 @@ def crash_on_picture(item: dict[str, Any]) -> Any:
     from occsurf.bridge.quality.check_files import check_job
 
     target = os.environ["OCCSURF_TEST_CRASH_PICTURE"]
-    original = pictures.render_picture
+    original = pictures.PngWriter.write
 
-    def crashing(fields: Any, kind: str, path: Any, **kwargs: Any) -> Any:
+    def crashing(self: Any, path: Any, rgb: Any) -> Any:  # the picture rendered, handed to the writer
         if os.path.basename(str(path)) == target:
             _segfault()
-        return original(fields, kind, path, **kwargs)
+        return original(self, path, rgb)
 
-    pictures.render_picture = crashing
+    pictures.PngWriter.write = crashing  # type: ignore[method-assign]
     return check_job(item)

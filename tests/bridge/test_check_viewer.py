@@ -123,6 +123,32 @@ def test_payload_draft_is_asin_of_the_normal_along_the_pull_and_lines_are_packed
         assert len(decode(e)) == sum(1 for c, _ in report.edge_lines if c == e["class"])
 
 
+def test_payload_triangles_are_the_mesh_and_per_pixel_indicators_are_not_sent(monkeypatch) -> None:
+    """Each face's triangles decode (uint16 up to 65536 vertices, uint32 beyond) to its mesh's own;
+    the values sent are the coloured indicators only (zebra and isophotes are drawn per pixel from
+    the normals), each the report's own in float32."""
+    from occsurf.bridge.quality import html as H
+
+    report = _report("loft.step")
+    payload = viewer_payload(report)
+    coloured = {k for k, *_ in VIEWER_INDICATORS} - set(H.PER_PIXEL) - {"shaded"}
+    for face in payload["faces"]:
+        fld = report.fields[face["index"]]
+        assert face["triangles_dtype"] == "uint16"
+        tris = np.frombuffer(base64.b64decode(face["triangles"]), "<u2").reshape(-1, 3)
+        assert np.array_equal(tris, fld.mesh.triangles)
+        assert set(face["values"]) == coloured
+        for k in coloured:
+            assert np.array_equal(_f4(face["values"][k]), fld.values[k].astype("<f4").astype(float), equal_nan=True)
+    # a face of more than 65536 vertices: 32-bit indices, the same triangles
+    big = report.fields[payload["faces"][0]["index"]]
+    monkeypatch.setattr(type(big.mesh), "n_vertices", property(lambda self: 70_000))
+    monkeypatch.setattr(H, "MAX_VIEWER_VERTICES", 10**9)  # every face counts 70 000 now
+    face = viewer_payload(report)["faces"][0]
+    assert face["triangles_dtype"] == "uint32"
+    assert np.array_equal(_u4(face["triangles"]).reshape(-1, 3), big.mesh.triangles)
+
+
 # ---------------------------------------------------------------------------------------- browser
 
 
