@@ -11,7 +11,7 @@ indicators (:func:`~occsurf.bridge.quality.report.face_fields`); degenerate poin
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
 from concurrent.futures import Future
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
@@ -282,18 +282,16 @@ def picture_scene(fields: Sequence[FaceField], kind: str, *, title: str = "", mo
     value, cmap, legend, _ = PICTURE_KINDS[kind]
     scene = Scene()
     if kind in ("zebra", "isophote"):  # per pixel, from the interpolated normals; no scale to read
-        for f in fields:
-            scene.add_mesh(f.mesh.points, f.mesh.triangles, normals=f.mesh.normals, shader=kind,
-                           stripes=ZEBRA_PAIRS if kind == "zebra" else ISOPHOTE_PAIRS)
+        for P, T, N, _ in _merged_meshes(fields, None):
+            scene.add_mesh(P, T, normals=N, shader=kind, stripes=ZEBRA_PAIRS if kind == "zebra" else ISOPHOTE_PAIRS)
     elif value is not None:
         lo, hi = scale if scale is not None else _scale([f.values[value] for f in fields], value, model_size)
-        for f in fields:
-            scene.add_mesh(f.mesh.points, f.mesh.triangles, normals=f.mesh.normals, scalars=f.values[value],
-                           cmap=cmap, scale=(lo, hi))
+        for P, T, N, S in _merged_meshes(fields, value):
+            scene.add_mesh(P, T, normals=N, scalars=S, cmap=cmap, scale=(lo, hi))
         scene.set_legend(legend, lo, hi, cmap=cmap)
     else:
-        for f in fields:
-            scene.add_mesh(f.mesh.points, f.mesh.triangles, normals=f.mesh.normals, cmap="grey")
+        for P, T, N, _ in _merged_meshes(fields, None):
+            scene.add_mesh(P, T, normals=N, cmap="grey")
     if kind == "hedgehog":
         hp, hn = _hedgehog_points(fields, model_size)
         scene.add_hedgehog(hp, hn, length=HEDGEHOG_LENGTH * model_size, color=(0.1, 0.2, 0.75))
@@ -311,6 +309,43 @@ def picture_scene(fields: Sequence[FaceField], kind: str, *, title: str = "", mo
     if title:
         scene.set_title(title)
     return scene
+
+
+#: Vertices per mesh handed to the scene: the faces' meshes are drawn in groups (one VTK actor per
+#: group instead of one per face; 213 faces of the OCCT bearing: add 0.9 -> 0.1 s for its eight model
+#: pictures), each group small enough that its concatenated copy stays a few MB.
+MERGED_VERTICES = 100_000
+
+
+def _merged_meshes(fields: Sequence[FaceField], value: str | None,
+                   limit: int | None = None) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]]:
+    """The faces' meshes concatenated in their order, in groups of at most ``limit`` vertices (a
+    face is never split; default :data:`MERGED_VERTICES`): ``(points, triangles, normals, values of
+    `value` or None)`` per group. The same triangles drawn in the same order as one mesh per face
+    (faces share no vertices, so a NaN normal's fallback from its own triangles is unchanged):
+    the same picture, pixel for pixel (tested)."""
+    cap = MERGED_VERTICES if limit is None else int(limit)
+    group: list[FaceField] = []
+    count = 0
+
+    def pack(items: list[FaceField]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+        if len(items) == 1:
+            m = items[0].mesh
+            return m.points, m.triangles, m.normals, None if value is None else items[0].values[value]
+        starts = np.cumsum([0] + [f.mesh.n_vertices for f in items[:-1]])
+        return (np.concatenate([f.mesh.points for f in items]),
+                np.concatenate([np.asarray(f.mesh.triangles, np.int64) + s for f, s in zip(items, starts)]),
+                np.concatenate([f.mesh.normals for f in items]),
+                None if value is None else np.concatenate([f.values[value] for f in items]))
+
+    for f in fields:
+        if group and count + f.mesh.n_vertices > cap:
+            yield pack(group)
+            group, count = [], 0
+        group.append(f)
+        count += f.mesh.n_vertices
+    if group:
+        yield pack(group)
 
 
 def _violation_points(report: QualityReport) -> np.ndarray:
