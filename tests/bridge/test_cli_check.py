@@ -281,3 +281,35 @@ def test_a_crashing_picture_is_left_out(tmp_path, capsys, monkeypatch) -> None:
     assert "zebra" not in by[1]["pictures"] and {"mean", "sections"} <= set(by[1]["pictures"])
     assert any("zebra not drawn" in n and "crashed" in n for n in by[1]["notes"])
     assert all({"mean", "zebra", "sections"} <= set(by[k]["pictures"]) for k in (0, 2))
+
+
+def test_triangulation_freed_after_the_faces_changes_nothing(tmp_path, monkeypatch) -> None:
+    """``check_file`` frees OCC's triangulation once the faces' meshes are copied: the pictures and
+    the page's data are byte for byte those of a check that keeps it (nothing after the faces reads
+    OCC's mesh; if something did, it would mesh a grid instead), and the shape is left unmeshed."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS
+
+    from occsurf.bridge.quality import check_files
+
+    seen = []
+    original = check_files._drop_triangulation
+
+    def dropping(model):
+        original(model)
+        seen.append(model.shape)
+
+    outs = {}
+    for label, drop in (("kept", lambda model: None), ("dropped", dropping)):
+        monkeypatch.setattr(check_files, "_drop_triangulation", drop)
+        check_files.check_file(SAMPLES / "mixed.igs", tmp_path / label, pictures="worst")
+        outs[label] = {p.name: p.read_bytes() for p in (tmp_path / label).iterdir()}
+    assert outs["kept"].keys() == outs["dropped"].keys() and any(n.endswith(".png") for n in outs["kept"])
+    assert outs["kept"] == outs["dropped"]
+    exp = TopExp_Explorer(seen[0], TopAbs_FACE)
+    while exp.More():
+        assert BRep_Tool.Triangulation_s(TopoDS.Face_s(exp.Current()), TopLoc_Location()) is None
+        exp.Next()
