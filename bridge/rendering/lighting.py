@@ -44,18 +44,8 @@ import numpy as np
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.lighting import LightingSetup, WarnLight
 
-from .vtk_scene import (
-    VIEW_ANGLE,
-    VIEWS,
-    Camera,
-    _vertex_normals,
-    apply_camera,
-    fit_camera,
-    polydata,
-    read_pixels,
-    render_available,
-    vtk_matrix,
-)
+from .cameras import VIEW_ANGLE, VIEWS, Camera, apply_camera, fit_camera, vtk_matrix
+from .vtk_scene import _vertex_normals, polydata, read_pixels, render_available
 from .vtk_scene import window as _window
 
 if TYPE_CHECKING:
@@ -78,7 +68,7 @@ def camera_for_view(view: str, lo: Sequence[float], hi: Sequence[float], aspect:
     The camera looks at the box's centre from the view's direction, at the smallest distance at
     which all eight corners of the box lie inside the picture (both openings divided by
     ``margin``): a long part fills the frame instead of a fraction of its bounding sphere.
-    (:func:`~occsurf.bridge.rendering.vtk_scene.fit_camera`, the framing of every VTK picture.)
+    (:func:`~occsurf.bridge.rendering.cameras.fit_camera`, the framing of every VTK picture.)
     """
     if not isinstance(view, str) or view not in VIEWS:
         raise InvalidGeometryError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")

@@ -16,14 +16,15 @@ display), not a painter's algorithm. One :class:`Scene` collects
   (:meth:`Scene.add_hedgehog`: normals);
 * one legend (:meth:`Scene.set_legend`, a scalar bar with its title) and a title;
 
-and renders them from a camera preset (:data:`CAMERAS`: ``'iso'``, ``'top'``, ``'front'``,
-``'right'``, any other of :data:`VIEWS`, or an explicit direction) to a PNG of a given size
+and renders them from a camera preset (:data:`~.cameras.CAMERAS`: ``'iso'``, ``'top'``, ``'front'``,
+``'right'``, any other of :data:`~.cameras.VIEWS`, or an explicit direction) to a PNG of a given size
 (:meth:`Scene.render`) or to an array (:meth:`Scene.render_array`).
 
 This module is also the one offscreen-window and camera code path of every VTK picture: the
 per-pixel Warn renderer of course ch. 10 (:mod:`.lighting`) draws through the same
-:func:`window` cache, frames with the same :func:`fit_camera` into the same :class:`Camera`,
-puts it on VTK with :func:`apply_camera` and reads pixels back with :func:`read_pixels`.
+:func:`window` cache, frames with the same :func:`~.cameras.fit_camera` into the same
+:class:`~.cameras.Camera`, puts it on VTK with :func:`~.cameras.apply_camera` (all three in
+:mod:`.cameras`) and reads pixels back with :func:`read_pixels`.
 """
 
 from __future__ import annotations
@@ -35,29 +36,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+# the cameras live in .cameras since 2026-12-06; importable from here as before
+from .cameras import CAMERAS, VIEW_ANGLE, VIEWS, Camera, apply_camera, fit_camera, vtk_matrix  # noqa: F401
+
 if TYPE_CHECKING:
     from vtkmodules.vtkCommonDataModel import vtkPolyData
-    from vtkmodules.vtkCommonMath import vtkMatrix4x4
-    from vtkmodules.vtkRenderingCore import vtkCamera, vtkRenderer, vtkRenderWindow
+    from vtkmodules.vtkRenderingCore import vtkRenderWindow
 
-__all__ = ["Scene", "CAMERAS", "VIEWS", "VIEW_ANGLE", "Camera", "fit_camera", "apply_camera", "window",
-           "new_window", "read_pixels", "COLORMAPS", "colormap_rgb", "render_available", "polydata"]
+__all__ = ["Scene", "window", "new_window", "read_pixels", "COLORMAPS", "colormap_rgb", "render_available", "polydata"]
 
-#: Named views: direction *from* the target *to* the camera, and the view-up vector (``top``
-#: looks down -z with +y up).
-VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
-    "iso": ((1.0, -1.0, 0.8), (0.0, 0.0, 1.0)),
-    "top": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
-    "bottom": ((0.0, 0.0, -1.0), (0.0, -1.0, 0.0)),
-    "front": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
-    "back": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
-    "left": ((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-    "right": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-}
-#: The presets of the quality pictures (every key of :data:`VIEWS` is accepted).
-CAMERAS = {name: VIEWS[name] for name in ("iso", "top", "front", "right")}
-#: Vertical opening angle of the perspective camera, degrees (before any zoom).
-VIEW_ANGLE = 30.0
 #: Colour maps by name: control colours (RGB in [0, 1]) spread evenly over the scale.
 COLORMAPS: dict[str, tuple[tuple[float, float, float], ...]] = {
     "diverging": ((0.23, 0.30, 0.75), (0.55, 0.69, 0.99), (0.87, 0.87, 0.87), (0.96, 0.60, 0.48), (0.71, 0.02, 0.15)),
@@ -210,147 +197,6 @@ def read_pixels(win: vtkRenderWindow, width: int, height: int, *, depth: bool = 
     zf = vtkFloatArray()
     win.GetZbufferData(0, 0, width - 1, height - 1, zf)
     return rgb, vtk_to_numpy(zf).reshape(height, width)[::-1].copy()
-
-
-# ---------------------------------------------------------------------------------------- cameras
-@dataclass(frozen=True)
-class Camera:
-    """A perspective camera: ``position``, ``target`` (focal point), ``up`` and vertical view angle
-    in degrees."""
-
-    position: tuple[float, float, float]
-    target: tuple[float, float, float]
-    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    view_angle: float = VIEW_ANGLE
-
-    def __post_init__(self) -> None:
-        from occsurf.algorithms.errors import InvalidGeometryError
-
-        for name in ("position", "target", "up"):
-            v = np.asarray(getattr(self, name), float)
-            if v.shape != (3,) or not np.all(np.isfinite(v)):
-                raise InvalidGeometryError(f"camera.{name}: expected 3 finite numbers, got {getattr(self, name)!r}")
-            object.__setattr__(self, name, tuple(float(x) for x in v))
-        d = np.subtract(self.target, self.position)
-        if np.linalg.norm(d) == 0:
-            raise InvalidGeometryError("camera.target: expected a point other than camera.position")
-        if np.linalg.norm(np.cross(d, self.up)) <= 1e-9 * np.linalg.norm(d) * np.linalg.norm(self.up):
-            raise InvalidGeometryError(f"camera.up: expected a direction not parallel to the line of sight, got "
-                                       f"{list(self.up)}")
-        if not 0 < float(self.view_angle) < 180:
-            raise InvalidGeometryError(f"camera.view_angle: expected 0 < angle < 180 degrees, got {self.view_angle}")
-
-
-def _view_axes(position: np.ndarray, target: np.ndarray, up: np.ndarray) -> np.ndarray:
-    """Rows ``sideways, up, back`` of VTK's view rotation (``vtkPerspectiveTransform.SetupCamera``)."""
-    back = position - target
-    back = back / np.linalg.norm(back)
-    side = np.cross(up, back)
-    side = side / np.linalg.norm(side)
-    return np.stack([side, np.cross(back, side), back])
-
-
-def fit_camera(view: str | Sequence[float], lo: Sequence[float], hi: Sequence[float], aspect: float = 4 / 3, *,
-               margin: float = 1.06, keep_distance: bool = False, width_share: float = 0.94,
-               shift_left: bool = False, zoom: float = 1.0) -> Camera:
-    """The camera that looks at the box ``[lo, hi]`` from a named view (:data:`VIEWS`) or from a
-    direction (target to camera; up +z, or +y within ~18 degrees of the z axis) and shows all its
-    eight corners.
-
-    Two framings, one code path:
-
-    * ``keep_distance=False`` (Warn pictures, ``occsurf render``): the view angle stays
-      :data:`VIEW_ANGLE` and the camera moves to the smallest distance at which every corner lies
-      inside the picture, both openings divided by ``margin`` (a long part fills the frame
-      instead of a fraction of its bounding sphere).
-    * ``keep_distance=True`` (:class:`Scene`): the camera stands where VTK's ``ResetCamera``
-      puts it (the box's bounding sphere fits the view) and the view angle narrows until the
-      corners fill ``0.94`` of the height and ``width_share`` of the width, times ``zoom``;
-      ``shift_left`` moves the model left by the rest of the width, clear of a legend on the
-      right.
-    """
-    from occsurf.algorithms.errors import InvalidGeometryError
-
-    direction: tuple[float, ...]
-    if isinstance(view, str):
-        if view not in VIEWS:
-            raise InvalidGeometryError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
-        direction, up = VIEWS[view]
-    else:
-        direction = tuple(float(x) for x in view)
-        up = (0.0, 0.0, 1.0) if abs(direction[2]) < 0.95 * np.linalg.norm(direction) else (0.0, 1.0, 0.0)
-    lo_, hi_ = np.asarray(lo, float), np.asarray(hi, float)
-    centre = (lo_ + hi_) / 2
-    corners = np.array([[x, y, z] for x in (lo_[0], hi_[0]) for y in (lo_[1], hi_[1]) for z in (lo_[2], hi_[2])])
-    if not keep_distance:
-        back = np.asarray(direction, float) / np.linalg.norm(direction)
-        right = np.cross(-back, up)
-        right /= np.linalg.norm(right)
-        true_up = np.cross(right, -back)
-        rel = corners - centre
-        tan_v = np.tan(np.radians(VIEW_ANGLE) / 2) / margin
-        tan_h = tan_v * aspect
-        need = rel @ back + np.maximum(np.abs(rel @ right) / tan_h, np.abs(rel @ true_up) / tan_v)
-        size = max(float(np.linalg.norm(hi_ - lo_)), 1e-9)
-        dist = max(float(need.max()), 0.05 * size) + 1e-3 * size  # never inside the box's near corner
-        return Camera(position=tuple(centre + dist * back), target=tuple(centre), up=up)
-    return _fit_by_view_angle(np.asarray(direction, float), np.asarray(up, float), centre, corners, aspect,
-                              width_share, shift_left, zoom)
-
-
-def _fit_by_view_angle(direction: np.ndarray, up: np.ndarray, centre: np.ndarray, corners: np.ndarray,
-                       aspect: float, width_share: float, shift_left: bool, zoom: float) -> Camera:
-    """:func:`fit_camera` with ``keep_distance``: VTK's ``ResetCamera`` on the box, then
-    ``vtkCamera.Zoom`` (the view angle divided) and the legend's shift, computed here."""
-    radius = max(float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0))) / 2, 1e-9)
-    d = direction / np.linalg.norm(direction)
-    vn = centre + d * radius * 4.0 - centre  # the view plane normal VTK derives from the first placement
-    vn = vn / np.linalg.norm(vn)
-    up = up / np.linalg.norm(up)
-    angle = np.radians(VIEW_ANGLE)
-    if aspect < 1.0:  # ResetCamera fits the sphere in the narrower, horizontal opening
-        angle = 2.0 * np.arctan(np.tan(angle * 0.5) * aspect)
-    sq = float(np.sum((corners.max(axis=0) - corners.min(axis=0)) ** 2))
-    sphere = np.sqrt(sq if sq != 0 else 1.0) * 0.5
-    distance = sphere / np.sin(angle * 0.5)
-    if abs(float(up @ vn)) > 0.999:
-        up = np.array([-up[2], up[0], up[1]])
-        up = up / np.linalg.norm(up)
-    position = centre + distance * vn
-    axes = _view_axes(position, centre, up)
-    c = (corners - position) @ axes.T
-    depth = np.maximum(-c[:, 2], 1e-12)
-    half = np.tan(np.radians(VIEW_ANGLE) / 2)
-    need = max(float(np.max(np.abs(c[:, 1]) / depth)) / (0.94 * half),
-               float(np.max(np.abs(c[:, 0]) / depth)) / (width_share * half * aspect), 1e-9)
-    target = centre
-    if shift_left:  # move the model left, clear of the legend
-        dop = (centre - position) / np.linalg.norm(centre - position)
-        shift = np.cross(dop, up) * (-(1 - width_share) * half * aspect * distance / (zoom / need))
-        target, position = centre - shift, position - shift
-    return Camera(position=tuple(position), target=tuple(target), up=tuple(up), view_angle=VIEW_ANGLE / (zoom / need))
-
-
-def apply_camera(renderer: vtkRenderer, camera: Camera, clip_bounds: Sequence[float] | None = None) -> vtkCamera:
-    """Put ``camera`` on ``renderer``'s active VTK camera (view-up orthogonalised) and fit the
-    clipping range to ``clip_bounds`` ``[x0, x1, y0, y1, z0, z1]`` (default: every visible prop);
-    returns the VTK camera."""
-    cam = renderer.GetActiveCamera()
-    cam.SetPosition(*camera.position)
-    cam.SetFocalPoint(*camera.target)
-    cam.SetViewUp(*camera.up)
-    cam.SetViewAngle(camera.view_angle)
-    cam.OrthogonalizeViewUp()
-    if clip_bounds is None:
-        renderer.ResetCameraClippingRange()
-    else:
-        renderer.ResetCameraClippingRange(*clip_bounds)
-    return cam
-
-
-def vtk_matrix(m: vtkMatrix4x4) -> np.ndarray:
-    """A ``vtkMatrix4x4`` as a ``(4, 4)`` array."""
-    return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
 
 
 def polydata(points: np.ndarray, cells: np.ndarray | Sequence[np.ndarray], kind: str, *,
@@ -698,7 +544,7 @@ class Scene:
 
     def _place_camera(self, camera: str | Sequence[float], zoom: float, aspect: float = 4 / 3) -> None:
         """Look at the bounding box from the preset direction and zoom so its eight corners fill the
-        frame (the legend's strip on the right kept free): :func:`fit_camera` with
+        frame (the legend's strip on the right kept free): :func:`~.cameras.fit_camera` with
         ``keep_distance``."""
         from occsurf.algorithms.errors import InvalidGeometryError
 
