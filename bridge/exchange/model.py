@@ -88,25 +88,42 @@ class ImportedFace:
         t = self._trimmed
         return t.value() if isinstance(t, _LazyTrimmed) else t
 
+    @property
+    def natural(self) -> bool | None:
+        """``True`` when the face is the whole parameter box of ``surface`` (its loops run along the
+        box's sides: nothing to trim away), ``False`` when it is trimmed (``trimmed`` is set),
+        ``None`` when unknown (no surface, loops that did not convert, or an ``ImportedFace`` made
+        by hand or unpickled without that knowledge). Builds ``trimmed`` on first access."""
+        t = self._trimmed
+        if isinstance(t, _LazyTrimmed):
+            return t.natural()
+        return False if t is not None else None
+
 
 class _LazyTrimmed:
     """The cached, on-demand :attr:`ImportedFace.trimmed` of one face (its loops converted by
     :func:`_build_trimmed` on the first call of :meth:`value`). Pickles as its value, so an
     ``ImportedFace`` whose OCC objects are dropped or replaced still carries its loops."""
 
-    __slots__ = ("_args", "_value")
+    __slots__ = ("_args", "_value", "_natural")
     _PENDING = object()
 
     def __init__(self, face: Any, surface: BSplineSurface, occ_surface: Any) -> None:
         self._args: tuple[Any, ...] | None = (face, surface, occ_surface)
         self._value: Any = self._PENDING
+        self._natural: bool | None = None
 
     def value(self) -> TrimmedSurface | None:
         args = self._args
         if args is not None:  # None: built already (the value is set before the arguments are dropped)
-            self._value = _build_trimmed(*args)
+            self._value, self._natural = _build_trimmed(*args)
             self._args = None  # the OCC objects are no longer needed here
         return self._value
+
+    def natural(self) -> bool | None:
+        """:attr:`ImportedFace.natural` (the loops converted first if they were not)."""
+        value = self.value()
+        return False if value is not None else self._natural
 
     def __reduce__(self) -> tuple[Any, tuple[Any]]:
         return _identity, (self.value(),)
@@ -277,9 +294,10 @@ def _import_face(index: int, shape: Any, name: str | None) -> ImportedFace:
     )
 
 
-def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> TrimmedSurface | None:
-    """:attr:`ImportedFace.trimmed`: the face's loops on ``surface``, ``None`` when it is untrimmed
-    or its loops do not convert (the face still has its ``surface``)."""
+def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> tuple[TrimmedSurface | None, bool | None]:
+    """:attr:`ImportedFace.trimmed` and :attr:`ImportedFace.natural`: the face's loops on
+    ``surface`` and ``False``; ``(None, True)`` when it is untrimmed (its loops are the box's
+    sides); ``(None, None)`` when its loops do not convert (the face still has its ``surface``)."""
     from OCP.BRepTools import BRepTools
 
     from ..conversion.trimming import face_from_occ
@@ -287,8 +305,8 @@ def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> Trim
     try:
         t = face_from_occ(face, surface, occ_surface, BRepTools.UVBounds_s(face))
     except Exception:  # noqa: BLE001 - a face whose loops fail keeps its surface
-        return None
-    return None if isinstance(t, BSplineSurface) else t
+        return None, None
+    return (None, True) if isinstance(t, BSplineSurface) else (t, False)
 
 
 def _conversion_bounds(face: Any, occ_surface: Any) -> tuple[float, float, float, float] | None:

@@ -260,8 +260,9 @@ def _ranges(field_: FaceField) -> dict[str, Any]:
 # ---------------------------------------------------------------------------------------- faces
 def _flags_of(face: ImportedFace, mesh: FaceMesh, samples: int) -> list[dict[str, Any]]:
     """:func:`occsurf.algorithms.quality.face_flags` of the face's surface on a ``samples`` grid,
-    masked to the trimmed face (its loops' classification, ``ImportedFace.trimmed``; else the
-    triangles of OCC's mesh), as JSON dicts."""
+    masked to the trimmed face (its loops' classification, ``ImportedFace.trimmed``; the whole grid
+    for a face that is its surface's whole box, ``ImportedFace.natural``; else the triangles of
+    OCC's mesh), as JSON dicts."""
     from occsurf.algorithms import quality
 
     surface = _surface_of(face)
@@ -271,6 +272,9 @@ def _flags_of(face: ImportedFace, mesh: FaceMesh, samples: int) -> list[dict[str
     trimmed = getattr(face, "trimmed", None)
     if trimmed is not None:
         inside = trimmed.contains(*grid)
+    elif getattr(face, "natural", None):
+        inside = None  # the whole parameter box is the face: its sides' samples too (a mesh mask may
+        # leave a side's samples out by round-off, as it left a revolved face's pole of mixed.igs)
     else:
         inside = uv_mask(mesh)(*grid) if mesh.source == "brepmesh" else None
     if inside is not None and not inside.any():

@@ -540,3 +540,31 @@ def test_a_released_mesh_mask_frees_its_finder_at_once(tmp_path) -> None:
         assert finder() is None  # freed by reference counting, no cycle left for the collector
     finally:
         gc.enable()
+
+
+def test_flags_of_a_natural_face_sample_its_whole_box(monkeypatch) -> None:
+    """A face that is its surface's whole parameter box (``ImportedFace.natural``) has its flags
+    on the whole grid, sides included, with no mesh mask built: mixed.igs' revolved face 12 has its
+    pole on the side u = 0, which OCC's mesh left out of the mask by round-off (the flag was
+    reported at u = pi/2, the same point), and the other faces keep their flags."""
+    from occsurf.algorithms import quality
+    from occsurf.bridge.exchange.step_iges import read_iges
+    from occsurf.bridge.quality import report as R
+
+    model = read_iges(SAMPLES / "mixed.igs")
+    assert all(f.natural for f in model.faces) and all(f.trimmed is None for f in model.faces)
+    built = []
+    original = R.uv_mask
+    monkeypatch.setattr(R, "uv_mask", lambda mesh: built.append(mesh.index) or original(mesh))
+    rep = check_model(model, edges=False)
+    assert built == []
+    for row in rep.faces:
+        s = model.faces[row.index].surface
+        (u0, u1), (v0, v1) = s.domain
+        want = quality.face_flags(s, mask=None, us=np.linspace(u0, u1, 41), vs=np.linspace(v0, v1, 41))
+        assert row.flags == [R._flag_json(f) for f in want], row.index
+    pole = [f for f in rep.faces[12].flags if f["kind"] == "near_degenerate_normal"]
+    assert len(pole) == 1 and pole[0]["uv"][0] == 0.0 and pole[0]["location"] == [12.0, 7.0, -8.0]
+    # a trimmed face still classifies its grid against its loops
+    loft = read_step(SAMPLES / "loft.step")
+    assert any(f.natural is False and f.trimmed is not None for f in loft.faces)

@@ -467,8 +467,9 @@ def test_imported_face_trimmed_is_lazy_cached_and_right(tmp_path, machined, monk
         for f, copy in zip(model.faces, copies):
             t = f.trimmed
             assert copy.trimmed is t and f.trimmed is t  # cached, shared with the copy
-            assert t == build(f.face, f.surface, f.occ_surface)  # what reading used to build eagerly
+            assert (t, f.natural) == build(f.face, f.surface, f.occ_surface)  # what reading used to build eagerly
             assert isinstance(from_occ(f.face), TrimmedSurface) == (t is not None)
+            assert f.natural is (t is None) and copy.natural is f.natural  # every loop converts here
             if t is not None:
                 n_trimmed += 1
                 a0 = occ_area(f.face)
