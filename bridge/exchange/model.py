@@ -7,6 +7,7 @@ objects), which both build models from these pieces.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -302,11 +303,20 @@ def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> tupl
 
     from ..conversion.trimming import face_from_occ
 
+    box = BRepTools.UVBounds_s(face)
     try:
-        t = face_from_occ(face, surface, occ_surface, BRepTools.UVBounds_s(face))
+        t = face_from_occ(face, surface, occ_surface, box)
     except Exception:  # noqa: BLE001 - a face whose loops fail keeps its surface
         return None, None
-    return (None, True) if isinstance(t, BSplineSurface) else (t, False)
+    if not isinstance(t, BSplineSurface):
+        return t, False
+    # one loop on the sides of the face's UV box: natural only when that box is the surface's whole
+    # domain (a B-spline face may use a rectangle inside its surface: linkrods' face 19 uses
+    # u in [-0.53, 0.53] of [-pi/2, pi/2], and face_from_occ gives it no trim: unknown then)
+    (u0, u1), (v0, v1) = surface.domain
+    tol = 1e-9 * max(1.0, math.hypot(u1 - u0, v1 - v0))
+    whole = max(abs(box[0] - u0), abs(box[1] - u1), abs(box[2] - v0), abs(box[3] - v1)) <= tol
+    return None, (True if whole else None)
 
 
 def _conversion_bounds(face: Any, occ_surface: Any) -> tuple[float, float, float, float] | None:

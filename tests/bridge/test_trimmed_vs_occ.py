@@ -522,3 +522,24 @@ def test_area_converges_beside_a_near_singular_point():
             assert int(tolerances.TRIM_AREA_LEVELS) == 6 and set(seen) == {(1 << k, u0) for k in range(7)}
             uniform = seen[64, u0]
             assert abs(uniform - a) <= 1e-9 * a, (uniform, a)
+
+
+@pytest.mark.skipif(not (REALDATA / "occt__linkrods.step").is_file(), reason=f"no occt__linkrods.step in {REALDATA}")
+def test_natural_only_where_the_face_is_its_surface_whole_box():
+    """``ImportedFace.natural``: linkrods' face 19 has one loop on the sides of its UV box, but that
+    box is u in [-0.53, 0.53] of its B-spline surface's [-pi/2, pi/2]: not natural (unknown: the
+    reader gives it no trim either), so the check masks it by its mesh, not by the whole box; the
+    faces that are natural span their surface's domain."""
+    from occsurf.bridge import read_step
+
+    model = read_step(REALDATA / "occt__linkrods.step")
+    f19 = model.faces[19]
+    u0, u1, v0, v1 = BRepTools.UVBounds_s(f19.face)
+    (s0, s1), _ = f19.surface.domain
+    assert f19.trimmed is None and f19.natural is None and u1 - u0 < 0.5 * (s1 - s0)
+    natural = [f for f in model.faces if f.natural]
+    assert len(natural) >= 5
+    for f in natural:
+        box = BRepTools.UVBounds_s(f.face)
+        (a0, a1), (b0, b1) = f.surface.domain
+        assert np.allclose(box, (a0, a1, b0, b1), rtol=0, atol=1e-9 * max(1.0, np.hypot(a1 - a0, b1 - b0)))
