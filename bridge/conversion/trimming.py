@@ -82,7 +82,9 @@ _FIT_DEGREE = 5
 # ============================================================================ OCC -> ours
 def face_from_occ(face: TopoDS_Face, surface: BSplineSurface, occ_surface: Geom_Surface, uv_box: tuple[float, ...]
                   ) -> TrimmedSurface | BSplineSurface:
-    """The face as a :class:`TrimmedSurface` on ``surface``, or ``surface`` when it is untrimmed.
+    """The face as a :class:`TrimmedSurface` on ``surface``, or ``surface`` when it is untrimmed
+    (one loop along the sides of ``surface``'s whole domain; a face on a rectangle inside the domain
+    is trimmed by that rectangle).
 
     Parameters
     ----------
@@ -107,8 +109,11 @@ def face_from_occ(face: TopoDS_Face, surface: BSplineSurface, occ_surface: Geom_
         exp.Next()
     if not wires or not all(wires):
         raise InvalidGeometryError("from_occ: the face has a wire without edges (or no wire)")
-    if len(wires) == 1 and _on_box(wires[0], uv_box):
+    if len(wires) == 1 and _on_box(wires[0], uv_box) and not _inner_rectangle(surface, uv_box):
         return surface
+    # (one loop on the sides of a box inside the surface's domain -- a B-spline face using a
+    # rectangle of its surface, as linkrods' face 19 does -- is a trim too: until 2026-12-06 it was
+    # returned as the whole surface)
     maps = parameter_maps(surface, occ_surface, uv_box)
     loops = [tuple(_map_pcurve(c, maps, surface, uv_box) for c in loop) for loop in wires]
     outer_loop = loops.pop(outer_index)
@@ -153,6 +158,17 @@ def _pcurve_to_ours(pc: Any, t0: float, t1: float) -> BSplineCurve:
         idx = np.arange(knots.shape[0] - p - 1) % n
         P, w = P[idx], None if w is None else w[idx]
     return BSplineCurve(b.Degree(), knots, P, w)
+
+
+def _inner_rectangle(surface: BSplineSurface, box: tuple[float, ...]) -> bool:
+    """Whether the UV ``box`` lies inside ``surface``'s domain and is smaller than it (to 1e-9 of the
+    domain's diagonal): the face is a rectangle cut out of its surface. A box that reaches past the
+    domain (a periodic face across its seam) is not one."""
+    u0, u1, v0, v1 = box
+    (a0, a1), (b0, b1) = surface.domain
+    tol = 1e-9 * max(1.0, float(np.hypot(a1 - a0, b1 - b0)))
+    inside = u0 >= a0 - tol and u1 <= a1 + tol and v0 >= b0 - tol and v1 <= b1 + tol
+    return inside and max(u0 - a0, a1 - u1, v0 - b0, b1 - v1) > tol
 
 
 def _on_box(loop: list[BSplineCurve], box: tuple[float, ...]) -> bool:

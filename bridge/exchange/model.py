@@ -311,8 +311,8 @@ def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> tupl
     if not isinstance(t, BSplineSurface):
         return t, False
     # one loop on the sides of the face's UV box: natural only when that box is the surface's whole
-    # domain (a B-spline face may use a rectangle inside its surface: linkrods' face 19 uses
-    # u in [-0.53, 0.53] of [-pi/2, pi/2], and face_from_occ gives it no trim: unknown then)
+    # domain (face_from_occ trims a rectangle inside it; a box reaching past the domain, a periodic
+    # face across its seam, is left unknown)
     (u0, u1), (v0, v1) = surface.domain
     tol = 1e-9 * max(1.0, math.hypot(u1 - u0, v1 - v0))
     whole = max(abs(box[0] - u0), abs(box[1] - u1), abs(box[2] - v0), abs(box[3] - v1)) <= tol

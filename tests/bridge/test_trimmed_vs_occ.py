@@ -525,18 +525,30 @@ def test_area_converges_beside_a_near_singular_point():
 
 
 @pytest.mark.skipif(not (REALDATA / "occt__linkrods.step").is_file(), reason=f"no occt__linkrods.step in {REALDATA}")
-def test_natural_only_where_the_face_is_its_surface_whole_box():
-    """``ImportedFace.natural``: linkrods' face 19 has one loop on the sides of its UV box, but that
-    box is u in [-0.53, 0.53] of its B-spline surface's [-pi/2, pi/2]: not natural (unknown: the
-    reader gives it no trim either), so the check masks it by its mesh, not by the whole box; the
-    faces that are natural span their surface's domain."""
+def test_a_face_on_a_rectangle_of_its_surface_is_trimmed_by_it():
+    """linkrods' faces 19, 23 and 36 have one loop on the sides of their UV box, but the box is a
+    rectangle inside their B-spline surface's domain (face 19: u in [-0.53, 0.53] of [-pi/2, pi/2]).
+    ``from_occ(face)`` returned the whole surface for them (and ``ImportedFace.trimmed`` was None):
+    now a TrimmedSurface on that rectangle, ``natural`` False. Its area equals OCC's adaptive
+    quadrature (eps 1e-12) to 1e-12 relative (OCC's default scheme is 5.7e-4 off on face 19), and
+    classification keeps the rectangle. The faces that are natural span their surface's domain."""
     from occsurf.bridge import read_step
 
     model = read_step(REALDATA / "occt__linkrods.step")
-    f19 = model.faces[19]
-    u0, u1, v0, v1 = BRepTools.UVBounds_s(f19.face)
-    (s0, s1), _ = f19.surface.domain
-    assert f19.trimmed is None and f19.natural is None and u1 - u0 < 0.5 * (s1 - s0)
+    for k in (19, 23, 36):
+        f = model.faces[k]
+        u0, u1, v0, v1 = BRepTools.UVBounds_s(f.face)
+        (s0, s1), (t0, t1) = f.surface.domain
+        assert max(u0 - s0, s1 - u1, v0 - t0, t1 - v1) > 1e-3 * (s1 - s0), k  # a rectangle inside
+        t = f.trimmed
+        assert isinstance(t, TrimmedSurface) and f.natural is False and isinstance(from_occ(f.face), TrimmedSurface)
+        props = GProp_GProps()
+        BRepGProp.SurfaceProperties_s(f.face, props, 1e-12)
+        assert abs(t.area() - props.Mass()) <= 1e-12 * props.Mass(), (k, t.area(), props.Mass())
+        du, dv = 1e-3 * (u1 - u0), 1e-3 * (v1 - v0)
+        uu = np.array([0.5 * (u0 + u1), u0 - du, u1 + du, 0.5 * (u0 + u1)])
+        vv = np.array([0.5 * (v0 + v1), 0.5 * (v0 + v1), 0.5 * (v0 + v1), v1 + dv])
+        assert t.classify(uu, vv).tolist() == [INSIDE, OUTSIDE, OUTSIDE, OUTSIDE]
     natural = [f for f in model.faces if f.natural]
     assert len(natural) >= 5
     for f in natural:
