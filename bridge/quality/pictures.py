@@ -207,7 +207,7 @@ def _cut(fields: Sequence[FaceField], lo: np.ndarray, normal: np.ndarray,
          offsets: np.ndarray) -> tuple[Lines, dict[int, Lines]]:
     from occsurf.algorithms import quality, tolerances
 
-    faces = [(f.surface, f.mask()) for f in fields]
+    faces = [(f.surface, None if f.natural else f.mask()) for f in fields]  # a natural face: its whole box
     index = np.array([f.mesh.index for f in fields])
     acc: dict[int, tuple[list, list, list]] = {}
 

@@ -82,6 +82,9 @@ class FaceField:
         ``'zebra'`` (phase in [0, 1)), ``'isophote'`` (n . l), ``'draft'`` (degrees); NaN where
         undefined (degenerate points).
     degenerate : ndarray of bool, shape (n,)
+    natural : bool
+        The face is its surface's whole parameter box (``ImportedFace.natural``): the sections cut
+        it unmasked.
     """
 
     mesh: FaceMesh
@@ -90,6 +93,7 @@ class FaceField:
     surface: Any = None
     trim: Any = None
     _mask: Any = field(default=None, repr=False)
+    natural: bool = False
 
     def mask(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
         """``mask(u, v) -> bool``: inside the trimmed face. The face's exact trim
@@ -244,7 +248,8 @@ def face_fields(face: ImportedFace, mesh: FaceMesh, *, view_dir: Sequence[float]
     trim = getattr(face, "trimmed", None)
     if trim is not None and getattr(trim, "surface", None) is not surf:
         trim = None  # loops in another surface's parameters: the mesh's mask instead
-    return FaceField(mesh=mesh, values=values, degenerate=degenerate, surface=surf, trim=trim)
+    return FaceField(mesh=mesh, values=values, degenerate=degenerate, surface=surf, trim=trim,
+                     natural=trim is None and bool(getattr(face, "natural", None)))
 
 
 def _ranges(field_: FaceField) -> dict[str, Any]:
