@@ -24,7 +24,7 @@ from .choices import PICTURE_CHOICES, WORST_FACES
 
 if TYPE_CHECKING:
     from ..rendering.vtk_scene import Scene
-    from .report import FaceField, QualityReport
+    from .report import FaceField, FaceQuality, QualityReport
 
 __all__ = ["render_report_pictures", "render_picture", "MODEL_PICTURES", "FACE_PICTURES", "PICTURE_KINDS",
            "PICTURE_CHOICES", "WORST_FACES", "section_lines", "face_section_lines", "model_sections"]
@@ -389,78 +389,62 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
     axis = model_section_axis(fields)
     done = 0
     # each picture is encoded and written on a background thread while the next one renders
-    # (rendering.png); a picture that fails there is noted once every file is written, in order
-    written: list[tuple[Future[Path], Callable[[], None], Callable[[str], None]]] = []
+    # (rendering.png); a picture that fails there is noted once every file is written, in order:
+    # (the file's future, where its name is recorded, the kind, the name, where a failure is noted)
+    written: list[tuple[Future[Path], dict[str, str], str, str, list[str]]] = []
     with PngWriter() as writer:
-        for kind in model_pictures:
-            name = f"model_{kind}.png"
-            value = PICTURE_KINDS[kind][0]
+
+        def draw(name: str, kind: str, size: tuple[int, int], build: Callable[[], Scene], record: dict[str, str],
+                 notes: list[str]) -> None:
+            """One picture: left out when ``skip`` names it, else built, rendered and handed to the
+            writer; a failure is noted in ``notes``, the name recorded in ``record`` once written."""
+            nonlocal done
+            done += 1
             if name in skip:
-                report.warnings.append(f"picture {kind} not drawn: {skip[name]}")
-                done += 1
-                continue
+                notes.append(f"picture {kind} not drawn: {skip[name]}")
+                return
             note(f"picture {name}")
             try:
-                scene = picture_scene(
-                    fields, kind, model_size=report.size, scale=scales.get(value or ""),
+                rgb = build().render_array(size=size, camera="iso")
+                written.append((writer.write(out / name, rgb), record, kind, name, notes))
+            except Exception as err:  # noqa: BLE001
+                notes.append(f"picture {kind} not drawn: {error_line(err)}")
+            if progress is not None:
+                progress(done, total)
+
+        for kind in model_pictures:
+
+            def model_scene(kind: str = kind) -> Scene:
+                return picture_scene(
+                    fields, kind, model_size=report.size, scale=scales.get(PICTURE_KINDS[kind][0] or ""),
                     flags=flags_all if kind == "mean" else (_violation_points(report) if kind == "edges" else None),
                     edges=report.edge_lines, title=f"{Path(report.path).name}: {PICTURE_KINDS[kind][3]}",
                     sections=lambda: model_sections(report))
-                written.append((writer.write(out / name, scene.render_array(size=MODEL_SIZE, camera="iso")),
-                                _setter(shown, kind, name), _appender(report.warnings, f"picture {kind} not drawn: ")))
-            except Exception as err:  # noqa: BLE001
-                report.warnings.append(f"picture {kind} not drawn: {error_line(err)}")
-            done += 1
-            if progress is not None:
-                progress(done, total)
+
+            draw(f"model_{kind}.png", kind, MODEL_SIZE, model_scene, shown, report.warnings)
         by_index = {f.index: f for f in report.faces}
         for fld in drawn:
             row = by_index[fld.mesh.index]
             for kind in face_pictures:
-                name = f"face_{row.index}_{kind}.png"
-                if name in skip:
-                    row.notes.append(f"picture {kind} not drawn: {skip[name]}")
-                    done += 1
-                    continue
-                note(f"picture {name}")
-                try:
+
+                def face_scene(fld: FaceField = fld, row: FaceQuality = row, kind: str = kind) -> Scene:
                     own: list[Lines] = []
                     if kind == "sections":
                         own.append(face_section_lines(fld, axis))
                         if not own[0][0]:
                             row.notes.append(f"no section through this face: {N_FACE_SECTIONS} planes through its "
                                              "own extent found no intersection inside its trim")
-                    scene = picture_scene([fld], kind, model_size=report.size,
-                                          flags=_flag_points(report, {row.index}) if kind == "mean" else None,
-                                          title=f"face {row.index} ({row.type}): {kind}",
-                                          sections=_returning(own[0]) if own else None)
-                    written.append((writer.write(out / name, scene.render_array(size=FACE_SIZE, camera="iso")),
-                                    _setter(row.pictures, kind, name),
-                                    _appender(row.notes, f"picture {kind} not drawn: ")))
-                except Exception as err:  # noqa: BLE001
-                    row.notes.append(f"picture {kind} not drawn: {error_line(err)}")
-                done += 1
-                if progress is not None:
-                    progress(done, total)
-    for fut, ok, failed in written:  # all done: the writer's block waited for them
+                    return picture_scene([fld], kind, model_size=report.size,
+                                         flags=_flag_points(report, {row.index}) if kind == "mean" else None,
+                                         title=f"face {row.index} ({row.type}): {kind}",
+                                         sections=_returning(own[0]) if own else None)
+
+                draw(f"face_{row.index}_{kind}.png", kind, FACE_SIZE, face_scene, row.pictures, row.notes)
+    for fut, record, kind, name, notes in written:  # all done: the writer's block waited for them
         problem = fut.exception()
         if problem is None:
-            ok()
+            record[kind] = name
         else:
-            failed(error_line(problem))
+            notes.append(f"picture {kind} not drawn: {error_line(problem)}")
     return shown
-
-
-def _setter(target: dict[str, str], key: str, value: str) -> Callable[[], None]:
-    def put() -> None:
-        target[key] = value
-
-    return put
-
-
-def _appender(target: list[str], prefix: str) -> Callable[[str], None]:
-    def add(reason: str) -> None:
-        target.append(prefix + reason)
-
-    return add
 
