@@ -92,21 +92,16 @@ def time_ours(P, T, N, setup, size, repeat, out: Path, samples: int):
 
 
 def _vtk_scene(P, T, N, size, samples=0):
-    from occsurf.bridge.rendering import lighting as L
-
-    win = L._window(*size, samples)
     from vtkmodules.vtkRenderingCore import vtkRenderer
 
+    from occsurf.bridge.rendering import lighting as L
+    from occsurf.bridge.rendering.cameras import apply_camera
+
+    win = L._window(*size, samples)
     ren = vtkRenderer()
     actor = L._actor(P, T, N)
     ren.AddActor(actor)
-    cam = L.camera_for_view("iso", P.min(axis=0), P.max(axis=0), size[0] / size[1])
-    c = ren.GetActiveCamera()
-    c.SetPosition(*cam.position)
-    c.SetFocalPoint(*cam.target)
-    c.SetViewUp(*cam.up)
-    c.SetViewAngle(cam.view_angle)
-    ren.ResetCameraClippingRange()
+    apply_camera(ren, L.camera_for_view("iso", P.min(axis=0), P.max(axis=0), size[0] / size[1]))
     return win, ren, actor
 
 
