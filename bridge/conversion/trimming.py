@@ -63,7 +63,7 @@ from occsurf.algorithms.fitting import interpolate_curve
 
 from .. import _occ
 
-__all__ = ["face_from_occ", "trimmed_to_occ_face", "angle_to_parameter", "parameter_maps", "TRIM_FIT_TOL",
+__all__ = ["face_from_occ", "box_on_domain", "trimmed_to_occ_face", "angle_to_parameter", "parameter_maps", "TRIM_FIT_TOL",
            "EDGE_TOLERANCE"]
 
 #: P-curves that must be resampled (not iso-lines on a surface whose circular directions
@@ -109,7 +109,7 @@ def face_from_occ(face: TopoDS_Face, surface: BSplineSurface, occ_surface: Geom_
         exp.Next()
     if not wires or not all(wires):
         raise InvalidGeometryError("from_occ: the face has a wire without edges (or no wire)")
-    if len(wires) == 1 and _on_box(wires[0], uv_box) and not _inner_rectangle(surface, uv_box):
+    if len(wires) == 1 and _on_box(wires[0], uv_box) and box_on_domain(surface, uv_box) != "inside":
         return surface
     # (one loop on the sides of a box inside the surface's domain -- a B-spline face using a
     # rectangle of its surface, as linkrods' face 19 does -- is a trim too: until 2026-12-06 it was
@@ -160,15 +160,17 @@ def _pcurve_to_ours(pc: Any, t0: float, t1: float) -> BSplineCurve:
     return BSplineCurve(b.Degree(), knots, P, w)
 
 
-def _inner_rectangle(surface: BSplineSurface, box: tuple[float, ...]) -> bool:
-    """Whether the UV ``box`` lies inside ``surface``'s domain and is smaller than it (to 1e-9 of the
-    domain's diagonal): the face is a rectangle cut out of its surface. A box that reaches past the
-    domain (a periodic face across its seam) is not one."""
+def box_on_domain(surface: BSplineSurface, box: tuple[float, ...]) -> str:
+    """Where a face's UV ``box`` ``(u0, u1, v0, v1)`` lies against ``surface``'s domain, to 1e-9 of
+    the domain's diagonal: ``"whole"`` (the same box), ``"inside"`` (within it and smaller: a
+    rectangle cut out of the surface) or ``"past"`` (reaching beyond it: a periodic face across its
+    seam)."""
     u0, u1, v0, v1 = box
     (a0, a1), (b0, b1) = surface.domain
     tol = 1e-9 * max(1.0, float(np.hypot(a1 - a0, b1 - b0)))
-    inside = u0 >= a0 - tol and u1 <= a1 + tol and v0 >= b0 - tol and v1 <= b1 + tol
-    return inside and max(u0 - a0, a1 - u1, v0 - b0, b1 - v1) > tol
+    if not (u0 >= a0 - tol and u1 <= a1 + tol and v0 >= b0 - tol and v1 <= b1 + tol):
+        return "past"
+    return "inside" if max(u0 - a0, a1 - u1, v0 - b0, b1 - v1) > tol else "whole"
 
 
 def _on_box(loop: list[BSplineCurve], box: tuple[float, ...]) -> bool:

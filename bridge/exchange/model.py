@@ -7,7 +7,6 @@ objects), which both build models from these pieces.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -301,7 +300,7 @@ def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> tupl
     sides); ``(None, None)`` when its loops do not convert (the face still has its ``surface``)."""
     from OCP.BRepTools import BRepTools
 
-    from ..conversion.trimming import face_from_occ
+    from ..conversion.trimming import box_on_domain, face_from_occ
 
     box = BRepTools.UVBounds_s(face)
     try:
@@ -313,10 +312,7 @@ def _build_trimmed(face: Any, surface: BSplineSurface, occ_surface: Any) -> tupl
     # one loop on the sides of the face's UV box: natural only when that box is the surface's whole
     # domain (face_from_occ trims a rectangle inside it; a box reaching past the domain, a periodic
     # face across its seam, is left unknown)
-    (u0, u1), (v0, v1) = surface.domain
-    tol = 1e-9 * max(1.0, math.hypot(u1 - u0, v1 - v0))
-    whole = max(abs(box[0] - u0), abs(box[1] - u1), abs(box[2] - v0), abs(box[3] - v1)) <= tol
-    return None, (True if whole else None)
+    return None, (True if box_on_domain(surface, box) == "whole" else None)
 
 
 def _conversion_bounds(face: Any, occ_surface: Any) -> tuple[float, float, float, float] | None:
