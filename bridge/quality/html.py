@@ -130,7 +130,7 @@ def viewer_payload(report: QualityReport) -> dict[str, Any]:
             })
     ranges = {}
     for key, _, _, _ in VIEWER_INDICATORS:
-        if key in ("zebra", "isophote", "shaded") or not fields:
+        if key in (*PER_PIXEL, "shaded") or not fields:
             continue
         lo, hi = _scale([f.values[key] for f in fields], key, report.size)
         ranges[key] = [lo, hi]

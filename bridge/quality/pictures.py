@@ -275,13 +275,13 @@ def picture_scene(fields: Sequence[FaceField], kind: str, *, title: str = "", mo
     meshes coloured by the kind's value (or striped per pixel), the legend, and the kind's lines
     (``sections()``'s lines, comb teeth and inflections; the ``edges`` of each continuity class),
     ``flags`` as red points and ``title``."""
-    from ..rendering.vtk_scene import Scene
+    from ..rendering.vtk_scene import PIXEL_SHADERS, Scene
 
     if kind not in PICTURE_KINDS:
         raise ValueError(f"kind: expected one of {', '.join(PICTURE_KINDS)}, got {kind!r}")
     value, cmap, legend, _ = PICTURE_KINDS[kind]
     scene = Scene()
-    if kind in ("zebra", "isophote"):  # per pixel, from the interpolated normals; no scale to read
+    if kind in PIXEL_SHADERS:  # zebra, isophotes: per pixel, from the interpolated normals; no scale to read
         for P, T, N, _ in _merged_meshes(fields, None):
             scene.add_mesh(P, T, normals=N, shader=kind, stripes=ZEBRA_PAIRS if kind == "zebra" else ISOPHOTE_PAIRS)
     elif value is not None:
