@@ -13,7 +13,6 @@ the stripes are those of the exact surfaces, interpolated per pixel.
 
 from __future__ import annotations
 
-import io
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -129,9 +128,7 @@ def zebra_before_after(path: str | Path, before: Sequence[Any], neighbours: Sequ
     RuntimeError
         VTK cannot render offscreen here (:func:`occsurf.bridge.rendering.vtk_scene.render_available`).
     """
-    from PIL import Image
-
-    from ..exchange.files import atomic_write
+    from ..rendering.png import write_png_file
     from ..rendering.vtk_scene import render_available
 
     if not render_available():
@@ -147,11 +144,7 @@ def zebra_before_after(path: str | Path, before: Sequence[Any], neighbours: Sequ
     for meshes, lines, title in ((nb + old, [], label or "before"), (nb + new, _edge_lines(after), after_label or "after")):
         halves.append(_scene(meshes, lines, title).render_array(size=PICTURE_SIZE, camera=tuple(direction)))
     gap = np.full((PICTURE_SIZE[1], 6, 3), 255, np.uint8)
-    buf = io.BytesIO()
-    Image.fromarray(np.concatenate([halves[0], gap, halves[1]], axis=1)).save(buf, format="PNG", compress_level=1)
-    path = Path(path)
-    atomic_write(path, buf.getvalue())
-    return path
+    return write_png_file(path, np.concatenate([halves[0], gap, halves[1]], axis=1), level=1)
 
 
 def hole_pictures(out: str | Path, reports: Sequence[Any], holes: Sequence[dict[str, Any]], *,

@@ -402,16 +402,7 @@ def render_model_lit(model: ImportedModel, setup: LightingSetup, **kw: Any) -> L
 
 
 def write_png(path: str | Path, image: LitImage | np.ndarray) -> Path:
-    """Write the picture as a PNG, atomically (the target is checked before anything is encoded)."""
-    import io
+    """Write the picture as a PNG, atomically (:func:`.png.write_png_file`, zlib level 6)."""
+    from .png import write_png_file
 
-    from PIL import Image
-
-    from ..exchange.files import atomic_write
-
-    arr = image.rgb if isinstance(image, LitImage) else np.asarray(image)
-    buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(arr, np.uint8)).save(buf, format="PNG")
-    p = Path(path)
-    atomic_write(p, buf.getvalue())
-    return p
+    return write_png_file(path, image.rgb if isinstance(image, LitImage) else np.asarray(image))

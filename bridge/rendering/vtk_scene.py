@@ -482,19 +482,10 @@ class Scene:
 
     def render(self, path: str | Path, *, size: tuple[int, int] = (800, 600), camera: str | Sequence[float] = "iso",
                zoom: float = 1.0) -> Path:
-        """Render to a PNG file at ``path`` (written atomically); returns the path."""
-        import io
+        """Render to a PNG file at ``path`` (written atomically, zlib level 1: fast); returns the path."""
+        from .png import write_png_file
 
-        from PIL import Image
-
-        from ..exchange.files import atomic_write
-
-        arr = self.render_array(size=size, camera=camera, zoom=zoom)
-        buf = io.BytesIO()
-        Image.fromarray(arr).save(buf, format="PNG", compress_level=1)
-        path = Path(path)
-        atomic_write(path, buf.getvalue())
-        return path
+        return write_png_file(path, self.render_array(size=size, camera=camera, zoom=zoom), level=1)
 
     # ------------------------------------------------------------------------------ steps
     def _decorate(self) -> None:
