@@ -134,6 +134,9 @@ def run(ns: argparse.Namespace) -> int:
         error(" ".join(str(err).split()))
         return EXIT_ERROR
     except Exception as err:  # noqa: BLE001 - a defect of ours: still one line, never a traceback
+        if signals.signum is not None:  # the interrupt, turned into another exception by a library it went through
+            error(f"interrupted; what finished is in {ns.out} (rerun with --resume to finish the rest)")
+            return signals.exit_status
         error(f"audit failed: {error_line(err)} (results written so far are in {ns.out}; --resume continues)")
         return EXIT_ERROR
     c = result.counts

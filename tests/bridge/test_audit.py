@@ -302,6 +302,36 @@ def test_sigterm_handled_inside_a_string_exec_still_exits_143(tmp_path: Path) ->
     assert "occsurf: interrupted; what finished is in" in proc.stderr and "Traceback" not in proc.stderr
 
 
+def test_an_interrupt_a_library_turned_into_another_error_still_exits_143(tmp_path: Path) -> None:
+    """A SIGTERM whose ``KeyboardInterrupt`` a library caught and turned into an error of its own
+    (here: where the store creates RESULTS/files) is still the interrupt: one line saying so and
+    143, not "audit failed" and 2 (an exit 2 then went through the interpreter's finalization, where
+    a Dask thread aborted the process: -6 in CI's ``test_signals_at_random_moments_end_the_run_promptly``
+    on 12-06)."""
+    hook = tmp_path / "wrap_hook"
+    hook.mkdir()
+    out = tmp_path / "results"
+    (hook / "sitecustomize.py").write_text(
+        "import os, sys, signal\n"
+        "if 'audit' in sys.argv or 'audit' in getattr(sys, 'orig_argv', []):\n"
+        "    def _term(event, args):\n"
+        f"        if event == 'os.mkdir' and str(args[0]) == {str(out / 'files')!r}:\n"
+        "            try:\n"
+        "                os.kill(os.getpid(), signal.SIGTERM)\n"
+        "                for _ in range(10**6): pass\n"
+        "            except KeyboardInterrupt:\n"
+        "                raise RuntimeError('the store could not be made') from None\n"
+        "    sys.addaudithook(_term)\n")
+    env = hook_env(tmp_path)
+    env["PYTHONPATH"] = os.pathsep.join((str(hook), env["PYTHONPATH"]))
+    corpus_dir = tmp_path / "corpus"
+    good_files(corpus_dir, iges=False)
+    proc = run_cli("audit", str(corpus_dir), "--out", str(out), "--workers", "1", env=env, timeout=120)
+    assert proc.returncode == 143, (proc.returncode, proc.stderr)
+    assert "occsurf: interrupted; what finished is in" in proc.stderr, proc.stderr
+    assert "audit failed" not in proc.stderr and "Traceback" not in proc.stderr
+
+
 def test_cli_imports_no_dask_numpy_or_occ_at_module_level() -> None:
     import subprocess
 

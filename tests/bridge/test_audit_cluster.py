@@ -333,7 +333,9 @@ def _signal_trial(tmp_path: Path, corpus: Path, env: dict[str, str], n_files: in
         if done:  # the run was over (the interpreter's exit, Dask's atexit hooks): every row kept
             assert len(read_files(out).to_pylist()) == n_files
         return "outside"
-    assert sent and proc.returncode == 128 + sig, (trial, proc.returncode, stderr)
+    if not (sent and proc.returncode == 128 + sig):  # raised, not asserted: the whole of stderr in the report
+        raise AssertionError(f"trial {trial} ({sig.name} {delay:.3f} s in, sent {sent}): exit {proc.returncode}, "
+                             f"not {128 + sig}; its stderr:\n{stderr}")
     m = re.search(r"interrupted: (\d+) of (\d+) files are in ", stderr)
     if m:  # in the loop over files: what it says finished is what the dataset holds
         assert int(m.group(2)) == n_files
