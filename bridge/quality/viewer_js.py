@@ -15,8 +15,9 @@ What the page can do without running the check again, from the data of
   planes, Moller-Trumbore against each face's triangles, bounding spheres first), tints the face
   and marks its row in the faces table; a click on a face row tints that face; a click on an edge
   row flies the view to the edge's worst point and marks it;
-* without WebGL (or with ``#no-webgl`` in the page's address, for tests) the canvas and its
-  controls are hidden and the overview pictures (PNG) are shown in their place with a note.
+* without WebGL (or with ``#no-webgl`` in the page's address, for tests), or where the browser
+  cannot inflate gzip (``DecompressionStream``), the canvas and its controls are hidden and the
+  overview pictures (PNG) are shown in their place with a note.
 
 The vendored bundle exports only the classes listed in ``static/README.md`` (no ``Raycaster``),
 hence the hand-written picking.
@@ -45,7 +46,7 @@ tr.picked td{background:#ffd79a !important;font-weight:bold}
 """
 
 VIEWER_JS = r"""
-(function(){
+(async function(){
 const DATA = JSON.parse(document.getElementById('viewer-data').textContent);
 const IND = JSON.parse(document.getElementById('viewer-indicators').textContent);
 const MAPS = JSON.parse(document.getElementById('viewer-maps').textContent);
@@ -53,7 +54,23 @@ const status = document.getElementById('viewer-status');
 const pickOut = document.getElementById('viewer-pick');
 const canvas = document.getElementById('viewer');
 const $ = id => document.getElementById(id);
-function dec(s, T){const b=atob(s);const u=new Uint8Array(b.length);for(let i=0;i<b.length;i++)u[i]=b.charCodeAt(i);return new T(u.buffer);}
+// the arrays: one gzip block (base64) of byte planes, see html.VIEWER_DATA_LAYOUT
+async function inflate(text){
+  const b = atob(text); const u = new Uint8Array(b.length); for (let i=0;i<b.length;i++) u[i] = b.charCodeAt(i);
+  const s = new Blob([u]).stream().pipeThrough(new DecompressionStream('gzip'));
+  return new Uint8Array(await new Response(s).arrayBuffer());
+}
+let RAW = null;
+function dec(ref, T){
+  const w = T.BYTES_PER_ELEMENT, n = ref.n, c = ref.columns || 1, m = n / c, b = new Uint8Array(n*w);
+  for (let k=0;k<w;k++){ const p = RAW.subarray(ref.at + k*n, ref.at + (k+1)*n); for (let i=0;i<n;i++) b[i*w+k] = p[i]; }
+  const U = w === 2 ? new Uint16Array(b.buffer) : new Uint32Array(b.buffer);  // the values' bits
+  if (ref.delta) for (let j=0;j<c;j++) for (let i=j*m+1;i<(j+1)*m;i++) U[i] = U[i] + U[i-1];  // stored modulo 2**(8w)
+  if (c === 1) return new T(b.buffer);
+  const out = new U.constructor(n);
+  for (let j=0;j<c;j++) for (let i=0;i<m;i++) out[i*c+j] = U[j*m+i];
+  return new T(out.buffer);
+}
 function cmap(name, t){const c=MAPS[name];if(!c)return [0.78,0.8,0.84];if(!(t>=0))t=0;if(t>1)t=1;const x=t*(c.length-1);const i=Math.min(Math.floor(x),c.length-2);const f=x-i;
   return [0,1,2].map(k=>c[i][k]*(1-f)+c[i+1][k]*f);}
 function rows(table){ const t=$(table); return t ? Array.from(t.tBodies[0].rows) : []; }
@@ -63,23 +80,28 @@ function markRow(table, row){
   const box = row.closest('.table-scroll');  // scroll the table's own box, not the page away from the view
   if (box){ const top = row.offsetTop - box.clientHeight/2; box.scrollTop = Math.max(0, top); }
 }
-function fallback(reason){
+function fallback(why){
   for (const id of ['viewer-wrap','viewer-controls','viewer-indicator']){ const e=$(id); if(e) e.style.display='none'; }
   const fb = $('viewer-fallback'); fb.hidden = false;
   const pics = document.querySelectorAll('#overview .pics figure');
-  fb.querySelector('.why').textContent = 'The interactive 3-D view needs WebGL, which ' + reason + '. ' +
+  fb.querySelector('.why').textContent = why + '. ' +
     (pics.length ? 'Shown instead: the overview pictures drawn when the report was written' :
      'No pictures were drawn for this report (occsurf check --pictures none)') +
     '; the faces and edges tables below hold the numbers.';
   const into = fb.querySelector('.pics');
   for (const p of pics){ const c = p.cloneNode(true); for (const i of c.querySelectorAll('img')) i.loading = 'eager'; into.appendChild(c); }
-  status.textContent = '3-D view off: ' + reason;
+  status.textContent = '3-D view off: ' + why;
   document.body.setAttribute('data-viewer', 'fallback');
 }
-if (/(^|[#&])no-webgl\b/.test(location.hash)){ fallback('is turned off by #no-webgl in the address'); return; }
+const NEEDS = 'The interactive 3-D view needs WebGL, which ';
+if (/(^|[#&])no-webgl\b/.test(location.hash)){ fallback(NEEDS + 'is turned off by #no-webgl in the address'); return; }
+try {  // three.js and the arrays come gzip-compressed; DecompressionStream: Chromium 80, Firefox 113, Safari 16.4
+  if (typeof THREE === 'undefined') (0, eval)(new TextDecoder().decode(await inflate($('viewer-three').textContent)));
+  RAW = await inflate(DATA.data);
+} catch(e){ fallback('The interactive 3-D view could not unpack its data in this browser (' + e.message + ')'); return; }
 let renderer;
 try { renderer = new THREE.WebGLRenderer({canvas, antialias:true, preserveDrawingBuffer:true}); }
-catch(e){ fallback('is not available in this browser (' + e.message + ')'); return; }
+catch(e){ fallback(NEEDS + 'is not available in this browser (' + e.message + ')'); return; }
 if (DATA.skipped){ status.textContent = 'The model has ' + DATA.n_vertices + ' mesh vertices: too many for the 3-D view; see the pictures.'; }
 const scene = new THREE.Scene(); scene.background = new THREE.Color(0xf4f6fa);
 const camera = new THREE.PerspectiveCamera(30, 1, 1e-3, 1e7);
@@ -151,6 +173,7 @@ if (L.sections) sets.sections.add(lineSet(segments(L.sections), [0.1,0.1,0.5]));
 if (L.combs) sets.combs.add(lineSet(segments(L.combs), [0.85,0.25,0.1]));
 if (L.inflections) sets.combs.add(lineSet(crosses(dec(L.inflections, Float32Array), R*0.012), [0,0.6,0]));
 for (const e of (L.edges || [])) sets.edges.add(lineSet(segments(e), e.color));
+RAW = null;  // every array is decoded: the block can go
 for (const k in sets){ sets[k].visible = false; scene.add(sets[k]);
   const cb = $('show-' + k); if (cb){ cb.disabled = !sets[k].children.length; cb.addEventListener('change', ()=>{ sets[k].visible = cb.checked; }); sets[k].visible = cb.checked; } }
 // ------------------------------------------------------------------ colours
@@ -272,7 +295,12 @@ function loop(now){
   if (dirty){ dirty = false; renderer.render(scene, camera); }
   requestAnimationFrame(loop); }
 window.addEventListener('resize', () => { resize(); redraw(); }); requestAnimationFrame(loop);
-window.occsurfViewer = {ready:true, meshes: meshes.length, pick, select, target: () => controls.target.toArray()};
+// what the page decoded, for tests: a face's positions, normals, triangles or one indicator's values
+function arrays(index, name){ const m = byIndex[index]; if (!m) return null; const g = m.geometry;
+  const a = name==='triangles' ? g.index.array : name==='points' ? g.getAttribute('position').array :
+            name==='normals' ? g.getAttribute('normal').array : m.userData.vals[name];
+  return a ? Array.from(a) : null; }
+window.occsurfViewer = {ready:true, meshes: meshes.length, pick, select, arrays, target: () => controls.target.toArray()};
 if (!DATA.skipped) status.textContent = meshes.length + ' faces, ' + DATA.n_vertices + ' vertices: drag to rotate, wheel to zoom, right-drag to pan; click a face or a table row.';
 document.body.setAttribute('data-viewer', 'ready');
 })();

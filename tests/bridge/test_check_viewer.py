@@ -18,9 +18,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from occsurf.bridge.quality.html import PULL_CHOICES, VIEWER_INDICATORS, viewer_payload, write_html
+from occsurf.bridge.quality.html import PULL_CHOICES, VIEWER_INDICATORS, viewer_array, viewer_payload, write_html
 
 from ..browser import chrome, needs_chromium
 
@@ -35,12 +37,14 @@ def _report(name: str):
     return check_model(read_step(str(SAMPLES / name)))
 
 
-def _f4(s: str) -> np.ndarray:
-    return np.frombuffer(base64.b64decode(s), dtype="<f4").astype(float)
+def _f4(payload: dict, ref: dict) -> np.ndarray:
+    assert ref["dtype"] == "<f4"
+    return viewer_array(payload, ref).astype(float)
 
 
-def _u4(s: str) -> np.ndarray:
-    return np.frombuffer(base64.b64decode(s), dtype="<u4")
+def _u4(payload: dict, ref: dict) -> np.ndarray:
+    assert ref["dtype"] == "<u4"
+    return viewer_array(payload, ref)
 
 
 # ---------------------------------------------------------------------------------------- payload
@@ -70,13 +74,13 @@ def test_payload_curvatures_are_the_analysis_own_at_the_vertices(name: str) -> N
     for face in payload["faces"]:
         fld = report.fields[face["index"]]
         uv = fld.mesh.uv
-        pts = _f4(face["points"]).reshape(-1, 3)
+        pts = _f4(payload, face["points"]).reshape(-1, 3)
         assert_allclose(pts, fld.mesh.points, rtol=1e-6, atol=1e-6 * report.size)
         pick = rng.choice(len(uv), size=min(40, len(uv)), replace=False)
         cmap = curvature_map(fld.surface, uv[pick, 0], uv[pick, 1], "mean")  # the grid's diagonal: the vertices
         sign = -1.0 if fld.mesh.reversed else 1.0
         for kind, want in (("mean", sign * np.diagonal(cmap.mean)), ("gaussian", np.diagonal(cmap.gaussian))):
-            stored = _f4(face["values"][kind])
+            stored = _f4(payload, face["values"][kind])
             assert stored.shape == (face["n"],)
             got = stored[pick]
             ok = np.isfinite(want)
@@ -101,12 +105,12 @@ def test_payload_draft_is_asin_of_the_normal_along_the_pull_and_lines_are_packed
     payload = viewer_payload(report)
     assert payload["pull"] == [0.0, 0.0, 1.0] and ("+z", (0, 0, 1)) in PULL_CHOICES
     for face in payload["faces"]:
-        N = _f4(face["normals"]).reshape(-1, 3)
+        N = _f4(payload, face["normals"]).reshape(-1, 3)
         own = np.degrees(np.arcsin(np.clip(N[:, 2] / np.linalg.norm(N, axis=1), -1, 1)))
-        assert_allclose(own, _f4(face["values"]["draft"]), atol=0.05)
+        assert_allclose(own, _f4(payload, face["values"]["draft"]), atol=0.05)
 
     def decode(pack: dict[str, str]) -> list[np.ndarray]:
-        P, counts = _f4(pack["points"]).reshape(-1, 3), _u4(pack["counts"])
+        P, counts = _f4(payload, pack["points"]).reshape(-1, 3), _u4(payload, pack["counts"])
         return np.split(P, np.cumsum(counts)[:-1]) if len(counts) else []
 
     sections, combs, infl = model_sections(report)
@@ -115,7 +119,7 @@ def test_payload_draft_is_asin_of_the_normal_along_the_pull_and_lines_are_packed
         assert len(got) == len(want) > 0
         for g, w in zip(got, want, strict=True):
             assert_allclose(g, w, rtol=1e-6, atol=1e-6 * report.size)
-    assert_allclose(_f4(lines["inflections"]).reshape(-1, 3), infl, atol=1e-6 * report.size)
+    assert_allclose(_f4(payload, lines["inflections"]).reshape(-1, 3), infl, atol=1e-6 * report.size)
     classes = {c for c, _ in report.edge_lines}
     assert {e["class"] for e in lines["edges"]} == classes
     for e in lines["edges"]:
@@ -135,18 +139,59 @@ def test_payload_triangles_are_the_mesh_and_per_pixel_indicators_are_not_sent(mo
     for face in payload["faces"]:
         fld = report.fields[face["index"]]
         assert face["triangles_dtype"] == "uint16"
-        tris = np.frombuffer(base64.b64decode(face["triangles"]), "<u2").reshape(-1, 3)
+        assert face["triangles"]["dtype"] == "<u2"
+        tris = viewer_array(payload, face["triangles"]).reshape(-1, 3)
         assert np.array_equal(tris, fld.mesh.triangles)
         assert set(face["values"]) == coloured
         for k in coloured:
-            assert np.array_equal(_f4(face["values"][k]), fld.values[k].astype("<f4").astype(float), equal_nan=True)
+            assert np.array_equal(_f4(payload, face["values"][k]), fld.values[k].astype("<f4").astype(float), equal_nan=True)
     # a face of more than 65536 vertices: 32-bit indices, the same triangles
     big = report.fields[payload["faces"][0]["index"]]
     monkeypatch.setattr(type(big.mesh), "n_vertices", property(lambda self: 70_000))
     monkeypatch.setattr(H, "MAX_VIEWER_VERTICES", 10**9)  # every face counts 70 000 now
-    face = viewer_payload(report)["faces"][0]
+    payload = viewer_payload(report)
+    face = payload["faces"][0]
     assert face["triangles_dtype"] == "uint32"
-    assert np.array_equal(_u4(face["triangles"]).reshape(-1, 3), big.mesh.triangles)
+    assert np.array_equal(_u4(payload, face["triangles"]).reshape(-1, 3), big.mesh.triangles)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["<f4", "<u2", "<u4"]), st.integers(0, 14), st.sampled_from([1, 3]),
+                          st.booleans()), max_size=6), st.integers(0, 2**31))
+def test_packed_arrays_read_back_and_follow_the_documented_layout(arrays, seed) -> None:
+    """Arrays of any length (empty too; NaN, infinities and signed zeros among the floats; integers
+    up to their largest, whose differences wrap) packed into one block, by rows of 1 or 3 columns,
+    as differences or not, read back bit for bit, in order; each starts at a multiple of 4 bytes
+    and stores byte k of element i at ``at + k * n + i``, the elements column by column, each the
+    difference from the one before it in its column where ``delta`` (:data:`~occsurf.bridge.quality.
+    html.VIEWER_DATA_LAYOUT`, which the page's decoder follows)."""
+    from occsurf.bridge.quality.html import _UNSIGNED, _Packer, viewer_data
+
+    rng = np.random.default_rng(seed)
+    pack, refs, want = _Packer(), [], []
+    for dtype, rows, columns, delta in arrays:
+        n = rows * columns
+        if dtype == "<f4":
+            a = rng.normal(size=n).astype("<f4")
+            a[rng.random(n) < 0.2] = rng.choice(np.array([np.nan, np.inf, -np.inf, -0.0], "<f4"))
+        else:
+            a = rng.integers(0, np.iinfo(dtype).max, size=n, endpoint=True).astype(dtype)
+        refs.append(pack.add(a.reshape(rows, columns), dtype, columns=columns, delta=delta))
+        want.append((a, columns, delta))
+    raw = viewer_data({"data": pack.data()})
+    for ref, (a, columns, delta) in zip(refs, want, strict=True):
+        assert ref["at"] % 4 == 0 and ref["n"] == a.size and ref["dtype"] == a.dtype.str
+        assert ref["columns"] == columns and ref["delta"] == delta
+        got = viewer_array(raw, ref)
+        assert got.dtype == a.dtype and got.view(np.uint8).tobytes() == a.view(np.uint8).tobytes()
+        # the layout spelled out: column-major, differences of the bits, byte planes
+        u = a.view(_UNSIGNED[a.dtype.str]).reshape(-1, columns).T.astype(np.int64)
+        if delta:
+            u[:, 1:] = (u[:, 1:] - u[:, :-1]) % (1 << (8 * a.dtype.itemsize))
+        stored = u.reshape(-1).astype(_UNSIGNED[a.dtype.str])
+        w = a.dtype.itemsize
+        for i in range(min(a.size, 4)):
+            assert bytes(raw[ref["at"] + k * a.size + i] for k in range(w)) == stored[i:i + 1].tobytes()
 
 
 # ---------------------------------------------------------------------------------------- browser
@@ -163,7 +208,7 @@ def page(tmp_path_factory):
     payload = viewer_payload(report)
     doc = report.to_json()
     write_html(out / "index.html", doc, payload, shown)
-    return out / "index.html", doc
+    return out / "index.html", doc, payload
 
 
 @pytest.fixture(scope="module")
@@ -221,7 +266,7 @@ def test_viewer_indicators_controls_lines_and_picking(page, browser) -> None:
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
 
-    path, doc = page
+    path, doc, _ = page
     drv = browser
     _open(drv, path.resolve().as_uri(), "ready")
     assert drv.find_element(By.ID, "viewer-status").text.startswith("11 faces,")
@@ -300,7 +345,7 @@ def test_without_webgl_the_page_shows_the_pictures(page, browser) -> None:
     (loaded) in its place with a note, the tables still there, nothing logged as an error."""
     from selenium.webdriver.common.by import By
 
-    path, doc = page
+    path, doc, _ = page
     drv = browser
     _open(drv, path.resolve().as_uri() + "#no-webgl", "fallback")
     assert not drv.find_element(By.ID, "viewer").is_displayed()
@@ -317,3 +362,40 @@ def test_without_webgl_the_page_shows_the_pictures(page, browser) -> None:
     assert all(ok for _, ok in loaded), loaded
     assert len(drv.find_elements(By.CSS_SELECTOR, "#face-table tbody tr")) == len(doc["faces"])
     assert _errors(drv) == []
+
+
+@pytest.mark.slow
+@needs_chromium
+def test_the_page_decodes_the_arrays_the_payload_holds(page, browser) -> None:
+    """The page's inflating and byte-plane decoding (``viewer_js``) gives every face's positions,
+    normals, triangles and indicator values bit for bit as :func:`viewer_array` reads them, which
+    the payload tests hold to the report's own."""
+    path, _, payload = page
+    drv = browser
+    _open(drv, path.resolve().as_uri(), "ready")
+    for face in payload["faces"]:
+        for name in ("points", "normals", "triangles", "mean", "draft"):
+            ref = face[name] if name in face else face["values"][name]
+            got = drv.execute_script("return occsurfViewer.arrays(arguments[0], arguments[1])", face["index"], name)
+            want = viewer_array(payload, ref)
+            assert np.array_equal(np.asarray(got, dtype=want.dtype), want, equal_nan=True), (face["index"], name)
+    assert _errors(drv) == []
+
+
+@pytest.mark.slow
+@needs_chromium
+def test_a_browser_that_cannot_inflate_shows_the_pictures(page, browser) -> None:
+    """Without ``DecompressionStream`` (browsers before Chromium 80, Firefox 113, Safari 16.4) the
+    page says why and shows the overview pictures, as without WebGL."""
+    from selenium.webdriver.common.by import By
+
+    path, _, _ = page
+    drv = browser
+    added = drv.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": "delete window.DecompressionStream;"})
+    try:
+        _open(drv, path.resolve().as_uri(), "fallback")
+        fallback = drv.find_element(By.ID, "viewer-fallback")
+        assert fallback.is_displayed() and "could not unpack its data" in fallback.text
+        assert len(drv.find_elements(By.CSS_SELECTOR, "#viewer-fallback img")) == 2
+    finally:
+        drv.execute_cdp_cmd("Page.removeScriptToEvaluateOnNewDocument", {"identifier": added["identifier"]})
