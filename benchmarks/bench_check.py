@@ -10,8 +10,11 @@ never committed). For each model, in the same run:
 
 * **floor**: OCC reads the file (``STEPControl_Reader`` / ``IGESControl_Reader``, ``TransferRoots``) and
   meshes it with ``BRepMesh_IncrementalMesh`` at the report's deflection
-  (``tessellation.LINEAR_DEFLECTION`` x the bounding-box diagonal, ``ANGULAR_DEFLECTION``), in this
-  process: the least any such report can cost;
+  (``tessellation.LINEAR_DEFLECTION`` x the bounding-box diagonal, ``ANGULAR_DEFLECTION``) as the
+  report does (``tessellation.mesh_shape``: the planes with Delabella's triangulation, since
+  2026-12-06), in a process of its own (time and peak memory): the least any such report can cost.
+  OCC's default mesher (one call, Watson's triangulation on the planes too: the floor before) is
+  printed beside it;
 * ``occsurf check FILE --out DIR`` as a user runs it (a new process, the worker, the page), with
   ``--pictures worst`` (the default), ``none`` and ``all``: wall time, the ratio to the floor, the
   report folder's size and file count, and the peak memory of the command's processes (the
@@ -60,7 +63,11 @@ def many_faces_plate(path: Path, n: int = 19) -> int:
     return len(part.faces())
 
 
-def floor_seconds(path: Path) -> float:
+def floor_seconds(path: Path, default_mesher: bool = False) -> float:
+    """OCC's read and mesh of ``path`` in this process: one ``BRepMesh_IncrementalMesh`` on the
+    whole shape with ``default_mesher`` (OCC's default, Watson's triangulation everywhere), else as
+    the report meshes (:func:`~occsurf.bridge.rendering.tessellation.mesh_shape`: the planes by
+    Delabella, the same nodes)."""
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
     from OCP.IFSelect import IFSelect_RetDone
     from OCP.IGESControl import IGESControl_Reader
@@ -80,9 +87,24 @@ def floor_seconds(path: Path) -> float:
     BRepBndLib.Add_s(shape, box)
     lo, hi = box.CornerMin(), box.CornerMax()
     size = ((hi.X() - lo.X()) ** 2 + (hi.Y() - lo.Y()) ** 2 + (hi.Z() - lo.Z()) ** 2) ** 0.5
-    BRepMesh_IncrementalMesh(shape, tessellation.LINEAR_DEFLECTION * size, False, tessellation.ANGULAR_DEFLECTION,
-                             False).Perform()
+    if default_mesher:
+        BRepMesh_IncrementalMesh(shape, tessellation.LINEAR_DEFLECTION * size, False, tessellation.ANGULAR_DEFLECTION,
+                                 False)
+    else:
+        tessellation.mesh_shape(shape, tessellation.LINEAR_DEFLECTION * size, tessellation.ANGULAR_DEFLECTION)
     return time.perf_counter() - t0
+
+
+def floor_run(path: Path, default_mesher: bool) -> tuple[float, float]:
+    """:func:`floor_seconds` in a process of its own (best of two there): seconds and that
+    process' peak memory (MB)."""
+    code = ("import resource, sys; sys.path.insert(0, sys.argv[1]); import bench_check as b; from pathlib import Path; "
+            "t = min(b.floor_seconds(Path(sys.argv[2]), sys.argv[3] == '1') for _ in range(2)); "
+            "print(t, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)")
+    out = subprocess.run([sys.executable, "-c", code, str(Path(__file__).resolve().parent), str(path),
+                          "1" if default_mesher else "0"], capture_output=True, text=True, check=True)
+    seconds, kb = out.stdout.split()[-2:]
+    return float(seconds), float(kb) / 1024.0
 
 
 #: Runs the command in its arguments, passes its exit status on and prints the peak resident memory
@@ -122,8 +144,11 @@ def main() -> int:
         print(f"machine: {common.machine_note()}; load average {os.getloadavg()[0]:.2f}")
         ok = True
         for label, path in models:
-            floor = min(floor_seconds(path) for _ in range(2))
-            print(f"\n{label}: floor (OCC read + mesh, in process) {floor:.2f} s")
+            floor, floor_peak = floor_run(path, False)
+            watson, watson_peak = floor_run(path, True)
+            print(f"\n{label}: floor (OCC read + mesh as the report meshes, in a process) {floor:.2f} s, peak "
+                  f"{floor_peak:.0f} MB; OCC's default mesher (Watson on the planes too) {watson:.2f} s, peak "
+                  f"{watson_peak:.0f} MB")
             for pictures in ("worst", "none") + (() if quick else ("all",)):
                 wall, peak, size, count = run_check(path, tmp / f"out_{pictures}", pictures)
                 ratio = wall / floor

@@ -133,7 +133,8 @@ def _check_read(model: Any, path: str | os.PathLike[str], out: str | os.PathLike
     report = check_model(model, faces=faces, preset=preset,
                          progress=None if progress is None else (lambda k, n: progress("faces", k, n)),
                          skip={int(k): v for k, v in (skip.get("faces") or {}).items()},
-                         edges=skip.get("edges") or True, trace=note, mesh_each=bool(skip.get("mesh_each")))
+                         edges=skip.get("edges") or True, trace=note, mesh_each=bool(skip.get("mesh_each")),
+                         free_meshes=True)
     report.path = str(path)
     _drop_triangulation(model)
     shown: dict[str, str] = {}

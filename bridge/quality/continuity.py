@@ -80,7 +80,7 @@ from occsurf.algorithms.errors import InvalidGeometryError
 from ..messages import one_line
 from ._batch import SurfaceBatch
 from ._engine import Engine, occ_fold
-from ._pairs import FaceData, Pair, collect_faces, match_free_edges, topology_pairs
+from ._pairs import Pair, collect_faces, match_free_edges, topology_pairs
 
 Array = NDArray[np.float64]
 
@@ -343,7 +343,9 @@ def _chebyshev(n: int) -> Array:
     return 0.5 * (1.0 - np.cos(np.pi * np.arange(n) / (n - 1)))
 
 
-def _model_size(faces: list[FaceData], shape: Any) -> float:
+def shape_size(shape: Any) -> float:
+    """The diagonal of OCC's bounding box of ``shape`` (``BRepBndLib.Add``: of its triangulation
+    where its faces are meshed) that :func:`edge_continuity`'s tolerances are relative to."""
     from OCP.Bnd import Bnd_Box
     from OCP.BRepBndLib import BRepBndLib
 
@@ -380,7 +382,7 @@ def _check_face_pairs(face_pairs: Any, n_faces: int) -> set[tuple[int, int]]:
 
 def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False, loose: bool = True,
                     match_tol: float | None = None, preset: str | Thresholds = "catia",
-                    refine: int | None = None, face_pairs: Any = None) -> ContinuityResult:
+                    refine: int | None = None, face_pairs: Any = None, model_size: float | None = None) -> ContinuityResult:
     """G0/G1/G2 (and G3) continuity of every edge between two faces of a model.
 
     Parameters
@@ -408,6 +410,10 @@ def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False,
     face_pairs : iterable of (int, int), optional
         Only the edges between these pairs of faces (in either order), e.g. chosen pairs of loose
         faces; default every pair.
+    model_size : float, optional
+        The diagonal the tolerances above are relative to; default :func:`shape_size` of the shape
+        as it is now (OCC's bounding box: of the triangulation where the faces are meshed, else of
+        the geometry, a little larger).
 
     Returns
     -------
@@ -433,7 +439,7 @@ def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False,
     except Exception as err:  # noqa: BLE001
         raise InvalidGeometryError(f"model: expected an ImportedModel or an OCC/build123d/cadquery shape, "
                                    f"got {type(model).__name__} ({one_line(err)})") from err
-    size = _model_size(faces, shape)
+    size = shape_size(shape) if model_size is None else float(model_size)
     surfaces = SurfaceBatch([f.evaluator for f in faces])
     pairs, free, warnings = topology_pairs(faces)
     warnings += [f.error for f in faces if f.error]

@@ -344,7 +344,8 @@ def _thresholds_json(th: Thresholds) -> dict[str, Any]:
 def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, samples: int = 41,
                 preset: str = DEFAULT_PRESET, thresholds: Thresholds | None = None, edges: bool | str = True, flags: bool = True,
                 progress: Callable[[int, int], None] | None = None, skip: Mapping[int, str] | None = None,
-                trace: Callable[[str], None] | None = None, mesh_each: bool = False) -> QualityReport:
+                trace: Callable[[str], None] | None = None, mesh_each: bool = False,
+                free_meshes: bool = False) -> QualityReport:
     """Assess a model's surfaces: per-face indicators and flags, the edge-continuity table.
 
     Parameters
@@ -378,6 +379,11 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     mesh_each : bool
         Triangulate face by face (each with the model's deflection) instead of the whole shape
         at once, so a face that crashes OCC's mesher can be named and skipped.
+    free_meshes : bool
+        Free OCC's triangulation of each face once its mesh is copied into the report (the faces'
+        fields hold what the rest needs): for a model nothing else will draw, as
+        :func:`~occsurf.bridge.quality.check_files.check_file`'s own (on bench_check's 1089-face
+        plate OCC's triangulation is ~150 MB). A caller's shape is left meshed by default.
 
     Returns
     -------
@@ -388,12 +394,15 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     InvalidGeometryError
         A face index out of range, or an unknown preset.
     """
+    from OCP.BRepTools import BRepTools
+
     from occsurf.algorithms._validate import check_count
     from occsurf.algorithms.errors import InvalidGeometryError
     from occsurf.algorithms.quality._common import check_grid
 
     from ..exchange.object_import import as_model
     from ..rendering import tessellation
+    from .continuity import shape_size
 
     check_grid(check_count(samples, "samples", 1, minimum=2), int(samples), "samples")  # each face's flags grid, up front
     model = as_model(model)  # a build123d / cadquery / OCC object: its faces with their labels and colours
@@ -406,6 +415,8 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     t0 = time.perf_counter()
     todo = [model.faces[k] for k in (chosen if chosen is not None else range(n))]
     size = _mesh(model, [f for f in todo if f.index not in skip], mesh_each, note)
+    # the edges' tolerances are relative to OCC's box of the meshed shape: taken before any mesh is freed
+    edge_size = shape_size(model.shape) if free_meshes else None
     seconds = {"mesh": time.perf_counter() - t0}
     rows: list[FaceQuality] = []
     fields: dict[int, FaceField] = {}
@@ -417,6 +428,8 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
         else:
             note(f"face {face.index}")
             row, fld = _check_face(face, lambda f: tessellation.mesh_face(f, size), samples, size, flags)
+            if free_meshes:
+                BRepTools.Clean_s(face.face)
         rows.append(row)
         if fld is not None:
             fields[face.index] = fld
@@ -432,7 +445,7 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     elif edges:
         t2 = time.perf_counter()
         note("edges")
-        _add_edges(report, model, chosen, preset, thresholds)
+        _add_edges(report, model, chosen, preset, thresholds, edge_size)
         seconds["edges"] = time.perf_counter() - t2
     fail_kinds = FACE_FAIL_KINDS.get(preset, FACE_FAIL_KINDS[DEFAULT_PRESET])
     for f in rows:
@@ -453,13 +466,10 @@ def _mesh(model: ImportedModel, faces: Sequence[ImportedFace], each: bool, note:
     if not each:
         note("mesh")
         return tessellation.mesh_model(model)
-    from OCP.BRepMesh import BRepMesh_IncrementalMesh
-
     size = tessellation.model_size(model)
     for face in faces:
         note(f"mesh face {face.index}")
-        BRepMesh_IncrementalMesh(face.face, tessellation.LINEAR_DEFLECTION * size, False,
-                                 tessellation.ANGULAR_DEFLECTION, False).Perform()
+        tessellation.mesh_one_face(face.face, tessellation.LINEAR_DEFLECTION * size, tessellation.ANGULAR_DEFLECTION)
     return size
 
 
@@ -470,13 +480,13 @@ def _preset_thresholds(preset: str, thresholds: Thresholds | None) -> Thresholds
 
 
 def _add_edges(report: QualityReport, model: ImportedModel, chosen: list[int] | None, preset: str,
-               thresholds: Thresholds | None) -> None:
+               thresholds: Thresholds | None, edge_size: float | None = None) -> None:
     """Fill the edge table (:func:`.continuity.edge_continuity`), each face's worst adjacent G1
     angle, and the edges' violations of the thresholds (:func:`.continuity.check_edges`)."""
     from . import continuity
 
     th = continuity._thresholds(preset if thresholds is None else thresholds)
-    result = continuity.edge_continuity(model, preset=th)
+    result = continuity.edge_continuity(model, preset=th, model_size=edge_size)
     reports = list(result)
     if chosen is not None:
         keep = set(chosen)
