@@ -62,18 +62,23 @@ def _meshes(path: Path, split: bool) -> tuple[list[tuple[np.ndarray, np.ndarray,
     return out, planes
 
 
+#: The models with planes among their faces (on the others ``mesh_shape`` is one default call on
+#: the whole shape, as before: the bearing and the lens are B-splines only, the torus and the vase
+#: one face each).
+WITH_PLANES = ("loft.step", "swept_tube.step", "mixed.igs", "build123d__M6-1x12-countersunk-screw.step",
+               "occt__linkrods.step")
+
+
 def _files(tmp_path_factory) -> list[Path]:
-    files = sorted(SAMPLES.glob("*.st*")) + sorted(SAMPLES.glob("*.ig*"))
-    if REALDATA.is_dir():
-        files += sorted(REALDATA.glob("*.st*")) + sorted(REALDATA.glob("*.ig*"))
+    files = [d / name for name in WITH_PLANES for d in (SAMPLES, REALDATA) if (d / name).is_file()]
     return files + [_plate_with_holes(tmp_path_factory.mktemp("plate"))]
 
 
 @pytest.mark.slow
 def test_planes_by_delabella_leave_every_node_and_curved_triangle_as_watson_makes_them(tmp_path_factory) -> None:
-    """The samples, the realdata models (where ../shared is present) and a plate with 9 filleted,
-    chamfered holes: the same nodes on every face, the same triangles on every curved face; a plane's
-    triangles cover the same area; planes were there to be meshed differently."""
+    """The samples and realdata models with planes (where ../shared is present) and a plate with 9
+    filleted, chamfered holes: the same nodes on every face, the same triangles on every curved face;
+    a plane's triangles cover the same area; planes were there to be meshed differently."""
     n_planes = n_curved = 0
     for path in _files(tmp_path_factory):
         before, planes = _meshes(path, split=False)
@@ -86,7 +91,7 @@ def test_planes_by_delabella_leave_every_node_and_curved_triangle_as_watson_make
             else:
                 n_curved += 1
                 assert np.array_equal(T, U), (path.name, k)
-    assert n_planes >= 20 and n_curved >= 200
+    assert n_planes >= 20 and n_curved >= 80
 
 
 def test_a_plane_with_many_holes_is_meshed_by_delabella(tmp_path, monkeypatch) -> None:
