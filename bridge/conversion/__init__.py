@@ -8,5 +8,8 @@
   :class:`occsurf.algorithms.TrimmedSurface` (surface + loops of p-curves) for a face that is not
   the natural rectangle of its surface, ``make_face`` / ``to_face`` rebuild the face from it;
 * :mod:`.spatch_export` — S-patches and generalized B-spline surfaces (course ch. 8) as sewn OCC
-  shells (their STEP files: :mod:`occsurf.bridge.exchange.spatch_io`).
+  shells (their STEP files: :mod:`occsurf.bridge.exchange.spatch_io`);
+* :mod:`.occ_evaluators` — OCC faces and p-curves evaluated many points at once in OCC's own
+  parametrisation (our B-splines, closed forms for elementary surfaces, OCC point by point for the
+  rest): the continuity check's and the refill's.
 """

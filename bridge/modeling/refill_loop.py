@@ -161,32 +161,85 @@ def edge_params(edge: Any, face: Any, k: int) -> np.ndarray:
     return a + f * (b - a)
 
 
-def normals_on(edge: Any, face: Any, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[Any]]:
-    """Points, unit normals (face orientation applied) and uv of ``face`` along ``edge``'s p-curve."""
+#: Samples from which :func:`normals_on` (asked for no uv points) evaluates the face and its p-curve
+#: many at a time (:mod:`~occsurf.bridge.conversion.occ_evaluators`: our B-splines, closed forms for
+#: elementary surfaces) instead of by OCC's ``D1`` point by point: below it, making the evaluator (a
+#: conversion of the surface) costs about what the loop does (the traces ask for up to 16 001).
+VECTOR_SAMPLES = 256
+#: How far (relative to the domain) a p-curve's parameters, or the uv it gives, may lie beyond the
+#: p-curve's or the surface's domain for the many-at-once evaluation, which clips there where OCC's
+#: extrapolates: round-off overshoots (1e-18 to 4e-12 on linkrods' edges) move a point by at most
+#: about this fraction of the surface's extent. Farther (1.5e-10 and 1e-9 on two linkrods p-curves),
+#: OCC's loop.
+VECTOR_OVERSHOOT = 1e-11
+
+
+def _d1_vectorised(s: Any, pc: Any, edge: Any, face: Any, ts: np.ndarray) -> tuple[np.ndarray, ...] | None:
+    """``(uv, P, DU, DV)`` at ``ts`` by :mod:`~occsurf.bridge.conversion.occ_evaluators`, or ``None``
+    where the surface or the p-curve has no vectorised form there (OCC's loop then)."""
+    from ..conversion.occ_evaluators import pcurve_evaluator, surface_evaluator
+
+    def beyond(x: np.ndarray, lo: float, hi: float) -> bool:
+        slack = VECTOR_OVERSHOOT * (hi - lo)
+        return bool(x.min() < lo - slack or x.max() > hi + slack)
+
+    first, last = BRep_Tool.Range_s(edge, face)
+    curve = pcurve_evaluator(pc, first, last)
+    # our splines clip to their domain where OCC's extrapolate: beyond it by more than round-off, OCC's loop
+    if curve.kind == "occ" or (curve.spline is not None and beyond(ts, *curve.spline.domain)):
+        return None
+    surface = surface_evaluator(s)
+    if surface.kind == "occ":
+        return None
+    uv, _ = curve(ts)
+    if surface.spline is not None:
+        for k, ((lo, hi), periodic) in enumerate(zip(surface.spline.domain, surface.periodic, strict=True)):
+            if not periodic and beyond(uv[:, k], lo, hi):
+                return None
+    D = surface.derivatives(uv[:, 0], uv[:, 1], 1)
+    return uv, D[:, 0, 0], D[:, 1, 0], D[:, 0, 1]
+
+
+def normals_on(edge: Any, face: Any, ts: np.ndarray, *, uv_points: bool = True
+               ) -> tuple[np.ndarray, np.ndarray, list[Any]]:
+    """Points, unit normals (face orientation applied) and uv (``gp_Pnt2d``; an empty list with
+    ``uv_points=False``) of ``face`` along ``edge``'s p-curve, where the normal is defined.
+
+    Without uv points and from :data:`VECTOR_SAMPLES` samples on, the face and the p-curve are
+    evaluated many points at a time (the same points and normals to round-off: 1e-15 of the model
+    in tests/bridge/test_refill_traces.py); else by OCC's ``D1`` per point."""
     s = BRep_Tool.Surface_s(face)
     pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
     sign = -1.0 if face.Orientation() == TopAbs_REVERSED else 1.0
     m = len(ts)
-    P, DU, DV = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
     uvs: list[Any] = []
-    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
-    for k, t in enumerate(ts):  # OCC's D1 per point; the arithmetic below is vectorised
-        uv = pc.Value(float(t))
-        s.D1(uv.X(), uv.Y(), p, du, dv)
-        P[k], DU[k], DV[k] = p.Coord(), du.Coord(), dv.Coord()
-        uvs.append(uv)
+    fast = None if uv_points or m < VECTOR_SAMPLES else _d1_vectorised(s, pc, edge, face, np.asarray(ts, float))
+    if fast is not None:
+        uv, P, DU, DV = fast
+    else:
+        uv = np.empty((m, 2))
+        P, DU, DV = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
+        p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
+        for k, t in enumerate(ts):  # OCC's D1 per point; the arithmetic below is vectorised
+            q = pc.Value(float(t))
+            s.D1(q.X(), q.Y(), p, du, dv)
+            P[k], DU[k], DV[k] = p.Coord(), du.Coord(), dv.Coord()
+            uv[k] = q.X(), q.Y()
+            if uv_points:
+                uvs.append(q)
     nrm = np.cross(DU, DV)
     floor = tolerances.FILL_EDGE_NORMAL_DEGENERATE * np.maximum(
         np.linalg.norm(DU, axis=1) * np.linalg.norm(DV, axis=1), 1e-300)
     for j in np.flatnonzero((np.linalg.norm(nrm, axis=1) <= floor) | ~np.all(np.isfinite(nrm), axis=1)):
         # a degenerate point (a pole of the surface): the normal by its limit, where OCC defines one
-        pr = GeomLProp_SLProps(s, uvs[j].X(), uvs[j].Y(), 1, tolerances.FILL_EDGE_NORMAL_RESOLUTION)
+        pr = GeomLProp_SLProps(s, float(uv[j, 0]), float(uv[j, 1]), 1, tolerances.FILL_EDGE_NORMAL_RESOLUTION)
         nrm[j] = np.array(pr.Normal().Coord()) if pr.IsNormalDefined() else np.full(3, np.nan)
     N = nrm * sign
     good = np.all(np.isfinite(N), axis=1) & (np.linalg.norm(N, axis=1) > 0)
     if good.sum() < int(tolerances.FILL_EDGE_MIN_NORMALS):
         raise InvalidGeometryError("the neighbour's normal is undefined along a hole edge")
-    return P[good], N[good] / np.linalg.norm(N[good], axis=1, keepdims=True), [u for u, g in zip(uvs, good) if g]
+    return P[good], N[good] / np.linalg.norm(N[good], axis=1, keepdims=True), \
+        [u for u, g in zip(uvs, good, strict=True) if g] if uv_points else []
 
 
 def joint_angle(edge: Any, f1: Any, f2: Any) -> float:

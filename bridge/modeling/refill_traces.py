@@ -93,7 +93,7 @@ def trace(edge: Any, nb: Any, curve: Any, samples: int | None = None) -> tuple[n
     (:func:`_fit_points`), :func:`follow_traces` asks for more."""
     k = min(max(FIT_SAMPLES, TRACE_SAMPLES_PER_POLE * len(curve.control_points)), TRACE_MAX_SAMPLES) \
         if samples is None else int(samples)
-    P, _, _ = normals_on(edge, nb, edge_params(edge, nb, k))
+    P, _, _ = normals_on(edge, nb, edge_params(edge, nb, k), uv_points=False)
     s, d = closest_parameters(curve, P)
     return P, unwrap_seam(curve, s, [len(P)]), d
 

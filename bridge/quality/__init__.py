@@ -12,8 +12,6 @@ models and validated against OCC's own checks.
 * :mod:`._engine` — the measures (G0, G1, cross curvature and its derivative, OCC's curvature gap)
   and the engine that evaluates them for every edge of a model at once.
 * :mod:`._batch` — all faces and p-curves of a model evaluated in one vectorised pass.
-* :mod:`._evaluators` — vectorised evaluation of faces and p-curves in OCC's parametrisation (our
-  B-splines, closed forms for elementary surfaces, OCC point by point for the rest).
 * :mod:`._pairs` — which faces meet along which edge (topology, seams, geometric matching).
 * :mod:`.check_files` — the per-file work of ``occsurf check``: the files its arguments name, the
   worker's job (read, assess, draw), re-runs without the piece that crashed the worker, the pages and JSON.

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from occsurf.algorithms.kernel.basis import basis_derivatives
 from occsurf.algorithms.kernel.rational import curve_quotient_rule, surface_quotient_rule
 
-from ._evaluators import PCurveEvaluator, SurfaceEvaluator
+from ..conversion.occ_evaluators import PCurveEvaluator, SurfaceEvaluator
 
 Array = NDArray[np.float64]
 Index = NDArray[np.intp]

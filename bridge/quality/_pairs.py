@@ -26,8 +26,8 @@ from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
+from ..conversion.occ_evaluators import PCurveEvaluator, SurfaceEvaluator, pcurve_evaluator, surface_evaluator
 from ..messages import one_line
-from ._evaluators import PCurveEvaluator, SurfaceEvaluator, pcurve_evaluator, surface_evaluator
 
 if TYPE_CHECKING:
     from ._batch import CurveBatch, SurfaceBatch

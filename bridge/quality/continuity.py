@@ -12,8 +12,8 @@ is the foot of side 1's point on that edge, so ``g0`` is the distance between th
 
 Speed: all faces and p-curves of the model are evaluated together (:mod:`._batch`: B-spline faces
 stacked by degree, or numba's compiled per-surface kernel when available; elementary surfaces in
-closed form, :mod:`._evaluators`), so the per-point cost is that of NumPy arithmetic, not of a
-Python call per point. ``benchmarks/bench_continuity.py`` compares it with
+closed form, :mod:`~occsurf.bridge.conversion.occ_evaluators`), so the per-point cost is that of
+NumPy arithmetic, not of a Python call per point. ``benchmarks/bench_continuity.py`` compares it with
 ``LocalAnalysis_SurfaceContinuity`` on the same points.
 
 Measures at a point of the edge (``P_k``, oriented unit normal ``n_k`` of face ``k``; ``T`` the

@@ -221,7 +221,7 @@ def test_degenerate_edges_and_seams_of_a_sphere() -> None:
 def test_a_face_that_cannot_be_evaluated_spares_the_others(monkeypatch) -> None:
     import cadquery as cq
 
-    from occsurf.bridge.quality import _evaluators
+    from occsurf.bridge.conversion import occ_evaluators as _evaluators
 
     box = cq.Workplane().box(10, 8, 6).edges("|Z").fillet(2.0).val().wrapped
     real = _evaluators._analytic_fn

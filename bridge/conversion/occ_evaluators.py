@@ -1,6 +1,7 @@
 """Vectorised evaluation of OCC faces and p-curves in OCC's own parametrisation.
 
-The continuity check evaluates both faces of an edge at the ``(u, v)`` that the edge's p-curves
+Shared by the quality rooms (the continuity check) and the modeling rooms (the refill's traces of a
+hole's neighbours). The continuity check evaluates both faces of an edge at the ``(u, v)`` that the edge's p-curves
 give, so every evaluator here must use exactly OCC's parameters (not those of a conversion that
 re-parametrises). Three kinds, chosen per face by :func:`surface_evaluator`:
 
@@ -46,7 +47,7 @@ from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec, gp_Vec2d
 from occsurf.algorithms import BSplineCurve, BSplineSurface
 
 from .. import _occ
-from ..conversion.splines import from_occ
+from .splines import from_occ
 
 Array = NDArray[np.float64]
 
