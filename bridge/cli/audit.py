@@ -131,6 +131,9 @@ def run(ns: argparse.Namespace) -> int:
         error(f"interrupted; what finished is in {ns.out} (rerun with --resume to finish the rest)")
         return signals.exit_status
     except (CorpusError, StoreError, ClusterError, AuditInputError) as err:
+        if signals.signum is not None:  # the interrupt, seen by the cluster's start-up or the store as their error
+            error(f"interrupted; what finished is in {ns.out} (rerun with --resume to finish the rest)")
+            return signals.exit_status
         error(" ".join(str(err).split()))
         return EXIT_ERROR
     except Exception as err:  # noqa: BLE001 - a defect of ours: still one line, never a traceback

@@ -381,7 +381,8 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
         at once, so a face that crashes OCC's mesher can be named and skipped.
     free_meshes : bool
         Free OCC's triangulation of each face once its mesh is copied into the report (the faces'
-        fields hold what the rest needs): for a model nothing else will draw, as
+        fields hold what the rest needs; the placed copies of one part share it: freed after the
+        last of them): for a model nothing else will draw, as
         :func:`~occsurf.bridge.quality.check_files.check_file`'s own (on bench_check's 1089-face
         plate OCC's triangulation is ~150 MB). A caller's shape is left meshed by default.
 
@@ -417,6 +418,9 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     size = _mesh(model, [f for f in todo if f.index not in skip], mesh_each, note)
     # the edges' tolerances are relative to OCC's box of the meshed shape: taken before any mesh is freed
     edge_size = shape_size(model.shape) if free_meshes else None
+    # a face's triangulation belongs to its TShape, which the placed copies of a part share: freed
+    # after the last face that uses it
+    uses, shared = (_shared_meshes([f for f in todo if f.index not in skip]) if free_meshes else ({}, {}))
     seconds = {"mesh": time.perf_counter() - t0}
     rows: list[FaceQuality] = []
     fields: dict[int, FaceField] = {}
@@ -429,7 +433,9 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
             note(f"face {face.index}")
             row, fld = _check_face(face, lambda f: tessellation.mesh_face(f, size), samples, size, flags)
             if free_meshes:
-                BRepTools.Clean_s(face.face)
+                uses[shared[face.index]] -= 1
+                if uses[shared[face.index]] == 0:
+                    BRepTools.Clean_s(face.face)
         rows.append(row)
         if fld is not None:
             fields[face.index] = fld
@@ -455,6 +461,23 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
     seconds["total"] = time.perf_counter() - t0
     report.seconds = seconds
     return report
+
+
+def _shared_meshes(faces: Sequence[ImportedFace]) -> tuple[dict[int, int], dict[int, int]]:
+    """``(uses, key)``: per face index the key of its TShape (faces that differ only by their
+    location or orientation, the placed copies of one part, share a key and OCC's triangulation),
+    and per key how many of ``faces`` use it."""
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    seen = TopTools_IndexedMapOfShape()
+    key: dict[int, int] = {}
+    uses: dict[int, int] = {}
+    for f in faces:
+        k = int(seen.Add(f.face.Located(TopLoc_Location())))  # the map compares shapes by IsSame
+        key[f.index] = k
+        uses[k] = uses.get(k, 0) + 1
+    return uses, key
 
 
 def _mesh(model: ImportedModel, faces: Sequence[ImportedFace], each: bool, note: Callable[[str], None]) -> float:

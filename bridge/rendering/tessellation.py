@@ -122,12 +122,13 @@ def mesh_model(model: ImportedModel, *, linear: float | None = None, angular: fl
 
 def _mesh_parameters(linear: float, angular: float, delabella: bool) -> Any:
     """``BRepMesh_IncrementalMesh``'s parameters: those its ``(shape, linear, False, angular, False)``
-    constructor sets, with Delabella's triangulation instead of Watson's where asked."""
-    from OCP.IMeshTools import IMeshTools_MeshAlgoType_Delabella, IMeshTools_MeshAlgoType_Watson, IMeshTools_Parameters
+    constructor sets (the default algorithm: Watson's, unless OCC's ``CSF_MeshAlgo`` says otherwise),
+    with Delabella's triangulation instead where asked."""
+    from OCP.IMeshTools import IMeshTools_MeshAlgoType_DEFAULT, IMeshTools_MeshAlgoType_Delabella, IMeshTools_Parameters
 
     p = IMeshTools_Parameters()
     p.Deflection, p.Angle, p.Relative, p.InParallel = float(linear), float(angular), False, False
-    p.MeshAlgo = IMeshTools_MeshAlgoType_Delabella if delabella else IMeshTools_MeshAlgoType_Watson
+    p.MeshAlgo = IMeshTools_MeshAlgoType_Delabella if delabella else IMeshTools_MeshAlgoType_DEFAULT
     return p
 
 
@@ -149,10 +150,10 @@ def mesh_shape(shape: Any, linear: float, angular: float) -> None:
     0.4 s and 12 MB for the same nodes (a plane's nodes are its edges' and the interior nodes the
     mesher adds; only the triangles joining them differ). Meshing the curved faces together and the
     planes apart leaves the curved faces' triangles and every face's nodes exactly as one call on the
-    whole shape makes them (every
-    face of the four realdata models, the samples and the 1089-face plate of
-    ``benchmarks/bench_check.py``: tests/bridge/test_tessellation.py). A plane Delabella leaves
-    without a triangulation is meshed by Watson.
+    whole shape makes them: measured on every face of the samples, the four realdata models and the
+    1089-face plate of ``benchmarks/bench_check.py``; tested (tests/bridge/test_tessellation.py) on
+    the samples and realdata models with planes and a plate with 9 holes. A plane Delabella leaves
+    without a triangulation is meshed by the default algorithm.
     """
     from OCP.BRep import BRep_Builder, BRep_Tool
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
@@ -192,7 +193,7 @@ def mesh_one_face(face: Any, linear: float, angular: float) -> None:
     plane = is_plane(face)
     BRepMesh_IncrementalMesh(face, _mesh_parameters(linear, angular, plane))
     if plane and BRep_Tool.Triangulation_s(face, TopLoc_Location()) is None:
-        BRepMesh_IncrementalMesh(face, _mesh_parameters(linear, angular, False))
+        BRepMesh_IncrementalMesh(face, _mesh_parameters(linear, angular, False))  # the default algorithm
 
 
 def _occ_triangulation(occ_face: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:

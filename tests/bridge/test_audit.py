@@ -302,12 +302,15 @@ def test_sigterm_handled_inside_a_string_exec_still_exits_143(tmp_path: Path) ->
     assert "occsurf: interrupted; what finished is in" in proc.stderr and "Traceback" not in proc.stderr
 
 
-def test_an_interrupt_a_library_turned_into_another_error_still_exits_143(tmp_path: Path) -> None:
+@pytest.mark.parametrize("turned_into", ["RuntimeError('the store could not be made')",
+                                         "PermissionError(13, 'Permission denied')"])
+def test_an_interrupt_a_library_turned_into_another_error_still_exits_143(tmp_path: Path, turned_into: str) -> None:
     """A SIGTERM whose ``KeyboardInterrupt`` a library caught and turned into an error of its own
-    (here: where the store creates RESULTS/files) is still the interrupt: one line saying so and
-    143, not "audit failed" and 2 (an exit 2 then went through the interpreter's finalization, where
-    a Dask thread aborted the process: -6 in CI's ``test_signals_at_random_moments_end_the_run_promptly``
-    on 12-06)."""
+    (here: where the store creates RESULTS/files; an OSError there is the store's ``StoreError``, as
+    the cluster's start-up makes any error its ``ClusterError``) is still the interrupt: one line
+    saying so and 143, not "audit failed" / "cannot write there" and 2 (an exit 2 then went through
+    the interpreter's finalization, where a Dask thread aborted the process: -6 in CI's
+    ``test_signals_at_random_moments_end_the_run_promptly`` on 12-06)."""
     hook = tmp_path / "wrap_hook"
     hook.mkdir()
     out = tmp_path / "results"
@@ -320,7 +323,7 @@ def test_an_interrupt_a_library_turned_into_another_error_still_exits_143(tmp_pa
         "                os.kill(os.getpid(), signal.SIGTERM)\n"
         "                for _ in range(10**6): pass\n"
         "            except KeyboardInterrupt:\n"
-        "                raise RuntimeError('the store could not be made') from None\n"
+        f"                raise {turned_into} from None\n"
         "    sys.addaudithook(_term)\n")
     env = hook_env(tmp_path)
     env["PYTHONPATH"] = os.pathsep.join((str(hook), env["PYTHONPATH"]))
@@ -329,7 +332,7 @@ def test_an_interrupt_a_library_turned_into_another_error_still_exits_143(tmp_pa
     proc = run_cli("audit", str(corpus_dir), "--out", str(out), "--workers", "1", env=env, timeout=120)
     assert proc.returncode == 143, (proc.returncode, proc.stderr)
     assert "occsurf: interrupted; what finished is in" in proc.stderr, proc.stderr
-    assert "audit failed" not in proc.stderr and "Traceback" not in proc.stderr
+    assert "audit failed" not in proc.stderr and "cannot write" not in proc.stderr and "Traceback" not in proc.stderr
 
 
 def test_cli_imports_no_dask_numpy_or_occ_at_module_level() -> None:

@@ -91,7 +91,7 @@ def test_planes_by_delabella_leave_every_node_and_curved_triangle_as_watson_make
             else:
                 n_curved += 1
                 assert np.array_equal(T, U), (path.name, k)
-    assert n_planes >= 20 and n_curved >= 80
+    assert n_planes >= 16 and n_curved >= 50  # the samples and the plate alone: 16 and 58
 
 
 def test_a_plane_with_many_holes_is_meshed_by_delabella(tmp_path, monkeypatch) -> None:
@@ -152,3 +152,25 @@ def test_free_meshes_frees_occ_triangulation_and_changes_nothing_reported() -> N
         assert np.array_equal(fa.mesh.points, fb.mesh.points) and np.array_equal(fa.mesh.triangles, fb.mesh.triangles)
         for name, v in fa.values.items():
             assert np.array_equal(v, fb.values[name], equal_nan=True), (k, name)
+
+
+def test_free_meshes_keeps_the_mesh_that_placed_copies_of_a_part_share() -> None:
+    """Two placed copies of one box (a compound sharing the box's faces, moved): their faces share
+    OCC's triangulation, so freeing it after the first copy's faces would leave the second copy's
+    without one (drawn as the untrimmed parameter box, with a note). ``free_meshes`` frees it after
+    the last face that uses it: the report is the default's."""
+    import build123d as bd
+
+    from occsurf.bridge.quality.report import check_model
+
+    box = bd.Box(10, 6, 4)
+    two = bd.Compound([box, box.moved(bd.Location((20, 0, 0)))])
+    a, b = check_model(two), check_model(two, free_meshes=True)
+    assert len(a.fields) == 12
+    ja, jb = a.to_json(), b.to_json()
+    ja.pop("seconds"), jb.pop("seconds")
+    assert ja == jb
+    for k, fa in a.fields.items():
+        fb = b.fields[k]
+        assert fb.mesh.source == "brepmesh" and not fb.mesh.notes, (k, fb.mesh.notes)
+        assert np.array_equal(fa.mesh.points, fb.mesh.points) and np.array_equal(fa.mesh.triangles, fb.mesh.triangles)
