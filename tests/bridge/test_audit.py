@@ -9,6 +9,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -276,6 +277,26 @@ def test_cli_bad_input_is_one_line_exit_2(tmp_path: Path) -> None:
     assert not (tmp_path / "o4").exists()
 
 
+def _audit_signalled_where_the_store_is_made(tmp_path: Path, *body: str) -> subprocess.CompletedProcess[str]:
+    """``occsurf audit`` of the good STEP files with ``body`` (lines of Python; ``os``, ``signal`` imported)
+    run in its main thread, from an audit hook, as the store creates RESULTS/files."""
+    hook = tmp_path / "signal_hook"  # hook_env's own folder is tmp_path / "hook"
+    hook.mkdir()
+    out = tmp_path / "results"
+    (hook / "sitecustomize.py").write_text(
+        "import os, sys, signal\n"
+        "if 'audit' in sys.argv or 'audit' in getattr(sys, 'orig_argv', []):\n"
+        "    def _term(event, args):\n"
+        f"        if event == 'os.mkdir' and str(args[0]) == {str(out / 'files')!r}:\n"
+        + "".join(f"            {line}\n" for line in body) +
+        "    sys.addaudithook(_term)\n")
+    env = hook_env(tmp_path)
+    env["PYTHONPATH"] = os.pathsep.join((str(hook), env["PYTHONPATH"]))
+    corpus_dir = tmp_path / "corpus"
+    good_files(corpus_dir, iges=False)
+    return run_cli("audit", str(corpus_dir), "--out", str(out), "--workers", "1", env=env, timeout=120)
+
+
 def test_sigterm_handled_inside_a_string_exec_still_exits_143(tmp_path: Path) -> None:
     """The CI flake of ``test_signals_at_random_moments_end_the_run_promptly`` (-2 instead of 143 under
     SIGTERM): CPython remembers a ``KeyboardInterrupt`` that ended a string ``exec``/``eval`` (the
@@ -283,21 +304,8 @@ def test_sigterm_handled_inside_a_string_exec_still_exits_143(tmp_path: Path) ->
     caught, and under ``python -m`` then kills the process with SIGINT whatever status it returned.
     Here the SIGTERM is handled, deterministically, inside such an exec in the command's main thread
     (when it creates RESULTS/files): the run must still say so and end with 143."""
-    hook = tmp_path / "term_hook"  # hook_env's own folder is tmp_path / "hook"
-    hook.mkdir()
-    out = tmp_path / "results"
-    (hook / "sitecustomize.py").write_text(
-        "import os, sys\n"
-        "if 'audit' in sys.argv or 'audit' in getattr(sys, 'orig_argv', []):\n"
-        "    def _term(event, args):\n"
-        f"        if event == 'os.mkdir' and str(args[0]) == {str(out / 'files')!r}:\n"
-        "            exec('import os, signal\\nos.kill(os.getpid(), signal.SIGTERM)\\nfor _ in range(100): pass')\n"
-        "    sys.addaudithook(_term)\n")
-    env = hook_env(tmp_path)
-    env["PYTHONPATH"] = os.pathsep.join((str(hook), env["PYTHONPATH"]))
-    corpus_dir = tmp_path / "corpus"
-    good_files(corpus_dir, iges=False)
-    proc = run_cli("audit", str(corpus_dir), "--out", str(out), "--workers", "1", env=env, timeout=120)
+    proc = _audit_signalled_where_the_store_is_made(
+        tmp_path, "exec('import os, signal\\nos.kill(os.getpid(), signal.SIGTERM)\\nfor _ in range(100): pass')")
     assert proc.returncode == 143, (proc.returncode, proc.stderr)
     assert "occsurf: interrupted; what finished is in" in proc.stderr and "Traceback" not in proc.stderr
 
@@ -311,25 +319,9 @@ def test_an_interrupt_a_library_turned_into_another_error_still_exits_143(tmp_pa
     saying so and 143, not "audit failed" / "cannot write there" and 2 (an exit 2 then went through
     the interpreter's finalization, where a Dask thread aborted the process: -6 in CI's
     ``test_signals_at_random_moments_end_the_run_promptly`` on 12-06)."""
-    hook = tmp_path / "wrap_hook"
-    hook.mkdir()
-    out = tmp_path / "results"
-    (hook / "sitecustomize.py").write_text(
-        "import os, sys, signal\n"
-        "if 'audit' in sys.argv or 'audit' in getattr(sys, 'orig_argv', []):\n"
-        "    def _term(event, args):\n"
-        f"        if event == 'os.mkdir' and str(args[0]) == {str(out / 'files')!r}:\n"
-        "            try:\n"
-        "                os.kill(os.getpid(), signal.SIGTERM)\n"
-        "                for _ in range(10**6): pass\n"
-        "            except KeyboardInterrupt:\n"
-        f"                raise {turned_into} from None\n"
-        "    sys.addaudithook(_term)\n")
-    env = hook_env(tmp_path)
-    env["PYTHONPATH"] = os.pathsep.join((str(hook), env["PYTHONPATH"]))
-    corpus_dir = tmp_path / "corpus"
-    good_files(corpus_dir, iges=False)
-    proc = run_cli("audit", str(corpus_dir), "--out", str(out), "--workers", "1", env=env, timeout=120)
+    proc = _audit_signalled_where_the_store_is_made(
+        tmp_path, "try:", "    os.kill(os.getpid(), signal.SIGTERM)", "    for _ in range(10**6): pass",
+        "except KeyboardInterrupt:", f"    raise {turned_into} from None")
     assert proc.returncode == 143, (proc.returncode, proc.stderr)
     assert "occsurf: interrupted; what finished is in" in proc.stderr, proc.stderr
     assert "audit failed" not in proc.stderr and "cannot write" not in proc.stderr and "Traceback" not in proc.stderr
