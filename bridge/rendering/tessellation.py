@@ -155,45 +155,42 @@ def mesh_shape(shape: Any, linear: float, angular: float) -> None:
     the samples and realdata models with planes and a plate with 9 holes. A plane Delabella leaves
     without a triangulation is meshed by the default algorithm.
     """
-    from OCP.BRep import BRep_Builder, BRep_Tool
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
-    from OCP.TopAbs import TopAbs_FACE
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopLoc import TopLoc_Location
-    from OCP.TopoDS import TopoDS, TopoDS_Compound
 
-    planes: list[Any] = []
-    curved: list[Any] = []
-    explorer = TopExp_Explorer(shape, TopAbs_FACE)
-    while explorer.More():
-        face = TopoDS.Face_s(explorer.Current())
-        (planes if is_plane(face) else curved).append(face)
-        explorer.Next()
-    if not planes:
+    from ..conversion.shapes import as_faces, compound
+
+    faces = as_faces(shape)
+    plane = [is_plane(face) for face in faces]
+    if not any(plane):
         BRepMesh_IncrementalMesh(shape, _mesh_parameters(linear, angular, False))
         return
-    for faces, delabella in ((curved, False), (planes, True)):
-        if faces:
-            group, builder = TopoDS_Compound(), BRep_Builder()
-            builder.MakeCompound(group)
-            for face in faces:
-                builder.Add(group, face)
-            BRepMesh_IncrementalMesh(group, _mesh_parameters(linear, angular, delabella))
-    for face in planes:
-        if BRep_Tool.Triangulation_s(face, TopLoc_Location()) is None:
-            BRepMesh_IncrementalMesh(face, _mesh_parameters(linear, angular, False))
+    for delabella in (False, True):
+        group = [face for face, p in zip(faces, plane, strict=True) if p == delabella]
+        if group:
+            BRepMesh_IncrementalMesh(compound(group), _mesh_parameters(linear, angular, delabella))
+            if delabella:
+                for face in group:
+                    _default_if_unmeshed(face, linear, angular)
 
 
 def mesh_one_face(face: Any, linear: float, angular: float) -> None:
     """Triangulate one face in place as :func:`mesh_shape` would (Delabella on a plane)."""
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+
+    plane = is_plane(face)
+    BRepMesh_IncrementalMesh(face, _mesh_parameters(linear, angular, plane))
+    if plane:
+        _default_if_unmeshed(face, linear, angular)
+
+
+def _default_if_unmeshed(face: Any, linear: float, angular: float) -> None:
+    """Mesh ``face`` with the default algorithm where Delabella's left it without a triangulation."""
     from OCP.BRep import BRep_Tool
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
     from OCP.TopLoc import TopLoc_Location
 
-    plane = is_plane(face)
-    BRepMesh_IncrementalMesh(face, _mesh_parameters(linear, angular, plane))
-    if plane and BRep_Tool.Triangulation_s(face, TopLoc_Location()) is None:
-        BRepMesh_IncrementalMesh(face, _mesh_parameters(linear, angular, False))  # the default algorithm
+    if BRep_Tool.Triangulation_s(face, TopLoc_Location()) is None:
+        BRepMesh_IncrementalMesh(face, _mesh_parameters(linear, angular, False))
 
 
 def _occ_triangulation(occ_face: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
