@@ -118,29 +118,25 @@ def run(ns: argparse.Namespace) -> int:
         print(f"audit: Dask dashboard at {link}", file=sys.stderr, flush=True)
 
     signals = _Interrupts()
-    try:
-        with signals.installed():
-            try:
-                result = audit(ns.paths, ns.out, scheduler=ns.scheduler, workers=ns.workers, timeout=ns.timeout,
-                               resume=ns.resume, checks=ns.checks, samples=ns.samples, on_dashboard=dashboard,
-                               stop=signals.stop)
-            except KeyboardInterrupt:  # outside the loop over files (hashing, cluster start-up, the summary)
-                error(f"interrupted; what finished is in {ns.out} (rerun with --resume to finish the rest)")
-                return signals.exit_status
-    except KeyboardInterrupt:  # our handler's, as it was being installed or restored (a SIGTERM is 143 here too)
+
+    def interrupted() -> int:
         error(f"interrupted; what finished is in {ns.out} (rerun with --resume to finish the rest)")
         return signals.exit_status
-    except (CorpusError, StoreError, ClusterError, AuditInputError) as err:
-        if signals.signum is not None:  # the interrupt, seen by the cluster's start-up or the store as their error
-            error(f"interrupted; what finished is in {ns.out} (rerun with --resume to finish the rest)")
-            return signals.exit_status
-        error(" ".join(str(err).split()))
-        return EXIT_ERROR
-    except Exception as err:  # noqa: BLE001 - a defect of ours: still one line, never a traceback
-        if signals.signum is not None:  # the interrupt, turned into another exception by a library it went through
-            error(f"interrupted; what finished is in {ns.out} (rerun with --resume to finish the rest)")
-            return signals.exit_status
-        error(f"audit failed: {error_line(err)} (results written so far are in {ns.out}; --resume continues)")
+
+    try:
+        with signals.installed():
+            result = audit(ns.paths, ns.out, scheduler=ns.scheduler, workers=ns.workers, timeout=ns.timeout,
+                           resume=ns.resume, checks=ns.checks, samples=ns.samples, on_dashboard=dashboard,
+                           stop=signals.stop)
+    except KeyboardInterrupt:  # outside the loop over files (hashing, cluster start-up, the summary), or as our
+        return interrupted()  # handler was being installed or restored (a SIGTERM is 143 here too)
+    except Exception as err:  # noqa: BLE001 - whatever it is: one line, never a traceback
+        if signals.signum is not None:  # the interrupt, made an error of its own by what it went through
+            return interrupted()  # (the cluster's start-up, the store, a library)
+        if isinstance(err, (CorpusError, StoreError, ClusterError, AuditInputError)):
+            error(" ".join(str(err).split()))
+        else:  # a defect of ours
+            error(f"audit failed: {error_line(err)} (results written so far are in {ns.out}; --resume continues)")
         return EXIT_ERROR
     c = result.counts
     if result.interrupted or signals.signum is not None:
