@@ -13,9 +13,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError, ParameterError
 from .curve import BSplineCurve
+from .degree import elevate_poles
+from .knots import check_rescaled, clamp_poles, merge_knots, most_repeated, refine_poles, rescale_knots, snap_knots
+from .rational import from_homogeneous, to_homogeneous
 
 __all__ = ["make_compatible", "common_knots", "missing_knots"]
 
@@ -40,7 +44,7 @@ def _clusters(values: np.ndarray, eps: float) -> tuple[np.ndarray, np.ndarray]:
     """Sorted representatives of ``values`` merged within ``eps``, and each value's cluster index."""
     order = np.argsort(values, kind="stable")
     v = values[order]
-    new = np.concatenate(([True], np.diff(v) > eps))
+    new = np.concatenate(([True], v[1:] - v[:-1] > eps))  # np.diff's values without its wrapper
     label_sorted = np.cumsum(new) - 1
     labels = np.empty_like(label_sorted)
     labels[order] = label_sorted
@@ -69,9 +73,26 @@ def common_knots(knot_vectors: Sequence[np.ndarray], tol: float | None = None) -
     span = float(allk.max() - allk.min()) or 1.0
     reps, labels = _clusters(allk, eps * span)
     owner = np.repeat(np.arange(len(vecs)), [k.size for k in vecs])
-    counts = np.zeros((len(vecs), reps.size), dtype=np.intp)
-    np.add.at(counts, (owner, labels), 1)
+    # each input's count per cluster (np.add.at's counts, by one bincount of the (input, cluster) pairs)
+    counts = np.bincount(owner * reps.size + labels, minlength=len(vecs) * reps.size).reshape(len(vecs), reps.size)
     return np.repeat(reps, counts.max(axis=0))
+
+
+def _target(target: np.ndarray, tol: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """The clusters of a target knot vector (:func:`missing_knots`): representatives and counts."""
+    eps = tolerances.KNOT_EQUALITY if tol is None else float(tol)
+    T = np.asarray(target, float)
+    reps, labels = _clusters(T, eps * (float(T[-1] - T[0]) or 1.0))
+    return reps, np.bincount(labels, minlength=reps.size)
+
+
+def _missing(knots: np.ndarray, reps: np.ndarray, want: np.ndarray) -> np.ndarray:
+    """:func:`missing_knots` given the target's clusters (:func:`_target`)."""
+    K = np.asarray(knots, float)
+    idx = np.minimum(np.searchsorted(reps, K), reps.size - 1)  # searchsorted is never negative
+    near = np.where((idx > 0) & (np.abs(reps[idx - 1] - K) < np.abs(reps[idx] - K)), idx - 1, idx)
+    have = np.bincount(near, minlength=reps.size)
+    return np.repeat(reps, np.maximum(want - have, 0))
 
 
 def missing_knots(knots: np.ndarray, target: np.ndarray, tol: float | None = None) -> np.ndarray:
@@ -85,15 +106,66 @@ def missing_knots(knots: np.ndarray, target: np.ndarray, tol: float | None = Non
     ndarray, shape (k,)
         Sorted, with repeats; empty when ``knots`` already holds all of ``target``.
     """
-    eps = tolerances.KNOT_EQUALITY if tol is None else float(tol)
-    T = np.asarray(target, float)
-    K = np.asarray(knots, float)
-    reps, labels = _clusters(T, eps * (float(T[-1] - T[0]) or 1.0))
-    want = np.bincount(labels, minlength=reps.size)
-    idx = np.minimum(np.searchsorted(reps, K), reps.size - 1)  # searchsorted is never negative
-    near = np.where((idx > 0) & (np.abs(reps[idx - 1] - K) < np.abs(reps[idx] - K)), idx - 1, idx)
-    have = np.bincount(near, minlength=reps.size)
-    return np.repeat(reps, np.maximum(want - have, 0))
+    return _missing(knots, *_target(target, tol))
+
+
+class _Work:
+    """A curve on its way through :func:`make_compatible`, as arrays: degree, knots, Cartesian poles,
+    weights and the homogeneous poles the kernels take. Each step stores its result exactly as the
+    :class:`BSplineCurve` that the curve's own method returns would hold it (homogeneous poles split
+    into poles and weights and multiplied back), so the poles are those of the method calls, bit for
+    bit, without a curve object per step."""
+
+    __slots__ = ("degree", "knots", "P", "w", "H")
+
+    def __init__(self, c: BSplineCurve) -> None:
+        self.degree, self.knots, self.P, self.w, self.H = c.degree, c.knots, c.control_points, c.weights, c._hpoles
+
+    def _poles(self, knots: np.ndarray, H: np.ndarray) -> None:
+        """As ``BSplineCurve._from_homogeneous(degree, knots, H, rational)`` stores them."""
+        self.knots = knots
+        if self.w is None:
+            self.P = self.H = H
+        else:
+            self.P, self.w = from_homogeneous(H)
+            self.H = to_homogeneous(self.P, self.w)
+
+    def clamp(self) -> None:
+        """:meth:`BSplineCurve.clamp`."""
+        t, H = clamp_poles(self.knots, self.degree, self.H)
+        if t is not self.knots:
+            self._poles(t, H)
+
+    def domain(self) -> tuple[float, float]:
+        return float(self.knots[self.degree]), float(self.knots[self.P.shape[0]])
+
+    def reparametrize(self, lo: float, hi: float) -> None:
+        """:meth:`BSplineCurve.reparametrize` (the poles stay as they are)."""
+        self.knots = check_rescaled(rescale_knots(self.knots, self.domain(), (lo, hi)), self.knots, (lo, hi),
+                                    "reparametrize")
+
+    def elevate(self, times: int) -> None:
+        """:meth:`BSplineCurve.elevate_degree`."""
+        t, H = elevate_poles(self.knots, self.degree, self.H, times)
+        self.degree += times
+        self._poles(t, H)
+
+    def refine(self, x: np.ndarray) -> None:
+        """:meth:`BSplineCurve.refine` with interior values ``x`` (its checks and errors)."""
+        n = self.P.shape[0]
+        V.check_size((n + x.size, max(n, self.H.shape[-1] + 4)), f"refine with {x.size} knots")
+        lo, hi = self.domain()
+        if x.min() <= lo or x.max() >= hi:
+            bad = float(x.min() if x.min() <= lo else x.max())
+            raise ParameterError(f"knots: {bad!r} must lie strictly inside the domain ({lo!r}, {hi!r})")
+        x = snap_knots(self.knots, x)
+        tau = merge_knots(self.knots, x)
+        excess = most_repeated(tau, self.degree + 1)
+        if excess is not None:
+            raise InvalidGeometryError(
+                f"knots: knot {excess[0]!r} would get multiplicity {excess[1]}, above degree + 1 = {self.degree + 1}"
+            )
+        self._poles(tau, refine_poles(self.knots, self.degree, self.H, tau))
 
 
 def make_compatible(
@@ -144,23 +216,27 @@ def make_compatible(
             raise ParameterError(f"domain: expected finite start < end, got {domain!r}")
     p = max(c.degree for c in items)
     rational = any(c.is_rational for c in items)
+    # the steps of c.clamp(), c.reparametrize(lo, hi), c.elevate_degree(k) and c.refine(missing) on
+    # arrays (_Work): the same poles, bit for bit, without the five intermediate curves and their checks
     work = []
     for c in items:
-        c = c.clamp()
-        if c.domain != (lo, hi):
-            c = c.reparametrize(lo, hi)
-        if c.degree < p:
-            c = c.elevate_degree(p - c.degree)
-        work.append(c)
-    T = common_knots([c.knots for c in work])
+        wk = _Work(c)
+        wk.clamp()
+        if wk.domain() != (lo, hi):
+            wk.reparametrize(lo, hi)
+        if wk.degree < p:
+            wk.elevate(p - wk.degree)
+        work.append(wk)
+    T = common_knots([wk.knots for wk in work])
     T[: p + 1] = lo
     T[-(p + 1):] = hi
+    reps, want = _target(T, None)  # the target's clusters, once for every curve
     out = []
-    for c in work:
-        missing = missing_knots(c.knots, T)
+    for wk in work:
+        missing = _missing(wk.knots, reps, want)
         if missing.size:
-            c = c.refine(missing)
-        w = c.weights if c.weights is not None else (np.ones(c.n_poles) if rational else None)
-        # c.knots equals T up to the knot-equality tolerance; use T itself so the vectors are identical
-        out.append(BSplineCurve._trusted(p, T.copy(), c.control_points, w))
+            wk.refine(missing)
+        w = wk.w if wk.w is not None else (np.ones(wk.P.shape[0]) if rational else None)
+        # wk.knots equals T up to the knot-equality tolerance; use T itself so the vectors are identical
+        out.append(BSplineCurve._trusted(p, T.copy(), wk.P, w))
     return out

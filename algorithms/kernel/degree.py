@@ -20,6 +20,8 @@ follows Seidel (1989) and the course's §2-6.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -29,6 +31,14 @@ from .knots import clamp_poles, distinct_knots, support_span
 __all__ = ["elevate_poles"]
 
 Array = NDArray[np.float64]
+
+
+@lru_cache(maxsize=32)
+def _dropped(p: int) -> NDArray[np.intp]:
+    """Row ``i``: the argument columns ``0..p`` without ``i`` (read-only, kept per degree)."""
+    drop = np.array([[c for c in range(p + 1) if c != i] for i in range(p + 1)], dtype=np.intp)
+    drop.flags.writeable = False
+    return drop
 
 
 def elevate_poles(knots: Array, degree: int, poles: Array, times: int = 1) -> tuple[Array, Array]:
@@ -53,7 +63,7 @@ def elevate_poles(knots: Array, degree: int, poles: Array, times: int = 1) -> tu
         gathered = poles[idx]  # (n2, p+1, ...)
         # The p + 1 blossoms with one argument dropped, in one call (row by row, so the same values
         # as one call per dropped argument): drop[i] lists the argument columns without i.
-        drop = np.array([[c for c in range(p + 1) if c != i] for i in range(p + 1)], dtype=np.intp)
+        drop = _dropped(p)
         A_all = blossom_basis(knots, p, np.tile(mu, p + 1), args[:, drop].transpose(1, 0, 2).reshape((p + 1) * n2, p))
         acc = np.zeros((n2,) + poles.shape[1:])
         for i in range(p + 1):

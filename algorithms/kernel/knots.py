@@ -44,9 +44,12 @@ Array = NDArray[np.float64]
 
 
 def distinct_knots(knots: Array) -> tuple[Array, NDArray[np.intp]]:
-    """Distinct knot values and multiplicities (exact equality, as OCC's ``BSplCLib::Knots``)."""
-    vals, counts = np.unique(knots, return_counts=True)
-    return vals, counts
+    """Distinct knot values and multiplicities (exact equality, as OCC's ``BSplCLib::Knots``).
+
+    ``knots`` is a knot vector (non-decreasing): the runs of equal values are found by one
+    comparison of neighbours, where ``np.unique`` sorted a copy first; the same values and counts."""
+    first = np.flatnonzero(np.r_[True, knots[1:] != knots[:-1]])
+    return knots[first], np.diff(np.r_[first, knots.shape[0]])
 
 
 def multiplicity(knots: Array, u: float) -> int:
@@ -315,7 +318,7 @@ def check_rescaled(t: Array, knots: Array, new: tuple[float, float], what: str) 
     largest double made every knot ``inf`` or ``nan``) or distinct knots merged by rounding."""
     if not (np.isfinite(new[1] - new[0]) and np.all(np.isfinite(t))):
         raise ParameterError(f"{what}: the domain {new!r} is too long for doubles (its length overflows)")
-    if np.count_nonzero(np.diff(t) > 0) != np.count_nonzero(np.diff(knots) > 0):
+    if np.count_nonzero(t[1:] > t[:-1]) != np.count_nonzero(knots[1:] > knots[:-1]):  # np.diff's > 0, unwrapped
         raise ParameterError(f"{what}: the domain {new!r} is too short to keep the distinct knots apart")
     tol = knot_tol(t)
     if new[1] - new[0] <= tol:

@@ -13,8 +13,9 @@ import pytest
 import scipy.interpolate
 from hypothesis import assume, given
 from hypothesis import strategies as st
+from numpy.testing import assert_array_equal
 
-from occsurf.algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, ParameterError, circle
+from occsurf.algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, ParameterError, circle, tolerances
 from occsurf.algorithms.fitting.interpolation import (
     approximation_knots,
     averaged_knots,
@@ -246,6 +247,66 @@ def test_make_compatible_keeps_geometry(curves):
         ub = blo + (bhi - blo) * s
         scale = max(1.0, np.abs(a.control_points).max())
         np.testing.assert_allclose(b.evaluate(ub), a.evaluate(ua), atol=1e-11 * scale)
+
+
+def _compatible_by_methods(curves):
+    """What make_compatible did before 2026-12-06, by the curves' own methods: clamp, reparametrize,
+    elevate_degree, refine (the reference its array steps must reproduce bit for bit)."""
+    from occsurf.algorithms.kernel.compat import common_knots, missing_knots
+
+    doms = np.array([c.domain for c in curves])
+    span = float(np.ptp(doms)) or 1.0
+    same = np.all(np.abs(doms - doms[0]) <= tolerances.KNOT_EQUALITY * max(span, float(np.abs(doms).max())))
+    lo, hi = (float(doms[0, 0]), float(doms[0, 1])) if same else (0.0, 1.0)
+    p = max(c.degree for c in curves)
+    rational = any(c.is_rational for c in curves)
+    work = []
+    for c in curves:
+        c = c.clamp()
+        if c.domain != (lo, hi):
+            c = c.reparametrize(lo, hi)
+        if c.degree < p:
+            c = c.elevate_degree(p - c.degree)
+        work.append(c)
+    T = common_knots([c.knots for c in work])
+    T[: p + 1], T[-(p + 1):] = lo, hi
+    out = []
+    for c in work:
+        missing = missing_knots(c.knots, T)
+        c = c.refine(missing) if missing.size else c
+        w = c.weights if c.weights is not None else (np.ones(c.n_poles) if rational else None)
+        out.append(BSplineCurve(p, T.copy(), c.control_points, w))
+    return out
+
+
+@test_settings(40)
+@given(curves=st.lists(bspline_curves(dims=st.just(3)), min_size=1, max_size=4))
+def test_make_compatible_steps_on_arrays_equal_the_curve_methods_bit_for_bit(curves):
+    """Issue 30: make_compatible runs clamp / reparametrize / elevate / refine on arrays, without a
+    curve object per step (ruled 0.47 -> 0.40 ms); its poles, weights and knots are those of the
+    method chain, bit for bit (rational steps included: each splits and re-multiplies the
+    homogeneous poles as a new curve does)."""
+    got, ref = make_compatible(curves), _compatible_by_methods(curves)
+    for a, b in zip(got, ref):
+        assert a.degree == b.degree
+        assert_array_equal(a.knots, b.knots)
+        assert_array_equal(a.control_points, b.control_points)
+        assert (a.weights is None) == (b.weights is None)
+        if a.weights is not None:
+            assert_array_equal(a.weights, b.weights)
+
+
+@test_settings(40)
+@given(c=bspline_curves())
+def test_distinct_knots_equal_numpy_unique(c):
+    """distinct_knots finds the runs of a knot vector by comparing neighbours (np.unique sorted a copy)."""
+    from occsurf.algorithms.kernel.knots import distinct_knots
+
+    vals, counts = distinct_knots(c.knots)
+    v2, c2 = np.unique(c.knots, return_counts=True)
+    assert_array_equal(vals, v2)
+    assert_array_equal(counts, c2)
+    assert counts.dtype == c2.dtype
 
 
 def test_make_compatible_errors():
