@@ -402,7 +402,7 @@ def render_model_lit(model: ImportedModel, setup: LightingSetup, **kw: Any) -> L
 
 
 def write_png(path: str | Path, image: LitImage | np.ndarray) -> Path:
-    """Write the picture as a PNG, atomically (:func:`.png.write_png_file`, zlib level 6)."""
+    """Write the picture as a PNG, atomically (:func:`.png.write_png_file`)."""
     from .png import write_png_file
 
     return write_png_file(path, image.rgb if isinstance(image, LitImage) else np.asarray(image))

@@ -129,3 +129,55 @@ def test_model_picture_of_merged_meshes_equals_one_mesh_per_face(tmp_path: Path,
     d = np.abs(pics["merged"] - pics["each"]).max(axis=2)
     assert (d > 0).mean() <= 0.02 and (d > 2).sum() <= 60, ((d > 0).mean(), int((d > 2).sum()))
     assert np.abs(pics["merged"] - 255).sum(axis=2).astype(bool).mean() > 0.1  # not blank
+
+
+@pytest.mark.parametrize("shape", [(1, 1, 3), (5, 7, 3), (5, 7, 4), (5, 7), (64, 90, 3)])
+def test_encoded_pixels_decode_the_same_in_pillow_and_vtk(tmp_path: Path, shape: tuple[int, ...]) -> None:
+    """The encoder (unfiltered rows, one IDAT) writes standard PNGs: Pillow and VTK's libpng reader
+    give back every pixel, grey, RGB and RGBA."""
+    import io
+
+    from PIL import Image
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkIOImage import vtkPNGReader
+
+    img = np.random.default_rng(len(shape) * 100 + shape[0]).integers(0, 256, shape).astype(np.uint8)
+    data = png.png_bytes(img)
+    assert data.startswith(b"\x89PNG\r\n\x1a\n") and data.endswith(b"IEND\xaeB`\x82")
+    assert np.array_equal(np.asarray(Image.open(io.BytesIO(data))), img)
+    path = png.write_png_file(tmp_path / "a.png", img)
+    reader = vtkPNGReader()
+    reader.SetFileName(str(path))
+    reader.Update()
+    channels = 1 if img.ndim == 2 else img.shape[2]
+    got = vtk_to_numpy(reader.GetOutput().GetPointData().GetScalars()).reshape(shape[0], shape[1], channels)[::-1]
+    assert np.array_equal(got.reshape(img.shape), img)  # VTK's rows run bottom up
+
+
+@pytest.mark.skipif(not vtk_scene.render_available(), reason="VTK cannot open an offscreen window here")
+@pytest.mark.parametrize("kind", ["mean", "zebra", "edges"])
+def test_a_report_picture_encodes_smaller_than_pillows_adaptive_filter(tmp_path: Path, kind: str) -> None:
+    """The reason for the encoder (see the module): a report's rendered picture (flat background,
+    shading, stripes, lines) compresses smaller with unfiltered rows at level 4 than with Pillow's
+    adaptive row filters at level 6 (the former encoder), and decodes to the same pixels."""
+    import io
+
+    from PIL import Image
+
+    from occsurf.bridge.exchange.step_iges import read_iges
+    from occsurf.bridge.quality import pictures as P
+    from occsurf.bridge.quality.report import check_model
+
+    report = check_model(read_iges(Path(__file__).resolve().parents[2] / "step_samples" / "mixed.igs"))
+    fields = [report.fields[k] for k in sorted(report.fields)]
+    path = P.render_picture(fields, kind, tmp_path / "p.png", model_size=report.size, edges=report.edge_lines)
+    img = np.asarray(Image.open(path).convert("RGB"))
+    buf = io.BytesIO()
+    Image.fromarray(img).save(buf, format="PNG", compress_level=6)
+    assert path.stat().st_size < len(buf.getvalue()), (path.stat().st_size, len(buf.getvalue()))
+
+
+def test_not_an_image_is_refused_by_name() -> None:
+    for bad in (np.zeros((4, 4, 7), np.uint8), np.zeros((0, 4, 3), np.uint8), np.zeros((2, 2, 2, 3), np.uint8)):
+        with pytest.raises(ValueError, match="expected an image of shape"):
+            png.png_bytes(bad)
