@@ -349,6 +349,47 @@ def test_closest_parameters_in_blocks_are_those_of_the_whole_at_once() -> None:
     np.testing.assert_array_equal(t, whole)
 
 
+def test_a_failing_fast_path_leaves_occs_loop(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where the many-at-once evaluation raises (a surface or p-curve our conversion cannot take),
+    ``_d1_vectorised`` returns None and ``normals_on`` gives OCC's point-by-point result, bit for bit."""
+    from pathlib import Path
+
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+    from OCP.TopExp import TopExp
+    from OCP.TopoDS import TopoDS
+    from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
+
+    from occsurf.bridge.conversion import occ_evaluators
+    from occsurf.bridge.exchange.reading import read_model
+    from occsurf.bridge.modeling import refill_loop
+
+    model = read_model(Path(__file__).resolve().parents[2] / "step_samples" / "swept_tube.step")
+    emap = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndAncestors_s(model.shape, TopAbs_EDGE, TopAbs_FACE, emap)
+    checked = fast = 0
+    for i in range(1, emap.Extent() + 1):
+        edge = TopoDS.Edge_s(emap.FindKey(i))
+        faces = [TopoDS.Face_s(f) for f in emap.FindFromIndex(i)]
+        if len(faces) != 2 or BRep_Tool.Degenerated_s(edge):
+            continue
+        face = faces[0]
+        ts = refill_loop.edge_params(edge, face, 1001)
+        P0, N0, _ = refill_loop.normals_on(edge, face, ts)  # OCC's loop (uv points asked)
+        s, pc = BRep_Tool.Surface_s(face), BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+        fast += refill_loop._d1_vectorised(s, pc, edge, face, np.asarray(ts, float)) is not None
+        with monkeypatch.context() as mp:
+            def broken(*args, **kwargs):
+                raise RuntimeError("no vectorised form")
+            mp.setattr(occ_evaluators, "surface_evaluator", broken)
+            assert refill_loop._d1_vectorised(s, pc, edge, face, np.asarray(ts, float)) is None
+            P1, N1, uv = refill_loop.normals_on(edge, face, ts, uv_points=False)
+        assert uv == []
+        assert np.array_equal(P1, P0) and np.array_equal(N1, N0)
+        checked += 1
+    assert checked >= 2 and fast >= 1, (checked, fast)  # the fast path is taken there unbroken
+
+
 @pytest.mark.parametrize("name", ["swept_tube.step", "build123d__M6-1x12-countersunk-screw.step",
                                   "occt__linkrods.step"])
 def test_normals_evaluated_many_at_once_are_occs_point_by_point(name) -> None:
