@@ -250,7 +250,7 @@ def _check_mesh(points: Any, triangles: Any, normals: Any) -> tuple[np.ndarray, 
             raise InvalidGeometryError(f"normals: expected shape {P.shape} (one per point), got {N.shape}")
         bad = ~np.all(np.isfinite(N), axis=1) | (np.linalg.norm(np.nan_to_num(N), axis=1) == 0)
         if bad.any():  # degenerate points (a sphere's pole): the mesh's own normal there
-            N[bad] = _vertex_normals(P, T)[bad]
+            N[bad] = _vertex_normals(P, T, bad)[bad]
     return P, T.astype(np.int64), N
 
 

@@ -319,7 +319,7 @@ class Scene:
             N = np.asarray(normals, float).copy()
             bad = ~np.all(np.isfinite(N), axis=1)
             if bad.any():
-                N[bad] = _vertex_normals(P, T)[bad]
+                N[bad] = _vertex_normals(P, T, bad)[bad]
             # as float32: what the renderer uploads anyway (the same rounding), at half the memory
             pd.GetPointData().SetNormals(numpy_to_vtk(N.astype(np.float32), deep=True))
         mapper = vtkPolyDataMapper()
@@ -560,12 +560,20 @@ def _finite_range(values: np.ndarray) -> tuple[float, float]:
     return (lo, hi) if hi > lo else (lo - 0.5, lo + 0.5)
 
 
-def _vertex_normals(P: np.ndarray, T: np.ndarray) -> np.ndarray:
-    """Area-weighted vertex normals of a triangle mesh ``(n, 3)`` (fallback for degenerate points)."""
+def _vertex_normals(P: np.ndarray, T: np.ndarray, at: np.ndarray | None = None) -> np.ndarray:
+    """Area-weighted vertex normals of a triangle mesh ``(n, 3)`` (fallback for degenerate points).
+
+    ``at``: a mask of the vertices wanted (the degenerate ones); then only the triangles touching
+    them are summed, and only the rows of ``at`` are meaningful. Each wanted row is the same sum,
+    in the same order, as over the whole mesh: the triangles' normals are added vertex by vertex
+    in triangle order, first corner, then second, then third (``np.bincount`` adds its weights in
+    input order, as ``np.add.at`` did), so the rows come out bit for bit alike (the bearing's
+    model pictures summed 3.6 million triangles for a few degenerate vertices, 35 ms a picture)."""
+    if at is not None:
+        T = T[np.asarray(at, bool)[T].any(axis=1)]
     fn = np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])
-    N = np.zeros_like(P)
-    for k in range(3):
-        np.add.at(N, T[:, k], fn)
+    corners = T.T.ravel()  # every triangle's first corner, then the second ones, then the third
+    N = np.stack([np.bincount(corners, weights=np.tile(fn[:, c], 3), minlength=len(P)) for c in range(3)], axis=1)
     length = np.linalg.norm(N, axis=1, keepdims=True)
     with np.errstate(all="ignore"):
         N = np.where(length > 0, N / length, np.array([0.0, 0.0, 1.0]))

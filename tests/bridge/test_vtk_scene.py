@@ -309,3 +309,32 @@ def test_compact_cells_and_float32_normals_draw_the_same_picture(tmp_path, monke
     pd = actors.GetNextActor().GetMapper().GetInput()
     assert pd.GetPointData().GetNormals().GetDataTypeAsString() == "double" and pd.GetPolys().IsStorage64Bit()
     assert new == old and len(new) > 1000
+
+
+def _add_at_normals(P: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """The fallback normals as they were summed before 2026-12-06 (np.add.at, corner by corner)."""
+    fn = np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])
+    N = np.zeros_like(P)
+    for k in range(3):
+        np.add.at(N, T[:, k], fn)
+    length = np.linalg.norm(N, axis=1, keepdims=True)
+    with np.errstate(all="ignore"):
+        return np.where(length > 0, N / length, np.array([0.0, 0.0, 1.0]))
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_fallback_normals_of_the_degenerate_vertices_alone_are_the_whole_meshs(seed: int) -> None:
+    """``_vertex_normals`` sums by ``np.bincount`` in np.add.at's order, and with ``at`` only over the
+    triangles touching the wanted vertices: those rows are bit for bit the whole mesh's (random
+    meshes, repeated and degenerate triangles, isolated vertices)."""
+    rng = np.random.default_rng(seed)
+    n, m = int(rng.integers(3, 400)), int(rng.integers(1, 900))
+    P = rng.normal(size=(n, 3)) * 10.0 ** rng.integers(-3, 4)
+    T = rng.integers(0, n, (m, 3))
+    T[: m // 10] = T[0]  # repeated triangles
+    P[T[-1]] = P[T[-1, 0]]  # a collapsed one
+    ref = _add_at_normals(P, T)
+    assert np.array_equal(vtk_scene._vertex_normals(P, T), ref)
+    at = rng.random(n) < 0.1
+    at[T[-1]] = True
+    assert np.array_equal(vtk_scene._vertex_normals(P, T, at)[at], ref[at])
