@@ -13,12 +13,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError, ParameterError
 from .curve import BSplineCurve
 from .degree import elevate_poles
-from .knots import check_rescaled, clamp_poles, merge_knots, most_repeated, refine_poles, rescale_knots, snap_knots
+from .knots import check_rescaled, clamp_poles, refine_poles, refinement_knots, rescale_knots
 from .rational import from_homogeneous, to_homogeneous
 
 __all__ = ["make_compatible", "common_knots", "missing_knots"]
@@ -152,19 +151,7 @@ class _Work:
 
     def refine(self, x: np.ndarray) -> None:
         """:meth:`BSplineCurve.refine` with interior values ``x`` (its checks and errors)."""
-        n = self.P.shape[0]
-        V.check_size((n + x.size, max(n, self.H.shape[-1] + 4)), f"refine with {x.size} knots")
-        lo, hi = self.domain()
-        if x.min() <= lo or x.max() >= hi:
-            bad = float(x.min() if x.min() <= lo else x.max())
-            raise ParameterError(f"knots: {bad!r} must lie strictly inside the domain ({lo!r}, {hi!r})")
-        x = snap_knots(self.knots, x)
-        tau = merge_knots(self.knots, x)
-        excess = most_repeated(tau, self.degree + 1)
-        if excess is not None:
-            raise InvalidGeometryError(
-                f"knots: knot {excess[0]!r} would get multiplicity {excess[1]}, above degree + 1 = {self.degree + 1}"
-            )
+        tau = refinement_knots(self.knots, self.degree, self.P.shape[0], self.H.shape[-1], x)
         self._poles(tau, refine_poles(self.knots, self.degree, self.H, tau))
 
 

@@ -28,14 +28,12 @@ from .knots import (
     check_rescaled,
     clamp_poles,
     insert_knot_boehm,
-    merge_knots,
-    most_repeated,
     multiplicity,
     refine_poles,
+    refinement_knots,
     remove_knot_lsq,
     rescale_knots,
     snap_knot,
-    snap_knots,
     split_poles,
 )
 from .rational import curve_quotient_rule, pole_deviation
@@ -321,20 +319,7 @@ class BSplineCurve(HomogeneousPoles, ControlPointValue):
         x = V.as_finite_array(knots, "knots", ndim=1)
         if x.size == 0:
             return self
-        # The Oslo matrix (dense: new poles x old poles), the refined poles and the merge's work arrays.
-        V.check_size((self.n_poles + x.size, max(self.n_poles, self._hpoles.shape[-1] + 4)),
-                     f"refine with {x.size} knots")
-        lo, hi = self.domain
-        if x.min() <= lo or x.max() >= hi:
-            bad = float(x.min() if x.min() <= lo else x.max())
-            raise ParameterError(f"knots: {bad!r} must lie strictly inside the domain ({lo!r}, {hi!r})")
-        x = snap_knots(self.knots, x)
-        tau = merge_knots(self.knots, x)
-        excess = most_repeated(tau, self.degree + 1)
-        if excess is not None:
-            raise InvalidGeometryError(
-                f"knots: knot {excess[0]!r} would get multiplicity {excess[1]}, above degree + 1 = {self.degree + 1}"
-            )
+        tau = refinement_knots(self.knots, self.degree, self.n_poles, self._hpoles.shape[-1], x)
         H = refine_poles(self.knots, self.degree, self._hpoles, tau)
         return self._rebuild(self.degree, tau, H)
 

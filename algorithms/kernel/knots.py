@@ -19,12 +19,13 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validate import knot_tol
-from ..errors import ParameterError
+from .._validate import check_size, knot_tol
+from ..errors import InvalidGeometryError, ParameterError
 from .basis import find_span
 from .blossom import blossom_basis
 
 __all__ = [
+    "refinement_knots",
     "multiplicity",
     "distinct_knots",
     "snap_knot",
@@ -185,6 +186,35 @@ def refine_poles(knots: Array, degree: int, poles: Array, new_knots: Array) -> A
     T = refinement_matrix(knots, degree, new_knots)
     flat = poles.reshape(poles.shape[0], -1)
     return (T @ flat).reshape((T.shape[0],) + poles.shape[1:])
+
+
+def refinement_knots(knots: Array, degree: int, n_poles: int, width: int, x: Array) -> Array:
+    """The refined knot vector for inserting the values ``x`` (not empty), with the refinement's
+    checks: its arrays within ``tolerances.MAX_ARRAY_BYTES`` (``width``: floats per pole), every
+    value strictly inside the domain, each snapped to an existing knot within the knot tolerance,
+    and no knot above multiplicity ``degree + 1``. What :meth:`BSplineCurve.refine` and
+    :func:`~occsurf.algorithms.kernel.compat.make_compatible` insert.
+
+    Raises
+    ------
+    ParameterError
+        A value on or outside the domain.
+    InvalidGeometryError
+        A knot would exceed multiplicity ``degree + 1``.
+    """
+    # The Oslo matrix (dense: new poles x old poles), the refined poles and the merge's work arrays.
+    check_size((n_poles + x.size, max(n_poles, width + 4)), f"refine with {x.size} knots")
+    lo, hi = float(knots[degree]), float(knots[n_poles])
+    if x.min() <= lo or x.max() >= hi:
+        bad = float(x.min() if x.min() <= lo else x.max())
+        raise ParameterError(f"knots: {bad!r} must lie strictly inside the domain ({lo!r}, {hi!r})")
+    tau = merge_knots(knots, snap_knots(knots, x))
+    excess = most_repeated(tau, degree + 1)
+    if excess is not None:
+        raise InvalidGeometryError(
+            f"knots: knot {excess[0]!r} would get multiplicity {excess[1]}, above degree + 1 = {degree + 1}"
+        )
+    return tau
 
 
 def merge_knots(knots: Array, extra: Array) -> Array:
