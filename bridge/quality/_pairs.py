@@ -274,16 +274,11 @@ def match_free_edges(faces: list[FaceData], free: list[Side], tol: float, spacin
     steps[np.diff(owner) != 0] = 0.0
     radius = tol + 0.5 * float(np.nanmax(steps)) + 1e-12
     hits = tree.query_ball_point(np.nan_to_num(probes, nan=1e300), radius)
+    near = [_containing(hits, owner, a, K) for a in range(len(usable))]  # each edge's candidates, once
     cand_a, cand_b = [], []
     for a in range(len(usable)):
-        common: set[int] | None = None
-        for h in hits[a * K:(a + 1) * K]:
-            owners = set(owner[h].tolist()) if len(h) else set()
-            common = owners if common is None else common & owners
-            if not common:
-                break
-        for b in sorted(common or ()):
-            if b < a and a in _containing(hits, owner, b, K):  # equal edges: matched once
+        for b in sorted(near[a]):
+            if b < a and a in near[b]:  # equal edges: matched once
                 continue
             if usable[b].face != usable[a].face:
                 cand_a.append(a)
@@ -315,9 +310,12 @@ def match_free_edges(faces: list[FaceData], free: list[Side], tol: float, spacin
 
 
 def _containing(hits: list, owner: NDArray[np.intp], a: int, K: int) -> set[int]:
-    """Edges near every probe of edge ``a`` (its candidates)."""
+    """Edges near every probe of edge ``a`` (its candidates); the intersection stops at the first
+    probe that leaves none (it stays empty)."""
     common: set[int] | None = None
     for h in hits[a * K:(a + 1) * K]:
         owners = set(owner[h].tolist()) if len(h) else set()
         common = owners if common is None else common & owners
+        if not common:
+            break
     return common or set()

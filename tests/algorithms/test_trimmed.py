@@ -115,6 +115,25 @@ def test_green_sums_over_the_overlapping_pieces_equal_the_sums_over_every_piece(
         assert abs(got - _green_every_piece(s, c, 1 << level, anchor)) <= 1e-13 * scale
 
 
+@test_settings(max_examples=30)
+@given(cx=st.floats(0.3, 0.7), cy=st.floats(0.3, 0.7), r=st.floats(0.02, 0.28), knots=st.lists(st.floats(0.05, 0.95),
+       min_size=1, max_size=6), rational=st.booleans())
+def test_breakpoints_stopped_at_neighbouring_doubles_are_all_sixty_halvings(cx, cy, r, knots, rational):
+    """The crossings of the surface's knot lines stop being halved once every bracket is two
+    neighbouring doubles: the same crossings, bit for bit, as the 60 halvings of before (circles
+    and the trim square over a dome with extra knots in u and v, rational or not)."""
+    from occsurf.algorithms.kernel import trimmed
+
+    s = _dome()
+    for k, x in enumerate(knots):
+        s = s.insert_knot(x, direction="u" if k % 2 else "v")
+    if rational:
+        wts = 1.0 + 0.3 * np.cos(np.arange(s.n_poles[0] * s.n_poles[1])).reshape(s.n_poles)
+        s = BSplineSurface(s.degree, s.knots, s.control_points, wts)
+    for c in (*_square(), _hole((cx, cy), r)):
+        assert np.array_equal(trimmed._breakpoints(s, c), trimmed._breakpoints(s, c, stop_early=False))
+
+
 def test_loops_are_oriented_whatever_the_input():
     a = TrimmedSurface(_plate().surface, _square(ccw=False), [(_hole(),)])
     b = TrimmedSurface(_plate().surface, _square(), [(_hole().reverse(),)])
