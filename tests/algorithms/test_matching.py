@@ -339,3 +339,43 @@ def test_kept_svds_give_the_same_match_bit_for_bit(seed, order, kink):
         fresh = match_surface(S, T, "u0", order)
     assert kept.surface.control_points.tobytes() == fresh.surface.control_points.tobytes()
     assert n_kept <= len(calls) - 2
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(32, 90), ratio=st.floats(2.0, 8.0), decades=st.floats(0.0, 16.0),
+       k=st.sampled_from([1, 3]))
+def test_row_svd_of_tall_matrices_through_qr_gives_the_plain_solution(seed, n, ratio, decades, k):
+    """A tall ``J`` (at least twice as many rows as columns) is factored by QR first and ``U^T b``
+    applied through the Householder reflectors (``RowSVD.project``): the singular values are those
+    of the SVD of ``J`` itself, and the robust minimum-norm solution agrees with the one through the
+    explicit ``U`` within 1e-10 of its norm, for conditioning from 1 to 1e-16 (round-off: both are
+    backward stable; the rank cut-offs then decide alike). Rows of very different norms and a zero
+    row are part of the draw, as the G1 and G2 conditions give them."""
+    import occsurf.algorithms.manipulation.matching as M
+
+    rng = np.random.default_rng(seed)
+    m = int(ratio * n)
+    J = rng.standard_normal((m, n)) @ np.diag(np.logspace(0.0, -decades, n)) @ rng.standard_normal((n, n))
+    J *= np.logspace(-3, 3, m)[rng.permutation(m)][:, None]
+    J[rng.integers(m)] = 0.0
+    b = rng.standard_normal((m, k)) if k > 1 else rng.standard_normal(m)
+    f = M.row_svd(J)
+    assert f.U is None and f.qr is not None  # the QR path
+    s = np.where(np.linalg.norm(J, axis=1) > 0, np.linalg.norm(J, axis=1), 1.0)
+    U, sv, Vt = sla.svd(J / s[:, None], full_matrices=False, lapack_driver="gesdd")
+    assert np.allclose(f.sv, sv, rtol=0, atol=1e-13 * sv[0])
+    plain = M.RowSVD(s, sv, Vt, U=U)
+    x_qr, x_plain = M.robust_min_norm(J, b, f), M.robust_min_norm(J, b, plain)
+    assert np.linalg.norm(x_qr - x_plain) <= 1e-10 * max(np.linalg.norm(x_plain), 1e-300)
+    assert np.array_equal(M.robust_min_norm(J, b), x_qr)  # the same factorisation when taken afresh
+
+
+def test_row_svd_keeps_the_plain_svd_below_the_qr_shapes():
+    """Near-square or narrow matrices (fewer than 32 columns) keep the plain SVD: faster there."""
+    import occsurf.algorithms.manipulation.matching as M
+
+    rng = np.random.default_rng(5)
+    for shape in [(28, 24), (400, 31), (60, 45), (100, 60)]:
+        f = M.row_svd(rng.standard_normal(shape))
+        assert f.U is not None and f.qr is None, shape
+    assert M.row_svd(rng.standard_normal((64, 32))).qr is not None
