@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "gauss_legendre",
+    "gram_bands",
     "find_span",
     "basis_functions",
     "basis_derivatives",
@@ -256,3 +257,48 @@ def gauss_legendre(m: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     x.flags.writeable = False
     w.flags.writeable = False
     return x, w
+
+
+def gram_bands(knots: ArrayLike, degree: int, top: int = 2) -> NDArray[np.float64]:
+    """The Gram matrices ``G_k[i, j] = int N_i^(k)(t) N_j^(k)(t) dt`` of a B-spline basis, k = 0 ..
+    ``top``, in band form: ``out[k, i, d] = G_k[i, i + d - degree]`` (0 where that index leaves the
+    basis; ``|i - j| <= degree`` holds every non-zero).
+
+    Exact for the piecewise polynomials: ``degree + 1`` Gauss-Legendre points per knot span (course
+    ch. 3's energies; the thin-plate and curvature-variation energies of the fills are sums of
+    Kronecker products of these). The basis and its derivatives are evaluated once at all points
+    (:func:`basis_derivatives`); each entry is summed straight into its band place by
+    ``np.bincount``, which adds in input order: the terms ``(w_q N_i^(k)(t_q)) N_j^(k)(t_q)`` over
+    the points ``t_q`` in increasing order, i.e. what the sparse product ``B^T diag(w) B`` of the
+    collocation matrices sums, bit for bit, without forming it.
+
+    Parameters
+    ----------
+    knots : array_like, shape (n + degree + 1,)
+        Clamped or not; the integral runs over ``[knots[0], knots[-1]]`` (spans of zero length add nothing).
+    degree : int
+    top : int
+        Highest derivative order (at most ``degree`` for a non-zero matrix).
+
+    Returns
+    -------
+    ndarray, shape (top + 1, n, 2 degree + 1)
+    """
+    knots = np.asarray(knots, dtype=float)
+    n = knots.size - degree - 1
+    brk = np.unique(knots)
+    x, w = gauss_legendre(degree + 1)
+    a, b = brk[:-1, None], brk[1:, None]
+    t = (0.5 * (a + b) + 0.5 * (b - a) * x).ravel()
+    wt = (0.5 * (b - a) * w).ravel()
+    span = find_span(knots, degree, n, t)
+    D = basis_derivatives(knots, degree, span, t, top)  # (m, top+1, degree+1): the non-zero values
+    cols = span[:, None] - degree + np.arange(degree + 1)
+    h = 2 * degree + 1
+    slot = (cols[:, :, None] * h + (cols[:, None, :] - cols[:, :, None] + degree)).ravel()  # point-major
+    out = np.empty((top + 1, n, h))
+    for k in range(top + 1):
+        Dk = D[:, k]
+        out[k] = np.bincount(slot, weights=((wt[:, None] * Dk)[:, :, None] * Dk[:, None, :]).ravel(),
+                             minlength=n * h).reshape(n, h)
+    return out

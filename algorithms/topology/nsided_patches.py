@@ -22,7 +22,7 @@ from scipy.sparse.linalg import SuperLU, splu
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ..kernel.basis import basis_derivatives, find_span, gauss_legendre
+from ..kernel.basis import gram_bands
 from ..kernel.sparse_kron import kron_sum
 from ..kernel.surface import BSplineSurface
 from .nsided_corners import CornerFit
@@ -207,33 +207,27 @@ def _corner_knot(K: Array, degree: int) -> Array:
 # ==================================================================================== fairing
 @functools.lru_cache(maxsize=64)
 def _gram_cached(knots_key: bytes, degree: int) -> tuple[Array, Array, Array]:
-    """The Gram matrices of orders 0, 1 and 2 (:func:`_gram`) for the knots as bytes (hashable), from
-    one evaluation of the basis and its derivatives at the Gauss points; read-only, shared by the
-    cache.
+    """The Gram matrices of orders 0, 1 and 2 (:func:`_gram`) for the knots as bytes (hashable), dense,
+    from their bands (:func:`~..kernel.basis.gram_bands`: one evaluation of the basis and its
+    derivatives at the Gauss points, each entry summed straight into its place); read-only, shared
+    by the cache.
 
-    Each entry is summed straight into its place (``np.bincount``, in the Gauss points' order) from
-    the ``degree + 1`` basis functions that do not vanish at a point, each term ``N_i (w N_j)`` as
-    the dense product ``B^T (w B)`` formed it. That product (before 2026-12-06) multiplied the whole
-    collocation matrices, zeros and all: 0.14 s for a degree-6 space of a few hundred poles, eight
-    of them 1.2 s of linkrods pair [22, 23]'s central split; BLAS sums its terms in an order of its
-    own, so the two agree to round-off (within 1e-13 of the largest entry, tested), not bit for bit."""
-    knots = np.frombuffer(knots_key)
-    n = len(knots) - degree - 1
-    xg, wg = gauss_legendre(degree + 1)
-    br = np.unique(knots)
-    a, b = br[:-1], br[1:]
-    x = (0.5 * (b - a)[:, None] * (xg + 1) + a[:, None]).ravel()
-    wt = (0.5 * (b - a)[:, None] * wg).ravel()
-    span = find_span(knots, degree, n, x)
-    D = basis_derivatives(knots, degree, span, x, 2)  # (m, 3, p + 1): the non-zero values
-    cols = span[:, None] - degree + np.arange(degree + 1)
-    at = (cols[:, :, None] * n + cols[:, None, :]).ravel()  # entry (i, j) of each point's (p + 1)^2 terms
+    The dense product ``B^T (w B)`` (before 2026-12-06) multiplied the whole collocation matrices,
+    zeros and all: 0.14 s for a degree-6 space of a few hundred poles, eight of them 1.2 s of
+    linkrods pair [22, 23]'s central split; BLAS sums its terms in an order of its own, so the two
+    agree to round-off (within 1e-13 of the largest entry, tested), not bit for bit. The bands are
+    the plate's (:func:`.plate_fill._gram`) since 2026-12-06, where this module had a copy of its
+    own that formed the Gauss points and the products in another order (the same to round-off)."""
+    bands = gram_bands(np.frombuffer(knots_key), degree, 2)
+    n, h = bands.shape[1], bands.shape[2]
+    row = np.repeat(np.arange(n), h)
+    col = row + np.tile(np.arange(-degree, degree + 1), n)
+    inside = (col >= 0) & (col < n)
     out: list[Array] = []
-    for k in range(3):
-        Dk = D[:, k]
-        terms = Dk[:, :, None] * (wt[:, None] * Dk)[:, None, :]
-        G = np.asarray(np.bincount(at, weights=terms.ravel(), minlength=n * n), dtype=np.float64).reshape(n, n)
-        G.flags.writeable = False  # float64 already (weights): no copy
+    for band in bands.reshape(3, n * h):
+        G = np.zeros((n, n))
+        G[row[inside], col[inside]] = band[inside]
+        G.flags.writeable = False
         out.append(G)
     return out[0], out[1], out[2]
 

@@ -188,8 +188,9 @@ def test_kept_factors_give_the_poles_of_a_fresh_factorisation_bit_for_bit(args, 
 @settings(max_examples=60, deadline=None)
 def test_grams_of_one_basis_evaluation_equal_each_order_alone(p, inner, snap):
     """The fairing's Gram matrices of orders 0-2 come from one evaluation of the basis to order 2 at
-    the Gauss points, summed over each point's non-zero basis functions: each equals, bit for bit,
-    the same sums from an evaluation to its own order only; and, to round-off (1e-13 of the largest
+    the Gauss points, summed over each point's non-zero basis functions (the bands of
+    ``basis.gram_bands``, shared with the plate): each equals, bit for bit, the same sums from an
+    evaluation to its own order only, summed into the full matrix; and, to round-off (1e-13 of the largest
     entry), the dense product ``B^T (w B)`` of the whole collocation matrix, which is how they were
     made before 2026-12-06 (BLAS sums the terms in an order of its own)."""
     from occsurf.algorithms.kernel.basis import basis_derivatives, basis_matrix, find_span, gauss_legendre
@@ -202,7 +203,7 @@ def test_grams_of_one_basis_evaluation_equal_each_order_alone(p, inner, snap):
     xg, wg = gauss_legendre(p + 1)
     br = np.unique(knots)
     a, b = br[:-1], br[1:]
-    x = (0.5 * (b - a)[:, None] * (xg + 1) + a[:, None]).ravel()
+    x = (0.5 * (a + b)[:, None] + 0.5 * (b - a)[:, None] * xg).ravel()
     wt = (0.5 * (b - a)[:, None] * wg).ravel()
     span = find_span(knots, p, n, x)
     cols = span[:, None] - p + np.arange(p + 1)
@@ -210,7 +211,7 @@ def test_grams_of_one_basis_evaluation_equal_each_order_alone(p, inner, snap):
     _gram_cached.cache_clear()
     for order in range(3):
         Dk = basis_derivatives(knots, p, span, x, order)[:, order]  # evaluated to this order only
-        alone = np.bincount(at, weights=(Dk[:, :, None] * (wt[:, None] * Dk)[:, None, :]).ravel(),
+        alone = np.bincount(at, weights=((wt[:, None] * Dk)[:, :, None] * Dk[:, None, :]).ravel(),
                             minlength=n * n).reshape(n, n)
         G = _gram(knots, p, order)
         assert np.array_equal(G, alone)
