@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "gauss_legendre",
     "gram_bands",
+    "gram_band_index",
     "find_span",
     "basis_functions",
     "basis_derivatives",
@@ -262,10 +263,11 @@ def gauss_legendre(m: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
 def gram_bands(knots: ArrayLike, degree: int, top: int = 2) -> NDArray[np.float64]:
     """The Gram matrices ``G_k[i, j] = int N_i^(k)(t) N_j^(k)(t) dt`` of a B-spline basis, k = 0 ..
     ``top``, in band form: ``out[k, i, d] = G_k[i, i + d - degree]`` (0 where that index leaves the
-    basis; ``|i - j| <= degree`` holds every non-zero).
+    basis; ``|i - j| <= degree`` holds every non-zero). :func:`gram_band_index` places the entries.
 
-    Exact for the piecewise polynomials: ``degree + 1`` Gauss-Legendre points per knot span (course
-    ch. 3's energies; the thin-plate and curvature-variation energies of the fills are sums of
+    Exact for the piecewise polynomials: ``degree + 1`` Gauss-Legendre points per knot span of the
+    domain ``[t_p, t_n]``. These are the fills' energies (course §8-3: the thin-plate energy of the
+    central split's fairing and of the plate, the curvature variation of the G2 plate, sums of
     Kronecker products of these). The basis and its derivatives are evaluated once at all points
     (:func:`basis_derivatives`); each entry is summed straight into its band place by
     ``np.bincount``, which adds in input order: the terms ``(w_q N_i^(k)(t_q)) N_j^(k)(t_q)`` over
@@ -275,18 +277,20 @@ def gram_bands(knots: ArrayLike, degree: int, top: int = 2) -> NDArray[np.float6
     Parameters
     ----------
     knots : array_like, shape (n + degree + 1,)
-        Clamped or not; the integral runs over ``[knots[0], knots[-1]]`` (spans of zero length add nothing).
+        Non-decreasing; the integral runs over the domain ``[knots[degree], knots[n]]``.
     degree : int
+        The degree ``p`` of the basis.
     top : int
-        Highest derivative order (at most ``degree`` for a non-zero matrix).
+        Highest derivative order (a matrix of order above ``degree`` is zero).
 
     Returns
     -------
     ndarray, shape (top + 1, n, 2 degree + 1)
+        ``out[k]``: the band of ``G_k``, row ``i`` holding ``G_k[i, i - degree .. i + degree]``.
     """
     knots = np.asarray(knots, dtype=float)
     n = knots.size - degree - 1
-    brk = np.unique(knots)
+    brk = np.unique(knots[degree:n + 1])
     x, w = gauss_legendre(degree + 1)
     a, b = brk[:-1, None], brk[1:, None]
     t = (0.5 * (a + b) + 0.5 * (b - a) * x).ravel()
@@ -302,3 +306,12 @@ def gram_bands(knots: ArrayLike, degree: int, top: int = 2) -> NDArray[np.float6
         out[k] = np.bincount(slot, weights=((wt[:, None] * Dk)[:, :, None] * Dk[:, None, :]).ravel(),
                              minlength=n * h).reshape(n, h)
     return out
+
+
+def gram_band_index(n: int, degree: int) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.bool_]]:
+    """Where the entries of :func:`gram_bands`' bands (raveled, shape ``(n (2 degree + 1),)``) stand
+    in the ``n x n`` matrix: ``(row, col, inside)``, ``inside`` false for the band places that leave
+    the matrix (the first and last ``degree`` rows' overhang)."""
+    row = np.repeat(np.arange(n), 2 * degree + 1)
+    col = row + np.tile(np.arange(-degree, degree + 1), n)
+    return row, col, (col >= 0) & (col < n)

@@ -22,7 +22,7 @@ from scipy.sparse.linalg import SuperLU, splu
 
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ..kernel.basis import gram_bands
+from ..kernel.basis import gram_band_index, gram_bands
 from ..kernel.sparse_kron import kron_sum
 from ..kernel.surface import BSplineSurface
 from .nsided_corners import CornerFit
@@ -220,9 +220,7 @@ def _gram_cached(knots_key: bytes, degree: int) -> tuple[Array, Array, Array]:
     own that formed the Gauss points and the products in another order (the same to round-off)."""
     bands = gram_bands(np.frombuffer(knots_key), degree, 2)
     n, h = bands.shape[1], bands.shape[2]
-    row = np.repeat(np.arange(n), h)
-    col = row + np.tile(np.arange(-degree, degree + 1), n)
-    inside = (col >= 0) & (col < n)
+    row, col, inside = gram_band_index(n, degree)
     out: list[Array] = []
     for band in bands.reshape(3, n * h):
         G = np.zeros((n, n))

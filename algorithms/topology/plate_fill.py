@@ -76,7 +76,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..fitting._common import check_fit_size
-from ..kernel.basis import basis_derivatives, find_span, gram_bands
+from ..kernel.basis import basis_derivatives, find_span, gram_band_index, gram_bands
 from ..kernel.curve import BSplineCurve
 from ..kernel.grid_cholesky import GridCholesky, NotPositiveDefinite, grid_stencil
 from ..kernel.sparse_kron import kron_stencil, kron_sum
@@ -290,9 +290,7 @@ def _gram_cached(knots_key: bytes, p: int, top: int) -> tuple[sp.csr_matrix, ...
     as CSR matrices, exact zeros dropped."""
     bands = gram_bands(np.frombuffer(knots_key), p, top)
     n, h = bands.shape[1], bands.shape[2]
-    row = np.repeat(np.arange(n), h)
-    col = row + np.tile(np.arange(-p, p + 1), n)
-    inside = (col >= 0) & (col < n)
+    _, col, inside = gram_band_index(n, p)
     out = []
     for band in bands.reshape(top + 1, n * h):
         keep = inside & (band != 0)

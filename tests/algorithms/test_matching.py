@@ -379,3 +379,19 @@ def test_row_svd_keeps_the_plain_svd_below_the_qr_shapes():
         f = M.row_svd(rng.standard_normal(shape))
         assert f.U is not None and f.qr is None, shape
     assert M.row_svd(rng.standard_normal((64, 32))).qr is not None
+
+
+def test_row_svd_holds_one_form_of_u():
+    """A ``RowSVD`` holds ``U`` or the QR path's ``qr``, ``tau`` and ``U_R``: neither, both, or a part
+    of the QR path is refused by name (``project`` would otherwise answer from the wrong one)."""
+    import occsurf.algorithms.manipulation.matching as M
+
+    z = np.zeros(3)
+    with pytest.raises(InvalidGeometryError, match="either U, or qr, tau and U_R"):
+        M.RowSVD(z, z, np.eye(3))
+    with pytest.raises(InvalidGeometryError, match="either U, or qr, tau and U_R"):
+        M.RowSVD(z, z, np.eye(3), U=np.eye(3), qr=np.eye(3), tau=z, U_R=np.eye(3))
+    with pytest.raises(InvalidGeometryError, match="either U, or qr, tau and U_R"):
+        M.RowSVD(z, z, np.eye(3), qr=np.eye(3), tau=z)
+    f = M.row_svd(np.random.default_rng(1).standard_normal((80, 33)))
+    assert f != M.row_svd(np.random.default_rng(1).standard_normal((80, 33)))  # identity, not arrays compared
