@@ -47,7 +47,8 @@ from ..kernel.basis import basis_derivatives, find_span
 from ..kernel.surface import BSplineSurface
 from .linalg import ConstraintError
 from .match_targets import MatchTarget
-from .matching import CONTINUITIES, MatchResult, pole_size, robust_min_norm, surface_change
+from .matching import CONTINUITIES, MatchResult, pole_size, surface_change
+from .min_norm import robust_min_norm
 
 __all__ = ["match_along"]
 

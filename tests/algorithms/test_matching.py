@@ -326,12 +326,14 @@ def test_kept_svds_give_the_same_match_bit_for_bit(seed, order, kink):
     its second pass of row-by-row solves: the matched surface is the one made with every SVD taken
     afresh, pole for pole (signed zeros too), with two SVDs fewer per solve of G2 or G3."""
     import occsurf.algorithms.manipulation.matching as M
+    import occsurf.algorithms.manipulation.min_norm as MN
 
     T, S = _pair(kink, nu_s=8, seed=seed, nv=5)
     calls = []
-    row_svd, plain = M.row_svd, M.robust_min_norm
+    row_svd, plain = MN.row_svd, MN.robust_min_norm
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(M, "row_svd", lambda J: calls.append(J.shape) or row_svd(J))
+        for module in (M, MN):  # _solve's own SVDs and those robust_min_norm takes afresh
+            mp.setattr(module, "row_svd", lambda J: calls.append(J.shape) or row_svd(J))
         kept = match_surface(S, T, "u0", order)
         n_kept = len(calls)
         mp.setattr(M, "robust_min_norm", lambda J, rhs, svd=None: plain(J, rhs))  # every SVD afresh
@@ -351,7 +353,7 @@ def test_row_svd_of_tall_matrices_through_qr_gives_the_plain_solution(seed, n, r
     explicit ``U`` within 1e-10 of its norm, for conditioning from 1 to 1e-16 (round-off: both are
     backward stable; the rank cut-offs then decide alike). Rows of very different norms and a zero
     row are part of the draw, as the G1 and G2 conditions give them."""
-    import occsurf.algorithms.manipulation.matching as M
+    import occsurf.algorithms.manipulation.min_norm as M
 
     rng = np.random.default_rng(seed)
     m = int(ratio * n)
@@ -372,7 +374,7 @@ def test_row_svd_of_tall_matrices_through_qr_gives_the_plain_solution(seed, n, r
 
 def test_row_svd_keeps_the_plain_svd_below_the_qr_shapes():
     """Near-square or narrow matrices (fewer than 32 columns) keep the plain SVD: faster there."""
-    import occsurf.algorithms.manipulation.matching as M
+    import occsurf.algorithms.manipulation.min_norm as M
 
     rng = np.random.default_rng(5)
     for shape in [(28, 24), (400, 31), (60, 45), (100, 60)]:
@@ -384,7 +386,7 @@ def test_row_svd_keeps_the_plain_svd_below_the_qr_shapes():
 def test_row_svd_holds_one_form_of_u():
     """A ``RowSVD`` holds ``U`` or the QR path's ``qr``, ``tau`` and ``U_R``: neither, both, or a part
     of the QR path is refused by name (``project`` would otherwise answer from the wrong one)."""
-    import occsurf.algorithms.manipulation.matching as M
+    import occsurf.algorithms.manipulation.min_norm as M
 
     z = np.zeros(3)
     with pytest.raises(InvalidGeometryError, match="either U, or qr, tau and U_R"):
