@@ -364,14 +364,14 @@ def rotation_minimizing_frames(curve: BSplineCurve, u: ArrayLike, initial_normal
     uu = np.asarray(u, dtype=float)
     if uu.ndim != 1 or uu.size == 0:
         raise InvalidGeometryError(f"u: expected a non-empty 1-D array of parameters, got shape {uu.shape}")
-    D = _curve_derivs(c, uu, 2)
+    D = _curve_derivs(c, uu, 1)  # the second derivative only at u[0], for the default normal
     x, d1 = D[:, 0, :], D[:, 1, :]
     s = _norm(d1)
     if np.any(s == 0):
         raise InvalidGeometryError(f"curve: C'(u) = 0 at u = {float(uu[np.argmax(s == 0)])!r}; the frame is undefined")
     t = d1 / s[:, None]
     if initial_normal is None:
-        f = _frenet_parts(D[:1])
+        f = _frenet_parts(_curve_derivs(c, uu[:1], 2))
         if f["bends"][0]:
             b0 = f["a"][0] / f["na"][0]
             r0 = np.cross(b0, t[0])
