@@ -8,8 +8,8 @@ and Gaussian curvature (computed from the S-patches' exact second derivatives) w
 mesh overlaid, and writes each surface to STEP as a sewn shell through
 :func:`occsurf.bridge.exchange.spatch_io.write_spatches_step`.
 
-Rendering: all quads of all patches go into one ``Poly3DCollection`` so matplotlib depth-sorts them
-together (separate ``plot_surface`` calls are painted in call order and show through each other).
+Rendering: every piece of every S-patch is a grid of points with its exact normals, drawn by VTK
+(:func:`occsurf.bridge.rendering.surfaces.render_surfaces`: one depth buffer for all of them).
 """
 
 from __future__ import annotations
@@ -22,13 +22,11 @@ from occsurf.algorithms.topology.generalized import GeneralizedSurface, generali
 from occsurf.algorithms.topology.generalized_bicubic import generalized_bicubic
 from occsurf.algorithms.topology.mesh import Mesh
 from occsurf.algorithms.topology.spatch_convert import piece_domain_points
-from occsurf.bridge.exchange.files import write_figure
 
 from ._common import output_folder
 
 __all__ = ["render_generalized_demo", "demo_dome", "demo_frame", "render_generalized"]
 
-_LIGHT = np.array([-0.45, -0.35, 0.82]) / np.linalg.norm([-0.45, -0.35, 0.82])
 
 
 # ------------------------------------------------------------------------------------- meshes
@@ -79,69 +77,36 @@ def demo_frame() -> Mesh:
 
 
 # ------------------------------------------------------------------------------------- drawing
-def _sample(surface: GeneralizedSurface, resolution: int, which: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Quads (Q, 4, 3), their unit normals (Q, 3) and curvature values (Q,) of every patch piece."""
+def _sample(surface: GeneralizedSurface, resolution: int, which: str) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Every patch piece as a ``resolution x resolution`` grid: points, unit normals and the
+    ``which`` ("mean" or "gaussian") curvature."""
     s = np.linspace(0.0, 1.0, resolution)
     S, T = np.meshgrid(s, s, indexing="ij")
-    quads, normals, vals = [], [], []
+    grids = []
     for p in surface.patches:
         for k in range(p.sides):
             x = piece_domain_points(p.sides, k, S, T)
             K, H, N = spatch_curvatures(p, x)
-            P = p.evaluate(x)
-            c = K if which == "gaussian" else H
-            q = np.stack((P[:-1, :-1], P[1:, :-1], P[1:, 1:], P[:-1, 1:]), axis=2).reshape(-1, 4, 3)
-            quads.append(q)
-            nq = (N[:-1, :-1] + N[1:, :-1] + N[1:, 1:] + N[:-1, 1:]).reshape(-1, 3)
-            normals.append(nq / np.linalg.norm(nq, axis=-1, keepdims=True))
-            vals.append(((c[:-1, :-1] + c[1:, :-1] + c[1:, 1:] + c[:-1, 1:]) / 4).ravel())
-    return np.concatenate(quads), np.concatenate(normals), np.concatenate(vals)
+            grids.append((p.evaluate(x), N, K if which == "gaussian" else H))
+    return grids
 
 
 def render_generalized(path: Path, surface: GeneralizedSurface, *, title: str, control: Mesh | None = None,
                        color: str = "mean", views: tuple[tuple[float, float], ...] = ((30.0, -60.0), (65.0, 25.0)),
                        resolution: int = 9, subtitle: str | None = None) -> Path:
-    """One PNG: the surface's patches shaded and coloured by ``color`` ("mean" or "gaussian")
-    curvature, the control mesh drawn as thin lines, patch boundaries as dark lines."""
-    from matplotlib import cm
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.colors import TwoSlopeNorm
-    from matplotlib.figure import Figure
-    from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
+    """One PNG: the surface's patches coloured by ``color`` ("mean" or "gaussian") curvature and
+    shaded by VTK (:func:`~occsurf.bridge.rendering.surfaces.render_surfaces`), the control mesh
+    drawn as thin green lines, patch boundaries as dark lines."""
+    from occsurf.bridge.rendering.surfaces import render_surfaces
 
-    quads, normals, vals = _sample(surface, resolution, color)
-    lim = float(np.percentile(np.abs(vals), 97)) or 1.0
-    norm = TwoSlopeNorm(vcenter=0.0, vmin=-lim, vmax=lim)
-    rgb = cm.coolwarm(norm(np.clip(vals, -lim, lim)))
-    rgb[:, :3] *= (0.35 + 0.65 * np.abs(normals @ _LIGHT))[:, None]
+    grids = _sample(surface, resolution, color)
+    lim = float(np.percentile(np.abs(np.concatenate([g[2].ravel() for g in grids])), 97)) or 1.0
     t = np.linspace(0.0, 1.0, 24)
     edges = [p.evaluate(p.edge_points(k, t)) for p in surface.patches for k in range(p.sides)]
     mesh = control if control is not None else surface.mesh
-    mesh_lines = [mesh.vertices[list(e)] for e in mesh.edges]
-    pts = np.concatenate((quads.reshape(-1, 3), mesh.vertices))
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    centre, half = (lo + hi) / 2, float((hi - lo).max()) / 2 * 0.8
-    fig = Figure(figsize=(5.6 * len(views) + 1.2, 5.6), dpi=110)
-    FigureCanvasAgg(fig)
-    fig.subplots_adjust(left=0.0, right=0.9, bottom=0.0, top=0.88, wspace=0.0)
-    for i, (elev, azim) in enumerate(views):
-        ax = fig.add_subplot(1, len(views), i + 1, projection="3d")
-        ax.add_collection3d(Poly3DCollection(quads, facecolors=rgb, edgecolors="none", linewidths=0))
-        ax.add_collection3d(Line3DCollection(edges, colors="0.15", linewidths=0.5, alpha=0.5))
-        ax.add_collection3d(Line3DCollection(mesh_lines, colors="#2a7a2a", linewidths=0.9, alpha=0.85))
-        ax.scatter(*mesh.vertices.T, s=4, c="#2a7a2a", depthshade=False)
-        ax.set_xlim(centre[0] - half, centre[0] + half)
-        ax.set_ylim(centre[1] - half, centre[1] + half)
-        ax.set_zlim(centre[2] - half, centre[2] + half)
-        ax.set_box_aspect((1, 1, 1))
-        ax.view_init(elev=elev, azim=azim)
-        ax.set_axis_off()
-    sm = cm.ScalarMappable(norm=norm, cmap=cm.coolwarm)
-    fig.colorbar(sm, ax=fig.axes, shrink=0.6, pad=0.02,
-                 label="mean curvature H" if color == "mean" else "Gaussian curvature K")
-    fig.suptitle(title if not subtitle else f"{title}\n{subtitle}", fontsize=11)
-    write_figure(fig, path)
-    return Path(path)
+    return render_surfaces(path, grids, color=color, title=title, subtitle=subtitle, curves=edges,
+                           mesh_lines=[mesh.vertices[list(e)] for e in mesh.edges], views=views,
+                           limits=(-lim, lim), figsize=(5.6 * len(views) + 1.2, 5.6))
 
 
 # ------------------------------------------------------------------------------------- demo

@@ -8,13 +8,14 @@ the same details stay vertical and shear. It writes shaded PNGs (colour = detail
 base surface, along its normal) and the edited surface as STEP with its editable hierarchy in a
 JSON sidecar (:mod:`occsurf.bridge.exchange.hierarchical_io`).
 
-matplotlib is imported here, in ``bridge``; figures use the Agg canvas (no display needed).
+The surfaces are shaded by VTK offscreen (:func:`occsurf.bridge.rendering.surfaces.render_panels`);
+matplotlib lays the panels out and draws the section profiles (2-D) on the Agg canvas.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -22,19 +23,13 @@ from occsurf.algorithms import BSplineSurface
 from occsurf.algorithms.hierarchical.surface import HierarchicalSurface
 from occsurf.bridge.exchange.files import write_figure
 
-from ._common import label_axes, output_folder, script
-
-if TYPE_CHECKING:
-    from matplotlib.axes import Axes
-    from matplotlib.colors import Normalize
-    from matplotlib.figure import Figure
+from ._common import output_folder, script
 
 #: A panel's data: the points (m, m, 3), their unit normals and the detail height above the base.
 PanelData = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 __all__ = ["render_hierarchical_demo", "demo_hierarchy"]
 
-_LIGHT = np.array([-0.4, -0.5, 0.77]) / np.linalg.norm([-0.4, -0.5, 0.77])
 RESOLUTION = 101
 #: Parameter window ``[lo, hi]^2`` of the level-by-level pictures: the overlays' region, so the
 #: level-3 knobs are large enough to see.
@@ -116,47 +111,23 @@ def _sample(hs: HierarchicalSurface, lo: float = 0.0, hi: float = 1.0, res: int 
     return P, np.nan_to_num(n, nan=0.0), h
 
 
-def _panel(fig: Figure, pos: tuple[int, int, int], data: PanelData, norm: Normalize, title: str,
-           limits: tuple[np.ndarray, np.ndarray], view: tuple[float, float] = (30, -62)) -> Axes:
-    from matplotlib import cm
-
-    P, n, h = data
-    ax = fig.add_subplot(*pos, projection="3d")
-    rgb = cm.RdYlBu_r(norm(h))
-    lam = np.abs(np.einsum("...i,i->...", n, _LIGHT))
-    rgb[..., :3] *= (0.3 + 0.7 * lam)[..., None]
-    ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], facecolors=rgb, rstride=1, cstride=1, linewidth=0,
-                    antialiased=False, shade=False)
-    (lo, hi) = limits
-    c, half = (lo + hi) / 2, float((hi - lo).max()) / 2
-    ax.set_xlim(c[0] - half, c[0] + half)
-    ax.set_ylim(c[1] - half, c[1] + half)
-    ax.set_zlim(c[2] - half * 0.6, c[2] + half * 0.6)
-    ax.set_box_aspect((1, 1, 0.6))
-    label_axes(ax, title, view)
-    return ax
-
-
 def _render(path: Path, panels: list[tuple[PanelData, str]], suptitle: str, view: tuple[float, float] = (30, -62),
             ncols: int = 3) -> None:
+    """Panels coloured by the detail height (one diverging scale) and shaded by VTK, all framed
+    on the box of every panel's points (:func:`~occsurf.bridge.rendering.surfaces.render_panels`)."""
     from matplotlib import cm
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.colors import TwoSlopeNorm
-    from matplotlib.figure import Figure
 
-    m = max(float(np.abs(d[2]).max()) for d, _ in panels)
+    from occsurf.bridge.rendering.surfaces import Panel, render_panels
+
+    m = max(float(np.abs(d[2]).max()) for d, _ in panels) or 1.0
     norm = TwoSlopeNorm(vcenter=0.0, vmin=-m, vmax=m)
     pts = np.concatenate([d[0].reshape(-1, 3) for d, _ in panels])
-    limits = (pts.min(0), pts.max(0))
+    box = np.array([pts.min(0), pts.max(0)])
     nrows = (len(panels) + ncols - 1) // ncols
-    fig = Figure(figsize=(6.2 * ncols + 1.0, 5.6 * nrows), dpi=100)
-    FigureCanvasAgg(fig)
-    for k, (data, title) in enumerate(panels):
-        _panel(fig, (nrows, ncols, k + 1), data, norm, title, limits, view)
-    sm = cm.ScalarMappable(norm=norm, cmap=cm.RdYlBu_r)
-    fig.colorbar(sm, ax=fig.axes, shrink=0.55, pad=0.05, label="detail height above the base (along its normal)")
-    fig.suptitle(suptitle, fontsize=13)
-    write_figure(fig, path)
+    render_panels(path, [Panel([data], view=view, title=title, frame=box) for data, title in panels], norm=norm,
+                  cmap=cm.RdYlBu_r, colorbar_label="detail height above the base (along its normal)", title=suptitle,
+                  ncols=ncols, figsize=(6.2 * ncols + 1.0, 5.6 * nrows), dpi=100)
 
 
 def render_hierarchical_demo(out_dir: Path) -> list[Path]:

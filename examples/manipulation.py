@@ -29,7 +29,7 @@ from occsurf.algorithms import (
 )
 from occsurf.bridge.exchange.files import write_figure
 
-from ._common import label_axes, output_folder, script
+from ._common import output_folder, script
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -153,9 +153,14 @@ def _render_curves(path: Path) -> tuple[BSplineCurve, dict[str, float]]:
 
 
 def _render_surface(path: Path) -> BSplineSurface:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.colors import LightSource
-    from matplotlib.figure import Figure
+    """The surface before and after :func:`drag_surface_point`, coloured by height and shaded by
+    VTK (:func:`~occsurf.bridge.rendering.surfaces.render_panels`), with the control nets, the
+    point before, the target and the normal asked for; returns the dragged surface."""
+    from matplotlib import cm
+    from matplotlib.colors import Normalize, to_rgb
+    from matplotlib.lines import Line2D
+
+    from occsurf.bridge.rendering.surfaces import Panel, render_panels
 
     s0 = demo_surface()
     u, v = 0.5, 0.45
@@ -164,41 +169,34 @@ def _render_surface(path: Path) -> BSplineSurface:
     normal = np.array([-0.5, 0.3, 1.0])
     s1 = drag_surface_point(s0, u, v, target, normal=normal, window=((1, 5), (1, 5)))
     us = np.linspace(0, 1, 41)
-    G0, G1 = s0.evaluate_grid(us, us), s1.evaluate_grid(us, us)
-    fig = Figure(figsize=(15, 6.4), dpi=110)
-    FigureCanvasAgg(fig)
-    ls = LightSource(azdeg=315, altdeg=45)
-    zlim = (min(G0[..., 2].min(), G1[..., 2].min()) - 0.2, max(G0[..., 2].max(), G1[..., 2].max()) + 0.3)
-    for i, (G, s, title) in enumerate([(G0, s0, "before"), (G1, s1, "after: point dragged up 1.8, normal tilted")]):
-        ax = fig.add_subplot(1, 2, i + 1, projection="3d")
-        from matplotlib import cm
-
-        ax.computed_zorder = False  # draw markers after (on top of) the surface
-        rgb = ls.shade(G[..., 2], cmap=cm.viridis, vert_exag=1.0, blend_mode="soft", vmin=zlim[0], vmax=zlim[1])
-        ax.plot_surface(G[..., 0], G[..., 1], G[..., 2], facecolors=rgb, rstride=1, cstride=1, linewidth=0,
-                        antialiased=True, shade=False, alpha=0.95)
-        net = s.control_points
-        for row in net:
-            ax.plot(*row.T, color="k", lw=0.5, alpha=0.55)
-        for col in net.transpose(1, 0, 2):
-            ax.plot(*col.T, color="k", lw=0.5, alpha=0.55)
-        ax.scatter(*net.reshape(-1, 3).T, s=6, color="k", alpha=0.6, label="control net")
-        if i == 1:
-            ax.plot_wireframe(G0[..., 0], G0[..., 1], G0[..., 2], rstride=4, cstride=4, color=BEFORE, lw=0.6,
-                              alpha=0.8, label="surface before (wireframe)")
-            n = s1.normal(u, v)
-            tip = target + 1.2 * n
-            ax.plot(*np.stack([target, tip]).T, color=TARGET, lw=2.5, label="normal wanted (reached)")
-            ax.scatter(*tip, s=60, color=TARGET, marker="^", depthshade=False)
-        ax.scatter(*p0, s=70, color="w", edgecolors="k", marker="s", label=f"S({u}, {v}) before", depthshade=False)
-        ax.scatter(*target, s=120, color=TARGET, marker="*", label="target", depthshade=False)
-        ax.set_zlim(*zlim)
-        label_axes(ax, f"Surface {title}", (28, -60))
-        ax.legend(loc="upper left", fontsize=8)
-    fig.suptitle("drag_surface_point: minimum-norm change of the poles in the window (1..5) x (1..5) "
-                 "(course ch. 4 applied to a tensor-product surface)", fontsize=12)
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
-    write_figure(fig, path)
+    U, V = np.meshgrid(us, us, indexing="ij")
+    zlim = (min(s0.evaluate_grid(us, us)[..., 2].min(), s1.evaluate_grid(us, us)[..., 2].min()) - 0.2,
+            max(s0.evaluate_grid(us, us)[..., 2].max(), s1.evaluate_grid(us, us)[..., 2].max()) + 0.3)
+    G0 = s0.evaluate_grid(us, us)
+    tip = target + 1.2 * s1.normal(u, v)
+    target_rgb, before_rgb = to_rgb(TARGET), to_rgb(BEFORE)
+    wire = [G0[i] for i in range(0, 41, 4)] + [G0[:, j] for j in range(0, 41, 4)]
+    box = np.concatenate([G0.reshape(-1, 3), s1.evaluate_grid(us, us).reshape(-1, 3), tip[None]])
+    panels = []
+    for s, title in ((s0, "before"), (s1, "after: point dragged up 1.8, normal tilted")):
+        G = s.evaluate_grid(us, us)
+        grid = (G, s.normal(U, V), G[..., 2])
+        marks = [(s.control_points.reshape(-1, 3), (0.1, 0.1, 0.1), 5.0), (p0[None], (1.0, 1.0, 1.0), 12.0),
+                 (target[None], target_rgb, 16.0)]
+        lines: list[tuple[np.ndarray, tuple[float, float, float], float]] = []
+        if s is s1:
+            lines = [(w, before_rgb, 1.0) for w in wire] + [(np.stack([target, tip]), target_rgb, 4.0)]
+            marks.append((tip[None], target_rgb, 10.0))
+        panels.append(Panel([grid], nets=[s.control_points], lines=lines, points=marks, view=(28.0, -60.0),
+                            title=f"Surface {title}", frame=box))
+    legend = [("control net", Line2D([], [], color="0.25", marker="o", markersize=3, lw=0.8)),
+              ("surface before (wireframe)", Line2D([], [], color=BEFORE, lw=1)),
+              ("normal wanted (reached)", Line2D([], [], color=TARGET, lw=2.5)),
+              (f"S({u}, {v}) before", Line2D([], [], color="w", marker="o", markeredgecolor="k", lw=0)),
+              ("target", Line2D([], [], color=TARGET, marker="o", markersize=8, lw=0))]
+    render_panels(path, panels, norm=Normalize(*zlim), cmap=cm.viridis, colorbar_label="z", legend=legend,
+                  legend_panel=1, title="drag_surface_point: minimum-norm change of the poles in the window (1..5) x "
+                  "(1..5) (course ch. 4 applied to a tensor-product surface)", figsize=(15.0, 6.4))
     return s1
 
 

@@ -1,13 +1,17 @@
-"""Shaded pictures of surfaces for ``occsurf demo``: curvature colouring with Lambert shading.
+"""Shaded pictures of surfaces for ``occsurf demo``: curvature colouring, lit by a 3-D engine.
 
 Course ch. 9 (quality assessment: colour-coded curvature, §9-8 graphical representation) and
-ch. 10 (a directional light). Pure matplotlib on the Agg canvas (no display needed); lives in
-``occsurf.bridge`` (the gallery in ``occsurf.examples`` uses it), not in ``occsurf.algorithms``.
+ch. 10 (lighting). Each view is rendered offscreen by VTK (:class:`~.vtk_scene.Scene`: depth
+buffer, smooth shading from the surfaces' own normals, lines drawn over the surface); the views,
+their titles and the colour bar are laid out side by side by matplotlib, which draws nothing 3-D.
+Lives in ``occsurf.bridge`` (the gallery in ``occsurf.examples`` uses it), not in
+``occsurf.algorithms``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -18,10 +22,9 @@ from occsurf.algorithms.geometry.differential import surface_curvatures
 
 from ..exchange.files import write_figure
 
-__all__ = ["render_surfaces", "surface_grid"]
+__all__ = ["render_surfaces", "render_panels", "Panel", "surface_grid"]
 
 COLORINGS = ("mean", "gaussian", "height", "none")
-_LIGHT = np.array([-0.45, -0.35, 0.82]) / np.linalg.norm([-0.45, -0.35, 0.82])
 
 
 def surface_grid(surface: BSplineSurface, resolution: int = 60, color: str = "mean") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -62,6 +65,49 @@ def surface_grid(surface: BSplineSurface, resolution: int = 60, color: str = "me
     return P, n, val
 
 
+Grid = tuple[np.ndarray, np.ndarray, np.ndarray]
+RGB = tuple[float, float, float]
+
+
+@dataclass
+class Panel:
+    """What one view of :func:`render_panels` shows.
+
+    Attributes
+    ----------
+    grids : sequence of (points (r, s, 3), normals (r, s, 3), scalar (r, s))
+        Sampled surfaces, drawn as triangles with their normals at the vertices (smooth shading),
+        coloured by the scalar through the picture's colour map (grey without one).
+    curves : sequence of BSplineCurve or (m, 3) arrays
+        Black lines over the surfaces (input curves, boundaries).
+    nets : sequence of (nu, nv, 3) arrays
+        Control nets: thin grey lines (rows and columns).
+    mesh_lines : sequence of (m, 3) arrays
+        Thin green polylines: control meshes of arbitrary topology (course ch. 8).
+    lines : sequence of (polyline (m, 3), colour, width)
+        Any other polylines, width in pixels.
+    points : sequence of (points (k, 3), colour, size)
+        Markers (round sprites of ``size`` pixels).
+    view : (elevation, azimuth)
+        Degrees, as matplotlib's ``view_init``: the camera looks at the panel's bounding box from
+        ``(cos e cos a, cos e sin a, sin e)``.
+    title : str, optional
+    frame : ndarray, shape (k, 3), optional
+        Points the camera frames besides the content (panels given the same box compare at one
+        scale).
+    """
+
+    grids: Sequence[Grid] = ()
+    curves: Sequence[BSplineCurve | np.ndarray] = ()
+    nets: Sequence[np.ndarray] = ()
+    mesh_lines: Sequence[np.ndarray] = ()
+    lines: Sequence[tuple[np.ndarray, RGB, float]] = ()
+    points: Sequence[tuple[np.ndarray, RGB, float]] = ()
+    view: tuple[float, float] = (28.0, -60.0)
+    title: str | None = None
+    frame: np.ndarray | None = None
+
+
 def render_surfaces(
     path: str | Path,
     items: Sequence[BSplineSurface | tuple[np.ndarray, np.ndarray, np.ndarray]],
@@ -71,6 +117,7 @@ def render_surfaces(
     subtitle: str | None = None,
     curves: Sequence[BSplineCurve | np.ndarray] = (),
     nets: Sequence[np.ndarray] = (),
+    mesh_lines: Sequence[np.ndarray] = (),
     views: Sequence[tuple[float, float]] = ((28.0, -60.0),),
     resolution: int = 60,
     limits: tuple[float, float] | None = None,
@@ -78,7 +125,7 @@ def render_surfaces(
     figsize: tuple[float, float] | None = None,
     dpi: int = 110,
 ) -> Path:
-    """Write a PNG of surfaces, shaded by a light and coloured by curvature.
+    """Write a PNG of surfaces, coloured by curvature and shaded by VTK, one panel per view.
 
     Parameters
     ----------
@@ -90,12 +137,10 @@ def render_surfaces(
     color : {"mean", "gaussian", "height", "none"}
         The scalar mapped to colour (diverging map, symmetric about 0 for curvatures; the limits
         are the 98th percentile of ``|value|`` over all items unless ``limits`` is given).
-    curves : sequence of BSplineCurve or (m, 3) arrays
-        Drawn as black lines on top (input curves of a curve net, boundaries).
-    nets : sequence of (nu, nv, 3) arrays
-        Control nets drawn as thin grey lines.
+    curves, nets, mesh_lines
+        As :class:`Panel`'s, in every view.
     views : sequence of (elevation, azimuth)
-        One panel per view, side by side.
+        One panel per view, side by side (see :class:`Panel`).
     panel_titles : sequence of str, optional
         One title per view.
 
@@ -103,38 +148,100 @@ def render_surfaces(
     -------
     Path
         ``path``.
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
 
+    Raises
+    ------
+    ValueError
+        An unknown ``color``.
+    RuntimeError
+        VTK cannot render offscreen here (:func:`~.vtk_scene.render_available`).
+    """
     if color not in COLORINGS:
         raise ValueError(f"color: expected one of {', '.join(COLORINGS)}, got {color!r}")
     grids = _grids(items, resolution, color)
     lo, hi, norm, cmap = _colour_scale(grids, color, limits)
-    centre, half = _bounding_cube(grids)
+    grids = [(P, n, np.clip(val, lo, hi)) for P, n, val in grids]
+    panels = [Panel(grids, curves, nets, mesh_lines, view=view,
+                    title=None if panel_titles is None or k >= len(panel_titles) else panel_titles[k])
+              for k, view in enumerate(views)]
+    label = {"mean": "mean curvature H", "gaussian": "Gaussian curvature K", "height": "z", "none": None}[color]
     nv = len(views)
-    fig = Figure(figsize=figsize or (6.4 * nv + (1.2 if color != "none" else 0), 6.0), dpi=dpi)
+    return render_panels(path, panels, norm=norm, cmap=None if color == "none" else cmap, colorbar_label=label,
+                         title=title, subtitle=subtitle, figsize=figsize or (6.4 * nv + (1.2 if label else 0), 6.0),
+                         dpi=dpi)
+
+
+def render_panels(path: str | Path, panels: Sequence[Panel], *, norm: Any = None, cmap: Any = None,
+                  colorbar_label: str | None = None, title: str | None = None, subtitle: str | None = None,
+                  ncols: int | None = None, figsize: tuple[float, float] | None = None, dpi: int = 110,
+                  legend: Sequence[tuple[str, Any]] = (), legend_panel: int = 0) -> Path:
+    """Write a PNG of panels, each rendered offscreen by VTK (:class:`~.vtk_scene.Scene`), laid
+    out in a grid of ``ncols`` columns (default: one row) with their titles, one colour bar and
+    the picture's title by matplotlib (2-D only).
+
+    Parameters
+    ----------
+    path : path-like
+        The PNG to write (parent folders must exist).
+    panels : sequence of Panel
+    norm, cmap : matplotlib ``Normalize`` and colour map, optional
+        The grids' scalars to colour (every panel alike); without ``cmap`` the surfaces are grey.
+    colorbar_label : str, optional
+        Draw the colour bar of ``norm`` and ``cmap`` with this label.
+    title, subtitle : str, optional
+    figsize : (width, height), optional
+        Inches; default 6.4 x 6.0 a panel (and the colour bar's strip).
+    legend : sequence of (label, matplotlib artist), optional
+        A legend in panel ``legend_panel`` (proxy artists: ``Line2D`` for a line or a marker).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    RuntimeError
+        VTK cannot render offscreen here (:func:`~.vtk_scene.render_available`).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from .vtk_scene import render_available
+
+    if not render_available():
+        raise RuntimeError("VTK cannot render offscreen here: no surface picture")
+    n = len(panels)
+    ncols = n if ncols is None else max(1, min(int(ncols), n))
+    nrows = (n + ncols - 1) // ncols
+    bar = colorbar_label is not None and cmap is not None
+    width_in, height_in = figsize or (6.4 * ncols + (1.2 if bar else 0), 6.0 * nrows)
+    top = 0.86 if nrows == 1 else 1.0 - 0.8 / height_in
+    size = (max(16, int(width_in * dpi * (0.9 if bar else 0.98) / ncols)),
+            max(16, int(height_in * dpi * (top - 0.02) / nrows * 0.92)))
+    fig = Figure(figsize=(width_in, height_in), dpi=dpi)
     FigureCanvasAgg(fig)
-    for k, (elev, azim) in enumerate(views):
-        ax = fig.add_subplot(1, nv, k + 1, projection="3d")
-        ax.computed_zorder = False
-        for P, n, val in grids:
-            rgb = _shaded_colours(P, n, val, color, lo, hi, norm, cmap)
-            ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], facecolors=rgb, rstride=1, cstride=1,
-                            linewidth=0, antialiased=False, shade=False)
-        _draw_lines(ax, nets, curves)
-        _frame_view(ax, centre, half, elev, azim, None if panel_titles is None or k >= len(panel_titles)
-                    else panel_titles[k])
-    _annotate(fig, color, norm, cmap, title, subtitle)
+    for k, panel in enumerate(panels):
+        ax = fig.add_subplot(nrows, ncols, k + 1)
+        ax.imshow(_render_view(panel, norm, cmap, size), interpolation="antialiased")
+        ax.set_axis_off()
+        if panel.title:
+            ax.set_title(panel.title, fontsize=10)
+        if k == legend_panel and legend:
+            ax.legend([h for _, h in legend], [s for s, _ in legend], loc="upper left", fontsize=8, framealpha=0.8)
+    fig.subplots_adjust(left=0.01, right=0.9 if bar else 0.99, bottom=0.02, top=top, wspace=0.02, hspace=0.08)
+    if bar:
+        from matplotlib import cm
+
+        fig.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), ax=fig.axes, shrink=0.6, pad=0.02, label=colorbar_label)
+    if title:
+        fig.suptitle(title if not subtitle else f"{title}\n{subtitle}", fontsize=12)
     path = Path(path)
     write_figure(fig, path)
     return path
 
 
 # ---------------------------------------------------------------------------------------- steps
-Grid = tuple[np.ndarray, np.ndarray, np.ndarray]
-
-
 def _grids(items: Sequence[BSplineSurface | Grid], resolution: int, color: str) -> list[Grid]:
     """Points ``(r, s, 3)``, normals ``(r, s, 3)`` and colour scalar ``(r, s)`` of every item:
     surfaces sampled by :func:`surface_grid`, sampled tuples taken as float arrays."""
@@ -176,60 +283,40 @@ def _colour_scale(grids: list[Grid], color: str, limits: tuple[float, float] | N
     return lo, hi, norm, cmap
 
 
-def _bounding_cube(grids: list[Grid]) -> tuple[np.ndarray, float]:
-    """Centre ``(3,)`` and half side of the cube around every sampled point (equal axes)."""
-    pts = np.concatenate([g[0].reshape(-1, 3) for g in grids])
-    lo3, hi3 = pts.min(axis=0), pts.max(axis=0)
-    return (lo3 + hi3) / 2, max(float((hi3 - lo3).max()) / 2, 1e-12)
+def _triangles(r: int, s: int) -> np.ndarray:
+    """Two triangles per cell of an ``r x s`` grid of points numbered row by row."""
+    idx = np.arange(r * s).reshape(r, s)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    return np.concatenate([np.stack([a, b, c], axis=1), np.stack([a, c, d], axis=1)])
 
 
-def _shaded_colours(P: np.ndarray, n: np.ndarray, val: np.ndarray, color: str, lo: float, hi: float,
-                    norm: Any, cmap: Any) -> np.ndarray:
-    """RGBA face colours ``(r, s, 4)``: the scalar's colour (grey for ``'none'``) darkened by a
-    two-sided Lambert term ``0.35 + 0.65 |n . light|`` (course ch. 10, a directional light)."""
-    base = np.full(P.shape[:2] + (4,), (0.72, 0.74, 0.78, 1.0)) if color == "none" else cmap(norm(np.clip(val, lo, hi)))
-    lam = np.abs(np.einsum("...i,i->...", n, _LIGHT))  # two-sided Lambert
-    shade = 0.35 + 0.65 * lam
-    rgb = base.copy()
-    rgb[..., :3] *= shade[..., None]
-    return rgb
+def _render_view(panel: Panel, norm: Any, cmap: Any, size: tuple[int, int]) -> np.ndarray:
+    """One panel as an image ``(height, width, 3)``: its grids coloured (grey without ``cmap``;
+    VTK's lights shade them), control nets thin grey, control meshes thin green, its own lines,
+    curves black on top, markers."""
+    from .vtk_scene import Scene
 
-
-def _draw_lines(ax: Any, nets: Sequence[np.ndarray], curves: Sequence[BSplineCurve | np.ndarray]) -> None:
-    """Control nets as thin grey polylines (rows, then columns), then curves in black on top."""
-    for net in nets:
+    scene = Scene()
+    for P, n, val in panel.grids:
+        r, s = P.shape[:2]
+        rgb = (np.broadcast_to(np.array([0.72, 0.74, 0.78]), (r * s, 3)) if cmap is None
+               else cmap(norm(np.asarray(val, float).reshape(-1)))[:, :3])
+        scene.add_mesh(P.reshape(-1, 3), _triangles(r, s), normals=n.reshape(-1, 3), colors=rgb, specular=0.2)
+    net_lines: list[np.ndarray] = []
+    for net in panel.nets:
         net = np.asarray(net, float)
-        for row in net:
-            ax.plot(*row.T, color="0.25", lw=0.5, alpha=0.6)
-        for col in net.transpose(1, 0, 2):
-            ax.plot(*col.T, color="0.25", lw=0.5, alpha=0.6)
-    for c in curves:
-        if isinstance(c, BSplineCurve):
-            c = c.evaluate(np.linspace(*c.domain, 200))
-        ax.plot(*np.asarray(c, float).T, color="k", lw=1.6)
-
-
-def _frame_view(ax: Any, centre: np.ndarray, half: float, elev: float, azim: float, title: str | None) -> None:
-    """Equal axes on the bounding cube, the camera, axis labels and the panel's title."""
-    ax.set_xlim(centre[0] - half, centre[0] + half)
-    ax.set_ylim(centre[1] - half, centre[1] + half)
-    ax.set_zlim(centre[2] - half, centre[2] + half)
-    ax.set_box_aspect((1, 1, 1))
-    ax.view_init(elev=elev, azim=azim)
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
-    ax.set_zlabel("z")
-    if title is not None:
-        ax.set_title(title, fontsize=10)
-
-
-def _annotate(fig: Any, color: str, norm: Any, cmap: Any, title: str | None, subtitle: str | None) -> None:
-    """The colour bar (unless ``color == 'none'``) and the figure's title with its subtitle."""
-    from matplotlib import cm
-
-    if color != "none":
-        sm = cm.ScalarMappable(norm=norm, cmap=cmap)
-        label = {"mean": "mean curvature H", "gaussian": "Gaussian curvature K", "height": "z"}[color]
-        fig.colorbar(sm, ax=fig.axes, shrink=0.6, pad=0.02, label=label)
-    if title:
-        fig.suptitle(title if not subtitle else f"{title}\n{subtitle}", fontsize=12)
+        net_lines += list(net) + list(net.transpose(1, 0, 2))
+    scene.add_lines(net_lines, color=(0.25, 0.25, 0.25), width=1.0, opacity=0.6)
+    scene.add_lines([np.asarray(m, float) for m in panel.mesh_lines], color=(0.16, 0.48, 0.16), width=1.5, opacity=0.85)
+    for line, rgb_line, width in panel.lines:
+        scene.add_lines([np.asarray(line, float)], color=rgb_line, width=width)
+    curves = [c.evaluate(np.linspace(*c.domain, 200)) if isinstance(c, BSplineCurve) else np.asarray(c, float)
+              for c in panel.curves]
+    scene.add_lines(curves, color=(0.0, 0.0, 0.0), width=2.5)
+    for pts, rgb_pts, px in panel.points:
+        scene.add_points(np.asarray(pts, float), color=rgb_pts, size=px)
+    if panel.frame is not None:
+        scene.frame(panel.frame)
+    e, a = np.radians(panel.view[0]), np.radians(panel.view[1])
+    direction = (float(np.cos(e) * np.cos(a)), float(np.cos(e) * np.sin(a)), float(np.sin(e)))
+    return scene.render_array(size=size, camera=direction)

@@ -448,6 +448,13 @@ class Scene:
         segs = np.stack([P[ok], P[ok] + V[ok]], axis=1)
         self.add_lines(list(segs), color=color, width=width)
 
+    def frame(self, points: np.ndarray) -> None:
+        """Frame ``points (n, 3)`` too (nothing is drawn): panels that share a box compare at one scale."""
+        P = np.asarray(points, float).reshape(-1, 3)
+        P = P[np.all(np.isfinite(P), axis=1)]
+        if len(P):
+            self._bounds.append(_extent(P))
+
     def set_legend(self, title: str, lo: float, hi: float, *, cmap: str = "diverging", stripes: int = 1,
                    labels: int = 5) -> None:
         """Show a scalar bar for ``cmap`` on ``[lo, hi]`` with ``title`` (units included by the caller)."""

@@ -11,7 +11,6 @@ through OpenCascade's XCAF writers; ``convert`` says what IGES cannot carry.
 import tempfile
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from occsurf.algorithms import BSplineSurface
@@ -37,11 +36,14 @@ err = max(np.abs(f.surface.control_points - o.control_points).max() for f, o in 
 print(f"through IGES: names {[f.name for f in igs.faces]}, largest pole change {err:.1e}")
 
 # %%
-# What was written, drawn from the file read back.
-fig = plt.figure(figsize=(8, 4))
-ax = fig.add_subplot(projection="3d")
-for face in back.faces:
-    P = face.surface.evaluate_grid(np.linspace(0, 1, 30), np.linspace(0, 1, 30))
-    ax.plot_surface(P[..., 0], P[..., 1], P[..., 2], alpha=0.85)
-    ax.text(*P[15, 15], face.name)
-ax.set_title("two.step, read back")
+# What was written, drawn from the file read back (shaded by VTK, coloured by mean curvature).
+import sys  # noqa: E402
+
+sys.path.insert(0, str(Path.cwd()))
+from _show import show  # noqa: E402
+
+from occsurf.bridge.rendering.surfaces import render_surfaces  # noqa: E402
+
+png = render_surfaces(work / "two.png", [f.surface for f in back.faces], color="mean", title="two.step, read back",
+                      subtitle=", ".join(f.name for f in back.faces), views=((35.0, -70.0),))
+show([png])
