@@ -124,7 +124,8 @@ def colored_mesh(source: QualityReport | FaceField | Sequence[FaceField], indica
         A key of :data:`occsurf.bridge.rendering.vtk_scene.COLORMAPS`; default as the pictures.
     """
     from ..rendering.vtk_scene import colormap_rgb
-    from .pictures import PICTURE_KINDS, _scale
+    from .pictures import PICTURE_KINDS
+    from .scales import value_range
 
     fields = _fields(source)
     if not fields:
@@ -141,7 +142,7 @@ def colored_mesh(source: QualityReport | FaceField | Sequence[FaceField], indica
         colors = np.where(np.isfinite(V), np.where(V < 0.5, 245, 15), 128).astype(np.uint8)[:, None].repeat(3, 1)
     else:
         size = getattr(source, "size", None) or 1.0
-        lo, hi = scale if scale is not None else _scale([f.values[indicator] for f in fields], indicator, size)
+        lo, hi = scale if scale is not None else value_range([f.values[indicator] for f in fields], indicator, size)
         kind = PICTURE_KINDS.get(indicator)
         name = cmap or (kind[1] if kind is not None and kind[1] not in ("stripes", "grey") else "diverging")
         colors = colormap_rgb(V, lo, hi, name)

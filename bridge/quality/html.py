@@ -194,7 +194,8 @@ def viewer_payload(report: QualityReport) -> dict[str, Any]:
     """
     import numpy as np
 
-    from .pictures import EDGE_COLORS, ISOPHOTE_PAIRS, ZEBRA_PAIRS, _scale, model_sections
+    from .pictures import EDGE_COLORS, ISOPHOTE_PAIRS, ZEBRA_PAIRS, model_sections
+    from .scales import value_range
 
     fields = [report.fields[k] for k in sorted(report.fields)]
     total = sum(f.mesh.n_vertices for f in fields)
@@ -216,7 +217,7 @@ def viewer_payload(report: QualityReport) -> dict[str, Any]:
     for key, _, _, _ in VIEWER_INDICATORS:
         if key in (*PER_PIXEL, "shaded") or not fields:
             continue
-        lo, hi = _scale([f.values[key] for f in fields], key, report.size)
+        lo, hi = value_range([f.values[key] for f in fields], key, report.size)
         ranges[key] = [lo, hi]
     sections, combs, inflections = model_sections(report)
     order = list(EDGE_COLORS)

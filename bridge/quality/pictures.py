@@ -21,6 +21,7 @@ import numpy as np
 from ..messages import error_line
 from ..rendering.png import PngWriter
 from .choices import PICTURE_CHOICES, WORST_FACES
+from .scales import value_range
 
 if TYPE_CHECKING:
     from ..rendering.vtk_scene import Scene
@@ -75,42 +76,12 @@ COMB_SCALE = 0.12
 COMB_PERCENTILE = 99.0
 
 
-#: Smallest half-range of a curvature colour scale, times the model size (1/unit; squared for
-#: Gaussian curvature): a flat face's round-off (1e-14) is drawn as zero, not as a full scale.
-FLAT_SCALE = 1e-6
-
-
 _T = TypeVar("_T")
 
 
 def _returning(value: _T) -> Callable[[], _T]:
     """A function of no arguments that returns ``value`` (bound now, not when it is called)."""
     return lambda: value
-
-
-def _scale(values: Sequence[np.ndarray], kind: str, size: float = 1.0) -> tuple[float, float]:
-    """Common colour range of several faces' values (symmetric about 0 for signed curvatures),
-    from :func:`occsurf.algorithms.quality.color_scale`, never narrower than :data:`FLAT_SCALE`."""
-    from occsurf.algorithms.quality import color_scale
-
-    if kind == "zebra":
-        return 0.0, 1.0
-    if kind == "isophote":
-        return -1.0, 1.0
-    if kind == "draft":
-        return -90.0, 90.0
-    allv = np.concatenate([np.asarray(v, float).ravel() for v in values]) if values else np.zeros(1)
-    finite = allv[np.isfinite(allv)]
-    floor = FLAT_SCALE / size ** (2 if kind == "gaussian" else 1)
-    if finite.size == 0:
-        return -floor, floor
-    mode = "symmetric" if kind in ("mean", "gaussian", "max", "min") else "clipped"
-    sc = color_scale(finite, mode)
-    lo, hi = float(sc.lo), float(sc.hi)
-    if hi - lo < 2 * floor:
-        mid = 0.0 if mode == "symmetric" else (lo + hi) / 2
-        lo, hi = mid - floor, mid + floor
-    return lo, hi
 
 
 def _hedgehog_points(fields: Sequence[FaceField], size: float) -> tuple[np.ndarray, np.ndarray]:
@@ -285,7 +256,7 @@ def picture_scene(fields: Sequence[FaceField], kind: str, *, title: str = "", mo
         for P, T, N, _ in _merged_meshes(fields, None):
             scene.add_mesh(P, T, normals=N, shader=kind, stripes=ZEBRA_PAIRS if kind == "zebra" else ISOPHOTE_PAIRS)
     elif value is not None:
-        lo, hi = scale if scale is not None else _scale([f.values[value] for f in fields], value, model_size)
+        lo, hi = scale if scale is not None else value_range([f.values[value] for f in fields], value, model_size)
         for P, T, N, S in _merged_meshes(fields, value):
             scene.add_mesh(P, T, normals=N, scalars=S, cmap=cmap, scale=(lo, hi))
         scene.set_legend(legend, lo, hi, cmap=cmap)
@@ -380,7 +351,7 @@ def render_report_pictures(report: QualityReport, out_dir: str | Path, *, model_
     shown: dict[str, str] = {}
     if not fields:
         return shown
-    scales = {v: _scale([f.values[v] for f in fields], v, report.size) for v in ("mean", "gaussian", "max", "absolute")}
+    scales = {v: value_range([f.values[v] for f in fields], v, report.size) for v in ("mean", "gaussian", "max", "absolute")}
     flags_all = _flag_points(report)
     drawn = [f for f in fields if faces is None or f.mesh.index in faces]
     total = len(model_pictures) + len(drawn) * len(face_pictures)
