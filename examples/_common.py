@@ -6,7 +6,6 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 
 def output_folder(out_dir: Path | str) -> Path:
@@ -14,15 +13,6 @@ def output_folder(out_dir: Path | str) -> Path:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     return out
-
-
-def label_axes(ax: Any, title: str, view: tuple[float, float], fontsize: int = 11) -> None:
-    """Title, ``x``/``y``/``z`` axis labels and the view (elevation, azimuth) of a 3-D panel."""
-    ax.view_init(elev=view[0], azim=view[1])
-    ax.set_title(title, fontsize=fontsize)
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
-    ax.set_zlabel("z")
 
 
 def script(render: Callable[[Path], list[Path]]) -> None:  # pragma: no cover - manual use

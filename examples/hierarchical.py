@@ -108,7 +108,7 @@ def _sample(hs: HierarchicalSurface, lo: float = 0.0, hi: float = 1.0, res: int 
     base = hs.base
     nb = base.normal(*np.meshgrid(us, us, indexing="ij"))
     h = np.einsum("...i,...i->...", P - base.evaluate_grid(us, us), nb)
-    return P, np.nan_to_num(n, nan=0.0), h
+    return P, n, h  # NaN normals (a degenerate point) are mended by the scene, from the mesh
 
 
 def _render(path: Path, panels: list[tuple[PanelData, str]], suptitle: str, view: tuple[float, float] = (30, -62),

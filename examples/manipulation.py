@@ -192,7 +192,7 @@ def _render_surface(path: Path) -> BSplineSurface:
     legend = [("control net", Line2D([], [], color="0.25", marker="o", markersize=3, lw=0.8)),
               ("surface before (wireframe)", Line2D([], [], color=BEFORE, lw=1)),
               ("normal wanted (reached)", Line2D([], [], color=TARGET, lw=2.5)),
-              (f"S({u}, {v}) before", Line2D([], [], color="w", marker="o", markeredgecolor="k", lw=0)),
+              (f"S({u}, {v}) before (seen on the left)", Line2D([], [], color="w", marker="o", markeredgecolor="k", lw=0)),
               ("target", Line2D([], [], color=TARGET, marker="o", markersize=8, lw=0))]
     render_panels(path, panels, norm=Normalize(*zlim), cmap=cm.viridis, colorbar_label="z", legend=legend,
                   legend_panel=1, title="drag_surface_point: minimum-norm change of the poles in the window (1..5) x "

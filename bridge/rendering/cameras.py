@@ -79,10 +79,10 @@ def _view_axes(position: np.ndarray, target: np.ndarray, up: np.ndarray) -> np.n
 
 def fit_camera(view: str | Sequence[float], lo: Sequence[float], hi: Sequence[float], aspect: float = 4 / 3, *,
                margin: float = 1.06, keep_distance: bool = False, width_share: float = 0.94,
-               shift_left: bool = False, zoom: float = 1.0) -> Camera:
+               shift_left: bool = False, zoom: float = 1.0, up: Sequence[float] | None = None) -> Camera:
     """The camera that looks at the box ``[lo, hi]`` from a named view (:data:`VIEWS`) or from a
-    direction (target to camera; up +z, or +y within ~18 degrees of the z axis) and shows all its
-    eight corners.
+    direction (target to camera; up +z, or +y within ~18 degrees of the z axis, unless ``up`` is
+    given: a direction not along the view, made square to it) and shows all its eight corners.
 
     Two framings, one code path:
 
@@ -99,13 +99,25 @@ def fit_camera(view: str | Sequence[float], lo: Sequence[float], hi: Sequence[fl
     from occsurf.algorithms.errors import InvalidGeometryError
 
     direction: tuple[float, ...]
+    view_up: tuple[float, float, float]
     if isinstance(view, str):
         if view not in VIEWS:
             raise InvalidGeometryError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
-        direction, up = VIEWS[view]
+        direction, view_up = VIEWS[view]
     else:
         direction = tuple(float(x) for x in view)
-        up = (0.0, 0.0, 1.0) if abs(direction[2]) < 0.95 * np.linalg.norm(direction) else (0.0, 1.0, 0.0)
+        if up is None:
+            view_up = (0.0, 0.0, 1.0) if abs(direction[2]) < 0.95 * np.linalg.norm(direction) else (0.0, 1.0, 0.0)
+        else:
+            d, u = np.asarray(direction, float), np.asarray(up, float)
+            if u.shape != (3,) or d.shape != (3,):
+                raise InvalidGeometryError(f"up: expected 3 numbers, got {up!r}")
+            u = u - (u @ d) / (d @ d) * d
+            if not np.isfinite(u).all() or np.linalg.norm(u) <= 1e-9 * np.linalg.norm(up):
+                raise InvalidGeometryError(f"up: expected a direction across the view, got {up!r}")
+            u = u / np.linalg.norm(u)
+            view_up = (float(u[0]), float(u[1]), float(u[2]))
+    up = view_up
     lo_, hi_ = np.asarray(lo, float), np.asarray(hi, float)
     centre = (lo_ + hi_) / 2
     corners = np.array([[x, y, z] for x in (lo_[0], hi_[0]) for y in (lo_[1], hi_[1]) for z in (lo_[2], hi_[2])])

@@ -11,7 +11,7 @@ Lives in ``occsurf.bridge`` (the gallery in ``occsurf.examples`` uses it), not i
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -152,12 +152,17 @@ def render_surfaces(
     Raises
     ------
     ValueError
-        An unknown ``color``.
+        An unknown ``color``; no view.
+    InvalidGeometryError
+        An item that is neither a surface nor points ``(r, s, 3)``, normals of their shape and
+        values ``(r, s)``.
     RuntimeError
         VTK cannot render offscreen here (:func:`~.vtk_scene.render_available`).
     """
     if color not in COLORINGS:
         raise ValueError(f"color: expected one of {', '.join(COLORINGS)}, got {color!r}")
+    if not views:
+        raise ValueError("views: expected at least one (elevation, azimuth)")
     grids = _grids(items, resolution, color)
     lo, hi, norm, cmap = _colour_scale(grids, color, limits)
     grids = [(P, n, np.clip(val, lo, hi)) for P, n, val in grids]
@@ -185,7 +190,8 @@ def render_panels(path: str | Path, panels: Sequence[Panel], *, norm: Any = None
         The PNG to write (parent folders must exist).
     panels : sequence of Panel
     norm, cmap : matplotlib ``Normalize`` and colour map, optional
-        The grids' scalars to colour (every panel alike); without ``cmap`` the surfaces are grey.
+        The grids' scalars to colour (every panel alike; NaN values in ``vtk_scene.NAN_COLOR``);
+        without ``cmap`` the surfaces are grey, without ``norm`` the values' range is mapped.
     colorbar_label : str, optional
         Draw the colour bar of ``norm`` and ``cmap`` with this label.
     title, subtitle : str, optional
@@ -201,6 +207,10 @@ def render_panels(path: str | Path, panels: Sequence[Panel], *, norm: Any = None
 
     Raises
     ------
+    ValueError
+        No panel; ``legend_panel`` not a panel's index (negative counts from the end).
+    InvalidGeometryError
+        A grid is not points ``(r, s, 3)``, normals of their shape and values ``(r, s)``.
     RuntimeError
         VTK cannot render offscreen here (:func:`~.vtk_scene.render_available`).
     """
@@ -209,14 +219,26 @@ def render_panels(path: str | Path, panels: Sequence[Panel], *, norm: Any = None
 
     from .vtk_scene import render_available
 
+    n = len(panels)
+    if n == 0:
+        raise ValueError("panels: expected at least one panel")
+    if legend and not -n <= legend_panel < n:
+        raise ValueError(f"legend_panel: expected a panel's index from {-n} to {n - 1}, got {legend_panel}")
+    panels = [replace(p, grids=[_check_grid(g, f"panels[{k}].grids[{i}]") for i, g in enumerate(p.grids)])
+              for k, p in enumerate(panels)]
+    if cmap is not None and norm is None:  # the grids' finite values, min to max
+        from matplotlib.colors import Normalize
+
+        vals = np.concatenate([np.ravel(g[2]) for p in panels for g in p.grids] or [np.zeros(1)])
+        vals = vals[np.isfinite(vals)]
+        norm = Normalize(float(vals.min()), float(vals.max())) if vals.size else Normalize(0.0, 1.0)
     if not render_available():
         raise RuntimeError("VTK cannot render offscreen here: no surface picture")
-    n = len(panels)
     ncols = n if ncols is None else max(1, min(int(ncols), n))
     nrows = (n + ncols - 1) // ncols
     bar = colorbar_label is not None and cmap is not None
     width_in, height_in = figsize or (6.4 * ncols + (1.2 if bar else 0), 6.0 * nrows)
-    top = 0.86 if nrows == 1 else 1.0 - 0.8 / height_in
+    top = 0.86 if nrows == 1 else max(0.5, 1.0 - 0.8 / height_in)
     size = (max(16, int(width_in * dpi * (0.9 if bar else 0.98) / ncols)),
             max(16, int(height_in * dpi * (top - 0.02) / nrows * 0.92)))
     fig = Figure(figsize=(width_in, height_in), dpi=dpi)
@@ -227,7 +249,7 @@ def render_panels(path: str | Path, panels: Sequence[Panel], *, norm: Any = None
         ax.set_axis_off()
         if panel.title:
             ax.set_title(panel.title, fontsize=10)
-        if k == legend_panel and legend:
+        if legend and k == legend_panel % n:
             ax.legend([h for _, h in legend], [s for s, _ in legend], loc="upper left", fontsize=8, framealpha=0.8)
     fig.subplots_adjust(left=0.01, right=0.9 if bar else 0.99, bottom=0.02, top=top, wspace=0.02, hspace=0.08)
     if bar:
@@ -246,13 +268,27 @@ def _grids(items: Sequence[BSplineSurface | Grid], resolution: int, color: str) 
     """Points ``(r, s, 3)``, normals ``(r, s, 3)`` and colour scalar ``(r, s)`` of every item:
     surfaces sampled by :func:`surface_grid`, sampled tuples taken as float arrays."""
     grids = []
-    for it in items:
+    for k, it in enumerate(items):
         if isinstance(it, BSplineSurface):
             grids.append(surface_grid(it, resolution, color))
         else:
-            P, n, val = (np.asarray(a, float) for a in it)
-            grids.append((P, n, val))
+            grids.append(_check_grid(it, f"items[{k}]"))
     return grids
+
+
+def _check_grid(grid: Any, name: str) -> Grid:
+    """A sampled surface as float arrays: points ``(r, s, 3)`` with ``r, s >= 2``, normals of the
+    same shape, values ``(r, s)``."""
+    from occsurf.algorithms.errors import InvalidGeometryError
+
+    try:
+        P, n, val = (np.asarray(a, float) for a in grid)
+    except (TypeError, ValueError) as err:
+        raise InvalidGeometryError(f"{name}: expected (points, normals, values) arrays ({err})") from err
+    if P.ndim != 3 or P.shape[-1] != 3 or min(P.shape[:2]) < 2 or n.shape != P.shape or val.shape != P.shape[:2]:
+        raise InvalidGeometryError(f"{name}: expected points (r, s, 3) with r, s >= 2, normals of their shape and "
+                                   f"values (r, s); got {P.shape}, {n.shape} and {val.shape}")
+    return P, n, val
 
 
 def _colour_scale(grids: list[Grid], color: str, limits: tuple[float, float] | None) -> tuple[float, float, Any, Any]:
@@ -266,13 +302,14 @@ def _colour_scale(grids: list[Grid], color: str, limits: tuple[float, float] | N
     from matplotlib.colors import Normalize, TwoSlopeNorm
 
     allv = np.concatenate([g[2].ravel() for g in grids])
+    allv = allv[np.isfinite(allv)]  # NaN values are drawn in vtk_scene.NAN_COLOR, not counted here
     if limits is not None:
         lo, hi = limits
     elif color in ("mean", "gaussian"):
-        m = float(np.percentile(np.abs(allv), 98)) or 1.0
+        m = (float(np.percentile(np.abs(allv), 98)) if allv.size else 0.0) or 1.0
         lo, hi = -m, m
     else:
-        lo, hi = float(allv.min()), float(allv.max())
+        lo, hi = (float(allv.min()), float(allv.max())) if allv.size else (0.0, 1.0)
         if hi <= lo:
             hi = lo + 1.0
     if color in ("mean", "gaussian"):
@@ -294,13 +331,17 @@ def _render_view(panel: Panel, norm: Any, cmap: Any, size: tuple[int, int]) -> n
     """One panel as an image ``(height, width, 3)``: its grids coloured (grey without ``cmap``;
     VTK's lights shade them), control nets thin grey, control meshes thin green, its own lines,
     curves black on top, markers."""
-    from .vtk_scene import Scene
+    from .vtk_scene import NAN_COLOR, Scene
 
     scene = Scene()
     for P, n, val in panel.grids:
         r, s = P.shape[:2]
-        rgb = (np.broadcast_to(np.array([0.72, 0.74, 0.78]), (r * s, 3)) if cmap is None
-               else cmap(norm(np.asarray(val, float).reshape(-1)))[:, :3])
+        if cmap is None:
+            rgb = np.broadcast_to(np.array([0.72, 0.74, 0.78]), (r * s, 3))
+        else:
+            v = np.asarray(val, float).reshape(-1)
+            rgb = cmap(norm(np.where(np.isfinite(v), v, 0.0)))[:, :3]
+            rgb[~np.isfinite(v)] = NAN_COLOR
         scene.add_mesh(P.reshape(-1, 3), _triangles(r, s), normals=n.reshape(-1, 3), colors=rgb, specular=0.2)
     net_lines: list[np.ndarray] = []
     for net in panel.nets:
@@ -317,6 +358,18 @@ def _render_view(panel: Panel, norm: Any, cmap: Any, size: tuple[int, int]) -> n
         scene.add_points(np.asarray(pts, float), color=rgb_pts, size=px)
     if panel.frame is not None:
         scene.frame(panel.frame)
-    e, a = np.radians(panel.view[0]), np.radians(panel.view[1])
-    direction = (float(np.cos(e) * np.cos(a)), float(np.cos(e) * np.sin(a)), float(np.sin(e)))
-    return scene.render_array(size=size, camera=direction)
+    direction, up = _view_axes(*panel.view)
+    return scene.render_array(size=size, camera=direction, up=up)
+
+
+def _view_axes(elev: float, azim: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """matplotlib's ``view_init(elev, azim)`` as a camera: the direction from the target to the eye
+    and the direction shown upwards, +z made square to the view (looking straight down or up,
+    where that vanishes, the limit of it: ``-/+ (cos a, sin a, 0)``)."""
+    e, a = np.radians(elev), np.radians(azim)
+    d = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+    up = np.array([0.0, 0.0, 1.0]) - d[2] * d
+    if np.linalg.norm(up) < 1e-9:
+        up = -np.sign(d[2]) * np.array([np.cos(a), np.sin(a), 0.0])
+    up /= np.linalg.norm(up)
+    return (float(d[0]), float(d[1]), float(d[2])), (float(up[0]), float(up[1]), float(up[2]))

@@ -471,8 +471,9 @@ class Scene:
 
     # ------------------------------------------------------------------------------ output
     def render_array(self, *, size: tuple[int, int] = (800, 600), camera: str | Sequence[float] = "iso",
-                     zoom: float = 1.0) -> np.ndarray:
-        """Render and return the image as ``(height, width, 3)`` uint8 (row 0 at the top)."""
+                     zoom: float = 1.0, up: Sequence[float] | None = None) -> np.ndarray:
+        """Render and return the image as ``(height, width, 3)`` uint8 (row 0 at the top). ``up``:
+        the direction shown upwards with a ``camera`` direction (:func:`~.cameras.fit_camera`)."""
         width, height = int(size[0]), int(size[1])
         if width < 16 or height < 16:
             raise ValueError(f"size: expected at least 16 x 16 pixels, got {size!r}")
@@ -480,7 +481,7 @@ class Scene:
         try:
             win.AddRenderer(self._renderer)
             self._decorate()
-            self._place_camera(camera, zoom, width / height)
+            self._place_camera(camera, zoom, width / height, up)
             win.Render()
             arr, _ = read_pixels(win, width, height)
         finally:
@@ -540,7 +541,8 @@ class Scene:
                 light.SetIntensity(intensity)
                 self._renderer.AddLight(light)
 
-    def _place_camera(self, camera: str | Sequence[float], zoom: float, aspect: float = 4 / 3) -> None:
+    def _place_camera(self, camera: str | Sequence[float], zoom: float, aspect: float = 4 / 3,
+                      up: Sequence[float] | None = None) -> None:
         """Look at the bounding box from the preset direction and zoom so its eight corners fill the
         frame (the legend's strip on the right kept free): :func:`~.cameras.fit_camera` with
         ``keep_distance``."""
@@ -553,7 +555,7 @@ class Scene:
         try:
             cam = fit_camera(camera, pts.min(axis=0), pts.max(axis=0), aspect, keep_distance=True,
                              width_share=0.80 if legend else 0.94,  # the scalar bar takes the right ~16 %
-                             shift_left=legend, zoom=zoom)
+                             shift_left=legend, zoom=zoom, up=None if isinstance(camera, str) else up)
         except InvalidGeometryError as err:
             raise ValueError(str(err)) from None
         apply_camera(self._renderer, cam)

@@ -45,5 +45,5 @@ from _show import show  # noqa: E402
 from occsurf.bridge.rendering.surfaces import render_surfaces  # noqa: E402
 
 png = render_surfaces(work / "two.png", [f.surface for f in back.faces], color="mean", title="two.step, read back",
-                      subtitle=", ".join(f.name for f in back.faces), views=((35.0, -70.0),))
+                      subtitle="hill: x from 0 to 1; dip: x from 1.2 to 2.2", views=((35.0, -70.0),))
 show([png])

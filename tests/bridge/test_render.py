@@ -8,6 +8,9 @@ import pytest
 from occsurf.algorithms import BSplineSurface, circle
 from occsurf.algorithms.fitting.interpolation import loft
 from occsurf.bridge.rendering.surfaces import render_surfaces, surface_grid
+from occsurf.bridge.rendering.vtk_scene import render_available
+
+needs_vtk = pytest.mark.skipif(not render_available(), reason="VTK cannot open an offscreen window here")
 
 
 def _vase() -> BSplineSurface:
@@ -24,6 +27,7 @@ def test_surface_grid_curvature_of_a_sphere_like_section():
     np.testing.assert_allclose(K, 0.0, atol=1e-12)
 
 
+@needs_vtk
 @pytest.mark.parametrize("color", ["mean", "gaussian", "height", "none"])
 def test_render_writes_png(tmp_path, color):
     s = _vase()
@@ -57,10 +61,11 @@ def _pixels(path) -> np.ndarray:
     return np.round(img[..., :3] * 255).astype(int)
 
 
+@needs_vtk
 def test_the_surface_is_drawn_in_its_curvature_colours(tmp_path):
-    """Seen from above, the wave's crest and trough show the diverging map's two ends (blue where
-    H < 0, red where H > 0: saturated colours no background, bar or grey surface has); without
-    colouring neither appears."""
+    """Seen from above (+x to the right), the wave's crest (x ~ 1/4, H < 0) is blue and its trough
+    (x ~ 3/4, H > 0) red, the diverging map's two ends (saturated colours no background, bar or
+    grey surface has); without colouring neither appears."""
     s = _wave()
     H = surface_grid(s, 30, "mean")[2]
     assert H.min() < -0.5 and H.max() > 0.5
@@ -68,10 +73,53 @@ def test_the_surface_is_drawn_in_its_curvature_colours(tmp_path):
     for color in ("mean", "none"):
         img = _pixels(render_surfaces(tmp_path / f"{color}.png", [s], color=color, views=((89.0, -90.0),)))
         r, g, b = img[..., 0], img[..., 1], img[..., 2]
-        counts[color] = (int(np.sum((r > b + 80) & (r > g + 60))), int(np.sum((b > r + 80) & (b > g + 40))))
+        red, blue = (r > b + 80) & (r > g + 60), (b > r + 80) & (b > g + 40)
+        counts[color] = (int(red.sum()), int(blue.sum()))
+        if color == "mean":
+            cols = np.broadcast_to(np.arange(img.shape[1])[None, :], red.shape)
+            panel = cols < 0.8 * img.shape[1]  # the colour bar stands right of it
+            x_red, x_blue = (float(cols[panel & m].mean()) for m in (red, blue))
+            assert x_red > x_blue + 0.1 * img.shape[1], (x_red, x_blue)
     total = img.shape[0] * img.shape[1]
     assert min(counts["mean"]) > 0.01 * total, counts  # the bar alone is < 0.3 % of the picture
     assert max(counts["none"]) == 0, counts
+
+
+@pytest.mark.parametrize("elev", [30.0, 60.0, 75.0, 80.0, 89.0, 90.0, -80.0])
+@pytest.mark.parametrize("azim", [-60.0, 0.0, 25.0])
+def test_views_are_matplotlibs(elev, azim):
+    """``(elev, azim)`` as matplotlib's ``view_init``: the eye's direction, and +z shown upwards,
+    square to the view; straight down (or up) the limit of that, with no jump near the pole (VTK's
+    own choice, +y above 72 degrees, turned steep pictures by up to 90 degrees)."""
+    from occsurf.bridge.rendering.surfaces import _view_axes
+
+    d, up = (np.array(x) for x in _view_axes(elev, azim))
+    e, a = np.radians(elev), np.radians(azim)
+    np.testing.assert_allclose(d, [np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)], atol=1e-15)
+    assert abs(np.linalg.norm(up) - 1) < 1e-12 and abs(up @ d) < 1e-12
+    if abs(elev) < 90:
+        assert up[2] > 0
+    near = np.array(_view_axes(elev - 1e-6 * np.sign(elev), azim)[1])
+    assert np.linalg.norm(up - near) < 1e-5  # continuous up to the pole
+
+
+@needs_vtk
+def test_a_steep_view_keeps_matplotlibs_up():
+    """At (80, 0) the eye stands high on the +x side: a marker at -x shows above one at +x (VTK's
+    default up, +y at that elevation, put them side by side)."""
+    from matplotlib.colors import Normalize
+
+    from occsurf.bridge.rendering import surfaces as R
+
+    grid = surface_grid(_wave(), 10, "height")
+    panel = R.Panel([grid], points=[(np.array([[-0.5, 0.5, 0.5]]), (0.9, 0.0, 0.0), 30.0),
+                                    (np.array([[1.5, 0.5, 0.5]]), (0.0, 0.0, 0.9), 30.0)], view=(80.0, 0.0))
+    img = R._render_view(panel, Normalize(0, 1), None, (300, 300)).astype(int)
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    rows_red, cols_red = np.nonzero((r > 150) & (g < 80) & (b < 80))
+    rows_blue, cols_blue = np.nonzero((b > 150) & (r < 80) & (g < 80))
+    assert rows_red.size and rows_blue.size
+    assert rows_red.mean() < rows_blue.mean() - 40 and abs(cols_red.mean() - cols_blue.mean()) < 20
 
 
 def test_panels_framed_on_one_box_compare_at_one_scale():
@@ -104,5 +152,62 @@ def test_no_model_is_shaded_by_matplotlib():
     files = [p for d in ("algorithms", "bridge", "examples", "docs/gallery") for p in (root / d).rglob("*.py")]
     assert len(files) > 100
     bad = [str(p.relative_to(root)) for p in files
-           if any(s in p.read_text(encoding="utf-8") for s in ("mplot3d", 'projection="3d"', "projection='3d'"))]
+           if any(s in p.read_text(encoding="utf-8") for s in ("mplot3d", 'projection="3d"', "projection='3d'",
+                                                               ".view_init(", "Axes3D", ".plot_surface(", ".plot_trisurf("))]
     assert bad == []
+
+
+def test_bad_grids_views_and_panels_are_refused(tmp_path):
+    """Sampled items must be grids (points (r, s, 3), normals alike, values (r, s)): points as a
+    list, or values of another shape, are named, not drawn as slivers or half a surface; no view,
+    no panel and a legend for a panel that is not there are refused before anything is drawn."""
+    from matplotlib.lines import Line2D
+
+    from occsurf.algorithms.errors import InvalidGeometryError
+    from occsurf.bridge.rendering.surfaces import Panel, render_panels
+
+    P, n, val = surface_grid(_wave(), 12, "height")
+    with pytest.raises(InvalidGeometryError, match=r"items\[0\]: expected points \(r, s, 3\)"):
+        render_surfaces(tmp_path / "a.png", [(P.reshape(-1, 3), n.reshape(-1, 3), val.ravel())], color="height")
+    with pytest.raises(InvalidGeometryError, match=r"items\[1\].*\(6, 12\)"):
+        render_surfaces(tmp_path / "b.png", [(P, n, val), (P, n, val[:6])], color="height")
+    with pytest.raises(ValueError, match="views: expected at least one"):
+        render_surfaces(tmp_path / "c.png", [(P, n, val)], views=())
+    with pytest.raises(ValueError, match="panels: expected at least one"):
+        render_panels(tmp_path / "d.png", [])
+    with pytest.raises(ValueError, match="legend_panel: expected a panel's index from -2 to 1, got 2"):
+        render_panels(tmp_path / "e.png", [Panel([(P, n, val)]), Panel([(P, n, val)])],
+                      legend=[("a", Line2D([], []))], legend_panel=2)
+    assert not any((tmp_path / f"{c}.png").exists() for c in "abcde")
+
+
+@needs_vtk
+def test_nan_values_are_magenta_and_the_rest_keeps_its_colours(tmp_path):
+    """A NaN value (a degenerate point's curvature) is drawn in ``vtk_scene.NAN_COLOR`` where it
+    is; it neither blackens the surface (a NaN in the range made every vertex the map's 'bad'
+    colour) nor stops the range of the others being found (``norm`` left to the values)."""
+    from matplotlib import cm
+
+    from occsurf.bridge.rendering import surfaces as R
+
+    P, n, val = surface_grid(_wave(), 20, "height")
+    val = val.copy()
+    val[8:12, 8:12] = np.nan
+    path = R.render_panels(tmp_path / "nan.png", [R.Panel([(P, n, val)], view=(89.0, -90.0))],
+                           cmap=cm.viridis, colorbar_label="z")
+    rgb = _pixels(path)
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    magenta = (r > 140) & (g < 90) & (b > 140) & (np.abs(r - b) < 40)  # shaded: ~(170, 0, 170)
+    black = (r < 30) & (g < 30) & (b < 30)
+    assert magenta.sum() > 50 and black.sum() < 0.01 * r.size, (int(magenta.sum()), int(black.sum()))
+
+
+def test_an_up_along_the_view_is_refused_and_another_is_made_square():
+    from occsurf.algorithms.errors import InvalidGeometryError
+    from occsurf.bridge.rendering.cameras import fit_camera
+
+    lo, hi = (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)
+    with pytest.raises(InvalidGeometryError, match="up: expected a direction across the view"):
+        fit_camera((0.0, 0.0, 1.0), lo, hi, up=(0.0, 0.0, -2.0))
+    cam = fit_camera((1.0, 0.0, 1.0), lo, hi, up=(0.0, 0.0, 1.0))
+    np.testing.assert_allclose(cam.up, np.array([-1.0, 0.0, 1.0]) / np.sqrt(2), atol=1e-15)
