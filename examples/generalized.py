@@ -95,18 +95,25 @@ def render_generalized(path: Path, surface: GeneralizedSurface, *, title: str, c
                        color: str = "mean", views: tuple[tuple[float, float], ...] = ((30.0, -60.0), (65.0, 25.0)),
                        resolution: int = 9, subtitle: str | None = None) -> Path:
     """One PNG: the surface's patches coloured by ``color`` ("mean" or "gaussian") curvature and
-    shaded by VTK (:func:`~occsurf.bridge.rendering.surfaces.render_surfaces`), the control mesh
-    drawn as thin green lines, patch boundaries as dark lines."""
-    from occsurf.bridge.rendering.surfaces import render_surfaces
+    shaded by VTK (:func:`~occsurf.bridge.rendering.surfaces.render_panels`), the control mesh
+    drawn as thin green lines with its vertices as dots, patch boundaries as thin dark lines."""
+    from matplotlib import cm
+    from matplotlib.colors import TwoSlopeNorm
+
+    from occsurf.bridge.rendering.surfaces import Panel, render_panels
 
     grids = _sample(surface, resolution, color)
     lim = float(np.percentile(np.abs(np.concatenate([g[2].ravel() for g in grids])), 97)) or 1.0
+    grids = [(P, N, np.clip(c, -lim, lim)) for P, N, c in grids]
     t = np.linspace(0.0, 1.0, 24)
-    edges = [p.evaluate(p.edge_points(k, t)) for p in surface.patches for k in range(p.sides)]
+    boundaries = [(p.evaluate(p.edge_points(k, t)), (0.15, 0.15, 0.15), 1.0) for p in surface.patches
+                  for k in range(p.sides)]
     mesh = control if control is not None else surface.mesh
-    return render_surfaces(path, grids, color=color, title=title, subtitle=subtitle, curves=edges,
-                           mesh_lines=[mesh.vertices[list(e)] for e in mesh.edges], views=views,
-                           limits=(-lim, lim), figsize=(5.6 * len(views) + 1.2, 5.6))
+    panels = [Panel(grids, mesh_lines=[mesh.vertices[list(e)] for e in mesh.edges], lines=boundaries,
+                    points=[(mesh.vertices, (0.16, 0.48, 0.16), 6.0)], view=view) for view in views]
+    return render_panels(path, panels, norm=TwoSlopeNorm(vcenter=0.0, vmin=-lim, vmax=lim), cmap=cm.coolwarm,
+                         colorbar_label="mean curvature H" if color == "mean" else "Gaussian curvature K",
+                         title=title, subtitle=subtitle, figsize=(5.6 * len(views) + 1.2, 5.6))
 
 
 # ------------------------------------------------------------------------------------- demo
