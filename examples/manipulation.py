@@ -170,16 +170,14 @@ def _render_surface(path: Path) -> BSplineSurface:
     s1 = drag_surface_point(s0, u, v, target, normal=normal, window=((1, 5), (1, 5)))
     us = np.linspace(0, 1, 41)
     U, V = np.meshgrid(us, us, indexing="ij")
-    zlim = (min(s0.evaluate_grid(us, us)[..., 2].min(), s1.evaluate_grid(us, us)[..., 2].min()) - 0.2,
-            max(s0.evaluate_grid(us, us)[..., 2].max(), s1.evaluate_grid(us, us)[..., 2].max()) + 0.3)
-    G0 = s0.evaluate_grid(us, us)
+    G0, G1 = s0.evaluate_grid(us, us), s1.evaluate_grid(us, us)
+    zlim = (min(G0[..., 2].min(), G1[..., 2].min()) - 0.2, max(G0[..., 2].max(), G1[..., 2].max()) + 0.3)
     tip = target + 1.2 * s1.normal(u, v)
     target_rgb, before_rgb = to_rgb(TARGET), to_rgb(BEFORE)
     wire = [G0[i] for i in range(0, 41, 4)] + [G0[:, j] for j in range(0, 41, 4)]
-    box = np.concatenate([G0.reshape(-1, 3), s1.evaluate_grid(us, us).reshape(-1, 3), tip[None]])
+    box = np.concatenate([G0.reshape(-1, 3), G1.reshape(-1, 3), tip[None]])
     panels = []
-    for s, title in ((s0, "before"), (s1, "after: point dragged up 1.8, normal tilted")):
-        G = s.evaluate_grid(us, us)
+    for s, G, title in ((s0, G0, "before"), (s1, G1, "after: point dragged up 1.8, normal tilted")):
         grid = (G, s.normal(U, V), G[..., 2])
         marks = [(s.control_points.reshape(-1, 3), (0.1, 0.1, 0.1), 5.0), (p0[None], (1.0, 1.0, 1.0), 12.0),
                  (target[None], target_rgb, 16.0)]

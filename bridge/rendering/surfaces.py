@@ -349,8 +349,11 @@ def _render_view(panel: Panel, norm: Any, cmap: Any, size: tuple[int, int]) -> n
         net_lines += list(net) + list(net.transpose(1, 0, 2))
     scene.add_lines(net_lines, color=(0.25, 0.25, 0.25), width=1.0, opacity=0.6)
     scene.add_lines([np.asarray(m, float) for m in panel.mesh_lines], color=(0.16, 0.48, 0.16), width=1.5, opacity=0.85)
+    styles: dict[tuple[RGB, float], list[np.ndarray]] = {}  # one VTK actor per colour and width
     for line, rgb_line, width in panel.lines:
-        scene.add_lines([np.asarray(line, float)], color=rgb_line, width=width)
+        styles.setdefault((rgb_line, float(width)), []).append(np.asarray(line, float))
+    for (rgb_line, width), polylines in styles.items():
+        scene.add_lines(polylines, color=rgb_line, width=width)
     curves = [c.evaluate(np.linspace(*c.domain, 200)) if isinstance(c, BSplineCurve) else np.asarray(c, float)
               for c in panel.curves]
     scene.add_lines(curves, color=(0.0, 0.0, 0.0), width=2.5)
