@@ -19,11 +19,11 @@ span tables of :func:`span_table`. The kernels are serial (deterministic results
 compare single-threaded peers).
 
 The module is longer than the house's ~600 lines on purpose: numba's on-disk cache is keyed by the
-source file of each kernel, and the helpers are inlined into the kernels, so a kernel in another
-file would keep its cached copy of a helper after the helper changed here. One file, one cache.
-Besides evaluation it holds :func:`surface_project`, the point projection of
-:func:`occsurf.algorithms.fitting._common.project_points` per point (first use compiles it, about
-17 s once per machine; cached after).
+source file of each kernel, and the helpers are compiled into the kernels (LLVM inlines them), so
+a kernel in another file would keep its cached copy of a helper after the helper changed here. One
+file, one cache. Besides evaluation it holds :func:`surface_project`, the point projection of
+:func:`occsurf.algorithms.fitting._common.project_points` per point. The first use of the kernels
+on a machine compiles them (all seven: 21-28 s on the 2-core test machine; cached after).
 
 References
 ----------
@@ -753,13 +753,15 @@ def grid_partials_rational(Du: _F, su: _I, p: int, G: _F, k: int, out: _F) -> No
             _surface_quotient(hf, start, src, wi, coef, o, out3, a * mv + b)
 
 
+#: Compiled as functions the kernels call; LLVM inlines them where it pays (the optimised kernels
+#: call the same few runtime functions either way). Numba's own ``inline="always"``, used until
+#: 2026-12-07, inlined them into each kernel's IR before typing: the same machine code speeds (in
+#: one process, alternately: 0.76-1.04x of the time) and the same results bit for bit, but the
+#: seven kernels' first compile took 34-41 s against 21-28 s.
 _HELPERS = (
     "_span", "_basis", "_basis_ders", "_binomials", "_quotient_plan", "_curve_quotient", "_surface_quotient",
-    "_tensor_partials", "_band_point", "_store_point", "_net_point", "_dot3", "_partials_scratch",
+    "_tensor_partials", "_band_point", "_store_point", "_net_point", "_dot3", "_partials_scratch", "_partials_at",
 )
-#: Helpers compiled as calls, not inlined: inlined into surface_project, _partials_at took the
-#: kernel's first compile from 17 s to 29 s for a projection 5-25 % faster.
-_CALLED = ("_partials_at",)
 _KERNELS = (
     "curve_points",
     "curve_derivatives",
@@ -798,9 +800,7 @@ def load() -> dict[str, Any] | None:
         else:
             g = globals()
             # Helpers first: kernels resolve them as globals when they compile.
-            for name in _HELPERS:  # inlined into the kernels: a call per point costs ~20 ns
-                g[name] = jit(numba, g[name], inline="always")
-            for name in _CALLED:
+            for name in _HELPERS:
                 g[name] = jit(numba, g[name])
             kernels = {name: jit(numba, g[name]) for name in _KERNELS}
         _state["kernels"] = kernels

@@ -299,8 +299,8 @@ def _load() -> Any:
                 import numba
 
                 g = globals()
-                for name in _HELPERS:
-                    g[name] = _nk.jit(numba, g[name], inline="always")
+                for name in _HELPERS:  # called, LLVM inlines them (as the evaluation kernels' helpers)
+                    g[name] = _nk.jit(numba, g[name])
                 kern = _nk.jit(numba, _shade)
             except Exception:  # noqa: BLE001 - numba missing or broken: NumPy path
                 kern = None
