@@ -57,10 +57,12 @@ def run(ns: argparse.Namespace) -> int:
         sys.stdout.write(json.dumps({**rep, "input": str(src), "output": str(out), "page": res["page"]}, indent=1)
                          + "\n")
     else:
+        still = rep["edges_repaired_still_breaking"]
         sys.stdout.write(
             f"{src}: {rep['edges_breaking_before']} smooth edges broke {rep['preset']} before, "
-            f"{rep['edges_breaking_after']} after; edges repaired {rep['edges_repaired']}, refused "
-            f"{rep['edges_refused']}, faces faired {rep['faces_faired']}\n")
+            f"{rep['edges_breaking_after']} after; edges repaired {rep['edges_repaired']}"
+            + (f" ({still} of them still break it in the check after)" if still else "")
+            + f", refused {rep['edges_refused']}, faces faired {rep['faces_faired']}\n")
         rt = rep.get("round_trip") or {}
         sys.stdout.write(f"  written and read back: {rt.get('faces_out')} faces of {rt.get('faces_in')}, "
                          f"{'valid' if rt.get('valid') else 'NOT valid'} (BRepCheck_Analyzer)\n")

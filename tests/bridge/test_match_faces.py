@@ -195,6 +195,11 @@ def test_cli_repair(tmp_path: Path):
     assert doc["edges_repaired"] == 1 and doc["worst_smooth_g1_after"] < 1e-6 and doc["faces_faired"] == 0
     assert doc["round_trip"] == {"faces_in": 3, "faces_out": 3, "valid": True}
     assert out.is_file() and (tmp_path / "fixed_report" / "index.html").is_file()
+    # its G1 is repaired, its curvature jump is not (G2 refused): still breaking CATIA in the check after
+    assert doc["edges_repaired_still_breaking"] == 1 and doc["edges"][0]["breaks_after"] is True
+    proc = run_cli("repair", str(src), "--preset", "catia", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert "edges repaired 1 (1 of them still break it in the check after), refused 0" in proc.stdout
     proc = run_cli("repair", str(src), "--preset", "nx", "--out", str(tmp_path / "x.step"))
     assert proc.returncode == 2 and "invalid choice" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
 
