@@ -753,11 +753,14 @@ def grid_partials_rational(Du: _F, su: _I, p: int, G: _F, k: int, out: _F) -> No
             _surface_quotient(hf, start, src, wi, coef, o, out3, a * mv + b)
 
 
-#: Compiled as functions the kernels call; LLVM inlines them where it pays (the optimised kernels
-#: call the same few runtime functions either way). Numba's own ``inline="always"``, used until
-#: 2026-12-07, inlined them into each kernel's IR before typing: the same machine code speeds (in
-#: one process, alternately: 0.76-1.04x of the time) and the same results bit for bit, but the
-#: seven kernels' first compile took 34-41 s against 21-28 s.
+#: Compiled as functions the kernels call; numba links each into the kernel's module and LLVM
+#: inlines what it chooses (``surface_points``' machine code: 135 call instructions with numba's
+#: ``inline="always"``, 138 without). Numba's inlining, used for all but ``_partials_at`` until
+#: 2026-12-07, copies each helper into every kernel's IR before typing: the speeds were the same (old
+#: and new alternately in one process: 0.76-1.04x of the time per kernel) and the results the same
+#: bit for bit, but the seven kernels' first compile took 34.1-40.8 s against 21.2-28.2 s now.
+#: ``_partials_at`` was a call before too: numba-inlined into ``surface_project`` it took that
+#: kernel's first compile from 17 s to 29 s for a projection 5-25 % faster.
 _HELPERS = (
     "_span", "_basis", "_basis_ders", "_binomials", "_quotient_plan", "_curve_quotient", "_surface_quotient",
     "_tensor_partials", "_band_point", "_store_point", "_net_point", "_dot3", "_partials_scratch", "_partials_at",

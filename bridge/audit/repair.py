@@ -113,11 +113,13 @@ class RepairReport:
 
     @property
     def repaired_still_breaking(self) -> int:
-        """Repaired edges that the check after still counts as breaking the preset: a measure left
-        (G1 matched where G2 could not be), or the check's own measure, which compares the faces at
-        equal edge parameters and so sees the edge's tolerance times the surfaces' curvature across
-        it (the OCCT bearing's edge between faces 16 and 163: 0.043 deg there, 0.002 deg by OCC's
-        ``LocalAnalysis`` at the moved face's nearest points, its tolerance 1.6e-6)."""
+        """Repaired edges whose pair of faces the check after still counts as breaking the preset
+        (``breaks_after``: any edge between the two faces). The causes include a measure left (G1
+        matched where G2 could not be), a later match or fairing of either face, and the check's own
+        measure, which compares the faces at equal edge parameters and so sees the edge's tolerance
+        times the surfaces' curvature across it (the OCCT bearing's edge between faces 16 and 163:
+        0.043 deg there, 0.002 deg by OCC's ``LocalAnalysis`` at the moved face's nearest points,
+        the sewn edge's tolerance 1.6e-6)."""
         return sum(e.status == "repaired" and bool(e.breaks_after) for e in self.edges)
 
     def to_dict(self) -> dict[str, Any]:

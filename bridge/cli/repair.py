@@ -5,7 +5,8 @@ Checks the model's edges against the preset, matches every edge that is meant to
 classified sharp) and breaks it (:func:`occsurf.bridge.audit.repair.repair_model`, in a worker
 process), checks again, writes ``OUT`` (STEP) and ``OUT_STEM_report/index.html`` (before and after
 side by side, every edge tried with what was done or why not), and prints the counts: edges
-repaired, refused, faces faired. A sharp edge is never changed, nor is a face moved by more than
+repaired (and how many of those the check after still counts as breaking the preset), refused,
+faces faired. A sharp edge is never changed, nor is a face moved by more than
 ``--max-change`` (default 1e-3 of the model's size). Exit status 0 when the model was written, 2
 when the input could not be read or repaired (one line on stderr).
 """
@@ -61,7 +62,7 @@ def run(ns: argparse.Namespace) -> int:
         sys.stdout.write(
             f"{src}: {rep['edges_breaking_before']} smooth edges broke {rep['preset']} before, "
             f"{rep['edges_breaking_after']} after; edges repaired {rep['edges_repaired']}"
-            + (f" ({still} of them still break it in the check after)" if still else "")
+            + (f" ({still} of them still break {rep['preset']} in the check after)" if still else "")
             + f", refused {rep['edges_refused']}, faces faired {rep['faces_faired']}\n")
         rt = rep.get("round_trip") or {}
         sys.stdout.write(f"  written and read back: {rt.get('faces_out')} faces of {rt.get('faces_in')}, "

@@ -197,9 +197,14 @@ def test_cli_repair(tmp_path: Path):
     assert out.is_file() and (tmp_path / "fixed_report" / "index.html").is_file()
     # its G1 is repaired, its curvature jump is not (G2 refused): still breaking CATIA in the check after
     assert doc["edges_repaired_still_breaking"] == 1 and doc["edges"][0]["breaks_after"] is True
-    proc = run_cli("repair", str(src), "--preset", "catia", "--out", str(out))
+    proc = run_cli("repair", str(src), "--preset", "catia", "--out", str(out), "--in-process")
     assert proc.returncode == 0, proc.stderr
-    assert "edges repaired 1 (1 of them still break it in the check after), refused 0" in proc.stdout
+    assert "edges repaired 1 (1 of them still break catia in the check after), refused 0" in proc.stdout
+    # mechanical, with room to move: repaired and no longer breaking, nothing said about it
+    proc = run_cli("repair", str(src), "--preset", "mechanical", "--max-change", "0.05", "--out", str(out),
+                   "--in-process")
+    assert proc.returncode == 0, proc.stderr
+    assert "edges repaired 1, refused 0" in proc.stdout and "still break" not in proc.stdout
     proc = run_cli("repair", str(src), "--preset", "nx", "--out", str(tmp_path / "x.step"))
     assert proc.returncode == 2 and "invalid choice" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
 
