@@ -19,9 +19,9 @@ span tables of :func:`span_table`. The kernels are serial (deterministic results
 compare single-threaded peers).
 
 The module is longer than the house's ~600 lines on purpose: numba's on-disk cache is keyed by the
-source file of each kernel, and the helpers are compiled into the kernels (LLVM inlines them), so
-a kernel in another file would keep its cached copy of a helper after the helper changed here. One
-file, one cache. Besides evaluation it holds :func:`surface_project`, the point projection of
+source file of each kernel, and each kernel's cached code holds the helpers it calls (numba links
+them into its module), so a kernel in another file would keep its cached copy of a helper after the
+helper changed here. One file, one cache. Besides evaluation it holds :func:`surface_project`, the point projection of
 :func:`occsurf.algorithms.fitting._common.project_points` per point. The first use of the kernels
 on a machine compiles them (all seven: 21-28 s on the 2-core test machine; cached after).
 
