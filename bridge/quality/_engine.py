@@ -16,13 +16,23 @@ from ._pairs import FaceData, Pair
 
 Array = NDArray[np.float64]
 
-__all__ = ["Engine", "occ_gap", "occ_fold", "PROJECTION_ITERATIONS"]
+__all__ = ["Engine", "occ_gap", "occ_fold", "PROJECTION_ITERATIONS", "MEASURE_BLOCK"]
 
 #: Gauss-Newton steps when projecting onto the other edge of a geometrically matched pair: from
 #: the matching table (9 points per edge) for the dense samples, then from the dense samples'
 #: table for the worst-point search (Gauss-Newton converges quadratically for the zero or tiny
 #: residuals of matched edges).
 PROJECTION_ITERATIONS: tuple[int, int] = (4, 2)
+
+#: Requests per block of :meth:`Engine.measure`. A model's dense samples (every edge's at once) are
+#: measured in blocks of whole edges of about this many points, so that both faces' partials (27 or
+#: 48 floats a point and side) and the arithmetic on them take tens of MB, not hundreds: on the
+#: 1089-face plate of ``benchmarks/bench_check.py`` (2026-12-07) the one batch raised the check's
+#: peak memory by about 125 MB. Every measure is pointwise, so a block changes at most a last digit
+#: (where NumPy's vectorised loops take an array's tail element by element): at this block the reports
+#: and samples of the four realdata models and the plate were bit for bit those of one batch; the test
+#: takes blocks of 7 requests and asserts 1e-12 relative.
+MEASURE_BLOCK = 16384
 
 
 # ======================================================================================= measures
@@ -268,7 +278,28 @@ class Engine:
     def measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool = False, s: Array | None = None,
                 gap: bool = False) -> dict[str, Array]:
         """All measures at the requests ``(pid[m], t[m])``: arrays of shape ``(m,)`` (points ``(m, 3)``),
-        and the parameters used: ``'uv1'``, ``'uv2'`` ``(m, 2)``, ``'s'`` (side 2's edge parameter)."""
+        and the parameters used: ``'uv1'``, ``'uv2'`` ``(m, 2)``, ``'s'`` (side 2's edge parameter).
+
+        More than :data:`MEASURE_BLOCK` requests are measured in blocks of whole runs of one pair
+        (every measure is pointwise: the same values to round-off, see there). ``set_flip`` takes each
+        geometry pair's orientation from all its requests: they must then be one run per pair, as
+        the dense samples are (else one block)."""
+        if set_flip:
+            self._reset_flip()
+        m = pid.shape[0]
+        runs = np.flatnonzero(pid[1:] != pid[:-1]) + 1
+        if m <= MEASURE_BLOCK or (set_flip and runs.size + 1 != np.unique(pid).size):
+            return self._measure(pid, t, set_flip, s, gap)
+        bounds = [0]
+        while bounds[-1] < m:
+            k = int(np.searchsorted(runs, bounds[-1] + MEASURE_BLOCK))
+            bounds.append(int(runs[k]) if k < runs.size else m)
+        parts = [self._measure(pid[a:b], t[a:b], set_flip, None if s is None else np.asarray(s, dtype=float)[a:b], gap)
+                 for a, b in zip(bounds[:-1], bounds[1:])]
+        return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+
+    def _measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool, s: Array | None, gap: bool) -> dict[str, Array]:
+        """:meth:`measure` on one block."""
         self.evaluated += np.bincount(pid, minlength=len(self.pairs))
         m = pid.shape[0]
         geo, proj = self.geo[pid], self.on_surface[pid]
@@ -316,11 +347,16 @@ class Engine:
                 "g3": np.abs(dk1 - dk2), "gap": occ_gap(D1, D2) if gap else np.full_like(g2, np.nan),
                 "P": D1[:, 0, 0], "uv1": uv1, "uv2": uv2, "s": s}
 
-    def _set_flip(self, pid: NDArray[np.intp], along: Array) -> None:
+    def _reset_flip(self) -> None:
         """Orientation agreement per pair: a shell's faces run along a shared edge in opposite senses.
-        Topology pairs: the senses of the edge in the two faces; geometry pairs: the tangents."""
+        Topology pairs: the senses of the edge in the two faces; geometry pairs: 1 until
+        :meth:`_set_flip` compares their tangents."""
         topo = ~self.geo
         self.flip = np.where(topo & ~self.seam & (self.sense1 == self.sense2), -1.0, 1.0)
+
+    def _set_flip(self, pid: NDArray[np.intp], along: Array) -> None:
+        """The orientation agreement of the geometry pairs among ``pid``, by the median sign of the
+        dot products ``along`` of their tangents at these requests."""
         for p in np.unique(pid[self.geo[pid]]):
             d = along[pid == p]
             d = d[np.isfinite(d)]

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..messages import error_line
 from .choices import face_scores
+from .face_values import FaceValues
 from .uv_masks import MeshMask, uv_mask
 
 if TYPE_CHECKING:
@@ -52,14 +53,6 @@ FACE_FAIL_KINDS: dict[str, frozenset[str]] = {
     "class-a": frozenset({"wiggle", "curvature_spike", "flat_spot", "ill_parametrisation"}),
     "mechanical": frozenset(),
 }
-#: Zebra set-up for the per-vertex fields (view along the iso camera, light lines along z): the
-#: light plane stands ZEBRA_DISTANCE model sizes behind the viewer, one light/dark pair every
-#: ZEBRA_WIDTH of that distance, so a pair is about 24 degrees of reflected direction near the
-#: middle, as CAD zebra environments are; finer stripes would be undersampled by the mesh's
-#: vertices (about 6 degrees of normal, 12 of reflected ray, apart).
-ZEBRA_DISTANCE = 10.0
-ZEBRA_WIDTH = 0.45
-ISOPHOTE_LEVELS = 12
 
 
 def _finite(x: Any) -> float | None:
@@ -77,10 +70,11 @@ class FaceField:
     Attributes
     ----------
     mesh : FaceMesh
-    values : dict of str -> ndarray, shape (n,)
+    values : mapping of str -> ndarray, shape (n,)
         ``'mean'``, ``'gaussian'``, ``'max'`` (k1), ``'min'`` (k2), ``'absolute'`` (``|k1|+|k2|``),
         ``'zebra'`` (phase in [0, 1)), ``'isophote'`` (n . l), ``'draft'`` (degrees); NaN where
-        undefined (degenerate points).
+        undefined (degenerate points). From :func:`face_fields` a :class:`~.face_values.FaceValues`
+        (zebra and isophotes computed on access); any mapping when made by hand.
     degenerate : ndarray of bool, shape (n,)
     natural : bool
         The face is its surface's whole parameter box (``ImportedFace.natural``): the sections cut
@@ -88,7 +82,7 @@ class FaceField:
     """
 
     mesh: FaceMesh
-    values: dict[str, np.ndarray]
+    values: Mapping[str, np.ndarray]
     degenerate: np.ndarray
     surface: Any = None
     trim: Any = None
@@ -226,7 +220,7 @@ def face_fields(face: ImportedFace, mesh: FaceMesh, *, view_dir: Sequence[float]
     mesh's points and normals.
     """
     from occsurf.algorithms.geometry.differential import curvatures_from_derivatives
-    from occsurf.algorithms.quality import curvature_values, draft_angle, isophotes, zebra
+    from occsurf.algorithms.quality import curvature_values, draft_angle
 
     surf = _surface_of(face)
     uv = mesh.uv
@@ -236,15 +230,13 @@ def face_fields(face: ImportedFace, mesh: FaceMesh, *, view_dir: Sequence[float]
     if mesh.reversed:
         k1, k2 = -k2, -k1
     K, H = np.asarray(c.gaussian, float), sign * np.asarray(c.mean, float)
-    values = {kind: np.asarray(curvature_values(kind, k1, k2, K, H, size), float)
-              for kind in ("mean", "gaussian", "max", "min", "absolute")}
+    held = {kind: np.asarray(curvature_values(kind, k1, k2, K, H, size), float)
+            for kind in ("mean", "gaussian", "max", "min", "absolute")}
     N = mesh.normals
     degenerate = ~np.all(np.isfinite(N), axis=1) | ~np.isfinite(k1)
-    vd = np.asarray(view_dir, float)
-    distance = ZEBRA_DISTANCE * size
-    values["zebra"] = np.asarray(zebra(mesh.points, N, vd, width=ZEBRA_WIDTH * distance, distance=distance).phase, float)
-    values["isophote"] = np.asarray(isophotes(N, -vd, ISOPHOTE_LEVELS).intensity, float)
-    values["draft"] = np.asarray(draft_angle(N, np.asarray(pull, float)), float)
+    held["draft"] = np.asarray(draft_angle(N, np.asarray(pull, float)), float)
+    # zebra and isophotes: computed when asked (the views draw them per pixel), see FaceValues
+    values = FaceValues(held, mesh, view_dir, size)
     trim = getattr(face, "trimmed", None)
     if trim is not None and getattr(trim, "surface", None) is not surf:
         trim = None  # loops in another surface's parameters: the mesh's mask instead

@@ -20,6 +20,7 @@ face's orientation (``TopAbs_REVERSED`` flips them and the triangles' winding).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import chain
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -60,8 +61,10 @@ class FaceMesh:
         Vertices (our evaluation at ``uv``).
     normals : ndarray, shape (n, 3)
         Unit normals, outward by the face's orientation; NaN rows where the surface is degenerate.
-    triangles : ndarray, shape (m, 3), int
-        Vertex indices, counter-clockwise seen from outside.
+    triangles : ndarray, shape (m, 3), int32
+        Vertex indices, counter-clockwise seen from outside. 32 bits, as OCC's ``Poly_Triangle``
+        holds them: half the memory of 64-bit indices (37 MB less on the 1.8 million vertices of
+        the 1089-face plate of ``benchmarks/bench_check.py``).
     reversed : bool
         The face is ``TopAbs_REVERSED`` in the model (normals and winding already flipped).
     unmapped : int
@@ -206,13 +209,18 @@ def _occ_triangulation(occ_face: Any) -> tuple[np.ndarray, np.ndarray, np.ndarra
     if tri is None or tri.NbTriangles() == 0 or not tri.HasUVNodes():
         return None
     n, m = tri.NbNodes(), tri.NbTriangles()
+    # straight into the arrays (np.fromiter over the coordinates): a list of tuples first held
+    # ~140 bytes a number, 0.3 GB for the 2.4 million triangles of one face of the 1089-face plate
+    # of benchmarks/bench_check.py (the check's peak memory), and took twice the time
+    node, uv_node, triangle = tri.Node, tri.UVNode, tri.Triangle
     if loc.IsIdentity():  # gp_Pnt::Transform leaves a point as it is under the identity
-        xyz = np.array([tri.Node(i).Coord() for i in range(1, n + 1)], float)
+        xyz_rows = (node(i).Coord() for i in range(1, n + 1))
     else:
         trsf = loc.Transformation()
-        xyz = np.array([tri.Node(i).Transformed(trsf).Coord() for i in range(1, n + 1)], float)
-    uv = np.array([tri.UVNode(i).Coord() for i in range(1, n + 1)], float)
-    tris = np.array([tri.Triangle(i).Get() for i in range(1, m + 1)], np.int64) - 1
+        xyz_rows = (node(i).Transformed(trsf).Coord() for i in range(1, n + 1))
+    xyz = np.fromiter(chain.from_iterable(xyz_rows), float, 3 * n).reshape(n, 3)
+    uv = np.fromiter(chain.from_iterable(uv_node(i).Coord() for i in range(1, n + 1)), float, 2 * n).reshape(n, 2)
+    tris = np.fromiter(chain.from_iterable(triangle(i).Get() for i in range(1, m + 1)), np.int32, 3 * m).reshape(m, 3) - 1
     return uv, xyz, tris
 
 
@@ -313,7 +321,7 @@ def grid_mesh(surface: BSplineSurface, n: int = 41, *, index: int = -1, flip: bo
     us, vs = np.linspace(u0, u1, n), np.linspace(v0, v1, n)
     U, V = np.meshgrid(us, vs, indexing="ij")
     uv = np.column_stack([U.ravel(), V.ravel()])
-    k = np.arange(n * n).reshape(n, n)
+    k = np.arange(n * n, dtype=np.int32).reshape(n, n)
     a, b, c, d = k[:-1, :-1].ravel(), k[1:, :-1].ravel(), k[1:, 1:].ravel(), k[:-1, 1:].ravel()
     if mask is not None:
         m = np.asarray(mask, bool)

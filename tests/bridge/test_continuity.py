@@ -372,3 +372,59 @@ def test_a_missing_pcurve_is_replaced_by_projection(monkeypatch) -> None:
     assert r.error is None and r.matched == "topology"
     assert r.g0_max <= 1e-12 and r.g1_max_deg <= 1e-6
     assert r.g2_max == pytest.approx(s.g2_max, rel=1e-9) and r.classification == s.classification
+
+
+def _same_to_roundoff(a, b, rel: float = 1e-12) -> bool:
+    """Equal structures whose floats agree to ``rel`` (NaN equal to NaN); everything else exactly."""
+    if isinstance(a, float) and isinstance(b, float):
+        return (math.isnan(a) and math.isnan(b)) or math.isclose(a, b, rel_tol=rel, abs_tol=0.0)
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same_to_roundoff(a[k], b[k], rel) for k in a)
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_same_to_roundoff(x, y, rel) for x, y in zip(a, b))
+    return bool(a == b)
+
+
+@pytest.mark.parametrize("model", ["loose", "sample"])
+def test_measures_in_blocks_equal_one_batch(monkeypatch, model) -> None:
+    """The engine measures many requests in blocks of whole edges (``MEASURE_BLOCK``, for the
+    check's memory on large models): the reports and sample values of one batch, to round-off.
+
+    Every measure is pointwise; what a block can change is the last digit where NumPy's vectorised
+    loops take an array's tail element by element (one g3 value of the tube at blocks of 7
+    requests: 1 ulp). 1e-12 relative is asserted (values here are 1e-15..1e2, a few ulps of round-off
+    is 1e-15 relative); the classifications and the structure exactly. ``loose``: three faces
+    along one line matched by geometry (each pair's orientation taken from all its samples, which
+    the blocks must not split); ``sample``: a sewn model of ``step_samples``."""
+    from pathlib import Path
+
+    from occsurf.bridge import read_step
+    from occsurf.bridge.quality import _engine
+
+    if model == "loose":
+        from OCP.BRep import BRep_Builder
+        from OCP.TopoDS import TopoDS_Compound
+
+        shape, builder = TopoDS_Compound(), BRep_Builder()
+        builder.MakeCompound(shape)
+        for face in (cm.face_a(), cm.face_b("crease", 10.0), cm.face_b("cylinder", 2.0)):
+            builder.Add(shape, face)
+    else:
+        shape = read_step(str(Path(__file__).resolve().parents[2] / "step_samples" / "swept_tube.step"))
+
+    def run(block: int):
+        monkeypatch.setattr(_engine, "MEASURE_BLOCK", block)
+        res = edge_continuity(shape, g3=True)
+        points = [None if p is None else {k: np.asarray(v).tolist() for k, v in p.items()} for p in res.points]
+        return [r.to_json() for r in res], points
+
+    one, one_points = run(10**9)
+    blocks, block_points = run(7)
+    assert len(one) >= (3 if model == "loose" else 2)
+    if model == "loose":
+        assert {r["matched"] for r in one} == {"geometry"}
+        # the cylinder's pair (0, 2), not the first: its flip is taken in a block of its own
+        assert [r["normal_flip"] for r in one] == [sorted(r["faces"]) == [0, 2] for r in one]
+    assert [r["classification"] for r in blocks] == [r["classification"] for r in one]
+    assert _same_to_roundoff(blocks, one)
+    assert _same_to_roundoff(block_points, one_points)

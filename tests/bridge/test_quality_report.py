@@ -609,3 +609,30 @@ def test_sections_cut_natural_faces_unmasked(monkeypatch) -> None:
     a, b = arrays(unmasked), arrays(masked)
     assert len(a) == len(b) > 100 and [x.shape for x in a] == [y.shape for y in b]
     assert max(float(np.abs(x - y).max(initial=0.0)) for x, y in zip(a, b)) <= 1e-9 * rep.size
+
+
+def test_face_values_compute_zebra_and_isophotes_when_asked(loft_report) -> None:
+    """``FaceField.values`` holds the curvatures and the draft and computes the zebra phase and the
+    isophote intensity on each access (memory on large models): the values the zebra and isophote
+    functions give on the same mesh with the report's set-up, bit for bit; every name listed, in
+    order; the mapping survives pickling (the audit sends reports between processes)."""
+    import pickle
+
+    from occsurf.algorithms.quality import isophotes, zebra
+    from occsurf.bridge.quality.face_values import ISOPHOTE_LEVELS, VALUE_NAMES, ZEBRA_DISTANCE, ZEBRA_WIDTH
+
+    fld = loft_report.fields[3]
+    vals = fld.values
+    assert list(vals) == list(VALUE_NAMES) and len(vals) == len(VALUE_NAMES)
+    assert "zebra" not in vals._held and "isophote" not in vals._held  # not held: computed
+    vd = np.array([-1.0, 1.0, -0.8])  # face_fields' default view, as check_model calls it
+    d = ZEBRA_DISTANCE * loft_report.size
+    phase = zebra(fld.mesh.points, fld.mesh.normals, vd, width=ZEBRA_WIDTH * d, distance=d).phase
+    assert np.array_equal(vals["zebra"], phase, equal_nan=True) and np.nanmax(vals["zebra"]) > 0.5
+    assert np.array_equal(vals["isophote"], isophotes(fld.mesh.normals, -vd, ISOPHOTE_LEVELS).intensity, equal_nan=True)
+    assert vals["zebra"] is not vals["zebra"]  # a new array on each access: nothing kept
+    with pytest.raises(KeyError):
+        vals["nope"]
+    again = pickle.loads(pickle.dumps(vals))
+    assert list(again) == list(vals)
+    assert all(np.array_equal(again[k], vals[k], equal_nan=True) for k in vals)
