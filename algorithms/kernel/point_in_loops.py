@@ -81,6 +81,10 @@ def _point_segment_distance(P: Array, A: Array, B: Array) -> Array:
     return np.linalg.norm(P - (A + t[:, None] * d), axis=1)
 
 
+#: Entries (a segment in one of its bands) placed at a time by :func:`segment_bands`.
+_BAND_BLOCK = 1 << 20
+
+
 @dataclass(frozen=True)
 class SegmentBands:
     """Segments binned into horizontal bands for :func:`classify_points` (:func:`segment_bands`):
@@ -120,19 +124,35 @@ def segment_bands(seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0) -> Segme
     h = (y1 - y0) / nb if y1 > y0 else 1.0
     b0 = np.clip(((ylo - y0) / h).astype(np.int64), 0, nb - 1)
     b1 = np.clip(((yhi - y0) / h).astype(np.int64), 0, nb - 1)
+    del ylo, yhi
     cnt = b1 - b0 + 1
     n = int(cnt.sum())
-    # the entries' segment and band as int32 where they fit, the band built in place: a face with
-    # 361 holes has ~6e6 entries, whose int64 temporaries took +345 MB while its bands were made
+    # Band j's entries are its segments in increasing order (a stable sort of the entries by band):
+    # each band's count from where the segments' runs of bands start and end, and the entries
+    # placed into their bands block by block of segments (_BAND_BLOCK entries at a time), each
+    # block's after the blocks before it. A face with 361 holes has ~6e6 entries: sorting them all
+    # at once took +224 MB of temporaries beside the 24 MB kept (the 1089-face plate of
+    # benchmarks/bench_check.py, whose check's peak it set), in blocks a few MB.
     it: type[np.signedinteger[Any]] = np.int32 if max(n, k, nb) < 2 ** 31 - 1 else np.int64
-    seg_of = np.repeat(np.arange(k, dtype=it), cnt)
-    band_of = np.arange(n, dtype=it)
-    band_of -= np.repeat((np.cumsum(cnt) - cnt).astype(it), cnt)  # the entry's place in its segment's run
-    band_of += np.repeat(b0.astype(it), cnt)
-    order = np.argsort(band_of, kind="stable")
-    seg_sorted = seg_of[order]
-    del seg_of
-    start = np.searchsorted(band_of[order], np.arange(nb + 1))
+    per_band = np.cumsum(np.bincount(b0, minlength=nb + 1) - np.bincount(b1 + 1, minlength=nb + 1))[:nb]
+    start = np.zeros(nb + 1, np.intp)
+    np.cumsum(per_band, out=start[1:])
+    seg_sorted = np.empty(n, it)
+    free = start[:-1].copy()  # each band's next place
+    ends = np.cumsum(cnt)
+    s0 = 0
+    while s0 < k:
+        s1 = max(s0 + 1, int(np.searchsorted(ends, (ends[s0 - 1] if s0 else 0) + _BAND_BLOCK, side="right")))
+        c = cnt[s0:s1]
+        m = int(c.sum())
+        seg = np.repeat(np.arange(s0, s1, dtype=it), c)
+        band = np.arange(m, dtype=np.intp) - np.repeat(np.cumsum(c) - c, c) + np.repeat(b0[s0:s1], c)
+        order = np.argsort(band, kind="stable")
+        band, seg = band[order], seg[order]
+        rank = np.arange(m) - np.searchsorted(band, band)  # the entry's place among its band's in this block
+        seg_sorted[free[band] + rank] = seg
+        free += np.bincount(band, minlength=nb)
+        s0 = s1
     return SegmentBands(A, B, float(tol), y0, y1, h, nb, seg_sorted, start)
 
 

@@ -365,10 +365,15 @@ def test_the_same_trim_on_another_surface_of_the_domain_keeps_its_drawn_loops():
 
 @test_settings(max_examples=30)
 @given(seed=st.integers(0, 2**16), holes=st.integers(0, 60), tol=st.sampled_from([0.0, 1e-6, 1e-3]))
-def test_segment_bands_in_int32_are_the_int64_bands(seed, holes, tol):
-    """Issue 28 (memory): ``segment_bands`` keeps its entries' segment ids as int32 and builds the
-    bands in place (a face with 361 holes: ~6e6 entries, +345 MB of int64 temporaries). The bands are
-    the ones the int64 construction gives, entry for entry."""
+@pytest.mark.parametrize("block", [1 << 20, 97, 1])
+def test_segment_bands_in_int32_are_the_int64_bands(seed, holes, tol, block):
+    """Issue 28 (memory): ``segment_bands`` keeps its entries' segment ids as int32 and places them
+    into their bands a block of entries at a time (a face with 361 holes: ~6e6 entries; +345 MB of
+    int64 temporaries, then +224 MB sorting them all at once). The bands are the ones the int64
+    construction and one stable sort of all entries give, entry for entry, whatever the block."""
+    from unittest import mock
+
+    from occsurf.algorithms.kernel import point_in_loops
     from occsurf.algorithms.kernel.point_in_loops import segment_bands
 
     rng = np.random.default_rng(seed)
@@ -378,7 +383,8 @@ def test_segment_bands_in_int32_are_the_int64_bands(seed, holes, tol):
         loops.append(np.c_[c[0] + r * np.cos(th), c[1] + r * np.sin(th)])
     A = np.concatenate([p[:-1] for p in loops])
     B = np.concatenate([p[1:] for p in loops])
-    bands = segment_bands(A, B, tol)
+    with mock.patch.object(point_in_loops, "_BAND_BLOCK", block):
+        bands = segment_bands(A, B, tol)
     assert bands.seg_sorted.dtype == np.int32
     ylo, yhi = np.minimum(A[:, 1], B[:, 1]) - tol, np.maximum(A[:, 1], B[:, 1]) + tol
     b0 = np.clip(((ylo - bands.y0) / bands.h).astype(np.int64), 0, bands.nb - 1)
