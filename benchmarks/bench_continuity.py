@@ -47,7 +47,7 @@ def _engine(model, samples: int):
     from occsurf.bridge.quality._pairs import collect_faces, match_free_edges, topology_pairs
 
     shape, faces = collect_faces(model)
-    size = C._model_size(faces, shape)
+    size = C.shape_size(shape)
     surfaces = SurfaceBatch([f.evaluator for f in faces])
     pairs, free, _ = topology_pairs(faces)
     pairs += match_free_edges(faces, free, tolerances.CONTINUITY_MATCH_RTOL * size, size / 200.0, surfaces)

@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..messages import one_line
-from ._batch import CurveBatch, SurfaceBatch
+from ._batch import NUMBA_MIN_POINTS, CurveBatch, SurfaceBatch
 from ._pairs import FaceData, Pair
 
 Array = NDArray[np.float64]
@@ -24,14 +24,15 @@ __all__ = ["Engine", "occ_gap", "occ_fold", "PROJECTION_ITERATIONS", "MEASURE_BL
 #: residuals of matched edges).
 PROJECTION_ITERATIONS: tuple[int, int] = (4, 2)
 
-#: Requests per block of :meth:`Engine.measure`. A model's dense samples (every edge's at once) are
-#: measured in blocks of whole edges of about this many points, so that both faces' partials (27 or
-#: 48 floats a point and side) and the arithmetic on them take tens of MB, not hundreds: on the
+#: Requests per block of :meth:`Engine.measure` (at most). A model's dense samples (every edge's at
+#: once) are measured in about equal blocks of whole edges, so that both faces' partials (27 or 48
+#: floats a point and side) and the arithmetic on them take tens of MB, not hundreds: on the
 #: 1089-face plate of ``benchmarks/bench_check.py`` (2026-12-07) the one batch raised the check's
 #: peak memory by about 125 MB. Every measure is pointwise, so a block changes at most a last digit
 #: (where NumPy's vectorised loops take an array's tail element by element): at this block the reports
 #: and samples of the four realdata models and the plate were bit for bit those of one batch; the test
-#: takes blocks of 7 requests and asserts 1e-12 relative.
+#: takes blocks of 7 requests and asserts 1e-12 relative. At least 2 x ``_batch.NUMBA_MIN_POINTS``,
+#: so that the blocks (over half of this) take the compiled evaluation as one batch does.
 MEASURE_BLOCK = 16384
 
 
@@ -281,22 +282,48 @@ class Engine:
         and the parameters used: ``'uv1'``, ``'uv2'`` ``(m, 2)``, ``'s'`` (side 2's edge parameter).
 
         More than :data:`MEASURE_BLOCK` requests are measured in blocks of whole runs of one pair
-        (every measure is pointwise: the same values to round-off, see there). ``set_flip`` takes each
-        geometry pair's orientation from all its requests: they must then be one run per pair, as
-        the dense samples are (else one block)."""
+        (every measure is pointwise: the same values to round-off, see there), each written into
+        the outputs as it is done (a block's arrays, views of its partials among them, are freed
+        before the next). ``set_flip`` takes each geometry pair's orientation from all its
+        requests: they must then be one run per pair, as the dense samples are (else one block).
+        Where a face fails to evaluate in one block only, its message is that block's (the edge's
+        report is degenerate either way)."""
         if set_flip:
             self._reset_flip()
         m = pid.shape[0]
+        if s is not None:
+            s = np.asarray(s, dtype=float)
+            if s.shape != t.shape:
+                raise ValueError(f"s: expected one side-2 parameter per request, shape {t.shape}, got {s.shape}")
+        bounds = self._blocks(pid, set_flip)
+        if len(bounds) <= 2:
+            return self._measure(pid, t, set_flip, s, gap)
+        out: dict[str, Array] = {}
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            part = self._measure(pid[a:b], t[a:b], set_flip, None if s is None else s[a:b], gap)
+            for k, v in part.items():
+                if k not in out:
+                    out[k] = np.empty((m,) + v.shape[1:], v.dtype)
+                out[k][a:b] = v
+            del part
+        return out
+
+    @staticmethod
+    def _blocks(pid: NDArray[np.intp], set_flip: bool) -> list[int]:
+        """Where :meth:`measure` splits its requests: about equal blocks of at most
+        :data:`MEASURE_BLOCK`, cut where the pair changes; ``[0, m]`` (one block) for fewer, for a
+        pair in several runs under ``set_flip``, or where a block would evaluate fewer than
+        :data:`~._batch.NUMBA_MIN_POINTS` points (one batch takes the compiled evaluation there)."""
+        m = pid.shape[0]
         runs = np.flatnonzero(pid[1:] != pid[:-1]) + 1
         if m <= MEASURE_BLOCK or (set_flip and runs.size + 1 != np.unique(pid).size):
-            return self._measure(pid, t, set_flip, s, gap)
-        bounds = [0]
-        while bounds[-1] < m:
-            k = int(np.searchsorted(runs, bounds[-1] + MEASURE_BLOCK))
-            bounds.append(int(runs[k]) if k < runs.size else m)
-        parts = [self._measure(pid[a:b], t[a:b], set_flip, None if s is None else np.asarray(s, dtype=float)[a:b], gap)
-                 for a, b in zip(bounds[:-1], bounds[1:])]
-        return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+            return [0, m]
+        n_blocks = -(-m // MEASURE_BLOCK)
+        cuts = runs[np.minimum(np.searchsorted(runs, np.arange(1, n_blocks) * m // n_blocks), runs.size - 1)]
+        bounds = [0] + sorted(set(int(c) for c in cuts) - {0, m}) + [m]
+        if min(np.diff(bounds)) < NUMBA_MIN_POINTS:
+            return [0, m]
+        return bounds
 
     def _measure(self, pid: NDArray[np.intp], t: Array, set_flip: bool, s: Array | None, gap: bool) -> dict[str, Array]:
         """:meth:`measure` on one block."""

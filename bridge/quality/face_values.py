@@ -3,7 +3,8 @@ the draft held, the zebra phase and the isophote intensity computed on each acce
 
 The report's views draw zebra stripes and isophotes per pixel from the interpolated normals (VTK's
 shaders and the page's); the per-vertex phase and intensity serve only callers that ask for them
-(:func:`.export.reflection_lines`, scripts). Held for every face they were two arrays of 8 bytes a
+(:func:`.export.reflection_lines`, :func:`.export.colored_mesh` with ``"zebra"`` or
+``"isophote"``, scripts). Held for every face they were two arrays of 8 bytes a
 vertex: 28 MB of the check's peak on the 1.8 million vertices of the 1089-face plate of
 ``benchmarks/bench_check.py``. Computed from the same mesh by the same functions, they are the
 values that were held, bit for bit.
@@ -76,6 +77,10 @@ class FaceValues(Mapping[str, np.ndarray]):
 
             return np.asarray(isophotes(self._mesh.normals, -self._view_dir, ISOPHOTE_LEVELS).intensity, float)
         raise KeyError(key)
+
+    def __contains__(self, key: object) -> bool:
+        # Mapping's would call __getitem__: compute the values only to say they are there
+        return key in self._held or key in _COMPUTED
 
     def __iter__(self) -> Iterator[str]:
         names = [k for k in VALUE_NAMES if k in self._held or k in _COMPUTED]

@@ -211,7 +211,7 @@ def viewer_payload(report: QualityReport) -> dict[str, Any]:
                 "triangles": pack.add(f.mesh.triangles, "<u2" if small else "<u4"),
                 "triangles_dtype": "uint16" if small else "uint32",
                 "values": {k: pack.add(f.values[k], "<f4") for k, *_ in VIEWER_INDICATORS
-                           if k in f.values and k not in PER_PIXEL},
+                           if k not in PER_PIXEL and k in f.values},
             })
     ranges = {}
     for key, _, _, _ in VIEWER_INDICATORS:

@@ -63,7 +63,7 @@ class FaceMesh:
         Unit normals, outward by the face's orientation; NaN rows where the surface is degenerate.
     triangles : ndarray, shape (m, 3), int32
         Vertex indices, counter-clockwise seen from outside. 32 bits, as OCC's ``Poly_Triangle``
-        holds them: half the memory of 64-bit indices (37 MB less on the 1.8 million vertices of
+        holds them: half the memory of 64-bit indices (3.6 million triangles, 41 MiB less, on
         the 1089-face plate of ``benchmarks/bench_check.py``).
     reversed : bool
         The face is ``TopAbs_REVERSED`` in the model (normals and winding already flipped).
@@ -209,9 +209,9 @@ def _occ_triangulation(occ_face: Any) -> tuple[np.ndarray, np.ndarray, np.ndarra
     if tri is None or tri.NbTriangles() == 0 or not tri.HasUVNodes():
         return None
     n, m = tri.NbNodes(), tri.NbTriangles()
-    # straight into the arrays (np.fromiter over the coordinates): a list of tuples first held
-    # ~140 bytes a number, 0.3 GB for the 2.4 million triangles of one face of the 1089-face plate
-    # of benchmarks/bench_check.py (the check's peak memory), and took twice the time
+    # straight into the arrays (np.fromiter over the coordinates), without a list of tuples first:
+    # that held about 145 bytes a node and 170 a triangle (each tuple and its numbers) beside the
+    # arrays, and took longer (the bearing's 213 faces, alternately: 0.59-0.64 s, now 0.31-0.51 s)
     node, uv_node, triangle = tri.Node, tri.UVNode, tri.Triangle
     if loc.IsIdentity():  # gp_Pnt::Transform leaves a point as it is under the identity
         xyz_rows = (node(i).Coord() for i in range(1, n + 1))
@@ -220,7 +220,8 @@ def _occ_triangulation(occ_face: Any) -> tuple[np.ndarray, np.ndarray, np.ndarra
         xyz_rows = (node(i).Transformed(trsf).Coord() for i in range(1, n + 1))
     xyz = np.fromiter(chain.from_iterable(xyz_rows), float, 3 * n).reshape(n, 3)
     uv = np.fromiter(chain.from_iterable(uv_node(i).Coord() for i in range(1, n + 1)), float, 2 * n).reshape(n, 2)
-    tris = np.fromiter(chain.from_iterable(triangle(i).Get() for i in range(1, m + 1)), np.int32, 3 * m).reshape(m, 3) - 1
+    tris = np.fromiter(chain.from_iterable(triangle(i).Get() for i in range(1, m + 1)), np.int32, 3 * m).reshape(m, 3)
+    tris -= 1
     return uv, xyz, tris
 
 

@@ -385,21 +385,12 @@ def _same_to_roundoff(a, b, rel: float = 1e-12) -> bool:
     return bool(a == b)
 
 
-@pytest.mark.parametrize("model", ["loose", "sample"])
-def test_measures_in_blocks_equal_one_batch(monkeypatch, model) -> None:
-    """The engine measures many requests in blocks of whole edges (``MEASURE_BLOCK``, for the
-    check's memory on large models): the reports and sample values of one batch, to round-off.
-
-    Every measure is pointwise; what a block can change is the last digit where NumPy's vectorised
-    loops take an array's tail element by element (one g3 value of the tube at blocks of 7
-    requests: 1 ulp). 1e-12 relative is asserted (values here are 1e-15..1e2, a few ulps of round-off
-    is 1e-15 relative); the classifications and the structure exactly. ``loose``: three faces
-    along one line matched by geometry (each pair's orientation taken from all its samples, which
-    the blocks must not split); ``sample``: a sewn model of ``step_samples``."""
+def _blocks_model(model: str):
+    """``loose``: three faces along one line, matched by geometry (the cylinder's pair (0, 2), not
+    the first, with opposite normals); ``sample``: a sewn model of ``step_samples``."""
     from pathlib import Path
 
     from occsurf.bridge import read_step
-    from occsurf.bridge.quality import _engine
 
     if model == "loose":
         from OCP.BRep import BRep_Builder
@@ -409,22 +400,93 @@ def test_measures_in_blocks_equal_one_batch(monkeypatch, model) -> None:
         builder.MakeCompound(shape)
         for face in (cm.face_a(), cm.face_b("crease", 10.0), cm.face_b("cylinder", 2.0)):
             builder.Add(shape, face)
-    else:
-        shape = read_step(str(Path(__file__).resolve().parents[2] / "step_samples" / "swept_tube.step"))
+        return shape
+    return read_step(str(Path(__file__).resolve().parents[2] / "step_samples" / "swept_tube.step"))
+
+
+@pytest.mark.parametrize("model", ["loose", "sample"])
+def test_measures_in_blocks_equal_one_batch(monkeypatch, model) -> None:
+    """The engine measures many requests in blocks of whole edges (``MEASURE_BLOCK``, for the
+    check's memory on large models): the reports and sample values of one batch, to round-off.
+
+    Every measure is pointwise; what a block can change is the last digit where NumPy's vectorised
+    loops take an array's tail element by element (one g3 value of the tube at blocks of 7
+    requests: 1 ulp). 1e-12 relative is asserted (values here are 1e-15..1e2, a few ulps of round-off
+    is 1e-15 relative); the classifications and the structure exactly. The blocks are seen to be
+    many, and each pair's dense samples (its orientation taken from all of them) in one block."""
+    from occsurf.bridge.quality import _engine
+
+    shape = _blocks_model(model)
+    calls: list[tuple[frozenset[int], bool]] = []
+    real = _engine.Engine._measure
+
+    def spy(self, pid, t, set_flip, s, gap):
+        calls.append((frozenset(int(p) for p in pid), set_flip))
+        return real(self, pid, t, set_flip, s, gap)
+
+    monkeypatch.setattr(_engine.Engine, "_measure", spy)
 
     def run(block: int):
         monkeypatch.setattr(_engine, "MEASURE_BLOCK", block)
+        monkeypatch.setattr(_engine, "NUMBA_MIN_POINTS", 1)  # small blocks allowed (none here reaches numba's 4096)
+        calls.clear()
         res = edge_continuity(shape, g3=True)
         points = [None if p is None else {k: np.asarray(v).tolist() for k, v in p.items()} for p in res.points]
-        return [r.to_json() for r in res], points
+        return [r.to_json() for r in res], points, list(calls)
 
-    one, one_points = run(10**9)
-    blocks, block_points = run(7)
+    one, one_points, one_calls = run(10**9)
+    blocks, block_points, block_calls = run(7)
     assert len(one) >= (3 if model == "loose" else 2)
+    flip_blocks = [pids for pids, flip in block_calls if flip]
+    assert len([c for c in one_calls if c[1]]) == 1 and len(flip_blocks) >= len(one)  # many blocks, a pair in each
+    assert sorted(p for pids in flip_blocks for p in pids) == sorted(set().union(*flip_blocks))  # each pair once
     if model == "loose":
         assert {r["matched"] for r in one} == {"geometry"}
-        # the cylinder's pair (0, 2), not the first: its flip is taken in a block of its own
         assert [r["normal_flip"] for r in one] == [sorted(r["faces"]) == [0, 2] for r in one]
     assert [r["classification"] for r in blocks] == [r["classification"] for r in one]
     assert _same_to_roundoff(blocks, one)
     assert _same_to_roundoff(block_points, one_points)
+
+
+def test_engine_blocks_with_given_side_2_parameters(monkeypatch) -> None:
+    """``Engine.measure`` with the side-2 parameters given (``s``: a benchmark giving OCC and us the
+    same points) and with a pair's requests in several runs under ``set_flip`` (then one block):
+    the values of one batch, to round-off (as above); ``s`` of another length is refused."""
+    from occsurf.algorithms import tolerances
+    from occsurf.bridge.quality import _engine
+    from occsurf.bridge.quality import continuity as C
+    from occsurf.bridge.quality._batch import SurfaceBatch
+    from occsurf.bridge.quality._pairs import collect_faces, match_free_edges, topology_pairs
+
+    def engine_of(shape):
+        model, faces = collect_faces(shape)
+        size = C.shape_size(model)
+        surfaces = SurfaceBatch([f.evaluator for f in faces])
+        pairs, free, _ = topology_pairs(faces)
+        pairs += match_free_edges(faces, free, tolerances.CONTINUITY_MATCH_RTOL * size, size / 200.0, surfaces)
+        return C.Engine(faces, pairs, True, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
+
+    monkeypatch.setattr(_engine, "NUMBA_MIN_POINTS", 1)
+    for model in ("loose", "sample"):
+        shape = _blocks_model(model)
+        engine = engine_of(shape)
+        good = np.array([i for i, p in enumerate(engine.pairs) if C._why_not(engine, p) is None], dtype=np.intp)
+        s01 = np.linspace(0.0, 1.0, 21)
+        first = np.array([engine.pairs[i].first for i in good])
+        last = np.array([engine.pairs[i].last for i in good])
+        t = (first[:, None] + (last - first)[:, None] * s01).reshape(-1)
+        pid = np.repeat(good, s01.size)
+        monkeypatch.setattr(_engine, "MEASURE_BLOCK", 10**9)
+        ref = engine.measure(pid, t, set_flip=True)
+        backwards = engine.measure(pid[::-1], t[::-1], set_flip=True)  # each pair one run still, last first
+        given_one = engine.measure(pid, t, s=ref["s"])
+        monkeypatch.setattr(_engine, "MEASURE_BLOCK", 5)
+        given = engine.measure(pid, t, s=ref["s"])
+        mixed = np.r_[pid[::2], pid[1::2]]  # every pair in two runs: one block under set_flip
+        assert _engine.Engine._blocks(mixed, True) == [0, mixed.size]
+        assert len(_engine.Engine._blocks(pid, True)) > 2
+        for k in given_one:
+            assert _same_to_roundoff(np.asarray(given[k]).tolist(), np.asarray(given_one[k]).tolist()), k
+            assert _same_to_roundoff(np.asarray(backwards[k])[::-1].tolist(), np.asarray(ref[k]).tolist()), k
+        with pytest.raises(ValueError, match="side-2 parameter"):
+            engine.measure(pid, t, s=ref["s"][:-1])

@@ -611,25 +611,30 @@ def test_sections_cut_natural_faces_unmasked(monkeypatch) -> None:
     assert max(float(np.abs(x - y).max(initial=0.0)) for x, y in zip(a, b)) <= 1e-9 * rep.size
 
 
-def test_face_values_compute_zebra_and_isophotes_when_asked(loft_report) -> None:
+def test_face_values_compute_zebra_and_isophotes_when_asked(loft_report, monkeypatch) -> None:
     """``FaceField.values`` holds the curvatures and the draft and computes the zebra phase and the
     isophote intensity on each access (memory on large models): the values the zebra and isophote
-    functions give on the same mesh with the report's set-up, bit for bit; every name listed, in
-    order; the mapping survives pickling (the audit sends reports between processes)."""
+    functions give on the same mesh with the report's set-up (the literals it had when the values
+    were held), bit for bit; every name listed, in order, and ``in`` computes nothing; the mapping
+    survives pickling (as a report's fields would)."""
     import pickle
 
     from occsurf.algorithms.quality import isophotes, zebra
-    from occsurf.bridge.quality.face_values import ISOPHOTE_LEVELS, VALUE_NAMES, ZEBRA_DISTANCE, ZEBRA_WIDTH
+    from occsurf.bridge.quality import face_values
+    from occsurf.bridge.quality.face_values import VALUE_NAMES
 
     fld = loft_report.fields[3]
     vals = fld.values
     assert list(vals) == list(VALUE_NAMES) and len(vals) == len(VALUE_NAMES)
     assert "zebra" not in vals._held and "isophote" not in vals._held  # not held: computed
     vd = np.array([-1.0, 1.0, -0.8])  # face_fields' default view, as check_model calls it
-    d = ZEBRA_DISTANCE * loft_report.size
-    phase = zebra(fld.mesh.points, fld.mesh.normals, vd, width=ZEBRA_WIDTH * d, distance=d).phase
+    d = 10.0 * loft_report.size  # ZEBRA_DISTANCE, ZEBRA_WIDTH 0.45, ISOPHOTE_LEVELS 12
+    phase = zebra(fld.mesh.points, fld.mesh.normals, vd, width=0.45 * d, distance=d).phase
     assert np.array_equal(vals["zebra"], phase, equal_nan=True) and np.nanmax(vals["zebra"]) > 0.5
-    assert np.array_equal(vals["isophote"], isophotes(fld.mesh.normals, -vd, ISOPHOTE_LEVELS).intensity, equal_nan=True)
+    assert np.array_equal(vals["isophote"], isophotes(fld.mesh.normals, -vd, 12).intensity, equal_nan=True)
+    with monkeypatch.context() as mp:
+        mp.setattr(face_values.FaceValues, "__getitem__", lambda self, key: pytest.fail("computed for `in`"))
+        assert "zebra" in vals and "isophote" in vals and "mean" in vals and "nope" not in vals
     assert vals["zebra"] is not vals["zebra"]  # a new array on each access: nothing kept
     with pytest.raises(KeyError):
         vals["nope"]
