@@ -316,8 +316,8 @@ class Engine:
         :data:`~._batch.NUMBA_MIN_POINTS` points (one batch takes the compiled evaluation there)."""
         m = pid.shape[0]
         runs = np.flatnonzero(pid[1:] != pid[:-1]) + 1
-        if m <= MEASURE_BLOCK or (set_flip and runs.size + 1 != np.unique(pid).size):
-            return [0, m]
+        if m <= MEASURE_BLOCK or runs.size == 0 or (set_flip and runs.size + 1 != np.unique(pid).size):
+            return [0, m]  # few requests, one pair's only, or a pair in several runs
         n_blocks = -(-m // MEASURE_BLOCK)
         cuts = runs[np.minimum(np.searchsorted(runs, np.arange(1, n_blocks) * m // n_blocks), runs.size - 1)]
         bounds = [0] + sorted(set(int(c) for c in cuts) - {0, m}) + [m]

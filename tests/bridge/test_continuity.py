@@ -484,6 +484,8 @@ def test_engine_blocks_with_given_side_2_parameters(monkeypatch) -> None:
         given = engine.measure(pid, t, s=ref["s"])
         mixed = np.r_[pid[::2], pid[1::2]]  # every pair in two runs: one block under set_flip
         assert _engine.Engine._blocks(mixed, True) == [0, mixed.size]
+        lone = np.full(11, good[0])  # one pair's requests only (no place to cut): one block
+        assert _engine.Engine._blocks(lone, True) == _engine.Engine._blocks(lone, False) == [0, 11]
         assert len(_engine.Engine._blocks(pid, True)) > 2
         for k in given_one:
             assert _same_to_roundoff(np.asarray(given[k]).tolist(), np.asarray(given_one[k]).tolist()), k
