@@ -130,9 +130,10 @@ def segment_bands(seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0) -> Segme
     # Band j's entries are its segments in increasing order (a stable sort of the entries by band):
     # each band's count from where the segments' runs of bands start and end, and the entries
     # placed into their bands block by block of segments (_BAND_BLOCK entries at a time), each
-    # block's after the blocks before it. A face with 361 holes has ~6e6 entries: sorting them all
-    # at once took +224 MB of temporaries beside the 24 MB kept (the 1089-face plate of
-    # benchmarks/bench_check.py, whose check's peak it set), in blocks a few MB.
+    # block's after the blocks before it. A face with 361 holes has ~6e6 entries for 1.5e6
+    # segments: sorting the entries all at once took +224 MB of temporaries beside the 24 MB kept
+    # (the 1089-face plate of benchmarks/bench_check.py, whose check's peak it set); now +120 MB,
+    # mostly the segments' own arrays (their bands' range, counts and ends, 8 bytes each a segment).
     it: type[np.signedinteger[Any]] = np.int32 if max(n, k, nb) < 2 ** 31 - 1 else np.int64
     per_band = np.cumsum(np.bincount(b0, minlength=nb + 1) - np.bincount(b1 + 1, minlength=nb + 1))[:nb]
     start = np.zeros(nb + 1, np.intp)
