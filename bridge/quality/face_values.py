@@ -36,11 +36,13 @@ _COMPUTED = ("zebra", "isophote")
 
 
 class FaceValues(Mapping[str, np.ndarray]):
-    """A read-only mapping of indicator name to per-vertex values, shape ``(n,)``: ``held`` as given,
-    ``'zebra'`` (phase in [0, 1), :func:`occsurf.algorithms.quality.zebra`) and ``'isophote'``
-    (``n . l``, :func:`occsurf.algorithms.quality.isophotes`) computed from ``mesh`` on each
-    access, with the light from ``-view_dir`` and the zebra plane :data:`ZEBRA_DISTANCE` model sizes
-    (``size``) away.
+    """A face's per-vertex values by indicator name, read-only, some computed when asked.
+
+    Each value has shape ``(n,)``. The ``held`` ones are returned as given. ``'zebra'`` (the phase
+    in [0, 1), :func:`occsurf.algorithms.quality.zebra`) and ``'isophote'`` (the intensity
+    ``n.l``, :func:`occsurf.algorithms.quality.isophotes`) are computed from ``mesh`` on each
+    access, with the light from ``-view_dir`` and the zebra plane :data:`ZEBRA_DISTANCE` model
+    sizes (``size``) away.
 
     Parameters
     ----------
