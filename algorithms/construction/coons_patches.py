@@ -200,17 +200,26 @@ def _scale_loop_weights(cc: list[BSplineCurve]) -> list[BSplineCurve] | None:
 
 
 # ------------------------------------------------------------------------------------ Coons
+#: The corners 00, 10, 11, 01 as (curve, end) index pairs into _check_loop's array of end poles:
+#: rows are curve of the first end, its end, curve of the second end, its end.
+_CORNER_ENDS = np.array([[0, 0, 2, 2], [0, 1, 1, 0], [3, 1, 1, 3], [0, 0, 1, 1]])
+
+
 def _check_loop(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BSplineCurve,
-                tol: float) -> Array:
-    """Corner points ``(4, d)`` (means of the two curve ends) in order 00, 10, 11, 01, or raise.
-    The curves must be clamped."""
-    # clamped curves: the end points are the end poles (exact, no evaluation)
-    ends = {k: (np.asarray(c.control_points[0], float), np.asarray(c.control_points[-1], float))
-            for k, c in (("bottom", bottom), ("right", right), ("top", top), ("left", left))}
-    pairs = [(("bottom", 0), ("left", 0)), (("bottom", 1), ("right", 0)),
-             (("top", 1), ("right", 1)), (("top", 0), ("left", 1))]
-    gaps = [float(np.linalg.norm(ends[a][i] - ends[b][j])) for (a, i), (b, j) in pairs]
+                tol: float) -> tuple[Array, bool]:
+    """Corner points ``(4, d)`` (means of the two curve ends) in order 00, 10, 11, 01, and whether
+    any end moves to them (False: the curves share every corner exactly), or raise. The curves
+    must be clamped."""
+    # clamped curves: the end points are the end poles (exact, no evaluation); E[k, e] is end e of
+    # curve k in the order bottom, right, top, left, and the corners 00, 10, 11, 01 pair them as
+    # `pairs` says: (bottom 0, left 0), (bottom 1, right 0), (top 1, right 1), (top 0, left 1)
+    E = np.stack([c.control_points[:: c.control_points.shape[0] - 1] for c in (bottom, right, top, left)])
+    first, second = E[_CORNER_ENDS[0], _CORNER_ENDS[1]], E[_CORNER_ENDS[2], _CORNER_ENDS[3]]
+    gaps = np.sqrt(np.square(first - second).sum(axis=1)).tolist()  # np.linalg.norm's values, one call
     if max(gaps) > tol:
+        ends = {k: (E[n, 0], E[n, 1]) for n, k in enumerate(("bottom", "right", "top", "left"))}
+        pairs = [(("bottom", 0), ("left", 0)), (("bottom", 1), ("right", 0)),
+                 (("top", 1), ("right", 1)), (("top", 0), ("left", 1))]
         # Are curves merely reversed or swapped? Try every reversal subset with and without
         # swapping left/right or bottom/top (48 cases of 4 point distances): name the fix.
         order = ("bottom", "right", "top", "left")
@@ -246,7 +255,7 @@ def _check_loop(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, le
             f"{a}, {b}: the boundary loop is open at corner {_CORNERS[k]}: the {('start', 'end')[i]} of "
             f"{a} and the {('start', 'end')[j]} of {b} are {gaps[k]:.3g} apart (tol={tol:g})"
         )
-    return np.stack([(ends[a][i] + ends[b][j]) / 2 for (a, i), (b, j) in pairs])
+    return (first + second) / 2, not np.array_equal(first, second)
 
 
 def _boundaries(bottom: object, right: object, top: object, left: object, tol: float, rational_ok: bool,
@@ -263,7 +272,9 @@ def _boundaries(bottom: object, right: object, top: object, left: object, tol: f
     if not rational_ok:
         cs = {k: polynomial_approximation(c, approx_tol)[0] for k, c in cs.items()}
     cs = {k: c.clamp() for k, c in cs.items()}
-    P = _check_loop(cs["bottom"], cs["right"], cs["top"], cs["left"], tol)
+    P, moved = _check_loop(cs["bottom"], cs["right"], cs["top"], cs["left"], tol)
+    if not moved:
+        return cs  # every corner shared exactly: the curves as they are
     cs["bottom"] = _with_end_points(cs["bottom"], P[0], P[1])
     cs["right"] = _with_end_points(cs["right"], P[1], P[2])
     cs["top"] = _with_end_points(cs["top"], P[3], P[2])
@@ -424,7 +435,7 @@ def _blend_coefficients(knots: Array, degree: int, blend: str) -> tuple[Array, A
     lo, hi = knots[0], knots[-1]
     x = (knots[1 + np.arange(n)[:, None] + np.arange(degree)[None, :]] - lo) / (hi - lo)  # (n, degree)
     if blend == "linear":
-        f1 = x.mean(axis=1)
+        f1 = x.sum(axis=1) / degree  # x.mean(axis=1)'s two steps, without its wrapper
     else:
         e = np.zeros((4, n))
         e[0] = 1.0

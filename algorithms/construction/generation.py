@@ -46,7 +46,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ..kernel.compat import make_compatible
+from ..kernel.compat import compatible_poles
 from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 from ._common import check_curve
@@ -170,10 +170,10 @@ def ruled(c1: BSplineCurve, c2: BSplineCurve) -> BSplineSurface:
     """
     a = _check_curve(c1, "c1")
     b = _check_curve(c2, "c2")
-    ca, cb = make_compatible([a, b])
-    P = np.stack([ca.control_points, cb.control_points], axis=1)
-    W = None if ca.weights is None or cb.weights is None else np.stack([ca.weights, cb.weights], axis=1)  # both or neither
-    return BSplineSurface._trusted((ca.degree, 1), (ca.knots.copy(), np.array([0.0, 0.0, 1.0, 1.0])), P, W)
+    p, T, ((Pa, wa), (Pb, wb)) = compatible_poles([a, b])
+    P = np.stack([Pa, Pb], axis=1)
+    W = None if wa is None or wb is None else np.stack([wa, wb], axis=1)  # both or neither
+    return BSplineSurface._trusted((p, 1), (T, np.array([0.0, 0.0, 1.0, 1.0])), P, W)
 
 
 # ------------------------------------------------------------------------------------- revolution

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["blossom_basis", "blossom_poles"]
+__all__ = ["blossom_basis", "blossom_rows", "blossom_poles"]
 
 
 def blossom_basis(
@@ -47,30 +47,41 @@ def blossom_basis(
         to ``u`` this is the basis-function vector at ``u`` (A2.2); with the arguments of a refined
         knot vector it is a row of the Oslo refinement matrix (discrete B-splines).
     """
+    return blossom_rows(knots, degree, span, args).T.copy()
+
+
+def blossom_rows(
+    knots: NDArray[np.float64], degree: int, span: NDArray[np.intp], args: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """:func:`blossom_basis` transposed, shape ``(degree + 1, m)``: row ``k`` the weights of pole
+    ``mu_i - degree + k`` (the layout the recurrence builds, without the transposing copy)."""
     m = span.shape[0]
     p = degree
     N = np.zeros((p + 1, m))
     N[0] = 1.0
     if p == 0:
-        return N.T.copy()
+        return N
     # The knots the recurrence reads, once: lo_all[k] = t[span - p + 1 + k], hi_all[r] = t[span + 1 + r].
     offsets = np.arange(1 - p, p + 1)
     ks = knots[span[None, :] + offsets[:, None]]
     lo_all, hi_all = ks[:p], ks[p:]
+    X = args.T
     for j in range(1, p + 1):
         # The inner loop over r = 0..j-1 as whole rows (as in basis_functions): every temp comes from
         # the old N[r], and N[r] = saved + (hi - x) temp[r] with saved = (x - lo) temp[r-1] (0 for
-        # r = 0); the same operations on each value, so the same bits.
-        x = args[:, j - 1]
+        # r = 0), N[j] = the last saved. The right terms are written into N[:j], then the saved
+        # ones added: the same sums (one addition each, commutative) and signs of zero (0 + -0 is +0
+        # in row 0, and row j is the saved term itself, as in the loop).
+        x = X[j - 1]
         lo = lo_all[p - j:]
         hi = hi_all[:j]
         temp = N[:j] / (hi - lo)
-        rt = (hi - x) * temp
         lt = (x - lo) * temp
+        np.multiply(hi - x, temp, out=N[:j])
+        N[0] += 0.0
+        N[1:j] += lt[:j - 1]
         N[j] = lt[j - 1]
-        N[1:j] = lt[:j - 1] + rt[1:]
-        N[0] = rt[0] + 0.0
-    return N.T.copy()
+    return N
 
 
 def blossom_poles(
