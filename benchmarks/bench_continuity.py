@@ -29,7 +29,6 @@ from OCP.BRep import BRep_Tool
 from OCP.GeomAbs import GeomAbs_Shape
 from OCP.LocalAnalysis import LocalAnalysis_SurfaceContinuity
 
-from occsurf.algorithms import tolerances
 from occsurf.bridge import read_iges, read_step
 from occsurf.bridge.quality import continuity as C
 from occsurf.bridge.quality import edge_continuity, occ_fold
@@ -43,21 +42,16 @@ def _read(path: Path):
 
 def _engine(model, samples: int):
     """The measured pairs and the dense requests ``(pid, t)`` of ``edge_continuity``."""
-    from occsurf.bridge.quality._batch import SurfaceBatch
-    from occsurf.bridge.quality._pairs import collect_faces, match_free_edges, topology_pairs
+    from occsurf.bridge.quality._setup import build_engine
 
-    shape, faces = collect_faces(model)
-    size = C.shape_size(shape)
-    surfaces = SurfaceBatch([f.evaluator for f in faces])
-    pairs, free, _ = topology_pairs(faces)
-    pairs += match_free_edges(faces, free, tolerances.CONTINUITY_MATCH_RTOL * size, size / 200.0, surfaces)
-    engine = C.Engine(faces, pairs, False, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
+    setup = build_engine(model)
+    engine, pairs = setup.engine, setup.pairs
     good = np.array([i for i, p in enumerate(pairs) if C._why_not(engine, p) is None], dtype=np.intp)
     s01 = C._chebyshev(samples)
     first = np.array([pairs[i].first for i in good])
     last = np.array([pairs[i].last for i in good])
     t = (first[:, None] + (last - first)[:, None] * s01).reshape(-1)
-    return engine, faces, np.repeat(good, samples), t, size
+    return engine, setup.faces, np.repeat(good, samples), t, setup.size
 
 
 def _occ(engine, faces, pid, t, s, size):

@@ -77,10 +77,9 @@ from occsurf.algorithms import tolerances
 from occsurf.algorithms._validate import check_size
 from occsurf.algorithms.errors import InvalidGeometryError
 
-from ..messages import one_line
-from ._batch import SurfaceBatch
 from ._engine import Engine, occ_fold
-from ._pairs import Pair, collect_faces, match_free_edges, topology_pairs
+from ._pairs import Pair
+from ._setup import build_engine
 
 Array = NDArray[np.float64]
 
@@ -343,21 +342,6 @@ def _chebyshev(n: int) -> Array:
     return 0.5 * (1.0 - np.cos(np.pi * np.arange(n) / (n - 1)))
 
 
-def shape_size(shape: Any) -> float:
-    """The diagonal of OCC's bounding box of ``shape`` (``BRepBndLib.Add``: of its triangulation
-    where its faces are meshed) that :func:`edge_continuity`'s tolerances are relative to."""
-    from OCP.Bnd import Bnd_Box
-    from OCP.BRepBndLib import BRepBndLib
-
-    box = Bnd_Box()
-    BRepBndLib.Add_s(shape, box)
-    if box.IsVoid():
-        return 1.0
-    x0, y0, z0, x1, y1, z1 = box.Get()
-    d = math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2 + (z1 - z0) ** 2)
-    return d if d > 0 and math.isfinite(d) else 1.0
-
-
 def _check_args(samples: Any, match_tol: Any) -> tuple[int, float | None]:
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 3:
         raise InvalidGeometryError(f"samples: expected an integer >= 3, got {samples!r}")
@@ -367,17 +351,6 @@ def _check_args(samples: Any, match_tol: Any) -> tuple[int, float | None]:
             raise InvalidGeometryError(f"match_tol: expected a finite number > 0 (model units) or None, got {match_tol!r}")
         match_tol = float(match_tol)
     return int(samples) | 1, match_tol  # odd: the middle of the edge is a sample
-
-
-def _check_face_pairs(face_pairs: Any, n_faces: int) -> set[tuple[int, int]]:
-    try:
-        chosen = {(min(i, j), max(i, j)) for i, j in ((int(a), int(b)) for a, b in face_pairs)}
-    except (TypeError, ValueError) as err:
-        raise InvalidGeometryError(f"face_pairs: expected pairs of face indices, got {face_pairs!r}") from err
-    bad = sorted(i for pair in chosen for i in pair if not 0 <= i < n_faces)
-    if bad:
-        raise InvalidGeometryError(f"face_pairs: face indices must be in [0, {n_faces - 1}], got {bad}")
-    return chosen
 
 
 def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False, loose: bool = True,
@@ -411,7 +384,7 @@ def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False,
         Only the edges between these pairs of faces (in either order), e.g. chosen pairs of loose
         faces; default every pair.
     model_size : float, optional
-        The diagonal the tolerances above are relative to; default :func:`shape_size` of the shape
+        The diagonal the tolerances above are relative to; default :func:`~._setup.shape_size` of the shape
         as it is now (OCC's bounding box: of the triangulation where the faces are meshed, else of
         the geometry, a little larger).
 
@@ -434,29 +407,11 @@ def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False,
     if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
         raise InvalidGeometryError(f"refine: expected an integer >= 0, got {iterations!r}")
     clock = time.perf_counter()
-    try:
-        shape, faces = collect_faces(model)
-    except Exception as err:  # noqa: BLE001
-        raise InvalidGeometryError(f"model: expected an ImportedModel or an OCC/build123d/cadquery shape, "
-                                   f"got {type(model).__name__} ({one_line(err)})") from err
-    size = shape_size(shape) if model_size is None else float(model_size)
-    surfaces = SurfaceBatch([f.evaluator for f in faces])
-    pairs, free, warnings = topology_pairs(faces)
-    warnings += [f.error for f in faces if f.error]
-    n_topology = len(pairs)
-    tol = None
-    t_match = time.perf_counter()
-    if loose:
-        tol = match_tol if match_tol is not None else tolerances.CONTINUITY_MATCH_RTOL * size
-        pairs += match_free_edges(faces, free, tol, spacing=size / 200.0, surfaces=surfaces)
-    t_match = time.perf_counter() - t_match
-    if face_pairs is not None:
-        chosen = _check_face_pairs(face_pairs, len(faces))
-        pairs = [p for p in pairs if tuple(sorted((p.side1.face, p.side2.face))) in chosen]
-        n_topology = sum(p.matched == "topology" for p in pairs)
+    setup = build_engine(model, g3=g3, loose=loose, match_tol=match_tol, face_pairs=face_pairs, model_size=model_size)
+    engine, faces, pairs, free, warnings = setup.engine, setup.faces, setup.pairs, setup.free, setup.warnings
+    n_topology, tol, size, t_match = setup.n_topology, setup.match_tol, setup.size, setup.seconds_matching
     result = ContinuityResult()
     result.match_tol, result.thresholds = tol, thresholds
-    engine = Engine(faces, pairs, g3, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
     t_measure = time.perf_counter()
     reports, result.points = _measure_all(engine, samples, int(iterations), thresholds)
     t_measure = time.perf_counter() - t_measure

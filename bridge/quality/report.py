@@ -395,7 +395,7 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
 
     from ..exchange.object_import import as_model
     from ..rendering import tessellation
-    from .continuity import shape_size
+    from ._setup import shape_size
 
     check_grid(check_count(samples, "samples", 1, minimum=2), int(samples), "samples")  # each face's flags grid, up front
     model = as_model(model)  # a build123d / cadquery / OCC object: its faces with their labels and colours

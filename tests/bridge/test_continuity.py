@@ -452,24 +452,14 @@ def test_engine_blocks_with_given_side_2_parameters(monkeypatch) -> None:
     """``Engine.measure`` with the side-2 parameters given (``s``: a benchmark giving OCC and us the
     same points) and with a pair's requests in several runs under ``set_flip`` (then one block):
     the values of one batch, to round-off (as above); ``s`` of another length is refused."""
-    from occsurf.algorithms import tolerances
     from occsurf.bridge.quality import _engine
     from occsurf.bridge.quality import continuity as C
-    from occsurf.bridge.quality._batch import SurfaceBatch
-    from occsurf.bridge.quality._pairs import collect_faces, match_free_edges, topology_pairs
-
-    def engine_of(shape):
-        model, faces = collect_faces(shape)
-        size = C.shape_size(model)
-        surfaces = SurfaceBatch([f.evaluator for f in faces])
-        pairs, free, _ = topology_pairs(faces)
-        pairs += match_free_edges(faces, free, tolerances.CONTINUITY_MATCH_RTOL * size, size / 200.0, surfaces)
-        return C.Engine(faces, pairs, True, tolerances.CONTINUITY_CURVATURE_FLOOR / size, surfaces)
+    from occsurf.bridge.quality._setup import build_engine
 
     monkeypatch.setattr(_engine, "NUMBA_MIN_POINTS", 1)
     for model in ("loose", "sample"):
         shape = _blocks_model(model)
-        engine = engine_of(shape)
+        engine = build_engine(shape, g3=True).engine  # edge_continuity's set-up, with G3
         good = np.array([i for i, p in enumerate(engine.pairs) if C._why_not(engine, p) is None], dtype=np.intp)
         s01 = np.linspace(0.0, 1.0, 21)
         first = np.array([engine.pairs[i].first for i in good])
