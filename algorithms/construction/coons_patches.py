@@ -64,7 +64,7 @@ from .. import tolerances
 from ..errors import InvalidGeometryError, ToleranceError
 from ..fitting.interpolation import interpolate_values
 from ..kernel.basis import greville
-from ..kernel.compat import make_compatible
+from ..kernel.compat import compatible_sets, make_compatible
 from ..kernel.curve import BSplineCurve
 from ..kernel.degree import elevate_poles
 from ..kernel.surface import BSplineSurface
@@ -291,9 +291,10 @@ def _compatible_loop(bottom: object, right: object, top: object, left: object, t
     :func:`occsurf.algorithms.kernel.compat.make_compatible`; the loop's corners coincide.
     """
     cs = _boundaries(bottom, right, top, left, tol, rational_ok, approx_tol)
-    b, t = make_compatible([cs["bottom"], cs["top"]])
-    l, r = make_compatible([cs["left"], cs["right"]])
-    return b, r, t, l
+    (pu, U, ((Pb, wb), (Pt, wt))), (pv, V, ((Pl, wl), (Pr, wr))) = compatible_sets(
+        [([cs["bottom"], cs["top"]], None), ([cs["left"], cs["right"]], None)])
+    return (BSplineCurve._trusted(pu, U, Pb, wb), BSplineCurve._trusted(pv, V, Pr, wr),
+            BSplineCurve._trusted(pu, U, Pt, wt), BSplineCurve._trusted(pv, V, Pl, wl))
 
 
 def coons(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BSplineCurve, *,

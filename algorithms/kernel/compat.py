@@ -32,7 +32,7 @@ from .degree import elevate_poles
 from .knots import check_rescaled, clamp_poles, distinct_knots, most_repeated, rescale_knots
 from .rational import from_homogeneous
 
-__all__ = ["make_compatible", "compatible_poles", "common_knots", "missing_knots"]
+__all__ = ["make_compatible", "compatible_poles", "compatible_sets", "common_knots", "missing_knots"]
 
 #: Above this many argument choices (``C(p, q)``, degree ``q`` raised to ``p``) the degree is raised
 #: one step at a time first (:func:`~.degree.elevate_poles`); ``C(3, 2) = 3``, ``C(9, 4) = 126``.
@@ -226,56 +226,76 @@ def _common_domain(items: list[BSplineCurve], domain: tuple[float, float] | None
     return lo, hi
 
 
-def compatible_poles(
-    curves: Sequence[BSplineCurve], *, domain: tuple[float, float] | None = None
-) -> tuple[int, np.ndarray, list[tuple[np.ndarray, np.ndarray | None]]]:
+Compatible = tuple[int, np.ndarray, list[tuple[np.ndarray, np.ndarray | None]]]
+
+
+def compatible_poles(curves: Sequence[BSplineCurve], *, domain: tuple[float, float] | None = None) -> Compatible:
     """:func:`make_compatible` as arrays: the common degree, the common knot vector and each curve's
     poles and weights (``None`` when no input is rational), without a curve object per result.
 
     The constructions that combine the curves' poles row by row (ruled, Coons, Gordon, loft) take
     these; the checks, errors and values are those of :func:`make_compatible`.
     """
-    items = _check_curves(curves)
-    lo, hi = _common_domain(items, domain)
-    p = max(c.degree for c in items)
-    rational = any(c.is_rational for c in items)
-    # Each curve clamped and its knots moved onto [lo, hi] (the poles stay: an affine change of
-    # parameter), then the merged knot vector of the curves raised to degree p.
-    prepared = []
-    for c in items:
-        t, H = clamp_poles(c.knots, c.degree, c._hpoles)
-        dom = (float(t[c.degree]), float(t[-1]))
-        if dom != (lo, hi):
-            t = check_rescaled(rescale_knots(t, dom, (lo, hi)), t, (lo, hi), "reparametrize")
-        prepared.append((c, c.degree, t, H))
-    runs = [distinct_knots(t) for _, _, t, _ in prepared]
-    T = _common_runs([v for v, _ in runs], [m + (p - q) for (_, q, _, _), (_, m) in zip(prepared, runs)])
-    T[: p + 1] = lo
-    T[-(p + 1):] = hi
-    _check_target(T, p, lo, hi)
-    n2 = T.shape[0] - p - 1
-    i = np.arange(n2)
-    args = T[i[:, None] + 1 + np.arange(p)]  # pole i of the result is the blossom at T[i+1 .. i+p]
-    # the middle of the first non-empty span of T in each pole's support (support_span's first half,
-    # shared by all curves): the piece of a curve whose blossom gives the pole is the one over it
-    k = np.minimum(np.searchsorted(T, T[:n2], side="right") - 1, T.shape[0] - 2)
-    mid = 0.5 * (T[k] + T[k + 1])
-    # Curves that need new poles, grouped by degree and pole width: one blossom evaluation each.
-    poles: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
-    groups: dict[tuple[int, int], list[tuple[int, np.ndarray, np.ndarray]]] = {}
-    for j, (c, q, t, H) in enumerate(prepared):
-        if q == p and t.shape[0] == T.shape[0]:  # same length and degree: no knot of T is missing
-            poles[j] = (c.control_points, c.weights) if H is c._hpoles else _split(H, c.dim)
-            continue
-        if q < p and comb(p, q) > _MAX_SUBSETS:  # raise the degree first (few curves reach here)
-            t, H = elevate_poles(t, q, H, p - q)
-            q = p
-        groups.setdefault((q, H.shape[-1]), []).append((j, t, H))
-    for (q, _), members in groups.items():
-        new = _blossom_poles([t for _, t, _ in members], q, [H for _, _, H in members], mid, args, p)
-        for (j, _, _), Hj in zip(members, new):
-            poles[j] = _split(Hj, prepared[j][0].dim)
-    return p, T, [(P, np.ones(n2) if w is None and rational else w) for P, w in (poles[j] for j in range(len(prepared)))]
+    return compatible_sets([(curves, domain)])[0]
+
+
+def compatible_sets(sets: Sequence[tuple[Sequence[BSplineCurve], tuple[float, float] | None]]) -> list[Compatible]:
+    """:func:`compatible_poles` of several independent sets of curves (each with its ``domain``), e.g.
+    the u and the v boundaries of a Coons patch: the same results, with the blossom evaluations of
+    all the sets' curves of one degree in one recurrence."""
+    out: list[Compatible] = []
+    # per blossom pass (curve degree, pole width, target degree): (set, curve, knots, poles) of its curves
+    passes: dict[tuple[int, int, int], list[tuple[int, int, np.ndarray, np.ndarray]]] = {}
+    targets = []  # per set: the blossom arguments and the points that pick each curve's piece
+    rational_sets = []
+    for si, (curves, domain) in enumerate(sets):
+        items = _check_curves(curves)
+        lo, hi = _common_domain(items, domain)
+        p = max(c.degree for c in items)
+        rational_sets.append(any(c.is_rational for c in items))
+        # Each curve clamped and its knots moved onto [lo, hi] (the poles stay: an affine change of
+        # parameter), then the merged knot vector of the curves raised to degree p.
+        prepared = []
+        for c in items:
+            t, H = clamp_poles(c.knots, c.degree, c._hpoles)
+            dom = (float(t[c.degree]), float(t[-1]))
+            if dom != (lo, hi):
+                t = check_rescaled(rescale_knots(t, dom, (lo, hi)), t, (lo, hi), "reparametrize")
+            prepared.append((c.degree, t, H))
+        runs = [distinct_knots(t) for _, t, _ in prepared]
+        T = _common_runs([v for v, _ in runs], [m + (p - q) for (q, _, _), (_, m) in zip(prepared, runs)])
+        T[: p + 1] = lo
+        T[-(p + 1):] = hi
+        _check_target(T, p, lo, hi)
+        n2 = T.shape[0] - p - 1
+        i = np.arange(n2)
+        args = T[i[:, None] + 1 + np.arange(p)]  # pole i of the result is the blossom at T[i+1 .. i+p]
+        # the middle of the first non-empty span of T in each pole's support (support_span's first
+        # half, shared by the set's curves): the piece of a curve whose blossom gives the pole is
+        # the one over it
+        k = np.minimum(np.searchsorted(T, T[:n2], side="right") - 1, T.shape[0] - 2)
+        targets.append((args, 0.5 * (T[k] + T[k + 1])))
+        poles: list[tuple[np.ndarray, np.ndarray | None]] = []
+        for j, (c, (q, t, H)) in enumerate(zip(items, prepared)):
+            poles.append((c.control_points, c.weights))
+            if q == p and t.shape[0] == T.shape[0]:  # same length and degree: no knot of T is missing
+                if H is not c._hpoles:  # clamped: its new poles
+                    poles[j] = _split(H, c.dim)
+                continue
+            if q < p and comb(p, q) > _MAX_SUBSETS:  # raise the degree first (few curves reach here)
+                t, H = elevate_poles(t, q, H, p - q)
+                q = p
+            passes.setdefault((q, H.shape[-1], p), []).append((si, j, t, H))
+        out.append((p, T, poles))
+    for (q, _, p), members in passes.items():
+        new = _blossom_poles(q, p, [(t, H, *targets[si]) for si, _, t, H in members])
+        for (si, j, _, _), Hj in zip(members, new):
+            out[si][2][j] = _split(Hj, out[si][2][j][0].shape[-1])  # the entry holds the input's poles
+    for (p, T, poles), rational in zip(out, rational_sets):
+        if rational:  # polynomial curves of a set with a rational one get unit weights
+            n2 = T.shape[0] - p - 1
+            poles[:] = [(P, np.ones(n2) if w is None else w) for P, w in poles]
+    return out
 
 
 def _split(H: np.ndarray, dim: int) -> tuple[np.ndarray, np.ndarray | None]:
@@ -283,12 +303,12 @@ def _split(H: np.ndarray, dim: int) -> tuple[np.ndarray, np.ndarray | None]:
     return (H, None) if H.shape[-1] == dim else from_homogeneous(H)
 
 
-def _blossom_poles(ts: list[np.ndarray], q: int, Hs: list[np.ndarray], mid: np.ndarray, args: np.ndarray,
-                   p: int) -> list[np.ndarray]:
-    """The poles of degree-``q`` splines (knots ``ts[c]``, poles ``Hs[c]`` of one width) written with
-    degree ``p >= q`` on the knot vector whose pole ``i`` is the degree-``p`` blossom at ``args[i]``:
-    for each curve, the blossom of its piece over the point ``mid[i]`` (inside the first non-empty
-    span of the new knots in the pole's support, so inside one piece).
+def _blossom_poles(q: int, p: int, members: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
+                   ) -> list[np.ndarray]:
+    """The poles of degree-``q`` splines written with degree ``p >= q`` on new knot vectors: for each
+    member ``(t, H, args, mid)`` (knots, poles of one width for all members, the new poles' blossom
+    arguments and a point inside the first non-empty new span of each new pole's support), pole
+    ``i`` is the degree-``p`` blossom at ``args[i]`` of the piece over ``mid[i]``.
 
     Degree raising and knot refinement in one step (course §2-6, §2-10): the degree-``p`` blossom of
     a degree-``q`` polynomial is the mean of its degree-``q`` blossom over the ``C(p, q)`` choices of
@@ -298,24 +318,25 @@ def _blossom_poles(ts: list[np.ndarray], q: int, Hs: list[np.ndarray], mid: np.n
     (the arguments lie in the support of the piece), so each new pole is a convex combination of
     old ones and its round-off is a few ulps of their size.
 
-    The curves go through one recurrence: their knot vectors end to end, each span index shifted by
-    the knots before it (the recurrence reads ``t[mu - q + 1 .. mu + q]``, inside the curve's own
+    The members go through one recurrence: their knot vectors end to end, each span index shifted by
+    the knots before it (the recurrence reads ``t[mu - q + 1 .. mu + q]``, inside the member's own
     vector for a span of its domain), each pole index by the poles before it.
     """
-    n2 = args.shape[0]
-    kn = np.concatenate(ts) if len(ts) > 1 else ts[0]
-    H = np.concatenate(Hs) if len(Hs) > 1 else Hs[0]
     k_off = p_off = 0
-    mus, cols = [], []
-    for t, Hc in zip(ts, Hs):
+    mus, cols, sizes = [], [], []
+    for t, H, _, mid in members:
         mu = np.searchsorted(t, mid, side="right") - 1
         mus.append(mu + k_off)
         cols.append(mu + (p_off - q))
+        sizes.append(mu.shape[0])
         k_off += t.shape[0]
-        p_off += Hc.shape[0]
-    mu_all = np.concatenate(mus) if len(mus) > 1 else mus[0]
-    first = np.concatenate(cols) if len(cols) > 1 else cols[0]  # each new pole's first old pole
-    a = np.tile(args, (len(ts), 1)) if len(ts) > 1 else args
+        p_off += H.shape[0]
+
+    def joined(arrays: list[np.ndarray]) -> np.ndarray:
+        return np.concatenate(arrays) if len(arrays) > 1 else arrays[0]
+
+    kn, H, a = joined([m[0] for m in members]), joined([m[1] for m in members]), joined([m[2] for m in members])
+    mu_all, first = joined(mus), joined(cols)  # first: each new pole's first old pole
     m = mu_all.shape[0]
     if q == p:
         A = blossom_rows(kn, q, mu_all, a)
@@ -325,4 +346,5 @@ def _blossom_poles(ts: list[np.ndarray], q: int, Hs: list[np.ndarray], mid: np.n
         A = blossom_rows(kn, q, np.repeat(mu_all, S.shape[0]), a[:, S].reshape(-1, q))
         A = A.reshape(q + 1, m, S.shape[0]).sum(axis=2) / S.shape[0]
     out = np.einsum("km,mk...->m...", A, H[first[:, None] + np.arange(q + 1)])
-    return [out[c * n2:(c + 1) * n2] for c in range(len(ts))]
+    ends = np.cumsum(sizes).tolist()
+    return [out[e - n:e] for e, n in zip(ends, sizes)]  # np.split's views, without its wrapper

@@ -338,6 +338,26 @@ def test_make_compatible_raises_high_degree_gaps_step_by_step_too(q, p):
         assert_allclose(a.weights, b.weights, rtol=0, atol=COMPAT_ULPS * eps * 2)
 
 
+@test_settings(30)
+@given(a=st.lists(bspline_curves(dims=st.just(3)), min_size=1, max_size=3),
+       b=st.lists(bspline_curves(dims=st.just(3)), min_size=1, max_size=3))
+def test_compatible_sets_equal_one_set_at_a_time(a, b):
+    """compatible_sets (a Coons patch's u and v boundaries: one blossom recurrence for the curves of
+    one degree of both sets) gives each set what compatible_poles gives it alone, bit for bit: every
+    row of the joint recurrence is computed as in a set's own."""
+    from occsurf.algorithms.kernel.compat import compatible_poles, compatible_sets
+
+    for (p, T, poles), one in zip(compatible_sets([(a, None), (b, (2.0, 3.0))]),
+                                  (compatible_poles(a), compatible_poles(b, domain=(2.0, 3.0)))):
+        assert p == one[0]
+        assert_array_equal(T, one[1])
+        for (P, w), (P1, w1) in zip(poles, one[2]):
+            assert_array_equal(P, P1)
+            assert (w is None) == (w1 is None)
+            if w is not None:
+                assert_array_equal(w, w1)
+
+
 @test_settings(40)
 @given(data=st.data(), k=st.integers(1, 4))
 def test_common_runs_merge_like_common_knots(data, k):
