@@ -212,7 +212,7 @@ def _check_loop(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, le
     must be clamped."""
     # clamped curves: the end points are the end poles (exact, no evaluation); E[k, e] is end e of
     # curve k in the order bottom, right, top, left, and the corners 00, 10, 11, 01 pair them as
-    # `pairs` says: (bottom 0, left 0), (bottom 1, right 0), (top 1, right 1), (top 0, left 1)
+    # (bottom 0, left 0), (bottom 1, right 0), (top 1, right 1), (top 0, left 1) (_CORNER_ENDS)
     E = np.stack([c.control_points[:: c.control_points.shape[0] - 1] for c in (bottom, right, top, left)])
     first, second = E[_CORNER_ENDS[0], _CORNER_ENDS[1]], E[_CORNER_ENDS[2], _CORNER_ENDS[3]]
     gaps = np.sqrt(np.square(first - second).sum(axis=1)).tolist()  # np.linalg.norm's values, one call
@@ -287,8 +287,9 @@ def _compatible_loop(bottom: object, right: object, top: object, left: object, t
     """The boundaries ``(bottom, right, top, left)`` of :func:`_boundaries`, made compatible in pairs.
 
     ``bottom`` and ``top`` share one degree and one knot vector (the u direction of the patch),
-    ``left`` and ``right`` another (v), by the exact operations of
-    :func:`occsurf.algorithms.kernel.compat.make_compatible`; the loop's corners coincide.
+    ``left`` and ``right`` another (v), as :func:`occsurf.algorithms.kernel.compat.make_compatible`
+    makes them (both pairs in one :func:`~occsurf.algorithms.kernel.compat.compatible_sets` call);
+    the loop's corners coincide.
     """
     cs = _boundaries(bottom, right, top, left, tol, rational_ok, approx_tol)
     (pu, U, ((Pb, wb), (Pt, wt))), (pv, V, ((Pl, wl), (Pr, wr))) = compatible_sets(

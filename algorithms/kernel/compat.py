@@ -7,11 +7,12 @@ affine reparametrisation, a common degree by degree elevation (course §2-6), an
 vector by knot refinement (course §2-10, Oslo algorithm). See also The NURBS Book, 2nd ed., §10.3.
 
 The last two are one step here: every pole of a result is a blossom of the input at consecutive
-knots of the common vector, and the blossom of a degree raised from ``q`` to ``p`` is the mean of
-the degree-``q`` blossom over the ways to choose ``q`` of its ``p`` arguments (Ramshaw 1989). The
-curves of one degree go through one blossom recurrence together. (Before 2026-12-07 each curve was
-raised, then refined, one knot vector at a time: the same poles to a few ulps, twice the time on
-a ruled surface of two small curves, where the cost is the number of NumPy calls, not arithmetic.)
+knots of its refined knot vector, and the blossom of a degree raised from ``q`` to ``p`` is the
+mean of the degree-``q`` blossom over the ways to choose ``q`` of its ``p`` arguments (Ramshaw
+1989). The curves of one degree go through one blossom recurrence together. (Before 2026-12-07
+each curve was raised, then refined, one knot vector at a time: the same poles to a few ulps,
+twice the time on a ruled surface of two small curves, where the cost is the number of NumPy
+calls, not arithmetic.)
 """
 
 from __future__ import annotations
@@ -124,9 +125,11 @@ def missing_knots(knots: np.ndarray, target: np.ndarray, tol: float | None = Non
     return _missing(knots, *_target(target, tol))
 
 
-def _common_runs(values: Sequence[np.ndarray], counts: Sequence[np.ndarray]) -> np.ndarray:
-    """:func:`common_knots` of knot vectors given as runs (distinct values, multiplicities): the
-    knot vectors ``np.repeat(values[k], counts[k])`` merged without being built."""
+def _common_runs(values: Sequence[np.ndarray], counts: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`common_knots` of knot vectors given as runs (distinct values, multiplicities), as
+    clusters: each cluster's value (the smallest in it), its multiplicity (the most copies one
+    input has in it) and each input value's cluster, in the order of ``np.concatenate(values)``.
+    The merged knot vector is ``np.repeat(value, multiplicity)``."""
     allv = np.concatenate(values)
     allc = np.concatenate(counts)
     order = np.argsort(allv, kind="stable")
@@ -140,12 +143,41 @@ def _common_runs(values: Sequence[np.ndarray], counts: Sequence[np.ndarray]) -> 
     # Each input's runs are sorted and its last value (the domain's end) is never in the cluster of
     # the next input's first: equal neighbour labels mean two runs of one input in one cluster.
     if not np.any(labels[1:] == labels[:-1]):
-        return np.repeat(v[starts], np.maximum.reduceat(allc[order], starts))  # the most copies of a value
+        return v[starts], np.maximum.reduceat(allc[order], starts), labels  # the most copies of a value
     # an input with two values closer than the tolerance: its knots in that cluster add up
     k = len(values)
     owner = np.repeat(np.arange(k), [x.size for x in values])
     per = np.bincount(owner * starts.size + labels, weights=allc, minlength=k * starts.size)
-    return np.repeat(v[starts], per.reshape(k, starts.size).max(axis=0).astype(np.intp))
+    return v[starts], per.reshape(k, starts.size).max(axis=0).astype(np.intp), labels
+
+
+def _knot_vector(value: np.ndarray, mult: np.ndarray, p: int, lo: float, hi: float) -> np.ndarray:
+    """``np.repeat(value, mult)`` with the ``p + 1`` copies at each end exactly ``lo`` and ``hi``."""
+    T = np.repeat(value, mult)
+    T[: p + 1] = lo
+    T[-(p + 1):] = hi
+    return T
+
+
+def _own_knots(vals: np.ndarray, m: np.ndarray, lab: np.ndarray, value: np.ndarray, mult: np.ndarray, p: int,
+               lo: float, hi: float) -> np.ndarray:
+    """A curve's knot vector (distinct ``vals``, multiplicities ``m`` at degree ``p``, clusters
+    ``lab``) refined to as many knots per cluster as the merged vector (cluster values ``value``,
+    multiplicities ``mult``): the added copies at the curve's own value in that cluster (its first,
+    as knot refinement snaps a value to the nearest knot), at the cluster's value elsewhere. Index
+    for index it has the merged vector's structure: a cluster's copies in the same places."""
+    if not np.any(lab[1:] == lab[:-1]):  # one value per cluster: its copies all take it
+        own = value.copy()
+        own[lab] = vals
+        return _knot_vector(own, mult, p, lo, hi)
+    # two values of the curve in one cluster: both kept with their own multiplicities
+    have = np.bincount(lab, weights=m, minlength=value.shape[0]).astype(np.intp)
+    at = value.copy()
+    at[lab[::-1]] = vals[::-1]  # the first value of the curve in each cluster
+    tau = np.sort(np.concatenate((np.repeat(vals, m), np.repeat(at, mult - have))))
+    tau[: p + 1] = lo
+    tau[-(p + 1):] = hi
+    return tau
 
 
 @lru_cache(maxsize=64)
@@ -158,14 +190,21 @@ def _subsets(p: int, q: int) -> np.ndarray:
 
 def _check_target(T: np.ndarray, p: int, lo: float, hi: float) -> None:
     """The merged knot vector's checks, as knot refinement made them (:func:`~.knots.refinement_knots`):
-    interior knots strictly inside the domain, none above multiplicity ``p + 1``."""
+    interior knots strictly inside the domain, none above multiplicity ``p + 1``. Knots closer
+    than the knot tolerance are one knot in ``T`` (their copies counted together), so a curve
+    with an interior knot that close to a domain end, or with knots that close to each other
+    whose copies add up beyond ``p + 1``, is refused here."""
     if T.shape[0] > 2 * (p + 1) and (T[p + 1] <= lo or T[-p - 2] >= hi):
-        bad = float(T[p + 1] if T[p + 1] <= lo else T[-p - 2])
-        raise ParameterError(f"knots: {bad!r} must lie strictly inside the domain ({lo!r}, {hi!r})")
+        end = lo if T[p + 1] <= lo else hi
+        raise ParameterError(
+            f"knots: an interior knot lies within the knot tolerance (tolerances.KNOT_EQUALITY of the range) of "
+            f"the domain end {end!r}: merged with it, that end would have {int(np.count_nonzero(T == end))} copies, "
+            f"above degree + 1 = {p + 1}")
     excess = most_repeated(T, p + 1)
     if excess is not None:
         raise InvalidGeometryError(
-            f"knots: knot {excess[0]!r} would get multiplicity {excess[1]}, above degree + 1 = {p + 1}")
+            f"knots: knot {excess[0]!r} would get multiplicity {excess[1]}, above degree + 1 = {p + 1} "
+            "(knots within the knot tolerance of each other count as one)")
 
 
 def make_compatible(
@@ -187,19 +226,26 @@ def make_compatible(
         In the input order. All clamped, with the highest input degree, the same knot vector
         (bit-identical arrays) and, if any input is rational, all rational (polynomial curves get
         unit weights). Each equals its input curve up to round-off (affine reparametrisation,
-        degree elevation and knot insertion are exact operations).
+        degree elevation and knot insertion are exact operations), where no two curves have knots
+        that differ by less than the knot tolerance (Notes).
 
     Raises
     ------
     InvalidGeometryError
-        An empty sequence, a non-curve, or mixed dimensions.
+        An empty sequence, a non-curve, or mixed dimensions; knots (of one curve or of several)
+        within ``tolerances.KNOT_EQUALITY`` of each other whose copies together exceed
+        ``degree + 1``.
     ParameterError
-        ``domain`` not a finite increasing pair.
+        ``domain`` not a finite increasing pair; an interior knot within that tolerance of a
+        domain end.
 
     Notes
     -----
     Course §2-10 (knot refinement) and §2-6 (degree raising); The NURBS Book, 2nd ed., §10.3
     ("making curves compatible" for skinning). :func:`compatible_poles` gives the same as arrays.
+    Knots of different curves equal within the knot tolerance become one (the smallest value):
+    each curve is first refined exactly on its own knots, then takes the common vector, which
+    moves it by about the knots' difference times its poles' differences over the spans there.
     """
     p, T, poles = compatible_poles(curves, domain=domain)
     # every curve holds T itself (a copy each), not its own knots equal to it within the tolerance
@@ -244,9 +290,9 @@ def compatible_sets(sets: Sequence[tuple[Sequence[BSplineCurve], tuple[float, fl
     the u and the v boundaries of a Coons patch: the same results, with the blossom evaluations of
     all the sets' curves of one degree in one recurrence."""
     out: list[Compatible] = []
-    # per blossom pass (curve degree, pole width, target degree): (set, curve, knots, poles) of its curves
-    passes: dict[tuple[int, int, int], list[tuple[int, int, np.ndarray, np.ndarray]]] = {}
-    targets = []  # per set: the blossom arguments and the points that pick each curve's piece
+    # per blossom pass (curve degree, pole width, target degree): (set, curve, knots, poles, blossom
+    # arguments, points picking the pieces) of its curves
+    passes: dict[tuple[int, int, int], list[tuple[int, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = {}
     rational_sets = []
     for si, (curves, domain) in enumerate(sets):
         items = _check_curves(curves)
@@ -263,20 +309,21 @@ def compatible_sets(sets: Sequence[tuple[Sequence[BSplineCurve], tuple[float, fl
                 t = check_rescaled(rescale_knots(t, dom, (lo, hi)), t, (lo, hi), "reparametrize")
             prepared.append((c.degree, t, H))
         runs = [distinct_knots(t) for _, t, _ in prepared]
-        T = _common_runs([v for v, _ in runs], [m + (p - q) for (q, _, _), (_, m) in zip(prepared, runs)])
-        T[: p + 1] = lo
-        T[-(p + 1):] = hi
+        value, mult, label = _common_runs([v for v, _ in runs], [m + (p - q) for (q, _, _), (_, m) in zip(prepared, runs)])
+        T = _knot_vector(value, mult, p, lo, hi)
         _check_target(T, p, lo, hi)
         n2 = T.shape[0] - p - 1
-        i = np.arange(n2)
-        args = T[i[:, None] + 1 + np.arange(p)]  # pole i of the result is the blossom at T[i+1 .. i+p]
-        # the middle of the first non-empty span of T in each pole's support (support_span's first
-        # half, shared by the set's curves): the piece of a curve whose blossom gives the pole is
-        # the one over it
+        at = np.arange(n2)[:, None] + 1 + np.arange(p)  # pole i of the result is the blossom at T[i+1 .. i+p]
+        # the first non-empty span of T in each pole's support (support_span's first half, shared by
+        # the set's curves): the piece of a curve whose blossom gives the pole is the one over it
         k = np.minimum(np.searchsorted(T, T[:n2], side="right") - 1, T.shape[0] - 2)
-        targets.append((args, 0.5 * (T[k] + T[k + 1])))
+        args, mid = T[at], 0.5 * (T[k] + T[k + 1])
         poles: list[tuple[np.ndarray, np.ndarray | None]] = []
-        for j, (c, (q, t, H)) in enumerate(zip(items, prepared)):
+        first = 0
+        for j, (c, (q, t, H), (vals, m)) in enumerate(zip(items, prepared, runs)):
+            lab = label[first:first + vals.shape[0]]
+            first += vals.shape[0]
+            m = m + (p - q)  # the multiplicities of the curve's knots at degree p
             poles.append((c.control_points, c.weights))
             if q == p and t.shape[0] == T.shape[0]:  # same length and degree: no knot of T is missing
                 if H is not c._hpoles:  # clamped: its new poles
@@ -285,11 +332,21 @@ def compatible_sets(sets: Sequence[tuple[Sequence[BSplineCurve], tuple[float, fl
             if q < p and comb(p, q) > _MAX_SUBSETS:  # raise the degree first (few curves reach here)
                 t, H = elevate_poles(t, q, H, p - q)
                 q = p
-            passes.setdefault((q, H.shape[-1], p), []).append((si, j, t, H))
+            if np.array_equal(vals, value[lab]):
+                passes.setdefault((q, H.shape[-1], p), []).append((si, j, t, H, args, mid))
+                continue
+            # Knots equal to T's within the knot tolerance but not bit for bit (an ulp from a
+            # rescaling, a near-duplicate in another curve): the blossoms are taken at the curve's
+            # own knots refined by T's others, where the blossom identity is exact (at T's values
+            # a short piece's blossom, extrapolated to its pole's far arguments, would multiply the
+            # difference by (1 / its length)^degree). The poles then go with T, as the refinement on
+            # the curve's own knots followed by T did before.
+            tau = _own_knots(vals, m, lab, value, mult, p, lo, hi)
+            passes.setdefault((q, H.shape[-1], p), []).append((si, j, t, H, tau[at], 0.5 * (tau[k] + tau[k + 1])))
         out.append((p, T, poles))
     for (q, _, p), members in passes.items():
-        new = _blossom_poles(q, p, [(t, H, *targets[si]) for si, _, t, H in members])
-        for (si, j, _, _), Hj in zip(members, new):
+        new = _blossom_poles(q, p, [(t, H, a, m) for _, _, t, H, a, m in members])
+        for (si, j, *_), Hj in zip(members, new):
             out[si][2][j] = _split(Hj, out[si][2][j][0].shape[-1])  # the entry holds the input's poles
     for (p, T, poles), rational in zip(out, rational_sets):
         if rational:  # polynomial curves of a set with a rational one get unit weights
@@ -314,9 +371,9 @@ def _blossom_poles(q: int, p: int, members: list[tuple[np.ndarray, np.ndarray, n
     a degree-``q`` polynomial is the mean of its degree-``q`` blossom over the ``C(p, q)`` choices of
     ``q`` of the ``p`` arguments (L. Ramshaw, "Blossoms are polar forms", CAGD 6, 1989, §6), so the
     weights of the ``q + 1`` poles of the piece are summed over the choices before one contraction.
-    With ``q == p`` this is the Oslo algorithm (discrete B-splines). All weights are non-negative
-    (the arguments lie in the support of the piece), so each new pole is a convex combination of
-    old ones and its round-off is a few ulps of their size.
+    With ``q == p`` this is the Oslo algorithm (discrete B-splines). The arguments are a refinement
+    of the member's own knots, so all weights are non-negative (discrete B-splines are): each new
+    pole is a convex combination of old ones and its round-off is a few ulps of their size.
 
     The members go through one recurrence: their knot vectors end to end, each span index shifted by
     the knots before it (the recurrence reads ``t[mu - q + 1 .. mu + q]``, inside the member's own

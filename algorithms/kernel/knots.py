@@ -44,6 +44,9 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
+#: Floats gathered at a time by :func:`refine_poles` (16 MB): its old pole rows, p + 1 for each new pole.
+REFINE_BLOCK = 1 << 21
+
 
 def distinct_knots(knots: Array) -> tuple[Array, NDArray[np.intp]]:
     """Distinct knot values and multiplicities (exact equality, as OCC's ``BSplCLib::Knots``).
@@ -189,18 +192,41 @@ def support_span(knots: Array, new_knots: Array, i: NDArray[np.intp]) -> NDArray
 
 
 def refine_poles(knots: Array, degree: int, poles: Array, new_knots: Array) -> Array:
-    """Poles on ``new_knots`` (a refinement of ``knots``) describing the same spline."""
-    T = refinement_matrix(knots, degree, new_knots)
+    """Poles on ``new_knots`` (a refinement of ``knots``) describing the same spline.
+
+    Each new pole is the blossom of one piece at its knots (course §2-10): ``degree + 1`` weights on
+    consecutive old poles, so where every piece needed lies in the domain (a clamped knot vector)
+    the weights multiply those rows directly, ``(degree + 1) x`` the work of the output instead of
+    the dense product with :func:`refinement_matrix` (new x old poles, mostly zeros). The same
+    values to round-off: the non-zero terms of each row in the same order, summed by a batched
+    matmul instead of BLAS's blocked product, neither of which promises an order.
+    """
+    p = degree
+    n = knots.shape[0] - p - 1
+    n2 = new_knots.shape[0] - p - 1
+    i = np.arange(n2)
+    mu = support_span(knots, new_knots, i)
     flat = poles.reshape(poles.shape[0], -1)
-    return (T @ flat).reshape((T.shape[0],) + poles.shape[1:])
+    if mu[0] >= p and mu[-1] <= n - 1:  # mu is non-decreasing in i: every piece in the domain
+        A = blossom_basis(knots, p, mu, new_knots[i[:, None] + 1 + np.arange(p)])  # (n2, p + 1)
+        # each new pole: its p + 1 weights times its p + 1 old pole rows, as one batched matmul, in
+        # blocks of rows so that the gathered rows stay within REFINE_BLOCK floats (at most p + 1
+        # times the output otherwise, which the callers' size checks do not count)
+        rows = max(1, REFINE_BLOCK // ((p + 1) * flat.shape[1]))
+        out = np.empty((n2, flat.shape[1]))
+        for r0 in range(0, n2, rows):
+            sl = slice(r0, min(r0 + rows, n2))
+            out[sl] = np.matmul(A[sl, None, :], flat[(mu[sl] - p)[:, None] + np.arange(p + 1)])[:, 0]
+    else:
+        out = refinement_matrix(knots, p, new_knots) @ flat
+    return out.reshape((n2,) + poles.shape[1:])
 
 
 def refinement_knots(knots: Array, degree: int, n_poles: int, width: int, x: Array) -> Array:
     """The refined knot vector for inserting the values ``x`` (not empty), with the refinement's
     checks: its arrays within ``tolerances.MAX_ARRAY_BYTES`` (``width``: floats per pole), every
     value strictly inside the domain, each snapped to an existing knot within the knot tolerance,
-    and no knot above multiplicity ``degree + 1``. What :meth:`BSplineCurve.refine` and
-    :func:`~occsurf.algorithms.kernel.compat.make_compatible` insert.
+    and no knot above multiplicity ``degree + 1``. What :meth:`BSplineCurve.refine` inserts.
 
     Raises
     ------
@@ -373,7 +399,8 @@ def rescale_knots(knots: Array, old: tuple[float, float], new: tuple[float, floa
     """
     (lo, hi), (a, b) = (float(x) for x in old), (float(x) for x in new)
     scale = (b - a) / (hi - lo)  # Python floats: an overflow gives inf, not an error
-    if math.isfinite(scale):
+    reach = max(abs(float(knots[0]) - lo), abs(float(knots[-1]) - lo)) * abs(scale)  # the largest |knots - lo| scaled
+    if math.isfinite(scale) and abs(a) + reach < 1e307:  # no value can overflow
         t = a + (knots - lo) * scale
     else:
         with np.errstate(over="ignore", invalid="ignore"):  # an overflowing b - a: check_rescaled says so
