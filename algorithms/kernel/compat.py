@@ -321,18 +321,18 @@ def compatible_sets(sets: Sequence[tuple[Sequence[BSplineCurve], tuple[float, fl
         poles: list[tuple[np.ndarray, np.ndarray | None]] = []
         first = 0
         for j, (c, (q, t, H), (vals, m)) in enumerate(zip(items, prepared, runs)):
-            lab = label[first:first + vals.shape[0]]
-            first += vals.shape[0]
-            m = m + (p - q)  # the multiplicities of the curve's knots at degree p
+            start, first = first, first + vals.shape[0]  # the curve's values among `label`'s
             poles.append((c.control_points, c.weights))
             if q == p and t.shape[0] == T.shape[0]:  # same length and degree: no knot of T is missing
                 if H is not c._hpoles:  # clamped: its new poles
                     poles[j] = _split(H, c.dim)
                 continue
+            m = m + (p - q)  # the multiplicities of the curve's knots at degree p
             if q < p and comb(p, q) > _MAX_SUBSETS:  # raise the degree first (few curves reach here)
                 t, H = elevate_poles(t, q, H, p - q)
                 q = p
-            if np.array_equal(vals, value[lab]):
+            lab = label[start:first]
+            if (vals == value[lab]).all():
                 passes.setdefault((q, H.shape[-1], p), []).append((si, j, t, H, args, mid))
                 continue
             # Knots equal to T's within the knot tolerance but not bit for bit (an ulp from a
