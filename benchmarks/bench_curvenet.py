@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import common  # noqa: F401  (pins BLAS threads before NumPy)
 import numpy as np  # noqa: E402
-from common import Row, best_of, machine_note, print_table
+from common import Row, best_of, check_targets, machine_note, print_table
 
 from occsurf.algorithms.construction import coons, gordon  # noqa: E402
 from occsurf.algorithms.kernel.basis import basis_matrix  # noqa: E402
@@ -54,7 +54,7 @@ def network(m: int, n: int, seed: int = 1):
     return A, B
 
 
-def main() -> None:
+def main() -> int:
     from OCP.GeomFill import GeomFill_BSplineCurves, GeomFill_FillingStyle
 
     from occsurf.bridge._occ import silence_messages
@@ -90,7 +90,10 @@ def main() -> None:
                         best_of(lambda A=A, B=B, us=us, vs=vs: gordon(A, B, u_params=us, v_params=vs), repeat=10), peers=peers))
     print(machine_note())
     print_table(rows, ["GeomFill Coons style", "ocp_gordon"])
+    ok = check_targets([(f"{r.case} within 1.2x of GeomFill's Coons style (OCC time / ours; issue 30)",
+                         t_occ / r.ours, 1 / 1.2) for r in rows[:2]])
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

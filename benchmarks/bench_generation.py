@@ -27,7 +27,7 @@ from pathlib import Path
 
 import common  # noqa: F401  (pins BLAS threads before NumPy)
 import numpy as np  # noqa: E402
-from common import Row, best_of, machine_note, print_table  # noqa: E402
+from common import Row, best_of, check_targets, machine_note, print_table  # noqa: E402
 
 from occsurf.algorithms import BSplineCurve, ellipse  # noqa: E402
 from occsurf.algorithms.construction.generation import extrude, revolve, ruled, translational_sweep  # noqa: E402
@@ -50,7 +50,7 @@ def inputs():
     return prof, c2, path, sec
 
 
-def main() -> None:
+def main() -> int:
     from OCP.GeomConvert import GeomConvert
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the OCC builders live beside the tests
@@ -99,7 +99,15 @@ def main() -> None:
         "OCC law = Law_Interpol through 65 samples")
     print(machine_note())
     print_table(rows, ["OCC B-rep", "OCC Geom"])
+    # issue 30: ruled against GeomFill::Surface, the sweeps against MakePipeShell, each within 1.2x
+    by_case = {r.case: r for r in rows}
+    targets = [("ruled within 1.2x of GeomFill::Surface (OCC time / ours; issue 30)",
+                by_case["ruled (degree 3 vs 2, rational)"].peers["OCC Geom"], "ruled (degree 3 vs 2, rational)")]
+    targets += [(f"{case} within 1.2x of MakePipeShell (OCC time / ours; issue 30)", by_case[case].peers["OCC B-rep"], case)
+                for case in ("sweep rmf, tol 1e-6 (helix)", "sweep frenet, tol 1e-6 (helix)")]
+    ok = check_targets([(label, peer / by_case[case].ours, 1 / 1.2) for label, peer, case in targets if peer])
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())
