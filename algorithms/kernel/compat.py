@@ -30,7 +30,7 @@ from ..errors import InvalidGeometryError, ParameterError
 from .blossom import blossom_rows
 from .curve import BSplineCurve
 from .degree import elevate_poles
-from .knots import check_rescaled, clamp_poles, distinct_knots, most_repeated, rescale_knots
+from .knots import check_rescaled, clamp_poles, distinct_knots, rescale_knots
 from .rational import from_homogeneous
 
 __all__ = ["make_compatible", "compatible_poles", "compatible_sets", "common_knots", "missing_knots"]
@@ -173,7 +173,10 @@ def _own_knots(vals: np.ndarray, m: np.ndarray, lab: np.ndarray, value: np.ndarr
     # two values of the curve in one cluster: both kept with their own multiplicities
     have = np.bincount(lab, weights=m, minlength=value.shape[0]).astype(np.intp)
     at = value.copy()
-    at[lab[::-1]] = vals[::-1]  # the first value of the curve in each cluster
+    first = np.empty(lab.shape[0], dtype=bool)  # the first of the curve's values in each cluster
+    first[0] = True
+    np.not_equal(lab[1:], lab[:-1], out=first[1:])
+    at[lab[first]] = vals[first]
     tau = np.sort(np.concatenate((np.repeat(vals, m), np.repeat(at, mult - have))))
     tau[: p + 1] = lo
     tau[-(p + 1):] = hi
@@ -188,22 +191,23 @@ def _subsets(p: int, q: int) -> np.ndarray:
     return S
 
 
-def _check_target(T: np.ndarray, p: int, lo: float, hi: float) -> None:
-    """The merged knot vector's checks, as knot refinement made them (:func:`~.knots.refinement_knots`):
-    interior knots strictly inside the domain, none above multiplicity ``p + 1``. Knots closer
-    than the knot tolerance are one knot in ``T`` (their copies counted together), so a curve
-    with an interior knot that close to a domain end, or with knots that close to each other
-    whose copies add up beyond ``p + 1``, is refused here."""
-    if T.shape[0] > 2 * (p + 1) and (T[p + 1] <= lo or T[-p - 2] >= hi):
-        end = lo if T[p + 1] <= lo else hi
-        raise ParameterError(
-            f"knots: an interior knot lies within the knot tolerance (tolerances.KNOT_EQUALITY of the range) of "
-            f"the domain end {end!r}: merged with it, that end would have {int(np.count_nonzero(T == end))} copies, "
-            f"above degree + 1 = {p + 1}")
-    excess = most_repeated(T, p + 1)
-    if excess is not None:
+def _check_clusters(value: np.ndarray, mult: np.ndarray, p: int, lo: float, hi: float) -> None:
+    """The merged knot vector's checks (clusters ``value``, multiplicities ``mult``), as knot
+    refinement made them (:func:`~.knots.refinement_knots`): interior knots strictly inside the
+    domain, none above multiplicity ``p + 1``. Knots closer than the knot tolerance (or chained
+    by such gaps) are one knot, their copies counted together, so a curve with an interior knot
+    that close to a domain end, or with knots that close to each other whose copies add up beyond
+    ``p + 1``, is refused here. Every curve ends in ``p + 1`` copies of ``lo`` and of ``hi``, so
+    an end cluster with more holds an interior knot."""
+    for end, m in ((lo, int(mult[0])), (hi, int(mult[-1]))):
+        if m > p + 1:
+            raise ParameterError(
+                f"knots: an interior knot lies within the knot tolerance (tolerances.KNOT_EQUALITY of the range) "
+                f"of the domain end {end!r}: merged with it, that end would have {m} copies, above degree + 1 = {p + 1}")
+    k = int(np.argmax(mult))
+    if mult[k] > p + 1:
         raise InvalidGeometryError(
-            f"knots: knot {excess[0]!r} would get multiplicity {excess[1]}, above degree + 1 = {p + 1} "
+            f"knots: knot {float(value[k])!r} would get multiplicity {int(mult[k])}, above degree + 1 = {p + 1} "
             "(knots within the knot tolerance of each other count as one)")
 
 
@@ -310,8 +314,8 @@ def compatible_sets(sets: Sequence[tuple[Sequence[BSplineCurve], tuple[float, fl
             prepared.append((c.degree, t, H))
         runs = [distinct_knots(t) for _, t, _ in prepared]
         value, mult, label = _common_runs([v for v, _ in runs], [m + (p - q) for (q, _, _), (_, m) in zip(prepared, runs)])
+        _check_clusters(value, mult, p, lo, hi)
         T = _knot_vector(value, mult, p, lo, hi)
-        _check_target(T, p, lo, hi)
         n2 = T.shape[0] - p - 1
         at = np.arange(n2)[:, None] + 1 + np.arange(p)  # pole i of the result is the blossom at T[i+1 .. i+p]
         # the first non-empty span of T in each pole's support (support_span's first half, shared by

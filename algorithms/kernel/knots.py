@@ -212,7 +212,7 @@ def refine_poles(knots: Array, degree: int, poles: Array, new_knots: Array) -> A
         # each new pole: its p + 1 weights times its p + 1 old pole rows, as one batched matmul, in
         # blocks of rows so that the gathered rows stay within REFINE_BLOCK floats (at most p + 1
         # times the output otherwise, which the callers' size checks do not count)
-        rows = max(1, REFINE_BLOCK // ((p + 1) * flat.shape[1]))
+        rows = max(1, REFINE_BLOCK // ((p + 1) * max(flat.shape[1], 1)))
         out = np.empty((n2, flat.shape[1]))
         for r0 in range(0, n2, rows):
             sl = slice(r0, min(r0 + rows, n2))

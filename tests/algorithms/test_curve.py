@@ -323,31 +323,40 @@ def test_oslo_and_raising_matrices_take_the_short_paths_bit_for_bit(data, p, ext
 
 
 @SETTINGS
-@given(data=st.data(), p=st.integers(1, 8), extra=st.integers(0, 7), clamped=st.booleans(), width=st.integers(1, 12))
-def test_refine_poles_by_rows_equals_the_oslo_matrix_product(data, p, extra, clamped, width):
+@given(data=st.data(), p=st.integers(1, 8), extra=st.integers(0, 7), clamped=st.booleans(), width=st.integers(1, 12),
+       block=st.sampled_from([1, 7, None]))
+def test_refine_poles_equals_boehm_insertions_in_any_block_size(data, p, extra, clamped, width, block):
     """refine_poles applies each new pole's p + 1 blossom weights to its p + 1 old rows (issue 30:
-    the 100-knot refinement of a 50 x 50 net 141 -> 119 us, side by side) where every piece it
-    needs is in the domain, and the dense Oslo matrix otherwise (unclamped ends). Either way the
-    product refinement_matrix @ poles: bit for bit on the dense path, to round-off on the rows.
-    Each row is a convex combination of p + 1 poles with the same weights in both, summed in an
-    order BLAS or matmul choose: each sum is within (p + 1) ulps of the largest pole of the exact
-    one, so the two within 2 p + 3 (asserted; 1.4 measured over 3000 random cases)."""
-    from occsurf.algorithms.kernel.knots import refine_poles
+    the 100-knot refinement of a 50 x 50 net 141 -> 119 us, side by side), in blocks of
+    REFINE_BLOCK gathered floats, where every piece it needs is in the domain, and the dense Oslo
+    matrix otherwise (unclamped ends). Either way the poles of inserting the knots one at a time by
+    Boehm's algorithm (an independent computation): each new pole of either is a convex combination
+    of old ones, within (2 p + 3) ulps of the largest pole for the rows and 3 ulps per insertion for
+    Boehm's. Blocks of 1 row, of 7 floats (one row too) and the default give the same bits."""
+    from occsurf.algorithms.kernel import knots as K
 
     n = p + 1 + extra
     t = data.draw(knot_vectors(p, n, clamped=True))
     if not clamped:
         t = np.concatenate((t[0] - np.cumsum(np.full(p, 0.25))[::-1], t[p:n + 1], t[n] + np.cumsum(np.full(p, 0.25))))
-    x = t[p] + (t[n] - t[p]) * np.array(data.draw(st.lists(st.floats(0.01, 0.99), min_size=1, max_size=12)))
+    x = np.sort(t[p] + (t[n] - t[p]) * np.array(data.draw(st.lists(st.floats(0.01, 0.99), min_size=1, max_size=12))))
     tau = np.sort(np.concatenate((t, x)))
     assume(np.all(tau[p + 1:] > tau[:-p - 1]))
     P = np.array(data.draw(st.lists(st.floats(-3, 3), min_size=width * n, max_size=width * n))).reshape(n, width)
-    got, ref = refine_poles(t, p, P, tau), refinement_matrix(t, p, tau) @ P
-    mu = support_span(t, tau, np.arange(tau.size - p - 1))
-    if mu[0] < p or mu[-1] > n - 1:
-        assert_array_equal(got, ref)
-    else:
-        assert_allclose(got, ref, rtol=0, atol=(2 * p + 3) * np.finfo(float).eps * max(np.abs(P).max(), np.finfo(float).tiny))
+    got = K.refine_poles(t, p, P, tau)
+    if block is not None:
+        default = K.REFINE_BLOCK
+        try:
+            K.REFINE_BLOCK = block
+            assert_array_equal(K.refine_poles(t, p, P, tau), got)
+        finally:
+            K.REFINE_BLOCK = default
+    kn, Q = t, P
+    for u in x:
+        kn, Q = K.insert_knot_boehm(kn, p, Q, float(u), 1)
+    assert_array_equal(kn, tau)
+    eps, scale = np.finfo(float).eps, max(np.abs(P).max(), np.finfo(float).tiny)
+    assert_allclose(got, Q, rtol=0, atol=(2 * p + 3 + 3 * x.size) * eps * scale)
 
 
 # ------------------------------------------------------------------------------------- oracles

@@ -323,6 +323,20 @@ def test_make_compatible_keeps_curves_whose_knots_differ_by_less_than_the_tolera
         assert_allclose(o.control_points, r.control_points, rtol=0, atol=COMPAT_ULPS * np.finfo(float).eps)
 
 
+@pytest.mark.parametrize("end", [0.0, 1.0])
+def test_make_compatible_refuses_an_interior_knot_within_the_tolerance_of_either_end(end):
+    """An interior knot 5e-13 from a domain end merges with the end's p + 1 copies: refused, in
+    either order of the curves, naming that end (a second review found the upper end let through
+    at 312d0eb: a wrong curve by 1.66 in one order, an IndexError in the other)."""
+    rng = np.random.default_rng(0)
+    a = BSplineCurve(3, np.r_[[0.0] * 4, 0.3, [1.0] * 4], rng.uniform(-1, 1, (5, 3)))
+    near = 5e-13 if end == 0.0 else 1 - 5e-13
+    b = BSplineCurve(3, np.sort(np.r_[[0.0] * 4, 0.5, near, [1.0] * 4]), rng.uniform(-1, 1, (6, 3)))
+    for pair in ([a, b], [b, a]):
+        with pytest.raises(ParameterError, match=rf"of the domain end {end!r}: merged with it, that end would have 5 copies"):
+            make_compatible(pair)
+
+
 def test_make_compatible_keeps_two_knots_of_one_curve_within_the_tolerance():
     """A curve with two knots closer than the knot tolerance (0.3 twice, 0.3 + 3e-13 once): they are
     one knot of multiplicity 3 in the common vector, and the curve is first refined on its own
