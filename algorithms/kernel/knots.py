@@ -378,9 +378,13 @@ def split_poles(knots: Array, degree: int, poles: Array, u: float) -> tuple[tupl
 
 def check_rescaled(t: Array, knots: Array, new: tuple[float, float], what: str) -> Array:
     """Refuse a rescaled knot vector that lost the knots' structure: overflow (``b - a`` beyond the
-    largest double made every knot ``inf`` or ``nan``) or distinct knots merged by rounding."""
-    if not (math.isfinite(new[1] - new[0]) and np.isfinite(t).all()):
+    largest double made every knot ``inf`` or ``nan``, or an unclamped vector's knots outside the
+    domain went past it) or distinct knots merged by rounding."""
+    if not math.isfinite(new[1] - new[0]):
         raise ParameterError(f"{what}: the domain {new!r} is too long for doubles (its length overflows)")
+    if not np.isfinite(t).all():
+        raise ParameterError(f"{what}: the domain {new!r} is too long for doubles (the knots outside it, "
+                             "scaled with it, overflow)")
     if np.count_nonzero(t[1:] > t[:-1]) != np.count_nonzero(knots[1:] > knots[:-1]):  # np.diff's > 0, unwrapped
         raise ParameterError(f"{what}: the domain {new!r} is too short to keep the distinct knots apart")
     tol = knot_tol(t)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -76,6 +77,13 @@ def test_reparametrize_refuses_overflowing_domains():
         _curve().reparametrize(1.0, 1.0 + 1e-16 * 2)  # the knot at the middle would merge with an end
     c = _curve().reparametrize(-1e300, 1e300)  # large but representable: fine
     assert np.all(np.isfinite(c.evaluate(np.linspace(-1e300, 1e300, 5))))
+    # an unclamped curve: the domain's length is a double, the knots outside it scaled with it are
+    # not; said as such, without a RuntimeWarning first (warnings are errors in this block)
+    unclamped = BSplineCurve(2, [-2, -1, 0, 1, 2, 3], np.random.default_rng(0).random((3, 3)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ParameterError, match=r"\(0.0, 1e\+308\) is too long for doubles \(the knots outside it"):
+            unclamped.reparametrize(0, 1e308)
 
 
 def test_rational_overflow_is_refused():
