@@ -79,7 +79,7 @@ def load(path: Path):
 
 
 def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only_pairs: bool = False,
-             on_row=None, continuity: str = "G1", only_g2: bool = False) -> list[dict]:
+             on_row=None, continuity: str = "G1", only_g2: bool = False, occ_time_limit: float | None = None) -> list[dict]:
     from OCP.BRep import BRep_Tool
     from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
 
@@ -95,7 +95,7 @@ def holes_of(path: Path, pairs: bool, max_holes: int | None, skip: int = 0, only
         if only_g2 and not had_g2_edge(model, faces):
             continue
         t0 = time.perf_counter()
-        rep, _ = refill_faces(model, faces, continuity=continuity)
+        rep, _ = refill_faces(model, faces, continuity=continuity, occ_time_limit=occ_time_limit)
         row = asdict(rep)
         row.update(file=path.name, wall=time.perf_counter() - t0, size=model.size)
         if continuity == "G2" and _g2_edges_of(row):
@@ -478,6 +478,9 @@ def main() -> None:
                          "refill and OCC's filler asked for curvature")
     ap.add_argument("--only-g2", action="store_true",
                     help="only the face sets with an edge the removed faces met curvature continuously")
+    ap.add_argument("--occ-time-limit", type=float, default=None, metavar="S",
+                    help="stop each OCC MakeFilling comparison after S seconds (run in a child process; "
+                         "recorded with status 'timeout'); default: unlimited, in process")
     ap.add_argument("--merge", nargs="+", default=None, metavar="JSON",
                     help="print the table of rows saved by earlier runs (--json) instead of running")
     ns = ap.parse_args()
@@ -508,7 +511,7 @@ def main() -> None:
 
     for p in files:
         holes_of(p, ns.pairs, ns.max_holes, ns.skip, ns.only_pairs, on_row=save, continuity=ns.continuity,
-                 only_g2=ns.only_g2)
+                 only_g2=ns.only_g2, occ_time_limit=ns.occ_time_limit)
     code = report(rows, ns.baseline)
     print(f"\n(total {time.perf_counter() - t0:.0f} s)")
     sys.exit(code)

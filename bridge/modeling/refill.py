@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from occsurf.algorithms._validate import check_tol
 from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.topology.nsided import fill_folds
 
@@ -103,7 +104,7 @@ class RefillReport:
     step_round_trip: bool | None = None
     folds: int | None = None  # grid pairs where a patch turns back over itself (0: sound; see FillQuality.folds)
     method: str | None = None  # 'central' (fill_hole's n patches), 'plate' (one trimmed plate, fill_plate) or 'wrap' (a plate about an axis, fill_wrapped_plate)
-    occ: dict[str, dict[str, Any]] = field(default_factory=dict)
+    occ: dict[str, dict[str, Any]] = field(default_factory=dict)  # per OCC variant: refill_candidates.occ_variant's dict ('ok', 'failed' or 'timeout')
     continuity: str = "auto"  # asked: 'auto'/'G2' (G2 where the removed faces were curvature continuous), or 'G1' (issue 31)
     original_g2: list[float | None] = field(default_factory=list)  # G2 asked: the removed faces' jump per edge
     g2_edges: int = 0  # edges filled G2
@@ -120,7 +121,7 @@ class RefillReport:
 
 def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool = True, check: bool = True,
                  occ_variants: dict[str, dict[str, Any]] | None = None,
-                 continuity: str = "auto") -> tuple[RefillReport, Any]:
+                 continuity: str = "auto", occ_time_limit: float | None = None) -> tuple[RefillReport, Any]:
     """Remove ``faces`` (inspect numbering) and fill the hole; returns the report and the new shape.
 
     Parameters
@@ -141,6 +142,10 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         where they were tangent, G0 elsewhere; where that plate cannot be made the fill is G1 and
         ``reason`` says why (``'G2'`` also when no edge was curvature continuous). ``'G1'``: G1
         where the removed faces were tangent, G0 elsewhere (:func:`fitted_fill`).
+    occ_time_limit : float, optional
+        Seconds each OCC comparison may take, run in a child process and stopped there (its
+        entry in ``occ`` then has status ``'timeout'``); default ``None``: in process, unlimited
+        (:func:`~.refill_candidates.occ_variant`).
 
     Returns
     -------
@@ -156,6 +161,10 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
     if bad or not faces:
         raise InvalidGeometryError(f"faces: expected indices 0..{n - 1} (as numbered by inspect), got {faces}")
     check_continuity(continuity)  # a bad argument, not a failure of the hole
+    if occ_time_limit is not None:
+        occ_time_limit = check_tol(occ_time_limit, "occ_time_limit")
+        if occ_time_limit <= 0:
+            raise InvalidGeometryError(f"occ_time_limit: expected a number of seconds > 0, got {occ_time_limit!r}")
     rep = RefillReport(faces=sorted(int(i) for i in faces), status="refused")
     try:
         edges, nbs, owners = hole_loop(model, rep.faces)
@@ -199,7 +208,7 @@ def refill_faces(model: SewnModel | Any, faces: list[int], *, compare_occ: bool 
         if rep.g1_edges == 0 and rep.status != "filled":
             g1 = [own is not None and _safe_joint(e, own, nb) for e, nb, own in zip(edges, nbs, owners)]
         for name, params in (occ_variants or {"default": OCC_DEFAULT, "tuned": OCC_TUNED}).items():
-            rep.occ[name] = occ_variant(edges, nbs, g1, params)
+            rep.occ[name] = occ_variant(edges, nbs, g1, params, time_limit=occ_time_limit)
     return rep, shape
 
 

@@ -80,7 +80,59 @@ def _measure(edges: list[Any], nbs: list[Any], g1: list[bool], surfs: list[Any],
     return s0, s1
 
 
-def occ_variant(edges: list[Any], nbs: list[Any], g1: list[bool], params: dict[str, Any]) -> dict[str, Any]:
+def occ_variant(edges: list[Any], nbs: list[Any], g1: list[bool], params: dict[str, Any],
+                time_limit: float | None = None) -> dict[str, Any]:
+    """OCC's filler (:func:`occ_filling` with ``params``) on the hole, measured as our fills are:
+    ``{"status": "ok", "seconds", "g0", "g1", "side_g0", "side_g1"}`` or ``{"status": "failed",
+    "reason", "seconds"}``.
+
+    ``time_limit`` (seconds): the filler and its measurement run in a child process (forked: it
+    shares the edges and faces as they are), stopped at the limit; then ``{"status": "timeout",
+    "reason", "seconds"}``. ``BRepOffsetAPI_MakeFilling`` cannot be interrupted in process, and on
+    some holes of real models it runs for tens of minutes (a pair of the bearing's faces: over 30
+    min tuned); a benchmark comparing every hole needs to go on. ``None`` (default): in process.
+    """
+    if time_limit is None:
+        return _occ_variant(edges, nbs, g1, params)
+    return _occ_variant_limited(edges, nbs, g1, params, float(time_limit))
+
+
+def _occ_variant_limited(edges: list[Any], nbs: list[Any], g1: list[bool], params: dict[str, Any],
+                         time_limit: float) -> dict[str, Any]:
+    """:func:`occ_variant` in a forked child, waited for ``time_limit`` seconds, killed after."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork")  # the child takes the OCC shapes as they are, unpickled
+    receive, send = ctx.Pipe(duplex=False)
+
+    def child() -> None:
+        receive.close()
+        send.send(_occ_variant(edges, nbs, g1, params))
+        send.close()
+
+    t0 = time.perf_counter()
+    proc = ctx.Process(target=child, daemon=True)
+    proc.start()
+    send.close()
+    try:
+        if receive.poll(time_limit):
+            try:
+                return dict(receive.recv())
+            except EOFError:  # the child died without a result (a crash in OCC)
+                proc.join()
+                return {"status": "failed", "seconds": time.perf_counter() - t0,
+                        "reason": f"BRepOffsetAPI_MakeFilling: its process ended without a result (exit {proc.exitcode})"}
+        return {"status": "timeout", "seconds": time.perf_counter() - t0,
+                "reason": f"BRepOffsetAPI_MakeFilling: no result within the time limit of {time_limit:g} s (stopped)"}
+    finally:
+        receive.close()
+        if proc.is_alive():
+            proc.kill()
+        proc.join()
+
+
+def _occ_variant(edges: list[Any], nbs: list[Any], g1: list[bool], params: dict[str, Any]) -> dict[str, Any]:
+    """:func:`occ_variant` in process."""
     t0 = time.perf_counter()
     try:
         face = occ_filling(edges, nbs, g1, params)
