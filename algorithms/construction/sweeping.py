@@ -45,7 +45,10 @@ convex combination of the pole-row errors, so
 .. math:: \max_u |S(u, v) - E(u, v)| \le \max_i |Q_i(v) - P_i(v)|,
 
 the *pole bound*, which the refinement drives below ``tol`` at ``SWEEP_CHECKS_PER_SPAN`` points per
-span. The final report then measures ``max |S - E|`` directly on a dense grid (every profile span
+span. Interpolation is linear and ``P_i(v) = C(v) + A(v) (P_i - C(v_0))`` is linear in the 12
+numbers of the map ``(C(v), A(v))``, so the refinement interpolates those 12 functions and maps
+the resulting poles (the same pole rows, whatever the number of profile poles); each parameter's
+map is computed once per sweep. The final report then measures ``max |S - E|`` directly on a dense grid (every profile span
 and ``SWEEP_VERIFY_PER_SPAN`` v values per v span, all off the interpolation sites). Both numbers
 are parametric deviations, upper bounds of the distance between the surfaces.
 
@@ -67,7 +70,7 @@ from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError, ToleranceError
 from ..fitting.interpolation import interpolate_values
-from ..geometry.differential import Frames, curve_frenet, rotation_minimizing_frames
+from ..geometry.differential import Frames, cross3, frenet_axes, rotation_minimizing_frames
 from ..kernel.basis import greville
 from ..kernel.curve import BSplineCurve
 from ..kernel.knots import distinct_knots
@@ -178,12 +181,13 @@ def _law(law: Law, name: str, default: float, nonnegative: bool) -> Callable[[Ar
 
 
 # ------------------------------------------------------------------------------------- frames
-def _reflect(v: Array, x: Array) -> Array:
-    """Reflect each ``x`` (m, 3) in the plane normal to ``v`` (m, 3); identity where ``v = 0``."""
+def _reflect(v: Array, *xs: Array) -> tuple[Array, list[Array]]:
+    """Reflect each of ``xs`` (m, 3 each) in the planes normal to ``v`` (m, 3); identity where
+    ``v = 0``. Returns also where ``v = 0``."""
     c2 = np.einsum("mi,mi->m", v, v)
     ok = c2 > 0
-    f = np.where(ok, 2.0 / np.where(ok, c2, 1.0), 0.0) * np.einsum("mi,mi->m", v, x)
-    return x - f[:, None] * v
+    g = np.where(ok, 2.0 / np.where(ok, c2, 1.0), 0.0)
+    return ~ok, [x - (g * np.einsum("mi,mi->m", v, x))[:, None] * v for x in xs]
 
 
 class _FrameField:
@@ -192,6 +196,8 @@ class _FrameField:
     def __init__(self, path: BSplineCurve, kind: str) -> None:
         # rmf: reference chain of SWEEP_RMF_STEPS double-reflection steps per span, computed once
         self.path, self.kind = path, kind
+        #: The path derivatives the frames need (``path.derivatives(v, order)`` in __call__).
+        self.order = {"rmf": 1, "frenet": 2, "fixed": 0}[kind]
         v0, v1 = path.domain
         if kind == "rmf":
             brk = distinct_knots(path.knots)[0]
@@ -210,7 +216,8 @@ class _FrameField:
             self.holonomy = (math.atan2(float(fr.normal[-1] @ fr.binormal[0]), float(fr.normal[-1] @ fr.normal[0]))
                              if closed and tangent_ok else 0.0)
         elif kind == "frenet":
-            self.start = self(np.array([v0]))[0]
+            at = np.array([v0])
+            self.start = self(at, path.derivatives(at, 2))[0]
             self.holonomy = 0.0
         else:  # the start normal does not matter (module notes): Frenet's, or any perpendicular
             f0 = _path_frames(path, np.array([v0]))
@@ -218,34 +225,40 @@ class _FrameField:
             self.holonomy = 0.0
 
     def __call__(self, v: Array, D: Array | None = None) -> Array:
-        """Frames at ``v`` (m,): shape (m, 3, 3). ``D`` = ``path.derivatives(v, 1)`` if known."""
+        """Frames at ``v`` (m,): shape (m, 3, 3), from ``D = path.derivatives(v, self.order)`` (computed
+        if not given)."""
+        if D is None:
+            D = self.path.derivatives(v, self.order)
         if self.kind == "fixed":
             return np.broadcast_to(self.start, (v.shape[0], 3, 3))
         if self.kind == "frenet":
-            f = curve_frenet(self.path, v)
-            bad = ~np.all(np.isfinite(f.normal), axis=-1)
+            F = frenet_axes(D)
+            bad = ~np.all(np.isfinite(F[:, :, 1]), axis=-1)
             if np.any(bad):
                 raise InvalidGeometryError(
                     f"path: the Frenet frame is undefined at v = {float(v[np.argmax(bad)])!r} (zero curvature); "
                     "use frame='rmf'"
                 )
-            return np.stack([f.tangent, f.normal, f.binormal], axis=-1)
-        if D is None:
-            D = self.path.derivatives(v, 1)
+            return F
         x, d1 = D[:, 0], D[:, 1]
-        speed = np.linalg.norm(d1, axis=-1)
+        speed = np.sqrt(np.einsum("mi,mi->m", d1, d1))
         if np.any(speed == 0):
             raise InvalidGeometryError(f"path: C'(v) = 0 at v = {float(v[np.argmax(speed == 0)])!r}; the frame is undefined")
-        t = d1 / speed[:, None]
-        k = np.clip(np.searchsorted(self.grid, v, side="right") - 1, 0, self.grid.shape[0] - 1)
-        # One double-reflection step (Wang et al. 2008) from reference sample k to v.
-        v1 = x - self.x[k]
-        rL = _reflect(v1, self.r[k])
-        tL = _reflect(v1, self.t[k])
-        r = _reflect(t - tL, rL)
-        r = r - np.einsum("mi,mi->m", r, t)[:, None] * t
-        r /= np.linalg.norm(r, axis=-1)[:, None]
-        return np.stack([t, r, np.cross(t, r)], axis=-1)
+        F = np.empty((v.shape[0], 3, 3))
+        t = F[:, :, 0]
+        np.divide(d1, speed[:, None], out=t)
+        k = np.minimum(np.maximum(np.searchsorted(self.grid, v, side="right") - 1, 0), self.grid.shape[0] - 1)
+        # One double-reflection step (Wang et al. 2008) from reference sample k to v. At the sample
+        # itself (x = x_k) the step is the identity: the first reflection is then skipped, so the
+        # second one's axis t - t_k would be round-off in a random direction; keep r_k there.
+        at_sample, (rL, tL) = _reflect(x - self.x[k], self.r[k], self.t[k])
+        r = _reflect(t - tL, rL)[1][0]
+        if np.any(at_sample):
+            r[at_sample] = self.r[k[at_sample]]
+        r -= np.einsum("mi,mi->m", r, t)[:, None] * t
+        F[:, :, 1] = r / np.sqrt(np.einsum("mi,mi->m", r, r))[:, None]
+        F[:, :, 2] = cross3(t, F[:, :, 1])
+        return F
 
 
 def _path_frames(path: BSplineCurve, v: Array) -> Frames:
@@ -268,11 +281,14 @@ class _Sweep:
         self.v0, self.v1 = path.domain
         self.c0 = path.evaluate(self.v0)
         self.start_T = np.ascontiguousarray(self.frames.start.T)
+        self.xc = np.ascontiguousarray((profile.control_points - self.c0).T)  # (3, n_u)
+        # memo of affine(): the parameters met so far (sorted) and their rows
+        self._memo_v, self._memo_g = np.empty(0), np.empty((0, 12))
 
     def maps(self, v: Array) -> tuple[Array, Array]:
         """``C(v)`` (m, 3) and ``A(v)`` (m, 3, 3)."""
         t = (v - self.v0) / (self.v1 - self.v0)
-        D = self.path.derivatives(v, 1)          # position and tangent in one evaluation
+        D = self.path.derivatives(v, self.frames.order)  # position and the frame's derivatives at once
         F = self.frames(v, D)
         phi, s = self.twist(t) - self.frames.holonomy * t, self.scale(t)
         c, sn = np.cos(phi), np.sin(phi)
@@ -281,13 +297,49 @@ class _Sweep:
         FR[:, :, 0] = F[:, :, 0]
         FR[:, :, 1] = c[:, None] * F[:, :, 1] + sn[:, None] * F[:, :, 2]
         FR[:, :, 2] = c[:, None] * F[:, :, 2] - sn[:, None] * F[:, :, 1]
-        A = s[:, None, None] * (FR @ self.start_T)
+        A = s[:, None, None] * (FR.reshape(-1, 3) @ self.start_T).reshape(-1, 3, 3)
         return D[:, 0], A
 
     def place(self, v: Array, X: Array) -> Array:
         """``E`` for the points ``X`` (n, 3) at each ``v``: shape (m, n, 3)."""
         C, A = self.maps(v)
-        return C[:, None, :] + np.matmul((X - self.c0)[None], A.transpose(0, 2, 1))
+        return _apply(C, A, np.ascontiguousarray((X - self.c0).T))
+
+    def affine(self, v: Array) -> Array:
+        """The map at each ``v`` as 12 numbers, ``C(v)`` then ``A(v)`` row by row: shape (m, 12).
+
+        Each parameter is computed once per sweep and looked up after: a span that a refinement
+        pass leaves whole keeps its check points and most Greville sites (90 % of the third pass's
+        parameters on the helix benchmark).
+        """
+        memo = self._memo_v
+        k = np.minimum(np.searchsorted(memo, v), max(memo.shape[0] - 1, 0))
+        known = memo[k] == v if memo.shape[0] else np.zeros(v.shape[0], dtype=bool)
+        if np.all(known):
+            return self._memo_g[k]
+        out = np.empty((v.shape[0], 12))
+        out[known] = self._memo_g[k[known]]
+        new_v = v[~known]
+        C, A = self.maps(new_v)
+        out[~known] = new = np.concatenate((C, A.reshape(-1, 9)), axis=1)
+        all_v = np.concatenate((memo, new_v))
+        order = np.argsort(all_v, kind="stable")
+        self._memo_v, self._memo_g = all_v[order], np.concatenate((self._memo_g, new))[order]
+        return out
+
+    def poles(self, g: Array) -> Array:
+        """The profile poles under the maps ``g`` (m, 12) of :meth:`affine`: shape (m, n_u, 3).
+
+        Linear in ``g``: the poles of a spline of maps are the maps of its poles, and the pole
+        errors of an approximate map ``g~`` are ``poles(g~ - g)``."""
+        return _apply(g[:, :3], g[:, 3:].reshape(-1, 3, 3), self.xc)
+
+
+def _apply(C: Array, A: Array, Xt: Array) -> Array:
+    """``C[m] + A[m] X[n]`` for ``Xt = X.T`` (3, n): shape (m, n, 3), by one (3m, 3) x (3, n)
+    product (a batch of m small products is 3-5x slower)."""
+    m, n = C.shape[0], Xt.shape[1]
+    return C[:, None, :] + (A.reshape(3 * m, 3) @ Xt).reshape(m, 3, n).transpose(0, 2, 1)
 
 
 # ------------------------------------------------------------------------------------- public
@@ -380,11 +432,13 @@ def _check_joints(path: BSplineCurve, frame: str, size: float) -> None:
             )
 
 
-def _span_errors(rows: BSplineCurve, exact: Array, v: Array, n_u: int, n_spans: int) -> Array:
-    """Largest pole-row distance ``max_i |Q_i(v) - P_i(v)|`` per span, from values at ``v`` (an equal
-    number of points per span, span by span) and the exact pole rows ``exact`` (m, 3 n_u)."""
-    diff = (rows.evaluate(v) - exact).reshape(v.shape[0], n_u, 3)
-    return np.sqrt((diff * diff).sum(axis=-1).max(axis=1)).reshape(n_spans, -1).max(axis=1)
+def _span_errors(ex: _Sweep, maps: BSplineCurve, exact: Array, v: Array, n_spans: int) -> Array:
+    """Largest pole-row distance ``max_i |Q_i(v) - P_i(v)|`` per span, from the spline of maps
+    ``maps`` and the exact maps ``exact`` (m, 12) at ``v`` (an equal number of points per span,
+    span by span): ``Q_i - P_i = poles(maps(v) - exact)`` (:meth:`_Sweep.poles`)."""
+    diff = ex.poles(maps.evaluate(v) - exact)
+    # the largest square first, one square root per span (sqrt is monotone: the same numbers)
+    return np.sqrt(np.einsum("mij,mij->mi", diff, diff).reshape(n_spans, -1).max(axis=1))
 
 
 def _off_sites(a: Array, b: Array, fractions: Array) -> Array:
@@ -497,26 +551,31 @@ class _Fit:
     span_errors: Array
 
 
-def _fit_rows(ex: _Sweep, K: Array, q: int) -> tuple[BSplineCurve, Array]:
-    """Pole rows of degree ``q`` on the v knots ``K`` interpolating the exact mapped profile poles
-    at the Greville abscissae, and their pole bound per v span at the check points."""
+def _fit_maps(ex: _Sweep, K: Array, q: int) -> tuple[BSplineCurve, Array]:
+    """The spline of maps (:meth:`_Sweep.affine`, 12-D) of degree ``q`` on the v knots ``K``
+    interpolating the exact maps at the Greville abscissae, and its pole bound per v span at the
+    check points. Its poles mapped by :meth:`_Sweep.poles` are the pole rows interpolating the
+    exact mapped profile poles there (interpolation is linear): 12 columns, whatever the profile."""
     a, b = _spans(K, q)
     sites = greville(K, q)
     vc = _off_sites(a, b, _check_fractions())
-    n_u = ex.profile.n_poles
-    # the exact pole rows at the fitting sites and the check points, in one evaluation
-    vals = ex.place(np.concatenate((sites, vc)), ex.profile.control_points).reshape(-1, 3 * n_u)
-    rows = BSplineCurve._trusted(q, K, interpolate_values(sites, vals[: sites.shape[0]], q, K))
-    return rows, _span_errors(rows, vals[sites.shape[0]:], vc, n_u, a.shape[0])
+    g = ex.affine(np.concatenate((sites, vc)))  # at the fitting sites and the check points at once
+    maps = BSplineCurve._trusted(q, K, interpolate_values(sites, g[: sites.shape[0]], q, K))
+    return maps, _span_errors(ex, maps, g[sites.shape[0]:], vc, a.shape[0])
 
 
-def _verify_rows(ex: _Sweep, rows: BSplineCurve) -> tuple[Array, Array]:
+def _rows(ex: _Sweep, maps: BSplineCurve) -> BSplineCurve:
+    """The pole rows (poles ``(n_sections, 3 n_u)``) of the spline of maps ``maps``."""
+    P = maps.control_points
+    return BSplineCurve._trusted(maps.degree, maps.knots, ex.poles(P).reshape(P.shape[0], -1))
+
+
+def _verify_maps(ex: _Sweep, maps: BSplineCurve) -> tuple[Array, Array]:
     """The verification parameters ``vv`` (``_verify_fractions`` of every v span) and the pole
     bound per v span measured there."""
-    a, b = _spans(rows.knots, rows.degree)
+    a, b = _spans(maps.knots, maps.degree)
     vv = _off_sites(a, b, _verify_fractions())
-    exact_vv = ex.place(vv, ex.profile.control_points).reshape(vv.shape[0], -1)
-    return vv, _span_errors(rows, exact_vv, vv, ex.profile.n_poles, a.shape[0])
+    return vv, _span_errors(ex, maps, ex.affine(vv), vv, a.shape[0])
 
 
 def _refine(ex: _Sweep, K: Array, q: int, tol_abs: float) -> _Fit:
@@ -525,19 +584,20 @@ def _refine(ex: _Sweep, K: Array, q: int, tol_abs: float) -> _Fit:
     iterations = 0
     while True:
         iterations += 1
-        rows, err = _fit_rows(ex, K, q)
+        maps, err = _fit_maps(ex, K, q)
         if not np.any(err > tol_abs):
             # the denser verification points of the report must meet tol too (the check points
             # alone let pole_bound exceed tol by up to 3 %)
-            vv, err = _verify_rows(ex, rows)
+            vv, err = _verify_maps(ex, maps)
             if not np.any(err > tol_abs):
-                return _Fit(rows, iterations, vv, err)
-        K = _split_spans(rows, err, tol_abs, ex.path.domain)
+                return _Fit(_rows(ex, maps), iterations, vv, err)
+        K = _split_spans(maps, err, tol_abs, ex.path.domain)
 
 
 def _split_spans(rows: BSplineCurve, err: Array, tol_abs: float, domain: tuple[float, float]) -> Array:
-    """The v knots of ``rows`` with every span whose error ``err`` (one per span) exceeds
-    ``tol_abs`` cut in as many equal pieces as the ``O(h^(q+1))`` error model asks for.
+    """The v knots of ``rows`` (the spline fitted last: of maps, or of pole rows) with every span
+    whose error ``err`` (one per span) exceeds ``tol_abs`` cut in as many equal pieces as the
+    ``O(h^(q+1))`` error model asks for.
 
     Raises
     ------

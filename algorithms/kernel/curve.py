@@ -192,7 +192,7 @@ class BSplineCurve(HomogeneousPoles, ControlPointValue):
         span = find_span(self.knots, p, n, flat)
         N = basis_functions(self.knots, p, span, flat)
         idx = span[:, None] - p + np.arange(p + 1)
-        H = np.einsum("mk,mkd->md", N, self._hpoles[idx])
+        H = np.einsum("mk,mkd->md", N, np.take(self._hpoles, idx, axis=0))  # einsum: see derivatives
         if self.is_rational:
             H = H[:, :-1] / H[:, -1:]
         return H.reshape(shape + (self.dim,))
@@ -226,7 +226,10 @@ class BSplineCurve(HomogeneousPoles, ControlPointValue):
         span = find_span(self.knots, p, n, flat)
         D = basis_derivatives(self.knots, p, span, flat, order)
         idx = span[:, None] - p + np.arange(p + 1)
-        H = np.einsum("mjk,mkd->mjd", D, self._hpoles[idx])
+        # einsum's plain sums, not a matrix product: BLAS sums in another order and rounds
+        # differently, and a straight line's C'' (exactly 0 here) becomes 1e-15 in a random direction:
+        # a Frenet normal where OCC raises LProp_NotDefined. np.take gathers faster than a fancy index.
+        H = np.einsum("mjk,mkd->mjd", D, np.take(self._hpoles, idx, axis=0))
         if self.is_rational:
             H = curve_quotient_rule(H)
         return H.reshape(shape + (order + 1, self.dim))

@@ -16,6 +16,7 @@ from numpy.testing import assert_allclose
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface, arc, circle, tolerances
 from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
+from occsurf.algorithms.geometry import differential
 from occsurf.algorithms.geometry.differential import (
     FrenetFrame,
     SurfaceCurvatures,
@@ -23,6 +24,7 @@ from occsurf.algorithms.geometry.differential import (
     curvature,
     curvature_derivative,
     curve_frenet,
+    frenet_axes,
     is_umbilic,
     normal_curvature,
     principal_curvatures,
@@ -294,6 +296,42 @@ def _check_rmf(c: BSplineCurve, m: int, **kw):
     assert_allclose(np.einsum("mji,mjk->mik", frame, frame), np.broadcast_to(np.eye(3), (m, 3, 3)), atol=1e-13)
     assert_allclose(np.linalg.det(frame), 1, atol=1e-13)
     return u, fr
+
+
+@SETTINGS
+@given(c=curves(dims=st.just(3)), fs=st.lists(st.floats(0, 1), min_size=1, max_size=9))
+def test_frenet_axes_are_curve_frenets_frames(c, fs):
+    """frenet_axes (the sweep's frames from derivatives it already has) gives curve_frenet's
+    tangent, normal and binormal bit for bit, NaN where they are undefined."""
+    lo, hi = c.domain
+    u = lo + np.array(fs) * (hi - lo)
+    f = curve_frenet(c, u)
+    F = frenet_axes(c.derivatives(u, 2))
+    assert F.shape == (u.shape[0], 3, 3)
+    assert np.array_equal(F, np.stack([f.tangent, f.normal, f.binormal], axis=-1), equal_nan=True)
+
+
+def test_frenet_axes_flags_lines_and_rejects_bad_shapes():
+    line = BSplineCurve(1, [0, 0, 1, 1], [[0, 0, 0], [1, 2, 3]])
+    F = frenet_axes(line.derivatives(np.array([0.2, 0.7]), 2))
+    assert_allclose(F[:, :, 0], np.broadcast_to(np.array([1, 2, 3]) / np.sqrt(14), (2, 3)), atol=1e-15)
+    assert np.isnan(F[:, :, 1:]).all()
+    with pytest.raises(InvalidGeometryError, match=r"expected shape S \+ \(k >= 3, 3\)"):
+        frenet_axes(line.derivatives(np.array([0.2]), 1))
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 7, 100, 1153])
+def test_chain_of_steps_equals_the_sequential_product(n):
+    """The two-level scan of rotation_minimizing_frames against the plain loop r_{i+1} = M_i r_i."""
+    rng = np.random.default_rng(n)
+    Q, _ = np.linalg.qr(rng.normal(size=(n, 3, 3)))
+    r0 = np.array([0.6, 0.0, 0.8])
+    expect = [r0]
+    for M in Q:
+        expect.append(M @ expect[-1])
+    got = differential._chain(Q, r0)
+    assert got.shape == (n + 1, 3)
+    assert_allclose(got, np.array(expect), rtol=0, atol=1e-14 * max(1.0, np.sqrt(n)))
 
 
 def test_rmf_has_no_twist_on_space_curve():
