@@ -48,9 +48,10 @@ the *pole bound*, which the refinement drives below ``tol`` at ``SWEEP_CHECKS_PE
 span. Interpolation is linear and ``P_i(v) = C(v) + A(v) (P_i - C(v_0))`` is linear in the 12
 numbers of the map ``(C(v), A(v))``, so the refinement interpolates those 12 functions and maps
 the resulting poles (the same pole rows, whatever the number of profile poles); each parameter's
-map is computed once per sweep. The final report then measures ``max |S - E|`` directly on a dense grid (every profile span
-and ``SWEEP_VERIFY_PER_SPAN`` v values per v span, all off the interpolation sites). Both numbers
-are parametric deviations, upper bounds of the distance between the surfaces.
+map is computed once per sweep. The final report then measures ``max |S - E|`` directly on a
+dense grid (every profile span and ``SWEEP_VERIFY_PER_SPAN`` v values per v span, all off the
+interpolation sites). Both numbers are parametric deviations, upper bounds of the distance between
+the surfaces.
 
 Every tolerance and limit named here (``SWEEP_...``) is in :mod:`occsurf.algorithms.tolerances`,
 read at call time, so :func:`occsurf.algorithms.tolerances.override` changes it.
@@ -227,10 +228,10 @@ class _FrameField:
     def __call__(self, v: Array, D: Array | None = None) -> Array:
         """Frames at ``v`` (m,): shape (m, 3, 3), from ``D = path.derivatives(v, self.order)`` (computed
         if not given)."""
-        if D is None:
-            D = self.path.derivatives(v, self.order)
         if self.kind == "fixed":
             return np.broadcast_to(self.start, (v.shape[0], 3, 3))
+        if D is None:
+            D = self.path.derivatives(v, self.order)
         if self.kind == "frenet":
             F = frenet_axes(D)
             bad = ~np.all(np.isfinite(F[:, :, 1]), axis=-1)
@@ -647,7 +648,8 @@ def _report(ex: _Sweep, surface: BSplineSurface, fit: _Fit, tol_abs: float, fram
     ua, ub = _spans(c.knots, c.degree)
     uu = np.concatenate((_off_sites(ua, ub, (np.arange(8) + 0.5) / 8), c.domain))
     S = surface.evaluate_grid(uu, fit.verify_v)
-    E = ex.place(fit.verify_v, c.evaluate(uu)).transpose(1, 0, 2)
+    g = ex.affine(fit.verify_v)  # the maps the verification computed, looked up
+    E = _apply(g[:, :3], g[:, 3:].reshape(-1, 3, 3), np.ascontiguousarray((c.evaluate(uu) - ex.c0).T)).transpose(1, 0, 2)
     max_error = float(np.linalg.norm(S - E, axis=-1).max())
     return SweepResult(surface=surface, max_error=max_error, pole_bound=float(fit.span_errors.max()), tol=tol_abs,
                        n_sections=fit.rows.n_poles, iterations=fit.iterations, n_checked=int(S.shape[0] * S.shape[1]),

@@ -157,15 +157,19 @@ def cross3(a: Array, b: Array) -> Array:
     return out
 
 
-def _frenet_parts(D: Array) -> dict[str, NDArray[Any]]:  # float and bool arrays
+def _frenet_parts(D: Array, curvature: bool = True) -> dict[str, NDArray[Any]]:  # float and bool arrays
+    """``C'``, ``C''``, their cross product ``a``, ``|C'|``, ``|a|``, where ``C' != 0``, where the
+    curve bends, and (``curvature``) the curvature ``kappa``, from derivatives ``D`` (S + (k >= 3, 3))."""
     d1, d2 = D[..., 1, :], D[..., 2, :]
     a = cross3(d1, d2)
     s = _norm(d1)
     na = _norm(a)
     regular = s > 0
     bends = regular & (na > tolerances.CURVATURE_ZERO * s * _norm(d2))
-    kappa = np.where(bends, _safe_div(na, s**3, bends), np.where(regular, 0.0, np.nan))
-    return dict(d1=d1, d2=d2, a=a, s=s, na=na, regular=regular, bends=bends, kappa=kappa)
+    parts = dict(d1=d1, d2=d2, a=a, s=s, na=na, regular=regular, bends=bends)
+    if curvature:
+        parts["kappa"] = np.where(bends, _safe_div(na, s**3, bends), np.where(regular, 0.0, np.nan))
+    return parts
 
 
 def curve_frenet(curve: BSplineCurve, u: ArrayLike) -> FrenetFrame:
@@ -227,19 +231,14 @@ def frenet_axes(D: ArrayLike) -> Array:
         Columns tangent, normal, binormal, equal to those of :func:`curve_frenet` at the same
         parameters: NaN where the curvature vanishes (normal, binormal) or ``C' = 0`` (all three).
     """
-    Da = np.asarray(D, dtype=float)
+    try:
+        Da = np.asarray(D, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise InvalidGeometryError(f"D: expected an array of derivatives, got {type(D).__name__} ({err})") from err
     if Da.ndim < 2 or Da.shape[-1] != 3 or Da.shape[-2] < 3:
         raise InvalidGeometryError(f"D: expected shape S + (k >= 3, 3) (point, C', C''), got {Da.shape}")
-    # _frenet_parts and _frenet_axes without the curvature: the same operations on the same numbers
-    d1, d2 = Da[..., 1, :], Da[..., 2, :]
-    a = cross3(d1, d2)
-    s, na = _norm(d1), _norm(a)
-    regular = s > 0
-    bends = regular & (na > tolerances.CURVATURE_ZERO * s * _norm(d2))
     F = np.empty(Da.shape[:-2] + (3, 3))
-    F[..., 0] = _safe_div(d1, s[..., None], regular[..., None])
-    F[..., 2] = _safe_div(a, na[..., None], bends[..., None])
-    F[..., 1] = cross3(F[..., 2], F[..., 0])
+    F[..., 0], F[..., 1], F[..., 2] = _frenet_axes(_frenet_parts(Da, curvature=False))
     return F
 
 
@@ -392,7 +391,7 @@ def _chain(M: Array, r0: Array) -> Array:
     """
     n = M.shape[0]
     if n == 0:
-        return r0[None].copy()
+        return np.array(r0, float)[None]
     L = math.isqrt(n - 1) + 1
     B = -(-n // L)
     Mb = np.empty((B * L, 3, 3))

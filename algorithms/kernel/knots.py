@@ -140,24 +140,36 @@ def refinement_matrix(knots: Array, degree: int, new_knots: Array) -> Array:
     n = knots.shape[0] - p - 1
     n2 = new_knots.shape[0] - p - 1
     i = np.arange(n2)
-    args = new_knots[i[:, None] + 1 + np.arange(p)[None, :]]  # (n2, p)
-    mu = support_span(knots, new_knots, i)  # 0 <= mu <= n + p - 1, maybe outside [p, n - 1]
+    mu, args, A = _oslo_rows(knots, p, new_knots)
+    T = np.zeros((n2, n))
+    if A is not None:
+        T[i[:, None], mu[:, None] - p + np.arange(p + 1)] = A
+        return T
     # Outside the domain a span has fewer than p + 1 basis functions: pad the knot vector with p
     # copies of each end knot so that every span has p + 1 columns, and drop the padding's
     # columns. Each column is one basis function's blossom, unaffected by the padding; every
     # denominator of the recurrence contains the non-empty span mu, so none vanishes.
-    T = np.zeros((n2, n))
-    if mu[0] >= p and mu[-1] <= n - 1:  # mu is non-decreasing in i
-        # Every span in the domain (a clamped knot vector's case): p + 1 columns each, no padding.
-        A = blossom_basis(knots, p, mu, args)
-        T[i[:, None], mu[:, None] - p + np.arange(p + 1)] = A
-        return T
     padded = np.concatenate((np.full(p, knots[0]), knots, np.full(p, knots[-1])))
     A = blossom_basis(padded, p, mu + p, args)
     cols = mu[:, None] - p + np.arange(p + 1)
     real = (cols >= 0) & (cols < n)
     T[np.broadcast_to(i[:, None], cols.shape)[real], cols[real]] = A[real]
     return T
+
+
+def _oslo_rows(knots: Array, degree: int, new_knots: Array) -> tuple[NDArray[np.intp], Array, Array | None]:
+    """For each new pole ``i`` of the refinement: the old span ``mu`` whose blossom gives it
+    (:func:`support_span`), the blossom arguments ``new_knots[i+1 .. i+degree]`` (n2, degree), and,
+    where every ``mu`` lies in the domain (a clamped knot vector's case), the ``degree + 1``
+    weights on the old poles ``mu - degree .. mu`` (n2, degree + 1); ``None`` otherwise."""
+    p = degree
+    n = knots.shape[0] - p - 1
+    i = np.arange(new_knots.shape[0] - p - 1)
+    args = new_knots[i[:, None] + 1 + np.arange(p)[None, :]]  # (n2, p)
+    mu = support_span(knots, new_knots, i)  # 0 <= mu <= n + p - 1, maybe outside [p, n - 1]
+    if mu[0] >= p and mu[-1] <= n - 1:  # mu is non-decreasing in i
+        return mu, args, blossom_basis(knots, p, mu, args)
+    return mu, args, None
 
 
 def support_span(knots: Array, new_knots: Array, i: NDArray[np.intp]) -> NDArray[np.intp]:
@@ -202,13 +214,10 @@ def refine_poles(knots: Array, degree: int, poles: Array, new_knots: Array) -> A
     matmul instead of BLAS's blocked product, neither of which promises an order.
     """
     p = degree
-    n = knots.shape[0] - p - 1
     n2 = new_knots.shape[0] - p - 1
-    i = np.arange(n2)
-    mu = support_span(knots, new_knots, i)
+    mu, _, A = _oslo_rows(knots, p, new_knots)
     flat = poles.reshape(poles.shape[0], -1)
-    if mu[0] >= p and mu[-1] <= n - 1:  # mu is non-decreasing in i: every piece in the domain
-        A = blossom_basis(knots, p, mu, new_knots[i[:, None] + 1 + np.arange(p)])  # (n2, p + 1)
+    if A is not None:  # every piece in the domain
         # each new pole: its p + 1 weights times its p + 1 old pole rows, as one batched matmul, in
         # blocks of rows so that the gathered rows stay within REFINE_BLOCK floats (at most p + 1
         # times the output otherwise, which the callers' size checks do not count)
