@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from functools import lru_cache
-from itertools import combinations
+from itertools import accumulate, combinations
 from math import comb
 
 import numpy as np
@@ -406,6 +406,6 @@ def _blossom_poles(q: int, p: int, members: list[tuple[np.ndarray, np.ndarray, n
         check_size((m * S.shape[0], q + 1), f"raise the degree from {q} to {p}")
         A = blossom_rows(kn, q, np.repeat(mu_all, S.shape[0]), a[:, S].reshape(-1, q))
         A = A.reshape(q + 1, m, S.shape[0]).sum(axis=2) / S.shape[0]
-    out = np.einsum("km,mk...->m...", A, H[first[:, None] + np.arange(q + 1)])
-    ends = np.cumsum(sizes).tolist()
+    out = np.einsum("km,mk...->m...", A, np.take(H, first[:, None] + np.arange(q + 1), axis=0))
+    ends = list(accumulate(sizes))
     return [out[e - n:e] for e, n in zip(ends, sizes)]  # np.split's views, without its wrapper

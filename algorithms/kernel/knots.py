@@ -328,9 +328,7 @@ def clamp_poles(knots: Array, degree: int, poles: Array) -> tuple[Array, Array]:
     p = degree
     n = poles.shape[0]
     a, b = knots[p], knots[n]
-    ma = int(np.count_nonzero(knots[: p + 1] == a))
-    mb = int(np.count_nonzero(knots[n:] == b))
-    if ma == p + 1 and mb == p + 1 and knots[0] == a and knots[-1] == b:
+    if knots[0] == a and knots[-1] == b:  # non-decreasing knots: p + 1 copies of each end already
         return knots, poles
     extra = np.concatenate((np.full(max(p + 1 - int(np.count_nonzero(knots == a)), 0), a),
                             np.full(max(p + 1 - int(np.count_nonzero(knots == b)), 0), b)))
