@@ -143,9 +143,9 @@ def _boundary_ribbons(sa: Side, sb: Side, pa: Poly, pb: Poly, sig_i: float, tau_
     s_a = lambda u: sig_i * u  # noqa: E731
     s_b = lambda v: 1.0 - tau_j * v  # noqa: E731
     row0 = represent(lambda u: sa.B.evaluate(s_a(u)), Pu, Ku)
-    da = represent(lambda u: np.einsum("mf,mfw->mw", pa(u), sa.fields(s_a(u))[0]), Pu, Ku)
+    da = represent(lambda u: np.einsum("mf,mfw->mw", pa(u), sa.values(s_a(u))), Pu, Ku)
     col0 = represent(lambda v: sb.B.evaluate(s_b(v)), Pv, Kv)
-    db = represent(lambda v: np.einsum("mf,mfw->mw", pb(v), sb.fields(s_b(v))[0]), Pv, Kv)
+    db = represent(lambda v: np.einsum("mf,mfw->mw", pb(v), sb.values(s_b(v))), Pv, Kv)
     return row0, da, col0, db
 
 

@@ -63,6 +63,13 @@ class Side:
         s = np.atleast_1d(np.asarray(s, float))
         return self._fields(self.B.derivatives(s, 2), self.X.derivatives(s, 1))
 
+    def values(self, s: Array) -> Array:
+        """The fields ``[X, B', (B)]`` at the parameters ``s`` (m,) without their derivatives: shape
+        (m, nf, w), :meth:`fields` ``(s)[0]`` bit for bit (a curve's derivatives up to an order do
+        not depend on the highest order asked) from the orders it needs, not two more."""
+        DB, X = self.B.derivatives(s, 1), self.X.derivatives(s, 0)[:, 0]
+        return np.stack([X, DB[:, 1], DB[:, 0]], 1) if self.rational else np.stack([X, DB[:, 1]], 1)
+
     def _fields(self, DB: Array, DX: Array) -> tuple[Array, Array]:
         if self.rational:
             F = np.stack([DX[:, 0], DB[:, 1], DB[:, 0]], 1)
