@@ -298,8 +298,9 @@ def test_equation_blocks_are_the_slices_of_the_whole_system_bit_for_bit(seed, r,
     """``_solve`` asks ``_equations`` for one order's rows and one pole row's columns (the rows in
     turn) or for orders 1..r and rows 1..r (the Gauss-Newton steps) instead of building the whole
     system and slicing it: the blocks must be those slices exactly, F and J alike."""
+    from occsurf.algorithms.manipulation.match_solve import _cross_rows, _equations
     from occsurf.algorithms.manipulation.match_targets import SurfaceSide
-    from occsurf.algorithms.manipulation.matching import _cross_rows, _equations, _solve_params
+    from occsurf.algorithms.manipulation.matching import _solve_params
 
     T, S = _pair(kink, nu_s=7, seed=seed, nv=nv)
     v = _solve_params(S)
@@ -325,7 +326,7 @@ def test_kept_svds_give_the_same_match_bit_for_bit(seed, order, kink):
     """``_solve`` keeps the SVDs of G0's and of row 1's G1 matrices (independent of the poles) for
     its second pass of row-by-row solves: the matched surface is the one made with every SVD taken
     afresh, pole for pole (signed zeros too), with two SVDs fewer per solve of G2 or G3."""
-    import occsurf.algorithms.manipulation.matching as M
+    import occsurf.algorithms.manipulation.match_solve as M  # where _solve lives
     import occsurf.algorithms.manipulation.min_norm as MN
 
     T, S = _pair(kink, nu_s=8, seed=seed, nv=5)
