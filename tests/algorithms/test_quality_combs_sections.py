@@ -18,7 +18,7 @@ from occsurf.algorithms import BSplineCurve, circle, tolerances
 from occsurf.algorithms.construction import extrude
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.quality import SampledCurve, axial_sections, curvature_comb, iso_curves, plane_sections
-from occsurf.algorithms.quality.sections import _order_chains, _rank
+from occsurf.algorithms.quality.section_cuts import _order_chains, _rank
 
 from .strategies import test_settings
 from .test_quality_maps import sphere, torus, wavy
