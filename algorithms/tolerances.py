@@ -502,7 +502,7 @@ _DEFAULTS: dict[str, float] = {
     # Curvatures below this times 1 / model size count as zero for the relative G2 jump (a radius
     # a million times the model): between two almost flat faces the ratio is noise.
     "CONTINUITY_CURVATURE_FLOOR": 1e-6,
-    # ---- matching (manipulation/matching.py, course ch. 4) ---------------------------------------
+    # ---- matching (manipulation/matching.py, match_solve.py; course ch. 4) -----------------------
     # Default G0 tolerance of match_surface, relative to the size of the pair (bounding-box diagonal
     # of both nets): 1e-5 mm on a 100 mm part, a hundred times below CATIA's 0.001 mm default.
     "MATCH_G0_RTOL": 1e-7,

@@ -1,7 +1,8 @@
-"""One face cut by planes (steps 1, 2 and 4 of :mod:`.sections`): marching squares on the signed
-distance over a parameter grid, every crossing refined onto the exact surface, the pieces that leave
-the face's trim cut at its boundary, the chains of segments ordered by pointer doubling, and the
-exact curvature of the cut with its inflections located.
+"""One face cut by planes (:mod:`.sections`' steps 1, 2 and 4, and step 3's ordering of the
+chains): marching squares on the signed distance over a parameter grid, every crossing refined
+onto the exact surface, the pieces that leave the face's trim cut at its boundary, the chains of
+segments ordered by pointer doubling, and the exact curvature of the cut with its inflections
+located.
 """
 
 from __future__ import annotations

@@ -190,8 +190,6 @@ class PlateFill:
 
 
 # ===================================================================================== sides
-
-
 def _params(curve: BSplineCurve, count: int) -> Array:
     """About ``count`` parameters on ``curve``, evenly spread in every knot span (ends included)."""
     k = np.unique(curve.knots[curve.degree:curve.n_poles + 1])

@@ -68,7 +68,8 @@ from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
 from .nsided import HoleSide
 from .nsided_loops import closest_parameters
-from .plate_fill import PlateFill, _side_samples, _validate, fill_plate
+from .plate_fill import PlateFill, _validate, fill_plate
+from .plate_measure import _side_samples
 
 Array = np.ndarray
 

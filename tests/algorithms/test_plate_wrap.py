@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.nsided import HoleSide, count_folds
-from occsurf.algorithms.topology.plate_fill import _side_samples
+from occsurf.algorithms.topology.plate_measure import _side_samples
 from occsurf.algorithms.topology.plate_wrap import (
     WrappedPlateFill,
     axis_residual,
