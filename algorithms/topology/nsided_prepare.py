@@ -66,7 +66,8 @@ class Side:
     def values(self, s: Array) -> Array:
         """The fields ``[X, B', (B)]`` at the parameters ``s`` (m,) without their derivatives: shape
         (m, nf, w), :meth:`fields` ``(s)[0]`` bit for bit (a curve's derivatives up to an order do
-        not depend on the highest order asked) from the orders it needs, not two more."""
+        not depend on the highest order asked), from ``B`` to order 1 and ``X`` to order 0 where
+        :meth:`fields` goes one order further in each."""
         DB, X = self.B.derivatives(s, 1), self.X.derivatives(s, 0)[:, 0]
         return np.stack([X, DB[:, 1], DB[:, 0]], 1) if self.rational else np.stack([X, DB[:, 1]], 1)
 
