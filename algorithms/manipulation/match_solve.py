@@ -4,7 +4,7 @@ course ch. 3-4).
 At samples ``v`` of the side ``u = u0`` of a surface in the canonical orientation of
 :mod:`.matching`, :func:`_cross_rows` gives the cross derivatives' rows over the first pole rows,
 :func:`_equations` the G0..G3 conditions' residuals and Jacobian against the target's jets (the
-table in :mod:`.matching`), and :func:`_solve` the least change of those pole rows that meets them:
+table in :mod:`.matching`), and :func:`min_norm_change` the least change of those pole rows that meets them:
 row by row, each by its minimum-norm correction, then for G2 and G3 Gauss-Newton steps on the rows
 together, the smaller change kept.
 """
@@ -22,6 +22,8 @@ from ..kernel.basis import basis_derivatives, find_span
 from ..kernel.surface import BSplineSurface
 from .match_targets import Jets
 from .min_norm import RowSVD, robust_min_norm, row_svd
+
+__all__ = ["JetSource", "min_norm_change"]
 
 Array = NDArray[np.float64]
 
@@ -66,7 +68,7 @@ def _equations(R: Array, Sj: Array, tg: Jets, r: int, lo: int = 0, poles: slice 
 
     With ``lo = 0`` and every pole these are all the conditions' rows, shape ``(n_eq,)`` and
     ``(n_eq, n_poles * 3)``; a caller that solves for some pole rows under some orders asks for
-    just those (:func:`_solve`): each entry is the same product either way, so the block is the
+    just those (:func:`min_norm_change`): each entry is the same product either way, so the block is the
     same as slicing the whole, bit for bit, without building the G0 block (``3 m`` rows, the
     largest) and the columns it then drops."""
     Rp = R[..., poles]
@@ -103,7 +105,7 @@ def _equations(R: Array, Sj: Array, tg: Jets, r: int, lo: int = 0, poles: slice 
     return np.concatenate(F), np.concatenate(J)
 
 
-def _solve(S: BSplineSurface, target: JetSource, r: int, v: Array, size: float) -> Array:
+def min_norm_change(S: BSplineSurface, target: JetSource, r: int, v: Array, size: float) -> Array:
     """Minimum-norm change of the first ``r + 1`` pole rows, shape ``(r + 1, n_v, 3)``.
 
     The target's jets are taken once, at the points that correspond to the side's samples ``v``

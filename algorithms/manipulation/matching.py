@@ -51,7 +51,7 @@ from ..errors import ArgumentTypeError, InvalidGeometryError, UnknownNameError
 from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 from .linalg import ConstraintError
-from .match_solve import _solve
+from .match_solve import min_norm_change
 from .match_targets import Jets, MatchTarget, SampledCurve, SurfaceSide, height_jets
 
 __all__ = ["MatchResult", "MatchTarget", "match_surface", "side_along", "surface_change", "pole_size",
@@ -294,7 +294,7 @@ def _match_canonical(S: BSplineSurface, target: _Target, r: int, o: int, tol: _T
     S, added = _rows_for_preserve(S, r, o, refine, side)
     rounds = tolerances.MATCH_MAX_ROUNDS
     for rnd in range(rounds + 1):
-        x = _solve(S, target, r, _solve_params(S), size)
+        x = min_norm_change(S, target, r, _solve_params(S), size)
         P = S.control_points.copy()
         P[: r + 1] += x
         new = BSplineSurface._trusted(S.degree, S.knots, P, S.weights)

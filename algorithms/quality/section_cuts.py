@@ -19,13 +19,16 @@ from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.surface import BSplineSurface
 from ._common import Array, dot
 
+__all__ = ["Face", "Ints", "march", "edge_ends", "on_edge", "newton", "to_trim", "order_chains", "rank", "cut_curvature",
+           "tangent_hints", "refine_inflections"]
+
 Ints = NDArray[np.intp]
 #: A surface the sections cut.
 Face = BSplineSurface | HierarchicalSurface
 
 
 # ------------------------------------------------------------------------------ marching squares
-def _march(h: Array) -> tuple[Ints, Ints, Ints, int, Ints]:
+def march(h: Array) -> tuple[Ints, Ints, Ints, int, Ints]:
     """Oriented zero-crossing segments of ``h`` (k, mu, mv), all planes at once.
 
     Returns ``(plane, src_edge, dst_edge, n_u_edges, cell)`` (``cell = i * (mv - 1) + j``): edge ids ``< n_u_edges`` lie along u
@@ -64,7 +67,7 @@ def _march(h: Array) -> tuple[Ints, Ints, Ints, int, Ints]:
     return np.concatenate(planes), np.concatenate(srcs), np.concatenate(dsts), nu_e, np.concatenate(cells)
 
 
-def _edge_ends(edges: Ints, plane: Ints, h: Array, us: Array, vs: Array, nu_e: int) -> tuple[Array, Array, Array]:
+def edge_ends(edges: Ints, plane: Ints, h: Array, us: Array, vs: Array, nu_e: int) -> tuple[Array, Array, Array]:
     """End parameters ``(n, 2)`` of each grid edge and the linear-interpolation zero ``t`` on it."""
     mv = vs.size
     along_u = edges < nu_e
@@ -77,7 +80,7 @@ def _edge_ends(edges: Ints, plane: Ints, h: Array, us: Array, vs: Array, nu_e: i
     return np.stack((us[i], vs[j]), -1), np.stack((us[i2], vs[j2]), -1), t
 
 
-def _on_edge(s: Face, uv0: Array, uv1: Array, t: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
+def on_edge(s: Face, uv0: Array, uv1: Array, t: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
     """The zero of ``h = (S - o) . n`` on each grid edge ``uv0 -> uv1`` (bracketed: ``h`` changes
     sign along it), by Newton's method safeguarded with bisection, all edges at once; converges
     whenever the seed is real. Returns ``(uv, converged)``."""
@@ -112,7 +115,7 @@ def _on_edge(s: Face, uv0: Array, uv1: Array, t: Array, o: Array, n: Array, tol:
     return uv, conv
 
 
-def _newton(s: Face, uv: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
+def newton(s: Face, uv: Array, o: Array, n: Array, tol: float) -> tuple[Array, NDArray[np.bool_]]:
     """Refine ``uv`` (p, 2) onto ``(S - o) . n = 0`` (o, n per point); returns (uv, converged)."""
     (u0, u1), (v0, v1) = s.domain
     uv = uv.copy()
@@ -136,11 +139,11 @@ def _newton(s: Face, uv: Array, o: Array, n: Array, tol: float) -> tuple[Array, 
     return uv, done
 
 
-def _to_trim(s: Face, keep: Callable[[Array, Array, Ints], NDArray[np.bool_]], uv_in: Array, uv_out: Array, o: Array,
+def to_trim(s: Face, keep: Callable[[Array, Array, Ints], NDArray[np.bool_]], uv_in: Array, uv_out: Array, o: Array,
              n: Array, tol_h: float) -> Array:
     """March each cut from its last point inside the trim (``uv_in``) to the trim boundary, towards
     its next point outside (``uv_out``; both on the intersection): bisection along the cut, every
-    trial point projected onto the intersection by :func:`_newton` and tested by ``keep(uv, X, i)``,
+    trial point projected onto the intersection by :func:`newton` and tested by ``keep(uv, X, i)``,
     all segments at once, until the inside and outside points are within ``tol_h`` of each other
     in model space (so the returned inside point is within ``tol_h`` of the boundary that
     ``keep`` draws). Returns the inside ends ``(p, 2)``."""
@@ -151,7 +154,7 @@ def _to_trim(s: Face, keep: Callable[[Array, Array, Ints], NDArray[np.bool_]], u
         i = np.flatnonzero(live)
         if i.size == 0:
             break
-        mid, conv = _newton(s, 0.5 * (lo[i] + hi[i]), o[i], n[i], tol_h)
+        mid, conv = newton(s, 0.5 * (lo[i] + hi[i]), o[i], n[i], tol_h)
         Xm = s.evaluate(mid[:, 0], mid[:, 1])
         inside = conv & keep(mid, Xm, i)
         j, k = i[inside], i[~inside]
@@ -163,7 +166,7 @@ def _to_trim(s: Face, keep: Callable[[Array, Array, Ints], NDArray[np.bool_]], u
 
 
 # -------------------------------------------------------------------------------------- chaining
-def _order_chains(src: Ints, dst: Ints) -> list[tuple[Ints, bool]]:
+def order_chains(src: Ints, dst: Ints) -> list[tuple[Ints, bool]]:
     """Oriented segments ``src -> dst`` (node ids 0..N-1, each node at most one in and one out)
     ordered into chains by pointer doubling. Returns ``[(nodes, closed), ...]``."""
     N = int(max(src.max(), dst.max())) + 1
@@ -187,7 +190,7 @@ def _order_chains(src: Ints, dst: Ints) -> list[tuple[Ints, bool]]:
         pred_of_first = cyc_nodes[nxt[cyc_nodes] == cut_to]
         nxt[pred_of_first] = -1
         closed[lab[cyc_nodes]] = True
-    dist = _rank(nxt)
+    dist = rank(nxt)
     nodes = np.flatnonzero(used)
     order = np.lexsort((-dist[nodes], lab[nodes]))
     nodes = nodes[order]
@@ -196,7 +199,7 @@ def _order_chains(src: Ints, dst: Ints) -> list[tuple[Ints, bool]]:
     return [(part, bool(closed[lab[part[0]]])) for part in np.split(nodes, cuts)]
 
 
-def _rank(nxt: Ints) -> NDArray[np.int64]:
+def rank(nxt: Ints) -> NDArray[np.int64]:
     """Number of steps from each node to the end of its (acyclic) chain: list ranking by pointer
     doubling (Wyllie), ``log2`` of the longest chain synchronous NumPy steps."""
     dist = (nxt >= 0).astype(np.int64)
@@ -213,7 +216,7 @@ def _rank(nxt: Ints) -> NDArray[np.int64]:
 
 
 # ------------------------------------------------------------------------- curvature on the cut
-def _cut_curvature(s: Face, uv: Array, m: Array, tangent_hint: Array) -> tuple[Array, Array, Array]:
+def cut_curvature(s: Face, uv: Array, m: Array, tangent_hint: Array) -> tuple[Array, Array, Array]:
     """Signed curvature of the intersection with the plane of normal ``m`` (per point), the unit
     tangent oriented along ``tangent_hint`` and the points. Meusnier: ``kappa_s = k_n(t) / (N_c . n_s)``."""
     D = s.derivatives(uv[:, 0], uv[:, 1], 2)
@@ -236,7 +239,7 @@ def _cut_curvature(s: Face, uv: Array, m: Array, tangent_hint: Array) -> tuple[A
     return ks, t, D[:, 0, 0]
 
 
-def _tangent_hints(P: Array, closed: bool) -> Array:
+def tangent_hints(P: Array, closed: bool) -> Array:
     """Chord directions along a polyline (central differences), used to orient tangents."""
     if P.shape[0] < 2:
         return np.zeros_like(P)
@@ -248,7 +251,7 @@ def _tangent_hints(P: Array, closed: bool) -> Array:
     return g
 
 
-def _refine_inflections(s: Face, uv_a: Array, uv_b: Array, ka: Array, kb: Array, o: Array, m: Array, hint: Array,
+def refine_inflections(s: Face, uv_a: Array, uv_b: Array, ka: Array, kb: Array, o: Array, m: Array, hint: Array,
                         tol_uv: float, tol_h: float) -> Array:
     """Zeros of the signed curvature on the exact cut between samples of opposite sign: the
     Illinois variant of regula falsi on the fraction ``c`` of the bracket (each trial point projected
@@ -269,8 +272,8 @@ def _refine_inflections(s: Face, uv_a: Array, uv_b: Array, ka: Array, kb: Array,
         i = np.flatnonzero(live)
         c = (a[i] * fb[i] - b[i] * fa[i]) / (fb[i] - fa[i])
         c = np.where(np.isfinite(c) & (c > np.minimum(a[i], b[i])) & (c < np.maximum(a[i], b[i])), c, 0.5 * (a[i] + b[i]))
-        uv, _ok = _newton(s, uv_a[i] + c[:, None] * (uv_b[i] - uv_a[i]), on[i], mm[i], tol_h)
-        fc, _, _ = _cut_curvature(s, uv, mm[i], hint[i])
+        uv, _ok = newton(s, uv_a[i] + c[:, None] * (uv_b[i] - uv_a[i]), on[i], mm[i], tol_h)
+        fc, _, _ = cut_curvature(s, uv, mm[i], hint[i])
         best[i] = c
         exact = ~np.isfinite(fc) | (fc == 0)
         swap = fc * fb[i] < 0  # the root lies between b and c: b becomes the other end
@@ -278,5 +281,5 @@ def _refine_inflections(s: Face, uv_a: Array, uv_b: Array, ka: Array, kb: Array,
         fa[i] = np.where(swap, fb[i], 0.5 * fa[i])  # Illinois: halve the stale end's value
         b[i], fb[i] = c, fc
         live[i[exact]] = False
-    uv, _ok = _newton(s, uv_a + best[:, None] * (uv_b - uv_a), on, mm, tol_h)
+    uv, _ok = newton(s, uv_a + best[:, None] * (uv_b - uv_a), on, mm, tol_h)
     return s.evaluate(uv[:, 0], uv[:, 1])

@@ -40,14 +40,14 @@ from .combs import Comb, _finish
 from .section_cuts import (
     Face,
     Ints,
-    _cut_curvature,
-    _edge_ends,
-    _march,
-    _on_edge,
-    _order_chains,
-    _refine_inflections,
-    _tangent_hints,
-    _to_trim,
+    cut_curvature,
+    edge_ends,
+    march,
+    on_edge,
+    order_chains,
+    refine_inflections,
+    tangent_hints,
+    to_trim,
 )
 
 __all__ = ["Section", "SectionCurve", "plane_sections", "axial_sections"]
@@ -200,7 +200,7 @@ def _face_pieces_of(fi: int, s: Face, mask: MaskFn | None, O: Array, Nm: Array, 
         cell_in = (inside[:-1, :-1] | inside[1:, :-1] | inside[1:, 1:] | inside[:-1, 1:]).ravel()
     pieces: list[list[_Piece]] = [[] for _ in range(k)]
     bad = np.zeros(k, np.int64)
-    plane, src, dst, nu_e, cell = _march(h)
+    plane, src, dst, nu_e, cell = march(h)
     if mask is not None and plane.size:
         keep = cell_in[cell]
         plane, src, dst = plane[keep], src[keep], dst[keep]
@@ -209,8 +209,8 @@ def _face_pieces_of(fi: int, s: Face, mask: MaskFn | None, O: Array, Nm: Array, 
     n_edges = nu_e + us.size * (vs.size - 1)
     ids, inv = np.unique(np.concatenate((plane * n_edges + src, plane * n_edges + dst)), return_inverse=True)
     node_plane, node_edge = ids // n_edges, ids % n_edges
-    e0, e1, t0 = _edge_ends(node_edge, node_plane, h, us, vs, nu_e)
-    uv, conv = _on_edge(s, e0, e1, t0, O[node_plane], Nm[node_plane], tol_h)
+    e0, e1, t0 = edge_ends(node_edge, node_plane, h, us, vs, nu_e)
+    uv, conv = on_edge(s, e0, e1, t0, O[node_plane], Nm[node_plane], tol_h)
     keep_node = conv.copy()
     if mask is not None:
         keep_node &= np.asarray(mask(uv[:, 0], uv[:, 1]), bool)
@@ -231,7 +231,7 @@ def _face_pieces_of(fi: int, s: Face, mask: MaskFn | None, O: Array, Nm: Array, 
             k = np.ones(uv_.shape[0], bool) if mask is None else np.asarray(mask(uv_[:, 0], uv_[:, 1]), bool)
             return k if half is None else k & (dot(X_ - O[pl[i]], half[pl[i]]) >= -tol_h)
 
-        uv_end = _to_trim(s, keep, uv[inner], uv[outer], O[pl], Nm[pl], tol_h)
+        uv_end = to_trim(s, keep, uv[inner], uv[outer], O[pl], Nm[pl], tol_h)
         new = uv.shape[0] + np.arange(ci.size)
         uv = np.concatenate((uv, uv_end))
         X = np.concatenate((X, s.evaluate(uv_end[:, 0], uv_end[:, 1])))
@@ -241,7 +241,7 @@ def _face_pieces_of(fi: int, s: Face, mask: MaskFn | None, O: Array, Nm: Array, 
         ok[ci] = True
     if not np.any(ok):
         return pieces, bad
-    for nodes, closed in _order_chains(a[ok], b[ok]):
+    for nodes, closed in order_chains(a[ok], b[ok]):
         if nodes.size < 2:
             continue
         pieces[int(node_plane[nodes[0]])].append(_Piece(X[nodes], uv[nodes], np.full(nodes.size, fi), closed))
@@ -301,12 +301,12 @@ def _curve(plane: int, piece: _Piece, faces: list[tuple[Face, MaskFn | None]], m
     # a crossing through a grid vertex is found on two grid edges: keep one of coincident points
     keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > 100 * tol_h]
     P, uv, face = P[keep], uv[keep], face[keep]
-    hint = _tangent_hints(P, piece.closed)
+    hint = tangent_hints(P, piece.closed)
     ks = np.empty(P.shape[0])
     T = np.empty_like(P)
     for fi in np.unique(face):  # one vectorised evaluation per face
         sel = face == fi
-        ks[sel], T[sel], _ = _cut_curvature(faces[fi][0], uv[sel], m, hint[sel])
+        ks[sel], T[sel], _ = cut_curvature(faces[fi][0], uv[sel], m, hint[sel])
     nxt = np.roll(np.arange(P.shape[0]), -1) if piece.closed else np.arange(1, P.shape[0])
     cur = np.arange(nxt.size)
     zero = tolerances.QUALITY_WIGGLE_CURVATURE / max(size, np.finfo(float).tiny) * 1e-3
@@ -331,7 +331,7 @@ def _refine_all(curves: list[_Curve], faces: list[tuple[Face, MaskFn | None]], O
         (u0, u1), (v0, v1) = s.domain
         cat = lambda f: np.concatenate([f(curves[ci], a, b) for ci, _, a, b in mine])  # noqa: E731, B023 - used in this iteration only
         owner = np.concatenate([np.full(a.size, ci) for ci, _, a, _b in mine])
-        X = _refine_inflections(
+        X = refine_inflections(
             s, cat(lambda c, a, b: c.uv[a]), cat(lambda c, a, b: c.uv[b]), cat(lambda c, a, b: c.ks[a]),
             cat(lambda c, a, b: c.ks[b]), cat(lambda c, a, b: np.broadcast_to(O[c.plane], (a.size, 3))),
             cat(lambda c, a, b: np.broadcast_to(Nm[c.plane], (a.size, 3))), cat(lambda c, a, b: c.hint[a]),

@@ -84,7 +84,7 @@ from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
 from .nsided_measure import count_folds
 from .nsided_types import HoleSide
-from .plate_measure import _corner_g2, _curvature_rows, _Evaluation, _local_data, _rows, _side_samples
+from .plate_measure import Evaluation, basis_rows, corner_g2, curvature_rows, local_data, side_samples
 from .plate_plane import plate_plane
 
 __all__ = ["PlateFill", "fill_plate", "plate_plane"]
@@ -336,7 +336,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
     angle_tol = float(tolerances.FILL_FIT_ANGLE if angle_tol is None else angle_tol)
     # ---- the plane, from a dense polyline of the loop
     per = _CHECK_POINTS // len(sides) + 2
-    dense = [_side_samples(s, np.linspace(*s.curve.domain, per)[:-1]) for s in sides]
+    dense = [side_samples(s, np.linspace(*s.curve.domain, per)[:-1]) for s in sides]
     P = np.concatenate([d[0] for d in dense])
     M = np.concatenate([np.cross(d[2], d[1]) for d in dense])
     Gm = np.concatenate([np.full(len(d[0]), f) for d, f in zip(dense, flags)])
@@ -381,11 +381,11 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
                 t = _params(s.curve, max(24, int(np.ceil(6 * spans * ln / ext.max()))))
                 fit_t.append(t)
                 chk_t.append(0.5 * (t[1:] + t[:-1]))
-            data = [_local_data(s, t, o, R, L) for s, t in zip(sides, fit_t)]
+            data = [local_data(s, t, o, R, L) for s, t in zip(sides, fit_t)]
             sid = np.concatenate([np.full(len(t), i) for i, t in enumerate(fit_t)])
             X = np.concatenate([d[0] for d in data])
             Mn = np.concatenate([d[1] for d in data])
-            val, du, dv, cols = _rows(ku, kv, p, X[:, 0], X[:, 1])
+            val, du, dv, cols = basis_rows(ku, kv, p, X[:, 0], X[:, 1])
             n = nu * nv
             gsel = flags[sid] & (np.abs(Mn[:, 2]) > 0)
             gx, gy = -Mn[gsel, 0] / Mn[gsel, 2], -Mn[gsel, 1] / Mn[gsel, 2]
@@ -394,7 +394,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             cols_all = np.vstack([cols, cols[gsel], cols[gsel]])
             rhs = np.r_[X[:, 2] / tol0, gx * w1, gy * w1]
             if g2f.any():  # the neighbour's Hessian as a height over the plane, where G2 is asked
-                r2, c2, b2 = _curvature_rows(sides, g2f, fit_t, ku, kv, p, o, R, L, g2_tol, kfloor)
+                r2, c2, b2 = curvature_rows(sides, g2f, fit_t, ku, kv, p, o, R, L, g2_tol, kfloor)
                 rows_v, cols_all, rhs = np.vstack([rows_v, r2]), np.vstack([cols_all, c2]), np.r_[rhs, b2]
             k = rows_v.shape[1]
             A = sp.csr_matrix((rows_v.ravel(), cols_all.ravel(), np.arange(0, rows_v.shape[0] * k + 1, k)),
@@ -418,7 +418,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             else:
                 lu = _SPDFactor(grid_stencil(AtA, (nu, nv), p) + eps * E,
                                 functools.partial(_sparse_system, AtA, eps, terms))
-            ev = _Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
+            ev = Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
                              g2=g2f, kfloor=kfloor, g2_tol=g2_tol)
             c = lu.solve(A.T @ rhs)
             stage = (ev.score(c, g0_tol, angle_tol), c)
@@ -457,7 +457,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
     surf, trimmed = _build(c, ku, kv, p, o, e1, e2, N, L, sides, trim)
     return PlateFill(surf, trimmed, sides, flags, g0_side, g1_side, o, e1, e2, N,
                      (ku.size - 2 * p - 1, kv.size - 2 * p - 1), bool(met), g0_tol, angle_tol, lean,
-                     g2=g2f, side_g2=g2_side, g2_tol=g2_tol, corner_g2=_corner_g2(sides, g2f, o, R, L, kfloor),
+                     g2=g2f, side_g2=g2_side, g2_tol=g2_tol, corner_g2=corner_g2(sides, g2f, o, R, L, kfloor),
                      folds=int(folds))
 
 

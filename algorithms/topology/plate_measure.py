@@ -4,7 +4,7 @@ The plate is a height field over a plane; its fit and its stopping rule look at 
 samples. This module holds those samples in the plate's local frame (points, the neighbours'
 normals, for G2 sides the neighbours' curvature as a height's Hessian), the tensor basis rows
 there (values, first and second derivatives), the G2 sides' least-squares curvature rows, and
-:class:`_Evaluation`: the distance, angle and curvature jump a coefficient vector leaves at every
+:class:`Evaluation`: the distance, angle and curvature jump a coefficient vector leaves at every
 sample, per side, and where it misses a target (the spans :func:`.plate_fill.fill_plate` refines).
 """
 
@@ -18,10 +18,13 @@ from ..kernel.curve import BSplineCurve
 from .nsided_types import HoleSide
 from .side_jets import cross_curvature, graph_jet, relative_jump, side_jet
 
+__all__ = ["side_samples", "local_data", "local_jet", "basis_rows", "basis_rows2", "normal_angle", "Evaluation",
+           "Curvature", "curvature_rows", "corner_g2"]
+
 Array = NDArray[np.float64]
 
 
-def _side_samples(side: HoleSide, t: Array) -> tuple[Array, Array, Array]:
+def side_samples(side: HoleSide, t: Array) -> tuple[Array, Array, Array]:
     """Points, Cartesian tangents and Cartesian cross derivatives of a side at parameters ``t``."""
     c = side.curve
     D = c.derivatives(t, 1)
@@ -34,7 +37,7 @@ def _side_samples(side: HoleSide, t: Array) -> tuple[Array, Array, Array]:
     return P, T, X
 
 
-def _rows(ku: Array, kv: Array, p: int, u: Array, v: Array) -> tuple[Array, Array, Array, Array]:
+def basis_rows(ku: Array, kv: Array, p: int, u: Array, v: Array) -> tuple[Array, Array, Array, Array]:
     """Per point: values, d/du and d/dv of the (p+1)^2 non-zero tensor basis functions, and their columns."""
     nu, nv = ku.size - p - 1, kv.size - p - 1
     su, sv = find_span(ku, p, nu, u), find_span(kv, p, nv, v)
@@ -47,9 +50,9 @@ def _rows(ku: Array, kv: Array, p: int, u: Array, v: Array) -> tuple[Array, Arra
     return val, du, dv, cols
 
 
-def _rows2(ku: Array, kv: Array, p: int, u: Array,
+def basis_rows2(ku: Array, kv: Array, p: int, u: Array,
            v: Array) -> tuple[Array, Array, Array, Array, Array, Array, Array]:
-    """:func:`_rows` and the rows of d2/du2, d2/dudv and d2/dv2: ``(val, du, dv, duu, duv, dvv, cols)``."""
+    """:func:`basis_rows` and the rows of d2/du2, d2/dudv and d2/dv2: ``(val, du, dv, duu, duv, dvv, cols)``."""
     nu, nv = ku.size - p - 1, kv.size - p - 1
     su, sv = find_span(ku, p, nu, u), find_span(kv, p, nv, v)
     Du, Dv = basis_derivatives(ku, p, su, u, 2), basis_derivatives(kv, p, sv, v, 2)  # (m, 3, p+1)
@@ -62,7 +65,7 @@ def _rows2(ku: Array, kv: Array, p: int, u: Array,
     return tensor(0, 0), tensor(1, 0), tensor(0, 1), tensor(2, 0), tensor(1, 1), tensor(0, 2), cols
 
 
-def _angle(gu: Array, gv: Array, m: Array) -> Array:
+def normal_angle(gu: Array, gv: Array, m: Array) -> Array:
     """Angle (degrees, sign-free) between the normal ``(-gu, -gv, 1)`` and ``m`` (local frame)."""
     n = np.c_[-gu, -gv, np.ones_like(gu)]
     c = np.abs(np.einsum("ij,ij->i", n, m))
@@ -70,23 +73,23 @@ def _angle(gu: Array, gv: Array, m: Array) -> Array:
     return np.degrees(np.arctan2(s, c))
 
 
-class _Evaluation:
+class Evaluation:
     """Boundary samples (the fit's and those between them) with their basis rows: what a coefficient
     vector achieves there (vectorised over all samples)."""
 
     def __init__(self, sides: list[HoleSide], flags: NDArray[np.bool_], ts: list[Array], ku: Array, kv: Array,
                  p: int, o: Array, R: Array, L: float, g2: NDArray[np.bool_] | None = None, kfloor: float = 0.0,
                  g2_tol: float = 1.0) -> None:
-        data = [_local_data(s, t, o, R, L) for s, t in zip(sides, ts)]
+        data = [local_data(s, t, o, R, L) for s, t in zip(sides, ts)]
         self.sid = np.concatenate([np.full(len(t), i) for i, t in enumerate(ts)])
         self.X = np.concatenate([d[0] for d in data])
         self.M = np.concatenate([d[1] for d in data])
         self.g1 = flags[self.sid]
-        self.val, self.du, self.dv, self.cols = _rows(ku, kv, p, self.X[:, 0], self.X[:, 1])
+        self.val, self.du, self.dv, self.cols = basis_rows(ku, kv, p, self.X[:, 0], self.X[:, 1])
         self.L, self.n = L, len(sides)
-        self.curv: _Curvature | None = None
+        self.curv: Curvature | None = None
         if g2 is not None and g2.any():
-            self.curv = _Curvature(sides, g2, ts, ku, kv, p, o, R, L, kfloor)
+            self.curv = Curvature(sides, g2, ts, ku, kv, p, o, R, L, kfloor)
         self.g2_tol = g2_tol
 
     def side_g2(self, c: Array) -> Array:
@@ -105,7 +108,7 @@ class _Evaluation:
         e0 = np.abs(np.einsum("ij,ij->i", self.val, cc) - self.X[:, 2]) * self.L
         ang = np.full(e0.shape, np.nan)
         g = self.g1
-        ang[g] = _angle(np.einsum("ij,ij->i", self.du[g], cc[g]), np.einsum("ij,ij->i", self.dv[g], cc[g]), self.M[g])
+        ang[g] = normal_angle(np.einsum("ij,ij->i", self.du[g], cc[g]), np.einsum("ij,ij->i", self.dv[g], cc[g]), self.M[g])
         return e0, ang
 
     def score(self, c: Array, g0_tol: float, angle_tol: float) -> float:
@@ -134,20 +137,20 @@ class _Evaluation:
         return g0, g1, bu, bv
 
 
-class _Curvature:
+class Curvature:
     """The neighbours' curvature across the G2 sides at samples (local frame, units of ``L``) and the
     plate's second-derivative rows there: the relative jump a coefficient vector leaves."""
 
     def __init__(self, sides: list[HoleSide], g2: NDArray[np.bool_], ts: list[Array], ku: Array, kv: Array,
                  p: int, o: Array, R: Array, L: float, kfloor: float) -> None:
         idx = [i for i in range(len(sides)) if g2[i]]
-        jets = [_local_jet(sides[i], ts[i], o, R, L) for i in idx]
+        jets = [local_jet(sides[i], ts[i], o, R, L) for i in idx]
         self.sid = np.concatenate([np.full(len(ts[i]), i) for i in idx])
         self.X = np.concatenate([j[0] for j in jets])
         self.T = np.concatenate([j[1] for j in jets])
         self.m = np.concatenate([j[2] for j in jets])
         self.k = np.concatenate([j[5] for j in jets])
-        self.val, self.du, self.dv, self.duu, self.duv, self.dvv, self.cols = _rows2(
+        self.val, self.du, self.dv, self.duu, self.duv, self.dvv, self.cols = basis_rows2(
             ku, kv, p, self.X[:, 0], self.X[:, 1])
         self.kfloor = kfloor
 
@@ -161,20 +164,20 @@ class _Curvature:
         return relative_jump(k, self.k, self.kfloor)
 
 
-def _local_jet(side: HoleSide, t: Array, o: Array, R: Array, L: float) -> tuple[Array, Array, Array, Array, Array, Array]:
+def local_jet(side: HoleSide, t: Array, o: Array, R: Array, L: float) -> tuple[Array, Array, Array, Array, Array, Array]:
     """At ``t`` on a G2 side, in the local frame (units of ``L``): points, tangents, unit neighbour
     normals, the neighbour's gradient (m, 2) and Hessian (m, 3) as a height over the plane
     (:func:`.side_jets.graph_jet`) and its normal curvature across the side (signed by the normal)."""
     G, Gs, Gt, Gss, Gst, Gtt = side_jet(side, t)
     Gl = [(G - o) @ R / L] + [D @ R / L for D in (Gs, Gt, Gss, Gst, Gtt)]
-    m = np.cross(Gl[2], Gl[1])  # as _local_data: cross x tangent
+    m = np.cross(Gl[2], Gl[1])  # as local_data: cross x tangent
     m /= np.maximum(np.linalg.norm(m, axis=1, keepdims=True), 1e-300)
     g, H = graph_jet(*Gl[1:])
     k = cross_curvature(Gl[1], Gl[2], Gl[3], Gl[4], Gl[5], Gl[1], m)
     return Gl[0], Gl[1], m, g, H, k
 
 
-def _curvature_rows(sides: list[HoleSide], g2: NDArray[np.bool_], ts: list[Array], ku: Array, kv: Array, p: int,
+def curvature_rows(sides: list[HoleSide], g2: NDArray[np.bool_], ts: list[Array], ku: Array, kv: Array, p: int,
                     o: Array, R: Array, L: float, g2_tol: float, kfloor: float) -> tuple[Array, Array, Array]:
     """Least-squares rows ``(rows, columns, right-hand side)`` asking the plate's Hessian at the G2
     sides' samples to be the neighbour's (as heights over the plane): ``h_xx``, ``sqrt 2 h_xy``,
@@ -183,8 +186,8 @@ def _curvature_rows(sides: list[HoleSide], g2: NDArray[np.bool_], ts: list[Array
     normal curvature in any direction changes by at most the Hessian's change)."""
     rows, cols, rhs = [], [], []
     for i in np.flatnonzero(g2):
-        X, _, _, _, H, k = _local_jet(sides[i], ts[i], o, R, L)
-        _, _, _, duu, duv, dvv, cl = _rows2(ku, kv, p, X[:, 0], X[:, 1])
+        X, _, _, _, H, k = local_jet(sides[i], ts[i], o, R, L)
+        _, _, _, duu, duv, dvv, cl = basis_rows2(ku, kv, p, X[:, 0], X[:, 1])
         w = 1.0 / (g2_tol * np.maximum(np.abs(k), kfloor))
         r2 = np.sqrt(2.0)
         rows += [duu * w[:, None], duv * (r2 * w)[:, None], dvv * w[:, None]]
@@ -193,22 +196,22 @@ def _curvature_rows(sides: list[HoleSide], g2: NDArray[np.bool_], ts: list[Array
     return np.vstack(rows), np.vstack(cols), np.concatenate(rhs)
 
 
-def _corner_g2(sides: list[HoleSide], g2: NDArray[np.bool_], o: Array, R: Array, L: float, kfloor: float) -> Array:
+def corner_g2(sides: list[HoleSide], g2: NDArray[np.bool_], o: Array, R: Array, L: float, kfloor: float) -> Array:
     """:attr:`PlateFill.corner_g2`: the two G2 neighbours' Hessians (heights over the plane) at each
     corner, their relative difference (Frobenius; ``kfloor`` the least scale)."""
     out = np.full(len(sides), np.nan)
     for i in np.flatnonzero(g2 & np.roll(g2, -1)):
         a, b = sides[i], sides[(i + 1) % len(sides)]
-        Ha = _local_jet(a, np.array([a.curve.domain[1]]), o, R, L)[4][0]
-        Hb = _local_jet(b, np.array([b.curve.domain[0]]), o, R, L)[4][0]
+        Ha = local_jet(a, np.array([a.curve.domain[1]]), o, R, L)[4][0]
+        Hb = local_jet(b, np.array([b.curve.domain[0]]), o, R, L)[4][0]
         norm = lambda H: float(np.sqrt(H[0] ** 2 + 2 * H[1] ** 2 + H[2] ** 2))  # noqa: E731
         out[i] = norm(Ha - Hb) / max(norm(Ha), norm(Hb), kfloor)
     return out
 
 
-def _local_data(side: HoleSide, t: Array, o: Array, R: Array, L: float) -> tuple[Array, Array]:
+def local_data(side: HoleSide, t: Array, o: Array, R: Array, L: float) -> tuple[Array, Array]:
     """Boundary points (local frame, units of ``L``) and neighbour normals (local frame) at ``t``."""
-    P, T, X = _side_samples(side, t)
+    P, T, X = side_samples(side, t)
     m = np.cross(X, T)
     m /= np.maximum(np.linalg.norm(m, axis=1, keepdims=True), 1e-300)
     return (P - o) @ R / L, m @ R

@@ -69,7 +69,7 @@ from ..kernel.trimmed import TrimmedSurface
 from .nsided import HoleSide
 from .nsided_loops import closest_parameters
 from .plate_fill import PlateFill, _validate, fill_plate
-from .plate_measure import _side_samples
+from .plate_measure import side_samples
 
 Array = np.ndarray
 
@@ -354,7 +354,7 @@ def _unrolled_side(side: HoleSide, c: Array, a: Array, e1: Array, r0: float, x_s
     turn = 2 * np.pi * r0
     while True:
         knots, t = _layout(side.curve, count)
-        P, T, X = _side_samples(side, t)
+        P, T, X = side_samples(side, t)
         U = _unroll(P, c, a, e1, r0)
         U[:, 0] = r0 * np.unwrap(U[:, 0] / r0)
         if x_start is not None:
@@ -365,7 +365,7 @@ def _unrolled_side(side: HoleSide, c: Array, a: Array, e1: Array, r0: float, x_s
         if float(np.max(np.maximum(speed[1:], speed[:-1]) * np.diff(t))) < 0.25 or count >= _MAX_SIDE_SAMPLES:
             curve = make_lsq_spline(t, U, knots, k=3)
             tm = 0.5 * (t[1:] + t[:-1])
-            Um = _unroll(_side_samples(side, tm)[0], c, a, e1, r0)
+            Um = _unroll(side_samples(side, tm)[0], c, a, e1, r0)
             Ui = curve(tm)
             Um[:, 0] += np.round((Ui[:, 0] - Um[:, 0]) / turn) * turn
             err = float(np.linalg.norm(Ui - Um, axis=1).max())
@@ -384,7 +384,7 @@ def _one_axis(sides: list[HoleSide], flags: Array, c: Array, a: Array, g0_tol: f
               max_spans: int | None) -> WrappedPlateFill:
     a = a / np.linalg.norm(a)
     e1, _ = _frame(a)
-    dense = np.concatenate([_side_samples(s, np.linspace(*s.curve.domain, 257))[0] for s in sides])
+    dense = np.concatenate([side_samples(s, np.linspace(*s.curve.domain, 257))[0] for s in sides])
     _, r = _radial(dense, c, a)
     r0 = float(r.mean())
     if r.min() < _MIN_RADIUS * r0:
@@ -552,7 +552,7 @@ def _measure(fill: WrappedPlateFill, per_span: int = 16) -> tuple[Array, Array]:
     brk = [np.unique(k) for k in fill.surface.knots]
     for i, s in enumerate(fill.sides):
         t0 = np.linspace(*s.curve.domain, 1025)
-        u0, v0 = fill._uv(i, t0, _side_samples(s, t0)[0])
+        u0, v0 = fill._uv(i, t0, side_samples(s, t0)[0])
         # spans crossed between neighbouring samples: each such step gets per_span samples per span
         cross = (np.abs(np.diff(np.searchsorted(brk[0], u0))) + np.abs(np.diff(np.searchsorted(brk[1], v0))))
         reps = per_span * (cross + 1)
@@ -560,7 +560,7 @@ def _measure(fill: WrappedPlateFill, per_span: int = 16) -> tuple[Array, Array]:
         step = np.repeat(np.diff(t0) / reps, reps)
         k = np.arange(reps.sum()) - np.repeat(np.cumsum(reps) - reps, reps)
         t = np.r_[start + k * step, t0[-1]]
-        P, T, X = _side_samples(s, t)
+        P, T, X = side_samples(s, t)
         u, v = fill._uv(i, t, P)
         D = fill.surface.derivatives(u, v, 1)
         g0[i] = float(np.linalg.norm(D[:, 0, 0] - P, axis=1).max())
@@ -601,7 +601,7 @@ def fill_wrapped_plate(sides: Sequence[HoleSide], *, axes: Sequence[tuple[ArrayL
     """
     sides, flags = _validate(sides, g1)
     angle_tol = float(tolerances.FILL_FIT_ANGLE if angle_tol is None else angle_tol)
-    samples = [_side_samples(s, np.linspace(*s.curve.domain, 129)) for s in sides]
+    samples = [side_samples(s, np.linspace(*s.curve.domain, 129)) for s in sides]
     dense = np.concatenate([d[0] for d in samples])
     normals = np.concatenate([np.cross(d[2], d[1]) for d in samples])
     diag = 2.0 * float(np.linalg.norm(dense - dense.mean(axis=0), axis=1).max()) or 1.0

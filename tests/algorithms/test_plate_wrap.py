@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.kernel.curve import BSplineCurve
 from occsurf.algorithms.topology.nsided import HoleSide, count_folds
-from occsurf.algorithms.topology.plate_measure import _side_samples
+from occsurf.algorithms.topology.plate_measure import side_samples
 from occsurf.algorithms.topology.plate_wrap import (
     WrappedPlateFill,
     axis_residual,
@@ -133,7 +133,7 @@ def test_fitted_axes_find_the_axis_of_two_coaxial_helices() -> None:
     """The helical axis of the neighbours (Pottmann and Randrup) is exact for a thread flank, which
     no single cylinder fits (two helices of radii 3 and 2.5: the least-squares cylinder is tilted)."""
     sides = _strip(0.5, 0.3, (Rotation.from_euler("xy", [20, 35], degrees=True).as_matrix(), np.array([1.0, -2, 3])))
-    S = [_side_samples(s, np.linspace(0, 1, 200)) for s in sides]
+    S = [side_samples(s, np.linspace(0, 1, 200)) for s in sides]
     P, N = np.concatenate([d[0] for d in S]), np.concatenate([np.cross(d[2], d[1]) for d in S])
     c, a = fitted_axes(P, N)[0]
     true = Rotation.from_euler("xy", [20, 35], degrees=True).as_matrix() @ [0, 0, 1]

@@ -18,7 +18,7 @@ from occsurf.algorithms import BSplineCurve, circle, tolerances
 from occsurf.algorithms.construction import extrude
 from occsurf.algorithms.errors import InvalidGeometryError
 from occsurf.algorithms.quality import SampledCurve, axial_sections, curvature_comb, iso_curves, plane_sections
-from occsurf.algorithms.quality.section_cuts import _order_chains, _rank
+from occsurf.algorithms.quality.section_cuts import order_chains, rank
 
 from .strategies import test_settings
 from .test_quality_maps import sphere, torus, wavy
@@ -198,11 +198,11 @@ def test_chain_ordering_pointer_doubling():
     # two paths and a cycle, shuffled
     src = np.array([5, 0, 1, 7, 8, 9, 3, 2])
     dst = np.array([6, 1, 2, 8, 9, 7, 4, 3])
-    chains = {tuple(n): c for n, c in _order_chains(src, dst)}
+    chains = {tuple(n): c for n, c in order_chains(src, dst)}
     assert chains[(0, 1, 2, 3, 4)] is False and chains[(5, 6)] is False
     assert any(c and sorted(n) == [7, 8, 9] for n, c in chains.items())
     nxt = np.array([1, 2, 3, -1])
-    assert list(_rank(nxt)) == [3, 2, 1, 0]
+    assert list(rank(nxt)) == [3, 2, 1, 0]
 
 
 def test_section_bad_input():
