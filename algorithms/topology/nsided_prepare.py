@@ -68,17 +68,15 @@ class Side:
         (m, nf, w), :meth:`fields` ``(s)[0]`` bit for bit (a curve's derivatives up to an order do
         not depend on the highest order asked), from ``B`` to order 1 and ``X`` to order 0 where
         :meth:`fields` goes one order further in each."""
-        DB, X = self.B.derivatives(s, 1), self.X.derivatives(s, 0)[:, 0]
-        return np.stack([X, DB[:, 1], DB[:, 0]], 1) if self.rational else np.stack([X, DB[:, 1]], 1)
+        DB = self.B.derivatives(s, 1)
+        return self._stack(self.X.derivatives(s, 0)[:, 0], DB[:, 1], DB[:, 0])
 
     def _fields(self, DB: Array, DX: Array) -> tuple[Array, Array]:
-        if self.rational:
-            F = np.stack([DX[:, 0], DB[:, 1], DB[:, 0]], 1)
-            dF = np.stack([DX[:, 1], DB[:, 2], DB[:, 1]], 1)
-        else:
-            F = np.stack([DX[:, 0], DB[:, 1]], 1)
-            dF = np.stack([DX[:, 1], DB[:, 2]], 1)
-        return F, dF
+        return self._stack(DX[:, 0], DB[:, 1], DB[:, 0]), self._stack(DX[:, 1], DB[:, 2], DB[:, 1])
+
+    def _stack(self, X: Array, B1: Array, B0: Array) -> Array:
+        """``[X, B', (B)]`` (B only for a rational side: the homogeneous fields), shape (m, nf, w)."""
+        return np.stack([X, B1, B0] if self.rational else [X, B1], 1)
 
     def continuity(self) -> dict[float, int]:
         """Interior knot -> continuity order of the fields (B' and X) there (made once: the split
