@@ -318,6 +318,8 @@ def test_frenet_axes_flags_lines_and_rejects_bad_shapes():
     assert np.isnan(F[:, :, 1:]).all()
     with pytest.raises(InvalidGeometryError, match=r"expected shape S \+ \(k >= 3, 3\)"):
         frenet_axes(line.derivatives(np.array([0.2]), 1))
+    with pytest.raises(InvalidGeometryError, match="D: expected an array of derivatives, got str"):
+        frenet_axes("abc")
 
 
 @pytest.mark.parametrize("n", [0, 1, 2, 7, 100, 1153])
