@@ -4,7 +4,8 @@ Same holes for both (ring models of examples/hole_models.py: multi-span neighbou
 polynomial and rational, n = 3..8), both assessed by OCC's LocalAnalysis_SurfaceContinuity
 (order G1) at 41 points per boundary edge: G0 gap (model units, model size ~14) and G1 angle
 (degrees), max over the hole's boundary. OCC runs with cadquery's makeNSidedSurface defaults.
-Times are wall-clock for the fill alone (ours: fill_hole; OCC: Add + Build), best of 3.
+Times are wall-clock for the fill alone (ours: sides, fill_hole and faces; OCC: Add + Build), each
+the best of ``REPEATS``.
 
 Run:  python benchmarks/bench_fill.py  (about a minute on the 2-core machine)
 """
@@ -20,6 +21,9 @@ from occsurf.bridge.conversion.splines import make_face
 from occsurf.bridge.modeling.fill import fill_model, sew_faces
 from occsurf.examples.hole_models import ring_model
 
+#: Fills per hole, ours and OCC's each; the table shows each one's best (the machine's timing moves
+#: by 10-30 % between runs of the same code: three repeats left a 20 % spread in the n = 3 ratio).
+REPEATS = 7
 CASES = [(n, False) for n in range(3, 9)] + [(3, True), (5, True), (8, True)]
 
 
@@ -29,17 +33,21 @@ def table() -> list[dict]:
         m = ring_model(n, rational=rational)
         shell = sew_faces([make_face(f, 1e-7) for f in m.faces])
         best = None
-        for _ in range(3):
+        occ_times = []
+        for _ in range(REPEATS):
             # every repeat from cold: the caches of fairing factors and Gram matrices are emptied
             # (they serve the patches of one hole, and the holes of one model, not a refill of the same hole)
             _fair_system_cached.cache_clear()
             _gram_cached.cache_clear()
             res = fill_model(shell)
             h = next(h for h in res.holes if h.status != "outer")
+            occ_times.append(h.occ_seconds)
             if best is None or h.seconds < best.seconds:
                 best = h
+        # each side's best of the repeats (OCC's time was the one of our best repeat before 2026-12-07)
+        occ_s = min((t for t in occ_times if t is not None), default=best.occ_seconds)
         rows.append(dict(n=n, rational=rational, ours_s=best.seconds, ours_g0=best.g0, ours_g1=best.g1,
-                         internal_g1=best.internal_g1, occ=best.occ_status, occ_s=best.occ_seconds,
+                         internal_g1=best.internal_g1, occ=best.occ_status, occ_s=occ_s,
                          occ_g0=best.occ_g0, occ_g1=best.occ_g1, occ_reason=best.occ_reason))
     return rows
 

@@ -551,9 +551,15 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
         return result
 
     def clamp(self) -> BSplineSurface:
-        """The same surface with clamped knot vectors in both directions."""
-        s = self._apply("u", clamp_poles)
-        return s._apply("v", clamp_poles)
+        """The same surface with clamped knot vectors in both directions: the surface itself where
+        both already are (as :meth:`BSplineCurve.clamp`; a rebuild made the same surface again,
+        through ``P = H / w`` and back for a rational one: five a side of a hole's neighbours)."""
+        s = self
+        for ax in (0, 1):
+            K, p, n = s.knots[ax], s.degree[ax], s.n_poles[ax]
+            if not (K[0] == K[p] and K[-1] == K[n]):  # clamp_poles' test: p + 1 copies of each end
+                s = s._apply("u" if ax == 0 else "v", clamp_poles)
+        return s
 
     def to_bezier(self) -> list[list[BSplineSurface]]:
         """Bézier patches (course §2-11): ``patches[i][j]`` covers u-span ``i`` and v-span ``j``."""

@@ -27,7 +27,7 @@ from ..kernel.sparse_kron import kron_sum
 from ..kernel.surface import BSplineSurface
 from .nsided_corners import CornerFit
 from .nsided_edges import InternalEdge
-from .nsided_poly import Poly, represent
+from .nsided_poly import Poly, collocation_sites, represent, represent_values
 from .nsided_prepare import Side, half_space
 
 __all__ = ["corner_patch", "patch_poles", "FairSystems"]
@@ -140,12 +140,13 @@ def _boundary_ribbons(sa: Side, sb: Side, pa: Poly, pb: Poly, sig_i: float, tau_
         ``(degree[1], knots[1])``.
     """
     (Pu, Pv), (Ku, Kv) = degree, knots
-    s_a = lambda u: sig_i * u  # noqa: E731
-    s_b = lambda v: 1.0 - tau_j * v  # noqa: E731
-    row0 = represent(lambda u: sa.B.evaluate(s_a(u)), Pu, Ku)
-    da = represent(lambda u: np.einsum("mf,mfw->mw", pa(u), sa.values(s_a(u))), Pu, Ku)
-    col0 = represent(lambda v: sb.B.evaluate(s_b(v)), Pv, Kv)
-    db = represent(lambda v: np.einsum("mf,mfw->mw", pb(v), sb.values(s_b(v))), Pv, Kv)
+    u, v = collocation_sites(Pu, Ku), collocation_sites(Pv, Kv)
+    Ba, Fa = sa.values(sig_i * u)  # the side and its fields at the same parameters: B once
+    Bb, Fb = sb.values(1.0 - tau_j * v)
+    row0 = represent_values(Ba, Pu, Ku)
+    da = represent_values(np.einsum("mf,mfw->mw", pa(u), Fa), Pu, Ku)
+    col0 = represent_values(Bb, Pv, Kv)
+    db = represent_values(np.einsum("mf,mfw->mw", pb(v), Fb), Pv, Kv)
     return row0, da, col0, db
 
 

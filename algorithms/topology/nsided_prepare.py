@@ -63,13 +63,17 @@ class Side:
         s = np.atleast_1d(np.asarray(s, float))
         return self._fields(self.B.derivatives(s, 2), self.X.derivatives(s, 1))
 
-    def values(self, s: Array) -> Array:
-        """The fields ``[X, B', (B)]`` at the parameters ``s`` (m,) without their derivatives: shape
-        (m, nf, w), :meth:`fields` ``(s)[0]`` bit for bit (a curve's derivatives up to an order do
-        not depend on the highest order asked), from ``B`` to order 1 and ``X`` to order 0 where
-        :meth:`fields` goes one order further in each."""
+    def values(self, s: Array) -> tuple[Array, Array]:
+        """``B(s)`` (m, w) and the fields ``[X, B', (B)]`` at the parameters ``s`` (m,) without their
+        derivatives (m, nf, w), from one evaluation of ``B`` to order 1 and ``X`` to order 0.
+
+        Bit for bit ``B.evaluate(s)`` and :meth:`fields` ``(s)[0]``: ``B`` is polynomial (homogeneous
+        for a rational hole) and a polynomial curve's derivatives up to an order are its points
+        and derivatives however high the order asked (tests/algorithms/test_curve.py). A patch's
+        side and the ribbon across it are placed at the same parameters, so ``B`` is evaluated
+        there once."""
         DB = self.B.derivatives(s, 1)
-        return self._stack(self.X.derivatives(s, 0)[:, 0], DB[:, 1], DB[:, 0])
+        return DB[:, 0], self._stack(self.X.derivatives(s, 0)[:, 0], DB[:, 1], DB[:, 0])
 
     def _fields(self, DB: Array, DX: Array) -> tuple[Array, Array]:
         return self._stack(DX[:, 0], DB[:, 1], DB[:, 0]), self._stack(DX[:, 1], DB[:, 2], DB[:, 1])

@@ -265,6 +265,35 @@ def test_neighbours_meeting_at_a_sharp_edge_at_a_corner_are_refused() -> None:
         fill_hole(sides)
 
 
+def test_represent_from_values_and_sides_evaluated_once() -> None:
+    """``represent`` is ``represent_values`` of the function at ``collocation_sites`` (bit for bit);
+    values that are not finite (at a Greville point or a check point) are refused with the reason,
+    where a NaN among the check points passed the check before; ``Side.values`` gives ``B(s)`` and
+    the fields bit for bit as ``B.evaluate`` and ``fields`` do."""
+    from occsurf.algorithms.errors import ToleranceError
+    from occsurf.algorithms.topology.nsided_poly import collocation_sites, represent, represent_values
+    from occsurf.algorithms.topology.nsided_prepare import working_sides
+
+    for rational in (False, True):
+        _, S, _, _, _ = working_sides(ring_model(5, rational=rational).sides)
+        for sd in S:
+            K, p = sd.B.knots, sd.B.degree
+            s = collocation_sites(p, K)
+            B, F = sd.values(s)
+            assert np.array_equal(B, sd.B.evaluate(s)) and np.array_equal(F, sd.fields(s)[0])
+            assert np.array_equal(represent(sd.B.evaluate, p, K), represent_values(B, p, K))
+            bad = B.copy()
+            for row in (0, len(s) - 1):  # a Greville point; a check point (the last site)
+                bad[:] = B
+                bad[row, 1] = np.nan
+                with pytest.raises(InvalidGeometryError, match="not finite"):
+                    represent_values(bad, p, K)
+            with pytest.raises(ToleranceError, match="not exactly representable"):
+                represent_values(B + np.sin(40 * s)[:, None], p, K)  # not in the space
+    with pytest.raises(ValueError, match="read-only"):
+        s[0] = 0.5  # the sites are the cache's own array
+
+
 # ------------------------------------------------------------------- the steps of fill_hole
 def _steps(m):
     """Run the steps of fill_hole up to the internal edges (working coordinates)."""

@@ -287,6 +287,24 @@ def test_clamp_keeps_geometry(s):
     for t, (lo, hi), p in zip(s2.knots, s2.domain, s2.degree):
         assert np.all(t[: p + 1] == lo) and np.all(t[-p - 1 :] == hi)
     assert_same_geometry(s, s2, pole_scale(s))
+    # clamped already: the surface itself (no rebuild through P = H / w and back), and clamping
+    # one direction leaves the other's knots and the homogeneous poles of a clamped one alone
+    assert s2.clamp() is s2
+    if all(t[0] == t[p] and t[-1] == t[-p - 1] for t, p in zip(s.knots, s.degree)):
+        assert s2 is s
+
+
+def test_clamp_of_a_clamped_rational_surface_is_the_surface_and_one_direction_is_left_alone():
+    """``clamp`` of a clamped surface returns it (it rebuilt it twice before 2026-12-07, through
+    ``P = H / w`` and back, for the same surface); a surface clamped in v but not u is clamped in
+    u only, its v knots the same array values."""
+    rng = np.random.default_rng(7)
+    P, w = rng.standard_normal((4, 5, 3)), rng.uniform(0.3, 3.0, (4, 5))
+    s = BSplineSurface((3, 2), ([0.0] * 4 + [1.0] * 4, [0.0] * 3 + [0.5, 0.5] + [1.0] * 3), P, w)
+    assert s.clamp() is s
+    un = BSplineSurface((3, 2), (np.linspace(0.0, 1.0, 8), [0.0] * 3 + [0.5, 0.5] + [1.0] * 3), P, w)  # u unclamped
+    c = un.clamp()
+    assert np.array_equal(c.knots[1], un.knots[1]) and c.knots[0][0] == c.knots[0][3]
 
 
 @SETTINGS
