@@ -123,7 +123,8 @@ def represent(fn: Callable[[Array], Array], degree: int, knots: Array) -> Array:
     """Poles of the spline of ``(degree, knots)`` equal to ``fn`` (which must lie in that space).
 
     Collocation at the Greville abscissae; verified at the points between them
-    (:func:`represent_values` of ``fn`` at :func:`collocation_sites`).
+    (:func:`represent_values` of ``fn`` at :func:`collocation_sites`, which ``fn`` receives as a
+    read-only array: the cache's own).
     """
     return represent_values(fn(collocation_sites(degree, knots)), degree, knots)
 
@@ -139,13 +140,16 @@ def represent_values(values: Array, degree: int, knots: Array) -> Array:
     Raises
     ------
     InvalidGeometryError
-        Values that are not finite.
+        Values that are not finite, or not one row per site.
     ToleranceError
         The function is not in the space (the check points miss it by more than
         ``tolerances.FILL_REPRESENT_TOL`` of its size).
     """
-    n, lu, piv, _, Nm = _collocation(int(degree), np.ascontiguousarray(knots, float).tobytes())
+    n, lu, piv, at, Nm = _collocation(int(degree), np.ascontiguousarray(knots, float).tobytes())
     Y = np.asarray(values, float)
+    if Y.ndim != 2 or Y.shape[0] != at.shape[0]:
+        raise InvalidGeometryError(f"internal: expected the values at the {at.shape[0]} collocation sites, one row "
+                                   f"each, got shape {Y.shape}")
     Y, Ym = Y[:n], Y[n:]
     top, top_m = float(np.abs(Y).max()), float(np.abs(Ym).max())  # nan where a value is nan
     if not (math.isfinite(top) and math.isfinite(top_m)):

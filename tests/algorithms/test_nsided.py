@@ -290,6 +290,9 @@ def test_represent_from_values_and_sides_evaluated_once() -> None:
                     represent_values(bad, p, K)
             with pytest.raises(ToleranceError, match="not exactly representable"):
                 represent_values(B + np.sin(40 * s)[:, None], p, K)  # not in the space
+            for rows in (B[:-1], np.r_[B, B[:1]], B[:, 0]):  # a site short, one too many, not (m, w)
+                with pytest.raises(InvalidGeometryError, match="collocation sites"):
+                    represent_values(rows, p, K)
     with pytest.raises(ValueError, match="read-only"):
         s[0] = 0.5  # the sites are the cache's own array
 
