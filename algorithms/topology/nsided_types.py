@@ -182,10 +182,14 @@ def side_from_surface(surface: BSplineSurface, edge: str, reverse: bool = False)
         first two rows of homogeneous poles.
     """
     s, H, (p, Kb), (q, Kc) = _boundary_net(surface, edge)
-    row, cross, cross2 = _start_jet(H, Kc, q)
+    with np.errstate(over="ignore", invalid="ignore"):  # checked below, by name
+        row, cross, cross2 = _start_jet(H, Kc, q)
     curve = _row_curve(s, p, Kb, row)
-    X = BSplineCurve(p, Kb, cross)
-    X2 = BSplineCurve(p, Kb, cross2)
+    if not (np.isfinite(cross).all() and np.isfinite(cross2).all()):  # what the checked constructor refused
+        raise InvalidGeometryError(f"surface: the derivatives across its {edge} side overflow (knots too close for "
+                                   "its poles)")
+    X = BSplineCurve._trusted(p, Kb, cross)  # the surface's own knots and degree: valid as it is
+    X2 = BSplineCurve._trusted(p, Kb, cross2)
     if reverse:
         curve, X, X2 = curve.reverse(), X.reverse(), X2.reverse()
     return HoleSide(curve, X, X2)

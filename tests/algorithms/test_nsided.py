@@ -297,6 +297,19 @@ def test_represent_from_values_and_sides_evaluated_once() -> None:
         s[0] = 0.5  # the sites are the cache's own array
 
 
+def test_a_side_whose_cross_derivative_overflows_is_refused_by_name() -> None:
+    """``side_from_surface`` builds its cross fields unchecked (from the surface's own knots); the
+    one thing the checked constructor caught there, derivatives that overflow, it names itself."""
+    from occsurf.algorithms.kernel.surface import BSplineSurface
+
+    P = np.zeros((2, 2, 3))
+    P[:, 1, 2], P[1, :, 0] = 1e300, 1.0
+    s = BSplineSurface((1, 1), ([0, 0, 1, 1], [0, 0, 1e-11, 1e-11]), P)
+    with pytest.raises(InvalidGeometryError, match="v0 side overflow"):  # no RuntimeWarning either
+        side_from_surface(s, "v0")
+    assert np.isfinite(side_from_surface(s, "u0").cross.control_points).all()  # along v: 1e300 fits
+
+
 # ------------------------------------------------------------------- the steps of fill_hole
 def _steps(m):
     """Run the steps of fill_hole up to the internal edges (working coordinates)."""
