@@ -22,7 +22,7 @@ import scipy.sparse as sp
 
 from ..errors import InvalidGeometryError
 
-__all__ = ["kron_sum", "kron_stencil"]
+__all__ = ["kron_sum", "kron_rows", "kron_stencil"]
 
 #: Half-bandwidths above this are summed by ``scipy.sparse`` (the band would hold mostly zeros).
 MAX_HALF_BAND = 16
@@ -117,40 +117,79 @@ def kron_sum(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix 
         out.eliminate_zeros()
         out.sort_indices()
         return out
-    wa, wb = 2 * ha + 1, 2 * hb + 1
-    ka = np.arange(m)[:, None] + np.arange(-ha, ha + 1)[None, :]  # (m, wa): the column of A
-    lb = np.arange(n)[:, None] + np.arange(-hb, hb + 1)[None, :]  # (n, wb)
+    return _banded_rows(terms, As, Bs, ha, hb, range(m), range(n))
+
+
+def kron_rows(terms: Sequence[tuple[float, sp.spmatrix | np.ndarray, sp.spmatrix | np.ndarray]],
+              rows_a: range, rows_b: range) -> sp.csr_matrix:
+    """The rows ``(i, j)``, ``i`` in ``rows_a`` and ``j`` in ``rows_b`` (``i`` major), of
+    :func:`kron_sum` ``(terms)``: the same values bit for bit, shape ``(len(rows_a) len(rows_b), m n)``,
+    without the other rows (the free block of the central split's fairing is the grid's interior:
+    its 12 x 12 of 16 x 16 rows, 0.9 of kron_sum's time and its row selection saved).
+
+    Raises
+    ------
+    InvalidGeometryError
+        As :func:`kron_sum`, or ranges that are not steps of 1 inside the matrices.
+    """
+    As, Bs, ha, hb = _operands(terms, "kron_rows")
+    m, n = As[0].shape[0], Bs[0].shape[0]
+    for r, size, name in ((rows_a, m, "rows_a"), (rows_b, n, "rows_b")):
+        if not isinstance(r, range) or r.step != 1 or r.start < 0 or r.stop > size or len(r) == 0:
+            raise InvalidGeometryError(f"{name}: expected a non-empty range with step 1 inside 0..{size}, got {r!r}")
+    if max(ha, hb) > MAX_HALF_BAND:
+        rows = (np.arange(rows_a.start, rows_a.stop)[:, None] * n + np.arange(rows_b.start, rows_b.stop)).ravel()
+        return kron_sum(terms)[rows]
+    return _banded_rows(terms, As, Bs, ha, hb, rows_a, rows_b)
+
+
+def _banded_rows(terms: Sequence[tuple[float, object, object]], As: list, Bs: list, ha: int, hb: int,
+                 rows_a: range, rows_b: range) -> sp.csr_matrix:
+    """The rows ``rows_a x rows_b`` of the banded sum as CSR (:func:`kron_sum`, :func:`kron_rows`)."""
+    m, n = As[0].shape[0], Bs[0].shape[0]
+    ia = np.arange(rows_a.start, rows_a.stop)
+    jb = np.arange(rows_b.start, rows_b.stop)
+    ka = ia[:, None] + np.arange(-ha, ha + 1)[None, :]  # (|I|, wa): the column of A
+    lb = jb[:, None] + np.arange(-hb, hb + 1)[None, :]  # (|J|, wb)
     in_a = (ka >= 0) & (ka < m)
     in_b = ((lb >= 0) & (lb < n))[None, :, None, :]
+    wa, wb = 2 * ha + 1, 2 * hb + 1
     index_dtype = np.int32 if m * n * wa * wb < 2 ** 31 else np.int64
     cols_b = lb[None, :, None, :].astype(index_dtype)
     data, indices, counts = [], [], []
-    for i0, i1, acc in _band_products(terms, As, Bs, ha, hb):
-        keep = (acc != 0) & in_a[i0:i1, None, :, None] & in_b
+    for i0, i1, acc in _band_products(terms, As, Bs, ha, hb, rows_a, rows_b):
+        a0, a1 = i0 - rows_a.start, i1 - rows_a.start
+        keep = (acc != 0) & in_a[a0:a1, None, :, None] & in_b
         data.append(acc[keep])
-        cols = (ka[i0:i1, None, :, None] * n).astype(index_dtype) + cols_b  # increasing along (wa, wb)
+        cols = (ka[a0:a1, None, :, None] * n).astype(index_dtype) + cols_b  # increasing along (wa, wb)
         indices.append(cols[keep])
-        counts.append(keep.reshape((i1 - i0) * n, -1).sum(axis=1))
-    indptr = np.zeros(m * n + 1, dtype=np.int64)
+        counts.append(keep.reshape((i1 - i0) * len(jb), -1).sum(axis=1))
+    rows = len(ia) * len(jb)
+    indptr = np.zeros(rows + 1, dtype=np.int64)
     np.cumsum(np.concatenate(counts), out=indptr[1:])
     out = sp.csr_matrix((np.concatenate(data), np.concatenate(indices), indptr.astype(index_dtype)),
-                        shape=(m * n, m * n))
+                        shape=(rows, m * n))
     out.has_sorted_indices = True
     return out
 
 
 def _band_products(terms: Sequence[tuple[float, object, object]], As: list, Bs: list, ha: int,
-                   hb: int) -> Iterator[tuple[int, int, np.ndarray]]:
-    """``(i0, i1, acc)`` per block of rows of ``A``: ``acc[i - i0, j, da, db]`` is the sum's entry
-    ``((i, j), (i + da - ha, j + db - hb))``, ``(c_0 (a_0 b_0) + c_1 (a_1 b_1)) + ...`` (zero where a
-    band runs off its matrix)."""
+                   hb: int, rows_a: range | None = None, rows_b: range | None = None
+                   ) -> Iterator[tuple[int, int, np.ndarray]]:
+    """``(i0, i1, acc)`` per block of the rows ``rows_a`` of ``A`` (all by default):
+    ``acc[i - i0, j - j0, da, db]`` is the sum's entry ``((i, j), (i + da - ha, j + db - hb))`` for
+    ``j`` in ``rows_b = range(j0, ...)`` (all rows of ``B`` by default), ``(c_0 (a_0 b_0) + c_1 (a_1
+    b_1)) + ...`` (zero where a band runs off its matrix)."""
     m, n = As[0].shape[0], Bs[0].shape[0]
+    rows_a = range(m) if rows_a is None else rows_a
+    rows_b = range(n) if rows_b is None else rows_b
+    nb = len(rows_b)
     wa, wb = 2 * ha + 1, 2 * hb + 1
-    bands = [(c, _band(a, ha), _band(b, hb)) for (c, _, _), a, b in zip(terms, As, Bs)]
-    step = max(1, 2 ** 17 // (n * wa * wb))  # rows of A per block: ~1 MB of values, kept in cache
-    for i0 in range(0, m, step):
-        i1 = min(m, i0 + step)
-        acc = np.empty((i1 - i0, n, wa, wb))
+    bands = [(c, _band(a, ha), _band(b, hb)[rows_b.start:rows_b.stop]) for (c, _, _), a, b in zip(terms, As, Bs)]
+    step = max(1, 2 ** 17 // (nb * wa * wb))  # rows of A per block: ~1 MB of values, kept in cache
+    for i0 in range(rows_a.start, rows_a.stop, step):
+        i1 = min(rows_a.stop, i0 + step)
+        acc = np.empty((i1 - i0, nb, wa, wb))
         prod = np.empty_like(acc) if len(bands) > 1 else acc
         for k, (c, Ab, Bb) in enumerate(bands):
             out = acc if k == 0 else prod

@@ -23,7 +23,7 @@ from scipy.sparse.linalg import SuperLU, splu
 from .. import tolerances
 from ..errors import InvalidGeometryError
 from ..kernel.basis import gram_band_index, gram_bands
-from ..kernel.sparse_kron import kron_sum
+from ..kernel.sparse_kron import kron_rows, kron_sum
 from ..kernel.surface import BSplineSurface
 from .nsided_corners import CornerFit
 from .nsided_edges import InternalEdge
@@ -271,11 +271,23 @@ def _fair_system(ku: bytes, kv: bytes, degree: tuple[int, int], free: NDArray[np
     """The thin-plate energy's free-by-fixed block and the free block's factors
     (:func:`_fair_interior`), for knots given as bytes."""
     G = [[_gram(np.frombuffer(k), degree[d], o) for o in range(3)] for d, k in enumerate((ku, kv))]  # dense, read by kron_sum
-    K = kron_sum([(1, G[0][2], G[1][0]), (2, G[0][1], G[1][1]), (1, G[0][0], G[1][2])])
+    terms = [(1, G[0][2], G[1][0]), (2, G[0][1], G[1][1]), (1, G[0][0], G[1][2])]
     f = free.ravel()
-    Kf = K[f]
+    block = _free_block(free)
+    # the free rows of K, bit for bit K[f]: made alone where the free poles are a block of the grid
+    Kf = kron_sum(terms)[f] if block is None else kron_rows(terms, *block)
     lu = splu(Kf[:, f].tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
     return Kf[:, ~f], lu
+
+
+def _free_block(free: NDArray[np.bool_]) -> tuple[range, range] | None:
+    """The rows and columns of the grid whose product is exactly the ``free`` poles (the interior
+    that :func:`_assemble_poles` leaves free), or ``None`` for another pattern."""
+    rows, cols = np.flatnonzero(free.any(axis=1)), np.flatnonzero(free.any(axis=0))
+    if rows.size == 0 or rows[-1] - rows[0] + 1 != rows.size or cols[-1] - cols[0] + 1 != cols.size:
+        return None
+    block = range(int(rows[0]), int(rows[-1]) + 1), range(int(cols[0]), int(cols[-1]) + 1)
+    return block if int(np.count_nonzero(free)) == rows.size * cols.size else None
 
 
 @functools.lru_cache(maxsize=16)

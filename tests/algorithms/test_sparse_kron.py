@@ -22,7 +22,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from occsurf.algorithms.errors import InvalidGeometryError
-from occsurf.algorithms.kernel.sparse_kron import MAX_HALF_BAND, kron_sum
+from occsurf.algorithms.kernel.sparse_kron import MAX_HALF_BAND, kron_rows, kron_sum
 from occsurf.algorithms.topology.plate_fill import _gram
 from tests.algorithms.strategies import test_settings
 
@@ -81,6 +81,59 @@ def test_random_banded_matrices_bit_for_bit(data, m, n, ha, hb, coefs) -> None:
     if len(terms) > 1:  # a term that cancels another: its entries sum to exact zeros, which are dropped
         terms.append((-1.0, terms[0][1], terms[0][2]) if terms[0][0] == 1 else terms[-1])
     _same(kron_sum(terms), _scipy_sum(terms))
+
+
+@test_settings(40)
+@given(data=st.data(), m=st.integers(1, 7), n=st.integers(1, 7), ha=st.integers(0, 3), hb=st.integers(0, 3),
+       coefs=st.lists(st.sampled_from([1, 2, 3.0, -1.0, 0.5]), min_size=1, max_size=3))
+def test_kron_rows_are_the_rows_of_the_sum_bit_for_bit(data, m, n, ha, hb, coefs) -> None:
+    """Any block of rows ``I x J`` (the fairing's interior of the grid): ``kron_sum(terms)`` at those
+    rows, values, columns and pattern, with the sum's zeros left out alike."""
+    terms = [(c, data.draw(_banded(m, ha)), data.draw(_banded(n, hb))) for c in coefs]
+    i0 = data.draw(st.integers(0, m - 1))
+    i1 = data.draw(st.integers(i0 + 1, m))
+    j0 = data.draw(st.integers(0, n - 1))
+    j1 = data.draw(st.integers(j0 + 1, n))
+    rows = (np.arange(i0, i1)[:, None] * n + np.arange(j0, j1)).ravel()
+    _same(kron_rows(terms, range(i0, i1), range(j0, j1)), kron_sum(terms)[rows])
+
+
+def test_kron_rows_of_wide_bands_and_bad_ranges() -> None:
+    rng = np.random.default_rng(5)
+    A = rng.standard_normal((MAX_HALF_BAND + 4, MAX_HALF_BAND + 4))  # dense: left to scipy
+    B = np.diag(rng.standard_normal(5))
+    terms = [(1, A, B), (2.0, A.T, B)]
+    rows = (np.arange(2, 9)[:, None] * 5 + np.arange(1, 4)).ravel()
+    _same(kron_rows(terms, range(2, 9), range(1, 4)), _scipy_sum(terms)[rows])
+    for ra, rb in ((range(0), range(2)), (range(0, 30), range(2)), (range(0, 4, 2), range(2)), ([0, 1], range(2))):
+        with pytest.raises(InvalidGeometryError, match="expected a non-empty range with step 1"):
+            kron_rows(terms, ra, rb)
+
+
+def test_the_fairing_takes_the_free_rows_alone_where_they_are_a_block(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``_fair_system``'s free rows by ``kron_rows`` where the free poles are a block of the grid
+    (else ``kron_sum``'s rows): the same coupling and factors, so the same solve, bit for bit."""
+    from occsurf.algorithms.topology import nsided_patches
+    from occsurf.algorithms.topology.nsided_patches import _fair_system, _free_block
+
+    free = np.zeros((9, 8), dtype=bool)
+    free[2:7, 2:6] = True
+    assert _free_block(free) == (range(2, 7), range(2, 6))
+    corner = free.copy()
+    corner[2, 2] = False
+    gaps = free.copy()
+    gaps[4] = False  # two blocks of rows
+    assert _free_block(corner) is None and _free_block(gaps) is None and _free_block(free & False) is None
+    p = 4
+    ku = np.r_[[0.0] * (p + 1), np.linspace(0, 1, 6)[1:-1] ** 1.3, [1.0] * (p + 1)]
+    kv = np.r_[[0.0] * (p + 1), np.linspace(0, 1, 5)[1:-1], [1.0] * (p + 1)]
+    key = (ku.tobytes(), kv.tobytes(), (p, p))
+    rhs = np.random.default_rng(1).standard_normal((72 - 20, 3))
+    coupling, lu = _fair_system(*key, free)
+    monkeypatch.setattr(nsided_patches, "_free_block", lambda f: None)  # every row of K, then the free ones
+    coupling_all, lu_all = _fair_system(*key, free)
+    _same(coupling, coupling_all)
+    assert np.array_equal(lu.solve(-(coupling @ rhs)), lu_all.solve(-(coupling_all @ rhs)))
 
 
 def test_wide_bands_are_summed_by_scipy() -> None:
