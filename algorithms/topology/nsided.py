@@ -100,7 +100,7 @@ from numpy.typing import NDArray
 
 from ..errors import InvalidGeometryError
 from ..kernel.surface import BSplineSurface
-from .nsided_centre import centre, centre_map, harmonic_boundary, harmonic_layout, midpoints
+from .nsided_centre import centre, centre_map, harmonic_boundary, harmonic_layout, midpoints, outward_ribbons
 from .nsided_corners import CornerFit, check_inward, corner_analysis
 from .nsided_edges import domain_picture, internal_edge
 from .nsided_loops import closest_parameters
@@ -277,7 +277,7 @@ def _central_split(sides: Sequence[HoleSide], stop_at_fold: bool) -> HoleFill | 
     # The plain layout first (midpoints' mean; a convex hole keeps its fill), then, if it folds or is
     # refused, the harmonic layout (a long curved hole, a sliver); the fill with fewer folds is kept.
     C, c1 = centre(mid, rational)  # the midpoints' mean: kept where every ribbon points into the hole
-    if np.any(c1[:, 0] >= 0):  # centre's test of a hole that may not be convex: its loop decides
+    if outward_ribbons(c1):  # centre's own test of a hole that may not be convex: its loop decides
         loop, hb = loop_picture()
         C, c1 = centre(mid, rational, loop, hb)
     err: InvalidGeometryError | None = None

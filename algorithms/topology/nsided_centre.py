@@ -22,7 +22,8 @@ from .nsided_loops import harmonic_centre, harmonic_picture, inner_point, turns_
 from .nsided_poly import angle_deg, cart, cart_tangent, unit
 from .nsided_prepare import Side
 
-__all__ = ["Midpoints", "midpoints", "centre", "centre_map", "harmonic_boundary", "harmonic_layout"]
+__all__ = ["Midpoints", "midpoints", "outward_ribbons", "centre", "centre_map", "harmonic_boundary",
+           "harmonic_layout"]
 
 Array = NDArray[np.float64]
 
@@ -75,6 +76,13 @@ def midpoints(S: list[Side], sig: Array, rational: bool) -> Midpoints:
     return Midpoints(Fm, mh, mder, mc, normals)
 
 
+def outward_ribbons(c1: Array) -> bool:
+    """Whether a ribbon at a midpoint does not point into the hole (a coefficient of its cross
+    field ``>= 0``, :func:`centre`'s ``c1``): the hole may not be convex, and only then does
+    :func:`centre` look at the loop (so its caller need not make the loop otherwise)."""
+    return bool(np.any(c1[:, 0] >= 0))
+
+
 def centre(mid: Midpoints, rational: bool, loop: Array | None = None,
            harmonic: tuple[Array, Array] | None = None) -> tuple[Array, Array]:
     """The centre ``C`` and the ribbon coefficients at the midpoints.
@@ -105,7 +113,7 @@ def centre(mid: Midpoints, rational: bool, loop: Array | None = None,
     C0 = mc.mean(0)
     C = np.mean([mc[i] + 0.5 * proj(i, C0 - mc[i]) for i in range(n)], axis=0)
     c1 = _midpoint_coefficients(mid, C, rational)
-    if loop is None or not np.any(c1[:, 0] >= 0) or not turns_inward(loop, normals):
+    if loop is None or not outward_ribbons(c1) or not turns_inward(loop, normals):
         return C, c1  # convex enough, or cross fields that point into the hole: check_inward says so
     hc = None if harmonic is None else harmonic_centre(harmonic[0], harmonic[1], normals)
     inner = hc[:2] if hc is not None else inner_point(loop, normals)

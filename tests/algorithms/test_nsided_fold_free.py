@@ -76,6 +76,23 @@ def test_fold_free_fill_agrees_with_fill_hole_on_crescents(angle, r0) -> None:
         assert got is not None and _same(got, full)
 
 
+def test_the_loop_picture_is_made_only_for_a_hole_that_may_not_be_convex(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The loop's harmonic picture (``harmonic_boundary``) is made once for a crescent (the centre
+    and, where the plain layout folds, the harmonic layout share it) and never for the convex ring
+    holes, whose centre is the midpoints' mean either way."""
+    from occsurf.algorithms.topology import nsided
+    from occsurf.examples.hole_models import ring_model
+
+    made = []
+    real = nsided.harmonic_boundary
+    monkeypatch.setattr(nsided, "harmonic_boundary", lambda *a, **k: made.append(1) or real(*a, **k))
+    for n in (3, 5):
+        fill_hole(ring_model(n).sides)
+    assert made == []
+    fill_hole(_crescent(300, 1.8))  # folds in the plain layout: the harmonic one is tried too
+    assert made == [1]
+
+
 def test_fold_free_fill_raises_what_fill_hole_raises() -> None:
     pts = [(0, 0, 0), (4, 0, 0), (4, 1, 0), (1, 1, 0), (1, 4, 0), (0, 4, 0)]  # a reflex corner
     sides = [_planar(_line(pts[i], pts[(i + 1) % 6])) for i in range(6)]
