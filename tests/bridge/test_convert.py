@@ -6,7 +6,7 @@ import build123d as bd
 import cadquery as cq
 import numpy as np
 import pytest
-from hypothesis import assume, given
+from hypothesis import assume, example, given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 from OCP.BRep import BRep_Tool
@@ -58,6 +58,17 @@ def occ_curve_arrays(occ: Geom_BSplineCurve):
             _occ.from_real_array(occ.KnotSequence()))
 
 
+def _as_occ_stores(x):
+    """``x`` as OCC stores it: a spline whose weights are all equal comes back polynomial with the
+    same poles (``test_equal_weights_are_stored_as_polynomial_by_occ``; hypothesis drew such
+    weights in CI10: a 2 x 2 surface with every weight 2.0); anything else bit for bit itself."""
+    if x.weights is None or np.ptp(x.weights) > 0:
+        return x
+    if isinstance(x, BSplineCurve):
+        return BSplineCurve(x.degree, x.knots, x.control_points)
+    return BSplineSurface(x.degree, x.knots, x.control_points)
+
+
 # ============================================================================ bit-exact round trips
 @SETTINGS
 @given(c=curves())
@@ -68,11 +79,11 @@ def test_curve_round_trip_is_bit_exact(c):
     P, w, flat = occ_curve_arrays(occ)
     assert_array_equal(P, c.control_points)  # exact: no tolerance
     assert_array_equal(flat, c.knots)
-    assert (w is None) == (c.weights is None)
+    assert (w is None) == (_as_occ_stores(c).weights is None)
     if w is not None:
         assert_array_equal(w, c.weights)
     assert (occ.FirstParameter(), occ.LastParameter()) == c.domain
-    assert from_occ(occ) == c  # BSplineCurve.__eq__ compares arrays exactly
+    assert from_occ(occ) == _as_occ_stores(c)  # BSplineCurve.__eq__ compares arrays exactly
 
 
 @SETTINGS
@@ -85,7 +96,7 @@ def test_surface_round_trip_is_bit_exact(s):
     assert_array_equal(_occ.from_real_array(occ.UKnotSequence()), s.knots[0])
     assert_array_equal(_occ.from_real_array(occ.VKnotSequence()), s.knots[1])
     assert occ.Bounds() == (*s.domain[0], *s.domain[1])
-    assert from_occ(occ) == s
+    assert from_occ(occ) == _as_occ_stores(s)
 
 
 def test_weights_varying_only_along_u_are_kept():
@@ -369,14 +380,16 @@ def test_two_dimensional_splines_are_refused():
 # ============================================================================ topology
 @SETTINGS
 @given(s=surfaces(degrees=st.integers(1, 5)))
+@example(s=BSplineSurface((1, 1), ([1.0, 1, 2, 2], [1.0, 1, 2, 2]), np.zeros((2, 2, 3)), np.full((2, 2), 2.0)))  # CI10
 def test_face_round_trip_build123d_and_cadquery(s):
     face = to_face(s)
     assert isinstance(face, bd.Face)
-    assert from_occ(face) == s  # B-spline surfaces come back whole and bit-exact
-    assert from_occ(face.wrapped) == s
+    want = _as_occ_stores(s)
+    assert from_occ(face) == want  # B-spline surfaces come back whole and bit-exact
+    assert from_occ(face.wrapped) == want
     cq_face = to_cq_face(s)
     assert isinstance(cq_face, cq.Face)
-    assert from_occ(cq_face) == s
+    assert from_occ(cq_face) == want
 
 
 @SETTINGS
@@ -384,10 +397,10 @@ def test_face_round_trip_build123d_and_cadquery(s):
 def test_edge_round_trip_build123d_and_cadquery(c):
     edge = to_edge(c)
     assert isinstance(edge, bd.Edge)
-    assert from_occ(edge) == c
+    assert from_occ(edge) == _as_occ_stores(c)
     cq_edge = to_cq_edge(c)
     assert isinstance(cq_edge, cq.Edge)
-    assert from_occ(cq_edge.wrapped) == c
+    assert from_occ(cq_edge.wrapped) == _as_occ_stores(c)
 
 
 def test_located_face_gets_its_location_applied():
