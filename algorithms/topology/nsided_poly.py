@@ -134,8 +134,9 @@ def represent_values(values: Array, degree: int, knots: Array) -> Array:
     functions evaluated together (a side and the ribbon across it, from one evaluation).
 
     The factors are applied by LAPACK's ``dgetrs`` as ``scipy.linalg.lu_solve`` does (the same
-    call, without its wrappers: 91 -> ~10 us, 30 calls a fill of three sides); values that are not
-    finite are refused, as its ``check_finite`` did (and the check points' too).
+    call, without its wrappers: 46 -> 8 us for a 17 x 4 system by timeit, 30 calls a fill of three
+    sides); values that are not finite are refused, as its ``check_finite`` did (and the check
+    points' too).
 
     Raises
     ------
