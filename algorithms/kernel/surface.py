@@ -442,10 +442,14 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
 
     # ------------------------------------------------------------------ knot operations
     def _apply(self, direction: Direction, fn: Callable[[Array, int, Array], tuple[Array, Array]], new_degree: int | None = None) -> BSplineSurface:
-        """Run a curve kernel ``fn(knots, degree, poles) -> (knots, poles)`` along ``direction``."""
+        """Run a curve kernel ``fn(knots, degree, poles) -> (knots, poles)`` along ``direction``; the
+        surface itself where the kernel returns its input as it was (``clamp_poles`` of clamped
+        knots: as :meth:`BSplineCurve.clamp`, no rebuild through ``P = H / w`` and back)."""
         ax = _axis(direction)
         H = self._hpoles if ax == 0 else self._hpoles.transpose(1, 0, 2)
         t, H2 = fn(self.knots[ax], self.degree[ax], H)
+        if t is self.knots[ax] and H2 is H and new_degree in (None, self.degree[ax]):
+            return self
         if ax == 1:
             H2 = H2.transpose(1, 0, 2)
         deg = list(self.degree)
@@ -552,14 +556,9 @@ class BSplineSurface(HomogeneousPoles, ControlPointValue):
 
     def clamp(self) -> BSplineSurface:
         """The same surface with clamped knot vectors in both directions: the surface itself where
-        both already are (as :meth:`BSplineCurve.clamp`; a rebuild made the same surface again,
-        through ``P = H / w`` and back for a rational one: five a side of a hole's neighbours)."""
-        s = self
-        for ax in (0, 1):
-            K, p, n = s.knots[ax], s.degree[ax], s.n_poles[ax]
-            if not (K[0] == K[p] and K[-1] == K[n]):  # clamp_poles' test: p + 1 copies of each end
-                s = s._apply("u" if ax == 0 else "v", clamp_poles)
-        return s
+        both already are (``clamp_poles`` returns clamped knots as they are, and :meth:`_apply` the
+        surface then; a hole's neighbours were rebuilt five times a side before)."""
+        return self._apply("u", clamp_poles)._apply("v", clamp_poles)
 
     def to_bezier(self) -> list[list[BSplineSurface]]:
         """Bézier patches (course §2-11): ``patches[i][j]`` covers u-span ``i`` and v-span ``j``."""
