@@ -25,6 +25,12 @@ solves take as long as SuperLU's (8-9 ms). Where it loses: thin grids with a wid
 central split's degree-6 fairing systems, 38 x 363 or 108 x 568: 2.5-3.5x slower than SuperLU's
 minimum degree, which finds the band there), which therefore stay with SuperLU.
 
+Each front is held as the three blocks LAPACK works on (own x own, ring x own, ring x ring), each a
+Fortran array factored in place: one array per front in C order cost a transposing copy of each
+block into LAPACK and of each child's update into the front (2026-12-07: a 131 x 131 grid of reach 3
+factored in 80 ms against 100-110 ms, the factors bit for bit the same). A solve reads the factors
+twice (52 MB on that grid): 7-8 ms.
+
 The order of the arithmetic differs from SuperLU's, so the solutions agree to the system's round-off
 (its conditioning times the machine epsilon), not bit for bit.
 """
@@ -58,16 +64,23 @@ class NotPositiveDefinite(InvalidGeometryError):
 
 @dataclass(frozen=True)
 class _Node:
-    """One front of the elimination tree (indices in the eliminated order, see :class:`_Plan`)."""
+    """One front of the elimination tree (indices in the eliminated order, see :class:`_Plan`).
+
+    The front's matrix ``F`` (its own points first, then the ring) is held as three Fortran arrays,
+    the blocks LAPACK works on in place: ``F11`` (own x own), ``F21`` (ring x own) and ``F22``
+    (ring x ring, the children's updates and then the update to the parent)."""
 
     start: int  # its own points are start:stop of the eliminated order
     stop: int
     ring: Index  # the ring's points (eliminated later), in the order of the parent's front
     children: tuple[int, ...]
     child_runs: tuple[tuple[tuple[int, int, int], ...], ...]  # each child's ring in this front, as runs of
-    # consecutive positions (start in this front, start in the child's ring, length), increasing
-    front_flat: NDArray[np.integer]  # assembly: F.flat[front_flat] = stencil[stencil_at] (F[:, :own] = K[front, own])
-    stencil_at: NDArray[np.integer]
+    # consecutive positions (start in this front, start in the child's ring, length), increasing, none
+    # across the boundary between the own points and the ring
+    own_flat: NDArray[np.integer]  # assembly: F11.T.flat[own_flat] = stencil[own_stencil] (F11 = K[own, own])
+    own_stencil: NDArray[np.integer]
+    ring_flat: NDArray[np.integer]  # F21.T.flat[ring_flat] = stencil[ring_stencil] (F21 = K[ring, own])
+    ring_stencil: NDArray[np.integer]
     size: int  # own points + ring
 
 
@@ -87,22 +100,17 @@ def _box(i0: int, i1: int, j0: int, j1: int, nv: int) -> Index:
 def _ring(box: tuple[int, int, int, int], nu: int, nv: int, reach: int) -> Index:
     """Row-major indices of the grid points within ``reach`` of the box (each index apart), outside it."""
     i0, i1, j0, j1 = box
-    a0, a1, b0, b1 = max(i0 - reach, 0), min(i1 + reach, nu), max(j0 - reach, 0), min(j1 + reach, nv)
-    ii, jj = np.meshgrid(np.arange(a0, a1), np.arange(b0, b1), indexing="ij")
-    out = ~((ii >= i0) & (ii < i1) & (jj >= j0) & (jj < j1))
-    return (ii[out] * nv + jj[out]).astype(np.intp)
+    ii = np.arange(max(i0 - reach, 0), min(i1 + reach, nu))[:, None]
+    jj = np.arange(max(j0 - reach, 0), min(j1 + reach, nv))
+    return (ii * nv + jj)[(ii < i0) | (ii >= i1) | (jj < j0) | (jj >= j1)]
 
 
-def _runs(pos: Index) -> tuple[tuple[int, int, int], ...]:
-    """Increasing positions as runs of consecutive ones: ``(first position, its index in pos, length)``."""
-    starts = np.flatnonzero(np.r_[True, np.diff(pos) != 1])
-    ends = np.r_[starts[1:], pos.size]
-    return tuple((int(pos[a]), int(a), int(b - a)) for a, b in zip(starts, ends))
-
-
-def _compact(index: Index) -> NDArray[np.integer]:
-    """``index`` as int32 where it fits (the plans are kept: half the memory)."""
-    return index.astype(np.int32) if index.size == 0 or index.max() < 2 ** 31 - 1 else index
+def _runs(pos: Index, cut: int) -> tuple[tuple[int, int, int], ...]:
+    """Increasing positions as runs of consecutive ones, none across ``cut`` (one run ends below it,
+    the next starts at it): ``(first position, its index in pos, length)``."""
+    starts = np.flatnonzero(np.concatenate(([True], (np.diff(pos) != 1) | (pos[1:] == cut))))
+    lengths = np.diff(np.append(starts, pos.size))
+    return tuple(zip(pos[starts].tolist(), starts.tolist(), lengths.tolist()))
 
 
 @lru_cache(maxsize=4)
@@ -110,8 +118,9 @@ def _plan(nu: int, nv: int, reach: int, leaf: int) -> _Plan:
     """Nested dissection of the ``nu x nv`` grid with separators ``reach`` wide, and its fronts.
 
     Kept for the last four grids only: a plate's stages seldom repeat a grid (linkrods face 35's 29
-    stages made 29 plans, 3-30 ms each), and a plan's assembly maps take ~8 bytes per stencil entry,
-    7 MB for a 131 x 131 grid of reach 3."""
+    stages made 29 plans, 2-26 ms each), and a plan's assembly maps take ~16 bytes per stencil entry,
+    11 MB for a 131 x 131 grid of reach 3 (as int32 half of it, but the conversion to NumPy's index
+    type on every factorisation cost more than the plan's build saved)."""
     boxes: list[tuple[int, int, int, int]] = []
     owns: list[Index] = []
     kids: list[tuple[int, ...]] = []
@@ -146,35 +155,38 @@ def _plan(nu: int, nv: int, reach: int, leaf: int) -> _Plan:
     di, dj = (a.ravel() for a in np.meshgrid(np.arange(-reach, reach + 1), np.arange(-reach, reach + 1), indexing="ij"))
     offsets = di * pv + dj
 
-    def padded(index: Index) -> Index:
-        i, j = np.divmod(index, nv)
-        return (i + reach) * pv + j + reach
-
+    gi, gj = np.divmod(np.arange(nu * nv), nv)
+    padded = (gi + reach) * pv + gj + reach  # padded[index]: a grid point's index on the padded grid
+    count = np.arange(nu * nv)
     rings: list[Index] = [np.zeros(0, np.intp)] * len(owns)
     nodes: list[_Node | None] = [None] * len(owns)
     where = np.full((nu + 2 * reach) * pv, -1, np.intp)
     for k in range(root, -1, -1):  # parents before children: a child's ring takes its parent's front order
         own = owns[k]
-        front = np.r_[own, rings[k]]
-        own_p = padded(own)
-        front_p = np.r_[own_p, padded(rings[k])]
-        where[front_p] = np.arange(front.size)
+        front = np.concatenate((own, rings[k]))
+        front_p = padded[front]
+        where[front_p] = count[:front.size]
         pos = []
         for c in kids[k]:
             ring = _ring(boxes[c], nu, nv, reach)
-            at = where[padded(ring)]  # every ring point of a child is in this front (the tree's invariant)
-            if (at < 0).any():
+            at = where[padded[ring]]  # every ring point of a child is in this front (the tree's invariant)
+            if at.min() < 0:
                 raise RuntimeError(f"grid_cholesky: a ring point of box {boxes[c]} is not in its parent's front")
             sort = np.argsort(at)
             rings[c], at = ring[sort], at[sort]
-            pos.append(at)
+            pos.append(_runs(at, own.size))
         # F[:, :own] = K[front, own]: each own point's stencil neighbours that are in the front (the
         # others, in the box below the separator, were eliminated in the children's fronts)
-        at = where[own_p[:, None] + offsets[None, :]]
-        a, s = np.nonzero(at >= 0)  # own point a, stencil offset s
-        flat, sten = at[a, s] * front.size + a, own[a] * width * width + s
-        nodes[k] = _Node(int(bounds[k]), int(bounds[k + 1]), rank[rings[k]], kids[k], tuple(_runs(at) for at in pos),
-                         _compact(flat), _compact(sten), int(front.size))
+        at = where[front_p[:own.size, None] + offsets]
+        inside = at >= 0
+        a, s = np.nonzero(inside)  # own point a, stencil offset s
+        at, sten = at[inside], own[a] * (width * width) + s
+        mine = at < own.size  # F11's entries, the rest F21's (blocks in Fortran order: column a)
+        ring_rows = front.size - own.size
+        nodes[k] = _Node(int(bounds[k]), int(bounds[k + 1]), rank[rings[k]], kids[k], tuple(pos),
+                         a[mine] * own.size + at[mine], sten[mine],
+                         a[~mine] * ring_rows + at[~mine] - own.size, sten[~mine],
+                         int(front.size))
         where[front_p] = -1
     return _Plan(order, tuple(n for n in nodes if n is not None))
 
@@ -313,22 +325,32 @@ class GridCholesky:
         factors: list[tuple[Array, Array]] = []
         updates: dict[int, Array] = {}
         for k, nd in enumerate(plan.nodes):
-            F = np.zeros((nd.size, nd.size))
-            F.flat[nd.front_flat] = stencil[nd.stencil_at]
+            own = nd.stop - nd.start
+            ring = nd.size - own
+            # the front's blocks in Fortran order (LAPACK's, worked on in place: no copies)
+            F11, F21, F22 = np.zeros((own, own)).T, np.zeros((own, ring)).T, np.zeros((ring, ring)).T
+            F11.T.ravel()[nd.own_flat] = stencil[nd.own_stencil]  # (views: the transposes are C arrays)
+            F21.T.ravel()[nd.ring_flat] = stencil[nd.ring_stencil]
             for c, runs in zip(nd.children, nd.child_runs):
                 U = updates.pop(c)
                 for a, (fa, ua, na) in enumerate(runs):  # the lower triangle is what counts: the blocks
                     for fb, ub, nb in runs[:a + 1]:  # on and below the diagonal (the positions increase)
-                        F[fa:fa + na, fb:fb + nb] += U[ua:ua + na, ub:ub + nb]
-            own = nd.stop - nd.start
-            L11, info = lapack.dpotrf(F[:own, :own], lower=1, clean=1)
+                        block = U[ua:ua + na, ub:ub + nb]
+                        if fa >= own:  # runs never cross from the own points to the ring
+                            if fb >= own:
+                                F22[fa - own:fa - own + na, fb - own:fb - own + nb] += block
+                            else:
+                                F21[fa - own:fa - own + na, fb:fb + nb] += block
+                        else:
+                            F11[fa:fa + na, fb:fb + nb] += block
+            L11, info = lapack.dpotrf(F11, lower=1, clean=1, overwrite_a=1)
             if info != 0:
                 bad = int(plan.order[nd.start + abs(int(info)) - 1])
                 raise NotPositiveDefinite(f"K: not positive definite (pivot at grid point {divmod(bad, nv)} "
                                           f"of a {nu} x {nv} grid)")
-            if nd.size > own:
-                L21 = blas.dtrsm(1.0, L11, F[own:, :own], side=1, lower=1, trans_a=1)
-                updates[k] = blas.dsyrk(-1.0, L21, beta=1.0, c=F[own:, own:], lower=1)
+            if ring:
+                L21 = blas.dtrsm(1.0, L11, F21, side=1, lower=1, trans_a=1, overwrite_b=1)
+                updates[k] = blas.dsyrk(-1.0, L21, beta=1.0, c=F22, lower=1, overwrite_c=1)
             else:
                 L21 = np.zeros((0, own))
             factors.append((L11, L21))

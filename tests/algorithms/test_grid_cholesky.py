@@ -63,6 +63,16 @@ def test_the_dissection_eliminates_every_point_once_and_each_ring_comes_later(nu
     rank[plan.order] = np.arange(nu * nv)
     for nd in plan.nodes:
         assert (nd.ring >= nd.stop).all()
+        # each child's update lands on its ring's places in this front, in runs that stay either
+        # among the own points or in the ring (the front's blocks are separate arrays)
+        front = np.r_[np.arange(nd.start, nd.stop), nd.ring]
+        own_size = nd.stop - nd.start
+        for c, runs in zip(nd.children, nd.child_runs):
+            at = np.concatenate([np.arange(f, f + n) for f, _, n in runs])
+            assert np.array_equal(front[at], plan.nodes[c].ring)
+            assert np.array_equal(np.concatenate([np.arange(u, u + n) for _, u, n in runs]),
+                                  np.arange(plan.nodes[c].ring.size))
+            assert all(f >= own_size or f + n <= own_size for f, _, n in runs)
         own = plan.order[nd.start:nd.stop]
         oi, oj = np.divmod(own, nv)
         ring = set(plan.order[nd.ring].tolist())
