@@ -84,7 +84,7 @@ from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
 from .nsided_measure import count_folds
 from .nsided_types import HoleSide
-from .plate_measure import Evaluation, basis_rows, corner_g2, curvature_rows, local_data, side_samples
+from .plate_measure import Evaluation, corner_g2, curvature_rows, side_samples
 from .plate_plane import plate_plane
 
 __all__ = ["PlateFill", "fill_plate", "plate_plane"]
@@ -381,11 +381,15 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
                 t = _params(s.curve, max(24, int(np.ceil(6 * spans * ln / ext.max()))))
                 fit_t.append(t)
                 chk_t.append(0.5 * (t[1:] + t[:-1]))
-            data = [local_data(s, t, o, R, L) for s, t in zip(sides, fit_t)]
-            sid = np.concatenate([np.full(len(t), i) for i, t in enumerate(fit_t)])
-            X = np.concatenate([d[0] for d in data])
-            Mn = np.concatenate([d[1] for d in data])
-            val, du, dv, cols = basis_rows(ku, kv, p, X[:, 0], X[:, 1])
+            # the samples of the fit and those between them (the stopping rule's), each side's fit
+            # samples first: the fit's rows are the evaluation's (per sample: one side evaluation and
+            # one basis row each)
+            ev = Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
+                            g2=g2f, kfloor=kfloor, g2_tol=g2_tol)
+            first = np.cumsum([0] + [2 * len(t) - 1 for t in fit_t[:-1]])
+            fit = np.concatenate([np.arange(a, a + len(t)) for a, t in zip(first, fit_t)])
+            sid, X, Mn = ev.sid[fit], ev.X[fit], ev.M[fit]
+            val, du, dv, cols = ev.val[fit], ev.du[fit], ev.dv[fit], ev.cols[fit]
             n = nu * nv
             gsel = flags[sid] & (np.abs(Mn[:, 2]) > 0)
             gx, gy = -Mn[gsel, 0] / Mn[gsel, 2], -Mn[gsel, 1] / Mn[gsel, 2]
@@ -418,8 +422,6 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             else:
                 lu = _SPDFactor(grid_stencil(AtA, (nu, nv), p) + eps * E,
                                 functools.partial(_sparse_system, AtA, eps, terms))
-            ev = Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
-                             g2=g2f, kfloor=kfloor, g2_tol=g2_tol)
             c = lu.solve(A.T @ rhs)
             stage = (ev.score(c, g0_tol, angle_tol), c)
             for _ in range(int(tolerances.FILL_PLATE_ITERATIONS)):

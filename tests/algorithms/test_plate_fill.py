@@ -391,3 +391,27 @@ def test_stages_share_their_trim_and_the_fill_is_the_same(monkeypatch: pytest.Mo
     np.testing.assert_array_equal(shared.surface.control_points, fresh.surface.control_points)
     np.testing.assert_array_equal(shared.side_g0, fresh.side_g0)
     np.testing.assert_array_equal(shared.side_g1, fresh.side_g1)
+
+
+def test_the_fit_rows_taken_from_the_evaluation_are_those_evaluated_alone() -> None:
+    """``fill_plate`` takes its fit's samples (points, neighbour normals, basis rows) from the stage's
+    :class:`Evaluation`, made on the fit's parameters and those between them: the same values, bit
+    for bit, as evaluating the fit's parameters alone (every sample is evaluated on its own)."""
+    from occsurf.algorithms.topology.plate_fill import _knots, _params
+    from occsurf.algorithms.topology.plate_measure import Evaluation, basis_rows, local_data
+
+    sides = _torus_l(0.8) + _sphere_l(0.4)[:1]  # polynomial (fitted) sides and a rational arc
+    rng = np.random.default_rng(3)
+    o, R, L = rng.standard_normal(3), np.linalg.qr(rng.standard_normal((3, 3)))[0], 2.5
+    ku, kv = _knots(-3.0, 3.0, 11, 3), _knots(-3.0, 3.0, 7, 3)
+    fit_t = [_params(s.curve, 24 + 7 * i) for i, s in enumerate(sides)]
+    ev = Evaluation(sides, np.ones(len(sides), bool), [np.r_[t, 0.5 * (t[1:] + t[:-1])] for t in fit_t],
+                    ku, kv, 3, o, R, L)
+    first = np.cumsum([0] + [2 * len(t) - 1 for t in fit_t[:-1]])
+    fit = np.concatenate([np.arange(a, a + len(t)) for a, t in zip(first, fit_t)])
+    alone = [local_data(s, t, o, R, L) for s, t in zip(sides, fit_t)]
+    X, M = np.concatenate([d[0] for d in alone]), np.concatenate([d[1] for d in alone])
+    assert ev.X[fit].tobytes() == X.tobytes() and ev.M[fit].tobytes() == M.tobytes()
+    for got, want in zip((ev.val[fit], ev.du[fit], ev.dv[fit], ev.cols[fit]), basis_rows(ku, kv, 3, X[:, 0], X[:, 1])):
+        assert got.tobytes() == want.tobytes()
+    assert np.array_equal(ev.sid[fit], np.concatenate([np.full(len(t), i) for i, t in enumerate(fit_t)]))
