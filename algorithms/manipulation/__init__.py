@@ -6,8 +6,8 @@ Public names: the constraints :class:`Position`, :class:`Tangent`, :class:`Deriv
 :func:`match_surface` (G0-G3 along an edge, :class:`MatchTarget`, :class:`MatchResult`) and
 :func:`match_along` (G0, G1 along a curve inside a surface: a trimmed face's edge);
 :func:`fair_surface` (wiggles out by the least curvature variation within a tolerance); the solvers of
-:mod:`.linalg` (least squares, minimum norm, equality-constrained, dense and sparse) and their
-errors :class:`ConstraintError`, :class:`ConvergenceError`.
+:mod:`.linalg` (least squares, minimum norm, equality-constrained; dense) and :mod:`.sparse_linalg`
+(their sparse forms) and their errors :class:`ConstraintError`, :class:`ConvergenceError`.
 """
 
 from .constraints import Curvature, Derivative, Position, Tangent

@@ -9,11 +9,10 @@ reveals the rank. No Gaussian elimination is written by hand.
 * :func:`min_norm_solve`: the shortest ``x`` with ``C x = d`` (course §4-4), conflicts reported;
 * :class:`ConstraintFactor`: the pivoted QR of ``C^T`` behind it, factored once and reused (§4-6);
 * :func:`constrained_lstsq`: ``min ||W^(1/2) (A x - b)||`` subject to ``C x = d`` by the
-  null-space method (§3-12);
-* :func:`sparse_lstsq`: LSMR for large sparse ``A`` (minimum-norm from a zero start);
-* :func:`sparse_min_norm_solve`: ``min ||x||`` s.t. ``C x = d`` through the sparse augmented system;
-* :func:`sparse_constrained_lstsq`: the sparse KKT (augmented) system
-  ``[[W^-1, 0, A], [0, 0, C], [A^T, C^T, 0]]``.
+  null-space method (§3-12).
+
+The sparse forms (LSMR, the augmented and KKT systems by SuperLU) are in :mod:`.sparse_linalg`, the
+argument checks both share in :mod:`.linalg_args`.
 
 Rank and consistency
 --------------------
@@ -32,23 +31,29 @@ R. Bartels, course notes C25 (SIGGRAPH 1991), ch. 3 "Computational linear algebr
 reduction to triangular form, §3-12 constrained equation systems) and §4-4 "Solving underdetermined
 systems of equations". G. H. Golub, C. F. Van Loan, *Matrix Computations*, 4th ed., §5.4-5.6 and
 §6.2 (the null-space method for LSE). Å. Björck, *Numerical Methods for Least Squares Problems*,
-SIAM 1996, §2.7 (augmented systems) and §5.1 (LSE). D. C.-L. Fong, M. Saunders, "LSMR", SIAM J. Sci.
-Comput. 33 (2011).
+SIAM 1996, §5.1 (LSE).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
-from typing import Any, NamedTuple, TypeVar, overload
+from collections.abc import Iterable, Sequence
+from typing import NamedTuple
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
 from .. import tolerances
 from ..errors import InvalidGeometryError, ToleranceError
+from .linalg_args import (
+    constrained_system,
+    dense_matrix,
+    per_row,
+    right_hand_side,
+    row_labels,
+    row_weights,
+    weighted_rows,
+)
 
 __all__ = [
     "ConstraintError",
@@ -58,13 +63,9 @@ __all__ = [
     "ConstraintFactor",
     "min_norm_solve",
     "constrained_lstsq",
-    "sparse_lstsq",
-    "sparse_min_norm_solve",
-    "sparse_constrained_lstsq",
 ]
 
 Array = NDArray[np.float64]
-_M = TypeVar("_M")  # a dense Array or a SciPy sparse matrix (SciPy ships no type stubs: Any)
 
 
 class ConstraintError(InvalidGeometryError):
@@ -105,86 +106,6 @@ class LstsqResult(NamedTuple):
     rank: int
 
 
-# ------------------------------------------------------------------------------ validation
-def _matrix(a: ArrayLike, name: str) -> Array:
-    try:
-        m = np.array(a, dtype=float)
-    except (TypeError, ValueError) as err:
-        raise InvalidGeometryError(f"{name}: expected a 2-D array of real numbers, got {type(a).__name__}") from err
-    if m.ndim != 2:
-        raise InvalidGeometryError(f"{name}: expected a 2-D array, got shape {m.shape}")
-    if not np.all(np.isfinite(m)):
-        raise InvalidGeometryError(f"{name}: expected finite values")
-    return m
-
-
-def _rhs(b: ArrayLike, rows: int, name: str) -> Array:
-    try:
-        v = np.array(b, dtype=float)
-    except (TypeError, ValueError) as err:
-        raise InvalidGeometryError(f"{name}: expected an array of real numbers, got {type(b).__name__}") from err
-    if v.ndim not in (1, 2) or v.shape[0] != rows:
-        raise InvalidGeometryError(f"{name}: expected shape ({rows},) or ({rows}, k), got {v.shape}")
-    if not np.all(np.isfinite(v)):
-        raise InvalidGeometryError(f"{name}: expected finite values")
-    return v
-
-
-def _positive(w: ArrayLike | None, size: int, name: str) -> Array | None:
-    if w is None:
-        return None
-    v = np.array(w, dtype=float)
-    if v.shape != (size,):
-        raise InvalidGeometryError(f"{name}: expected shape ({size},), got {v.shape}")
-    if not np.all(np.isfinite(v)) or np.any(v <= 0):
-        raise InvalidGeometryError(f"{name}: expected finite values > 0, got min {v.min()!r}")
-    return v
-
-
-def _per_row(x: Array, s: Array) -> Array:
-    """``s`` (m,) shaped to scale the rows of ``x`` (shape (m,) or (m, k)): ``x * _per_row(x, s)``."""
-    return s if x.ndim == 1 else s[:, None]
-
-
-@overload
-def _weighted_rows(A: Array, b: Array, w: Array | None) -> tuple[Array, Array]: ...
-@overload
-def _weighted_rows(A: Any, b: Array, w: Array | None) -> tuple[Any, Array]: ...
-def _weighted_rows(A: Any, b: Array, w: Array | None) -> tuple[Any, Array]:
-    """``W^(1/2) A`` and ``W^(1/2) b`` for row weights ``w`` (``A`` dense or sparse; unchanged if
-    ``w`` is None)."""
-    if w is None:
-        return A, b
-    s = np.sqrt(w)
-    A = sp.diags(s) @ A if sp.issparse(A) else A * s[:, None]
-    return A, b * _per_row(b, s)
-
-
-def _constrained_system(A: Any, b: ArrayLike, C: Any, d: ArrayLike, weights: ArrayLike | None,
-                        as_matrix: Callable[[Any, str], _M]) -> tuple[_M, Array, _M, Array, Array | None]:
-    """Validated inputs of a constrained least-squares problem (dense or sparse by ``as_matrix``):
-    ``A`` and ``C`` with as many columns, ``b`` and ``d`` with as many right-hand sides, row weights."""
-    A = as_matrix(A, "A")
-    C = as_matrix(C, "C")
-    if A.shape[1] != C.shape[1]:
-        raise InvalidGeometryError(f"A, C: expected the same number of columns, got {A.shape[1]} and {C.shape[1]}")
-    b = _rhs(b, A.shape[0], "b")
-    d = _rhs(d, C.shape[0], "d")
-    w = _positive(weights, A.shape[0], "weights")
-    if b.ndim != d.ndim or (b.ndim == 2 and b.shape[1] != d.shape[1]):
-        raise InvalidGeometryError(f"b, d: expected the same number of right-hand sides, got shapes {b.shape} and {d.shape}")
-    return A, b, C, d, w
-
-
-def _labels(labels: Sequence[str] | None, m: int) -> list[str]:
-    if labels is None:
-        return [f"row {i}" for i in range(m)]
-    labels = [str(s) for s in labels]
-    if len(labels) != m:
-        raise InvalidGeometryError(f"labels: expected {m} labels (one per constraint row), got {len(labels)}")
-    return labels
-
-
 # ------------------------------------------------------------------------------ least squares
 def lstsq(A: ArrayLike, b: ArrayLike, weights: ArrayLike | None = None, *, rcond: float | None = None) -> LstsqResult:
     """Weighted linear least squares, minimum-norm when ``A`` is rank deficient (course §3-9).
@@ -213,9 +134,9 @@ def lstsq(A: ArrayLike, b: ArrayLike, weights: ArrayLike | None = None, *, rcond
     InvalidGeometryError
         Shapes that do not match, non-finite values, weights ``<= 0``.
     """
-    A = _matrix(A, "A")
-    b = _rhs(b, A.shape[0], "b")
-    A, b = _weighted_rows(A, b, _positive(weights, A.shape[0], "weights"))
+    A = dense_matrix(A, "A")
+    b = right_hand_side(b, A.shape[0], "b")
+    A, b = weighted_rows(A, b, row_weights(weights, A.shape[0], "weights"))
     if A.shape[1] == 0:
         x = np.zeros((0,) + b.shape[1:])
         return LstsqResult(x, np.linalg.norm(b, axis=0), 0)
@@ -263,10 +184,10 @@ class ConstraintFactor:
 
     def __init__(self, C: ArrayLike, labels: Sequence[str] | None = None, *, rank_rtol: float | None = None,
                  full: bool = False) -> None:
-        C = _matrix(C, "C")
+        C = dense_matrix(C, "C")
         m, n = C.shape
         self.shape = (m, n)
-        self.labels = _labels(labels, m)
+        self.labels = row_labels(labels, m)
         rtol = tolerances.RANK_RTOL if rank_rtol is None else float(rank_rtol)
         norms = np.linalg.norm(C, axis=1)
         self.row_scale = np.where(norms > 0, norms, 1.0)
@@ -312,7 +233,7 @@ class ConstraintFactor:
         """Per redundant row, how far its (equilibrated) target is from the combination of the
         independent rows' targets, shape ``(m - rank,)`` (max over right-hand sides)."""
         de = np.asarray(d, float)
-        de = de / _per_row(de, self.row_scale)
+        de = de / per_row(de, self.row_scale)
         if not self.redundant.size:
             return np.zeros(0)
         r = de[self.redundant] - self.coefficients @ de[self.independent]
@@ -332,7 +253,7 @@ class ConstraintFactor:
         if not self.redundant.size:
             return
         de = np.asarray(d, float)
-        de = de / _per_row(de, self.row_scale)
+        de = de / per_row(de, self.row_scale)
         res = self.inconsistency(d)
         if tol is None:
             scale = float(np.abs(de).max()) if de.size else 0.0
@@ -383,13 +304,13 @@ class ConstraintFactor:
         ConstraintError
             Inconsistent constraints, naming the rows involved.
         """
-        d = _rhs(d, self.shape[0], "d")
+        d = right_hand_side(d, self.shape[0], "d")
         if check:
             self.check(d, tol)
         n = self.shape[1]
         if self.rank == 0:
             return np.zeros((n,) + d.shape[1:])
-        de = d / _per_row(d, self.row_scale)
+        de = d / per_row(d, self.row_scale)
         y = sla.solve_triangular(self._R11.T, de[self.independent], lower=True, check_finite=False)
         return self._Q1 @ y
 
@@ -421,14 +342,14 @@ def min_norm_solve(C: ArrayLike, d: ArrayLike, weights: ArrayLike | None = None,
     ConstraintError
         Conflicting rows (named), or more independent conditions than unknowns.
     """
-    C = _matrix(C, "C")
-    d = _rhs(d, C.shape[0], "d")
-    w = _positive(weights, C.shape[1], "weights")
+    C = dense_matrix(C, "C")
+    d = right_hand_side(d, C.shape[0], "d")
+    w = row_weights(weights, C.shape[1], "weights")
     if w is None:
         return ConstraintFactor(C, labels).solve(d, tol=tol)
     s = 1.0 / np.sqrt(w)
     y = ConstraintFactor(C * s, labels).solve(d, tol=tol)
-    return y * _per_row(y, s)
+    return y * per_row(y, s)
 
 
 def constrained_lstsq(A: ArrayLike, b: ArrayLike, C: ArrayLike, d: ArrayLike, weights: ArrayLike | None = None, *,
@@ -473,7 +394,7 @@ def constrained_lstsq(A: ArrayLike, b: ArrayLike, C: ArrayLike, d: ArrayLike, we
     InvalidGeometryError
         Shapes or values that do not fit.
     """
-    Am, bv, Cm, dv, w = _constrained_system(A, b, C, d, weights, _matrix)
+    Am, bv, Cm, dv, w = constrained_system(A, b, C, d, weights, dense_matrix)
     F = ConstraintFactor(Cm, labels, full=True)
     xc = F.solve(dv, tol=tol)
     Z = F.null_basis
@@ -482,213 +403,3 @@ def constrained_lstsq(A: ArrayLike, b: ArrayLike, C: ArrayLike, d: ArrayLike, we
     r = bv - Am @ xc
     z = lstsq(Am @ Z, r, w, rcond=rcond).x
     return xc + Z @ z
-
-
-# ------------------------------------------------------------------------------ sparse
-def _sparse(a: object, name: str) -> sp.csr_matrix:
-    try:
-        m = sp.csr_matrix(a, dtype=float)
-    except (TypeError, ValueError) as err:
-        raise InvalidGeometryError(f"{name}: expected a sparse or dense 2-D matrix, got {type(a).__name__}") from err
-    if not np.all(np.isfinite(m.data)):
-        raise InvalidGeometryError(f"{name}: expected finite values")
-    return m
-
-
-def sparse_lstsq(A: object, b: ArrayLike, weights: ArrayLike | None = None, *, tol: float | None = None,
-                 maxiter: int | None = None) -> Array:
-    """Least squares for large sparse ``A`` by LSMR (minimum-norm from the zero start).
-
-    Suited to the banded collocation matrices of B-spline fitting: each iteration costs two
-    sparse products. From ``x0 = 0`` LSMR converges to the minimum-norm least-squares solution,
-    so rank-deficient problems are handled like :func:`lstsq`.
-
-    Parameters
-    ----------
-    A : sparse matrix or array_like, shape (m, n)
-    b : array_like, shape (m,) or (m, k)
-        Each column is solved separately.
-    weights : array_like, shape (m,), optional
-    tol : float, optional
-        ``atol = btol`` of LSMR; default :data:`~occsurf.algorithms.tolerances.SPARSE_TOL`.
-    maxiter : int, optional
-        Default ``10 * n``.
-
-    Returns
-    -------
-    ndarray, shape (n,) or (n, k)
-
-    Raises
-    ------
-    ConvergenceError
-        LSMR hit ``maxiter`` or the condition-number limit before converging.
-    """
-    Asp = _sparse(A, "A")
-    rhs = _rhs(b, Asp.shape[0], "b")
-    Asp, rhs = _weighted_rows(Asp, rhs, _positive(weights, Asp.shape[0], "weights"))
-    t = tolerances.SPARSE_TOL if tol is None else float(tol)
-    it = 10 * Asp.shape[1] if maxiter is None else int(maxiter)
-    B = rhs.reshape(rhs.shape[0], -1)
-    X = np.empty((Asp.shape[1], B.shape[1]))
-    for k in range(B.shape[1]):  # one Krylov run per right-hand side
-        out = spla.lsmr(Asp, B[:, k], atol=t, btol=t, conlim=1e12, maxiter=it)
-        if out[1] in (3, 6, 7):
-            raise ConvergenceError(
-                f"sparse_lstsq: LSMR stopped without converging (istop={out[1]}, {out[2]} iterations, "
-                f"residual {out[3]:.3g}); raise maxiter or loosen tol"
-            )
-        X[:, k] = out[0]
-    return X[:, 0] if rhs.ndim == 1 else X
-
-
-def _splu_solve(K: sp.spmatrix, rhs: Array, what: str) -> Array:
-    try:
-        lu = spla.splu(sp.csc_matrix(K))
-    except RuntimeError as err:  # SuperLU: "Factor is exactly singular"
-        raise ConstraintError(f"{what}: the augmented system is singular ({err})") from err
-    x = lu.solve(rhs)
-    if not np.all(np.isfinite(x)):
-        raise ConstraintError(f"{what}: the augmented system is numerically singular")
-    return x
-
-
-def _diagnose_sparse(C: sp.csr_matrix, d: Array, labels: Sequence[str] | None, what: str) -> None:
-    """Name the conflicting rows of a sparse constraint matrix (dense QR of ``C^T``, ``m`` small)."""
-    m, n = C.shape
-    if m * n > 50_000_000:
-        return
-    F = ConstraintFactor(C.toarray(), labels)
-    F.check(d)
-    if F.rank < m:
-        raise ConstraintError(
-            f"{what}: rows {', '.join(F.labels[i] for i in F.redundant)} are redundant (consistent); the sparse "
-            "solver needs independent constraints: drop them or use the dense solver",
-            F.redundant, [F.labels[i] for i in F.redundant],
-        )
-
-
-def sparse_min_norm_solve(C: object, d: ArrayLike, weights: ArrayLike | None = None, *,
-                          labels: Sequence[str] | None = None, tol: float | None = None) -> Array:
-    """Minimum-norm solution of ``C x = d`` for large sparse ``C`` (course §4-4, sparse form).
-
-    Solves the augmented (saddle-point) system by sparse LU (SuperLU):
-
-    .. math::
-
-        \\begin{bmatrix} W & C^T \\\\ C & 0 \\end{bmatrix}
-        \\begin{bmatrix} x \\\\ -\\lambda \\end{bmatrix} =
-        \\begin{bmatrix} 0 \\\\ d \\end{bmatrix},
-
-    the optimality conditions of ``min x^T W x / 2`` subject to ``C x = d`` (Björck 1996, §2.7).
-    Its matrix is never formed densely, so B-spline systems with many thousands of poles are cheap.
-
-    Parameters
-    ----------
-    C : sparse matrix or array_like, shape (m, n)
-        Independent rows (a redundant or conflicting row makes the system singular; the error then
-        names the rows, found by a dense rank-revealing QR of ``C^T``).
-    d : array_like, shape (m,) or (m, k)
-    weights : array_like, shape (n,), optional
-    labels : sequence of str, optional
-    tol : float, optional
-        Relative tolerance of the final check ``||C x - d|| <= tol * max(1, ||d||)``; default
-        :data:`~occsurf.algorithms.tolerances.CONSISTENCY_RTOL`.
-
-    Returns
-    -------
-    ndarray, shape (n,) or (n, k)
-
-    Raises
-    ------
-    ConstraintError
-        Dependent (consistent or not) rows; conflicting rows are named.
-    """
-    Csp = _sparse(C, "C")
-    m, n = Csp.shape
-    d = _rhs(d, m, "d")
-    w = _positive(weights, n, "weights")
-    W = sp.identity(n, format="csr") if w is None else sp.diags(w, format="csr")
-    K = sp.bmat([[W, Csp.T], [Csp, sp.csr_matrix((m, m))]], format="csc")
-    rhs = np.concatenate([np.zeros((n,) + d.shape[1:]), d])
-    try:
-        sol = _splu_solve(K, rhs, "sparse_min_norm_solve")
-    except ConstraintError:
-        _diagnose_sparse(Csp, d, labels, "sparse_min_norm_solve")
-        raise
-    x = sol[:n]
-    _check_residual(Csp, x, d, tol, labels, "sparse_min_norm_solve")
-    return x
-
-
-def _check_residual(C: sp.csr_matrix, x: Array, d: Array, tol: float | None, labels: Sequence[str] | None,
-                    what: str) -> None:
-    res = np.abs(C @ x - d).reshape(d.shape[0], -1).max(axis=1)
-    rtol = tolerances.CONSISTENCY_RTOL if tol is None else float(tol)
-    t = rtol * max(1.0, float(np.abs(d).max()) if d.size else 0.0)
-    if np.any(res > t):
-        _diagnose_sparse(C, d, labels, what)
-        bad = np.nonzero(res > t)[0]
-        names = _labels(labels, d.shape[0])
-        raise ConstraintError(f"{what}: constraints {', '.join(names[i] for i in bad)} are not met "
-                              f"(residual up to {res.max():.3g}); the system is too ill-conditioned",
-                              bad, [names[i] for i in bad])
-
-
-def sparse_constrained_lstsq(A: object, b: ArrayLike, C: object, d: ArrayLike, weights: ArrayLike | None = None, *,
-                             labels: Sequence[str] | None = None, tol: float | None = None) -> Array:
-    """Equality-constrained least squares for large sparse systems (augmented KKT system).
-
-    With the weighted residual ``s = W (b - A x)`` and multipliers ``mu``, the optimality conditions
-    of ``min ||W^(1/2)(A x - b)||`` subject to ``C x = d`` are the sparse symmetric system
-
-    .. math::
-
-        \\begin{bmatrix} W^{-1} & 0 & A \\\\ 0 & 0 & C \\\\ A^T & C^T & 0 \\end{bmatrix}
-        \\begin{bmatrix} s \\\\ \\mu \\\\ x \\end{bmatrix} =
-        \\begin{bmatrix} b \\\\ d \\\\ 0 \\end{bmatrix}
-
-    (Björck 1996, §5.1), factored by SuperLU. The residual block avoids forming ``A^T A``, so the
-    conditioning is that of the problem, not its square.
-
-    Parameters
-    ----------
-    A : sparse matrix or array_like, shape (p, n)
-        ``[A; C]`` must have full column rank (the solution unique); otherwise use the dense
-        :func:`constrained_lstsq`, which returns the minimum-norm minimiser.
-    b : array_like, shape (p,) or (p, k)
-    C : sparse matrix or array_like, shape (m, n)
-        Independent rows.
-    d : array_like, shape (m,) or (m, k)
-    weights : array_like, shape (p,), optional
-    labels : sequence of str, optional
-        Names of the rows of ``C``.
-    tol : float, optional
-        As in :func:`sparse_min_norm_solve`.
-
-    Returns
-    -------
-    ndarray, shape (n,) or (n, k)
-
-    Raises
-    ------
-    ConstraintError
-        Dependent or conflicting constraints (named), or a solution that is not unique.
-    """
-    Asp, b, Csp, d, w = _constrained_system(A, b, C, d, weights, _sparse)
-    (p, n), m = Asp.shape, Csp.shape[0]
-    Winv = sp.identity(p, format="csr") if w is None else sp.diags(1.0 / w, format="csr")
-    K = sp.bmat([
-        [Winv, None, Asp],
-        [None, sp.csr_matrix((m, m)), Csp],
-        [Asp.T, Csp.T, sp.csr_matrix((n, n))],
-    ], format="csc")
-    rhs = np.concatenate([b, d, np.zeros((n,) + b.shape[1:])])
-    try:
-        sol = _splu_solve(K, rhs, "sparse_constrained_lstsq")
-    except ConstraintError as err:
-        _diagnose_sparse(Csp, d, labels, "sparse_constrained_lstsq")
-        raise ConstraintError(f"{err}; the constraints are independent, so [A; C] is rank deficient and the "
-                              "minimiser is not unique: use constrained_lstsq for the minimum-norm one") from err
-    x = sol[p + m:]
-    _check_residual(Csp, x, d, tol, labels, "sparse_constrained_lstsq")
-    return x

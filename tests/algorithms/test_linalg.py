@@ -26,10 +26,8 @@ from occsurf.algorithms.manipulation.linalg import (
     constrained_lstsq,
     lstsq,
     min_norm_solve,
-    sparse_constrained_lstsq,
-    sparse_lstsq,
-    sparse_min_norm_solve,
 )
+from occsurf.algorithms.manipulation.sparse_linalg import sparse_constrained_lstsq, sparse_lstsq, sparse_min_norm_solve
 
 from .strategies import test_settings
 

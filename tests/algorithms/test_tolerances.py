@@ -31,7 +31,8 @@ from occsurf.algorithms.manipulation import (
     constrain,
     drag_surface_point,
 )
-from occsurf.algorithms.manipulation.linalg import ConstraintFactor, sparse_lstsq
+from occsurf.algorithms.manipulation.linalg import ConstraintFactor
+from occsurf.algorithms.manipulation.sparse_linalg import sparse_lstsq
 
 ALGORITHMS = Path(A.__file__).parent
 
