@@ -170,7 +170,7 @@ def _plan(nu: int, nv: int, reach: int, leaf: int) -> _Plan:
         for c in kids[k]:
             ring = _ring(boxes[c], nu, nv, reach)
             at = where[padded[ring]]  # every ring point of a child is in this front (the tree's invariant)
-            if at.min() < 0:
+            if at.size and at.min() < 0:
                 raise RuntimeError(f"grid_cholesky: a ring point of box {boxes[c]} is not in its parent's front")
             sort = np.argsort(at)
             rings[c], at = ring[sort], at[sort]

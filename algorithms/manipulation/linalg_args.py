@@ -1,7 +1,7 @@
-"""The argument checks and row weighting that the dense (:mod:`.linalg`) and sparse
-(:mod:`.sparse_linalg`) solvers share (course ch. 3): every matrix, right-hand side and weight
-vector is checked for shape and finiteness before LAPACK or SuperLU sees it, and an error names the
-argument.
+"""The argument checks and row weighting of the least-squares solvers (course ch. 3): the dense
+ones of :mod:`.linalg` and the sparse ones of :mod:`.sparse_linalg` (LSMR, SuperLU) check their
+right-hand sides, weights, constrained systems and constraint labels here, and :mod:`.linalg` its
+dense matrices, so that a bad argument is refused with its name before any factorisation sees it.
 """
 
 from __future__ import annotations

@@ -50,7 +50,7 @@ def sparse_lstsq(A: object, b: ArrayLike, weights: ArrayLike | None = None, *, t
 
     Suited to the banded collocation matrices of B-spline fitting: each iteration costs two
     sparse products. From ``x0 = 0`` LSMR converges to the minimum-norm least-squares solution,
-    so rank-deficient problems are handled like :func:`lstsq`.
+    so rank-deficient problems are handled like :func:`.linalg.lstsq`.
 
     Parameters
     ----------
@@ -203,7 +203,7 @@ def sparse_constrained_lstsq(A: object, b: ArrayLike, C: object, d: ArrayLike, w
     ----------
     A : sparse matrix or array_like, shape (p, n)
         ``[A; C]`` must have full column rank (the solution unique); otherwise use the dense
-        :func:`constrained_lstsq`, which returns the minimum-norm minimiser.
+        :func:`.linalg.constrained_lstsq`, which returns the minimum-norm minimiser.
     b : array_like, shape (p,) or (p, k)
     C : sparse matrix or array_like, shape (m, n)
         Independent rows.

@@ -54,6 +54,8 @@ REMOVED = {
     "geometry/differential.py": ["CURVATURE_ZERO", "NORMAL_ZERO", "ARC_LENGTH", "UMBILIC", "_MAX_LEVELS"],
     "geometry/affine.py": ["MAX_CONDITION"],
     "manipulation/linalg.py": ["RANK_RTOL", "CONSISTENCY_RTOL", "SPARSE_TOL"],
+    "manipulation/sparse_linalg.py": ["RANK_RTOL", "CONSISTENCY_RTOL", "SPARSE_TOL"],
+    "manipulation/linalg_args.py": ["RANK_RTOL", "CONSISTENCY_RTOL", "SPARSE_TOL"],
     "manipulation/curves.py": ["NEWTON_TOL", "MAX_ITERATIONS", "NEWTON_STEPS", "MIN_CONTINUATION_STEP", "KKT_RTOL",
                                "LINEAR_CHECK_RTOL"],
     "manipulation/surfaces.py": ["LINEAR_CHECK_RTOL"],
