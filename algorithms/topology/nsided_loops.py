@@ -87,12 +87,17 @@ def nearest_samples(P: Array, dense: Array) -> NDArray[np.intp]:
     The few nearest samples of each point come from a k-d tree (:class:`scipy.spatial.cKDTree`) and
     are scored by the same arithmetic as every sample would be; where the tree's candidates all lie
     within 1e-9 (relative) of the nearest distance (repeated samples: a closed curve's ends, a
-    degenerate side), the point is scored against every sample. So the index is the one the full
-    comparison picks, bit for bit, at ``O(m log k)`` instead of ``O(m k)`` (a 16 000-point trace
-    against 401 samples: most of :func:`closest_parameters`' time before).
+    degenerate side), or fewer than four are found (distances that overflow), or the point is not
+    finite, the point is scored against every sample. So the index is the one the full comparison
+    picks, bit for bit, at ``O(m log k)`` instead of ``O(m k)`` (a 16 000-point trace against 401
+    samples: most of :func:`closest_parameters`' time before). Both arrays are taken as float64
+    rows (the sum of a point's squared differences then has one order; the comparison before this
+    function summed a Fortran-ordered array of points in another, 2026-12-07 review).
     """
     from scipy.spatial import cKDTree
 
+    P = np.ascontiguousarray(P, dtype=float)  # float64 rows (the tree's arithmetic; see above)
+    dense = np.ascontiguousarray(dense, dtype=float)
     m, k = len(P), len(dense)
     out = np.empty(m, dtype=np.intp)
     finite = np.isfinite(P).all(axis=1)
@@ -101,10 +106,13 @@ def nearest_samples(P: Array, dense: Array) -> NDArray[np.intp]:
     else:
         at = np.flatnonzero(finite)  # (the tree takes finite points only; the others: every sample)
         dist, cand = cKDTree(dense).query(P[at], k=NEAREST_CANDIDATES)
-        cand = np.sort(cand, axis=1)  # the first of equal scores is the lowest sample index
+        # index k stands for a neighbour not found: fewer than four at a finite distance (squares
+        # that overflow)
+        lost = (cand >= k).any(axis=1)
+        cand = np.sort(np.where(cand >= k, 0, cand), axis=1)  # the first of equal scores: the lowest index
         out[at] = cand[np.arange(at.size), np.argmin(_sq_distances(P[at], dense[cand]), axis=1)]
         tied = ~(dist[:, -1] > dist[:, 0] * (1.0 + 1e-9))  # candidates within round-off of one another
-        full = np.sort(np.r_[np.flatnonzero(~finite), at[tied]])
+        full = np.sort(np.r_[np.flatnonzero(~finite), at[tied | lost]])
     step = max(1, (1 << 18) // (k * P.shape[1]))  # points a block: ~2 MB of differences, in cache
     for a in range(0, full.size, step):  # (16 000 points x 401 samples at once were 150 MB a temporary)
         rows = full[a:a + step]

@@ -41,6 +41,8 @@ def test_the_nearest_sample_is_the_one_every_sample_compared_gives(seed: int, di
     P = np.r_[rng.standard_normal((m, dim)), dense[rng.integers(0, k, 5)], 0.5 * (dense[:j] + dense[1:j + 1])]
     P[0, 0] = np.nan if seed % 3 == 0 else P[0, 0]
     np.testing.assert_array_equal(nearest_samples(P, dense), _every_sample(P, dense))
+    # points in any memory layout are taken as float64 rows: the same index
+    np.testing.assert_array_equal(nearest_samples(np.asfortranarray(P), dense), nearest_samples(P, dense))
 
 
 def test_closest_parameters_on_a_closed_curve_start_at_the_first_end() -> None:
@@ -56,3 +58,27 @@ def test_closest_parameters_on_a_closed_curve_start_at_the_first_end() -> None:
     grid = np.linspace(0.0, 4.0, 401)
     np.testing.assert_array_equal(t, grid[_every_sample(P, circle.evaluate(grid))])
     assert t[1000] == 0.0 and np.allclose(d, 0.5, atol=1e-3)  # a sample's distance (no Newton step)
+
+
+def test_ties_the_tree_cannot_see_and_distances_that_overflow() -> None:
+    """Where the k-d tree's own arithmetic cannot order the candidates: shells of samples at one
+    distance from the origin up to round-off (the permutations of random coordinates, shuffled:
+    sums of the same squares in other orders, which the tree and the scoring round differently),
+    samples that repeat one point at shuffled indices, and squared distances that overflow (the
+    tree then finds fewer than four neighbours). Each point's index is the one comparing every
+    sample gives."""
+    import itertools
+
+    rng = np.random.default_rng(7)
+    for _ in range(60):
+        d = int(rng.integers(3, 5))
+        shell = np.array(list(itertools.permutations(rng.uniform(0.1, 3.0, d))))
+        dense = np.r_[shell[rng.permutation(len(shell))], rng.uniform(5.0, 9.0, (401 - len(shell), d))]
+        P = np.zeros((60, d))
+        np.testing.assert_array_equal(nearest_samples(P, dense), _every_sample(P, dense))
+    same = rng.permutation(np.r_[np.tile([[5.0, -1.0, 2.0]], (9, 1)), rng.standard_normal((400, 3)) * 30 + 60])
+    P = np.tile([[5.0, -1.0, 2.1]], (100, 1))
+    np.testing.assert_array_equal(nearest_samples(P, same), _every_sample(P, same))
+    far = np.r_[[[0.0, 0.0], [1.0, 0.0]], np.tile([[2e154, 0.0]], (399, 1))]
+    P = np.zeros((100, 2))
+    np.testing.assert_array_equal(nearest_samples(P, far), np.zeros(100, dtype=np.intp))
