@@ -85,7 +85,10 @@ def spline_lstsq(knots: Array, degree: int, s: Array, Y: Array, w: Array) -> Arr
         c = int(start[lo])
         while col < c:  # the window moves on: the triangle's first row is final
             R[col] = T[0]
-            T = np.vstack([np.hstack([T[1:, 1:p + 1], np.zeros((p, 1)), T[1:, p + 1:]]), np.zeros((1, p + 1 + d))])
+            shifted = np.zeros_like(T)  # the rows below it, one column to the left, zeros after
+            shifted[:p, :p] = T[1:, 1:p + 1]
+            shifted[:p, p + 1:] = T[1:, p + 1:]
+            T = shifted
             col += 1
         r: Array = np.asarray(np.linalg.qr(np.vstack([T, rows[lo:hi]]), mode="r"))  # R alone (mode "r")
         T = np.zeros_like(T)
