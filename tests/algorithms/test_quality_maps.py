@@ -293,16 +293,45 @@ def test_rigid_motion_leaves_map_unchanged(s, angles, shift):
     assert_allclose(b.values[ok], a.values[ok], atol=1e-8 * kmax**2 + 2 * kmax * floor.max(initial=0))
 
 
+def _nearly_collapsed_net_found_by_ci() -> BSplineSurface:
+    """CI19 (2026-12-07): every pole at (7.3125, 7.3125, 7.3125) but two; at one grid point the
+    mean curvature before and after the insertion differed by 1.9e-8 (its round-off bound
+    :func:`roundoff_floor` 2.5e-8, against 1.5e-10..3.5e-10 at the others)."""
+    P = np.full((7, 5, 3), 7.3125)
+    P[1, 4, 0], P[4, 3, 1] = 9.0, 7.25
+    return BSplineSurface((3, 2), (np.array([2, 3, 3, 5, 5, 6.75, 6.75, 6.75, 7.75, 8.75, 9.75]),
+                                   np.array([2, 3, 4, 6, 9.125, 10.21875, 10.21875, 10.21875])), P)
+
+
+def _full_knot_at_the_middle_found_by_ci() -> BSplineSurface:
+    """CI19: the middle of the u domain [4, 6] is a knot of multiplicity 2 = the degree."""
+    return BSplineSurface((2, 2), (np.array([2.0, 3, 4, 5, 5, 6, 6, 7, 8]), np.array([2.0, 3, 4, 5, 6, 7])),
+                          np.zeros((6, 3, 3)))
+
+
 @given(s=surfaces(dims=st.just(3), degrees=st.integers(2, 4), rational=False), t=st.floats(0.05, 0.95))
+@example(s=_nearly_collapsed_net_found_by_ci(), t=0.5)
+@example(s=_full_knot_at_the_middle_found_by_ci(), t=0.5)
 @SETTINGS
 def test_knot_insertion_leaves_map_unchanged(s, t):
     (u0, u1), _ = s.domain
-    s2 = s.insert_knot(u0 + t * (u1 - u0), direction="u")
+    u = u0 + t * (u1 - u0)
+    try:
+        s2 = s.insert_knot(u, direction="u")
+    except InvalidGeometryError as err:  # a knot of full multiplicity there already: refused by name
+        assert "exceeds the degree" in str(err)
+        assert np.count_nonzero(np.abs(s.knots[0] - u) <= 1e-12 * (u1 - u0)) >= s.degree[0]
+        return
     a, b = curvature_map(s, 6, 7, "mean"), curvature_map(s2, 6, 7, "mean")
     ok = well_conditioned(s, a.us, a.vs)
     assert_allclose(b.points, a.points, atol=1e-9)
     kmax = 1 + np.nanmax(np.abs(a.k1[ok]), initial=0) + np.nanmax(np.abs(a.k2[ok]), initial=0)
-    assert_allclose(b.values[ok], a.values[ok], atol=1e-8 * kmax)
+    # per point, the curvatures' round-off bound as for the rigid motion above (the mean curvature
+    # errs by at most the principal curvatures' bound): a nearly collapsed net loses digits there
+    floor = roundoff_floor(s, a.us, a.vs, float(np.abs(s.control_points).max()))[ok]
+    x, y = b.values[ok], a.values[ok]
+    bad = np.abs(x - y) > 1e-8 * kmax + floor + 1e-7 * np.abs(y)
+    assert not bad.any(), (x[bad], y[bad], floor[bad])
 
 
 # -------------------------------------------------------------------------------- colour scales
