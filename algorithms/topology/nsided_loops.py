@@ -100,10 +100,10 @@ def nearest_samples(P: Array, dense: Array) -> NDArray[np.intp]:
     dense = np.ascontiguousarray(dense, dtype=float)
     m, k = len(P), len(dense)
     out = np.empty(m, dtype=np.intp)
-    finite = np.isfinite(P).all(axis=1)
     if m * k <= NEAREST_BRUTE_PAIRS or k <= NEAREST_CANDIDATES or not np.isfinite(dense).all():
         full = np.arange(m)
     else:
+        finite = np.isfinite(P).all(axis=1)
         at = np.flatnonzero(finite)  # (the tree takes finite points only; the others: every sample)
         dist, cand = cKDTree(dense).query(P[at], k=NEAREST_CANDIDATES)
         # index k stands for a neighbour not found: fewer than four at a finite distance (squares

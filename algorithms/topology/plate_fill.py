@@ -228,6 +228,12 @@ def _validate(sides: Sequence[HoleSide],
 
 
 # ===================================================================================== the fit
+def _fit_rows(fit_t: list[Array], chk_t: list[Array]) -> NDArray[np.bool_]:
+    """Which samples of an :class:`Evaluation` made on ``[np.r_[f, c] for f, c in zip(fit_t, chk_t)]``
+    are the fit's (each side's ``fit_t`` then its ``chk_t``)."""
+    return np.concatenate([np.r_[np.ones(len(f), bool), np.zeros(len(c), bool)] for f, c in zip(fit_t, chk_t)])
+
+
 def _knots(lo: float, hi: float, spans: int, degree: int) -> Array:
     inner = np.linspace(lo, hi, spans + 1)[1:-1]
     return np.r_[np.full(degree + 1, lo), inner, np.full(degree + 1, hi)]
@@ -386,8 +392,7 @@ def fill_plate(sides: Sequence[HoleSide], *, g1: Sequence[bool] | NDArray[np.boo
             # one basis row each)
             ev = Evaluation(sides, flags, [np.r_[a, b] for a, b in zip(fit_t, chk_t)], ku, kv, p, o, R, L,
                             g2=g2f, kfloor=kfloor, g2_tol=g2_tol)
-            first = np.cumsum([0] + [2 * len(t) - 1 for t in fit_t[:-1]])
-            fit = np.concatenate([np.arange(a, a + len(t)) for a, t in zip(first, fit_t)])
+            fit = _fit_rows(fit_t, chk_t)
             sid, X, Mn = ev.sid[fit], ev.X[fit], ev.M[fit]
             val, du, dv, cols = ev.val[fit], ev.du[fit], ev.dv[fit], ev.cols[fit]
             n = nu * nv

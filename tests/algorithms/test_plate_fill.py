@@ -397,7 +397,7 @@ def test_the_fit_rows_taken_from_the_evaluation_are_those_evaluated_alone() -> N
     """``fill_plate`` takes its fit's samples (points, neighbour normals, basis rows) from the stage's
     :class:`Evaluation`, made on the fit's parameters and those between them: the same values, bit
     for bit, as evaluating the fit's parameters alone (every sample is evaluated on its own)."""
-    from occsurf.algorithms.topology.plate_fill import _knots, _params
+    from occsurf.algorithms.topology.plate_fill import _fit_rows, _knots, _params
     from occsurf.algorithms.topology.plate_measure import Evaluation, basis_rows, local_data
 
     sides = _torus_l(0.8) + _sphere_l(0.4)[:1]  # polynomial (fitted) sides and a rational arc
@@ -405,10 +405,9 @@ def test_the_fit_rows_taken_from_the_evaluation_are_those_evaluated_alone() -> N
     o, R, L = rng.standard_normal(3), np.linalg.qr(rng.standard_normal((3, 3)))[0], 2.5
     ku, kv = _knots(-3.0, 3.0, 11, 3), _knots(-3.0, 3.0, 7, 3)
     fit_t = [_params(s.curve, 24 + 7 * i) for i, s in enumerate(sides)]
-    ev = Evaluation(sides, np.ones(len(sides), bool), [np.r_[t, 0.5 * (t[1:] + t[:-1])] for t in fit_t],
-                    ku, kv, 3, o, R, L)
-    first = np.cumsum([0] + [2 * len(t) - 1 for t in fit_t[:-1]])
-    fit = np.concatenate([np.arange(a, a + len(t)) for a, t in zip(first, fit_t)])
+    chk_t = [0.5 * (t[1:] + t[:-1]) for t in fit_t]
+    ev = Evaluation(sides, np.ones(len(sides), bool), [np.r_[t, c] for t, c in zip(fit_t, chk_t)], ku, kv, 3, o, R, L)
+    fit = _fit_rows(fit_t, chk_t)
     alone = [local_data(s, t, o, R, L) for s, t in zip(sides, fit_t)]
     X, M = np.concatenate([d[0] for d in alone]), np.concatenate([d[1] for d in alone])
     assert ev.X[fit].tobytes() == X.tobytes() and ev.M[fit].tobytes() == M.tobytes()
