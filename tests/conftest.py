@@ -70,6 +70,33 @@ def _restore_sigint() -> None:
 _restore_sigint()
 
 
+# BLAS threads: NumPy's and SciPy's OpenBLAS start one thread per core in every process. Under
+# pytest-xdist each worker is a process, so on the 2-core machine two workers ran four BLAS threads
+# that busy-wait for each other (OpenBLAS spins between calls): ``tests/algorithms -m "not slow"
+# -n auto`` took 66-67 s against 52-54 s with one thread per worker (2026-12-07, two alternating
+# runs each). Each worker takes its share of the cores, for itself (threadpoolctl: the libraries
+# may be loaded by now) and for the processes it starts (the variables are read when they load
+# BLAS). A run without xdist keeps every core; thread counts set in the environment are kept.
+_BLAS_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+_BLAS_LIMIT: list[object] = []
+
+
+def _blas_threads_per_worker() -> None:
+    workers = os.environ.get("PYTEST_XDIST_WORKER_COUNT")
+    if not workers or not os.environ.get("PYTEST_XDIST_WORKER") or any(v in os.environ for v in _BLAS_VARS):
+        return
+    threads = max(1, (os.cpu_count() or 1) // max(1, int(workers)))
+    for var in _BLAS_VARS:
+        os.environ[var] = str(threads)
+    from threadpoolctl import threadpool_limits
+
+    # kept: the limiter restores the old limits only when asked to
+    _BLAS_LIMIT.append(threadpool_limits(limits=threads, user_api="blas"))
+
+
+_blas_threads_per_worker()
+
+
 # Worker processes (occsurf.bridge.isolation, the audit reader, the CLI's checker) run test jobs that
 # live in this folder (``tests.bridge.isolation_jobs:...``). occsurf itself is the installed package
 # (the checkout has no ``occsurf/`` folder at its top to shadow it), so the children need the

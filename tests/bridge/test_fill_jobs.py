@@ -32,7 +32,10 @@ def _data(step: Path) -> str:
 @pytest.mark.slow
 def test_two_processes_fill_the_faces_one_process_fills(tmp_path: Path) -> None:
     """dome_holes' four holes through two workers: two processes did the work, and every hole's faces
-    are byte for byte (OCC binary BRep) those one process makes."""
+    are byte for byte (OCC binary BRep) those one process makes. Which worker fills which hole is a
+    race (the eight loops include the four outer ones, reported without a fill): both readers start with
+    one of the first two loops, so both pids are among all the results; the four filled ones may
+    all come from one of them (seen once under load, 2026-12-07)."""
     item = _item(DOME, tmp_path / "o.step")
     plan = ff.plan_job(item)
     ff._cached = None  # plan_job ran here, not in a worker: keep nothing of it
@@ -40,7 +43,8 @@ def test_two_processes_fill_the_faces_one_process_fills(tmp_path: Path) -> None:
     results = ff._fill_holes(item, plan, [Reader(ff.PRELOAD), Reader(ff.PRELOAD)], timeout=None)
     filled = [r for r in results if r["faces"] is not None]
     assert len(filled) == 4
-    assert len({r["pid"] for r in filled}) == 2 and os.getpid() not in {r["pid"] for r in filled}
+    pids = {r["pid"] for r in results}
+    assert len(pids) == 2 and os.getpid() not in pids
     ctx = ff._context(item, keep=False)
     for k, r in enumerate(results):
         here = ff._fill_one(ctx, k, item)
