@@ -9,15 +9,8 @@ differential geometry of curves and surfaces: :func:`curve_frenet`, :func:`curva
 
 from .affine import Normal, Point, Vector, affine_combination
 from .affine_maps import AffineMap, Frame, ProjectiveMap
-from .differential import (
-                           arc_length,
-                           curvature,
-                           curvatures_from_derivatives,
-                           curve_frenet,
-                           rotation_minimizing_frames,
-                           surface_curvatures,
-                           torsion,
-)
+from .differential import arc_length, curvature, curve_frenet, rotation_minimizing_frames, torsion
+from .surface_differential import curvatures_from_derivatives, surface_curvatures
 
 __all__ = [
     "AffineMap",

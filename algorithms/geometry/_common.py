@@ -6,7 +6,9 @@ imports the other's internals:
 
 * argument checks that name the argument: :func:`as_coords`, :func:`as_matrix`,
   :func:`check_invertible`, :func:`check_broadcast`, :func:`as_scalar`;
-* array helpers: :func:`readonly`, :func:`unit`;
+* array helpers: :func:`readonly`, :func:`unit`, and :func:`lengths`, :func:`divide_where` (shared
+  by :mod:`~occsurf.algorithms.geometry.differential` and
+  :mod:`~occsurf.algorithms.geometry.surface_differential`);
 * :class:`Element`, the common storage (and the forbidden operations) of ``Point``, ``Vector`` and
   ``Normal``, with :func:`kind_of` naming an operand in error messages.
 
@@ -32,7 +34,9 @@ __all__ = [
     "as_scalar",
     "check_broadcast",
     "check_invertible",
+    "divide_where",
     "kind_of",
+    "lengths",
     "readonly",
     "unit",
 ]
@@ -46,6 +50,17 @@ def readonly(a: ArrayLike) -> Array:
     a = np.ascontiguousarray(a, dtype=float)
     a.flags.writeable = False
     return a
+
+
+def lengths(a: Array) -> Array:
+    """Euclidean lengths of the vectors on the last axis of ``a``."""
+    return np.linalg.norm(a, axis=-1)
+
+
+def divide_where(num: Array, den: Array, ok: NDArray[np.bool_]) -> Array:
+    """``num / den`` where ``ok``, NaN elsewhere (no warning for the zeros left out)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(ok, num / np.where(ok, den, 1.0), np.nan)
 
 
 def as_coords(value: ArrayLike, name: str) -> Array:

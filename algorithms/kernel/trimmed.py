@@ -57,7 +57,7 @@ from .point_in_loops import (
 from .surface import BSplineSurface
 
 if TYPE_CHECKING:
-    from ..geometry.differential import SurfaceCurvatures
+    from ..geometry.surface_differential import SurfaceCurvatures
 
 __all__ = ["TrimmedSurface", "INSIDE", "ON", "OUTSIDE", "classify_points"]
 
@@ -377,7 +377,7 @@ class TrimmedSurface:
         -------
         SurfaceCurvatures
         """
-        from ..geometry.differential import curvatures_from_derivatives
+        from ..geometry.surface_differential import curvatures_from_derivatives
 
         self._need_3d("curvatures")
         D = self.derivatives(u, v, 2, outside=outside)

@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ..geometry.differential import curvatures_from_derivatives
+from ..geometry.surface_differential import curvatures_from_derivatives
 from ..kernel.surface import BSplineSurface
 from ..topology.spatch import SPatch
 from . import _kernels

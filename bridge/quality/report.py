@@ -215,11 +215,11 @@ def face_fields(face: ImportedFace, mesh: FaceMesh, *, view_dir: Sequence[float]
                 pull: Sequence[float] = (0.0, 0.0, 1.0), size: float = 1.0) -> FaceField:
     """Per-vertex indicators of one meshed face, by our own exact derivatives (course §9-5..9-13).
 
-    Curvatures come from :func:`occsurf.algorithms.geometry.differential.curvatures_from_derivatives`
+    Curvatures come from :func:`occsurf.algorithms.geometry.surface_differential.curvatures_from_derivatives`
     at the mesh's parameters, zebra/isophotes/draft from :mod:`occsurf.algorithms.quality` on the
     mesh's points and normals.
     """
-    from occsurf.algorithms.geometry.differential import curvatures_from_derivatives
+    from occsurf.algorithms.geometry.surface_differential import curvatures_from_derivatives
     from occsurf.algorithms.quality import curvature_values, draft_angle
 
     surf = _surface_of(face)

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface
-from occsurf.algorithms.geometry.differential import surface_curvatures
+from occsurf.algorithms.geometry.surface_differential import surface_curvatures
 
 from ..exchange.files import write_figure
 

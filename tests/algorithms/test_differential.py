@@ -1,4 +1,4 @@
-"""Differential geometry (occsurf.algorithms.geometry.differential): closed forms, invariants, degenerate points.
+"""Differential geometry (occsurf.algorithms.geometry.differential, .surface_differential): closed forms, invariants, degenerate points.
 
 Oracles: circle (kappa = 1/r, tau = 0, length r theta), the twisted cubic (t, t^2, t^3) written as a
 cubic Bézier (closed-form kappa, tau), sphere / cylinder / torus as exact rational B-splines built
@@ -19,18 +19,20 @@ from occsurf.algorithms.errors import InvalidGeometryError, ParameterError
 from occsurf.algorithms.geometry import differential
 from occsurf.algorithms.geometry.differential import (
     FrenetFrame,
-    SurfaceCurvatures,
     arc_length,
     curvature,
     curvature_derivative,
     curve_frenet,
     frenet_axes,
+    rotation_minimizing_frames,
+    torsion,
+)
+from occsurf.algorithms.geometry.surface_differential import (
+    SurfaceCurvatures,
     is_umbilic,
     normal_curvature,
     principal_curvatures,
-    rotation_minimizing_frames,
     surface_curvatures,
-    torsion,
 )
 
 from .strategies import curves, surfaces, test_settings

@@ -1,7 +1,7 @@
 """Generalized biquadratic B-spline surfaces from S-patches (occsurf.algorithms.topology.generalized; course §8-6, 8-7).
 
 Oracles: the tensor-product biquadratic B-spline on regular grids (BSplineSurface, independent
-code), curvature of that B-spline (occsurf.algorithms.geometry.differential), the Bézier net's closed forms
+code), curvature of that B-spline (occsurf.algorithms.geometry.surface_differential), the Bézier net's closed forms
 (corners at face centroids, quadratic boundaries, Varignon corner planes). Invariants: G1 between
 all neighbouring patches measured densely, C1 between regular ones, affine invariance.
 """
@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from occsurf.algorithms.errors import InvalidGeometryError
-from occsurf.algorithms.geometry.differential import surface_curvatures
+from occsurf.algorithms.geometry.surface_differential import surface_curvatures
 from occsurf.algorithms.kernel.surface import BSplineSurface
 from occsurf.algorithms.topology.generalized import (
     BIQUADRATIC_DEPTH,
@@ -120,7 +120,7 @@ def test_regular_grid_equals_tensor_product_biquadratic(nu, nv, seed):
 
 
 def test_regular_grid_curvature_matches_bspline():
-    """spatch_curvatures (from SPatch second derivatives) against occsurf.algorithms.geometry.differential on the
+    """spatch_curvatures (from SPatch second derivatives) against occsurf.algorithms.geometry.surface_differential on the
     same surface in the B-spline's parametrisation: curvature does not depend on it."""
     rng = np.random.default_rng(7)
     m, P = grid(5, 5, rng)

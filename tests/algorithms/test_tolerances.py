@@ -21,7 +21,8 @@ import occsurf.algorithms as A
 from occsurf.algorithms import BSplineCurve, BSplineSurface, InvalidGeometryError, ToleranceError, tolerances
 from occsurf.algorithms.fitting.interpolation import interpolate_curve
 from occsurf.algorithms.geometry import Frame, Point
-from occsurf.algorithms.geometry.differential import arc_length, curve_frenet, is_umbilic, surface_curvatures
+from occsurf.algorithms.geometry.differential import arc_length, curve_frenet
+from occsurf.algorithms.geometry.surface_differential import is_umbilic, surface_curvatures
 from occsurf.algorithms.hierarchical.offsets import frames_from_partials, surface_frames
 from occsurf.algorithms.manipulation import (
     ConstraintError,
@@ -52,6 +53,7 @@ def bump(height: float = 0.5) -> BSplineSurface:
 # ---------------------------------------------------------------------------------------- registry
 REMOVED = {
     "geometry/differential.py": ["CURVATURE_ZERO", "NORMAL_ZERO", "ARC_LENGTH", "UMBILIC", "_MAX_LEVELS"],
+    "geometry/surface_differential.py": ["CURVATURE_ZERO", "NORMAL_ZERO", "ARC_LENGTH", "UMBILIC", "_MAX_LEVELS"],
     "geometry/affine.py": ["MAX_CONDITION"],
     "manipulation/linalg.py": ["RANK_RTOL", "CONSISTENCY_RTOL", "SPARSE_TOL"],
     "manipulation/sparse_linalg.py": ["RANK_RTOL", "CONSISTENCY_RTOL", "SPARSE_TOL"],

@@ -77,7 +77,7 @@ def _occ_points(shape_or_model, result, max_edges: int | None = None):
 
 def _umbilic(model, rep, pts) -> np.ndarray:
     """Points where either side is umbilic (k1 == k2 within 1e-9 of the scale)."""
-    from occsurf.algorithms.geometry.differential import curvatures_from_derivatives
+    from occsurf.algorithms.geometry.surface_differential import curvatures_from_derivatives
 
     _, faces = collect_faces(model)
     bad = np.zeros(len(pts["uv1"]), dtype=bool)

@@ -1,4 +1,4 @@
-"""occsurf.algorithms.geometry.differential against OpenCascade's GeomLProp on the bit-identical ``to_occ`` copies.
+"""occsurf.algorithms.geometry.differential and .surface_differential against OpenCascade's GeomLProp on the bit-identical ``to_occ`` copies.
 
 Oracles
 -------
@@ -37,7 +37,8 @@ from OCP.GeomLProp import GeomLProp_CLProps, GeomLProp_SLProps
 from OCP.gp import gp_Ax3, gp_Dir
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface
-from occsurf.algorithms.geometry.differential import curve_frenet, surface_curvatures
+from occsurf.algorithms.geometry.differential import curve_frenet
+from occsurf.algorithms.geometry.surface_differential import surface_curvatures
 from occsurf.bridge.conversion.splines import from_occ, to_occ
 from tests.algorithms.strategies import curves, surfaces, test_settings
 
