@@ -7,9 +7,10 @@ Public names: :func:`extrude`, :func:`ruled`, :func:`revolve`, :func:`translatio
 :func:`coons_bicubic`, :func:`polynomial_approximation`, :func:`gordon`, :func:`network_parameters`.
 """
 
-from .coons_patches import coons, coons_bicubic, polynomial_approximation
+from .coons_patches import coons, coons_bicubic
 from .generation import extrude, revolve, rotational_sweep, ruled, translational_sweep
 from .gordon_surfaces import gordon, network_parameters
+from .rational_approximation import polynomial_approximation
 from .sweeping import SweepResult, exact_sweep, sweep
 
 __all__ = [

@@ -1,8 +1,9 @@
-r"""Coons patches (course §6-20, §6-21) and the polynomial approximation of rational curves that
-Gordon surfaces (:mod:`occsurf.algorithms.construction.gordon_surfaces`) use too; the helpers both
-share (argument checks, compatible tensor-product nets) are in
-:mod:`occsurf.algorithms.construction._common`. :mod:`occsurf.algorithms.construction` re-exports
-both modules. Tolerances: ``NETWORK_TOLERANCE``, ``DERIVATIVE_TOLERANCE``,
+r"""Coons patches (course §6-20, §6-21). The helpers they share with Gordon surfaces
+(:mod:`occsurf.algorithms.construction.gordon_surfaces`: argument checks, compatible
+tensor-product nets) are in :mod:`occsurf.algorithms.construction._common`, the polynomial
+approximation of rational curves both use in
+:mod:`occsurf.algorithms.construction.rational_approximation`;
+:mod:`occsurf.algorithms.construction` re-exports them all. Tolerances: ``NETWORK_TOLERANCE``, ``DERIVATIVE_TOLERANCE``,
 ``APPROXIMATION_TOLERANCE`` and ``HOMOGENEOUS_WEIGHT_RTOL`` of :mod:`occsurf.algorithms.tolerances`,
 read at call time.
 
@@ -47,7 +48,7 @@ below. Gordon surfaces of rational networks are built in homogeneous coordinates
 curves meet in homogeneous space too (for instance a network of iso-curves of one NURBS
 surface); otherwise, and for :func:`coons_bicubic` (whose derivative data are Cartesian), rational
 curves are replaced by polynomial B-spline approximations within ``approx_tol`` (measured on dense
-samples, see :func:`polynomial_approximation`), so the result is within that distance of the
+samples, see :func:`~occsurf.algorithms.construction.rational_approximation.polynomial_approximation`), so the result is within that distance of the
 rational network.
 """
 
@@ -61,19 +62,17 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import _validate as V
 from .. import tolerances
-from ..errors import InvalidGeometryError, ToleranceError
-from ..fitting.interpolation import interpolate_values
-from ..kernel.basis import greville
+from ..errors import InvalidGeometryError
 from ..kernel.compat import compatible_sets, make_compatible
 from ..kernel.curve import BSplineCurve
 from ..kernel.degree import elevate_poles
 from ..kernel.surface import BSplineSurface
 from ._common import Net, check_curve, check_curves, homogeneous_poles, resolve_tolerance, surface_from_net, unify_nets
+from .rational_approximation import polynomial_approximation
 
 __all__ = [
     "coons",
     "coons_bicubic",
-    "polynomial_approximation",
 ]
 
 Array = NDArray[np.float64]
@@ -116,71 +115,6 @@ def _boolean_sum(A: Array, B: Array, C: Array) -> Array:
 
 
 # ------------------------------------------------------------------------------------ rational
-def polynomial_approximation(curve: BSplineCurve, tol: float | None = None, *,
-                             max_subdivisions: int = 256) -> tuple[BSplineCurve, float]:
-    """A polynomial B-spline within ``tol`` of a rational curve, with the measured error.
-
-    Degree ``max(p, 3)``; knots: the curve's own (multiplicities raised with the degree, so the
-    continuity at each knot is kept) with every span cut into ``k`` equal pieces, ``k = 2, 4, 8,
-    ...``; the spline interpolating the curve at the Greville abscissae of those knots (which
-    satisfy the Schoenberg–Whitney condition). Stops once the largest distance over 16 samples
-    per span is at most ``tol``. The end points are interpolated exactly (they are Greville
-    abscissae of clamped knots), so Coons corners and network ends stay put.
-
-    Parameters
-    ----------
-    curve : BSplineCurve
-        Returned unchanged (error 0.0) if it is not rational.
-    tol : float, optional
-        Default ``tolerances.APPROXIMATION_TOLERANCE``.
-    max_subdivisions : int
-        Largest ``k`` tried. A step whose work arrays would exceed ``tolerances.MAX_ARRAY_BYTES``
-        is refused before it is made (InvalidGeometryError).
-
-    Returns
-    -------
-    (BSplineCurve, float)
-        The approximation (same domain, degree ``max(curve.degree, 3)``) and its measured error.
-
-    Raises
-    ------
-    ToleranceError
-        ``tol`` is not reached with ``max_subdivisions``.
-    """
-    c = check_curve(curve, "curve")
-    tol = resolve_tolerance(tol, tolerances.APPROXIMATION_TOLERANCE)
-    cap = V.check_times(max_subdivisions, "max_subdivisions")
-    if not c.is_rational:
-        return c, 0.0
-    c = c.clamp()
-    p = max(c.degree, 3)
-    vals, mult = np.unique(c.knots, return_counts=True)
-    mult = np.minimum(mult + (p - c.degree), p + 1)  # keeps the curve's continuity at its knots
-    k = 2
-    err = np.inf
-    while k <= cap:
-        # per piece: knots, Greville sites, homogeneous values, the banded system (2p + 1) and 16
-        # samples of both curves; refused before the step that would pass MAX_ARRAY_BYTES
-        V.check_size(((vals.size - 1) * k, 4 + c.dim + 2 * p + 1 + 16 * 2 * (c.dim + 1)),
-                     f"polynomial_approximation with max_subdivisions={cap}: {k} pieces per span of {vals.size - 1}")
-        f = np.linspace(0.0, 1.0, k + 1)[1:-1]
-        extra = (vals[:-1, None] + f * np.diff(vals)[:, None]).ravel()
-        kn = np.sort(np.r_[np.repeat(vals, mult), extra])
-        x = greville(kn, p)  # Schoenberg-Whitney holds at the Greville abscissae
-        approx = BSplineCurve._trusted(p, kn, interpolate_values(x, c.evaluate(x), p, kn))
-        s = np.linspace(0.0, 1.0, 17)[:-1]
-        br = np.unique(kn)
-        y = np.r_[(br[:-1, None] + s * np.diff(br)[:, None]).ravel(), br[-1]]
-        err = float(np.max(np.linalg.norm(approx.evaluate(y) - c.evaluate(y), axis=-1)))
-        if err <= tol:
-            return approx, err
-        k *= 2
-    raise ToleranceError(
-        f"polynomial_approximation: could not approximate the rational curve within tol={tol:g} "
-        f"(error {err:.3g} with {k // 2} pieces per span)"
-    )
-
-
 def _scale_loop_weights(cc: list[BSplineCurve]) -> list[BSplineCurve] | None:
     """Scale the weights of compatible rational Coons boundaries so that homogeneous corners agree.
 
@@ -329,7 +263,7 @@ def coons(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BS
     approx_tol : float, optional
         Only for rational boundaries whose corner weights cannot be matched (module notes): the
         distance within which they are replaced by polynomial curves
-        (:func:`polynomial_approximation`; default ``tolerances.APPROXIMATION_TOLERANCE``).
+        (:func:`~occsurf.algorithms.construction.rational_approximation.polynomial_approximation`; default ``tolerances.APPROXIMATION_TOLERANCE``).
 
     Returns
     -------
@@ -493,7 +427,7 @@ def coons_bicubic(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, 
         Corner gap tolerance, as in :func:`coons`.
     approx_tol : float, optional
         Rational curves are replaced by polynomial approximations within this distance
-        (:func:`polynomial_approximation`; default ``tolerances.APPROXIMATION_TOLERANCE``).
+        (:func:`~occsurf.algorithms.construction.rational_approximation.polynomial_approximation`; default ``tolerances.APPROXIMATION_TOLERANCE``).
 
     Returns
     -------

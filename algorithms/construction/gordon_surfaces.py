@@ -29,7 +29,7 @@ from ..kernel.compat import make_compatible
 from ..kernel.curve import BSplineCurve
 from ..kernel.surface import BSplineSurface
 from ._common import Net, check_curves, homogeneous_poles, resolve_tolerance, surface_from_net, unify_nets
-from .coons_patches import polynomial_approximation
+from .rational_approximation import polynomial_approximation
 
 __all__ = ["gordon", "network_parameters"]
 
