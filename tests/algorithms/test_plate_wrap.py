@@ -17,15 +17,10 @@ from scipy.spatial.transform import Rotation
 
 from occsurf.algorithms.errors import InvalidGeometryError, OccsurfError
 from occsurf.algorithms.kernel.curve import BSplineCurve
+from occsurf.algorithms.topology.axis_fit import axis_residual, fitted_axes, helical_axis
 from occsurf.algorithms.topology.nsided import HoleSide, count_folds
 from occsurf.algorithms.topology.plate_measure import side_samples
-from occsurf.algorithms.topology.plate_wrap import (
-    WrappedPlateFill,
-    axis_residual,
-    fill_wrapped_plate,
-    fitted_axes,
-    helical_axis,
-)
+from occsurf.algorithms.topology.plate_wrap import WrappedPlateFill, fill_wrapped_plate
 
 R, PITCH, TURNS = 3.0, 1.0, 3.0
 END = 2 * np.pi * TURNS
@@ -319,14 +314,15 @@ def test_roll_back_by_blocks_is_the_broadcast_formula_bit_for_bit(seed: int, row
     million points) works coordinate by coordinate on blocks of points; the values are those of
     ``c + y a + z (cos(x / r0) e1 + sin(x / r0) e2)`` broadcast over the last axis, bit for bit,
     whatever the grid's shape and wherever the blocks end (a block of 1 to 17 points here)."""
-    from occsurf.algorithms.topology.plate_wrap import _frame, _roll_back
+    from occsurf.algorithms.topology.axis_fit import axis_frame
+    from occsurf.algorithms.topology.plate_wrap import _roll_back
 
     rng = np.random.default_rng(seed)
     X = rng.normal(size=(rows, cols, 3)) * 10.0 ** rng.uniform(-3, 3, 3)
     c = rng.normal(size=3)
     a = rng.normal(size=3)
     a /= np.linalg.norm(a)
-    e1, _ = _frame(a)
+    e1, _ = axis_frame(a)
     r0 = float(rng.uniform(0.1, 10.0))
     e2 = np.cross(a, e1)
     th = X[..., 0] / r0
