@@ -13,7 +13,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from .checks import STEP_FACE_TYPES, IgesScan, StepScan, _limited
+from .checks import STEP_FACE_TYPES, StepScan, limited_lines
+from .iges_checks import IgesScan
 
 __all__ = ["occ_check_warnings", "occ_broken_ids", "model_warnings", "faces_lost", "FACE_COUNT_WARNING"]
 
@@ -90,7 +91,7 @@ def occ_check_warnings(reader: Any, fmt: str, scan: StepScan | None = None) -> l
                 continue  # scan_step reported (and pruned) them
             lines.append(f"{label}: {text} (OCC)")
         it.Next()
-    return _limited(lines, "OCC check messages")
+    return limited_lines(lines, "OCC check messages")
 
 
 #: The warning of :func:`model_warnings` when the model has another number of faces than the file

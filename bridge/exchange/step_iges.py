@@ -64,7 +64,7 @@ OCC must never see a file that failed to parse: ``TransferRoots`` after a failed
 crashes the process. Before OCC parses anything, a STEP file must start with ``ISO-10303-21;`` and
 end with ``END-ISO-10303-21;``; an IGES file must end with a Terminate section whose line counts
 match the Start, Global, Directory and Parameter sections (a truncated IGES file otherwise reads as
-a valid-looking face with wrong poles). :mod:`occsurf.bridge.exchange.checks` then refuses what
+a valid-looking face with wrong poles). :mod:`occsurf.bridge.exchange.checks` (and :mod:`~occsurf.bridge.exchange.iges_checks`) then refuses what
 crashes OCC's parsers (deep nesting, reference cycles, impossible B-spline counts) and prunes
 references to undefined instances; what OCC reads but should not accept silently becomes
 ``ImportedModel.warnings``. Every refusal raises :class:`ExchangeError` naming the path. A file from
@@ -234,7 +234,7 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
     is a warning), then the same transfer fills an XCAF document (:func:`.xcaf.read_xcaf`): unit,
     assembly tree, colours, layers, instances. In an assembly a face without a name of its own is
     named after its instance."""
-    from . import checks, read_warnings
+    from . import checks, iges_checks, read_warnings
 
     kind = fmt.upper()
     p, data = _files.load(path, kind)
@@ -244,7 +244,7 @@ def _transfer(path: str | os.PathLike[str], fmt: str) -> tuple[Path, Any, tuple[
         warnings = list(scan.warnings)
     else:
         _files.check_iges_text(p, data)
-        iges_scan = checks.scan_iges(p, data)
+        iges_scan = iges_checks.scan_iges(p, data)
         warnings = list(iges_scan.warnings)
         scan = None
     from OCP.IFSelect import IFSelect_ReturnStatus

@@ -171,8 +171,8 @@ def _poles_finite(surface: Any) -> bool:
 def check_iges_bytes(p: Path, data: bytes, objects: Any, items: Any) -> None:
     """Refuse IGES bytes that our own reader's framing check would call damaged (a name beyond ASCII
     whose UTF-8 bytes shifted OCC's fixed columns), naming the names beyond ASCII."""
-    from .checks import scan_iges
     from .files import check_iges_text
+    from .iges_checks import scan_iges
 
     try:
         check_iges_text(p, data)

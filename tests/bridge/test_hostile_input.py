@@ -446,7 +446,7 @@ def _edit_parameters(text: C.IgesText, etype: int, edit) -> bytes:
 
 @pytest.mark.slow
 def test_iges_closed_shell_that_is_open_is_reported(tmp_path):
-    from occsurf.bridge.exchange.checks import scan_iges
+    from occsurf.bridge.exchange.iges_checks import scan_iges
 
     path = _brep_iges(tmp_path)
     data = path.read_bytes()

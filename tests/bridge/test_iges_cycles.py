@@ -3,7 +3,7 @@
 One swapped pointer of a filleted box's IGES file (``tests/bridge/test_fuzz_exchange.py``: ``swap``
 13, 262145) made the trimmed surface 144 at D3 point to itself as its base surface: OCC's transfer
 recursed round it until the reading process died of SIGSEGV, in-process (the fuzz's worker) as in
-the CLI's worker. :func:`occsurf.bridge.exchange.checks.scan_iges` now follows the pointer fields of
+the CLI's worker. :func:`occsurf.bridge.exchange.iges_checks.scan_iges` now follows the pointer fields of
 the entities a reader builds recursively (the IGES 5.3 schema of 102, 118, 120, 122, 140-144, 510)
 and refuses a cycle through them in one line; the real files read as before.
 
