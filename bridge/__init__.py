@@ -77,13 +77,12 @@ if TYPE_CHECKING:  # the lazily served names, for type checkers and IDEs
         fill_model,
     )
     from .quality.continuity import (
-        PRESETS,
         EdgeReport,
-        Thresholds,
         Violation,
         check_edges,
         edge_continuity,
     )
+    from .quality.thresholds import PRESETS, Thresholds
     from .rendering.lighting import (
         render_lit,
         render_model_lit,
@@ -137,9 +136,9 @@ _EXPORTS = {
     "edge_continuity": "quality.continuity",
     "check_edges": "quality.continuity",
     "EdgeReport": "quality.continuity",
-    "Thresholds": "quality.continuity",
+    "Thresholds": "quality.thresholds",
     "Violation": "quality.continuity",
-    "PRESETS": "quality.continuity",
+    "PRESETS": "quality.thresholds",
     "render_lit": "rendering.lighting",
     "render_model_lit": "rendering.lighting",
     "render_surfaces_lit": "rendering.lighting",

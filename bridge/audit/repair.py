@@ -218,7 +218,7 @@ def repair_model(shape: Any, preset: str = "catia", *, max_change: float | None 
     (RepairReport, TopoDS_Shape)
         The report (face numbers of the input) and the repaired model (sewn: numbered anew).
     """
-    from ..quality.continuity import PRESETS
+    from ..quality.thresholds import PRESETS
 
     if preset not in PRESETS:
         raise OccsurfError(f"preset: expected one of {', '.join(sorted(PRESETS))}, got {preset!r}")

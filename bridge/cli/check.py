@@ -81,7 +81,7 @@ __all__ = ["add_parser", "run", "PRESET_NAMES", "EXIT_FAILED", "DEFAULT_TIMEOUT"
 
 #: Exit status when ``--fail-on`` finds an edge or a face that breaks the preset.
 EXIT_FAILED = 1
-#: The threshold presets of :data:`occsurf.bridge.quality.continuity.PRESETS` (named here so the
+#: The threshold presets of :data:`occsurf.bridge.quality.thresholds.PRESETS` (named here so the
 #: command line does not import NumPy to list them; a test keeps the two equal).
 PRESET_NAMES = ("catia", "class-a", "mechanical")
 #: Seconds the worker may take for the whole model before it is stopped.

@@ -31,10 +31,8 @@ if TYPE_CHECKING:  # the lazily served names, for type checkers and IDEs
         occ_gap,
     )
     from .continuity import (
-        PRESETS,
         ContinuityResult,
         EdgeReport,
-        Thresholds,
         Violation,
         check_edges,
         edge_continuity,
@@ -44,12 +42,13 @@ if TYPE_CHECKING:  # the lazily served names, for type checkers and IDEs
         check_model,
         summarize_model,
     )
+    from .thresholds import PRESETS, Thresholds
 
 _EXPORTS = {
     name: "continuity"
-    for name in ("edge_continuity", "check_edges", "EdgeReport", "Violation", "Thresholds", "PRESETS",
-                 "ContinuityResult")
+    for name in ("edge_continuity", "check_edges", "EdgeReport", "Violation", "ContinuityResult")
 }
+_EXPORTS.update({name: "thresholds" for name in ("Thresholds", "PRESETS")})
 # OCC's own measures, written once in the engine (continuity did not define occ_gap: the lazy name
 # raised AttributeError until the TYPE_CHECKING imports below made mypy look).
 _EXPORTS.update({name: "_engine" for name in ("occ_fold", "occ_gap")})

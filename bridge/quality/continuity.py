@@ -67,7 +67,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -80,12 +80,11 @@ from occsurf.algorithms.errors import InvalidGeometryError
 from ._engine import Engine, occ_fold
 from ._pairs import Pair
 from ._setup import build_engine
+from .thresholds import Thresholds, classify_edge, resolve_thresholds, worst_measure
 
 Array = NDArray[np.float64]
 
 __all__ = [
-    "Thresholds",
-    "PRESETS",
     "EdgeReport",
     "Violation",
     "ContinuityResult",
@@ -105,76 +104,6 @@ __all__ = [
 CLASSES: tuple[str, ...] = ("degenerate", "gap", "sharp", "G0", "G1", "G2", "seam")
 
 _MEASURES = ("g0", "g1", "g2", "g2_rel", "g3")
-
-
-# ======================================================================================= presets
-@dataclass(frozen=True)
-class Thresholds:
-    """Tolerances an edge is checked against (model units: millimetres for STEP/IGES).
-
-    Attributes
-    ----------
-    g0 : float
-        Largest gap.
-    g1_deg : float
-        Largest angle between the normals, degrees.
-    g2_rel : float or None
-        Largest curvature jump in percent (CATIA's Connect Checker); ``None``: not checked.
-    g2_abs : float or None
-        Largest absolute curvature jump, 1/model units; ``None``: not checked.
-    g3 : float or None
-        Largest jump of the curvature derivative, 1/model units^2; needs ``g3=True``.
-    sharp_deg : float
-        Angles from this on are creases by design: classified ``'sharp'`` and not G1 violations.
-    name : str
-    """
-
-    g0: float = 0.001
-    g1_deg: float = 0.01
-    g2_rel: float | None = 2.0
-    g2_abs: float | None = None
-    g3: float | None = None
-    sharp_deg: float = 0.5
-    name: str = "custom"
-
-    def __post_init__(self) -> None:
-        for key in ("g0", "g1_deg", "g2_rel", "g2_abs", "g3", "sharp_deg"):
-            value = getattr(self, key)
-            if value is None and key in ("g2_rel", "g2_abs", "g3"):
-                continue
-            if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
-                raise InvalidGeometryError(f"Thresholds.{key}: expected a finite number >= 0, got {value!r}")
-
-    def replace(self, **changes: Any) -> Thresholds:
-        """A copy with some values changed (``name`` becomes ``'<name>+custom'`` unless given)."""
-        changes.setdefault("name", f"{self.name}+custom")
-        return replace(self, **changes)
-
-
-#: CATIA's relative curvature jump (percent): also what tells G1 from G2 in a report when the
-#: thresholds do not check relative jumps (``g2_rel=None``).
-_CATIA_G2_REL = 2.0
-#: ``'catia'``: CATIA V5 Connect Checker's defaults (G0 0.001 mm, G1 0.01 deg, G2 2 %).
-#: ``'class-a'``: visible automotive/consumer surfaces: half CATIA's angle and curvature jumps
-#: (0.005 deg, 1 %), as class-A reviews ask for joints that look seamless in highlight lines, and a
-#: G3 check when requested (1e-3 per mm^2).
-#: ``'mechanical'``: machined parts: 0.01 mm gap (a typical machining tolerance, and above IGES's
-#: 10-digit round-off on metre-sized parts), 0.5 deg tangency (below what shows on a part; also
-#: NX's default angle tolerance), no curvature check (a fillet meets its plane with a 100 %
-#: curvature jump by design), creases from 5 deg on.
-PRESETS: dict[str, Thresholds] = {
-    "catia": Thresholds(0.001, 0.01, _CATIA_G2_REL, None, None, 0.5, "catia"),
-    "class-a": Thresholds(0.001, 0.005, 1.0, None, 1e-3, 0.5, "class-a"),
-    "mechanical": Thresholds(0.01, 0.5, None, None, None, 5.0, "mechanical"),
-}
-
-
-def _thresholds(preset: str | Thresholds) -> Thresholds:
-    if isinstance(preset, Thresholds):
-        return preset
-    if isinstance(preset, str) and preset in PRESETS:
-        return PRESETS[preset]
-    raise InvalidGeometryError(f"preset: expected one of {sorted(PRESETS)} or a Thresholds, got {preset!r}")
 
 
 # ======================================================================================= reports
@@ -402,7 +331,7 @@ def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False,
         indices of the model), or a ``model`` that is not a shape.
     """
     samples, match_tol = _check_args(tolerances.CONTINUITY_SAMPLES if samples is None else samples, match_tol)
-    thresholds = _thresholds(preset)
+    thresholds = resolve_thresholds(preset)
     iterations = tolerances.CONTINUITY_REFINE_ITERATIONS if refine is None else refine
     if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
         raise InvalidGeometryError(f"refine: expected an integer >= 0, got {iterations!r}")
@@ -541,8 +470,8 @@ def _report(engine: Engine, idx: int, p: Pair, why: str | None, r: int | None, b
     pts = {m: best[m]["P"][r] for m in meas}
     flip = bool(engine.flip[idx] < 0) if not p.seam else False
     length = float(np.nansum(np.linalg.norm(np.diff(P[r], axis=0), axis=1)))
-    cls = _classify(p, val, th)
-    worst = pts[_worst_measure(val, th, cls)]
+    cls = classify_edge(p, val, th)
+    worst = pts[worst_measure(val, th, cls)]
     g3 = val.get("g3") if engine.third else None
     return EdgeReport(idx, faces, P[r, samples // 2].copy(), p.matched, val["g0"], val["g1"], val["g2"],
                       val["g2_rel"], g3, float(np.nanmax(grid["gap"][r])) if np.any(np.isfinite(grid["gap"][r])) else float("nan"),
@@ -559,35 +488,6 @@ def _midpoint_fallback(p: Pair) -> Array:
         return np.array(c.Value(0.5 * (c.FirstParameter() + c.LastParameter())).Coord())
     except Exception:  # noqa: BLE001
         return np.full(3, np.nan)
-
-
-def _limits(th: Thresholds) -> dict[str, float | None]:
-    return {"g0": th.g0, "g1": th.g1_deg, "g2": th.g2_abs, "g2_rel": th.g2_rel, "g3": th.g3}
-
-
-def _classify(p: Pair, val: dict[str, float], th: Thresholds) -> str:
-    if p.seam:
-        return "seam"
-    g2_rel = th.g2_rel if th.g2_rel is not None else _CATIA_G2_REL
-    if not val["g0"] <= th.g0:
-        return "gap"
-    if not val["g1"] < th.sharp_deg:
-        return "sharp"
-    if not val["g1"] <= th.g1_deg:
-        return "G0"
-    if not val["g2_rel"] <= g2_rel or (th.g2_abs is not None and not val["g2"] <= th.g2_abs):
-        return "G1"
-    return "G2"
-
-
-def _worst_measure(val: dict[str, float], th: Thresholds, cls: str) -> str:
-    lim = _limits(th)
-    if lim["g2_rel"] is None:
-        lim["g2_rel"] = _CATIA_G2_REL
-    ratios = {m: val[m] / limit for m in val if (limit := lim.get(m)) and math.isfinite(val[m])}
-    if cls in ("gap", "sharp", "G0"):  # curvature is meaningless across a crease
-        ratios = {m: r for m, r in ratios.items() if m in ("g0", "g1")}
-    return max(ratios, key=ratios.__getitem__) if ratios else "g0"
 
 
 def check_edges(reports: list[EdgeReport], thresholds: str | Thresholds = "catia") -> list[Violation]:
@@ -609,7 +509,7 @@ def check_edges(reports: list[EdgeReport], thresholds: str | Thresholds = "catia
     list of Violation
         In edge order, then measure order.
     """
-    th = _thresholds(thresholds)
+    th = resolve_thresholds(thresholds)
     out: list[Violation] = []
     for r in reports:
         if r.classification == "degenerate":

@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 
     from ..exchange.step_iges import ImportedFace, ImportedModel
     from ..rendering.tessellation import FaceMesh
-    from .continuity import Thresholds
+    from .thresholds import Thresholds
 
 __all__ = ["FaceQuality", "QualityReport", "FaceField", "check_model", "face_fields", "summarize_model", "DEFAULT_PRESET",
            "face_scores", "worst_faces"]
@@ -352,7 +352,7 @@ def check_model(model: ImportedModel, *, faces: Sequence[int] | None = None, sam
         Grid size per face for :func:`~occsurf.algorithms.quality.face_flags` (masked to the
         trimmed face).
     preset : str
-        A key of :data:`occsurf.bridge.quality.continuity.PRESETS` (``'catia'``: 0.001 mm, 0.01 deg, 2 %).
+        A key of :data:`occsurf.bridge.quality.thresholds.PRESETS` (``'catia'``: 0.001 mm, 0.01 deg, 2 %).
     thresholds : optional
         Explicit thresholds overriding the preset.
     edges, flags : bool
@@ -489,9 +489,9 @@ def _mesh(model: ImportedModel, faces: Sequence[ImportedFace], each: bool, note:
 
 
 def _preset_thresholds(preset: str, thresholds: Thresholds | None) -> Thresholds:
-    from . import continuity
+    from .thresholds import resolve_thresholds
 
-    return continuity._thresholds(preset if thresholds is None else thresholds)
+    return resolve_thresholds(preset if thresholds is None else thresholds)
 
 
 def _add_edges(report: QualityReport, model: ImportedModel, chosen: list[int] | None, preset: str,
@@ -499,8 +499,9 @@ def _add_edges(report: QualityReport, model: ImportedModel, chosen: list[int] | 
     """Fill the edge table (:func:`.continuity.edge_continuity`), each face's worst adjacent G1
     angle, and the edges' violations of the thresholds (:func:`.continuity.check_edges`)."""
     from . import continuity
+    from .thresholds import resolve_thresholds
 
-    th = continuity._thresholds(preset if thresholds is None else thresholds)
+    th = resolve_thresholds(preset if thresholds is None else thresholds)
     result = continuity.edge_continuity(model, preset=th, model_size=edge_size)
     reports = list(result)
     if chosen is not None:

@@ -220,9 +220,9 @@ def test_vendored_viewer_and_licence() -> None:
 
 def test_cli_preset_names_match_the_library() -> None:
     from occsurf.bridge.cli.check import PRESET_NAMES
-    from occsurf.bridge.quality import continuity
+    from occsurf.bridge.quality import thresholds
 
-    assert sorted(PRESET_NAMES) == sorted(continuity.PRESETS) == sorted(FACE_FAIL_KINDS)
+    assert sorted(PRESET_NAMES) == sorted(thresholds.PRESETS) == sorted(FACE_FAIL_KINDS)
 
 
 def test_python_access_edges_and_coloured_meshes(loft_report, tmp_path) -> None:
