@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from .. import tolerances
 from ..errors import ParameterError
-from ..hierarchical.core import Overlay
+from ..hierarchical.overlays import Overlay
 from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.surface import BSplineSurface
 

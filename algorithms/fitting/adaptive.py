@@ -52,7 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import _numba_kernels as _nk
 from .. import tolerances
 from ..errors import InvalidGeometryError
-from ..hierarchical.core import Overlay
+from ..hierarchical.overlays import Overlay
 from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.basis import basis_matrix
 from ..kernel.surface import BSplineSurface

@@ -47,7 +47,7 @@ from .. import _numba_kernels as _nk
 from .. import _validate as V
 from .. import tolerances
 from ..errors import InvalidGeometryError, ParameterError
-from ..hierarchical.core import Overlay
+from ..hierarchical.overlays import Overlay
 from ..hierarchical.surface import HierarchicalSurface
 from ..kernel.surface import BSplineSurface
 from ._common import check_fit_size, project_points, sparse_difference_penalty

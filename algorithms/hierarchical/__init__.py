@@ -10,7 +10,6 @@ Public names: :class:`HierarchicalSurface`, :class:`HierarchicalCurve`, :class:`
 :func:`section_area` and :class:`SoftTissue`.
 """
 
-from .core import Overlay
 from .curve import HierarchicalCurve
 from .dynamics import SoftTissue
 from .figures import (
@@ -24,6 +23,7 @@ from .figures import (
     section_area,
 )
 from .offsets import ADDITIVE_OFFSETS, FRAME_OFFSETS, OffsetMapping, register_offset_mapping
+from .overlays import Overlay
 from .skeleton import Joint, Pose, Skeleton
 from .skinning import blend_motions
 from .surface import HierarchicalSurface

@@ -30,8 +30,9 @@ from ..kernel.curve import BSplineCurve
 from ..kernel.rational import curve_quotient_rule
 from ..manipulation.curves import drag_point as _drag_curve_point
 from ..manipulation.linalg import ConvergenceError
-from .core import Hierarchy, Overlay, check_format, support_mask
+from .core import Hierarchy, check_format
 from .offsets import OffsetMapping, curve_frames
+from .overlays import Overlay, support_mask
 
 __all__ = ["HierarchicalCurve"]
 

@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import _validate as V
 from ..errors import InvalidGeometryError
 from ..kernel.surface import BSplineSurface
-from .core import Overlay
+from .overlays import Overlay
 from .skeleton import Pose, Skeleton
 from .skinning import BLENDS, blend_motions
 from .surface import HierarchicalSurface

@@ -41,8 +41,9 @@ from ..kernel.rational import surface_quotient_rule
 from ..kernel.surface import BSplineSurface
 from ..manipulation.linalg import ConvergenceError
 from ..manipulation.surfaces import drag_surface_point
-from .core import FORMAT_VERSION, Hierarchy, Node, Overlay, check_format, support_mask
+from .core import FORMAT_VERSION, Hierarchy, check_format
 from .offsets import OffsetMapping, surface_frames
+from .overlays import Node, Overlay, support_mask
 
 __all__ = ["HierarchicalSurface", "Overlay", "FORMAT_VERSION"]
 
