@@ -20,6 +20,7 @@ from scipy.integrate import solve_ivp
 import occsurf.algorithms.construction.sweeping as sw
 from occsurf.algorithms import BSplineCurve, arc, circle, tolerances
 from occsurf.algorithms.construction.generation import translational_sweep
+from occsurf.algorithms.construction.sweep_frames import PathFrames
 from occsurf.algorithms.construction.sweeping import SweepResult, exact_sweep, sweep
 from occsurf.algorithms.errors import InvalidGeometryError, ToleranceError
 from occsurf.algorithms.fitting.interpolation import interpolate_curve
@@ -132,7 +133,7 @@ def test_report_bounds_and_independent_check(frame):
 def test_rmf_frame_field_matches_ode():
     path = helix_path()
     v = np.linspace(*path.domain, 301)
-    F = sw._FrameField(path, "rmf")(v)
+    F = PathFrames(path, "rmf")(v)
 
     def rhs(s, r):  # r' = -(r . T') T : the rotation-minimising (Bishop) transport
         d = path.derivatives(s, 2)
@@ -151,7 +152,7 @@ def test_rmf_frame_field_at_its_reference_samples_is_the_reference_frame():
     second axis ``t - t_k`` is round-off in a random direction: the field keeps ``r_k`` there.
     Tangents off by 1e-13 (another way to compute them) once turned those normals by up to 140 degrees."""
     path = helix_path()
-    field = sw._FrameField(path, "rmf")
+    field = PathFrames(path, "rmf")
     v = field.grid[::7]
     D = path.derivatives(v, 1)
     ref = field.r[::7]
@@ -287,7 +288,7 @@ def test_rmf_sweep_along_a_closed_non_planar_path_closes():
     closed = BSplineCurve(3, np.arange(P.shape[0] + 4, dtype=float), P).clamp()
     d0, d1 = closed.derivatives(closed.domain[0], 1), closed.derivatives(closed.domain[1], 1)
     assert np.linalg.norm(d0[0] - d1[0]) < 1e-12 and np.linalg.norm(d0[1] - d1[1]) < 1e-9
-    assert abs(sw._FrameField(closed, "rmf").holonomy) > 1.0  # there is something to correct
+    assert abs(PathFrames(closed, "rmf").holonomy) > 1.0  # there is something to correct
     prof = circle(d0[0], 0.2, normal=d0[1])
     r = sweep(prof, closed, frame="rmf", tol=1e-7, return_report=True)
     (u0, u1), (v0, v1) = r.surface.domain
@@ -296,7 +297,7 @@ def test_rmf_sweep_along_a_closed_non_planar_path_closes():
     assert gap <= 2e-7  # both ends within the sweep's tolerance of one closed section
     assert r.max_error <= 1e-7
     # an open path keeps the pure RMF (no correction)
-    assert sw._FrameField(closed.segment(*closed.domain[:1], closed.domain[1] - 0.5), "rmf").holonomy == 0.0
+    assert PathFrames(closed.segment(*closed.domain[:1], closed.domain[1] - 0.5), "rmf").holonomy == 0.0
 
 
 # ------------------------------------------------------------------------------ tolerances
@@ -329,9 +330,9 @@ def test_check_and_verify_points_follow_an_override_of_their_counts():
 def test_frame_and_knot_limits_are_read_from_tolerances():
     path = helix_path()
     spans = np.unique(path.knots).shape[0] - 1
-    assert sw._FrameField(path, "rmf").grid.shape == (128 * spans + 1,)
+    assert PathFrames(path, "rmf").grid.shape == (128 * spans + 1,)
     with tolerances.override(SWEEP_RMF_STEPS=16):
-        assert sw._FrameField(path, "rmf").grid.shape == (16 * spans + 1,)
+        assert PathFrames(path, "rmf").grid.shape == (16 * spans + 1,)
     K = sw._initial_knots(path, "rmf", 3)
     with tolerances.override(SWEEP_INITIAL_PIECES=4):
         K4 = sw._initial_knots(path, "rmf", 3)
@@ -352,9 +353,9 @@ def test_close_tol_override_decides_whether_a_path_is_closed():
     P = np.vstack((pts, pts[:3]))
     P[-1] += [0, 0, 1e-6]  # the end moves 1e-6 off the start (the tangents still agree within 1e-6)
     almost = BSplineCurve(3, np.arange(P.shape[0] + 4, dtype=float), P).clamp()
-    assert sw._FrameField(almost, "rmf").holonomy == 0.0  # 1e-6 > SWEEP_CLOSE_TOL * size
+    assert PathFrames(almost, "rmf").holonomy == 0.0  # 1e-6 > SWEEP_CLOSE_TOL * size
     with tolerances.override(SWEEP_CLOSE_TOL=1e-5, SWEEP_CLOSE_ANGLE=1e-3):
-        assert abs(sw._FrameField(almost, "rmf").holonomy) > 1.0
+        assert abs(PathFrames(almost, "rmf").holonomy) > 1.0
 
 
 # ------------------------------------------------------------------------------ the steps
