@@ -60,6 +60,8 @@ REMOVED = {
     "manipulation/linalg_args.py": ["RANK_RTOL", "CONSISTENCY_RTOL", "SPARSE_TOL"],
     "manipulation/curves.py": ["NEWTON_TOL", "MAX_ITERATIONS", "NEWTON_STEPS", "MIN_CONTINUATION_STEP", "KKT_RTOL",
                                "LINEAR_CHECK_RTOL"],
+    "manipulation/curve_solver.py": ["NEWTON_TOL", "MAX_ITERATIONS", "NEWTON_STEPS", "MIN_CONTINUATION_STEP",
+                                     "KKT_RTOL", "LINEAR_CHECK_RTOL"],
     "manipulation/surfaces.py": ["LINEAR_CHECK_RTOL"],
     "hierarchical/offsets.py": ["FRAME_DEGENERACY", "FRAME_NUDGE"],
     "hierarchical/surface.py": ["EDIT_POINT_RTOL", "EDIT_POINT_MAX_ITER"],
@@ -169,10 +171,11 @@ def test_newton_tolerances_and_limits_are_read_at_call_time(monkeypatch):
     with tolerances.override(LINEAR_CHECK_RTOL=0.0), pytest.raises(ConstraintError, match="not met after the solve"):
         constrain(c, request)  # a zero limit refuses every linear residual (round-off is never 0 here)
 
+    import occsurf.algorithms.manipulation.curve_solver as CS
     import occsurf.algorithms.manipulation.curves as MC
 
     limits, steps, converged = [], [], []
-    real_solve, real_newton = MC._solve, MC._newton_kkt
+    real_solve, real_newton = CS.solve_problem, CS._newton_kkt
 
     def newton(*args):
         steps.append(args[-1])
@@ -184,8 +187,8 @@ def test_newton_tolerances_and_limits_are_read_at_call_time(monkeypatch):
         limits.append(max_iter)
         return real_solve(prob, tol, max_iter)
 
-    monkeypatch.setattr(MC, "_solve", solve)
-    monkeypatch.setattr(MC, "_newton_kkt", newton)
+    monkeypatch.setattr(MC, "solve_problem", solve)  # where constrain looks it up
+    monkeypatch.setattr(CS, "_newton_kkt", newton)
     with tolerances.override(DRAG_MAX_ITERATIONS=17, DRAG_NEWTON_STEPS=3):
         constrain(c, request)
     assert limits == [17] and max(steps) == 3 and any(converged)
