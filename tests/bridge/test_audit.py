@@ -256,6 +256,19 @@ def _one_line_exit_2(proc) -> str:
     return proc.stderr
 
 
+# The client waits open_client's connect_timeout (10 s) for a scheduler nobody runs; 2 s here, the
+# same refusal (nothing listens on the port: the connection cannot succeed however long it waits).
+_SHORT_CONNECT = """
+import sys
+if "occsurf.bridge.cli" in " ".join(getattr(sys, "orig_argv", [])):
+    from occsurf.bridge.audit import cluster
+    _open_client = cluster.open_client
+    def _short(scheduler=None, workers=None, connect_timeout=10.0):
+        return _open_client(scheduler, workers, min(connect_timeout, 2.0))
+    cluster.open_client = _short
+"""
+
+
 @pytest.mark.slow
 def test_cli_bad_input_is_one_line_exit_2(tmp_path: Path) -> None:
     env = hook_env(tmp_path)
@@ -265,8 +278,12 @@ def test_cli_bad_input_is_one_line_exit_2(tmp_path: Path) -> None:
     sample = str(SAMPLES / "loft.step")
     assert "no STEP/IGES files" in _one_line_exit_2(run_cli("audit", str(tmp_path / "empty"), "--out", str(tmp_path / "o"), env=env))
     assert "cannot write there" in _one_line_exit_2(run_cli("audit", sample, "--out", str(blocker / "o"), env=env))
+    hook = tmp_path / "short_connect"  # first on the path: this sitecustomize, not hook_env's (no reader runs)
+    hook.mkdir()
+    (hook / "sitecustomize.py").write_text(_SHORT_CONNECT)
+    short = {**env, "PYTHONPATH": os.pathsep.join((str(hook), env["PYTHONPATH"]))}
     err = _one_line_exit_2(run_cli("audit", sample, "--out", str(tmp_path / "o2"), "--scheduler",
-                                   f"tcp://127.0.0.1:{free_port()}", env=env))
+                                   f"tcp://127.0.0.1:{free_port()}", env=short))
     assert "cannot connect" in err
     assert "no such file" in _one_line_exit_2(run_cli("audit", str(tmp_path / "nope.step"), "--out", str(tmp_path / "o3"),
                                                        env=env))
