@@ -75,13 +75,13 @@ def test_area_of_curved_patch_agrees_with_dense_quadrature():
 
 
 def _green_every_piece(surface, c, pieces, anchor):
-    """The Green sum of ``trimmed._green_area`` with every u piece evaluated at every node (the
+    """The Green sum of ``trimmed_area.green_area`` with every u piece evaluated at every node (the
     pieces outside ``[min(u, anchor), max(u, anchor)]`` at zero length): its form before the pieces
     were picked per node."""
-    from occsurf.algorithms.kernel import trimmed
+    from occsurf.algorithms.kernel import trimmed_area
 
-    x, w = trimmed._GAUSS
-    s, ws = trimmed._composite_nodes(trimmed._breakpoints(surface, c), pieces, x, w)
+    x, w = trimmed_area.GAUSS
+    s, ws = trimmed_area.composite_nodes(trimmed_area.breakpoints(surface, c), pieces, x, w)
     D = c.derivatives(s, 1)
     us, vs, dv = D[:, 0, 0], D[:, 0, 1], D[:, 1, 1]
     kb = np.unique(surface.knots[0][surface.degree[0]:surface.n_poles[0] + 1])
@@ -103,7 +103,7 @@ def test_green_sums_over_the_overlapping_pieces_equal_the_sums_over_every_piece(
     """The area's inner integrals evaluate, per node, only the u pieces between the node and the
     anchor; the value equals the former sum over every piece (zero-length ones adding 0) to
     round-off: 1e-13 of the integral of |J| over the patch (a few hundred terms of size <= that)."""
-    from occsurf.algorithms.kernel import trimmed
+    from occsurf.algorithms.kernel import trimmed_area
 
     s = _dome().insert_knot(0.37, direction="u").insert_knot(0.61, direction="u").insert_knot(0.5, direction="v")
     if rational:
@@ -111,7 +111,7 @@ def test_green_sums_over_the_overlapping_pieces_equal_the_sums_over_every_piece(
         s = BSplineSurface(s.degree, s.knots, s.control_points, wts)
     scale = _plate(holes=False).area() * 6.0  # |J| <= ~6 over the unit square of the dome
     for c in (*_square(), _hole((cx, cy), r)):
-        got = trimmed._green_area(s, c, 1 << level, anchor)
+        got = trimmed_area.green_area(s, c, 1 << level, anchor)
         assert abs(got - _green_every_piece(s, c, 1 << level, anchor)) <= 1e-13 * scale
 
 
@@ -122,7 +122,7 @@ def test_breakpoints_stopped_at_neighbouring_doubles_are_all_sixty_halvings(cx, 
     """The crossings of the surface's knot lines stop being halved once every bracket is two
     neighbouring doubles: the same crossings, bit for bit, as the 60 halvings of before (circles
     and the trim square over a dome with extra knots in u and v, rational or not)."""
-    from occsurf.algorithms.kernel import trimmed
+    from occsurf.algorithms.kernel import trimmed_area
 
     s = _dome()
     for k, x in enumerate(knots):
@@ -131,7 +131,7 @@ def test_breakpoints_stopped_at_neighbouring_doubles_are_all_sixty_halvings(cx, 
         wts = 1.0 + 0.3 * np.cos(np.arange(s.n_poles[0] * s.n_poles[1])).reshape(s.n_poles)
         s = BSplineSurface(s.degree, s.knots, s.control_points, wts)
     for c in (*_square(), _hole((cx, cy), r)):
-        assert np.array_equal(trimmed._breakpoints(s, c), trimmed._breakpoints(s, c, stop_early=False))
+        assert np.array_equal(trimmed_area.breakpoints(s, c), trimmed_area.breakpoints(s, c, stop_early=False))
 
 
 def test_loops_are_oriented_whatever_the_input():

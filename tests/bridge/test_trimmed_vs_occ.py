@@ -507,7 +507,7 @@ def test_area_converges_beside_a_near_singular_point():
 
             u0 = t.surface.domain[0][0]
             seen: dict[tuple[int, float], float] = {}  # (pieces, anchor) -> sum over the loops' p-curves
-            green = trimmed._green_area
+            green = trimmed.green_area
 
             def recorded(surface, c, pieces, anchor, seen=seen, green=green):
                 value = green(surface, c, pieces, anchor)
@@ -516,7 +516,7 @@ def test_area_converges_beside_a_near_singular_point():
 
             with tolerances.override(TRIM_AREA_SINGULAR=0.0), pytest.raises(ToleranceError, match="TRIM_AREA_LEVELS"), \
                     pytest.MonkeyPatch.context() as mp:
-                mp.setattr(trimmed, "_green_area", recorded)
+                mp.setattr(trimmed, "green_area", recorded)  # where area() looks it up
                 t.area()  # the override turns the anchor choice off (u0): the old failure
             # its last level is the u0-anchored quadrature at 64 pieces per span (computed once, not twice)
             assert int(tolerances.TRIM_AREA_LEVELS) == 6 and set(seen) == {(1 << k, u0) for k in range(7)}
