@@ -48,7 +48,7 @@ below. Gordon surfaces of rational networks are built in homogeneous coordinates
 curves meet in homogeneous space too (for instance a network of iso-curves of one NURBS
 surface); otherwise, and for :func:`coons_bicubic` (whose derivative data are Cartesian), rational
 curves are replaced by polynomial B-spline approximations within ``approx_tol`` (measured on dense
-samples, see :func:`~occsurf.algorithms.construction.rational_approximation.polynomial_approximation`), so the result is within that distance of the
+samples, see :func:`~occsurf.algorithms.construction.polynomial_approximation`), so the result is within that distance of the
 rational network.
 """
 
@@ -263,7 +263,7 @@ def coons(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, left: BS
     approx_tol : float, optional
         Only for rational boundaries whose corner weights cannot be matched (module notes): the
         distance within which they are replaced by polynomial curves
-        (:func:`~occsurf.algorithms.construction.rational_approximation.polynomial_approximation`; default ``tolerances.APPROXIMATION_TOLERANCE``).
+        (:func:`~occsurf.algorithms.construction.polynomial_approximation`; default ``tolerances.APPROXIMATION_TOLERANCE``).
 
     Returns
     -------
@@ -427,7 +427,7 @@ def coons_bicubic(bottom: BSplineCurve, right: BSplineCurve, top: BSplineCurve, 
         Corner gap tolerance, as in :func:`coons`.
     approx_tol : float, optional
         Rational curves are replaced by polynomial approximations within this distance
-        (:func:`~occsurf.algorithms.construction.rational_approximation.polynomial_approximation`; default ``tolerances.APPROXIMATION_TOLERANCE``).
+        (:func:`~occsurf.algorithms.construction.polynomial_approximation`; default ``tolerances.APPROXIMATION_TOLERANCE``).
 
     Returns
     -------

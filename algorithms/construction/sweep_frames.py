@@ -1,6 +1,6 @@
-"""The frames a generalised sweep moves its profile by (course §6-30 .. §6-33): rotation-minimizing
-(the double reflection method), Frenet or fixed, at any parameters of the path
-(:class:`PathFrames`). The sweep itself is :mod:`.sweeping`.
+"""The frames a generalised sweep moves its profile by (course §6-6, for the sweeps of §6-26 ..
+§6-32): rotation-minimizing (the double reflection method), Frenet or fixed, at any parameters of
+the path (:class:`PathFrames`). The sweep itself is :mod:`.sweeping`.
 """
 
 from __future__ import annotations

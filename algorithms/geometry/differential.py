@@ -1,4 +1,4 @@
-"""Differential geometry of curves (course §6-0 .. §6-7), vectorised, rational included.
+"""Differential geometry of curves (course §6-1 .. §6-6), vectorised, rational included.
 
 Frenet frame, curvature, torsion, dκ/ds, arc length by adaptive Gauss–Legendre, and
 rotation-minimizing frames by the double reflection method. Surfaces (fundamental forms,

@@ -1,4 +1,4 @@
-"""Differential geometry of surfaces (course §6-8 .. §6-14), vectorised, rational included.
+"""Differential geometry of surfaces (course §6-7 .. §6-16), vectorised, rational included.
 
 First and second fundamental forms, Gaussian / mean / principal curvatures with principal
 directions in 3-D, umbilics, and the normal curvature of a tangent direction, from

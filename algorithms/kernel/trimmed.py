@@ -16,7 +16,7 @@ The area is ``integral over D of |S_u x S_v| du dv`` turned into a boundary inte
 theorem, ``A = closed integral of F(u, v) dv`` with ``F(u, v) = integral from u0 to u of
 |S_u x S_v|(t, v) dt``, both integrals by composite Gauss-Legendre quadrature on the knot spans
 (the scheme OCC's ``BRepGProp_Face`` uses), refined until two levels agree to
-``tolerances.TRIM_AREA_RTOL``.
+``tolerances.TRIM_AREA_RTOL``; the quadrature is :mod:`.trimmed_area`'s.
 
 Conventions
 -----------

@@ -17,8 +17,10 @@ __all__ = ["GAUSS", "breakpoints", "composite_nodes", "green_area"]
 
 Array = NDArray[np.float64]
 
-#: The 8-point Gauss-Legendre rule on [-1, 1]: (nodes, weights).
+#: The 8-point Gauss-Legendre rule on [-1, 1]: (nodes, weights), read-only.
 GAUSS = np.polynomial.legendre.leggauss(8)
+for _a in GAUSS:
+    _a.flags.writeable = False
 
 
 def green_area(surface: BSplineSurface, c: BSplineCurve, pieces: int, anchor: float) -> float:

@@ -49,7 +49,8 @@ principal frames agree, with a rotation term); it is reported too, as ``g2_gap_o
 our principal curvatures with OCC's formula: that is what the cross-validation against
 ``LocalAnalysis_SurfaceContinuity`` compares, on the same points.
 
-Classification of an edge (``Thresholds`` of the chosen preset):
+Classification of an edge (the :class:`~.thresholds.Thresholds` of the chosen preset; the presets and
+the classification are in :mod:`.thresholds`):
 
 ==============  ======================================================================
 ``degenerate``  a degenerated edge (collapsed side, pole), or one that could not be evaluated
@@ -216,7 +217,7 @@ class EdgeReport:
 
 @dataclass(frozen=True)
 class Violation:
-    """One edge breaking one tolerance of a :class:`Thresholds`.
+    """One edge breaking one tolerance of a :class:`~.thresholds.Thresholds`.
 
     ``measure`` is ``'g0'``, ``'g1'``, ``'g2_rel'``, ``'g2'``, ``'g3'`` or ``'normal_flip'``.
     """
@@ -304,8 +305,8 @@ def edge_continuity(model: Any, *, samples: int | None = None, g3: bool = False,
         Matching tolerance in model units; default ``tolerances.CONTINUITY_MATCH_RTOL`` (1e-4) times
         the diagonal of the model's bounding box. Stated in the result (``.match_tol``).
     preset : str or Thresholds, optional
-        ``'catia'`` (default), ``'class-a'``, ``'mechanical'`` (see :data:`PRESETS`) or your own
-        :class:`Thresholds`: used for ``classification`` and ``worst_point``.
+        ``'catia'`` (default), ``'class-a'``, ``'mechanical'`` (see :data:`~.thresholds.PRESETS`) or your own
+        :class:`~.thresholds.Thresholds`: used for ``classification`` and ``worst_point``.
     refine : int, optional
         Golden-section iterations of the worst-point search per measure (default
         ``tolerances.CONTINUITY_REFINE_ITERATIONS``, 6; 0 keeps the dense samples only).
@@ -502,7 +503,7 @@ def check_edges(reports: list[EdgeReport], thresholds: str | Thresholds = "catia
     ----------
     reports : list of EdgeReport
     thresholds : str or Thresholds
-        A :data:`PRESETS` name or your own.
+        A :data:`~.thresholds.PRESETS` name or your own.
 
     Returns
     -------

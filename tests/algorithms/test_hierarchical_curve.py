@@ -185,7 +185,7 @@ def test_curve_derivatives_at_the_ends_of_an_overlay_follow_the_flat_convention(
 
 
 def test_hierarchical_modules_import_no_private_names():
-    """curve.py and surface.py build on core.py's public Hierarchy and Node, not on private names."""
+    """curve.py and surface.py build on core.py's public Hierarchy and overlays.py's Node, not on private names."""
     import ast
     from pathlib import Path
 

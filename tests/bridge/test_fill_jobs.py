@@ -43,6 +43,7 @@ def test_two_processes_fill_the_faces_one_process_fills(tmp_path: Path) -> None:
     results = ff._fill_holes(item, plan, [Reader(ff.PRELOAD), Reader(ff.PRELOAD)], timeout=None)
     filled = [r for r in results if r["faces"] is not None]
     assert len(filled) == 4
+    assert all("pid" in r for r in results), [r["report"] for r in results if "pid" not in r]  # none lost
     pids = {r["pid"] for r in results}
     assert len(pids) == 2 and os.getpid() not in pids
     ctx = ff._context(item, keep=False)
