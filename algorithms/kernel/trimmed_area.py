@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import _validate as V
 from .curve import BSplineCurve
 from .surface import BSplineSurface
 
@@ -18,9 +19,7 @@ __all__ = ["GAUSS", "breakpoints", "composite_nodes", "green_area"]
 Array = NDArray[np.float64]
 
 #: The 8-point Gauss-Legendre rule on [-1, 1]: (nodes, weights), read-only.
-GAUSS = np.polynomial.legendre.leggauss(8)
-for _a in GAUSS:
-    _a.flags.writeable = False
+GAUSS = tuple(V.readonly(a) for a in np.polynomial.legendre.leggauss(8))
 
 
 def green_area(surface: BSplineSurface, c: BSplineCurve, pieces: int, anchor: float) -> float:
