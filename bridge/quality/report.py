@@ -30,6 +30,7 @@ import numpy as np
 from ..messages import error_line
 from .choices import face_scores
 from .face_values import FaceValues
+from .thresholds import Thresholds, resolve_thresholds
 from .uv_masks import MeshMask, uv_mask
 
 if TYPE_CHECKING:
@@ -37,7 +38,6 @@ if TYPE_CHECKING:
 
     from ..exchange.step_iges import ImportedFace, ImportedModel
     from ..rendering.tessellation import FaceMesh
-    from .thresholds import Thresholds
 
 __all__ = ["FaceQuality", "QualityReport", "FaceField", "check_model", "face_fields", "summarize_model", "DEFAULT_PRESET",
            "face_scores", "worst_faces"]
@@ -489,8 +489,6 @@ def _mesh(model: ImportedModel, faces: Sequence[ImportedFace], each: bool, note:
 
 
 def _preset_thresholds(preset: str, thresholds: Thresholds | None) -> Thresholds:
-    from .thresholds import resolve_thresholds
-
     return resolve_thresholds(preset if thresholds is None else thresholds)
 
 
@@ -499,9 +497,8 @@ def _add_edges(report: QualityReport, model: ImportedModel, chosen: list[int] | 
     """Fill the edge table (:func:`.continuity.edge_continuity`), each face's worst adjacent G1
     angle, and the edges' violations of the thresholds (:func:`.continuity.check_edges`)."""
     from . import continuity
-    from .thresholds import resolve_thresholds
 
-    th = resolve_thresholds(preset if thresholds is None else thresholds)
+    th = _preset_thresholds(preset, thresholds)
     result = continuity.edge_continuity(model, preset=th, model_size=edge_size)
     reports = list(result)
     if chosen is not None:
