@@ -179,7 +179,8 @@ def audit(paths: Sequence[str], out: str, *, scheduler: str | None = None, worke
     try:
         with held_signals():  # a signal during start-up: delivered once the cluster is ours to close
             client, cluster = open_client(scheduler, workers)
-        dashboard = dashboard_link(client)  # first: the dashboard shows the cluster from the start
+        # first: the dashboard shows the cluster from the start; a local cluster's page is ours (not probed)
+        dashboard = dashboard_link(client, probe=cluster is None)
         if dashboard is not None and on_dashboard is not None:
             on_dashboard(dashboard)
         if progress is not None:

@@ -214,6 +214,25 @@ def test_store_parts_are_atomic_and_resume_by_hash(tmp_path: Path) -> None:
     assert t.schema == store.FILES_SCHEMA
 
 
+
+def test_summary_leaves_the_caller_s_matplotlib_alone(tmp_path: Path) -> None:
+    """An audit called from a notebook or a GUI draws its charts on figures of its own: the caller's
+    backend stays what it chose and pyplot's figures are not touched (``matplotlib.use("Agg")`` in
+    the summary switched the backend of the calling process)."""
+    out = tmp_path / "r"
+    s = store.ResultStore(out)
+    s.add({**_row("a"), "max_dev": 1e-15}, [{"face": 0, "type": "BSplineSurface", "max_dev": 1e-15,
+                                            "roundtrip_dev": 0.0, "roundtrip_exact": True}])
+    s.flush()
+    code = ("import sys, matplotlib; matplotlib.use('svg'); import matplotlib.pyplot as plt; plt.figure(7); "
+            "from occsurf.bridge.audit.summary import write_summary; "
+            f"doc = write_summary({str(out)!r}, ['a']); "
+            "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend(); "
+            "assert plt.get_fignums() == [7], plt.get_fignums(); print(doc['counts']['ok'])")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0 and proc.stdout.strip() == "1", proc.stderr[-2000:]
+    assert (out / "summary.html").read_text().count("data:image/png;base64,") == 4
+
 def test_store_refuses_an_unwritable_out(tmp_path: Path) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("x")
@@ -378,8 +397,11 @@ def test_dashboard_link_is_asked_of_the_scheduler() -> None:
 
     from occsurf.bridge.audit.cluster import dashboard_link
 
+    requests: list[str] = []
+
     class Page(http.server.BaseHTTPRequestHandler):
         def do_GET(self):  # noqa: N802 - http.server's name
+            requests.append(self.path)
             self.send_response(200 if self.path == "/status" else 404)
             self.end_headers()
 
@@ -397,6 +419,11 @@ def test_dashboard_link_is_asked_of_the_scheduler() -> None:
         assert dashboard_link(client({"dashboard": 1}, base + "/status")) == base + "/status"
         assert dashboard_link(client({"dashboard": 1}, base + "/nothing")) is None  # HTTP service, no page
         assert dashboard_link(client({}, base + "/status")) is None
+        # not probed (the local cluster started here): the scheduler's word, no request made
+        seen = len(requests)
+        assert dashboard_link(client({"dashboard": 1}, base + "/nothing"), probe=False) == base + "/nothing"
+        assert dashboard_link(client({}, base + "/status"), probe=False) is None
+        assert len(requests) == seen
     finally:
         server.shutdown()
     far = f"http://127.0.0.1:{free_port()}/status"  # nothing listens there: reported as the scheduler says
