@@ -327,6 +327,42 @@ def _triangles(r: int, s: int) -> np.ndarray:
     return np.concatenate([np.stack([a, b, c], axis=1), np.stack([a, c, d], axis=1)])
 
 
+
+#: Vertices per mesh handed to the scene: a panel's grids are drawn in groups, one VTK actor per
+#: group instead of one per grid (an S-patch panel has hundreds of patches: the generalized demo's
+#: 16 views added 3860 meshes), each group small enough that its concatenated copy stays a few MB.
+#: As for the report's pictures (``quality.pictures.MERGED_VERTICES``).
+MERGED_VERTICES = 100_000
+
+
+def _merged(meshes: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
+            ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """The meshes ``(points, triangles, normals, colours)`` concatenated in their order, in groups
+    of at most :data:`MERGED_VERTICES` vertices (a mesh is never split). The grids share no
+    vertices, so a NaN normal's fallback from its own triangles is the same in a group; the
+    picture is the same to rasterisation round-off (VTK shifts and scales each mesh's float32
+    vertex buffer about its own bounds)."""
+    groups: list[list[int]] = []
+    count = 0
+    for k, (P, *_) in enumerate(meshes):
+        if not groups or count + P.shape[0] > MERGED_VERTICES:
+            groups.append([])
+            count = 0
+        groups[-1].append(k)
+        count += P.shape[0]
+    out = []
+    for g in groups:
+        if len(g) == 1:
+            out.append(meshes[g[0]])
+            continue
+        sizes = [meshes[k][0].shape[0] for k in g]
+        offsets = np.cumsum([0, *sizes[:-1]])
+        out.append((np.concatenate([meshes[k][0] for k in g]),
+                    np.concatenate([meshes[k][1] + o for k, o in zip(g, offsets)]),
+                    np.concatenate([meshes[k][2] for k in g]),
+                    np.concatenate([np.asarray(meshes[k][3], float) for k in g])))
+    return out
+
 def _render_view(panel: Panel, norm: Any, cmap: Any, size: tuple[int, int]) -> np.ndarray:
     """One panel as an image ``(height, width, 3)``: its grids coloured (grey without ``cmap``;
     VTK's lights shade them), control nets thin grey, control meshes thin green, its own lines,
@@ -334,6 +370,7 @@ def _render_view(panel: Panel, norm: Any, cmap: Any, size: tuple[int, int]) -> n
     from .vtk_scene import NAN_COLOR, Scene
 
     scene = Scene()
+    meshes = []
     for P, n, val in panel.grids:
         r, s = P.shape[:2]
         if cmap is None:
@@ -342,7 +379,9 @@ def _render_view(panel: Panel, norm: Any, cmap: Any, size: tuple[int, int]) -> n
             v = np.asarray(val, float).reshape(-1)
             rgb = cmap(norm(np.where(np.isfinite(v), v, 0.0)))[:, :3]
             rgb[~np.isfinite(v)] = NAN_COLOR
-        scene.add_mesh(P.reshape(-1, 3), _triangles(r, s), normals=n.reshape(-1, 3), colors=rgb, specular=0.2)
+        meshes.append((P.reshape(-1, 3), _triangles(r, s), n.reshape(-1, 3), rgb))
+    for P, T, N, C in _merged(meshes):
+        scene.add_mesh(P, T, normals=N, colors=C, specular=0.2)
     net_lines: list[np.ndarray] = []
     for net in panel.nets:
         net = np.asarray(net, float)

@@ -211,3 +211,37 @@ def test_an_up_along_the_view_is_refused_and_another_is_made_square():
         fit_camera((0.0, 0.0, 1.0), lo, hi, up=(0.0, 0.0, -2.0))
     cam = fit_camera((1.0, 0.0, 1.0), lo, hi, up=(0.0, 0.0, 1.0))
     np.testing.assert_allclose(cam.up, np.array([-1.0, 0.0, 1.0]) / np.sqrt(2), atol=1e-15)
+
+
+@needs_vtk
+def test_a_panel_s_grids_drawn_as_merged_meshes_give_the_picture_of_one_mesh_each(monkeypatch):
+    """``_render_view`` hands its grids to VTK in groups of at most ``MERGED_VERTICES`` vertices
+    (one actor per group; the generalized demo's S-patch panels had hundreds of actors). Drawn
+    that way, with a group boundary falling between grids and a grid with a NaN normal (its
+    fallback comes from its own triangles), the picture is the one drawn with one mesh per grid."""
+    from matplotlib import cm
+    from matplotlib.colors import Normalize
+
+    from occsurf.bridge.rendering import surfaces as R
+
+    grids = []
+    for k in range(12):  # tiles of one wave, side by side, each its own grid
+        P, n, val = surface_grid(_wave(), 9, "height")
+        P = P.copy()
+        P[..., 0] += 1.05 * (k % 4)
+        P[..., 1] += 1.05 * (k // 4)
+        n = n.copy()
+        if k == 5:
+            n[4, 4] = np.nan
+        grids.append((P, n, val))
+    merged = R._merged([(P.reshape(-1, 3), R._triangles(9, 9), n.reshape(-1, 3), np.zeros((81, 3))) for P, n, _ in grids])
+    panel = R.Panel(grids, view=(35.0, -60.0))
+    monkeypatch.setattr(R, "MERGED_VERTICES", 5 * 81 + 7)  # groups of 5, 5 and 2 grids
+    assert [g[0].shape[0] for g in R._merged([(P.reshape(-1, 3), R._triangles(9, 9), n.reshape(-1, 3), np.zeros((81, 3)))
+                                               for P, n, _ in grids])] == [405, 405, 162]
+    assert len(merged) == 1 and merged[0][1].max() == 12 * 81 - 1  # the default: one group, indices offset
+    img = R._render_view(panel, Normalize(0, 1), cm.viridis, (320, 240))
+    monkeypatch.setattr(R, "MERGED_VERTICES", 1)  # one mesh per grid, as before
+    one_each = R._render_view(panel, Normalize(0, 1), cm.viridis, (320, 240))
+    assert (img != 255).any(axis=2).mean() > 0.1  # the tiles are drawn
+    np.testing.assert_array_equal(img, one_each)
