@@ -174,3 +174,37 @@ def test_free_meshes_keeps_the_mesh_that_placed_copies_of_a_part_share() -> None
         fb = b.fields[k]
         assert fb.mesh.source == "brepmesh" and not fb.mesh.notes, (k, fb.mesh.notes)
         assert np.array_equal(fa.mesh.points, fb.mesh.points) and np.array_equal(fa.mesh.triangles, fb.mesh.triangles)
+
+
+@pytest.mark.parametrize("rational", [False, True])
+def test_grid_mesh_is_the_point_by_point_evaluation_to_round_off(rational: bool) -> None:
+    """``grid_mesh`` takes its points and normals from the grid evaluation (the basis once per row
+    and per column) instead of point by point: the same values to round-off -- points within 1e-14
+    and normals within 1e-12 of the scattered evaluation at the mesh's (u, v) (unit vectors from
+    partials that agree to ~1e-14 of their size), NaN at the same vertices where the surface is
+    degenerate (a pole: a collapsed row of poles), the triangles and the flip as before."""
+    from occsurf.algorithms import BSplineSurface
+    from occsurf.bridge.rendering.tessellation import _normals, grid_mesh
+
+    rng = np.random.default_rng(7)
+    ku = np.r_[[0.0] * 4, 0.3, 0.55, [1.0] * 4]
+    kv = np.r_[[0.0] * 3, 0.8, [2.0] * 3]
+    P = rng.random((6, 4, 3))
+    P[0] = P[0, 0]  # u = 0 is a pole: the normal there is NaN
+    w = 0.5 + rng.random((6, 4)) if rational else None
+    s = BSplineSurface((3, 2), (ku, kv), P, w)
+    meshes = []
+    for flip in (False, True):
+        mask = np.ones((33, 33), bool)
+        mask[10:14, 5:9] = False
+        m = grid_mesh(s, 33, flip=flip, mask=mask)
+        np.testing.assert_allclose(m.points, s.evaluate(m.uv[:, 0], m.uv[:, 1]), rtol=0, atol=1e-14)
+        scattered = _normals(s, m.uv, flip)
+        nan = np.isnan(m.normals).any(axis=1)
+        assert nan[:33].all() and not nan[33:].any()  # the pole's row of vertices, and only it
+        np.testing.assert_array_equal(nan, np.isnan(scattered).any(axis=1))
+        np.testing.assert_allclose(m.normals[~nan], scattered[~nan], rtol=0, atol=1e-12)
+        assert m.triangles.shape == (2 * (32 * 32 - 5 * 5), 3)  # cells with a corner in the hole dropped
+        meshes.append(m)
+    np.testing.assert_array_equal(meshes[1].triangles, meshes[0].triangles[:, ::-1])  # flipped: the winding
+    np.testing.assert_array_equal(meshes[1].normals, -meshes[0].normals)
