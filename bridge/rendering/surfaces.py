@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from occsurf.algorithms import BSplineCurve, BSplineSurface
-from occsurf.algorithms.geometry.surface_differential import surface_curvatures
+from occsurf.algorithms.geometry.surface_differential import curvatures_from_derivatives
 
 from ..exchange.files import write_figure
 
@@ -44,9 +44,10 @@ def surface_grid(surface: BSplineSurface, resolution: int = 60, color: str = "me
     eu, ev = 1e-6 * (u1 - u0), 1e-6 * (v1 - v0)
     us = np.linspace(u0 + eu, u1 - eu, resolution)
     vs = np.linspace(v0 + ev, v1 - ev, resolution)
-    U, W = np.meshgrid(us, vs, indexing="ij")
     P = surface.evaluate_grid(us, vs)
-    sc = surface_curvatures(surface, U, W)
+    # the partials on the grid (the basis once per row and per column), not point by point: the
+    # curvatures of surface_curvatures at the same points to round-off
+    sc = curvatures_from_derivatives(surface.derivatives_grid(us, vs, 2))
     n = np.asarray(sc.normal)
     if color == "mean":
         val = np.asarray(sc.mean, float)

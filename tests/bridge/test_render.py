@@ -27,6 +27,27 @@ def test_surface_grid_curvature_of_a_sphere_like_section():
     np.testing.assert_allclose(K, 0.0, atol=1e-12)
 
 
+
+@pytest.mark.parametrize("color", ["mean", "gaussian"])
+def test_surface_grid_is_the_point_by_point_curvature_to_round_off(color):
+    """``surface_grid`` takes the partials on the grid (``derivatives_grid``) rather than point by
+    point: its normals and curvatures are ``surface_curvatures``' at the same (u, v) to round-off
+    (1e-12 of the largest principal curvature, its square for the Gaussian; normals 1e-12), on a rational vase and a wave."""
+    from occsurf.algorithms.geometry.surface_differential import surface_curvatures
+
+    for s in (_vase(), _wave()):
+        P, n, val = surface_grid(s, 31, color)
+        (u0, u1), (v0, v1) = s.domain
+        eu, ev = 1e-6 * (u1 - u0), 1e-6 * (v1 - v0)
+        U, W = np.meshgrid(np.linspace(u0 + eu, u1 - eu, 31), np.linspace(v0 + ev, v1 - ev, 31), indexing="ij")
+        sc = surface_curvatures(s, U, W)
+        ref = np.asarray(sc.mean if color == "mean" else sc.gaussian, float)
+        assert np.isfinite(ref).all()
+        k = np.abs(np.asarray([sc.k1, sc.k2])).max()  # the curvature's scale (K's is its square)
+        np.testing.assert_allclose(val, ref, rtol=0, atol=1e-12 * (k if color == "mean" else k * k))
+        np.testing.assert_allclose(n, np.asarray(sc.normal), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(P, s.evaluate(U, W), rtol=0, atol=1e-13)
+
 @needs_vtk
 @pytest.mark.parametrize("color", ["mean", "gaussian", "height", "none"])
 def test_render_writes_png(tmp_path, color):
