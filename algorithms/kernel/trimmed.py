@@ -443,13 +443,15 @@ class TrimmedSurface:
         (a near-singular point, usually outside the face): then the end of the loops' u range
         farther from that point, so the inner integrals do not cross its kink."""
         (u0, u1), (v0, v1) = self.surface.domain
-        U, W = np.meshgrid(np.linspace(u0, u1, 129), np.linspace(v0, v1, 129), indexing="ij")
-        D = self.surface.derivatives(U.ravel(), W.ravel(), 1)
-        J = np.linalg.norm(np.cross(D[:, 1, 0], D[:, 0, 1]), axis=-1)
+        gu, gv = np.linspace(u0, u1, 129), np.linspace(v0, v1, 129)
+        # the partials on the grid (the basis once per row and column: ~10x faster than point by
+        # point, the same to round-off)
+        D = self.surface.derivatives_grid(gu, gv, 1)
+        J = np.linalg.norm(np.cross(D[..., 1, 0, :], D[..., 0, 1, :]), axis=-1).ravel()
         if J.min() >= tolerances.TRIM_AREA_SINGULAR * J.max():
             return float(u0)
         us = np.concatenate([P[:, 0] for P in self.polylines()])
-        lo, hi, u_star = float(us.min()), float(us.max()), float(U.ravel()[np.argmin(J)])
+        lo, hi, u_star = float(us.min()), float(us.max()), float(gu[np.argmin(J) // gv.size])
         return lo if abs(lo - u_star) > abs(hi - u_star) else hi
 
     def _jacobian_range(self) -> tuple[float, float, tuple[float, float]]:
