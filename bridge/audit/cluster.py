@@ -52,10 +52,10 @@ def dashboard_link(client: Any, probe_timeout: float = 5.0, *, probe: bool = Tru
     itself is asked for: a 404 means no dashboard. A page that cannot be reached from here (a
     firewall, a tunnel) is still reported: the scheduler says it serves one.
 
-    ``probe=False`` trusts the scheduler's list of services without asking for the page: for the
-    local cluster of :func:`open_client`, started here with a dashboard only where bokeh is
-    installed. Its scheduler runs in this process, and drawing the page for the probe held the
-    audit's start ~0.3 s.
+    ``probe=False`` does not ask for the page: for the local cluster of :func:`open_client`, started
+    here, whose dashboard is there exactly when bokeh is (:func:`dashboard_available`; without it the
+    scheduler still lists its HTTP service as "dashboard", and the page is a 404). Its scheduler runs
+    in this process, and drawing the page for the probe held the audit's start ~0.3 s.
     """
     import urllib.error
     import urllib.request
@@ -67,7 +67,7 @@ def dashboard_link(client: Any, probe_timeout: float = 5.0, *, probe: bool = Tru
     except Exception:  # noqa: BLE001 - no answer: no link (the audit itself reports the scheduler)
         return None
     if not probe:
-        return link
+        return link if dashboard_available() else None
     try:
         with urllib.request.urlopen(link, timeout=probe_timeout):
             return link

@@ -44,6 +44,10 @@ def surface_grid(surface: BSplineSurface, resolution: int = 60, color: str = "me
     eu, ev = 1e-6 * (u1 - u0), 1e-6 * (v1 - v0)
     us = np.linspace(u0 + eu, u1 - eu, resolution)
     vs = np.linspace(v0 + ev, v1 - ev, resolution)
+    if not isinstance(surface, BSplineSurface) or surface.dim != 3:  # as surface_curvatures refuses it
+        from occsurf.algorithms.errors import InvalidGeometryError
+
+        raise InvalidGeometryError(f"surface: needs a 3-D BSplineSurface, got {surface!r}")
     P = surface.evaluate_grid(us, vs)
     # the partials on the grid (the basis once per row and per column), not point by point: the
     # curvatures of surface_curvatures at the same points to round-off

@@ -419,10 +419,17 @@ def test_dashboard_link_is_asked_of_the_scheduler() -> None:
         assert dashboard_link(client({"dashboard": 1}, base + "/status")) == base + "/status"
         assert dashboard_link(client({"dashboard": 1}, base + "/nothing")) is None  # HTTP service, no page
         assert dashboard_link(client({}, base + "/status")) is None
-        # not probed (the local cluster started here): the scheduler's word, no request made
+        # not probed (the local cluster started here): its page is there exactly when bokeh is, no
+        # request made; without bokeh the scheduler still lists its HTTP service as "dashboard"
+        from occsurf.bridge.audit import cluster
+
         seen = len(requests)
-        assert dashboard_link(client({"dashboard": 1}, base + "/nothing"), probe=False) == base + "/nothing"
-        assert dashboard_link(client({}, base + "/status"), probe=False) is None
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(cluster, "dashboard_available", lambda: True)
+            assert dashboard_link(client({"dashboard": 1}, base + "/nothing"), probe=False) == base + "/nothing"
+            assert dashboard_link(client({}, base + "/status"), probe=False) is None
+            mp.setattr(cluster, "dashboard_available", lambda: False)
+            assert dashboard_link(client({"dashboard": 1}, base + "/status"), probe=False) is None
         assert len(requests) == seen
     finally:
         server.shutdown()

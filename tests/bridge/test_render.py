@@ -188,6 +188,9 @@ def test_bad_grids_views_and_panels_are_refused(tmp_path):
     from occsurf.bridge.rendering.surfaces import Panel, render_panels
 
     P, n, val = surface_grid(_wave(), 12, "height")
+    flat = BSplineSurface((1, 1), ([0, 0, 1, 1], [0, 0, 1, 1]), np.zeros((2, 2, 2)))  # a 2-D surface
+    with pytest.raises(InvalidGeometryError, match="surface: needs a 3-D BSplineSurface"):
+        surface_grid(flat, 5)
     with pytest.raises(InvalidGeometryError, match=r"items\[0\]: expected points \(r, s, 3\)"):
         render_surfaces(tmp_path / "a.png", [(P.reshape(-1, 3), n.reshape(-1, 3), val.ravel())], color="height")
     with pytest.raises(InvalidGeometryError, match=r"items\[1\].*\(6, 12\)"):
@@ -239,14 +242,15 @@ def test_a_panel_s_grids_drawn_as_merged_meshes_give_the_picture_of_one_mesh_eac
     """``_render_view`` hands its grids to VTK in groups of at most ``MERGED_VERTICES`` vertices
     (one actor per group; the generalized demo's S-patch panels had hundreds of actors). Drawn
     that way, with a group boundary falling between grids and a grid with a NaN normal (its
-    fallback comes from its own triangles), the picture is the one drawn with one mesh per grid."""
+    fallback comes from its own triangles), the picture is the one drawn with one mesh per grid.
+    Each tile has values of its own, so colours or points taken from the wrong grid show."""
     from matplotlib import cm
     from matplotlib.colors import Normalize
 
     from occsurf.bridge.rendering import surfaces as R
 
     grids = []
-    for k in range(12):  # tiles of one wave, side by side, each its own grid
+    for k in range(12):  # tiles of one wave, side by side, each its own grid and colours
         P, n, val = surface_grid(_wave(), 9, "height")
         P = P.copy()
         P[..., 0] += 1.05 * (k % 4)
@@ -254,15 +258,18 @@ def test_a_panel_s_grids_drawn_as_merged_meshes_give_the_picture_of_one_mesh_eac
         n = n.copy()
         if k == 5:
             n[4, 4] = np.nan
-        grids.append((P, n, val))
-    merged = R._merged([(P.reshape(-1, 3), R._triangles(9, 9), n.reshape(-1, 3), np.zeros((81, 3))) for P, n, _ in grids])
-    panel = R.Panel(grids, view=(35.0, -60.0))
-    monkeypatch.setattr(R, "MERGED_VERTICES", 5 * 81 + 7)  # groups of 5, 5 and 2 grids
-    assert [g[0].shape[0] for g in R._merged([(P.reshape(-1, 3), R._triangles(9, 9), n.reshape(-1, 3), np.zeros((81, 3)))
-                                               for P, n, _ in grids])] == [405, 405, 162]
+        grids.append((P, n, val + 0.15 * k))
+    meshes = [(P.reshape(-1, 3), R._triangles(9, 9), n.reshape(-1, 3), np.zeros((81, 3))) for P, n, _ in grids]
+    merged = R._merged(meshes)
     assert len(merged) == 1 and merged[0][1].max() == 12 * 81 - 1  # the default: one group, indices offset
-    img = R._render_view(panel, Normalize(0, 1), cm.viridis, (320, 240))
+    box = np.array([[0.0, 0.0, -1.0], [4.2, 3.2, 1.0]])
+    panel = R.Panel(grids, view=(35.0, -60.0), frame=box)
+    norm = Normalize(-0.3, 2.0)
+    monkeypatch.setattr(R, "MERGED_VERTICES", 5 * 81 + 7)  # groups of 5, 5 and 2 grids
+    assert [g[0].shape[0] for g in R._merged(meshes)] == [405, 405, 162]
+    img = R._render_view(panel, norm, cm.viridis, (320, 240))
     monkeypatch.setattr(R, "MERGED_VERTICES", 1)  # one mesh per grid, as before
-    one_each = R._render_view(panel, Normalize(0, 1), cm.viridis, (320, 240))
-    assert (img != 255).any(axis=2).mean() > 0.1  # the tiles are drawn
+    one_each = R._render_view(panel, norm, cm.viridis, (320, 240))
+    empty = R._render_view(R.Panel([], view=(35.0, -60.0), frame=box), norm, cm.viridis, (320, 240))
+    assert (img != empty).any(axis=2).mean() > 0.2  # the tiles are drawn
     np.testing.assert_array_equal(img, one_each)

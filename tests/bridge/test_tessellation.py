@@ -182,7 +182,9 @@ def test_grid_mesh_is_the_point_by_point_evaluation_to_round_off(rational: bool)
     and per column) instead of point by point: the same values to round-off -- points within 1e-14
     and normals within 1e-12 of the scattered evaluation at the mesh's (u, v) (unit vectors from
     partials that agree to ~1e-14 of their size), NaN at the same vertices where the surface is
-    degenerate (a pole: a collapsed row of poles), the triangles and the flip as before."""
+    degenerate (a pole: a collapsed row of poles; on this net -- where |S_u x S_v| falls within
+    round-off of the 1e-14 cut-off either evaluation may call a vertex degenerate), the triangles
+    and the flip as before."""
     from occsurf.algorithms import BSplineSurface
     from occsurf.bridge.rendering.tessellation import _normals, grid_mesh
 
