@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import os
 
+import pytest
 from hypothesis import HealthCheck, settings
 from hypothesis.errors import InvalidArgument
 
@@ -104,3 +105,16 @@ _blas_threads_per_worker()
 _REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if _REPO not in os.environ.get("PYTHONPATH", "").split(os.pathsep):
     os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (_REPO, os.environ.get("PYTHONPATH")) if p)
+
+
+# numba's kernels are compiled on a machine's first use into their on-disk cache. With that cache
+# empty (every CI run: a fresh virtualenv) each xdist worker, and every command-line process a test
+# started, compiled the kernels it met for itself: the fast lane took 5 min 48 s against 3 min 15 s
+# with the cache full (2026-12-07). The controller of an xdist run compiles them all once (~21 s on
+# the 2-core machine; ~1 s to find them cached) before its workers start (tests/numba_warmup.py).
+def pytest_configure(config: pytest.Config) -> None:
+    if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
+        return  # a worker, or a run without xdist
+    from tests.numba_warmup import warm
+
+    warm()
