@@ -50,8 +50,6 @@ def _jobs():
             (f"grid partials {rational}", lambda s=s: s.derivatives_grid(x, x, 2)),
         ]
     s = _surface(False)
-    # u broadcast against v: flattened by a copy, a writable array (the others are read-only views)
-    jobs.append(("surface derivatives, one u", lambda: s.derivatives(0.5, x, 2)))
     X = s.evaluate(x, x) + 1e-3
     jobs.append(("surface project", lambda: project_points(s, X, x, x)))
     return jobs

@@ -189,7 +189,9 @@ class SurfaceBatch:
                 args = self._kargs[f] = tuple(nk.readonly(x) for x in nk.surface_args(spline))
             if kernel is not None:
                 try:
-                    kernel(*args, U[a:b], V[a:b], order, spline.is_rational, out[a:b])
+                    # u, v read-only as nk.run passes them: the signature the library compiles
+                    # anyway (writable, they were a second compile of the kernel, ~4 s once)
+                    kernel(*args, nk.readonly(U[a:b]), nk.readonly(V[a:b]), order, spline.is_rational, out[a:b])
                     continue
                 except Exception:  # noqa: BLE001 - as nk.run: fall back to NumPy
                     kernel = None

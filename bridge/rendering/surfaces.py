@@ -35,8 +35,11 @@ def surface_grid(surface: BSplineSurface, resolution: int = 60, color: str = "me
     median so they do not blot the picture.
     """
     from occsurf.algorithms._validate import check_count
+    from occsurf.algorithms.errors import InvalidGeometryError
     from occsurf.algorithms.quality._common import check_grid
 
+    if not isinstance(surface, BSplineSurface) or surface.dim != 3:  # as surface_curvatures refuses it
+        raise InvalidGeometryError(f"surface: needs a 3-D BSplineSurface, got {surface!r}")
     r = check_count(resolution, "resolution", 1, minimum=2)
     check_grid(r, r, "resolution")  # the grid, its curvatures and the mesh, refused before any of them exists
     (u0, u1), (v0, v1) = surface.domain
@@ -44,10 +47,6 @@ def surface_grid(surface: BSplineSurface, resolution: int = 60, color: str = "me
     eu, ev = 1e-6 * (u1 - u0), 1e-6 * (v1 - v0)
     us = np.linspace(u0 + eu, u1 - eu, resolution)
     vs = np.linspace(v0 + ev, v1 - ev, resolution)
-    if not isinstance(surface, BSplineSurface) or surface.dim != 3:  # as surface_curvatures refuses it
-        from occsurf.algorithms.errors import InvalidGeometryError
-
-        raise InvalidGeometryError(f"surface: needs a 3-D BSplineSurface, got {surface!r}")
     P = surface.evaluate_grid(us, vs)
     # the partials on the grid (the basis once per row and per column), not point by point: the
     # curvatures of surface_curvatures at the same points to round-off
@@ -332,7 +331,6 @@ def _triangles(r: int, s: int) -> np.ndarray:
     return np.concatenate([np.stack([a, b, c], axis=1), np.stack([a, c, d], axis=1)])
 
 
-
 #: Vertices per mesh handed to the scene: a panel's grids are drawn in groups, one VTK actor per
 #: group instead of one per grid (an S-patch panel has hundreds of patches: the generalized demo's
 #: 16 views added 3860 meshes), each group small enough that its concatenated copy stays a few MB.
@@ -367,6 +365,7 @@ def _merged(meshes: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarra
                     np.concatenate([meshes[k][2] for k in g]),
                     np.concatenate([np.asarray(meshes[k][3], float) for k in g])))
     return out
+
 
 def _render_view(panel: Panel, norm: Any, cmap: Any, size: tuple[int, int]) -> np.ndarray:
     """One panel as an image ``(height, width, 3)``: its grids coloured (grey without ``cmap``;
