@@ -5,9 +5,11 @@ its ``__pycache__`` empty), each pytest-xdist worker and every command-line proc
 compiled the kernels it met first for itself: the fast lane took 5 min 48 s with the cache empty
 against 3 min 15 s with it full (2026-12-07, the 2-core machine). :func:`warm` runs every kernel
 once through the library's own calls, on small inputs (``NUMBA_MIN_POINTS`` overridden), so the
-argument types are the ones the library passes; ``python -m tests.numba_warmup K N`` does the
-kernels ``k`` with ``k % N == K``, so that N processes share the compiling (``tests/conftest.py``
-starts one per worker). Results of the kernels are not looked at here: ``test_fast_paths.py``
+argument types are the ones the library passes (a check of the OCCT bearing and of
+``step_samples/`` compiles nothing after it). ``tests/conftest.py`` calls it in an xdist run's
+controller, in one process: ``python -m tests.numba_warmup K N`` (the calls ``k`` with
+``k % N == K``) lets N processes share the work, but two of them lost a signature to a race on
+numba's index file. Results of the kernels are not looked at here: ``test_fast_paths.py``
 compares them with the NumPy paths."""
 
 from __future__ import annotations
