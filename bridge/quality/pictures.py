@@ -297,28 +297,14 @@ def _merged_meshes(fields: Sequence[FaceField], value: str | None,
     the same picture to rasterisation round-off, since VTK shifts and scales each mesh's float32
     vertex buffer about its own bounds (the bearing: at most 0.4 % of a picture's pixels one level
     apart; the linkrods: none; tested)."""
+    from ..rendering.vtk_scene import merged_meshes
+
+    def mesh(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+        m = fields[k].mesh
+        return m.points, m.triangles, m.normals, None if value is None else fields[k].values[value]
+
     cap = MERGED_VERTICES if limit is None else int(limit)
-    group: list[FaceField] = []
-    count = 0
-
-    def pack(items: list[FaceField]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
-        if len(items) == 1:
-            m = items[0].mesh
-            return m.points, m.triangles, m.normals, None if value is None else items[0].values[value]
-        starts = np.cumsum([0] + [f.mesh.n_vertices for f in items[:-1]])
-        return (np.concatenate([f.mesh.points for f in items]),
-                np.concatenate([np.asarray(f.mesh.triangles, np.int64) + s for f, s in zip(items, starts)]),
-                np.concatenate([f.mesh.normals for f in items]),
-                None if value is None else np.concatenate([f.values[value] for f in items]))
-
-    for f in fields:
-        if group and count + f.mesh.n_vertices > cap:
-            yield pack(group)
-            group, count = [], 0
-        group.append(f)
-        count += f.mesh.n_vertices
-    if group:
-        yield pack(group)
+    yield from merged_meshes([f.mesh.n_vertices for f in fields], mesh, cap)
 
 
 def _violation_points(report: QualityReport) -> np.ndarray:

@@ -339,33 +339,12 @@ MERGED_VERTICES = 100_000
 
 
 def _merged(meshes: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
-            ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
-    """The meshes ``(points, triangles, normals, colours)`` concatenated in their order, in groups
-    of at most :data:`MERGED_VERTICES` vertices (a mesh is never split). The grids share no
-    vertices, so a NaN normal's fallback from its own triangles is the same in a group; the
-    picture is the same to rasterisation round-off (VTK shifts and scales each mesh's float32
-    vertex buffer about its own bounds)."""
-    groups: list[list[int]] = []
-    count = 0
-    for k, (P, *_) in enumerate(meshes):
-        if not groups or count + P.shape[0] > MERGED_VERTICES:
-            groups.append([])
-            count = 0
-        groups[-1].append(k)
-        count += P.shape[0]
-    out = []
-    for g in groups:
-        if len(g) == 1:
-            out.append(meshes[g[0]])
-            continue
-        sizes = [meshes[k][0].shape[0] for k in g]
-        offsets = np.cumsum([0, *sizes[:-1]])
-        out.append((np.concatenate([meshes[k][0] for k in g]),
-                    np.concatenate([meshes[k][1] + o for k, o in zip(g, offsets)]),
-                    np.concatenate([meshes[k][2] for k in g]),
-                    np.concatenate([np.asarray(meshes[k][3], float) for k in g])))
-    return out
+            ) -> list[tuple[Any, ...]]:
+    """The meshes ``(points, triangles, normals, colours)`` in groups of at most
+    :data:`MERGED_VERTICES` vertices (:func:`.vtk_scene.merged_meshes`)."""
+    from .vtk_scene import merged_meshes
 
+    return list(merged_meshes([m[0].shape[0] for m in meshes], meshes.__getitem__, MERGED_VERTICES))
 
 def _render_view(panel: Panel, norm: Any, cmap: Any, size: tuple[int, int]) -> np.ndarray:
     """One panel as an image ``(height, width, 3)``: its grids coloured (grey without ``cmap``;

@@ -29,7 +29,7 @@ per-pixel Warn renderer of course ch. 10 (:mod:`.lighting`) draws through the sa
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -43,7 +43,8 @@ if TYPE_CHECKING:
     from vtkmodules.vtkCommonDataModel import vtkPolyData
     from vtkmodules.vtkRenderingCore import vtkRenderWindow
 
-__all__ = ["Scene", "window", "new_window", "read_pixels", "COLORMAPS", "colormap_rgb", "render_available", "polydata"]
+__all__ = ["Scene", "window", "new_window", "read_pixels", "COLORMAPS", "colormap_rgb", "render_available", "polydata",
+           "merged_meshes"]
 
 #: Colour maps by name: control colours (RGB in [0, 1]) spread evenly over the scale.
 COLORMAPS: dict[str, tuple[tuple[float, float, float], ...]] = {
@@ -197,6 +198,41 @@ def read_pixels(win: vtkRenderWindow, width: int, height: int, *, depth: bool = 
     zf = vtkFloatArray()
     win.GetZbufferData(0, 0, width - 1, height - 1, zf)
     return rgb, vtk_to_numpy(zf).reshape(height, width)[::-1].copy()
+
+
+def merged_meshes(sizes: Sequence[int], mesh: Callable[[int], tuple[Any, ...]],
+                  limit: int) -> Iterator[tuple[Any, ...]]:
+    """Meshes concatenated in their order, in groups of at most ``limit`` vertices (a mesh is never
+    split), for a scene that draws one actor per group instead of one per mesh.
+
+    ``sizes[k]`` is mesh ``k``'s vertex count and ``mesh(k)`` its ``(points, triangles, per-vertex
+    arrays...)``, asked for only when its group is made; a per-vertex array that is None in a
+    group's first mesh is None in the group. The meshes share no vertices, so a NaN normal's
+    fallback from its own triangles is the same in a group; the picture is the same to
+    rasterisation round-off (VTK shifts and scales each mesh's float32 vertex buffer about its own
+    bounds). Used by the report's pictures and ``render_panels``.
+    """
+    group: list[int] = []
+    count = 0
+
+    def pack(ks: list[int]) -> tuple[Any, ...]:
+        if len(ks) == 1:
+            return mesh(ks[0])
+        parts = [mesh(k) for k in ks]
+        starts = np.cumsum([0] + [sizes[k] for k in ks[:-1]])
+        rest = tuple(None if parts[0][j] is None else np.concatenate([q[j] for q in parts])
+                     for j in range(2, len(parts[0])))
+        return (np.concatenate([q[0] for q in parts]),
+                np.concatenate([np.asarray(q[1], np.int64) + s for q, s in zip(parts, starts)]), *rest)
+
+    for k, n in enumerate(sizes):
+        if group and count + n > limit:
+            yield pack(group)
+            group, count = [], 0
+        group.append(k)
+        count += n
+    if group:
+        yield pack(group)
 
 
 def polydata(points: np.ndarray, cells: np.ndarray | Sequence[np.ndarray], kind: str, *,
