@@ -102,17 +102,26 @@ class SegmentBands:
     start: NDArray[np.intp]
 
 
-def segment_bands(seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0) -> SegmentBands:
+def segment_bands(seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0, *, keep: ArrayLike | None = None
+                  ) -> SegmentBands:
     """The segments ``seg_a[i] -> seg_b[i]`` (shape (k, 2) each) binned into ``k`` horizontal bands
-    of their ``v`` range, each segment in every band its ``v`` range widened by ``tol`` meets."""
+    of their ``v`` range, each segment in every band its ``v`` range widened by ``tol`` meets.
+
+    ``keep`` (bool, shape (k,)): the segments to bin, the others left out as if absent (the bands
+    and their entries those of the kept segments alone, the entries numbering them among all):
+    ``seg_a = P[:-1]``, ``seg_b = P[1:]`` over polylines laid end to end in ``P`` are views of one
+    array, the step from one polyline's last point to the next one's first left out."""
     A = np.asarray(seg_a, float).reshape(-1, 2)
     B = np.asarray(seg_b, float).reshape(-1, 2)
-    k = A.shape[0]
+    idx = None if keep is None else np.flatnonzero(np.asarray(keep, bool))
+    k = A.shape[0] if idx is None else idx.size
     if k == 0:
         empty = np.zeros(0, np.intp)
         return SegmentBands(A, B, float(tol), 0.0, 0.0, 1.0, 1, empty, np.zeros(2, np.intp))
-    ylo = np.minimum(A[:, 1], B[:, 1]) - tol
-    yhi = np.maximum(A[:, 1], B[:, 1]) + tol
+    av, bv = (A[:, 1], B[:, 1]) if idx is None else (A[idx, 1], B[idx, 1])
+    ylo = np.minimum(av, bv) - tol
+    yhi = np.maximum(av, bv) + tol
+    del av, bv
     y0, y1 = float(ylo.min()), float(yhi.max())
     # As many bands as segments, but no more than keep the entries (a segment once per band it
     # meets) within ~4 k: a face with hundreds of small holes has short, steep segments, each of
@@ -134,7 +143,7 @@ def segment_bands(seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0) -> Segme
     # segments: sorting the entries all at once took +224 MB of temporaries beside the 24 MB kept
     # (the 1089-face plate of benchmarks/bench_check.py, whose check's peak it set); now +120 MB,
     # mostly the segments' own arrays (their bands' range, counts and ends, 8 bytes each a segment).
-    it: type[np.signedinteger[Any]] = np.int32 if max(n, k, nb) < 2 ** 31 - 1 else np.int64
+    it: type[np.signedinteger[Any]] = np.int32 if max(n, A.shape[0], nb) < 2 ** 31 - 1 else np.int64
     per_band = np.cumsum(np.bincount(b0, minlength=nb + 1) - np.bincount(b1 + 1, minlength=nb + 1))[:nb]
     start = np.zeros(nb + 1, np.intp)
     np.cumsum(per_band, out=start[1:])
@@ -146,7 +155,7 @@ def segment_bands(seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0) -> Segme
         s1 = max(s0 + 1, int(np.searchsorted(ends, (ends[s0 - 1] if s0 else 0) + _BAND_BLOCK, side="right")))
         c = cnt[s0:s1]
         m = int(c.sum())
-        seg = np.repeat(np.arange(s0, s1, dtype=it), c)
+        seg = np.repeat(np.arange(s0, s1, dtype=it) if idx is None else idx[s0:s1].astype(it), c)
         band = np.arange(m, dtype=np.intp) - np.repeat(np.cumsum(c) - c, c) + np.repeat(b0[s0:s1], c)
         order = np.argsort(band, kind="stable")
         band, seg = band[order], seg[order]

@@ -186,9 +186,9 @@ def test_binned_segments_are_reused_with_the_same_answers(seed, tol):
     rng = np.random.default_rng(seed)
     t = _plate()
     P = rng.uniform(-0.2, 4.2, (500, 2))
-    A, B = t._segments(tolerances.TRIM_POLYLINE * t._diag())
-    bands = segment_bands(A, B, tol)
-    assert np.array_equal(classify_points(P, bands=bands), classify_points(P, A, B, tol))
+    A, B, keep = t._segments(tolerances.TRIM_POLYLINE * t._diag())
+    bands = segment_bands(A, B, tol, keep=keep)
+    assert np.array_equal(classify_points(P, bands=bands), classify_points(P, A[keep], B[keep], tol))
     first = t.classify(P[:, 0], P[:, 1], tol=tol if tol > 0 else None)
     other = t.classify(P[:, 0], P[:, 1], tol=1e-3)  # another tolerance, other bins
     fresh = _plate()
@@ -395,3 +395,56 @@ def test_segment_bands_in_int32_are_the_int64_bands(seed, holes, tol, block):
     order = np.argsort(band_of, kind="stable")
     assert np.array_equal(bands.seg_sorted, seg_of[order])
     assert np.array_equal(bands.start, np.searchsorted(band_of[order], np.arange(bands.nb + 1)))
+
+
+@test_settings(max_examples=25)
+@given(seed=st.integers(0, 2**16), holes=st.integers(0, 40), tol=st.sampled_from([0.0, 1e-6, 1e-3]))
+@pytest.mark.parametrize("block", [1 << 20, 97])
+def test_bands_of_polylines_end_to_end_are_the_bands_of_their_segments(seed, holes, tol, block):
+    """Issue 28 (memory): a trim's polylines lie end to end in one array, and the classification's
+    segments are two views of it (``P[:-1] -> P[1:]``) with the steps from one loop to the next
+    left out (``keep``), where each loop's segments were copied twice before. The bands are those of
+    the loops' segments alone (the same bands, the same entries in the same order, numbered among
+    all), so every point is classified as before, bit for bit."""
+    from unittest import mock
+
+    from occsurf.algorithms.kernel import point_in_loops
+    from occsurf.algorithms.kernel.point_in_loops import segment_bands
+
+    rng = np.random.default_rng(seed)
+    loops = [np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]], float)]
+    th = np.linspace(0, 2 * np.pi, int(rng.integers(5, 120)))
+    for c, r in zip(rng.uniform(1, 9, (holes, 2)), rng.uniform(0.05, 0.4, holes)):
+        loops.append(np.c_[c[0] + r * np.cos(th), c[1] + r * np.sin(th)])
+    A = np.concatenate([p[:-1] for p in loops])
+    B = np.concatenate([p[1:] for p in loops])
+    P = np.concatenate(loops)
+    keep = np.ones(len(P) - 1, bool)
+    keep[np.cumsum([len(p) for p in loops])[:-1] - 1] = False
+    with mock.patch.object(point_in_loops, "_BAND_BLOCK", block):
+        apart = segment_bands(A, B, tol)
+        joined = segment_bands(P[:-1], P[1:], tol, keep=keep)
+    assert (joined.y0, joined.y1, joined.h, joined.nb) == (apart.y0, apart.y1, apart.h, apart.nb)
+    assert np.array_equal(joined.start, apart.start)
+    assert np.array_equal(np.flatnonzero(keep)[apart.seg_sorted], joined.seg_sorted)
+    Q = np.r_[rng.uniform(-1, 11, (600, 2)), A[rng.integers(0, len(A), 80)]]  # on the loops too
+    assert np.array_equal(classify_points(Q, bands=joined), classify_points(Q, A, B, tol))
+
+
+def test_a_trim_holds_its_polylines_once():
+    """The polylines a trim hands out and the segments it classifies with are views of one array of
+    points (a face with 361 holes held three copies of its 1.5 million points before), and its
+    classification is that of the loops' segments taken apart."""
+    t = _plate()
+    lines = t.polylines()
+    pts, _ = t._points(t._tol(None, tolerances.TRIM_POLYLINE, "tol"))
+    assert all(np.shares_memory(p, pts) for p in lines)
+    A, B, keep = t._segments(t._tol(None, tolerances.TRIM_POLYLINE, "tol"))
+    assert np.shares_memory(A, pts) and np.shares_memory(B, pts) and keep.sum() == sum(len(p) - 1 for p in lines)
+    u, v = np.meshgrid(np.linspace(-0.1, 1.1, 61), np.linspace(-0.1, 1.1, 57), indexing="ij")
+    on = tolerances.TRIM_ON * t._diag()
+    want = classify_points(np.c_[u.ravel(), v.ravel()], np.concatenate([p[:-1] for p in lines]),
+                           np.concatenate([p[1:] for p in lines]), on)
+    (u0, u1), (v0, v1) = t.domain
+    want[(u.ravel() < u0 - on) | (u.ravel() > u1 + on) | (v.ravel() < v0 - on) | (v.ravel() > v1 + on)] = OUTSIDE
+    assert np.array_equal(t.classify(u, v).ravel(), want)
