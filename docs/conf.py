@@ -61,7 +61,7 @@ def documented_modules() -> list[str]:
     """The modules whose ``__all__`` the API reference covers with a page per name (also used by the
     docs test). The two top-level packages re-export names documented here; their own pages are
     tables of links (:func:`_top_level_table`)."""
-    mods = ["occsurf.algorithms.errors", "occsurf.algorithms.tolerances"]
+    mods = ["occsurf.algorithms.errors", "occsurf.algorithms.tolerances", "occsurf.algorithms.threads"]
     mods += [f"occsurf.algorithms.{s}" for s in ALGORITHMS]
     mods += ["occsurf.bridge.isolation", "occsurf.bridge.messages"]
     for room in BRIDGE_ROOMS:

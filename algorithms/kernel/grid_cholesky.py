@@ -46,6 +46,7 @@ from numpy.typing import NDArray
 from scipy.linalg import blas, lapack
 
 from ..errors import InvalidGeometryError
+from ..threads import blas_threads
 
 __all__ = ["GridCholesky", "NotPositiveDefinite", "grid_stencil", "LEAF_POINTS"]
 
@@ -317,7 +318,8 @@ class GridCholesky:
             pad = np.zeros((nu + 2 * reach, nv + 2 * reach))
             pad[reach:reach + nu, reach:reach + nv] = sc
             S = (sc[:, :, None, None] * S) * np.lib.stride_tricks.sliding_window_view(pad, (w, w))
-        self._factor(S.ravel(), nu, nv, reach, leaf)
+        with blas_threads():  # fronts of tens to a few thousand unknowns: one thread (see .threads)
+            self._factor(S.ravel(), nu, nv, reach, leaf)
 
     def _factor(self, stencil: Array, nu: int, nv: int, reach: int, leaf: int) -> None:
         """Factor the (scaled) stencil rows, front by front."""
@@ -358,6 +360,10 @@ class GridCholesky:
 
     def solve(self, b: Array) -> Array:
         """``K^-1 b`` for a vector ``b`` of ``nu * nv`` values (forward and back substitution by fronts)."""
+        with blas_threads():
+            return self._solve(b)
+
+    def _solve(self, b: Array) -> Array:
         plan = self._plan
         y = np.array(b, float)
         if self._scale is not None:

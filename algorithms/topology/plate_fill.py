@@ -82,6 +82,7 @@ from ..kernel.grid_cholesky import GridCholesky, NotPositiveDefinite, grid_stenc
 from ..kernel.sparse_kron import kron_stencil, kron_sum
 from ..kernel.surface import BSplineSurface
 from ..kernel.trimmed import TrimmedSurface
+from ..threads import blas_threads
 from .nsided_measure import count_folds
 from .nsided_types import HoleSide
 from .plate_measure import Evaluation, corner_g2, curvature_rows, side_samples
@@ -511,14 +512,16 @@ class _SPDFactor:
             K = sp.csc_matrix(sparse())
             self.s = 1.0 / np.sqrt(K.diagonal())
             S = sp.diags(self.s)
-            self.lu = spla.splu((S @ K @ S).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                                options={"SymmetricMode": True})
+            with blas_threads():
+                self.lu = spla.splu((S @ K @ S).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                                    options={"SymmetricMode": True})
 
     def solve(self, b: Array) -> Array:
         """``K^-1 b``."""
         if self.chol is not None:
             return self.chol.solve(b)
-        return self.s * self.lu.solve(self.s * b)
+        with blas_threads():
+            return self.s * self.lu.solve(self.s * b)
 
 
 def _diagonal(E: Array | sp.spmatrix) -> Array:

@@ -43,7 +43,6 @@ from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepTools import BRepTools
 from OCP.gp import gp_Pnt, gp_Vec
 from OCP.TopAbs import TopAbs_REVERSED
-from threadpoolctl import ThreadpoolController
 
 from occsurf.algorithms import tolerances
 from occsurf.algorithms.errors import InvalidGeometryError
@@ -52,6 +51,7 @@ from occsurf.algorithms.kernel.surface import BSplineSurface
 from occsurf.algorithms.manipulation import MatchTarget, match_along, match_surface
 from occsurf.algorithms.manipulation.match_targets import height_jets
 from occsurf.algorithms.manipulation.matching import CONTINUITIES, side_along
+from occsurf.algorithms.threads import blas_threads
 
 from .. import _occ
 from ..conversion.splines import to_occ
@@ -271,18 +271,6 @@ class _Pair:
     notes: list[str] = field(default_factory=list)
 
 
-_CONTROLLER: list[ThreadpoolController] = []
-
-
-def _blas_controller() -> ThreadpoolController:
-    """threadpoolctl's view of the loaded thread pools, made once: ``threadpool_limits(...)`` scans
-    the process's libraries (``/proc/self/maps``) at every use, 6.5 ms, and a repair of the bearing
-    asks 601 times (3.9 s of its matching). BLAS is loaded with NumPy, before the first match."""
-    if not _CONTROLLER:
-        _CONTROLLER.append(ThreadpoolController())
-    return _CONTROLLER[0]
-
-
 class FaceMatcher:
     """Faces of one model matched one edge after another (``occsurf repair``; course ch. 3-4).
 
@@ -456,7 +444,7 @@ class FaceMatcher:
         g0_ask = tol_g0 if tol_g0 is not None else tolerances.MATCH_G0_RTOL * ed.size
         g0_tol = max(pair.etol, g0_ask)
         # one BLAS thread: the systems are small, and threads cost more than they save (MATCH_BLAS_THREADS)
-        with _blas_controller().limit(limits=MATCH_BLAS_THREADS, user_api="blas"):
+        with blas_threads(MATCH_BLAS_THREADS):
             if pair.inside is not None:
                 assert isinstance(tgt, MatchTarget)
                 res = match_along(pair.surface, tgt, pair.inside[0], continuity, tol_g0=g0_ask, tol_g1_deg=tol_g1_deg,
