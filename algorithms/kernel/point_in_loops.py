@@ -113,7 +113,13 @@ def segment_bands(seg_a: ArrayLike, seg_b: ArrayLike, tol: float = 0.0, *, keep:
     array, the step from one polyline's last point to the next one's first left out."""
     A = np.asarray(seg_a, float).reshape(-1, 2)
     B = np.asarray(seg_b, float).reshape(-1, 2)
-    idx = None if keep is None else np.flatnonzero(np.asarray(keep, bool))
+    idx = None
+    if keep is not None:
+        mask = np.asarray(keep)
+        if mask.dtype != np.bool_ or mask.shape != (A.shape[0],):
+            raise InvalidGeometryError(f"keep: expected a bool mask of shape ({A.shape[0]},), one per segment, got "
+                                       f"{mask.dtype} of shape {mask.shape}")
+        idx = np.flatnonzero(mask).astype(np.int32 if A.shape[0] < 2 ** 31 - 1 else np.int64)
     k = A.shape[0] if idx is None else idx.size
     if k == 0:
         empty = np.zeros(0, np.intp)

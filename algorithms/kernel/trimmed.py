@@ -240,7 +240,8 @@ class TrimmedSurface:
         Returns
         -------
         tuple of ndarray, shape (k_i, 2)
-            One per loop (outer first), oriented as the loops, first point repeated last.
+            One per loop (outer first), oriented as the loops, first point repeated last; read-only
+            views of the points the classification uses (copy one to change it).
         """
         t = self._tol(tol, tolerances.TRIM_POLYLINE, "tol")
         key = ("polylines", t)
@@ -253,11 +254,14 @@ class TrimmedSurface:
         """The loops' polylines (:meth:`polylines`) laid end to end in one array, and where each
         ends: the polylines and the classification's segments (:meth:`_segments`) are views of it.
         (Each held its own copy before: three copies of 1.5 million points, ~72 MB, on a face
-        with 361 holes.)"""
+        with 361 holes.) Read-only: the classification reads the same points, so a polyline
+        changed in place would change what is inside."""
         key = ("points", tol)
         if key not in self._cache:
             lines = [loop_polyline(loop, tol) for loop in self.loops]
-            self._cache[key] = (np.concatenate(lines), np.cumsum([len(p) for p in lines]))
+            pts = np.concatenate(lines)
+            pts.flags.writeable = False
+            self._cache[key] = (pts, np.cumsum([len(p) for p in lines]))
         return self._cache[key]
 
     def _tol(self, tol: float | None, default_rel: float, name: str) -> float:

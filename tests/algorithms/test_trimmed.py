@@ -439,6 +439,8 @@ def test_a_trim_holds_its_polylines_once():
     lines = t.polylines()
     pts, _ = t._points(t._tol(None, tolerances.TRIM_POLYLINE, "tol"))
     assert all(np.shares_memory(p, pts) for p in lines)
+    with pytest.raises(ValueError, match="read-only"):  # changed in place, it would change the classification
+        lines[0][0, 0] += 0.1
     A, B, keep = t._segments(t._tol(None, tolerances.TRIM_POLYLINE, "tol"))
     assert np.shares_memory(A, pts) and np.shares_memory(B, pts) and keep.sum() == sum(len(p) - 1 for p in lines)
     u, v = np.meshgrid(np.linspace(-0.1, 1.1, 61), np.linspace(-0.1, 1.1, 57), indexing="ij")
@@ -448,3 +450,17 @@ def test_a_trim_holds_its_polylines_once():
     (u0, u1), (v0, v1) = t.domain
     want[(u.ravel() < u0 - on) | (u.ravel() > u1 + on) | (v.ravel() < v0 - on) | (v.ravel() > v1 + on)] = OUTSIDE
     assert np.array_equal(t.classify(u, v).ravel(), want)
+
+
+def test_segment_bands_take_a_bool_mask_of_the_segments():
+    """``keep`` is one bool per segment: an index list (read as a mask it would keep other segments)
+    or a mask of another length is refused by name."""
+    from occsurf.algorithms.kernel.point_in_loops import segment_bands
+
+    P = np.array([[0, 0], [1, 0], [1, 1], [0, 0], [2, 2], [3, 2], [2, 3], [2, 2]], float)
+    for bad in ([0, 2, 3], np.ones(6, bool), np.ones(8, bool)):
+        with pytest.raises(InvalidGeometryError, match="keep: expected a bool mask of shape"):
+            segment_bands(P[:-1], P[1:], keep=bad)
+    keep = np.ones(7, bool)
+    keep[3] = False
+    assert segment_bands(P[:-1], P[1:], keep=keep).seg_sorted.max() == 6
