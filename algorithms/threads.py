@@ -11,7 +11,7 @@ thread pools for the duration of a block, whichever BLAS NumPy and SciPy carry (
 
 from __future__ import annotations
 
-from contextlib import AbstractContextManager
+from contextlib import AbstractContextManager, nullcontext
 from typing import Any
 
 __all__ = ["blas_threads", "FACTOR_BLAS_THREADS"]
@@ -27,11 +27,18 @@ def blas_threads(limit: int = FACTOR_BLAS_THREADS) -> AbstractContextManager[Any
 
     threadpoolctl's view of the loaded libraries is taken once (scanning them costs ~6.5 ms;
     entering and leaving the limit ~8 us), after SciPy's LAPACK is loaded (SciPy carries an
-    OpenBLAS of its own beside NumPy's).
+    OpenBLAS of its own beside NumPy's). threadpoolctl is a dependency of occsurf, but
+    ``occsurf.algorithms`` needs NumPy and SciPy alone: without it the context limits nothing.
     """
     if not _CONTROLLER:
         import scipy.linalg  # noqa: F401  (its OpenBLAS loaded before the libraries are listed)
-        from threadpoolctl import ThreadpoolController
 
-        _CONTROLLER.append(ThreadpoolController())
+        try:
+            from threadpoolctl import ThreadpoolController
+        except ImportError:  # the algorithms on NumPy and SciPy alone: the libraries' own thread counts
+            _CONTROLLER.append(None)
+        else:
+            _CONTROLLER.append(ThreadpoolController())
+    if _CONTROLLER[0] is None:
+        return nullcontext()
     return _CONTROLLER[0].limit(limits=int(limit), user_api="blas")

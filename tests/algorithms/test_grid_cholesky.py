@@ -144,3 +144,23 @@ def test_fronts_are_factored_and_solved_on_one_blas_thread() -> None:
     assert seen and all(s == {1} for s in seen), seen
     assert after == {2}  # the limit outside, back
     assert np.allclose(K @ x, b, rtol=0, atol=1e-8 * np.abs(b).max())
+
+
+def test_without_threadpoolctl_the_factor_runs_on_the_libraries_own_threads() -> None:
+    """``occsurf.algorithms`` needs NumPy and SciPy alone: without threadpoolctl ``blas_threads``
+    limits nothing, and the factor and its solve work as before."""
+    import subprocess
+    import sys
+
+    code = ("import sys; sys.modules['threadpoolctl'] = None\n"
+            "import numpy as np\n"
+            "from occsurf.algorithms.kernel.grid_cholesky import GridCholesky\n"
+            "from occsurf.algorithms.threads import blas_threads\n"
+            "import scipy.sparse as sp\n"
+            "T = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(5, 5))\n"
+            "K = (sp.kron(T, sp.identity(5)) + sp.kron(sp.identity(5), T) + sp.identity(25)).tocsr()\n"
+            "with blas_threads(): pass\n"
+            "x = GridCholesky(K, (5, 5), 1).solve(np.ones(25))\n"
+            "assert np.allclose(K @ x, 1.0), x\n"
+            "assert 'threadpoolctl' not in sys.modules or sys.modules['threadpoolctl'] is None\n")
+    subprocess.run([sys.executable, "-c", code], check=True)
