@@ -7,14 +7,11 @@ against 3 min 15 s with it full (2026-12-07, the 2-core machine). :func:`warm` r
 once through the library's own calls, on small inputs (``NUMBA_MIN_POINTS`` overridden), so the
 argument types are the ones the library passes (a check of the OCCT bearing and of
 ``step_samples/`` compiles nothing after it). ``tests/conftest.py`` calls it in an xdist run's
-controller, in one process: ``python -m tests.numba_warmup K N`` (the calls ``k`` with
-``k % N == K``) lets N processes share the work, but two of them lost a signature to a race on
-numba's index file. Results of the kernels are not looked at here: ``test_fast_paths.py``
-compares them with the NumPy paths."""
+controller, in one process (two processes sharing the calls lost a signature to a race on numba's
+index file); ``python -m tests.numba_warmup`` runs it alone. Results of the kernels are not looked
+at here: ``test_fast_paths.py`` compares them with the NumPy paths."""
 
 from __future__ import annotations
-
-import sys
 
 import numpy as np
 
@@ -57,8 +54,8 @@ def _jobs():
     return jobs
 
 
-def warm(part: int = 0, parts: int = 1) -> list[str]:
-    """Run the kernel signatures ``k`` with ``k % parts == part``; returns their names."""
+def warm() -> list[str]:
+    """Run every kernel signature once; returns their names."""
     from occsurf.algorithms import _numba_kernels as nk
     from occsurf.algorithms import tolerances
 
@@ -66,12 +63,11 @@ def warm(part: int = 0, parts: int = 1) -> list[str]:
         return []
     done = []
     with tolerances.override(NUMBA_MIN_POINTS=0):
-        for k, (name, call) in enumerate(_jobs()):
-            if k % parts == part:
-                call()
-                done.append(name)
+        for name, call in _jobs():
+            call()
+            done.append(name)
     return done
 
 
 if __name__ == "__main__":
-    print(", ".join(warm(int(sys.argv[1]), int(sys.argv[2]))) if len(sys.argv) == 3 else ", ".join(warm()))
+    print(", ".join(warm()))

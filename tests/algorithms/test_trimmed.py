@@ -34,6 +34,16 @@ def _hole(center=(0.5, 0.5), r=R) -> BSplineCurve:
     return BSplineCurve(c.degree, c.knots, c.control_points[:, :2], c.weights)
 
 
+def _round_holes(rng: np.random.Generator, holes: int, points: int) -> list[np.ndarray]:
+    """A 10 x 10 square's closed polyline and ``holes`` closed circles of ``points`` points inside
+    it (centres in [1, 9], radii in [0.05, 0.4]: they may overlap), drawn from ``rng``."""
+    loops = [np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]], float)]
+    th = np.linspace(0, 2 * np.pi, points)
+    for c, r in zip(rng.uniform(1, 9, (holes, 2)), rng.uniform(0.05, 0.4, holes)):
+        loops.append(np.c_[c[0] + r * np.cos(th), c[1] + r * np.sin(th)])
+    return loops
+
+
 def _plate(size=4.0, holes=True) -> TrimmedSurface:
     P = np.zeros((2, 2, 3))
     P[1, :, 0] = size
@@ -206,10 +216,7 @@ def test_banded_classification_equals_testing_every_segment(seed, holes, tol):
     from occsurf.algorithms.kernel.point_in_loops import _point_segment_distance
 
     rng = np.random.default_rng(seed)
-    loops = [np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]], float)]
-    th = np.linspace(0, 2 * np.pi, 97)
-    for c, r in zip(rng.uniform(1, 9, (holes, 2)), rng.uniform(0.05, 0.4, holes)):
-        loops.append(np.c_[c[0] + r * np.cos(th), c[1] + r * np.sin(th)])
+    loops = _round_holes(rng, holes, 97)
     A = np.concatenate([p[:-1] for p in loops])
     B = np.concatenate([p[1:] for p in loops])
     P = np.r_[rng.uniform(-1, 11, (400, 2)), A[rng.integers(0, len(A), 50)]]  # on the loops too
@@ -377,10 +384,7 @@ def test_segment_bands_in_int32_are_the_int64_bands(seed, holes, tol, block):
     from occsurf.algorithms.kernel.point_in_loops import segment_bands
 
     rng = np.random.default_rng(seed)
-    loops = [np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]], float)]
-    th = np.linspace(0, 2 * np.pi, int(rng.integers(5, 200)))
-    for c, r in zip(rng.uniform(1, 9, (holes, 2)), rng.uniform(0.05, 0.4, holes)):
-        loops.append(np.c_[c[0] + r * np.cos(th), c[1] + r * np.sin(th)])
+    loops = _round_holes(rng, holes, int(rng.integers(5, 200)))
     A = np.concatenate([p[:-1] for p in loops])
     B = np.concatenate([p[1:] for p in loops])
     with mock.patch.object(point_in_loops, "_BAND_BLOCK", block):
@@ -412,10 +416,7 @@ def test_bands_of_polylines_end_to_end_are_the_bands_of_their_segments(seed, hol
     from occsurf.algorithms.kernel.point_in_loops import segment_bands
 
     rng = np.random.default_rng(seed)
-    loops = [np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]], float)]
-    th = np.linspace(0, 2 * np.pi, int(rng.integers(5, 120)))
-    for c, r in zip(rng.uniform(1, 9, (holes, 2)), rng.uniform(0.05, 0.4, holes)):
-        loops.append(np.c_[c[0] + r * np.cos(th), c[1] + r * np.sin(th)])
+    loops = _round_holes(rng, holes, int(rng.integers(5, 120)))
     A = np.concatenate([p[:-1] for p in loops])
     B = np.concatenate([p[1:] for p in loops])
     P = np.concatenate(loops)
